@@ -1,0 +1,11 @@
+//! One module per subcommand: its clap arguments and its `run`.
+
+pub mod bench;
+pub mod check;
+pub mod demo;
+pub mod error;
+pub mod example;
+pub mod info;
+pub mod paper;
+pub mod simulate;
+pub mod solve;

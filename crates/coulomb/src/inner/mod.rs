@@ -1,0 +1,77 @@
+//! Inner solvers: for a fixed s ≥ 0, compute F(s) of (3.19) by solving the strongly convex
+//! second-order-cone QP, either in its dual form (4.7) on the Delassus matrix,
+//!
+//! ```text
+//!     min_{r ∈ L}  ½ rᵀ W r + bᵀ r,      b = q + E s,
+//! ```
+//!
+//! whose optimality conditions are L* ∋ ũ = W r + b ⊥ r ∈ L (3.14), or in its primal form
+//! (3.15) on (M, H) for global problems.
+
+use crate::sparse::CscMatrix;
+use std::time::Instant;
+
+/// The dual inner problem (4.7): min over r ∈ L = ∏ K_{μⁱ} of ½ rᵀ W r + bᵀ r.
+#[derive(Debug, Clone, Copy)]
+pub struct InnerProblem<'a> {
+    /// space dimension d
+    pub dim: usize,
+    /// Delassus matrix W (symmetric positive semi-definite)
+    pub w: &'a CscMatrix,
+    /// linear term b = q + E s
+    pub b: &'a [f64],
+    /// friction coefficients μⁱ (the cone of contact i is K_{μⁱ})
+    pub mu: &'a [f64],
+}
+
+/// How an inner solve ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InnerStatus {
+    /// the inner stopping criterion was met
+    Solved,
+    /// the iteration cap was reached first
+    MaxIterations,
+    /// the deadline passed first
+    TimeLimit,
+    /// the problem was detected infeasible or unbounded (e.g. (3.15) has an empty feasible set)
+    Infeasible,
+    /// numerical breakdown (non-finite iterates, factorization failure, solver error)
+    NumericalError,
+}
+
+/// What an inner solve returns besides r.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InnerReport {
+    /// how it ended
+    pub status: InnerStatus,
+    /// iterations spent
+    pub iterations: usize,
+    /// final value of the solver's own stopping measure
+    pub residual: f64,
+}
+
+/// Limits and tolerance for one inner solve.
+#[derive(Debug, Clone, Copy)]
+pub struct InnerLimits {
+    /// stopping tolerance on the solver's own (relative) optimality measure
+    pub tol: f64,
+    /// iteration cap
+    pub max_iterations: usize,
+    /// wall-clock deadline
+    pub deadline: Option<Instant>,
+}
+
+/// A solver of the dual inner problem (4.7). `r` holds the warm start on entry (zeros for a
+/// cold start) and the solution on exit; solvers that cannot use a warm start ignore it.
+pub trait InnerSolver {
+    /// Short name for reports ("pgs", "apgd", "ipm", "faceted").
+    fn name(&self) -> &'static str;
+    /// Solves (4.7) for `problem`, writing r.
+    fn solve(
+        &mut self,
+        problem: &InnerProblem<'_>,
+        limits: &InnerLimits,
+        r: &mut [f64],
+    ) -> InnerReport;
+}

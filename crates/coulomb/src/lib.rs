@@ -1,0 +1,23 @@
+//! # coulomb
+//!
+//! The discrete (one time-step) Coulomb frictional contact problem, after Acary, Cadoux,
+//! Lemaréchal and Malick, *A formulation of the linear discrete Coulomb friction problem via
+//! convex optimization*, ZAMM 2011:
+//!
+//! - [`problem`]: the incremental problem (2.10), global (M, H, f, w, μ) and local (W, q, μ);
+//! - [`cone`] and [`law`]: Coulomb cones (3.2), projections, the De Saxcé change (3.7),
+//!   Coulomb's law (2.9) and the error measure results are reported in;
+//! - [`delassus`]: W = Hᵀ M⁻¹ H and q = Hᵀ M⁻¹ f + w;
+//! - [`inner`]: solvers of the second-order-cone QP (3.15)/(4.7) that defines F(s);
+//! - [`fclib`]: the FCLIB HDF5 exchange format.
+
+pub mod cone;
+pub mod delassus;
+pub mod inner;
+pub mod law;
+pub mod problem;
+pub mod solver;
+pub mod sparse;
+
+pub use problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
+pub use sparse::CscMatrix;

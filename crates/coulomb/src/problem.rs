@@ -1,0 +1,491 @@
+//! Problem data of the incremental problem (2.10), in its global form (M, H, f, w, μ) and its
+//! local (Delassus) form (W, q, μ).
+//!
+//! # The one internal convention
+//! coulomb stores problems in the **FCLIB convention**:
+//!
+//! ```text
+//!     M v = H r + f,     u = Hᵀ v + w,     (uⁱ, rⁱ) ∈ C(eⁱ, μⁱ)   (2.9)
+//! ```
+//!
+//! with H of size n × m (n = dofs, m = d · contacts). The paper writes (2.8)
+//! `M v + f_p = H_pᵀ r`, `u = H_p v + w`; the two are related by H = H_pᵀ and f = −f_p
+//! ([`GlobalProblem::from_paper`] converts). Eliminating v gives the local form
+//! `u = W r + q` with W = Hᵀ M⁻¹ H and q = Hᵀ M⁻¹ f + w (see [`crate::delassus`]).
+//!
+//! Every contact block is ordered normal first, uⁱ = (u_N, u_T), rⁱ = (r_N, r_T), so the
+//! paper's eⁱ is the first basis vector of the block.
+
+use crate::sparse::{CscMatrix, SparseError};
+use thiserror::Error;
+
+/// Relative asymmetry max|A − Aᵀ| / max|A| above which M or W is rejected as not symmetric.
+pub const SYMMETRY_TOLERANCE: f64 = 1e-6;
+
+/// What is wrong with a problem's data.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ProblemError {
+    /// The space dimension d is not 2 or 3.
+    #[error("space dimension d = {0} is not 2 or 3")]
+    Dimension(i64),
+    /// Two pieces of data do not fit together.
+    #[error("shape mismatch in {what}: expected {expected}, found {found}")]
+    Shape {
+        /// which array or matrix
+        what: &'static str,
+        /// the size it must have
+        expected: String,
+        /// the size it has
+        found: String,
+    },
+    /// A matrix or vector entry is NaN or infinite.
+    #[error("non-finite entry in {what} at {location}")]
+    NonFinite {
+        /// which array or matrix
+        what: &'static str,
+        /// index, or (row, col)
+        location: String,
+    },
+    /// A friction coefficient is negative or NaN.
+    #[error("friction coefficient mu[{contact}] = {value} is not in [0, inf]")]
+    Friction {
+        /// contact index
+        contact: usize,
+        /// the offending value
+        value: f64,
+    },
+    /// A matrix that must be symmetric is not.
+    #[error(
+        "{what} is not symmetric: relative asymmetry {asymmetry:.3e} > {SYMMETRY_TOLERANCE:.0e}"
+    )]
+    NotSymmetric {
+        /// which matrix
+        what: &'static str,
+        /// max|A − Aᵀ| / max|A|
+        asymmetry: f64,
+    },
+    /// M is not positive definite: its Cholesky factorization broke down.
+    #[error("M is not positive definite: {0}")]
+    NotPositiveDefinite(String),
+    /// Sparse storage arrays are inconsistent.
+    #[error("inconsistent sparse storage of {what}: {source}")]
+    Sparse {
+        /// which matrix
+        what: &'static str,
+        /// what is wrong with its arrays
+        source: SparseError,
+    },
+}
+
+/// The local (Delassus) problem: find r, u with u = W r + q and (uⁱ, rⁱ) ∈ C(eⁱ, μⁱ).
+/// The dual inner problem (4.7) is posed on it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LocalProblem {
+    /// space dimension d ∈ {2, 3}
+    pub dim: usize,
+    /// Delassus matrix W (m × m, symmetric positive semi-definite), m = d · contacts
+    pub w: CscMatrix,
+    /// free velocity q (m)
+    pub q: Vec<f64>,
+    /// friction coefficient of each contact
+    pub mu: Vec<f64>,
+}
+
+/// The global problem (2.10) in FCLIB convention: M v = H r + f, u = Hᵀ v + w.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GlobalProblem {
+    /// space dimension d ∈ {2, 3}
+    pub dim: usize,
+    /// mass matrix M (n × n, symmetric positive definite)
+    pub m: CscMatrix,
+    /// H (n × m), m = d · contacts
+    pub h: CscMatrix,
+    /// f (n)
+    pub f: Vec<f64>,
+    /// w (m)
+    pub w: Vec<f64>,
+    /// friction coefficient of each contact
+    pub mu: Vec<f64>,
+}
+
+/// Either form of the incremental problem.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Problem {
+    /// local form (W, q, μ)
+    Local(LocalProblem),
+    /// global form (M, H, f, w, μ)
+    Global(GlobalProblem),
+}
+
+impl Problem {
+    /// Space dimension d.
+    pub fn dim(&self) -> usize {
+        match self {
+            Problem::Local(p) => p.dim,
+            Problem::Global(p) => p.dim,
+        }
+    }
+    /// Number of contacts.
+    pub fn contacts(&self) -> usize {
+        self.mu().len()
+    }
+    /// Friction coefficients.
+    pub fn mu(&self) -> &[f64] {
+        match self {
+            Problem::Local(p) => &p.mu,
+            Problem::Global(p) => &p.mu,
+        }
+    }
+    /// Number of degrees of freedom n (None for a local problem).
+    pub fn dofs(&self) -> Option<usize> {
+        match self {
+            Problem::Local(_) => None,
+            Problem::Global(p) => Some(p.m.nrows),
+        }
+    }
+    /// "local" or "global".
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Problem::Local(_) => "local",
+            Problem::Global(_) => "global",
+        }
+    }
+}
+
+fn check_dim(dim: i64) -> Result<usize, ProblemError> {
+    if dim == 2 || dim == 3 {
+        Ok(dim as usize)
+    } else {
+        Err(ProblemError::Dimension(dim))
+    }
+}
+
+fn check_len(what: &'static str, v: &[f64], n: usize) -> Result<(), ProblemError> {
+    if v.len() != n {
+        return Err(ProblemError::Shape {
+            what,
+            expected: format!("length {n}"),
+            found: format!("length {}", v.len()),
+        });
+    }
+    if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+        return Err(ProblemError::NonFinite {
+            what,
+            location: format!("index {i}"),
+        });
+    }
+    Ok(())
+}
+
+fn check_matrix(
+    what: &'static str,
+    a: &CscMatrix,
+    nrows: usize,
+    ncols: usize,
+) -> Result<(), ProblemError> {
+    a.check()
+        .map_err(|source| ProblemError::Sparse { what, source })?;
+    if a.nrows != nrows || a.ncols != ncols {
+        return Err(ProblemError::Shape {
+            what,
+            expected: format!("{nrows} x {ncols}"),
+            found: format!("{} x {}", a.nrows, a.ncols),
+        });
+    }
+    if let Some((r, c)) = a.first_non_finite() {
+        return Err(ProblemError::NonFinite {
+            what,
+            location: format!("({r}, {c})"),
+        });
+    }
+    Ok(())
+}
+
+fn check_symmetric(what: &'static str, a: &CscMatrix) -> Result<(), ProblemError> {
+    let asymmetry = a.asymmetry();
+    if asymmetry > SYMMETRY_TOLERANCE {
+        return Err(ProblemError::NotSymmetric { what, asymmetry });
+    }
+    Ok(())
+}
+
+fn check_mu(mu: &[f64]) -> Result<(), ProblemError> {
+    if let Some(i) = mu.iter().position(|m| m.is_nan() || *m < 0.0) {
+        return Err(ProblemError::Friction {
+            contact: i,
+            value: mu[i],
+        });
+    }
+    Ok(())
+}
+
+fn contact_count(dim: usize, m: usize, what: &'static str) -> Result<usize, ProblemError> {
+    if m % dim != 0 {
+        return Err(ProblemError::Shape {
+            what,
+            expected: format!("a multiple of d = {dim}"),
+            found: format!("{m}"),
+        });
+    }
+    Ok(m / dim)
+}
+
+impl LocalProblem {
+    /// Builds and validates a local problem (W, q, μ) with d = `dim`: W square of size
+    /// m = d · contacts, symmetric within [`SYMMETRY_TOLERANCE`], all data finite, μ ≥ 0.
+    pub fn new(dim: i64, w: CscMatrix, q: Vec<f64>, mu: Vec<f64>) -> Result<Self, ProblemError> {
+        let dim = check_dim(dim)?;
+        let m = mu.len() * dim;
+        check_mu(&mu)?;
+        check_len("q", &q, m)?;
+        check_matrix("W", &w, m, m)?;
+        check_symmetric("W", &w)?;
+        Ok(Self { dim, w, q, mu })
+    }
+
+    /// Number of contacts.
+    pub fn contacts(&self) -> usize {
+        self.mu.len()
+    }
+
+    /// u = W r + q.
+    pub fn velocity(&self, r: &[f64]) -> Vec<f64> {
+        let mut u = self.q.clone();
+        self.w.gemv_acc(1.0, r, &mut u);
+        u
+    }
+
+    /// The error of `docs/error.md` for impulses r, with u recomputed as W r + q.
+    pub fn error(&self, r: &[f64]) -> crate::law::ErrorMeasure {
+        let u = self.velocity(r);
+        crate::law::error_measure(self.dim, &self.mu, r, &u, crate::law::norm(&self.q))
+    }
+}
+
+impl GlobalProblem {
+    /// Builds and validates a global problem in FCLIB convention (M v = H r + f,
+    /// u = Hᵀ v + w). M must be symmetric and positive definite; positive definiteness is
+    /// established by a Cholesky factorization.
+    pub fn new(
+        dim: i64,
+        m: CscMatrix,
+        h: CscMatrix,
+        f: Vec<f64>,
+        w: Vec<f64>,
+        mu: Vec<f64>,
+    ) -> Result<Self, ProblemError> {
+        let p = Self::new_unfactored(dim, m, h, f, w, mu)?;
+        crate::delassus::MassFactor::new(&p.m)?;
+        Ok(p)
+    }
+
+    /// Like [`GlobalProblem::new`] without the Cholesky test of M (every solver factors M
+    /// anyway and reports [`ProblemError::NotPositiveDefinite`] then).
+    pub fn new_unfactored(
+        dim: i64,
+        m: CscMatrix,
+        h: CscMatrix,
+        f: Vec<f64>,
+        w: Vec<f64>,
+        mu: Vec<f64>,
+    ) -> Result<Self, ProblemError> {
+        let dim = check_dim(dim)?;
+        check_mu(&mu)?;
+        let n = m.nrows;
+        let nc = contact_count(dim, w.len(), "w")?;
+        if nc != mu.len() {
+            return Err(ProblemError::Shape {
+                what: "mu",
+                expected: format!("length {nc} (= len(w) / d)"),
+                found: format!("length {}", mu.len()),
+            });
+        }
+        check_matrix("M", &m, n, n)?;
+        check_symmetric("M", &m)?;
+        check_matrix("H", &h, n, w.len())?;
+        check_len("f", &f, n)?;
+        check_len("w", &w, nc * dim)?;
+        Ok(Self {
+            dim,
+            m,
+            h,
+            f,
+            w,
+            mu,
+        })
+    }
+
+    /// Builds a problem from the paper's convention (2.8): `M v + f_p = H_pᵀ r`,
+    /// `u = H_p v + w`, with H_p of size m × n. Stored as H = H_pᵀ, f = −f_p.
+    pub fn from_paper(
+        dim: i64,
+        m: CscMatrix,
+        h_p: &CscMatrix,
+        f_p: &[f64],
+        w: Vec<f64>,
+        mu: Vec<f64>,
+    ) -> Result<Self, ProblemError> {
+        Self::new(
+            dim,
+            m,
+            h_p.transpose(),
+            f_p.iter().map(|x| -x).collect(),
+            w,
+            mu,
+        )
+    }
+
+    /// The paper's (H_p, f_p) = (Hᵀ, −f) of (2.8).
+    pub fn to_paper(&self) -> (CscMatrix, Vec<f64>) {
+        (self.h.transpose(), self.f.iter().map(|x| -x).collect())
+    }
+
+    /// Number of contacts.
+    pub fn contacts(&self) -> usize {
+        self.mu.len()
+    }
+
+    /// Number of degrees of freedom n.
+    pub fn dofs(&self) -> usize {
+        self.m.nrows
+    }
+
+    /// u = Hᵀ v + w.
+    pub fn velocity(&self, v: &[f64]) -> Vec<f64> {
+        let mut u = self.w.clone();
+        self.h.gemv_t_acc(1.0, v, &mut u);
+        u
+    }
+
+    /// The balance residual ‖M v − H r − f‖ / max(1, ‖f‖).
+    pub fn balance_residual(&self, v: &[f64], r: &[f64]) -> f64 {
+        let mut res = self.m.mul_vec(v);
+        self.h.gemv_acc(-1.0, r, &mut res);
+        for (x, f) in res.iter_mut().zip(&self.f) {
+            *x -= f;
+        }
+        crate::law::norm(&res) / crate::law::norm(&self.f).max(1.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn small_global() -> GlobalProblem {
+        let m = CscMatrix::from_dense(2, 2, &[2.0, 0.5, 0.5, 1.0]);
+        let h = CscMatrix::from_dense(2, 2, &[1.0, 0.0, 0.3, 1.0]);
+        GlobalProblem::new(2, m, h, vec![1.0, -2.0], vec![0.1, 0.0], vec![0.5]).unwrap()
+    }
+
+    #[test]
+    fn paper_convention_round_trip() {
+        let g = small_global();
+        let (hp, fp) = g.to_paper();
+        let back =
+            GlobalProblem::from_paper(2, g.m.clone(), &hp, &fp, g.w.clone(), g.mu.clone()).unwrap();
+        assert_eq!(back, g);
+        // Same (v, r) satisfies both forms of the balance: M v + f_p = H_pᵀ r  ⇔  M v = H r + f.
+        let v = [0.3, -0.7];
+        let r = [1.0, 0.2];
+        let mv = g.m.mul_vec(&v);
+        let hpr = hp.mul_t_vec(&r);
+        let hr = g.h.mul_vec(&r);
+        for i in 0..2 {
+            let paper = mv[i] + fp[i] - hpr[i];
+            let fclib = mv[i] - hr[i] - g.f[i];
+            assert!((paper - fclib).abs() < 1e-14);
+        }
+        // u = H_p v + w = Hᵀ v + w
+        let u1 = g.velocity(&v);
+        let mut u2 = hp.mul_vec(&v);
+        u2.iter_mut().zip(&g.w).for_each(|(a, b)| *a += b);
+        assert_eq!(u1, u2);
+    }
+
+    #[test]
+    fn zero_contacts_is_valid() {
+        let m = CscMatrix::identity(3, 1.0);
+        let h = CscMatrix::zeros(3, 0);
+        let g = GlobalProblem::new(3, m, h, vec![0.0; 3], vec![], vec![]).unwrap();
+        assert_eq!(g.contacts(), 0);
+        let l = LocalProblem::new(2, CscMatrix::zeros(0, 0), vec![], vec![]).unwrap();
+        assert_eq!(l.contacts(), 0);
+    }
+
+    #[test]
+    fn every_validation_error_is_reported() {
+        let w = CscMatrix::identity(2, 1.0);
+        assert_eq!(
+            LocalProblem::new(4, w.clone(), vec![0.0; 2], vec![0.1]),
+            Err(ProblemError::Dimension(4))
+        );
+        assert!(matches!(
+            LocalProblem::new(2, w.clone(), vec![0.0; 3], vec![0.1]),
+            Err(ProblemError::Shape { what: "q", .. })
+        ));
+        assert!(matches!(
+            LocalProblem::new(2, w.clone(), vec![0.0, f64::NAN], vec![0.1]),
+            Err(ProblemError::NonFinite { what: "q", .. })
+        ));
+        assert!(matches!(
+            LocalProblem::new(2, w.clone(), vec![0.0; 2], vec![-0.1]),
+            Err(ProblemError::Friction { contact: 0, .. })
+        ));
+        assert!(matches!(
+            LocalProblem::new(2, w.clone(), vec![0.0; 2], vec![f64::NAN]),
+            Err(ProblemError::Friction { .. })
+        ));
+        let asym = CscMatrix::from_dense(2, 2, &[1.0, 1.0, 0.0, 1.0]);
+        assert!(matches!(
+            LocalProblem::new(2, asym, vec![0.0; 2], vec![0.1]),
+            Err(ProblemError::NotSymmetric { what: "W", .. })
+        ));
+        let mut bad = w.clone();
+        bad.col_ptr = vec![0, 2, 1];
+        assert!(matches!(
+            LocalProblem::new(2, bad, vec![0.0; 2], vec![0.1]),
+            Err(ProblemError::Sparse { what: "W", .. })
+        ));
+        let mut inf = w.clone();
+        inf.values[1] = f64::INFINITY;
+        assert!(matches!(
+            LocalProblem::new(2, inf, vec![0.0; 2], vec![0.1]),
+            Err(ProblemError::NonFinite { what: "W", .. })
+        ));
+        // Global: indefinite M, wrong H shape, wrong mu length.
+        let m_indef = CscMatrix::from_dense(2, 2, &[1.0, 2.0, 2.0, 1.0]);
+        let h = CscMatrix::identity(2, 1.0);
+        assert!(matches!(
+            GlobalProblem::new(2, m_indef, h.clone(), vec![0.0; 2], vec![0.0; 2], vec![0.1]),
+            Err(ProblemError::NotPositiveDefinite(_))
+        ));
+        let m = CscMatrix::identity(2, 1.0);
+        assert!(matches!(
+            GlobalProblem::new(
+                2,
+                m.clone(),
+                CscMatrix::identity(3, 1.0),
+                vec![0.0; 2],
+                vec![0.0; 2],
+                vec![0.1]
+            ),
+            Err(ProblemError::Shape { what: "H", .. })
+        ));
+        assert!(matches!(
+            GlobalProblem::new(
+                2,
+                m.clone(),
+                h.clone(),
+                vec![0.0; 2],
+                vec![0.0; 2],
+                vec![0.1, 0.2]
+            ),
+            Err(ProblemError::Shape { what: "mu", .. })
+        ));
+        assert!(matches!(
+            GlobalProblem::new(2, m, h, vec![0.0; 2], vec![0.0; 3], vec![0.1]),
+            Err(ProblemError::Shape { what: "w", .. })
+        ));
+    }
+}

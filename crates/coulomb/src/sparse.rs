@@ -1,0 +1,504 @@
+//! Compressed sparse column matrices: the one storage type for M, H and W.
+//!
+//! A plain CSC container is kept by hand because it is the exchange format between three
+//! parties that each have their own type: FCLIB (CSC, CSR or triplets on disk), faer (sparse
+//! Cholesky of M) and Clarabel (its own CSC type for the conic interior point). Converting at
+//! those edges is a copy of three arrays; the hot loops (matrix–vector products, block
+//! Gauss–Seidel sweeps) read the arrays directly.
+
+use thiserror::Error;
+
+/// Why a set of arrays does not describe a valid sparse matrix.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum SparseError {
+    /// `col_ptr` has the wrong length, does not start at 0, decreases, or does not end at nnz.
+    #[error("column pointers are inconsistent: {0}")]
+    BadPointers(String),
+    /// A row (or column) index is outside the matrix.
+    #[error("index {index} at entry {entry} is out of range (dimension {dim})")]
+    IndexOutOfRange {
+        /// position of the entry in the index array
+        entry: usize,
+        /// the offending index
+        index: i64,
+        /// the dimension it must stay below
+        dim: usize,
+    },
+    /// Index and value arrays have different lengths.
+    #[error("array lengths disagree: {0}")]
+    LengthMismatch(String),
+}
+
+/// A real sparse matrix in compressed sparse column form, row indices sorted and unique
+/// within each column.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CscMatrix {
+    /// number of rows
+    pub nrows: usize,
+    /// number of columns
+    pub ncols: usize,
+    /// `ncols + 1` column pointers into `row_idx` and `values`
+    pub col_ptr: Vec<usize>,
+    /// row index of each stored entry
+    pub row_idx: Vec<usize>,
+    /// value of each stored entry
+    pub values: Vec<f64>,
+}
+
+impl CscMatrix {
+    /// The `nrows × ncols` zero matrix.
+    pub fn zeros(nrows: usize, ncols: usize) -> Self {
+        Self {
+            nrows,
+            ncols,
+            col_ptr: vec![0; ncols + 1],
+            row_idx: Vec::new(),
+            values: Vec::new(),
+        }
+    }
+
+    /// The `n × n` identity scaled by `alpha`.
+    pub fn identity(n: usize, alpha: f64) -> Self {
+        Self {
+            nrows: n,
+            ncols: n,
+            col_ptr: (0..=n).collect(),
+            row_idx: (0..n).collect(),
+            values: vec![alpha; n],
+        }
+    }
+
+    /// Builds a matrix from `(row, col, value)` triplets; duplicates are summed, entries are
+    /// sorted. Indices must be in range.
+    pub fn from_triplets(
+        nrows: usize,
+        ncols: usize,
+        rows: &[usize],
+        cols: &[usize],
+        vals: &[f64],
+    ) -> Result<Self, SparseError> {
+        if rows.len() != cols.len() || rows.len() != vals.len() {
+            return Err(SparseError::LengthMismatch(format!(
+                "{} row indices, {} column indices, {} values",
+                rows.len(),
+                cols.len(),
+                vals.len()
+            )));
+        }
+        for (k, (&r, &c)) in rows.iter().zip(cols).enumerate() {
+            if r >= nrows {
+                return Err(SparseError::IndexOutOfRange {
+                    entry: k,
+                    index: r as i64,
+                    dim: nrows,
+                });
+            }
+            if c >= ncols {
+                return Err(SparseError::IndexOutOfRange {
+                    entry: k,
+                    index: c as i64,
+                    dim: ncols,
+                });
+            }
+        }
+        let mut counts = vec![0usize; ncols + 1];
+        for &c in cols {
+            counts[c + 1] += 1;
+        }
+        for j in 0..ncols {
+            counts[j + 1] += counts[j];
+        }
+        let mut next = counts.clone();
+        let mut ri = vec![0usize; rows.len()];
+        let mut vv = vec![0.0; rows.len()];
+        for k in 0..rows.len() {
+            let p = next[cols[k]];
+            ri[p] = rows[k];
+            vv[p] = vals[k];
+            next[cols[k]] += 1;
+        }
+        Ok(Self::compress(nrows, ncols, &counts, &ri, &vv))
+    }
+
+    /// Builds a matrix from CSC arrays that may be unsorted or hold duplicates (summed).
+    pub fn from_csc_arrays(
+        nrows: usize,
+        ncols: usize,
+        col_ptr: &[usize],
+        row_idx: &[usize],
+        values: &[f64],
+    ) -> Result<Self, SparseError> {
+        check_pointers(col_ptr, ncols, row_idx.len().min(values.len()))?;
+        let nnz = col_ptr[ncols];
+        for (k, &r) in row_idx[..nnz].iter().enumerate() {
+            if r >= nrows {
+                return Err(SparseError::IndexOutOfRange {
+                    entry: k,
+                    index: r as i64,
+                    dim: nrows,
+                });
+            }
+        }
+        Ok(Self::compress(
+            nrows,
+            ncols,
+            col_ptr,
+            &row_idx[..nnz],
+            &values[..nnz],
+        ))
+    }
+
+    /// Builds a matrix from CSR arrays (row pointers, column indices), unsorted or with
+    /// duplicates allowed.
+    pub fn from_csr_arrays(
+        nrows: usize,
+        ncols: usize,
+        row_ptr: &[usize],
+        col_idx: &[usize],
+        values: &[f64],
+    ) -> Result<Self, SparseError> {
+        check_pointers(row_ptr, nrows, col_idx.len().min(values.len()))?;
+        let nnz = row_ptr[nrows];
+        let mut rows = Vec::with_capacity(nnz);
+        for i in 0..nrows {
+            for _ in row_ptr[i]..row_ptr[i + 1] {
+                rows.push(i);
+            }
+        }
+        Self::from_triplets(nrows, ncols, &rows, &col_idx[..nnz], &values[..nnz])
+    }
+
+    /// Sorts each column by row index and sums duplicates. `col_ptr` delimits the columns of
+    /// `row_idx`/`values`.
+    fn compress(
+        nrows: usize,
+        ncols: usize,
+        col_ptr: &[usize],
+        row_idx: &[usize],
+        values: &[f64],
+    ) -> Self {
+        let mut out_ptr = Vec::with_capacity(ncols + 1);
+        let mut out_rows = Vec::with_capacity(row_idx.len());
+        let mut out_vals = Vec::with_capacity(values.len());
+        out_ptr.push(0);
+        let mut col: Vec<(usize, f64)> = Vec::new();
+        for j in 0..ncols {
+            col.clear();
+            col.extend((col_ptr[j]..col_ptr[j + 1]).map(|p| (row_idx[p], values[p])));
+            col.sort_by_key(|e| e.0);
+            for &(r, v) in &col {
+                if out_rows.len() > out_ptr[j] && out_rows.last() == Some(&r) {
+                    *out_vals.last_mut().expect("non-empty") += v;
+                } else {
+                    out_rows.push(r);
+                    out_vals.push(v);
+                }
+            }
+            out_ptr.push(out_rows.len());
+        }
+        Self {
+            nrows,
+            ncols,
+            col_ptr: out_ptr,
+            row_idx: out_rows,
+            values: out_vals,
+        }
+    }
+
+    /// Builds a sparse matrix from a dense row-major array, dropping exact zeros.
+    pub fn from_dense(nrows: usize, ncols: usize, data: &[f64]) -> Self {
+        let mut col_ptr = vec![0];
+        let mut row_idx = Vec::new();
+        let mut values = Vec::new();
+        for j in 0..ncols {
+            for i in 0..nrows {
+                let v = data[i * ncols + j];
+                if v != 0.0 {
+                    row_idx.push(i);
+                    values.push(v);
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
+        Self {
+            nrows,
+            ncols,
+            col_ptr,
+            row_idx,
+            values,
+        }
+    }
+
+    /// Dense row-major copy.
+    pub fn to_dense(&self) -> Vec<f64> {
+        let mut d = vec![0.0; self.nrows * self.ncols];
+        for j in 0..self.ncols {
+            for p in self.col_ptr[j]..self.col_ptr[j + 1] {
+                d[self.row_idx[p] * self.ncols + j] += self.values[p];
+            }
+        }
+        d
+    }
+
+    /// Number of stored entries.
+    pub fn nnz(&self) -> usize {
+        self.col_ptr[self.ncols]
+    }
+
+    /// Iterates over the stored `(row, col, value)` entries, column by column.
+    pub fn triplets(&self) -> impl Iterator<Item = (usize, usize, f64)> + '_ {
+        (0..self.ncols).flat_map(move |j| {
+            (self.col_ptr[j]..self.col_ptr[j + 1])
+                .map(move |p| (self.row_idx[p], j, self.values[p]))
+        })
+    }
+
+    /// The transpose, in CSC form.
+    pub fn transpose(&self) -> Self {
+        let mut counts = vec![0usize; self.nrows + 1];
+        for &r in &self.row_idx[..self.nnz()] {
+            counts[r + 1] += 1;
+        }
+        for i in 0..self.nrows {
+            counts[i + 1] += counts[i];
+        }
+        let mut next = counts.clone();
+        let mut ri = vec![0; self.nnz()];
+        let mut vv = vec![0.0; self.nnz()];
+        for j in 0..self.ncols {
+            for p in self.col_ptr[j]..self.col_ptr[j + 1] {
+                let r = self.row_idx[p];
+                ri[next[r]] = j;
+                vv[next[r]] = self.values[p];
+                next[r] += 1;
+            }
+        }
+        Self {
+            nrows: self.ncols,
+            ncols: self.nrows,
+            col_ptr: counts,
+            row_idx: ri,
+            values: vv,
+        }
+    }
+
+    /// y ← y + alpha · A x.
+    pub fn gemv_acc(&self, alpha: f64, x: &[f64], y: &mut [f64]) {
+        debug_assert_eq!(x.len(), self.ncols);
+        debug_assert_eq!(y.len(), self.nrows);
+        for j in 0..self.ncols {
+            let xj = alpha * x[j];
+            if xj == 0.0 {
+                continue;
+            }
+            for p in self.col_ptr[j]..self.col_ptr[j + 1] {
+                y[self.row_idx[p]] += self.values[p] * xj;
+            }
+        }
+    }
+
+    /// y ← y + alpha · Aᵀ x.
+    pub fn gemv_t_acc(&self, alpha: f64, x: &[f64], y: &mut [f64]) {
+        debug_assert_eq!(x.len(), self.nrows);
+        debug_assert_eq!(y.len(), self.ncols);
+        for j in 0..self.ncols {
+            let mut s = 0.0;
+            for p in self.col_ptr[j]..self.col_ptr[j + 1] {
+                s += self.values[p] * x[self.row_idx[p]];
+            }
+            y[j] += alpha * s;
+        }
+    }
+
+    /// A x as a new vector.
+    pub fn mul_vec(&self, x: &[f64]) -> Vec<f64> {
+        let mut y = vec![0.0; self.nrows];
+        self.gemv_acc(1.0, x, &mut y);
+        y
+    }
+
+    /// Aᵀ x as a new vector.
+    pub fn mul_t_vec(&self, x: &[f64]) -> Vec<f64> {
+        let mut y = vec![0.0; self.ncols];
+        self.gemv_t_acc(1.0, x, &mut y);
+        y
+    }
+
+    /// Largest |A − Aᵀ| entry relative to the largest |A| entry (0 for a symmetric matrix).
+    pub fn asymmetry(&self) -> f64 {
+        if self.nrows != self.ncols {
+            return f64::INFINITY;
+        }
+        let t = self.transpose();
+        let scale = self.values.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let diff = self.add_scaled(-1.0, &t);
+        let d = diff.values.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        if scale > 0.0 {
+            d / scale
+        } else {
+            d
+        }
+    }
+
+    /// A + alpha · B (same shape).
+    pub fn add_scaled(&self, alpha: f64, other: &CscMatrix) -> CscMatrix {
+        let mut rows = Vec::with_capacity(self.nnz() + other.nnz());
+        let mut cols = Vec::with_capacity(self.nnz() + other.nnz());
+        let mut vals = Vec::with_capacity(self.nnz() + other.nnz());
+        for (r, c, v) in self.triplets() {
+            rows.push(r);
+            cols.push(c);
+            vals.push(v);
+        }
+        for (r, c, v) in other.triplets() {
+            rows.push(r);
+            cols.push(c);
+            vals.push(alpha * v);
+        }
+        Self::from_triplets(self.nrows, self.ncols, &rows, &cols, &vals)
+            .expect("indices of valid matrices are in range")
+    }
+
+    /// The upper triangle (diagonal included), as Clarabel and faer's Cholesky expect.
+    pub fn upper_triangle(&self) -> CscMatrix {
+        let mut col_ptr = vec![0];
+        let mut row_idx = Vec::new();
+        let mut values = Vec::new();
+        for j in 0..self.ncols {
+            for p in self.col_ptr[j]..self.col_ptr[j + 1] {
+                if self.row_idx[p] <= j {
+                    row_idx.push(self.row_idx[p]);
+                    values.push(self.values[p]);
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
+        Self {
+            nrows: self.nrows,
+            ncols: self.ncols,
+            col_ptr,
+            row_idx,
+            values,
+        }
+    }
+
+    /// Whether every stored value is finite; returns the first bad `(row, col)` otherwise.
+    pub fn first_non_finite(&self) -> Option<(usize, usize)> {
+        self.triplets()
+            .find(|(_, _, v)| !v.is_finite())
+            .map(|(r, c, _)| (r, c))
+    }
+
+    /// Diagonal entries (zero where not stored).
+    pub fn diagonal(&self) -> Vec<f64> {
+        let n = self.nrows.min(self.ncols);
+        let mut d = vec![0.0; n];
+        for j in 0..n {
+            for p in self.col_ptr[j]..self.col_ptr[j + 1] {
+                if self.row_idx[p] == j {
+                    d[j] += self.values[p];
+                }
+            }
+        }
+        d
+    }
+
+    /// Checks the structural invariants (pointer monotonicity, sorted unique in-range rows).
+    pub fn check(&self) -> Result<(), SparseError> {
+        check_pointers(
+            &self.col_ptr,
+            self.ncols,
+            self.row_idx.len().min(self.values.len()),
+        )?;
+        for j in 0..self.ncols {
+            let mut last: Option<usize> = None;
+            for p in self.col_ptr[j]..self.col_ptr[j + 1] {
+                let r = self.row_idx[p];
+                if r >= self.nrows {
+                    return Err(SparseError::IndexOutOfRange {
+                        entry: p,
+                        index: r as i64,
+                        dim: self.nrows,
+                    });
+                }
+                if last.is_some_and(|l| l >= r) {
+                    return Err(SparseError::BadPointers(format!(
+                        "row indices of column {j} are not sorted and unique"
+                    )));
+                }
+                last = Some(r);
+            }
+        }
+        Ok(())
+    }
+}
+
+fn check_pointers(ptr: &[usize], n: usize, avail: usize) -> Result<(), SparseError> {
+    if ptr.len() != n + 1 {
+        return Err(SparseError::BadPointers(format!(
+            "expected {} pointers, found {}",
+            n + 1,
+            ptr.len()
+        )));
+    }
+    if ptr[0] != 0 {
+        return Err(SparseError::BadPointers(format!(
+            "first pointer is {}, not 0",
+            ptr[0]
+        )));
+    }
+    if let Some(k) = ptr.windows(2).position(|w| w[1] < w[0]) {
+        return Err(SparseError::BadPointers(format!(
+            "pointers decrease at position {}",
+            k + 1
+        )));
+    }
+    if ptr[n] > avail {
+        return Err(SparseError::BadPointers(format!(
+            "last pointer {} exceeds the {} stored entries",
+            ptr[n], avail
+        )));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn triplets_sum_duplicates_and_sort() {
+        let a = CscMatrix::from_triplets(2, 2, &[1, 0, 1], &[0, 0, 0], &[1.0, 2.0, 3.0]).unwrap();
+        assert_eq!(a.col_ptr, vec![0, 2, 2]);
+        assert_eq!(a.row_idx, vec![0, 1]);
+        assert_eq!(a.values, vec![2.0, 4.0]);
+        a.check().unwrap();
+    }
+
+    #[test]
+    fn csr_and_transpose_agree_with_dense() {
+        // [[1, 0, 2], [0, 3, 0]]
+        let a = CscMatrix::from_csr_arrays(2, 3, &[0, 2, 3], &[0, 2, 1], &[1.0, 2.0, 3.0]).unwrap();
+        assert_eq!(a.to_dense(), vec![1.0, 0.0, 2.0, 0.0, 3.0, 0.0]);
+        let t = a.transpose();
+        assert_eq!(t.to_dense(), vec![1.0, 0.0, 0.0, 3.0, 2.0, 0.0]);
+        assert_eq!(a.mul_vec(&[1.0, 1.0, 1.0]), vec![3.0, 3.0]);
+        assert_eq!(a.mul_t_vec(&[1.0, 2.0]), vec![1.0, 6.0, 2.0]);
+    }
+
+    #[test]
+    fn bad_arrays_are_reported() {
+        assert!(matches!(
+            CscMatrix::from_csc_arrays(2, 2, &[0, 1], &[0], &[1.0]),
+            Err(SparseError::BadPointers(_))
+        ));
+        assert!(matches!(
+            CscMatrix::from_csc_arrays(2, 2, &[0, 2, 1], &[0, 1], &[1.0, 1.0]),
+            Err(SparseError::BadPointers(_))
+        ));
+        assert!(matches!(
+            CscMatrix::from_triplets(2, 2, &[5], &[0], &[1.0]),
+            Err(SparseError::IndexOutOfRange { .. })
+        ));
+    }
+}

@@ -13,6 +13,10 @@
 
 pub mod cone;
 pub mod delassus;
+pub mod examples;
+pub mod existence;
+pub mod fclib;
+pub mod fixed_point;
 pub mod inner;
 pub mod law;
 pub mod problem;

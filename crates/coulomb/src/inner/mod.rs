@@ -8,6 +8,11 @@
 //! whose optimality conditions are L* ∋ ũ = W r + b ⊥ r ∈ L (3.14), or in its primal form
 //! (3.15) on (M, H) for global problems.
 
+pub mod apgd;
+pub mod faceted;
+pub mod ipm;
+pub mod pgs;
+
 use crate::sparse::CscMatrix;
 use std::time::Instant;
 

@@ -89,10 +89,7 @@ pub fn moving_obstacle(
         ]
     };
     let mut sys = Planar::default();
-    let discs: Vec<usize> = centres
-        .iter()
-        .map(|_| sys.body(1.0, 0.5 * r * r))
-        .collect();
+    let discs: Vec<usize> = centres.iter().map(|_| sys.body(1.0, 0.5 * r * r)).collect();
     // Walls: (disc, normal from the wall into the disc).
     let walls = [
         (0usize, [0.0, 1.0]),

@@ -314,10 +314,8 @@ impl<'a> KinematicData<'a> {
         w: &'a [f64],
         mu: &'a [f64],
     ) -> Result<Self, ProblemError> {
-        b.check().map_err(|source| ProblemError::Sparse {
-            what: "H",
-            source,
-        })?;
+        b.check()
+            .map_err(|source| ProblemError::Sparse { what: "H", source })?;
         let m = dim * mu.len();
         if b.ncols != m || w.len() != m {
             return Err(ProblemError::Shape {
@@ -622,7 +620,8 @@ impl<'d, 'a> MarginProblem<'d, 'a> {
                 }
             }
         }
-        let t_opt = (status == ConicStatus::Solved).then(|| sol.x.get(t_col).copied().unwrap_or(0.0));
+        let t_opt =
+            (status == ConicStatus::Solved).then(|| sol.x.get(t_col).copied().unwrap_or(0.0));
         let clarabel_status = match t_opt {
             Some(t) => format!("{:?}, t* = {t:.3e}", sol.status),
             None => format!("{:?}", sol.status),
@@ -689,11 +688,7 @@ impl<'d, 'a> MarginProblem<'d, 'a> {
             r.iter().zip(d.w).map(|(a, b)| a * b).sum::<f64>() / d.w_scale
         };
         let hr = d.b.mul_vec(&r);
-        let denom: f64 = r
-            .iter()
-            .zip(&d.col_norms)
-            .map(|(a, c)| a.abs() * c)
-            .sum();
+        let denom: f64 = r.iter().zip(&d.col_norms).map(|(a, c)| a.abs() * c).sum();
         let residual = if denom > 0.0 {
             crate::law::norm(&hr) / denom
         } else {
@@ -740,10 +735,7 @@ struct Verified {
 
 fn solve_and_verify(mp: &MarginProblem, settings: &CheckSettings) -> Verified {
     let solve = mp.solve(settings);
-    let vel = solve
-        .v
-        .as_ref()
-        .map(|v| (v.clone(), mp.check_velocity(v)));
+    let vel = solve.v.as_ref().map(|v| (v.clone(), mp.check_velocity(v)));
     let imp = solve.r.as_ref().and_then(|r| mp.check_impulse(r));
     Verified { solve, vel, imp }
 }
@@ -933,7 +925,7 @@ fn criterion_4_1(data: &KinematicData, settings: &CheckSettings) -> CriterionRep
             };
             return CriterionReport {
                 verdict: Verdict::Holds,
-                certificate_residual: Some((-c.unmasked).max(0.0).min(f64::MAX)),
+                certificate_residual: Some(if c.unmasked < 0.0 { -c.unmasked } else { 0.0 }),
                 certificate_kind: Some(CertificateKind::Velocity),
                 certificate: Some(v.clone()),
                 margin: c.masked.is_finite().then_some(c.masked),
@@ -1103,10 +1095,10 @@ fn run_all(
 }
 
 fn validate_settings(s: &CheckSettings) -> Result<(), CheckError> {
-    if !(s.tol.is_finite() && s.tol >= 0.0) {
+    if !s.tol.is_finite() || s.tol < 0.0 {
         return Err(CheckError::Settings(format!("tol = {} is not ≥ 0", s.tol)));
     }
-    if !(s.certificate_tol.is_finite() && s.certificate_tol >= 0.0) {
+    if !s.certificate_tol.is_finite() || s.certificate_tol < 0.0 {
         return Err(CheckError::Settings(format!(
             "certificate_tol = {} is not ≥ 0",
             s.certificate_tol
@@ -1115,7 +1107,7 @@ fn validate_settings(s: &CheckSettings) -> Result<(), CheckError> {
     if s.max_iter == 0 {
         return Err(CheckError::Settings("max_iter = 0".into()));
     }
-    if !(s.time_limit > 0.0) {
+    if s.time_limit.is_nan() || s.time_limit <= 0.0 {
         return Err(CheckError::Settings(format!(
             "time_limit = {} is not > 0",
             s.time_limit

@@ -61,7 +61,10 @@ fn painleve_4_4_matches_2_13_on_a_sweep() {
                 if expected {
                     assert_eq!(c.certificate_kind, Some(CertificateKind::Velocity));
                     let m = dual_cone_margins(&p, cert, true);
-                    assert!(m[0] >= -1e-7 * u0.abs().max(1.0), "θ={theta} μ={mu} u0={u0}");
+                    assert!(
+                        m[0] >= -1e-7 * u0.abs().max(1.0),
+                        "θ={theta} μ={mu} u0={u0}"
+                    );
                     // With g = −1, (2.13) is necessary and sufficient: the conclusion is existence.
                     assert!(matches!(rep.conclusion, Conclusion::Exists { .. }));
                 } else {

@@ -1,10 +1,155 @@
-//! `coulomb check`.
+//! `coulomb check FILE [--json]`: the existence criteria (4.1), (4.4), (4.5), (4.6), (5.1) of
+//! an FCLIB problem, each with a verified certificate, and what the theory concludes.
+
+use coulomb::existence::{
+    self, CheckSettings, Conclusion, Criterion, CriterionReport, ExistenceReport,
+};
+use coulomb::Problem;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `coulomb check`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    /// FCLIB file (.hdf5), local or global
+    pub file: PathBuf,
+    /// print one JSON object instead of a table
+    #[arg(long)]
+    pub json: bool,
+    /// decision tolerance on margins and dual bounds (relative to ‖w‖∞)
+    #[arg(long, default_value_t = 1e-7)]
+    pub tol: f64,
+    /// largest accepted certificate residual
+    #[arg(long, default_value_t = 1e-6)]
+    pub certificate_tol: f64,
+    /// print the certificate vectors too (table: first entries; JSON: in full)
+    #[arg(long)]
+    pub certificates: bool,
+}
 
 /// Runs `coulomb check`.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("coulomb check is not available yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let problem = read_problem(&args.file)?;
+    let settings = CheckSettings {
+        tol: args.tol,
+        certificate_tol: args.certificate_tol,
+        ..CheckSettings::default()
+    };
+    let report = existence::check(&problem, &settings)?;
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&to_json(&args.file, &report, args.certificates))?
+        );
+    } else {
+        print_table(&args.file, &report, args.certificates);
+    }
+    Ok(())
+}
+
+/// Reads an FCLIB problem.
+fn read_problem(path: &Path) -> anyhow::Result<Problem> {
+    anyhow::bail!(
+        "cannot read {}: the FCLIB reader is not available in this build yet",
+        path.display()
+    )
+}
+
+/// The criteria in the order they are printed: the necessary one first.
+const ORDER: [Criterion; 5] = [
+    Criterion::C4_5,
+    Criterion::C4_1,
+    Criterion::C4_4,
+    Criterion::C4_6,
+    Criterion::C5_1,
+];
+
+/// The JSON of `--json`: {"file", "criteria": {"4.1": {"verdict", "certificate_residual"}, …},
+/// "conclusion": "exists" | "none" | "unknown", "by": "4.1" | … | null}.
+pub fn to_json(file: &Path, report: &ExistenceReport, certificates: bool) -> serde_json::Value {
+    let mut criteria = serde_json::Map::new();
+    for criterion in ORDER {
+        let label = criterion.label();
+        let c: &CriterionReport = report.criteria.get(criterion);
+        let mut o = serde_json::json!({
+            "verdict": c.verdict,
+            "certificate_residual": c.certificate_residual,
+        });
+        if certificates {
+            o["certificate_kind"] = serde_json::json!(c.certificate_kind);
+            o["certificate"] = serde_json::json!(c.certificate);
+            o["margin"] = serde_json::json!(c.margin);
+            o["detail"] = serde_json::json!(c.detail);
+        }
+        criteria.insert(label.to_string(), o);
+    }
+    let by = match &report.conclusion {
+        Conclusion::Exists { by, .. } | Conclusion::None { by, .. } => Some(by.label()),
+        Conclusion::Unknown => None,
+    };
+    serde_json::json!({
+        "file": file.display().to_string(),
+        "kind": report.kind,
+        "contacts": report.contacts,
+        "criteria": criteria,
+        "conclusion": report.conclusion.label(),
+        "by": by,
+    })
+}
+
+fn print_table(file: &Path, report: &ExistenceReport, certificates: bool) {
+    println!(
+        "{}: {} problem, d = {}, {} contacts{}",
+        file.display(),
+        report.kind,
+        report.dim,
+        report.contacts,
+        if report.frictionless {
+            ", frictionless"
+        } else {
+            ""
+        }
+    );
+    println!(
+        "{:<10} {:<10} {:>12} {:>12}  detail",
+        "criterion", "verdict", "residual", "margin"
+    );
+    for criterion in ORDER {
+        let label = criterion.label();
+        let c: &CriterionReport = report.criteria.get(criterion);
+        println!(
+            "{:<10} {:<10} {:>12} {:>12}  {}",
+            format!("({label})"),
+            format!("{:?}", c.verdict).to_lowercase(),
+            c.certificate_residual
+                .map_or_else(|| "-".to_string(), |x| format!("{x:.2e}")),
+            c.margin
+                .map_or_else(|| "-".to_string(), |x| format!("{x:.3e}")),
+            c.detail
+        );
+        if certificates {
+            if let (Some(kind), Some(v)) = (c.certificate_kind, &c.certificate) {
+                let shown: Vec<String> = v.iter().take(12).map(|x| format!("{x:.4e}")).collect();
+                println!(
+                    "{:<10} {:?} certificate ({} entries): [{}{}]",
+                    "",
+                    kind,
+                    v.len(),
+                    shown.join(", "),
+                    if v.len() > 12 { ", …" } else { "" }
+                );
+            }
+        }
+    }
+    match &report.conclusion {
+        Conclusion::Exists { by, theorem } => {
+            println!("conclusion: a solution EXISTS, by {by}: {theorem}")
+        }
+        Conclusion::None { by, theorem } => {
+            println!("conclusion: NO solution exists, {by} fails: {theorem}")
+        }
+        Conclusion::Unknown => println!(
+            "conclusion: UNKNOWN: no sufficient criterion holds and the necessary (4.5) does not fail"
+        ),
+    }
+    println!("({:.3} s)", report.seconds);
 }

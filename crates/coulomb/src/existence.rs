@@ -475,7 +475,16 @@ struct ImpulseCheck {
     on_mask: bool,
     /// ‖H r‖ / Σⱼ |rⱼ| ‖H₍:,ⱼ₎‖
     residual: f64,
+    /// `value` plus the uncertainty the kernel residual leaves on it (see [`KERNEL_SLACK`]):
+    /// the verified upper bound on the margin
+    bound: f64,
 }
+
+/// How far wᵀr may move when an approximate r ∈ L (residual ε = ‖H r‖ relative) is replaced
+/// by a point of L ∩ Ker H: |Δ(wᵀr)| ≤ κ ‖ŵ‖ ‖r‖ ε for polyhedral cones (Hoffman) and
+/// κ ‖ŵ‖ ‖r‖ √ε for second-order cones (Hölderian error bound with exponent ½, which is
+/// attained when Ker H runs along the boundary of L). κ = KERNEL_SLACK.
+const KERNEL_SLACK: f64 = 10.0;
 
 impl<'d, 'a> MarginProblem<'d, 'a> {
     fn w_hat(&self, j: usize) -> f64 {
@@ -695,11 +704,24 @@ impl<'d, 'a> MarginProblem<'d, 'a> {
             // H r = 0 trivially: every column r touches is zero.
             0.0
         };
+        let polyhedral = d.dim == 2 || self.blocks.iter().all(|b| !matches!(b, Block::Soc(_)));
+        let w_hat_norm = if self.homogeneous {
+            0.0
+        } else {
+            crate::law::norm(d.w) / d.w_scale
+        };
+        let spread = if polyhedral {
+            residual
+        } else {
+            residual.sqrt()
+        };
+        let bound = value + KERNEL_SLACK * w_hat_norm * crate::law::norm(&r) * spread;
         Some(ImpulseCheck {
             r,
             value,
             on_mask,
             residual,
+            bound,
         })
     }
 }
@@ -771,7 +793,7 @@ fn criterion_4_5(data: &KinematicData, settings: &CheckSettings) -> CriterionRep
         }
     }
     if let Some(imp) = &ver.imp {
-        if imp.value < -settings.tol && imp.residual <= settings.certificate_tol {
+        if imp.bound < -settings.tol && imp.residual <= settings.certificate_tol {
             let y: Vec<f64> = imp.r.chunks_exact(data.dim).map(|c| c[0]).collect();
             return CriterionReport {
                 verdict: Verdict::Fails,
@@ -779,11 +801,11 @@ fn criterion_4_5(data: &KinematicData, settings: &CheckSettings) -> CriterionRep
                 certificate_kind: Some(CertificateKind::Farkas),
                 certificate: Some(y),
                 margin,
-                dual_bound: Some(imp.value),
+                dual_bound: Some(imp.bound),
                 detail: format!(
-                    "Farkas certificate y ≥ 0, Σy = 1, H_N y ≈ 0 (relative residual {:.2e}), w_Nᵀy = {:.3e}·‖w‖∞ < 0: \
+                    "Farkas certificate y ≥ 0, Σy = 1, H_N y ≈ 0 (relative residual {:.2e}), w_Nᵀy = {:.3e}·‖w‖∞ (+ kernel slack: {:.3e}) < 0: \
                      penetration cannot be prevented, no solution exists",
-                    imp.residual, imp.value
+                    imp.residual, imp.value, imp.bound
                 ),
             };
         }
@@ -793,10 +815,10 @@ fn criterion_4_5(data: &KinematicData, settings: &CheckSettings) -> CriterionRep
             "no certificate verified (Clarabel: {}; best margin {}, dual bound {})",
             ver.solve.clarabel_status,
             fmt_opt(margin),
-            fmt_opt(ver.imp.as_ref().map(|i| i.value))
+            fmt_opt(ver.imp.as_ref().map(|i| i.bound))
         ),
         margin,
-        ver.imp.as_ref().map(|i| i.value),
+        ver.imp.as_ref().map(|i| i.bound),
     )
 }
 
@@ -817,7 +839,7 @@ fn criteria_4_4_and_4_6(
     };
     let ver = solve_and_verify(&mp, settings);
     let margin = ver.vel.as_ref().map(|(_, c)| c.masked.min(c.unmasked));
-    let dual_bound = ver.imp.as_ref().map(|i| i.value);
+    let dual_bound = ver.imp.as_ref().map(|i| i.bound);
     if let (Some((v, c)), Some(m)) = (&ver.vel, margin) {
         if m >= -settings.tol {
             let v_rel = crate::law::norm(v) * data.b_scale / data.w_scale;
@@ -856,21 +878,18 @@ fn criteria_4_4_and_4_6(
         }
     }
     if let Some(imp) = &ver.imp {
-        let infeasible_off_mask = !imp.on_mask && imp.value < -settings.tol;
-        if (imp.value < -settings.tol || infeasible_off_mask)
-            && imp.residual <= settings.certificate_tol
-        {
+        if imp.bound < -settings.tol && imp.residual <= settings.certificate_tol {
             let rep = CriterionReport {
                 verdict: Verdict::Fails,
                 certificate_residual: Some(imp.residual),
                 certificate_kind: Some(CertificateKind::Impulse),
                 certificate: Some(imp.r.clone()),
                 margin,
-                dual_bound: Some(imp.value),
+                dual_bound: Some(imp.bound),
                 detail: format!(
-                    "r ∈ L with Σ r_N = 1, ‖H r‖ relative residual {:.2e}, wᵀr = {:.3e}·‖w‖∞ < 0: \
+                    "r ∈ L with Σ r_N = 1, ‖H r‖ relative residual {:.2e}, wᵀr = {:.3e}·‖w‖∞ (+ kernel slack: {:.3e}) < 0: \
                      w ∉ cl(Im Hᵀ + L*)",
-                    imp.residual, imp.value
+                    imp.residual, imp.value, imp.bound
                 ),
             };
             return (rep.clone(), rep);
@@ -915,7 +934,7 @@ fn criterion_4_1(data: &KinematicData, settings: &CheckSettings) -> CriterionRep
     };
     let ver = solve_and_verify(&mp, settings);
     let margin = ver.vel.as_ref().map(|(_, c)| c.masked);
-    let dual_bound = ver.imp.as_ref().map(|i| i.value);
+    let dual_bound = ver.imp.as_ref().map(|i| i.bound);
     if let Some((v, c)) = &ver.vel {
         if c.masked > settings.tol && c.unmasked >= -settings.tol {
             let shown = if c.masked.is_finite() {
@@ -940,9 +959,9 @@ fn criterion_4_1(data: &KinematicData, settings: &CheckSettings) -> CriterionRep
     }
     if let Some(imp) = &ver.imp {
         let bound_ok = if imp.on_mask {
-            imp.value <= settings.tol
+            imp.bound <= settings.tol
         } else {
-            imp.value < -settings.tol
+            imp.bound < -settings.tol
         };
         if bound_ok && imp.residual <= settings.certificate_tol {
             return CriterionReport {
@@ -951,16 +970,16 @@ fn criterion_4_1(data: &KinematicData, settings: &CheckSettings) -> CriterionRep
                 certificate_kind: Some(CertificateKind::Impulse),
                 certificate: Some(imp.r.clone()),
                 margin,
-                dual_bound: Some(imp.value),
+                dual_bound: Some(imp.bound),
                 detail: if imp.on_mask {
                     format!(
-                        "r ∈ L ∩ Ker H (relative residual {:.2e}) with Σ_{{μ>0}} r_N = 1 bounds every margin by wᵀr = {:.3e}·‖w‖∞ ≤ tol",
-                        imp.residual, imp.value
+                        "r ∈ L ∩ Ker H (relative residual {:.2e}) with Σ_{{μ>0}} r_N = 1 bounds every margin by wᵀr = {:.3e}·‖w‖∞ (+ kernel slack: {:.3e}) ≤ tol",
+                        imp.residual, imp.value, imp.bound
                     )
                 } else {
                     format!(
-                        "r ∈ L ∩ Ker H (relative residual {:.2e}) with wᵀr = {:.3e}·‖w‖∞ < 0: even the closed cone constraint is infeasible",
-                        imp.residual, imp.value
+                        "r ∈ L ∩ Ker H (relative residual {:.2e}) with wᵀr = {:.3e}·‖w‖∞ (+ kernel slack: {:.3e}) < 0: even the closed cone constraint is infeasible",
+                        imp.residual, imp.value, imp.bound
                     )
                 },
             };

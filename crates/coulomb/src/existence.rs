@@ -42,6 +42,23 @@
 //! Certificates returned by Clarabel are never trusted as such: v is checked by recomputing
 //! Hᵀ v + w and its cone margins; r is projected onto L, normalized, and its kernel residual
 //! ‖H r‖ / Σⱼ |rⱼ| ‖H₍:,ⱼ₎‖ is recomputed. The verdict is taken from these verified numbers.
+//!
+//! # Tolerances and "undecided"
+//! Margins are measured on w / ‖w‖∞ (the criteria are invariant under scaling of w), and
+//! `CheckSettings::tol` separates the verdicts:
+//! - a closed criterion ((4.4), (4.5), (4.6)) holds when a verified v has margin ≥ −tol;
+//! - the strict ones hold when the margin is > tol ((4.1); for (5.1), relative to max‖xⁱ‖);
+//! - a criterion fails when a verified r gives an upper bound on the margin below −tol
+//!   (≤ tol for (4.1)); that bound is wᵀr plus a slack for the kernel residual of r, which
+//!   grows like √residual for second-order cones (see `KERNEL_SLACK`), so that an r that
+//!   is only approximately in Ker H cannot fake a failure;
+//! - otherwise the verdict is undecided. This is what happens when w lies on the boundary of
+//!   a non-closed Im Hᵀ + L* (d = 3): the supremum of the margin is 0 but is not attained, so
+//!   (4.4) fails while (4.6) holds, and no finite computation can tell them apart; (4.4) is
+//!   then reported undecided rather than holding.
+//!
+//! In d = 2 (and for μ ∈ {0, ∞}) every cone is polyhedral, Im Hᵀ + L* is closed and
+//! (4.4) ⇔ (4.6).
 
 use crate::problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
 use crate::sparse::CscMatrix;
@@ -851,8 +868,8 @@ fn criteria_4_4_and_4_6(
                 margin: Some(m),
                 dual_bound,
                 detail: format!(
-                    "v found with dist-margin {m:.3e} of Hᵀv + w to L*: w ∈ cl(Im Hᵀ + L*) within tolerance, \
-                     hence wᵀr ≥ 0 on L ∩ Ker H"
+                    "v found with worst margin x_N − μ‖x_T‖ = {m:.3e}·‖w‖∞ of Hᵀv + w: w ∈ cl(Im Hᵀ + L*) \
+                     within tolerance, i.e. wᵀr ≥ 0 on L ∩ Ker H"
                 ),
             };
             let unattained = m < 0.0 && !polyhedral && v_rel > UNATTAINED_V_NORM;

@@ -8,8 +8,8 @@
 //! |---|---|---|
 //! | (4.5) | ∃ v: (Hᵀ v + w)ⁱ_N ≥ 0 for every contact | necessary; if it fails **no solution exists** |
 //! | (4.1) | ∃ v: Hᵀ v + w ∈ 𝓛* (interior of K_{1/μ} where μ > 0, half-spaces where μ = 0) | existence, Thm 4.6 |
-//! | (4.4) | w ∈ Im Hᵀ + L* | existence, Cadoux–Malick [21] (after Prop. 4.8); necessary and sufficient when all μ = 0 (§5.1) |
-//! | (4.6) | wᵀ r ≥ 0 for all r ∈ L ∩ Ker H, i.e. w ∈ cl(Im Hᵀ + L*) | existence, Klarbring–Pang [48] via Prop. 4.8 |
+//! | (4.4) | w ∈ Im Hᵀ + L* | existence, Cadoux–Malick \[21\] (after Prop. 4.8); necessary and sufficient when all μ = 0 (§5.1) |
+//! | (4.6) | wᵀ r ≥ 0 for all r ∈ L ∩ Ker H, i.e. w ∈ cl(Im Hᵀ + L*) | existence, Klarbring–Pang \[48\] via Prop. 4.8 |
 //! | (5.1) | Ker H ∩ L = {0} | existence for every w, Thm 5.1 |
 //!
 //! For a local problem (W, q) the same holds with W in place of H (Ker W = Ker H,
@@ -1154,7 +1154,7 @@ fn validate_settings(s: &CheckSettings) -> Result<(), CheckError> {
 
 /// The theory's conclusion from the verdicts: (4.5) failing proves non-existence; in the
 /// frictionless case (4.4) is necessary and sufficient (§5.1); otherwise the first sufficient
-/// criterion that holds, in the order (4.1) Thm 4.6, (5.1) Thm 5.1, (4.4) [21], (4.6) [48].
+/// criterion that holds, in the order (4.1) Thm 4.6, (5.1) Thm 5.1, (4.4) \[21\], (4.6) \[48\].
 pub fn conclude(c: &Criteria, frictionless: bool) -> Conclusion {
     if c.c4_5.verdict == Verdict::Fails {
         return Conclusion::None {
@@ -1187,9 +1187,9 @@ pub fn conclude(c: &Criteria, frictionless: bool) -> Conclusion {
         ),
         (
             Criterion::C4_4,
-            "Cadoux–Malick [21], generalizing Thm 4.6 (after Prop. 4.8)",
+            "Cadoux–Malick \[21\], generalizing Thm 4.6 (after Prop. 4.8)",
         ),
-        (Criterion::C4_6, "Klarbring–Pang [48] via Prop. 4.8"),
+        (Criterion::C4_6, "Klarbring–Pang \[48\] via Prop. 4.8"),
     ];
     for (by, theorem) in sufficient {
         if c.get(by).verdict == Verdict::Holds {

@@ -28,10 +28,22 @@ fn valid_local() -> Layout {
     put(&mut l, "fclib_local/W/n", Data::I32(vec![6]));
     put(&mut l, "fclib_local/W/nz", Data::I32(vec![-1]));
     put(&mut l, "fclib_local/W/nzmax", Data::I32(vec![8]));
-    put(&mut l, "fclib_local/W/p", Data::I32(vec![0, 1, 2, 3, 4, 5, 6]));
-    put(&mut l, "fclib_local/W/i", Data::I32(vec![0, 1, 2, 3, 4, 5, 99, -7]));
+    put(
+        &mut l,
+        "fclib_local/W/p",
+        Data::I32(vec![0, 1, 2, 3, 4, 5, 6]),
+    );
+    put(
+        &mut l,
+        "fclib_local/W/i",
+        Data::I32(vec![0, 1, 2, 3, 4, 5, 99, -7]),
+    );
     put(&mut l, "fclib_local/W/x", Data::F64(vec![2.0; 8]));
-    put(&mut l, "fclib_local/vectors/q", Data::F64(vec![-1.0, 0.0, 0.0, 1.0, 0.0, 0.0]));
+    put(
+        &mut l,
+        "fclib_local/vectors/q",
+        Data::F64(vec![-1.0, 0.0, 0.0, 1.0, 0.0, 0.0]),
+    );
     put(&mut l, "fclib_local/vectors/mu", Data::F64(vec![0.3, 0.5]));
     put(&mut l, "fclib_local/spacedim", Data::I32(vec![3]));
     put(&mut l, "fclib_local/info/title", Data::Str("test"));
@@ -113,22 +125,26 @@ fn fclib_corrupt_valid_layout_reads() {
     let Problem::Local(p) = &f.problem else {
         panic!()
     };
-    assert_eq!(p.w, CscMatrix::identity(6, 2.0), "only the first p[n] entries used");
+    assert_eq!(
+        p.w,
+        CscMatrix::identity(6, 2.0),
+        "only the first p[n] entries used"
+    );
     assert_eq!(f.guesses.len(), 1);
     // int64 indices are read too.
     let mut l = valid_local();
+    l.insert("fclib_local/W/i".into(), Data::I64(vec![0, 1, 2, 3, 4, 5]));
     l.insert(
-        "fclib_local/W/i".into(),
-        Data::I64(vec![0, 1, 2, 3, 4, 5]),
+        "fclib_local/W/p".into(),
+        Data::I64(vec![0, 1, 2, 3, 4, 5, 6]),
     );
-    l.insert("fclib_local/W/p".into(), Data::I64(vec![0, 1, 2, 3, 4, 5, 6]));
     assert_eq!(read(&l).unwrap().problem, f.problem);
 }
 
 #[test]
 fn fclib_corrupt_not_hdf5_and_truncated() {
-    let err = fclib::read_bytes("text.hdf5", b"this is not an HDF5 file at all".to_vec())
-        .unwrap_err();
+    let err =
+        fclib::read_bytes("text.hdf5", b"this is not an HDF5 file at all".to_vec()).unwrap_err();
     assert!(matches!(err.kind, FclibErrorKind::NotHdf5), "{err}");
     assert!(err.to_string().starts_with("text.hdf5: not an HDF5 file"));
     let err = fclib::read_bytes("empty.hdf5", Vec::new()).unwrap_err();
@@ -141,7 +157,9 @@ fn fclib_corrupt_not_hdf5_and_truncated() {
             .expect_err("a truncated file is never valid");
         assert!(err.to_string().starts_with("cut.hdf5: "));
         let name = format!("{:?}", err.kind);
-        *kinds.entry(name.split([' ', '(', '{']).next().unwrap().to_string()).or_insert(0) += 1;
+        *kinds
+            .entry(name.split([' ', '(', '{']).next().unwrap().to_string())
+            .or_insert(0) += 1;
     }
     println!("truncation error kinds: {kinds:?}");
     assert!(kinds.contains_key("Corrupt") || kinds.contains_key("MissingGroup"));
@@ -157,9 +175,15 @@ fn fclib_corrupt_wrong_group() {
     let mut l = Layout::new();
     l.insert("something_else/x".into(), Data::F64(vec![1.0]));
     let err = read(&l).unwrap_err();
-    assert!(matches!(err.kind, FclibErrorKind::MissingGroup { .. }), "{err}");
+    assert!(
+        matches!(err.kind, FclibErrorKind::MissingGroup { .. }),
+        "{err}"
+    );
     let msg = err.to_string();
-    assert!(msg.contains("/fclib_local") && msg.contains("/fclib_global"), "{msg}");
+    assert!(
+        msg.contains("/fclib_local") && msg.contains("/fclib_global"),
+        "{msg}"
+    );
 
     let mut l = valid_local();
     l.retain(|k, _| !k.starts_with("fclib_local/W/"));
@@ -171,7 +195,11 @@ fn fclib_corrupt_wrong_group() {
 fn fclib_corrupt_wrong_lengths() {
     let mut l = valid_local();
     l.insert("fclib_local/vectors/q".into(), Data::F64(vec![1.0; 4]));
-    expect_err(&l, "/fclib_local/vectors/q", "expected 6 (m of /fclib_local/W) entries, found 4");
+    expect_err(
+        &l,
+        "/fclib_local/vectors/q",
+        "expected 6 (m of /fclib_local/W) entries, found 4",
+    );
 
     let mut l = valid_local();
     l.insert("fclib_local/vectors/mu".into(), Data::F64(vec![0.3]));
@@ -198,7 +226,11 @@ fn fclib_corrupt_wrong_lengths() {
 fn fclib_corrupt_wrong_types() {
     let mut l = valid_local();
     l.insert("fclib_local/vectors/q".into(), Data::Str("0 0 0 0 0 0"));
-    expect_err(&l, "/fclib_local/vectors/q", "expected a float64 array, found a fixed-length string");
+    expect_err(
+        &l,
+        "/fclib_local/vectors/q",
+        "expected a float64 array, found a fixed-length string",
+    );
 
     let mut l = valid_local();
     l.insert("fclib_local/W/p".into(), Data::F64(vec![0.0; 7]));
@@ -211,18 +243,28 @@ fn fclib_corrupt_wrong_types() {
     let mut l = valid_local();
     l.remove("fclib_local/vectors/mu");
     l.insert("fclib_local/vectors/mu/x".into(), Data::F64(vec![0.3, 0.5]));
-    expect_err(&l, "/fclib_local/vectors/mu", "expected a dataset, found a group");
+    expect_err(
+        &l,
+        "/fclib_local/vectors/mu",
+        "expected a dataset, found a group",
+    );
 }
 
 #[test]
 fn fclib_corrupt_inconsistent_storage() {
     // p[n] larger than the index array.
     let mut l = valid_local();
-    l.insert("fclib_local/W/p".into(), Data::I32(vec![0, 1, 2, 3, 4, 5, 9]));
+    l.insert(
+        "fclib_local/W/p".into(),
+        Data::I32(vec![0, 1, 2, 3, 4, 5, 9]),
+    );
     expect_err(&l, "/fclib_local/W/i", "at least 9 (p[n])");
     // Decreasing pointers.
     let mut l = valid_local();
-    l.insert("fclib_local/W/p".into(), Data::I32(vec![0, 2, 1, 3, 4, 5, 6]));
+    l.insert(
+        "fclib_local/W/p".into(),
+        Data::I32(vec![0, 2, 1, 3, 4, 5, 6]),
+    );
     expect_err(&l, "/fclib_local/W/p", "pointer 2 = 1 is smaller");
     // Triplets: nz larger than the arrays.
     let mut l = valid_local();
@@ -232,7 +274,11 @@ fn fclib_corrupt_inconsistent_storage() {
     let mut l = valid_local();
     l.insert("fclib_local/W/nz".into(), Data::I32(vec![6]));
     l.insert("fclib_local/W/p".into(), Data::I32(vec![0, 1, 2, 3, 4, 6]));
-    expect_err(&l, "/fclib_local/W/p", "entry 5 = 6 is not a column index in 0..6");
+    expect_err(
+        &l,
+        "/fclib_local/W/p",
+        "entry 5 = 6 is not a column index in 0..6",
+    );
     // A negative row index among the used entries.
     let mut l = valid_local();
     l.insert("fclib_local/W/i".into(), Data::I32(vec![0, 1, -2, 3, 4, 5]));
@@ -279,8 +325,13 @@ fn fclib_corrupt_inconsistent_storage() {
 fn fclib_corrupt_byte_edits_never_panic() {
     let mut files: Vec<Vec<u8>> = vec![build(&valid_local())];
     let p = LocalProblem::new(3, CscMatrix::identity(6, 1.0), vec![0.0; 6], vec![0.1; 2]).unwrap();
-    files.push(fclib::to_bytes(&FclibFile::new(Problem::Local(p)), &WriteOptions::default()).unwrap());
-    let shared = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/fclib"));
+    files.push(
+        fclib::to_bytes(&FclibFile::new(Problem::Local(p)), &WriteOptions::default()).unwrap(),
+    );
+    let shared = PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/fclib"
+    ));
     for name in ["Capsules-i125-1213", "Box_Stacks-i0122-82-5", "Rover4396"] {
         if let Ok(b) = std::fs::read(shared.join(format!("{name}.hdf5"))) {
             files.push(b);

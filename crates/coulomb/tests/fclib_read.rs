@@ -25,7 +25,15 @@ const EXPECTED: &[(&str, &str, usize, usize, Option<usize>, bool, usize)] = &[
     ("BoxesStack1-i100000-32", "local", 3, 52, None, false, 0),
     ("Capsules-i101-404", "local", 3, 225, None, false, 0),
     ("Capsules-i125-1213", "local", 3, 286, None, true, 1),
-    ("Confeti-ex13-4contact-Fc3D-SBM", "local", 3, 4, None, false, 0),
+    (
+        "Confeti-ex13-4contact-Fc3D-SBM",
+        "local",
+        3,
+        4,
+        None,
+        false,
+        0,
+    ),
     ("CubeH8", "global", 3, 1, Some(162), false, 0),
     ("FC3D_Example1", "local", 3, 3, None, false, 0),
     ("FrictionContact3D_1c", "local", 3, 1, None, false, 0),
@@ -166,7 +174,9 @@ for fn in sorted(glob.glob(os.path.join(sys.argv[1], '*.hdf5'))):
         .arg(dir)
         .output()
         .ok()?;
-    out.status.success().then(|| String::from_utf8_lossy(&out.stdout).into_owned())
+    out.status
+        .success()
+        .then(|| String::from_utf8_lossy(&out.stdout).into_owned())
 }
 
 fn h5py_available() -> bool {
@@ -226,15 +236,24 @@ fn fclib_strict_symmetry_on_real_files() {
                 let msg = err.to_string();
                 match err.kind {
                     FclibErrorKind::InvalidProblem {
-                        source: ProblemError::NotSymmetric { what: "W", asymmetry },
+                        source:
+                            ProblemError::NotSymmetric {
+                                what: "W",
+                                asymmetry,
+                            },
                         ..
                     } => assert!((asymmetry / asym - 1.0).abs() < 1e-3, "{name}: {asymmetry}"),
                     other => panic!("{name}: unexpected {other}"),
                 }
-                assert!(msg.contains("/fclib_local") && msg.contains("not symmetric"), "{msg}");
+                assert!(
+                    msg.contains("/fclib_local") && msg.contains("not symmetric"),
+                    "{msg}"
+                );
                 let got = relaxed.symmetrized.expect("recorded");
                 assert!((got / asym - 1.0).abs() < 1e-3);
-                let Problem::Local(p) = &relaxed.problem else { panic!() };
+                let Problem::Local(p) = &relaxed.problem else {
+                    panic!()
+                };
                 assert_eq!(p.w.asymmetry(), 0.0);
             }
             None => {
@@ -244,4 +263,27 @@ fn fclib_strict_symmetry_on_real_files() {
             }
         }
     }
+}
+
+/// The stored solutions of docs/fclib.md, evaluated with the error of docs/error.md.
+#[test]
+fn fclib_stored_solutions_evaluate_as_documented() {
+    let Some(dir) = fclib_dir() else { return };
+    let f = read(&dir, "Capsules-i125-1213");
+    let e = fclib::evaluate(&f.problem, f.solution.as_ref().unwrap()).unwrap();
+    println!("Capsules-i125-1213 solution: {e:?}");
+    assert!((e.measure.error / 1.58e-2 - 1.0).abs() < 0.01, "{e:?}");
+    assert!(e.balance_residual.is_none());
+    assert!(!e.converged(1e-8));
+    let g = fclib::evaluate(&f.problem, &f.guesses[0]).unwrap();
+    println!("Capsules-i125-1213 guess 1: {g:?}");
+    assert!((g.measure.error / 1.1e-2 - 1.0).abs() < 0.05, "{g:?}");
+
+    let f = read(&dir, "Box_Stacks-i0122-82-5");
+    let e = fclib::evaluate(&f.problem, f.solution.as_ref().unwrap()).unwrap();
+    println!("Box_Stacks-i0122-82-5 solution: {e:?}");
+    assert_eq!(e.measure.error, 0.0);
+    let b = e.balance_residual.unwrap();
+    assert!((b / 3.97e-2 - 1.0).abs() < 0.01, "{b}");
+    assert!(!e.converged(1e-8));
 }

@@ -1,9 +1,7 @@
 //! write → read round trips in every storage and index width, and h5py reading what
 //! coulomb writes.
 
-use coulomb::fclib::{
-    self, FclibFile, IndexWidth, Info, Storage, StoredSolution, WriteOptions,
-};
+use coulomb::fclib::{self, FclibFile, IndexWidth, Info, Storage, StoredSolution, WriteOptions};
 use coulomb::{CscMatrix, GlobalProblem, LocalProblem, Problem};
 use std::path::PathBuf;
 use std::process::Command;
@@ -195,10 +193,7 @@ fn fclib_write_refuses_int32_overflow_by_name() {
 }
 
 fn tempdir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "coulomb-fclib-{}-{tag}",
-        std::process::id()
-    ));
+    let dir = std::env::temp_dir().join(format!("coulomb-fclib-{}-{tag}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }

@@ -104,11 +104,8 @@ impl<'a> Reader<'a> {
     }
 
     fn dataset(&self, path: &str) -> Result<Dataset, FclibError> {
-        self.dataset_opt(path)?.ok_or_else(|| {
-            self.err(FclibErrorKind::MissingDataset {
-                path: shown(path),
-            })
-        })
+        self.dataset_opt(path)?
+            .ok_or_else(|| self.err(FclibErrorKind::MissingDataset { path: shown(path) }))
     }
 
     /// Datatype and entry count of a dataset, after checking that its declared size is
@@ -544,23 +541,23 @@ impl<'a> Reader<'a> {
     pub(super) fn fclib_file(&self, opts: &ReadOptions) -> Result<FclibFile, FclibError> {
         let local = self.has_group("fclib_local")?;
         let global = self.has_group("fclib_global")?;
-        let ((problem, symmetrized), group) = match (local, global) {
-            (true, false) => (self.local(opts)?, "fclib_local"),
-            (false, true) => (self.global(opts)?, "fclib_global"),
-            (true, true) => {
-                return Err(self.err(FclibErrorKind::Unsupported {
+        let ((problem, symmetrized), group) =
+            match (local, global) {
+                (true, false) => (self.local(opts)?, "fclib_local"),
+                (false, true) => (self.global(opts)?, "fclib_global"),
+                (true, true) => return Err(self.err(FclibErrorKind::Unsupported {
                     path: "/".into(),
-                    detail: "holds both /fclib_local and /fclib_global; an FCLIB file has one problem"
-                        .into(),
-                }))
-            }
-            (false, false) => {
-                return Err(self.err(FclibErrorKind::MissingGroup {
-                    path: "/fclib_local".into(),
-                    hint: " (and no /fclib_global either): not an FCLIB problem file".into(),
-                }))
-            }
-        };
+                    detail:
+                        "holds both /fclib_local and /fclib_global; an FCLIB file has one problem"
+                            .into(),
+                })),
+                (false, false) => {
+                    return Err(self.err(FclibErrorKind::MissingGroup {
+                        path: "/fclib_local".into(),
+                        hint: " (and no /fclib_global either): not an FCLIB problem file".into(),
+                    }))
+                }
+            };
         let info = self.info(group)?;
         let solution = if self.has_group("solution")? {
             Some(self.solution("solution", Some(&problem))?)

@@ -142,7 +142,11 @@ fn put_matrix(
     Ok(())
 }
 
-fn put_info(parent: &mut GroupBuilder, info: &Info, parent_path: &str) -> Result<(), FclibErrorKind> {
+fn put_info(
+    parent: &mut GroupBuilder,
+    info: &Info,
+    parent_path: &str,
+) -> Result<(), FclibErrorKind> {
     let path = format!("{parent_path}/info");
     let mut g = parent.create_group("info");
     put_string(&mut g, "title", &info.title, &path)?;

@@ -91,7 +91,7 @@ impl InnerSolver for FacetedSolver {
         r: &mut [f64],
     ) -> InnerReport {
         let k = self.effective_facets();
-        solve_dual_qp(&mut self.cache, k, problem, limits, r, || {
+        solve_dual_qp(&mut self.cache, k, 0, problem, limits, r, || {
             pyramid_constraints(problem.dim, problem.mu, k)
         })
     }

@@ -37,24 +37,52 @@ use std::time::Instant;
 ///
 /// The returned r is Clarabel's primal solution x; W r + b is then ũ ∈ L* up to the
 /// tolerance (the multiplier z of the cone rows, rescaled, equals ũ).
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct IpmSolver {
+    /// at most this many semismooth Newton steps polish Clarabel's r (0: none); see
+    /// [`DEFAULT_POLISH_STEPS`]
+    pub polish_steps: usize,
     /// the Clarabel solver of the last call, reused while (d, μ, W) stay the same
     cache: Option<QpCache>,
+}
+
+/// Default number of semismooth Newton polish steps after an interior-point solve.
+///
+/// Clarabel stops on the duality gap; for sliding contacts the gap is quadratic in the
+/// misalignment of r and ũ, so its r has a natural-map residual (the error of
+/// docs/error.md) of about the square root of the gap, e.g. 1e-7 for a gap of 1e-13 in 3-D.
+/// A few Newton steps on the natural map F(r) = r − P_L(r − ũ), each kept only if it
+/// reduces ‖F‖, bring it to rounding level.
+pub const DEFAULT_POLISH_STEPS: usize = 3;
+
+impl Default for IpmSolver {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl Clone for IpmSolver {
     /// A clone starts without the cached Clarabel setup (it is rebuilt on first use).
     fn clone(&self) -> Self {
-        Self::new()
+        Self::with_polish(self.polish_steps)
     }
 }
 
 impl IpmSolver {
     /// A solver with default Clarabel settings (`verbose = false`; tolerances, iteration cap
-    /// and time limit come from the [`InnerLimits`] of each call).
+    /// and time limit come from the [`InnerLimits`] of each call) and
+    /// [`DEFAULT_POLISH_STEPS`] polish steps.
     pub fn new() -> Self {
-        Self { cache: None }
+        Self::with_polish(DEFAULT_POLISH_STEPS)
+    }
+
+    /// Like [`IpmSolver::new`] with at most `polish_steps` Newton polish steps (0: plain
+    /// Clarabel).
+    pub fn with_polish(polish_steps: usize) -> Self {
+        Self {
+            polish_steps,
+            cache: None,
+        }
     }
 }
 
@@ -63,14 +91,21 @@ impl InnerSolver for IpmSolver {
         "ipm"
     }
 
-    /// Solves (4.7) with Clarabel; `r` on entry is ignored (no warm start, see module docs).
+    /// Solves (4.7) with Clarabel, then polishes r (see [`DEFAULT_POLISH_STEPS`]); `r` on
+    /// entry is ignored (no warm start, see module docs).
+    ///
+    /// The report's residual is the relative natural-map residual
+    /// ‖r − P_L(r − (W r + b))‖ / max(1, ‖b‖) of the returned r. The status is Clarabel's,
+    /// mapped by [`map_status`], except that a stalled Clarabel solve (`AlmostSolved`,
+    /// `InsufficientProgress`) whose polished r has residual ≤ `limits.tol` is `Solved`.
     fn solve(
         &mut self,
         problem: &InnerProblem<'_>,
         limits: &InnerLimits,
         r: &mut [f64],
     ) -> InnerReport {
-        solve_dual_qp(&mut self.cache, 0, problem, limits, r, || {
+        let polish = self.polish_steps;
+        solve_dual_qp(&mut self.cache, 0, polish, problem, limits, r, || {
             let layout = ConeLayout::dual_exact(problem.dim, problem.mu);
             let a = layout.a_matrix(None);
             (a, layout.cones())
@@ -103,6 +138,19 @@ pub struct PrimalOutcome {
 /// then hold Clarabel's last iterate (its infeasibility certificate), not a solution.
 /// Inconsistent sizes give [`InnerStatus::NumericalError`] with empty v and r.
 pub fn solve_primal(problem: &GlobalProblem, shift: &[f64], limits: &InnerLimits) -> PrimalOutcome {
+    solve_primal_polished(problem, shift, limits, DEFAULT_POLISH_STEPS)
+}
+
+/// [`solve_primal`] with at most `polish_steps` semismooth Newton steps on (3.14) after
+/// Clarabel (0: plain Clarabel): F₁ = M v − H r − f = 0, F₂ = r − P_L(r − (Hᵀ v + shift)) = 0.
+/// When polishing, the report's residual is max(‖F₁‖ / max(1, ‖f‖), ‖F₂‖ / max(1, ‖shift‖));
+/// a stalled Clarabel solve whose polished residual is ≤ `limits.tol` is `Solved`.
+pub fn solve_primal_polished(
+    problem: &GlobalProblem,
+    shift: &[f64],
+    limits: &InnerLimits,
+    polish_steps: usize,
+) -> PrimalOutcome {
     let fail = |status| PrimalOutcome {
         v: Vec::new(),
         r: Vec::new(),
@@ -149,16 +197,29 @@ pub fn solve_primal(problem: &GlobalProblem, shift: &[f64], limits: &InnerLimits
         Err(_) => return fail(InnerStatus::NumericalError),
     };
     solver.solve();
-    let v = solver.solution.x.clone();
+    let mut v = solver.solution.x.clone();
     let z = &solver.solution.z;
-    let r = (0..nr)
+    let mut r: Vec<f64> = (0..nr)
         .map(|k| layout.map[k].map_or(0.0, |(row, scale)| scale * z[row]))
         .collect();
-    PrimalOutcome {
-        v,
-        r,
-        report: report_of(&solver),
+    let mut report = report_of(&solver);
+    let finite = v.iter().chain(&r).all(|x| x.is_finite());
+    if !finite {
+        report.status = InnerStatus::NumericalError;
+    } else if polish_steps > 0 {
+        let raw = solver.info.status;
+        let stalled = matches!(
+            raw,
+            SolverStatus::AlmostSolved | SolverStatus::InsufficientProgress
+        );
+        if raw == SolverStatus::Solved || stalled {
+            report.residual = polish_primal(problem, shift, &mut v, &mut r, polish_steps);
+            if stalled && report.residual <= limits.tol {
+                report.status = InnerStatus::Solved;
+            }
+        }
     }
+    PrimalOutcome { v, r, report }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -507,9 +568,11 @@ pub(crate) fn valid_inner(problem: &InnerProblem<'_>, r: &[f64]) -> bool {
 /// Solves min ½ rᵀ W r + bᵀ r s.t. A r + s = 0, s ∈ K with Clarabel, where `constraints`
 /// builds (A, K) for a new setup. Reuses `cache` when (d, μ, W, variant) are unchanged.
 /// Writes Clarabel's x into `r` (left untouched when no solve took place).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn solve_dual_qp(
     cache: &mut Option<QpCache>,
     variant: usize,
+    polish: usize,
     problem: &InnerProblem<'_>,
     limits: &InnerLimits,
     r: &mut [f64],
@@ -557,17 +620,334 @@ pub(crate) fn solve_dual_qp(
     };
     c.solver.solve();
     let x = &c.solver.solution.x;
-    if x.len() == r.len() && x.iter().all(|v| v.is_finite()) {
+    let finite = x.len() == r.len() && x.iter().all(|v| v.is_finite());
+    if finite {
         r.copy_from_slice(x);
     }
-    let report = report_of(&c.solver);
-    if x.iter().any(|v| !v.is_finite()) && report.status == InnerStatus::Solved {
-        return InnerReport {
-            status: InnerStatus::NumericalError,
-            ..report
+    let mut report = report_of(&c.solver);
+    if !finite {
+        report.status = InnerStatus::NumericalError;
+        return report;
+    }
+    if polish > 0 {
+        let raw = c.solver.info.status;
+        let stalled = matches!(
+            raw,
+            SolverStatus::AlmostSolved | SolverStatus::InsufficientProgress
+        );
+        let residual = if raw == SolverStatus::Solved || stalled {
+            polish_dual(problem, r, polish)
+        } else {
+            dual_natural_residual(problem, r)
         };
+        report.residual = residual;
+        if stalled && residual <= limits.tol {
+            report.status = InnerStatus::Solved;
+        }
     }
     report
+}
+
+// ---------------------------------------------------------------------------------------------
+// Semismooth Newton polish of an interior-point solution
+// ---------------------------------------------------------------------------------------------
+
+/// Projection of y onto K_μ (written into `p`) and its Jacobian ∂P_{K_μ}(y) (row-major d × d
+/// into `jac`). On the boundary piece (0 < μ < ∞, neither y ∈ K_μ nor −y ∈ K_μ*), with
+/// t = ‖y_T‖, ŷ = y_T / t and a = (y_N + μ t)/(1 + μ²):
+///
+/// ```text
+///     ∂P = (1/(1 + μ²)) (1, μ ŷ)(1, μ ŷ)ᵀ + (μ a / t) [0 0; 0 I − ŷ ŷᵀ].
+/// ```
+///
+/// Inside K_μ it is I, inside −K_μ* it is 0 (a B-subdifferential element on the kinks).
+fn projection_jacobian(mu: f64, y: &[f64], p: &mut [f64], jac: &mut [f64]) {
+    let d = y.len();
+    p.copy_from_slice(y);
+    crate::cone::project(mu, p);
+    jac.iter_mut().for_each(|x| *x = 0.0);
+    let t = crate::cone::tangent_norm(y);
+    if mu == 0.0 {
+        jac[0] = if y[0] > 0.0 { 1.0 } else { 0.0 };
+    } else if mu.is_infinite() {
+        jac[0] = if y[0] > 0.0 { 1.0 } else { 0.0 };
+        (1..d).for_each(|k| jac[k * d + k] = 1.0);
+    } else if t <= mu * y[0] {
+        (0..d).for_each(|k| jac[k * d + k] = 1.0);
+    } else if mu * t <= -y[0] || t == 0.0 {
+        // polar cone: P = 0
+    } else {
+        let a = (y[0] + mu * t) / (1.0 + mu * mu);
+        let mut g = [0.0; 3];
+        g[0] = 1.0;
+        for k in 1..d {
+            g[k] = mu * y[k] / t;
+        }
+        for i in 0..d {
+            for j in 0..d {
+                jac[i * d + j] = g[i] * g[j] / (1.0 + mu * mu);
+            }
+        }
+        let c = mu * a / t;
+        for i in 1..d {
+            for j in 1..d {
+                let e = if i == j { 1.0 } else { 0.0 };
+                jac[i * d + j] += c * (e - (y[i] / t) * (y[j] / t));
+            }
+        }
+    }
+}
+
+/// Natural-map residual F(r) = r − P_L(r − u) of the complementarity L* ∋ u ⊥ r ∈ L (3.14),
+/// with the Jacobians ∂P of every contact (row-major d × d blocks) in `jac`.
+fn natural_map(dim: usize, mu: &[f64], r: &[f64], u: &[f64], f: &mut [f64], jac: &mut [f64]) {
+    let mut y = [0.0; 3];
+    let mut p = [0.0; 3];
+    for (i, &m) in mu.iter().enumerate() {
+        let block = i * dim..(i + 1) * dim;
+        for k in 0..dim {
+            y[k] = r[block.start + k] - u[block.start + k];
+        }
+        projection_jacobian(
+            m,
+            &y[..dim],
+            &mut p[..dim],
+            &mut jac[i * dim * dim..(i + 1) * dim * dim],
+        );
+        for k in 0..dim {
+            f[block.start + k] = r[block.start + k] - p[k];
+        }
+    }
+}
+
+/// Solves J x = rhs for a square sparse J given as summed triplets, by faer's sparse LU.
+/// None if the factorization fails or the solution is not finite.
+fn sparse_lu_solve(
+    n: usize,
+    rows: &[usize],
+    cols: &[usize],
+    vals: &[f64],
+    rhs: &mut [f64],
+) -> Option<()> {
+    use faer::linalg::solvers::Solve;
+    let csc = CscMatrix::from_triplets(n, n, rows, cols, vals).ok()?;
+    let trip: Vec<faer::sparse::Triplet<usize, usize, f64>> = csc
+        .triplets()
+        .map(|(i, j, v)| faer::sparse::Triplet::new(i, j, v))
+        .collect();
+    let mat = faer::sparse::SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip).ok()?;
+    let lu = mat.sp_lu().ok()?;
+    lu.solve_in_place(faer::MatMut::from_column_major_slice_mut(rhs, n, 1));
+    rhs.iter().all(|x| x.is_finite()).then_some(())
+}
+
+/// Appends the triplets of `sign`·D·B (rows offset by `row0`) where D is the block diagonal
+/// of the d × d projection Jacobians and B is given by `(row k, column j, value)` entries;
+/// row k of B belongs to contact k / d.
+#[allow(clippy::too_many_arguments)]
+fn push_d_times(
+    dim: usize,
+    jac: &[f64],
+    sign: f64,
+    entries: impl Iterator<Item = (usize, usize, f64)>,
+    row0: usize,
+    rows: &mut Vec<usize>,
+    cols: &mut Vec<usize>,
+    vals: &mut Vec<f64>,
+) {
+    for (k, j, v) in entries {
+        let (c, a) = (k / dim, k % dim);
+        for a2 in 0..dim {
+            let dv = jac[c * dim * dim + a2 * dim + a];
+            if dv != 0.0 {
+                rows.push(row0 + c * dim + a2);
+                cols.push(j);
+                vals.push(sign * dv * v);
+            }
+        }
+    }
+}
+
+/// Appends the triplets of I − D (rows and columns offset by `off`).
+fn push_identity_minus_d(
+    dim: usize,
+    jac: &[f64],
+    off: usize,
+    rows: &mut Vec<usize>,
+    cols: &mut Vec<usize>,
+    vals: &mut Vec<f64>,
+) {
+    let contacts = jac.len() / (dim * dim);
+    for c in 0..contacts {
+        for a in 0..dim {
+            for b in 0..dim {
+                let e = if a == b { 1.0 } else { 0.0 };
+                rows.push(off + c * dim + a);
+                cols.push(off + c * dim + b);
+                vals.push(e - jac[c * dim * dim + a * dim + b]);
+            }
+        }
+    }
+}
+
+/// Relative natural-map residual ‖r − P_L(r − (W r + b))‖ / max(1, ‖b‖) of (4.7).
+pub(crate) fn dual_natural_residual(problem: &InnerProblem<'_>, r: &[f64]) -> f64 {
+    let m = r.len();
+    let mut u = problem.b.to_vec();
+    problem.w.gemv_acc(1.0, r, &mut u);
+    let mut f = vec![0.0; m];
+    let mut jac = vec![0.0; problem.mu.len() * problem.dim * problem.dim];
+    natural_map(problem.dim, problem.mu, r, &u, &mut f, &mut jac);
+    crate::law::norm(&f) / crate::law::norm(problem.b).max(1.0)
+}
+
+/// Polishes an approximate solution r of (4.7) by at most `steps` semismooth Newton steps on
+/// F(r) = r − P_L(r − (W r + b)), whose Jacobian is I − D + D W (D = ∂P_L). A step is kept
+/// only if it decreases ‖F‖; returns the final relative residual ‖F(r)‖ / max(1, ‖b‖).
+///
+/// Why: an interior-point method stops on the duality gap rᵀũ, and for a sliding contact
+/// (r and ũ on the boundaries of K_μ and K_μ*) rᵀũ is *quadratic* in their misalignment, so a
+/// gap of 1e-12 leaves a natural residual (the error measure of docs/error.md) near 1e-7.
+/// Newton on F converges quadratically from there.
+pub(crate) fn polish_dual(problem: &InnerProblem<'_>, r: &mut [f64], steps: usize) -> f64 {
+    let (dim, m) = (problem.dim, r.len());
+    let scale = crate::law::norm(problem.b).max(1.0);
+    let mut f = vec![0.0; m];
+    let mut jac = vec![0.0; problem.mu.len() * dim * dim];
+    let eval = |r: &[f64], f: &mut [f64], jac: &mut [f64]| {
+        let mut u = problem.b.to_vec();
+        problem.w.gemv_acc(1.0, r, &mut u);
+        natural_map(dim, problem.mu, r, &u, f, jac);
+        crate::law::norm(f)
+    };
+    let mut norm_f = eval(r, &mut f, &mut jac);
+    let mut trial = vec![0.0; m];
+    let mut f_trial = vec![0.0; m];
+    let mut jac_trial = vec![0.0; jac.len()];
+    for _ in 0..steps {
+        if !(norm_f > 1e-15 * scale) {
+            break;
+        }
+        // J = I − D + D W
+        let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+        push_identity_minus_d(dim, &jac, 0, &mut rows, &mut cols, &mut vals);
+        push_d_times(
+            dim,
+            &jac,
+            1.0,
+            problem.w.triplets(),
+            0,
+            &mut rows,
+            &mut cols,
+            &mut vals,
+        );
+        let mut delta: Vec<f64> = f.iter().map(|x| -x).collect();
+        if sparse_lu_solve(m, &rows, &cols, &vals, &mut delta).is_none() {
+            break;
+        }
+        for k in 0..m {
+            trial[k] = r[k] + delta[k];
+        }
+        let norm_trial = eval(&trial, &mut f_trial, &mut jac_trial);
+        if !(norm_trial < norm_f) {
+            break;
+        }
+        r.copy_from_slice(&trial);
+        std::mem::swap(&mut f, &mut f_trial);
+        std::mem::swap(&mut jac, &mut jac_trial);
+        norm_f = norm_trial;
+    }
+    norm_f / scale
+}
+
+/// Residuals of (3.14) for the primal unknowns (v, r): F₁ = M v − H r − f (into `f[..n]`) and
+/// F₂ = r − P_L(r − (Hᵀ v + shift)) (into `f[n..]`, Jacobians ∂P into `jac`); returns
+/// max(‖F₁‖ / max(1, ‖f‖), ‖F₂‖ / max(1, ‖shift‖)).
+fn primal_map(
+    problem: &GlobalProblem,
+    shift: &[f64],
+    x: &[f64],
+    f: &mut [f64],
+    jac: &mut [f64],
+) -> f64 {
+    let n = problem.m.nrows;
+    let (v, r) = x.split_at(n);
+    let (f1, f2) = f.split_at_mut(n);
+    f1.iter_mut().zip(&problem.f).for_each(|(a, b)| *a = -b);
+    problem.m.gemv_acc(1.0, v, f1);
+    problem.h.gemv_acc(-1.0, r, f1);
+    let mut u = shift.to_vec();
+    problem.h.gemv_t_acc(1.0, v, &mut u);
+    natural_map(problem.dim, &problem.mu, r, &u, f2, jac);
+    let s1 = crate::law::norm(&problem.f).max(1.0);
+    let s2 = crate::law::norm(shift).max(1.0);
+    (crate::law::norm(f1) / s1).max(crate::law::norm(f2) / s2)
+}
+
+/// Polishes (v, r) of (3.15) by at most `steps` semismooth Newton steps on
+/// (F₁, F₂) of [`primal_map`], with Jacobian [[M, −H], [D Hᵀ, I − D]]; a step is kept only
+/// if it decreases the residual. Returns the final residual (see [`polish_dual`] for why).
+fn polish_primal(
+    problem: &GlobalProblem,
+    shift: &[f64],
+    v: &mut [f64],
+    r: &mut [f64],
+    steps: usize,
+) -> f64 {
+    let (dim, n, m) = (problem.dim, v.len(), r.len());
+    let mut x: Vec<f64> = v.iter().chain(r.iter()).copied().collect();
+    let mut f = vec![0.0; n + m];
+    let mut jac = vec![0.0; problem.mu.len() * dim * dim];
+    let mut res = primal_map(problem, shift, &x, &mut f, &mut jac);
+    let mut trial = vec![0.0; n + m];
+    let mut f_trial = vec![0.0; n + m];
+    let mut jac_trial = vec![0.0; jac.len()];
+    for _ in 0..steps {
+        if !(res > 1e-15) {
+            break;
+        }
+        let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+        for (i, j, val) in problem.m.triplets() {
+            rows.push(i);
+            cols.push(j);
+            vals.push(val);
+        }
+        for (i, k, val) in problem.h.triplets() {
+            rows.push(i);
+            cols.push(n + k);
+            vals.push(-val);
+        }
+        // ∂F₂/∂v = D Hᵀ (y = r − Hᵀ v − shift): entry (k, j) of Hᵀ is H[j, k]
+        push_d_times(
+            dim,
+            &jac,
+            1.0,
+            problem.h.triplets().map(|(j, k, val)| (k, j, val)),
+            n,
+            &mut rows,
+            &mut cols,
+            &mut vals,
+        );
+        push_identity_minus_d(dim, &jac, n, &mut rows, &mut cols, &mut vals);
+        let mut delta: Vec<f64> = f.iter().map(|a| -a).collect();
+        if sparse_lu_solve(n + m, &rows, &cols, &vals, &mut delta).is_none() {
+            break;
+        }
+        for k in 0..n + m {
+            trial[k] = x[k] + delta[k];
+        }
+        let res_trial = primal_map(problem, shift, &trial, &mut f_trial, &mut jac_trial);
+        if !(res_trial < res) {
+            break;
+        }
+        std::mem::swap(&mut x, &mut trial);
+        std::mem::swap(&mut f, &mut f_trial);
+        std::mem::swap(&mut jac, &mut jac_trial);
+        res = res_trial;
+    }
+    v.copy_from_slice(&x[..n]);
+    r.copy_from_slice(&x[n..]);
+    res
 }
 
 #[cfg(test)]

@@ -5,7 +5,7 @@
 use coulomb::cone;
 use coulomb::delassus::Delassus;
 use coulomb::inner::faceted::FacetedSolver;
-use coulomb::inner::ipm::{solve_primal, IpmSolver};
+use coulomb::inner::ipm::{solve_primal, solve_primal_polished, IpmSolver};
 use coulomb::inner::{InnerLimits, InnerProblem, InnerSolver, InnerStatus};
 use coulomb::problem::GlobalProblem;
 use coulomb::sparse::CscMatrix;
@@ -123,22 +123,37 @@ fn ipm_dual_satisfies_kkt_of_4_7() {
     for dim in [2, 3] {
         for seed in 0..15 {
             let p = random_dual(100 * dim as u64 + seed, dim);
+            let problem = InnerProblem {
+                dim: p.dim,
+                w: &p.w,
+                b: &p.b,
+                mu: &p.mu,
+            };
+            // plain Clarabel, no polish
             let mut r = vec![0.0; p.b.len()];
-            let mut solver = IpmSolver::new();
-            let report = solver.solve(
-                &InnerProblem {
-                    dim: p.dim,
-                    w: &p.w,
-                    b: &p.b,
-                    mu: &p.mu,
-                },
-                &limits(),
-                &mut r,
-            );
+            let report = IpmSolver::with_polish(0).solve(&problem, &limits(), &mut r);
             assert_eq!(report.status, InnerStatus::Solved, "d={dim} seed={seed}");
             assert!(report.iterations > 0 && report.iterations <= 200);
             let kkt = kkt_residual(p.dim, &p.w, &p.b, &p.mu, &r);
             assert!(kkt < 1e-7, "d={dim} seed={seed}: KKT residual {kkt:.3e}");
+            let plain_natural = natural_residual(p.dim, &p.w, &p.b, &p.mu, &r);
+            assert!(
+                plain_natural < 1e-5,
+                "d={dim} seed={seed}: {plain_natural:.3e}"
+            );
+
+            // with the default Newton polish: the natural residual drops to rounding level
+            let mut r = vec![0.0; p.b.len()];
+            let report = IpmSolver::new().solve(&problem, &limits(), &mut r);
+            assert_eq!(report.status, InnerStatus::Solved, "d={dim} seed={seed}");
+            let kkt = kkt_residual(p.dim, &p.w, &p.b, &p.mu, &r);
+            assert!(kkt < 1e-7, "d={dim} seed={seed}: KKT residual {kkt:.3e}");
+            let natural = natural_residual(p.dim, &p.w, &p.b, &p.mu, &r);
+            assert!(
+                natural < 1e-12,
+                "d={dim} seed={seed}: natural residual {natural:.3e}"
+            );
+            assert!(report.residual < 1e-12, "{report:?}");
             // μ = 0 contacts carry no tangential impulse
             for (ri, &m) in r.chunks(dim).zip(&p.mu) {
                 if m == 0.0 {
@@ -146,6 +161,44 @@ fn ipm_dual_satisfies_kkt_of_4_7() {
                 }
             }
         }
+    }
+}
+
+#[test]
+fn ipm_handles_singular_delassus() {
+    // W = Gᵀ G with G of rank n < m (more contact components than dofs), b = Gᵀ c so that
+    // (4.7) stays bounded below
+    for seed in 0..5 {
+        let mut rng = ChaCha8Rng::seed_from_u64(40 + seed);
+        let (contacts, n) = (6, 8);
+        let m = 3 * contacts;
+        let g = random_dense(&mut rng, n, m);
+        let mut w = vec![0.0; m * m];
+        for i in 0..m {
+            for j in 0..m {
+                w[i * m + j] = (0..n).map(|k| g[k * m + i] * g[k * m + j]).sum();
+            }
+        }
+        let w = CscMatrix::from_dense(m, m, &w);
+        let c: Vec<f64> = (0..n).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let b: Vec<f64> = (0..m)
+            .map(|i| (0..n).map(|k| g[k * m + i] * c[k]).sum::<f64>() + 0.1)
+            .collect();
+        let mu = random_mu(&mut rng, contacts);
+        let mut r = vec![0.0; m];
+        let report = IpmSolver::new().solve(
+            &InnerProblem {
+                dim: 3,
+                w: &w,
+                b: &b,
+                mu: &mu,
+            },
+            &limits(),
+            &mut r,
+        );
+        assert_eq!(report.status, InnerStatus::Solved, "seed={seed}");
+        let kkt = kkt_residual(3, &w, &b, &mu, &r);
+        assert!(kkt < 1e-7, "seed={seed}: KKT residual {kkt:.3e}");
     }
 }
 
@@ -246,12 +299,56 @@ fn primal_and_dual_agree_and_balance_holds() {
             let v_dual = delassus.velocity(&g.h, &r_dual);
             let vs = 1.0_f64.max(norm(&primal.v));
             let dv = dist(&primal.v, &v_dual) / vs;
-            eprintln!("d={dim} seed={seed}: |dv| {dv:.2e} balance {balance:.2e} kkt_dual {:.2e} kkt_primal_r {:.2e} nat {:.2e} {:.2e} it {} {} res {:.1e} {:.1e}", kkt_residual(dim, &local.w, &b, &g.mu, &r_dual), kkt_residual(dim, &local.w, &b, &g.mu, &primal.r), natural_residual(dim, &local.w, &b, &g.mu, &r_dual), natural_residual(dim, &local.w, &b, &g.mu, &primal.r), report.iterations, primal.report.iterations, report.residual, primal.report.residual);
-            assert!(dv < 1e-5, "d={dim} seed={seed}: |v - v_dual| = {dv:.3e}");
+            assert!(dv < 1e-9, "d={dim} seed={seed}: |v - v_dual| = {dv:.3e}");
             let rs = 1.0_f64.max(norm(&r_dual));
             let dr = dist(&primal.r, &r_dual) / rs;
-            assert!(dr < 1e-5, "d={dim} seed={seed}: |r - r_dual| = {dr:.3e}");
+            assert!(dr < 1e-8, "d={dim} seed={seed}: |r - r_dual| = {dr:.3e}");
+
+            // without polish both are Clarabel's own answers: agreement to IPM accuracy
+            let plain = solve_primal_polished(&g, &shift, &limits(), 0);
+            assert_eq!(plain.report.status, InnerStatus::Solved);
+            assert!(g.balance_residual(&plain.v, &plain.r) < 1e-7);
+            let dv = dist(&plain.v, &v_dual) / vs;
+            assert!(
+                dv < 1e-5,
+                "d={dim} seed={seed}: unpolished |v - v_dual| = {dv:.3e}"
+            );
         }
+    }
+}
+
+#[test]
+fn primal_with_fewer_dofs_than_contact_components() {
+    // H not injective: r is not unique (Theorem 3.3's remark) but v(s) is
+    for seed in 0..5 {
+        let mut rng = ChaCha8Rng::seed_from_u64(60 + seed);
+        let (dim, contacts, n) = (3, 5, 9);
+        let m = dim * contacts;
+        let mass = CscMatrix::from_dense(n, n, &random_spd(&mut rng, n, 0.5));
+        let h = CscMatrix::from_dense(n, m, &random_dense(&mut rng, n, m));
+        let f: Vec<f64> = (0..n).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let w: Vec<f64> = (0..m).map(|_| rng.random_range(0.0..1.0)).collect();
+        let mu = random_mu(&mut rng, contacts);
+        let g = GlobalProblem::new(3, mass, h, f, w.clone(), mu).expect("valid");
+        let primal = solve_primal(&g, &w, &limits());
+        assert_eq!(primal.report.status, InnerStatus::Solved, "seed={seed}");
+        assert!(g.balance_residual(&primal.v, &primal.r) < 1e-9);
+        let delassus = Delassus::new(&g).expect("SPD");
+        let mut r_dual = vec![0.0; m];
+        let report = IpmSolver::new().solve(
+            &InnerProblem {
+                dim,
+                w: &delassus.local.w,
+                b: &delassus.local.q,
+                mu: &g.mu,
+            },
+            &limits(),
+            &mut r_dual,
+        );
+        assert_eq!(report.status, InnerStatus::Solved, "seed={seed}");
+        let v_dual = delassus.velocity(&g.h, &r_dual);
+        let dv = dist(&primal.v, &v_dual) / 1.0_f64.max(norm(&primal.v));
+        assert!(dv < 1e-6, "seed={seed}: |v - v_dual| = {dv:.3e}");
     }
 }
 
@@ -380,7 +477,6 @@ fn faceted_approaches_ipm_as_facets_grow_in_3d() {
         );
         // the inscribed polygon's facets turn by π/k: in the sliding regime the solution
         // error is O(1/k), a factor 16 from k = 8 to 128
-        eprintln!("seed={seed}: distances to IPM for k = 8, 32, 128: {distances:?}");
         assert!(
             distances[2] < distances[0] / 8.0,
             "seed={seed}: {distances:?}"

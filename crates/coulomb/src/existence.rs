@@ -820,7 +820,7 @@ fn criterion_4_5(data: &KinematicData, settings: &CheckSettings) -> CriterionRep
                 margin,
                 dual_bound: Some(imp.bound),
                 detail: format!(
-                    "Farkas certificate y ≥ 0, Σy = 1, H_N y ≈ 0 (relative residual {:.2e}), w_Nᵀy = {:.3e}·‖w‖∞ (+ kernel slack: {:.3e}) < 0: \
+                    "Farkas certificate y ≥ 0, Σy = 1, H_N y ≈ 0 (relative residual {:.2e}), w_Nᵀy = {:.3e}·‖w‖∞ (upper bound with the kernel-residual slack: {:.3e}) < 0: \
                      penetration cannot be prevented, no solution exists",
                     imp.residual, imp.value, imp.bound
                 ),
@@ -904,7 +904,7 @@ fn criteria_4_4_and_4_6(
                 margin,
                 dual_bound: Some(imp.bound),
                 detail: format!(
-                    "r ∈ L with Σ r_N = 1, ‖H r‖ relative residual {:.2e}, wᵀr = {:.3e}·‖w‖∞ (+ kernel slack: {:.3e}) < 0: \
+                    "r ∈ L with Σ r_N = 1, ‖H r‖ relative residual {:.2e}, wᵀr = {:.3e}·‖w‖∞ (upper bound with the kernel-residual slack: {:.3e}) < 0: \
                      w ∉ cl(Im Hᵀ + L*)",
                     imp.residual, imp.value, imp.bound
                 ),
@@ -990,12 +990,12 @@ fn criterion_4_1(data: &KinematicData, settings: &CheckSettings) -> CriterionRep
                 dual_bound: Some(imp.bound),
                 detail: if imp.on_mask {
                     format!(
-                        "r ∈ L ∩ Ker H (relative residual {:.2e}) with Σ_{{μ>0}} r_N = 1 bounds every margin by wᵀr = {:.3e}·‖w‖∞ (+ kernel slack: {:.3e}) ≤ tol",
+                        "r ∈ L ∩ Ker H (relative residual {:.2e}) with Σ_{{μ>0}} r_N = 1 bounds every margin by wᵀr = {:.3e}·‖w‖∞ (upper bound with the kernel-residual slack: {:.3e}) ≤ tol",
                         imp.residual, imp.value, imp.bound
                     )
                 } else {
                     format!(
-                        "r ∈ L ∩ Ker H (relative residual {:.2e}) with wᵀr = {:.3e}·‖w‖∞ (+ kernel slack: {:.3e}) < 0: even the closed cone constraint is infeasible",
+                        "r ∈ L ∩ Ker H (relative residual {:.2e}) with wᵀr = {:.3e}·‖w‖∞ (upper bound with the kernel-residual slack: {:.3e}) < 0: even the closed cone constraint is infeasible",
                         imp.residual, imp.value, imp.bound
                     )
                 },
@@ -1187,9 +1187,9 @@ pub fn conclude(c: &Criteria, frictionless: bool) -> Conclusion {
         ),
         (
             Criterion::C4_4,
-            "Cadoux–Malick \[21\], generalizing Thm 4.6 (after Prop. 4.8)",
+            "Cadoux–Malick [21], generalizing Thm 4.6 (after Prop. 4.8)",
         ),
-        (Criterion::C4_6, "Klarbring–Pang \[48\] via Prop. 4.8"),
+        (Criterion::C4_6, "Klarbring–Pang [48] via Prop. 4.8"),
     ];
     for (by, theorem) in sufficient {
         if c.get(by).verdict == Verdict::Holds {

@@ -4,6 +4,7 @@
 use coulomb::existence::{
     self, CheckSettings, Conclusion, Criterion, CriterionReport, ExistenceReport,
 };
+use coulomb::fclib::{self, ReadOptions, Symmetry};
 use coulomb::Problem;
 use std::path::{Path, PathBuf};
 
@@ -46,12 +47,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Reads an FCLIB problem.
+/// Reads an FCLIB problem. A W or M that is not symmetric within 1e-6 is symmetrized (the
+/// criteria only use H, W, w, q and μ) and the user is told.
 fn read_problem(path: &Path) -> anyhow::Result<Problem> {
-    anyhow::bail!(
-        "cannot read {}: the FCLIB reader is not available in this build yet",
-        path.display()
-    )
+    let options = ReadOptions {
+        symmetry: Symmetry::Symmetrize,
+    };
+    let file = fclib::read_with(path, &options)?;
+    if let Some(asym) = file.symmetrized {
+        eprintln!(
+            "note: {}: the matrix was not symmetric (relative asymmetry {asym:.2e}); its symmetric part is used",
+            path.display()
+        );
+    }
+    Ok(file.problem)
 }
 
 /// The criteria in the order they are printed: the necessary one first.

@@ -3,6 +3,7 @@
 
 use coulomb::examples;
 use coulomb::existence::{self, CheckSettings};
+use coulomb::fclib::{self, FclibFile};
 use coulomb::{GlobalProblem, Problem};
 use std::path::{Path, PathBuf};
 
@@ -143,9 +144,8 @@ pub fn build(which: Which) -> anyhow::Result<(&'static str, GlobalProblem, PathB
 }
 
 /// Writes a global problem as FCLIB.
-fn write_global(path: &Path, _problem: &GlobalProblem) -> anyhow::Result<()> {
-    anyhow::bail!(
-        "cannot write {}: the FCLIB writer is not available in this build yet",
-        path.display()
-    )
+fn write_global(path: &Path, problem: &GlobalProblem) -> anyhow::Result<()> {
+    let file = FclibFile::new(Problem::Global(problem.clone()));
+    fclib::write(path, &file)?;
+    Ok(())
 }

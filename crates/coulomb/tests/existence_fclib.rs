@@ -1,0 +1,78 @@
+//! Every problem of ../shared/fclib gets an existence conclusion (time is not asserted here;
+//! `coulomb check` prints it). Prints the table for the README.
+
+use coulomb::existence::{check, CheckSettings, Conclusion, Criterion, Verdict};
+use coulomb::fclib::{self, ReadOptions, Symmetry};
+use std::path::PathBuf;
+
+#[test]
+fn every_fclib_problem_gets_a_conclusion() {
+    let dir = PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/fclib"
+    ));
+    if !dir.is_dir() {
+        println!("skipped: ../shared absent");
+        return;
+    }
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "hdf5"))
+        .collect();
+    files.sort();
+    assert!(!files.is_empty());
+    let options = ReadOptions {
+        symmetry: Symmetry::Symmetrize,
+    };
+    println!("| file | kind | contacts | (4.5) | (4.1) | (4.4) | (4.6) | (5.1) | conclusion | s |");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    for path in files {
+        let file = fclib::read_with(&path, &options).unwrap();
+        let rep = check(&file.problem, &CheckSettings::default()).unwrap();
+        let v = |c: Criterion| match rep.criteria.get(c).verdict {
+            Verdict::Holds => "holds",
+            Verdict::Fails => "fails",
+            Verdict::Undecided => "undecided",
+        };
+        let conclusion = match &rep.conclusion {
+            Conclusion::Exists { by, theorem } => format!("exists by {by}: {theorem}"),
+            Conclusion::None { by, .. } => format!("none: {by} fails"),
+            Conclusion::Unknown => "unknown".to_string(),
+        };
+        println!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.2} |",
+            path.file_stem().unwrap().to_string_lossy(),
+            rep.kind,
+            rep.contacts,
+            v(Criterion::C4_5),
+            v(Criterion::C4_1),
+            v(Criterion::C4_4),
+            v(Criterion::C4_6),
+            v(Criterion::C5_1),
+            conclusion,
+            rep.seconds
+        );
+        // Whatever a verdict is, a Holds or Fails comes with a verified certificate.
+        for c in [
+            Criterion::C4_1,
+            Criterion::C4_4,
+            Criterion::C4_5,
+            Criterion::C4_6,
+            Criterion::C5_1,
+        ] {
+            let r = rep.criteria.get(c);
+            if r.verdict != Verdict::Undecided {
+                let res = r.certificate_residual.unwrap();
+                assert!(res <= 1e-6, "{} {c}: residual {res}", path.display());
+            }
+        }
+        // These are physical simulation snapshots: a solution exists.
+        assert!(
+            matches!(rep.conclusion, Conclusion::Exists { .. }),
+            "{}: {:?}",
+            path.display(),
+            rep.conclusion
+        );
+    }
+}

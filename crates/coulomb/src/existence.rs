@@ -1227,6 +1227,35 @@ mod tests {
     }
 
     #[test]
+    fn zero_delassus_and_infinite_friction_do_not_break() {
+        // W = 0: u = q whatever r. q_N < 0 at contact 1: (4.5) fails with y = e₁.
+        let p = local(
+            3,
+            &[0.0; 36],
+            vec![1.0, 0.0, 0.0, -1.0, 0.5, 0.0],
+            vec![0.3, 0.3],
+        );
+        let rep = check(&p, &CheckSettings::default()).unwrap();
+        assert_eq!(rep.criteria.c4_5.verdict, Verdict::Fails);
+        let y = rep.criteria.c4_5.certificate.clone().unwrap();
+        assert!(
+            y[0] >= 0.0 && y[0] < 1e-6 && (y[1] - 1.0).abs() < 1e-6,
+            "{y:?}"
+        );
+        assert!(matches!(rep.conclusion, Conclusion::None { .. }));
+        // μ = ∞ at one contact: K_0 has empty interior, (4.1) fails; nothing panics.
+        let p = local(
+            2,
+            &[1.0, 0.0, 0.0, 1.0],
+            vec![1.0, 0.0],
+            vec![f64::INFINITY],
+        );
+        let rep = check(&p, &CheckSettings::default()).unwrap();
+        assert_eq!(rep.criteria.c4_1.verdict, Verdict::Fails);
+        assert_eq!(rep.criteria.c4_4.verdict, Verdict::Holds);
+    }
+
+    #[test]
     fn bad_settings_are_rejected() {
         let p = local(2, &[1.0, 0.0, 0.0, 1.0], vec![1.0, 0.0], vec![0.5]);
         let s = CheckSettings {

@@ -220,7 +220,9 @@ pub fn solve_primal_polished(
     let mut report = report_of(&solver);
     let finite = v.iter().chain(&r).all(|x| x.is_finite());
     if !finite {
-        report.status = InnerStatus::NumericalError;
+        if report.status != InnerStatus::Infeasible {
+            report.status = InnerStatus::NumericalError;
+        }
     } else if polish_steps > 0 {
         let raw = solver.info.status;
         let stalled = matches!(
@@ -648,7 +650,9 @@ pub(crate) fn solve_dual_qp(
     }
     let mut report = report_of(&c.solver);
     if !finite {
-        report.status = InnerStatus::NumericalError;
+        if report.status != InnerStatus::Infeasible {
+            report.status = InnerStatus::NumericalError;
+        }
         return report;
     }
     if polish > 0 {

@@ -368,3 +368,45 @@ fn fclib_corrupt_byte_edits_never_panic() {
     println!("byte edits: {ok} still valid, {err} errors");
     assert!(err > 0);
 }
+
+/// Replaces every little-endian u64 equal to `from` by `to`; returns how many.
+fn patch_u64(bytes: &mut [u8], from: u64, to: u64) -> usize {
+    let (pattern, repl) = (from.to_le_bytes(), to.to_le_bytes());
+    let (mut hits, mut k) = (0, 0);
+    while k + 8 <= bytes.len() {
+        if bytes[k..k + 8] == pattern {
+            bytes[k..k + 8].copy_from_slice(&repl);
+            hits += 1;
+            k += 8;
+        } else {
+            k += 1;
+        }
+    }
+    hits
+}
+
+/// Dataspaces patched to declare 2⁵⁰ entries: refused as corrupt before anything is
+/// allocated (honouring them would abort the process on allocation failure). The real
+/// files have no metadata checksums (v1 object headers), so the patch reaches the reader;
+/// in Box_Stacks the 246-entry vectors (w, solution r/u, guesses) are patched, among them
+/// never-written datasets that HDF5 would fill with zeros of the declared size.
+#[test]
+fn fclib_corrupt_huge_declared_size_is_refused() {
+    let path = PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/fclib/Box_Stacks-i0122-82-5.hdf5"
+    ));
+    let Ok(mut bytes) = std::fs::read(&path) else {
+        println!("skipped: ../shared absent");
+        return;
+    };
+    assert!(
+        patch_u64(&mut bytes, 246, 1 << 50) > 0,
+        "dataspace sizes found"
+    );
+    let err = fclib::read_bytes("huge.hdf5", bytes).unwrap_err();
+    let msg = err.to_string();
+    println!("{msg}");
+    assert!(matches!(err.kind, FclibErrorKind::Corrupt { .. }), "{msg}");
+    assert!(msg.contains("declares shape [1125899906842624]"), "{msg}");
+}

@@ -20,7 +20,16 @@ fn fclib_dir() -> Option<PathBuf> {
 
 /// (file, kind, d, contacts, dofs, has solution, guesses), as h5py lists them
 /// (`len(vectors/mu)`, `M/m`, `number_of_guesses`).
-const EXPECTED: &[(&str, &str, usize, usize, Option<usize>, bool, usize)] = &[
+type Row = (
+    &'static str,
+    &'static str,
+    usize,
+    usize,
+    Option<usize>,
+    bool,
+    usize,
+);
+const EXPECTED: &[Row] = &[
     ("Box_Stacks-i0122-82-5", "global", 3, 82, Some(450), true, 1),
     ("BoxesStack1-i100000-32", "local", 3, 52, None, false, 0),
     ("Capsules-i101-404", "local", 3, 225, None, false, 0),

@@ -149,15 +149,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 Err((file, _)) => println!("{file:<45} (unreadable, see below)"),
             }
         }
-        for r in &rows {
-            if let Ok(s) = r {
-                if let Some(a) = s.symmetrized_asymmetry {
-                    let w = if s.kind == "local" { "W" } else { "M" };
-                    eprintln!(
-                        "warning: {}: {w} is not symmetric (relative asymmetry {a:.3e} > 1e-6); shown for ½({w} + {w}ᵀ)",
-                        s.file
-                    );
-                }
+        for s in rows.iter().flatten() {
+            if let Some(a) = s.symmetrized_asymmetry {
+                let w = if s.kind == "local" { "W" } else { "M" };
+                eprintln!(
+                    "warning: {}: {w} is not symmetric (relative asymmetry {a:.3e} > 1e-6); shown for ½({w} + {w}ᵀ)",
+                    s.file
+                );
             }
         }
         for r in &rows {

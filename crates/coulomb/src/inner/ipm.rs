@@ -105,9 +105,14 @@ impl InnerSolver for IpmSolver {
     /// entry is ignored (no warm start, see module docs).
     ///
     /// The report's residual is the relative natural-map residual
-    /// ‖r − P_L(r − (W r + b))‖ / max(1, ‖b‖) of the returned r. The status is Clarabel's,
-    /// mapped by [`map_status`], except that a stalled Clarabel solve (`AlmostSolved`,
-    /// `InsufficientProgress`) whose polished r has residual ≤ `limits.tol` is `Solved`.
+    /// ‖r − P_L(r − (W r + b))‖ / max(1, ‖b‖) of the returned r (Clarabel's own
+    /// max(res_primal, res_dual, min(gap_abs, gap_rel)) when polishing is off).
+    ///
+    /// Clarabel's status maps to: `Solved` → Solved; primal or dual infeasibility
+    /// certificates (full or reduced accuracy) → Infeasible ((4.7) unbounded, i.e. (3.15)
+    /// infeasible); `MaxIterations` → MaxIterations; `MaxTime` → TimeLimit; anything else
+    /// (`AlmostSolved`, `InsufficientProgress`, `NumericalError`) → NumericalError, except
+    /// that a stalled solve whose polished r has residual ≤ `limits.tol` is Solved.
     fn solve(
         &mut self,
         problem: &InnerProblem<'_>,
@@ -215,7 +220,9 @@ pub fn solve_primal_polished(
     let mut report = report_of(&solver);
     let finite = v.iter().chain(&r).all(|x| x.is_finite());
     if !finite {
-        report.status = InnerStatus::NumericalError;
+        if report.status != InnerStatus::Infeasible {
+            report.status = InnerStatus::NumericalError;
+        }
     } else if polish_steps > 0 {
         let raw = solver.info.status;
         let stalled = matches!(
@@ -643,7 +650,9 @@ pub(crate) fn solve_dual_qp(
     }
     let mut report = report_of(&c.solver);
     if !finite {
-        report.status = InnerStatus::NumericalError;
+        if report.status != InnerStatus::Infeasible {
+            report.status = InnerStatus::NumericalError;
+        }
         return report;
     }
     if polish > 0 {

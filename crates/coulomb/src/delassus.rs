@@ -83,7 +83,7 @@ fn dense_cholesky(a: &mut [f64], k: usize) -> Result<(), String> {
         for p in 0..j {
             d -= a[j * k + p] * a[j * k + p];
         }
-        if !(d > 0.0) || !d.is_finite() {
+        if d.is_nan() || d <= 0.0 || !d.is_finite() {
             return Err(format!("non-positive pivot {d:.3e}"));
         }
         let d = d.sqrt();

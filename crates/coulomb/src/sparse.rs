@@ -286,8 +286,8 @@ impl CscMatrix {
     pub fn gemv_acc(&self, alpha: f64, x: &[f64], y: &mut [f64]) {
         debug_assert_eq!(x.len(), self.ncols);
         debug_assert_eq!(y.len(), self.nrows);
-        for j in 0..self.ncols {
-            let xj = alpha * x[j];
+        for (j, &xv) in x.iter().enumerate() {
+            let xj = alpha * xv;
             if xj == 0.0 {
                 continue;
             }
@@ -301,12 +301,12 @@ impl CscMatrix {
     pub fn gemv_t_acc(&self, alpha: f64, x: &[f64], y: &mut [f64]) {
         debug_assert_eq!(x.len(), self.nrows);
         debug_assert_eq!(y.len(), self.ncols);
-        for j in 0..self.ncols {
+        for (j, yj) in y.iter_mut().enumerate() {
             let mut s = 0.0;
             for p in self.col_ptr[j]..self.col_ptr[j + 1] {
                 s += self.values[p] * x[self.row_idx[p]];
             }
-            y[j] += alpha * s;
+            *yj += alpha * s;
         }
     }
 
@@ -393,10 +393,10 @@ impl CscMatrix {
     pub fn diagonal(&self) -> Vec<f64> {
         let n = self.nrows.min(self.ncols);
         let mut d = vec![0.0; n];
-        for j in 0..n {
+        for (j, dj) in d.iter_mut().enumerate() {
             for p in self.col_ptr[j]..self.col_ptr[j + 1] {
                 if self.row_idx[p] == j {
-                    d[j] += self.values[p];
+                    *dj += self.values[p];
                 }
             }
         }

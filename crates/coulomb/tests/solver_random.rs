@@ -230,6 +230,10 @@ fn apgd_runs_matrix_free() {
     let rep = solve_operator(&d.local.w, dim, &b, &mu, lip, true, &limits, &mut r_csc);
     assert_eq!(rep.status, InnerStatus::Solved);
     assert!(kkt_4_7(dim, &d.local.w, &b, &mu, &r_free) < 1e-9);
-    let diff: f64 = r_free.iter().zip(&r_csc).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    let diff: f64 = r_free
+        .iter()
+        .zip(&r_csc)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
     assert!(diff < 1e-7, "{diff}");
 }

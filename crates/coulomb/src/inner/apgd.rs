@@ -69,7 +69,9 @@ pub fn lipschitz_estimate<A: LinearOperator + ?Sized>(op: &A, iterations: usize)
     if n == 0 {
         return 0.0;
     }
-    let mut x: Vec<f64> = (0..n).map(|i| 1.0 + 0.1 * ((i * 7919) % 13) as f64).collect();
+    let mut x: Vec<f64> = (0..n)
+        .map(|i| 1.0 + 0.1 * ((i * 7919) % 13) as f64)
+        .collect();
     let mut y = vec![0.0; n];
     let mut lambda = 0.0;
     for _ in 0..iterations.max(1) {
@@ -172,7 +174,11 @@ pub fn solve_operator<A: LinearOperator + ?Sized>(
     let mut xn = vec![0.0; n];
     let mut wxn = vec![0.0; n];
     let mut grad = vec![0.0; n];
-    let mut l = if lip > 0.0 && lip.is_finite() { lip } else { 1.0 };
+    let mut l = if lip > 0.0 && lip.is_finite() {
+        lip
+    } else {
+        1.0
+    };
     let l_floor = 1e-3 * l;
     let mut t = 1.0f64;
     let mut fx = objective(&x, &wx, b);

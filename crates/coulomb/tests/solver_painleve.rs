@@ -14,7 +14,7 @@ fn painleve(theta: f64, u0: f64, mu: f64) -> Problem {
 
 fn all_settings() -> Vec<Settings> {
     let mut out = Vec::new();
-    for inner in [InnerKind::Pgs] {
+    for inner in [InnerKind::Pgs, InnerKind::Apgd] {
         for outer in [OuterKind::FixedPoint, OuterKind::Anderson] {
             out.push(Settings {
                 inner,

@@ -14,7 +14,7 @@ use rand_chacha::ChaCha8Rng;
 
 /// The inner solvers under test; adding one is one line.
 fn inner_solvers() -> Vec<Box<dyn InnerSolver>> {
-    vec![Box::new(PgsSolver::new())]
+    vec![Box::new(PgsSolver::new()), Box::new(ApgdSolver::new())]
 }
 
 /// Dense symmetric positive definite G Gᵀ + shift·I, as a CSC matrix.
@@ -106,7 +106,7 @@ fn inner_solvers_solve_random_soc_qps() {
 
 fn settings_under_test() -> Vec<Settings> {
     let mut out = Vec::new();
-    for inner in [InnerKind::Pgs] {
+    for inner in [InnerKind::Pgs, InnerKind::Apgd] {
         for outer in [OuterKind::FixedPoint, OuterKind::Anderson] {
             out.push(Settings {
                 inner,
@@ -192,4 +192,48 @@ fn zero_contacts_is_trivial() {
     assert_eq!(sol.status, Status::Converged);
     let v = sol.v.unwrap();
     assert!((v[0] - 0.5).abs() < 1e-15 && (v[1] - 0.5).abs() < 1e-15);
+}
+
+/// APGD on the assembled W and on the matrix-free operator x ↦ Hᵀ M⁻¹ H x agree.
+#[test]
+fn apgd_runs_matrix_free() {
+    use coulomb::delassus::{Delassus, DelassusOperator};
+    use coulomb::inner::apgd::{lipschitz_estimate, solve_operator, MatrixFree};
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let (dim, nc) = (3, 6);
+    let m = dim * nc;
+    let n = m + 4;
+    let mm = random_spd(&mut rng, n, 1.0);
+    let hd: Vec<f64> = (0..n * m).map(|_| rng.random_range(-1.0..1.0)).collect();
+    let h = CscMatrix::from_dense(n, m, &hd);
+    let f: Vec<f64> = (0..n).map(|_| rng.random_range(-1.0..1.0)).collect();
+    let wv: Vec<f64> = (0..m).map(|_| rng.random_range(-1.0..1.0)).collect();
+    let mu = vec![0.4; nc];
+    let g = GlobalProblem::new(dim as i64, mm, h, f, wv, mu.clone()).unwrap();
+    let d = Delassus::new(&g).unwrap();
+    let op = MatrixFree {
+        op: DelassusOperator::new(&g.h, &d.factor),
+        size: m,
+    };
+    let limits = InnerLimits {
+        tol: 1e-12,
+        max_iterations: 100_000,
+        deadline: None,
+    };
+    let b = d.local.q.clone();
+    let mut r_free = vec![0.0; m];
+    let lip = lipschitz_estimate(&op, 20);
+    let rep = solve_operator(&op, dim, &b, &mu, lip, false, &limits, &mut r_free);
+    assert_eq!(rep.status, InnerStatus::Solved);
+    let mut r_csc = vec![0.0; m];
+    let lip = lipschitz_estimate(&d.local.w, 20);
+    let rep = solve_operator(&d.local.w, dim, &b, &mu, lip, true, &limits, &mut r_csc);
+    assert_eq!(rep.status, InnerStatus::Solved);
+    assert!(kkt_4_7(dim, &d.local.w, &b, &mu, &r_free) < 1e-9);
+    let diff: f64 = r_free
+        .iter()
+        .zip(&r_csc)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(diff < 1e-7, "{diff}");
 }

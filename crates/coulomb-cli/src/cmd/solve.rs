@@ -1,10 +1,175 @@
-//! `coulomb solve`.
+//! `coulomb solve`: solve an FCLIB problem with the convex fixed-point solver and report the
+//! error of docs/error.md recomputed from the returned r (and v).
+
+use anyhow::Context;
+use coulomb::fclib::{self, FclibFile, StoredSolution};
+use coulomb::solver::{self, InnerKind, OuterKind, Settings};
+use serde::Serialize;
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// Inner solver choice on the command line.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum InnerArg {
+    /// interior point (Clarabel)
+    Ipm,
+    /// accelerated projected gradient
+    Apgd,
+    /// projected block Gauss–Seidel
+    Pgs,
+    /// faceted cones + Clarabel
+    Faceted,
+}
+
+/// Outer iteration choice on the command line.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum OuterArg {
+    /// successive approximation s ← F(s)
+    FixedPoint,
+    /// safeguarded Anderson mixing
+    Anderson,
+    /// Gauss–Seidel directly on the De Saxcé form (pgs only)
+    Fused,
+}
 
 /// Arguments of `coulomb solve`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    /// FCLIB problem file (.hdf5)
+    pub file: PathBuf,
+    /// Inner solver (default: the library's default settings)
+    #[arg(long, value_enum)]
+    pub inner: Option<InnerArg>,
+    /// Outer iteration (default: the library's default settings)
+    #[arg(long, value_enum)]
+    pub outer: Option<OuterArg>,
+    /// Tolerance on the error of docs/error.md (and the balance residual)
+    #[arg(long, default_value_t = 1e-8)]
+    pub tol: f64,
+    /// Cap on outer iterations
+    #[arg(long, value_name = "N")]
+    pub max_outer: Option<usize>,
+    /// Wall-clock limit in seconds
+    #[arg(long, value_name = "SECONDS")]
+    pub time_limit: Option<f64>,
+    /// Write the problem plus /solution {r, u, v} to this FCLIB file
+    #[arg(long, value_name = "OUT.hdf5")]
+    pub output: Option<PathBuf>,
+    /// Print one JSON object
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// What `coulomb solve --json` prints.
+#[derive(Debug, Serialize)]
+pub struct Report {
+    /// the problem file
+    pub file: String,
+    /// how the solve ended
+    pub status: solver::Status,
+    /// err ≤ tol (and balance residual ≤ tol)
+    pub converged: bool,
+    /// the error of docs/error.md, recomputed from the returned r (and v)
+    pub error: f64,
+    /// ‖M v − H r − f‖ / max(1, ‖f‖) (global problems)
+    pub balance_residual: Option<f64>,
+    /// outer iterations
+    pub outer_iterations: usize,
+    /// inner iterations, summed
+    pub inner_iterations: usize,
+    /// solve time in seconds, file reading excluded
+    pub solve_time_s: f64,
+    /// existence check on failure (filled by the existence module when available)
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub existence: Option<serde_json::Value>,
+    /// relative asymmetry of W (or M) when it exceeded 1e-6 and ½(W + Wᵀ) was used
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub symmetrized_asymmetry: Option<f64>,
+}
+
+/// Settings from the arguments, on top of the library defaults.
+pub fn settings(args: &Args) -> anyhow::Result<Settings> {
+    let mut s = Settings {
+        tol: args.tol,
+        ..Settings::default()
+    };
+    if let Some(i) = args.inner {
+        s.inner = match i {
+            InnerArg::Ipm => InnerKind::Ipm,
+            InnerArg::Apgd => InnerKind::Apgd,
+            InnerArg::Pgs => InnerKind::Pgs,
+            InnerArg::Faceted => InnerKind::Faceted,
+        };
+        // the fused iteration exists only for pgs
+        if s.outer == OuterKind::Fused && s.inner != InnerKind::Pgs && args.outer.is_none() {
+            s.outer = OuterKind::FixedPoint;
+        }
+    }
+    if let Some(o) = args.outer {
+        s.outer = match o {
+            OuterArg::FixedPoint => OuterKind::FixedPoint,
+            OuterArg::Anderson => OuterKind::Anderson,
+            OuterArg::Fused => OuterKind::Fused,
+        };
+    }
+    if let Some(n) = args.max_outer {
+        s.max_outer = n;
+    }
+    if let Some(t) = args.time_limit {
+        anyhow::ensure!(
+            t.is_finite() && t > 0.0,
+            "--time-limit must be a positive number of seconds, got {t}"
+        );
+        s.time_limit = Some(Duration::from_secs_f64(t));
+    }
+    Ok(s)
+}
 
 /// Runs `coulomb solve`.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("coulomb solve is not available yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let settings = settings(&args)?;
+    let file = super::info::read_relaxed(&args.file)
+        .with_context(|| format!("reading {}", args.file.display()))?;
+    let sol = solver::solve(&file.problem, &settings)
+        .with_context(|| format!("solving {}", args.file.display()))?;
+    if let Some(out) = &args.output {
+        let mut written = FclibFile::new(file.problem.clone());
+        written.info = file.info.clone();
+        written.solution = Some(StoredSolution {
+            v: sol.v.clone(),
+            u: Some(sol.u.clone()),
+            r: sol.r.clone(),
+            l: None,
+        });
+        fclib::write(out, &written).with_context(|| format!("writing {}", out.display()))?;
+    }
+    let report = Report {
+        file: args.file.display().to_string(),
+        status: sol.status,
+        converged: sol.converged(),
+        error: sol.error,
+        balance_residual: sol.balance_residual,
+        outer_iterations: sol.outer_iterations,
+        inner_iterations: sol.inner_iterations,
+        solve_time_s: sol.solve_time.as_secs_f64(),
+        existence: None,
+        symmetrized_asymmetry: file.symmetrized,
+    };
+    if args.json {
+        println!("{}", serde_json::to_string(&report)?);
+    } else {
+        println!("file              {}", report.file);
+        if let Some(a) = report.symmetrized_asymmetry {
+            println!("note              W (or M) not symmetric ({a:.2e}); solved ½(A + Aᵀ)");
+        }
+        println!("status            {:?}", report.status);
+        println!("error             {:.3e}", report.error);
+        if let Some(b) = report.balance_residual {
+            println!("balance residual  {b:.3e}");
+        }
+        println!("outer iterations  {}", report.outer_iterations);
+        println!("inner iterations  {}", report.inner_iterations);
+        println!("solve time        {:.3} ms", 1e3 * report.solve_time_s);
+    }
+    Ok(())
 }

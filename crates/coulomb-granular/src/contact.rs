@@ -62,7 +62,10 @@ impl Contact {
 ///     g_k + γ h min(u_{N,k}, 0) ≤ δ
 /// ```
 ///
-/// γ = 1/2 and δ = 0 by default (the prediction of the gap at mid-step).
+/// γ = 1/2 (the prediction of the gap at mid-step) and δ = 10⁻⁸ m by default: the small δ
+/// keeps a resting or sliding contact in the index set although the solver's round-off lifts it
+/// by ~10⁻¹² m, which would otherwise let it fall freely for one step (g h²/2 of sinking each
+/// time).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Activation {
     /// γ ∈ [0, 1]
@@ -75,7 +78,7 @@ impl Default for Activation {
     fn default() -> Self {
         Self {
             gamma: 0.5,
-            delta: 0.0,
+            delta: 1e-8,
         }
     }
 }

@@ -119,6 +119,9 @@ pub fn solver_settings(
         max_outer,
         max_inner: max_inner.unwrap_or(d.max_inner),
         fixed_point_tol: (fp_tol > 0.0).then_some(fp_tol),
+        // solve each subproblem accurately (down to tol / 5): with the loose rule (6.1) the
+        // outer loop often stops after one subproblem, whose accuracy is then the step's
+        inner_tol_factor: 1e-6,
         ..d
     }
 }
@@ -276,6 +279,13 @@ fn dump_fclib(
     step: usize,
     problem: &coulomb::problem::GlobalProblem,
 ) -> anyhow::Result<()> {
-    let _ = (dir, step, problem);
-    bail!("--dump-fclib: FCLIB writing is not available in this build yet")
+    use coulomb::fclib::{write, FclibFile, Info};
+    let path = dir.join(format!("step_{step:06}.hdf5"));
+    let mut file = FclibFile::new(coulomb::problem::Problem::Global(problem.clone()));
+    file.info = Some(Info {
+        title: format!("granular step {step}"),
+        description: "Moreau-Jean step of coulomb simulate (coulomb-granular)".into(),
+        math_info: String::new(),
+    });
+    write(&path, &file).with_context(|| format!("writing {}", path.display()))
 }

@@ -22,10 +22,11 @@ fn bench_box(c: &mut Criterion) {
     let mut group = c.benchmark_group("box_step");
     group.sample_size(10);
     for beads in [150usize, 600] {
-        let mut sim = match Simulation::new(Scene::Box.build(beads, 1), paper_params(InnerKind::Apgd)) {
-            Ok(s) => s,
-            Err(e) => panic!("{e}"),
-        };
+        let mut sim =
+            match Simulation::new(Scene::Box.build(beads, 1), paper_params(InnerKind::Apgd)) {
+                Ok(s) => s,
+                Err(e) => panic!("{e}"),
+            };
         // let the pile form first
         for _ in 0..150 {
             if sim.step().is_err() {

@@ -239,7 +239,15 @@ mod tests {
             restitution: 0.2,
             mu: 0.3,
         };
-        let p0 = assemble(&w, &contacts, &StepData { restitution: 0.0, ..data }).unwrap();
+        let p0 = assemble(
+            &w,
+            &contacts,
+            &StepData {
+                restitution: 0.0,
+                ..data
+            },
+        )
+        .unwrap();
         let p = assemble(&w, &contacts, &data).unwrap();
         for (i, c) in contacts.iter().enumerate() {
             let extra = if c.normal_velocity < 0.0 {

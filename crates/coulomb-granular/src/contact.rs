@@ -125,8 +125,7 @@ pub fn candidate_pairs(world: &World, margin: f64) -> Vec<(usize, usize)> {
         let k = |c: f64| (c / cell).floor().clamp(-1e15, 1e15) as i64;
         (k(x.x), k(x.y), k(x.z))
     };
-    let mut grid: HashMap<(i64, i64, i64), Vec<usize>> =
-        HashMap::with_capacity(world.bodies.len());
+    let mut grid: HashMap<(i64, i64, i64), Vec<usize>> = HashMap::with_capacity(world.bodies.len());
     for (i, b) in world.bodies.iter().enumerate() {
         grid.entry(key(b.position)).or_default().push(i);
     }
@@ -258,19 +257,26 @@ mod tests {
                 normal: Vec3::Z,
             },
         ));
-        world.bodies.push(Sphere::new(Vec3::new(0.0, 0.0, 0.1), 0.1, 1.0));
+        world
+            .bodies
+            .push(Sphere::new(Vec3::new(0.0, 0.0, 0.1), 0.1, 1.0));
         let mut falling = Sphere::new(Vec3::new(0.0, 0.0, 0.31), 0.1, 1.0);
         falling.velocity = Vec3::new(0.0, 0.0, -1.0);
         world.bodies.push(falling);
         // far sphere, no contact
-        world.bodies.push(Sphere::new(Vec3::new(5.0, 0.0, 0.5), 0.1, 1.0));
+        world
+            .bodies
+            .push(Sphere::new(Vec3::new(5.0, 0.0, 0.5), 0.1, 1.0));
         let h = 0.02;
         let c = detect(&world, 0.0, h, &Activation::default());
         // body 0 – body 1: gap 0.01, u_N = −1 → 0.01 − 0.5·0.02·1 = 0 ≤ 0: active
         // body 0 – ground: gap 0: active
         assert_eq!(c.len(), 2);
         assert_eq!(c[0].key(), (0, Partner::Body(1)));
-        assert!((c[0].normal + Vec3::Z).norm() < 1e-12, "normal from B=1 to A=0");
+        assert!(
+            (c[0].normal + Vec3::Z).norm() < 1e-12,
+            "normal from B=1 to A=0"
+        );
         assert!((c[0].gap - 0.01).abs() < 1e-12);
         assert!((c[0].normal_velocity + 1.0).abs() < 1e-12);
         assert_eq!(c[1].key(), (0, Partner::Obstacle(0)));

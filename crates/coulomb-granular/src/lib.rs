@@ -21,7 +21,7 @@ pub mod world;
 
 pub use contact::{Activation, Contact, Partner};
 pub use math::Vec3;
-pub use run::{run, run_with, Stop, SimulationSettings, Summary};
+pub use run::{run, run_with, SimulationSettings, Stop, Summary};
 pub use scene::Scene;
 pub use simulation::{Params, Simulation, SimulationError, StepStats};
 pub use world::{Motion, Obstacle, Shape, Sphere, World};

@@ -95,7 +95,11 @@ pub fn vtp_frame(sim: &Simulation) -> (String, String) {
         }
         s.push_str("</DataArray>\n");
     };
-    vec_array(&mut s, "velocity", &mut bodies.iter().map(|b| b.velocity.to_array()));
+    vec_array(
+        &mut s,
+        "velocity",
+        &mut bodies.iter().map(|b| b.velocity.to_array()),
+    );
     vec_array(
         &mut s,
         "angular_velocity",
@@ -117,7 +121,11 @@ pub fn vtp_frame(sim: &Simulation) -> (String, String) {
         let _ = writeln!(c, "{} {} {}", ct.point.x, ct.point.y, ct.point.z);
     }
     c.push_str("</DataArray></Points>\n<PointData Vectors=\"force\">\n");
-    vec_array(&mut c, "normal", &mut sim.contacts.iter().map(|x| x.normal.to_array()));
+    vec_array(
+        &mut c,
+        "normal",
+        &mut sim.contacts.iter().map(|x| x.normal.to_array()),
+    );
     vec_array(
         &mut c,
         "force",

@@ -102,7 +102,11 @@ impl Scene {
                     let dir = Vec3::new(side * a.cos(), 0.0, a.sin());
                     let center = Vec3::new(0.5 * lx + side * 0.5 * slot, 0.5 * ly, zb) + dir * half;
                     world.obstacles.push(Obstacle::fixed(
-                        if side < 0.0 { "funnel-left" } else { "funnel-right" },
+                        if side < 0.0 {
+                            "funnel-left"
+                        } else {
+                            "funnel-right"
+                        },
                         Shape::Rectangle {
                             center,
                             normal: Vec3::new(-side * a.sin(), 0.0, a.cos()),
@@ -157,7 +161,9 @@ impl Scene {
                     beads,
                     Vec3::new(-rd, 0.0, 0.0),
                     Vec3::new(rd, len, 2.0 * rd),
-                    move |p| (Vec3::new(p.x, 0.0, p.z) - Vec3::new(0.0, 0.0, rd)).norm() < rd - 1.2 * r,
+                    move |p| {
+                        (Vec3::new(p.x, 0.0, p.z) - Vec3::new(0.0, 0.0, rd)).norm() < rd - 1.2 * r
+                    },
                 );
             }
         }
@@ -254,7 +260,11 @@ mod tests {
                     delta: 0.0,
                 },
             );
-            assert!(contacts.is_empty(), "{scene:?}: {} overlaps", contacts.len());
+            assert!(
+                contacts.is_empty(),
+                "{scene:?}: {} overlaps",
+                contacts.len()
+            );
             assert_eq!(Scene::from_name(scene.name()), Some(scene));
         }
     }

@@ -2,7 +2,7 @@
 //! assemble the incremental problem (2.10), solve it with `coulomb::solver`, then update
 //! velocities and positions with the θ-method.
 
-use crate::assembly::{assemble, mass_diagonal, free_momentum, StepData};
+use crate::assembly::{assemble, free_momentum, mass_diagonal, StepData};
 use crate::contact::{detect, Activation, Contact, Partner};
 use crate::world::World;
 use coulomb::problem::{GlobalProblem, Problem, ProblemError};

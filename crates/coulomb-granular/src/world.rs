@@ -209,7 +209,11 @@ impl Obstacle {
                 let p = c + *u * a + v * b;
                 let e = x - p;
                 let dist = e.norm();
-                let side = if d.dot(*normal) >= 0.0 { *normal } else { -*normal };
+                let side = if d.dot(*normal) >= 0.0 {
+                    *normal
+                } else {
+                    -*normal
+                };
                 Proximity {
                     gap: dist - radius,
                     normal: e.normalized_or(side),
@@ -348,13 +352,18 @@ mod tests {
             frequency: 10.0,
         };
         assert!((m.offset(0.025).z - 0.01).abs() < 1e-12);
-        assert!((m.velocity_at(Vec3::ZERO, 0.0).z - 0.01 * 20.0 * std::f64::consts::PI).abs() < 1e-12);
+        assert!(
+            (m.velocity_at(Vec3::ZERO, 0.0).z - 0.01 * 20.0 * std::f64::consts::PI).abs() < 1e-12
+        );
         let r = Motion::Rotate {
             center: Vec3::ZERO,
             axis: Vec3::Y,
             omega: 2.0,
         };
         // ω e_y × (0, 0, −1) = (−2, 0, 0)
-        assert!((r.velocity_at(Vec3::new(0.0, 0.0, -1.0), 0.0) - Vec3::new(-2.0, 0.0, 0.0)).norm() < 1e-12);
+        assert!(
+            (r.velocity_at(Vec3::new(0.0, 0.0, -1.0), 0.0) - Vec3::new(-2.0, 0.0, 0.0)).norm()
+                < 1e-12
+        );
     }
 }

@@ -40,10 +40,18 @@ fn sphere_resting_on_the_ground_stays_put() {
         let s = sim.step().unwrap();
         assert_eq!(s.contacts, 1);
         assert!(s.converged, "{s:?}");
-        assert!(s.max_penetration <= 1e-9, "penetration {}", s.max_penetration);
+        assert!(
+            s.max_penetration <= 1e-9,
+            "penetration {}",
+            s.max_penetration
+        );
     }
     let b = &sim.world.bodies[0];
-    assert!((b.position - start).norm() < 1e-9, "drifted to {:?}", b.position);
+    assert!(
+        (b.position - start).norm() < 1e-9,
+        "drifted to {:?}",
+        b.position
+    );
     assert!(b.velocity.norm() < 1e-9);
     // the impulse balances gravity: r_N = m g h
     let r = sim.contacts[0].impulse;
@@ -152,7 +160,10 @@ fn energy_never_increases_in_a_closed_box_implicit_positions() {
     // θ = 1: the energy balance is r·u_{k+1} − ½‖v_{k+1} − v_k‖²_M − ½ h² ‖g‖²_M ≤ 0 up
     // to the solver's tolerance
     let (worst, scale, _) = box_energy(1.0);
-    assert!(worst <= 1e-7 * scale, "energy increased by {worst} (scale {scale})");
+    assert!(
+        worst <= 1e-7 * scale,
+        "energy increased by {worst} (scale {scale})"
+    );
 }
 
 #[test]
@@ -160,5 +171,8 @@ fn energy_never_increases_in_a_closed_box_midpoint_positions() {
     // θ = 1/2 (default): free flight conserves the energy exactly; contacts separating at
     // t_k while still active may do work of order h² per step
     let (worst, scale, _) = box_energy(0.5);
-    assert!(worst <= 1e-4 * scale, "energy increased by {worst} (scale {scale})");
+    assert!(
+        worst <= 1e-4 * scale,
+        "energy increased by {worst} (scale {scale})"
+    );
 }

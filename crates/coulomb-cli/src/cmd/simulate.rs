@@ -178,7 +178,11 @@ pub fn progress(len: usize, hidden: bool) -> ProgressBar {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let Some(scene) = Scene::from_name(&args.scene) else {
         let names: Vec<&str> = Scene::ALL.iter().map(|s| s.name()).collect();
-        bail!("unknown scene '{}': expected one of {}", args.scene, names.join(", "));
+        bail!(
+            "unknown scene '{}': expected one of {}",
+            args.scene,
+            names.join(", ")
+        );
     };
     if args.beads == 0 {
         bail!("--beads must be positive");
@@ -232,7 +236,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     pb.finish_and_clear();
     let summary = Summary::from_stats(scene.name(), args.beads, &stats, at_rest);
     if let Some(dir) = &args.output {
-        write_stats(dir, &stats).with_context(|| format!("writing stats into {}", dir.display()))?;
+        write_stats(dir, &stats)
+            .with_context(|| format!("writing stats into {}", dir.display()))?;
         std::fs::write(
             dir.join("summary.json"),
             serde_json::to_string_pretty(&summary)?,

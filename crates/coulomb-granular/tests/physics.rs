@@ -133,9 +133,9 @@ fn sphere_on_an_incline_slides_with_g_sin_minus_mu_cos() {
 }
 
 /// The largest one-step increase of kinetic + potential energy and the final energy, for the
-/// box scene with 60 beads.
+/// box scene with 30 beads.
 fn box_energy(theta: f64) -> (f64, f64, f64) {
-    let world = Scene::Box.build(60, 5);
+    let world = Scene::Box.build(30, 5);
     let p = Params {
         theta,
         ..params(0.01, 0.3, 0.2)

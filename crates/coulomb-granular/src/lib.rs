@@ -1,1 +1,27 @@
-//! granular
+//! coulomb-granular: Moreau–Jean time stepping (2.5)–(2.7) of rigid spheres with Coulomb
+//! friction, each step's incremental problem (2.10) solved by `coulomb::solver` — the
+//! granular experiments of §6 (Table 1, Fig. 8, Fig. 9).
+//!
+//! ```no_run
+//! use coulomb_granular::{Scene, Simulation, Params};
+//! let world = Scene::Box.build(150, 1);
+//! let mut sim = Simulation::new(world, Params::default()).unwrap();
+//! let stats = sim.step().unwrap();
+//! println!("{} contacts, {} subproblems", stats.contacts, stats.subproblems);
+//! ```
+
+pub mod assembly;
+pub mod contact;
+pub mod math;
+pub mod output;
+pub mod run;
+pub mod scene;
+pub mod simulation;
+pub mod world;
+
+pub use contact::{Activation, Contact, Partner};
+pub use math::Vec3;
+pub use run::{run, run_with, SimulationSettings, Stop, Summary};
+pub use scene::Scene;
+pub use simulation::{Params, Simulation, SimulationError, StepStats};
+pub use world::{Motion, Obstacle, Shape, Sphere, World};

@@ -1,0 +1,138 @@
+//! A minimal 3-vector for the geometry of spheres and obstacles.
+
+use serde::Serialize;
+use std::ops::{Add, AddAssign, Mul, Neg, Sub};
+
+/// A vector of ℝ³.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct Vec3 {
+    /// first component
+    pub x: f64,
+    /// second component
+    pub y: f64,
+    /// third component (vertical in every scene: gravity is −g e_z)
+    pub z: f64,
+}
+
+impl Vec3 {
+    /// The zero vector.
+    pub const ZERO: Vec3 = Vec3::new(0.0, 0.0, 0.0);
+    /// e_x.
+    pub const X: Vec3 = Vec3::new(1.0, 0.0, 0.0);
+    /// e_y.
+    pub const Y: Vec3 = Vec3::new(0.0, 1.0, 0.0);
+    /// e_z.
+    pub const Z: Vec3 = Vec3::new(0.0, 0.0, 1.0);
+
+    /// (x, y, z).
+    pub const fn new(x: f64, y: f64, z: f64) -> Self {
+        Self { x, y, z }
+    }
+    /// From a slice of at least three entries (missing entries read as 0).
+    pub fn from_slice(s: &[f64]) -> Self {
+        let g = |i: usize| s.get(i).copied().unwrap_or(0.0);
+        Self::new(g(0), g(1), g(2))
+    }
+    /// As an array.
+    pub fn to_array(self) -> [f64; 3] {
+        [self.x, self.y, self.z]
+    }
+    /// Scalar product a·b.
+    pub fn dot(self, o: Vec3) -> f64 {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+    /// Cross product a × b.
+    pub fn cross(self, o: Vec3) -> Vec3 {
+        Vec3::new(
+            self.y * o.z - self.z * o.y,
+            self.z * o.x - self.x * o.z,
+            self.x * o.y - self.y * o.x,
+        )
+    }
+    /// Euclidean norm.
+    pub fn norm(self) -> f64 {
+        self.dot(self).sqrt()
+    }
+    /// Squared norm.
+    pub fn norm_sq(self) -> f64 {
+        self.dot(self)
+    }
+    /// self / ‖self‖, or `fallback` when the norm is (nearly) zero or not finite.
+    pub fn normalized_or(self, fallback: Vec3) -> Vec3 {
+        let n = self.norm();
+        if n > 1e-300 && n.is_finite() {
+            self * (1.0 / n)
+        } else {
+            fallback
+        }
+    }
+    /// Whether every component is finite.
+    pub fn is_finite(self) -> bool {
+        self.x.is_finite() && self.y.is_finite() && self.z.is_finite()
+    }
+    /// Two unit vectors (t₁, t₂) completing the unit vector n to a right-handed orthonormal
+    /// frame (n, t₁, t₂): the contact frame, normal first.
+    pub fn tangent_basis(self) -> (Vec3, Vec3) {
+        let a = if self.x.abs() <= self.y.abs() && self.x.abs() <= self.z.abs() {
+            Vec3::X
+        } else if self.y.abs() <= self.z.abs() {
+            Vec3::Y
+        } else {
+            Vec3::Z
+        };
+        let t1 = a.cross(self).normalized_or(Vec3::X);
+        let t2 = self.cross(t1);
+        (t1, t2)
+    }
+}
+
+impl Add for Vec3 {
+    type Output = Vec3;
+    fn add(self, o: Vec3) -> Vec3 {
+        Vec3::new(self.x + o.x, self.y + o.y, self.z + o.z)
+    }
+}
+impl AddAssign for Vec3 {
+    fn add_assign(&mut self, o: Vec3) {
+        *self = *self + o;
+    }
+}
+impl Sub for Vec3 {
+    type Output = Vec3;
+    fn sub(self, o: Vec3) -> Vec3 {
+        Vec3::new(self.x - o.x, self.y - o.y, self.z - o.z)
+    }
+}
+impl Mul<f64> for Vec3 {
+    type Output = Vec3;
+    fn mul(self, s: f64) -> Vec3 {
+        Vec3::new(self.x * s, self.y * s, self.z * s)
+    }
+}
+impl Neg for Vec3 {
+    type Output = Vec3;
+    fn neg(self) -> Vec3 {
+        Vec3::new(-self.x, -self.y, -self.z)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tangent_basis_is_orthonormal_and_right_handed() {
+        for n in [
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::new(1.0, 2.0, -3.0).normalized_or(Vec3::Z),
+            Vec3::new(0.0, -1.0, 1e-9).normalized_or(Vec3::Z),
+        ] {
+            let (t1, t2) = n.tangent_basis();
+            assert!((t1.norm() - 1.0).abs() < 1e-12);
+            assert!((t2.norm() - 1.0).abs() < 1e-12);
+            assert!(n.dot(t1).abs() < 1e-12 && n.dot(t2).abs() < 1e-12 && t1.dot(t2).abs() < 1e-12);
+            assert!((n.cross(t1) - t2).norm() < 1e-12);
+        }
+    }
+}

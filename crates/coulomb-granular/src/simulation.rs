@@ -1,0 +1,317 @@
+//! The Moreau–Jean time-stepping loop (2.5)–(2.7): at each step, detect the active contacts,
+//! assemble the incremental problem (2.10), solve it with `coulomb::solver`, then update
+//! velocities and positions with the θ-method.
+
+use crate::assembly::{assemble, free_momentum, mass_diagonal, StepData};
+use crate::contact::{detect, Activation, Contact, Partner};
+use crate::world::World;
+use coulomb::problem::{GlobalProblem, Problem, ProblemError};
+use coulomb::solver::{self, Guess, OuterRecord, Settings, SolveError, Status};
+use serde::Serialize;
+use std::collections::HashMap;
+use std::time::Instant;
+
+/// Parameters of the time stepping.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Params {
+    /// time step h (s)
+    pub h: f64,
+    /// θ of the position update (2.7), in [0, 1]
+    pub theta: f64,
+    /// Newton restitution coefficient e ∈ [0, 1] (Moreau's rule)
+    pub restitution: f64,
+    /// friction coefficient μ of every contact
+    pub mu: f64,
+    /// the activation rule of the index set
+    pub activation: Activation,
+    /// settings of `coulomb::solver`
+    #[serde(skip)]
+    pub solver: Settings,
+    /// warm start from the previous step's impulses of persisting contacts
+    pub warm_start: bool,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Self {
+            h: 0.02,
+            theta: 0.5,
+            restitution: 0.2,
+            mu: 0.3,
+            activation: Activation::default(),
+            solver: Settings::default(),
+            warm_start: true,
+        }
+    }
+}
+
+/// Why a step could not be taken.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SimulationError {
+    /// a parameter is out of range
+    #[error("invalid parameter: {0}")]
+    Parameter(String),
+    /// the assembled problem is invalid (should not happen with finite states)
+    #[error("assembly of step {step} failed: {source}")]
+    Assembly {
+        /// step index
+        step: usize,
+        /// the problem error
+        source: ProblemError,
+    },
+    /// the solver refused the problem
+    #[error("solver failed at step {step}: {source}")]
+    Solve {
+        /// step index
+        step: usize,
+        /// the solver error
+        source: SolveError,
+    },
+    /// velocities or positions became NaN or infinite
+    #[error("non-finite state at step {0}")]
+    NonFinite(usize),
+}
+
+/// Statistics of one time step.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StepStats {
+    /// step index k (the step from t_k to t_{k+1})
+    pub step: usize,
+    /// t_{k+1}
+    pub time: f64,
+    /// active contacts
+    pub contacts: usize,
+    /// outer (fixed-point) iterations, i.e. subproblems (3.15) solved
+    pub subproblems: usize,
+    /// inner iterations, summed
+    pub inner_iterations: usize,
+    /// solver wall-clock time (ms), assembly excluded
+    pub solve_ms: f64,
+    /// assembly + detection time (ms)
+    pub assembly_ms: f64,
+    /// error of docs/error.md of the returned solution (0 without contacts)
+    pub error: f64,
+    /// the paper's (6.1) measure at the last outer iteration (0 without contacts)
+    pub rule_6_1: f64,
+    /// solver status ("converged", …, or "no_contact")
+    pub status: String,
+    /// whether the solver reported convergence (true without contacts)
+    pub converged: bool,
+    /// kinetic energy at t_{k+1}
+    pub kinetic_energy: f64,
+    /// potential energy at t_{k+1}
+    pub potential_energy: f64,
+    /// largest penetration max(0, −g_k) over the active contacts at t_k
+    pub max_penetration: f64,
+    /// contacts that were warm started
+    pub warm_started: usize,
+}
+
+/// The time-stepping simulation: a [`World`] advanced by [`Simulation::step`].
+#[derive(Debug, Clone)]
+pub struct Simulation {
+    /// the mechanical system at t_k
+    pub world: World,
+    /// parameters
+    pub params: Params,
+    /// t_k
+    pub time: f64,
+    /// k
+    pub steps_done: usize,
+    /// the active contacts of the last step, with their impulses
+    pub contacts: Vec<Contact>,
+    /// the last step's outer history (for Fig. 9)
+    pub last_history: Vec<OuterRecord>,
+    /// the last step's problem, kept when `keep_problem` is set (FCLIB dumps)
+    pub last_problem: Option<GlobalProblem>,
+    /// keep each step's problem in `last_problem`
+    pub keep_problem: bool,
+    previous: HashMap<(usize, Partner), [f64; 3]>,
+}
+
+impl Simulation {
+    /// A simulation of `world` starting at t = 0.
+    pub fn new(world: World, params: Params) -> Result<Self, SimulationError> {
+        let p = &params;
+        let bad = |s: String| Err(SimulationError::Parameter(s));
+        if !(p.h.is_finite() && p.h > 0.0) {
+            return bad(format!("time step h = {} must be positive", p.h));
+        }
+        if !(0.0..=1.0).contains(&p.theta) {
+            return bad(format!("theta = {} is not in [0, 1]", p.theta));
+        }
+        if !(0.0..=1.0).contains(&p.restitution) {
+            return bad(format!("restitution = {} is not in [0, 1]", p.restitution));
+        }
+        if !(p.mu >= 0.0 && p.mu.is_finite()) {
+            return bad(format!("mu = {} is not a finite nonnegative number", p.mu));
+        }
+        if !(0.0..=1.0).contains(&p.activation.gamma) || !(p.activation.delta >= 0.0) {
+            return bad(format!("activation {:?} out of range", p.activation));
+        }
+        for (i, b) in world.bodies.iter().enumerate() {
+            if !(b.radius > 0.0 && b.mass > 0.0 && b.radius.is_finite() && b.mass.is_finite())
+                || !b.position.is_finite()
+                || !b.velocity.is_finite()
+            {
+                return bad(format!("body {i} has invalid radius, mass or state"));
+            }
+        }
+        Ok(Self {
+            world,
+            params,
+            time: 0.0,
+            steps_done: 0,
+            contacts: Vec::new(),
+            last_history: Vec::new(),
+            last_problem: None,
+            keep_problem: false,
+            previous: HashMap::new(),
+        })
+    }
+
+    /// One Moreau–Jean step from t_k to t_{k+1} = t_k + h:
+    /// 1. index set: contacts active by the [`Activation`] rule at (q_k, v_k);
+    /// 2. the incremental problem (2.10) of (2.5) with Moreau's impact law (assembly module);
+    /// 3. its solution (v_{k+1}, r_{k+1}) by `coulomb::solver::solve_with_guess`, warm
+    ///    started from the previous impulses of persisting contacts;
+    /// 4. q_{k+1} = q_k + h((1 − θ) v_k + θ v_{k+1}) (2.7).
+    pub fn step(&mut self) -> Result<StepStats, SimulationError> {
+        let k = self.steps_done;
+        let h = self.params.h;
+        let t0 = Instant::now();
+        let mut contacts = detect(&self.world, self.time, h, &self.params.activation);
+        let data = StepData {
+            h,
+            t_end: self.time + h,
+            restitution: self.params.restitution,
+            mu: self.params.mu,
+        };
+        let max_penetration = contacts
+            .iter()
+            .map(|c| (-c.gap).max(0.0))
+            .fold(0.0, f64::max);
+        let v_old = self.world.velocities();
+        let mut stats = StepStats {
+            step: k,
+            time: self.time + h,
+            contacts: contacts.len(),
+            subproblems: 0,
+            inner_iterations: 0,
+            solve_ms: 0.0,
+            assembly_ms: 0.0,
+            error: 0.0,
+            rule_6_1: 0.0,
+            status: "no_contact".into(),
+            converged: true,
+            kinetic_energy: 0.0,
+            potential_energy: 0.0,
+            max_penetration,
+            warm_started: 0,
+        };
+        let v_new = if contacts.is_empty() {
+            stats.assembly_ms = t0.elapsed().as_secs_f64() * 1e3;
+            self.last_history.clear();
+            self.last_problem = None;
+            let diag = mass_diagonal(&self.world);
+            free_momentum(&self.world, h)
+                .iter()
+                .zip(&diag)
+                .map(|(f, m)| f / m)
+                .collect()
+        } else {
+            let problem = assemble(&self.world, &contacts, &data)
+                .map_err(|source| SimulationError::Assembly { step: k, source })?;
+            let mut r0 = vec![0.0; 3 * contacts.len()];
+            if self.params.warm_start {
+                for (i, c) in contacts.iter().enumerate() {
+                    if let Some(prev) = self.previous.get(&c.key()) {
+                        r0[3 * i..3 * i + 3].copy_from_slice(prev);
+                        stats.warm_started += 1;
+                    }
+                }
+            }
+            // v consistent with the guess: v = M⁻¹ (H r + f)
+            let mut hr = problem.f.clone();
+            problem.h.gemv_acc(1.0, &r0, &mut hr);
+            let v0: Vec<f64> = hr
+                .iter()
+                .zip(&problem.m.values)
+                .map(|(x, m)| x / m)
+                .collect();
+            let guess = Guess { r: r0, v: Some(v0) };
+            stats.assembly_ms = t0.elapsed().as_secs_f64() * 1e3;
+            let wrapped = Problem::Global(problem);
+            let t1 = Instant::now();
+            let sol = solver::solve_with_guess(&wrapped, &self.params.solver, Some(&guess))
+                .map_err(|source| SimulationError::Solve { step: k, source })?;
+            stats.solve_ms = t1.elapsed().as_secs_f64() * 1e3;
+            stats.subproblems = sol.outer_iterations;
+            stats.inner_iterations = sol.inner_iterations;
+            stats.error = sol.error;
+            stats.rule_6_1 = sol.history.last().map(|r| r.rule_6_1).unwrap_or(0.0);
+            stats.converged = sol.status == Status::Converged;
+            stats.status = serde_json::to_value(sol.status)
+                .ok()
+                .and_then(|v| v.as_str().map(str::to_string))
+                .unwrap_or_else(|| format!("{:?}", sol.status));
+            let Problem::Global(problem) = wrapped else {
+                return Err(SimulationError::NonFinite(k));
+            };
+            let v = match &sol.v {
+                Some(v) if v.len() == problem.dofs() => v.clone(),
+                _ => {
+                    let mut hr = problem.f.clone();
+                    problem.h.gemv_acc(1.0, &sol.r, &mut hr);
+                    hr.iter()
+                        .zip(&problem.m.values)
+                        .map(|(x, m)| x / m)
+                        .collect()
+                }
+            };
+            self.previous.clear();
+            for (i, c) in contacts.iter_mut().enumerate() {
+                if let Some(r) = sol.r.get(3 * i..3 * i + 3) {
+                    c.impulse = [r[0], r[1], r[2]];
+                    self.previous.insert(c.key(), c.impulse);
+                }
+            }
+            self.last_history = sol.history;
+            self.last_problem = self.keep_problem.then_some(problem);
+            v
+        };
+        if v_new.iter().any(|x| !x.is_finite()) {
+            return Err(SimulationError::NonFinite(k));
+        }
+        let theta = self.params.theta;
+        for (i, b) in self.world.bodies.iter_mut().enumerate() {
+            let vn = crate::math::Vec3::from_slice(&v_new[6 * i..6 * i + 3]);
+            let vo = crate::math::Vec3::from_slice(&v_old[6 * i..6 * i + 3]);
+            b.position += (vo * (1.0 - theta) + vn * theta) * h;
+            b.velocity = vn;
+            b.angular_velocity = if b.rotation_locked {
+                crate::math::Vec3::ZERO
+            } else {
+                crate::math::Vec3::from_slice(&v_new[6 * i + 3..6 * i + 6])
+            };
+        }
+        if contacts.is_empty() {
+            self.previous.clear();
+        }
+        self.contacts = contacts;
+        self.time += h;
+        self.steps_done += 1;
+        stats.kinetic_energy = self.world.kinetic_energy();
+        stats.potential_energy = self.world.potential_energy();
+        Ok(stats)
+    }
+
+    /// Largest speed |ẋ| + R|ω| over the spheres.
+    pub fn max_speed(&self) -> f64 {
+        self.world
+            .bodies
+            .iter()
+            .map(|b| b.velocity.norm() + b.radius * b.angular_velocity.norm())
+            .fold(0.0, f64::max)
+    }
+}

@@ -2,9 +2,16 @@
 //! s ← F(s) of §3.3 around an inner solver of (3.15)/(4.7), and reports the error of
 //! `docs/error.md` recomputed from the returned r (and v).
 
-use crate::problem::{Problem, ProblemError};
+use crate::delassus::Delassus;
+use crate::fixed_point::{self, OuterUpdate};
+use crate::inner::{
+    apgd::ApgdSolver, faceted::FacetedSolver, ipm, ipm::IpmSolver, pgs, pgs::PgsSolver,
+    InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus,
+};
+use crate::law;
+use crate::problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
 use serde::Serialize;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// Which method computes F(s) (§6, options (i), (iv), (v)).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -28,6 +35,10 @@ pub enum OuterKind {
     FixedPoint,
     /// safeguarded Anderson mixing on s
     Anderson,
+    /// no separate outer loop: Gauss–Seidel directly on Coulomb's law in De Saxcé form, sⁱ
+    /// updated from the current uⁱ each time contact i is solved (needs `InnerKind::Pgs`).
+    /// Convergence is decided by the error measure like every other choice.
+    Fused,
 }
 
 /// How a solve ended.
@@ -46,6 +57,8 @@ pub enum Status {
     InnerInfeasible,
     /// the iterates became non-finite
     NumericalError,
+    /// the paper's rule (6.1) held (`Settings::fixed_point_tol`) but the error is above tol
+    FixedPointRule,
 }
 
 /// Typed settings with defaults suited to rigid-body problems.
@@ -68,6 +81,9 @@ pub struct Settings {
     pub fixed_point_tol: Option<f64>,
     /// number of facets of the pyramid replacing each K_μ (faceted inner solver, d = 3)
     pub facets: usize,
+    /// the inner tolerance is `inner_tol_factor` × (error of the previous outer iterate),
+    /// kept between `tol`/5 and 1e-2
+    pub inner_tol_factor: f64,
 }
 
 impl Default for Settings {
@@ -81,6 +97,7 @@ impl Default for Settings {
             time_limit: Some(Duration::from_secs(60)),
             fixed_point_tol: None,
             facets: 8,
+            inner_tol_factor: 0.1,
         }
     }
 }
@@ -155,17 +172,269 @@ pub enum SolveError {
     Guess(String),
 }
 
+impl Settings {
+    fn validate(&self) -> Result<(), SolveError> {
+        let bad = |m: &str| Err(SolveError::Settings(m.to_string()));
+        if self.tol.is_nan() || self.tol <= 0.0 || self.tol.is_infinite() {
+            return bad("tol must be positive and finite");
+        }
+        if self.max_outer == 0 || self.max_inner == 0 {
+            return bad("max_outer and max_inner must be at least 1");
+        }
+        if self.inner_tol_factor.is_nan()
+            || self.inner_tol_factor <= 0.0
+            || self.inner_tol_factor > 1.0
+        {
+            return bad("inner_tol_factor must be in (0, 1]");
+        }
+        if self.fixed_point_tol.is_some_and(|e| e.is_nan() || e <= 0.0) {
+            return bad("fixed_point_tol must be positive");
+        }
+        if self.facets < 3 {
+            return bad("facets must be at least 3");
+        }
+        if self.outer == OuterKind::Fused && self.inner != InnerKind::Pgs {
+            return bad("the fused outer iteration needs the pgs inner solver");
+        }
+        Ok(())
+    }
+}
+
 /// Solves the incremental problem (2.10) from a cold start.
 pub fn solve(problem: &Problem, settings: &Settings) -> Result<Solution, SolveError> {
     solve_with_guess(problem, settings, None)
 }
 
+/// The local form the solver works on, and what links it to a global problem.
+enum Form<'a> {
+    Local(&'a LocalProblem),
+    Global(&'a GlobalProblem, Box<Delassus>),
+}
+
+impl Form<'_> {
+    fn local(&self) -> &LocalProblem {
+        match self {
+            Form::Local(p) => p,
+            Form::Global(_, d) => &d.local,
+        }
+    }
+}
+
+/// The checked outcome for impulses r: (u, v, error, balance residual).
+struct Verdict {
+    u: Vec<f64>,
+    v: Option<Vec<f64>>,
+    error: f64,
+    balance: Option<f64>,
+}
+
+impl Verdict {
+    /// Recomputes u (and v) from r and evaluates the error of docs/error.md: u = W r + q for a
+    /// local problem; v = M⁻¹(H r + f), u = Hᵀ v + w and the balance residual for a global one.
+    fn of(form: &Form<'_>, r: &[f64]) -> Self {
+        let local = form.local();
+        let q_norm = law::norm(&local.q);
+        match form {
+            Form::Local(p) => {
+                let u = p.velocity(r);
+                let error = law::error_measure(p.dim, &p.mu, r, &u, q_norm).error;
+                Verdict {
+                    u,
+                    v: None,
+                    error,
+                    balance: None,
+                }
+            }
+            Form::Global(g, d) => {
+                let v = d.velocity(&g.h, r);
+                let u = g.velocity(&v);
+                let error = law::error_measure(g.dim, &g.mu, r, &u, q_norm).error;
+                let balance = g.balance_residual(&v, r);
+                Verdict {
+                    u,
+                    v: Some(v),
+                    error,
+                    balance: Some(balance),
+                }
+            }
+        }
+    }
+
+    fn converged(&self, tol: f64) -> bool {
+        self.error <= tol && self.balance.is_none_or(|b| b <= tol)
+    }
+}
+
+fn inner_solver(settings: &Settings) -> Box<dyn InnerSolver> {
+    match settings.inner {
+        InnerKind::Pgs => Box::new(PgsSolver::new()),
+        InnerKind::Apgd => Box::new(ApgdSolver::new()),
+        InnerKind::Ipm => Box::new(IpmSolver::new()),
+        InnerKind::Faceted => Box::new(FacetedSolver::new(settings.facets)),
+    }
+}
+
 /// Solves the incremental problem (2.10), warm-started from `guess` when given.
+///
+/// The outer loop (§3.3): with b = q + E s, solve the inner problem (4.7) for r(s) (warm
+/// started from the previous r, tolerance tied to the current error), evaluate
+/// ũ = W r + b and F(s)ⁱ = ‖ũ_Tⁱ‖ (3.19), compute the error of docs/error.md from r, and stop
+/// when it is ≤ tol; otherwise s ← F(s) (or Anderson mixing). With all μ = 0 the inner
+/// problem is the whole problem (§5.1) and s plays no role. With [`OuterKind::Fused`] each
+/// "outer iteration" is one batch of Gauss–Seidel sweeps on the De Saxcé form.
 pub fn solve_with_guess(
     problem: &Problem,
     settings: &Settings,
     guess: Option<&Guess>,
 ) -> Result<Solution, SolveError> {
-    let _ = (problem, settings, guess);
-    Err(SolveError::Settings("solver under construction".into()))
+    settings.validate()?;
+    let start = Instant::now();
+    let deadline = settings.time_limit.map(|t| start + t);
+    let form = match problem {
+        Problem::Local(p) => Form::Local(p),
+        Problem::Global(g) => Form::Global(g, Box::new(Delassus::new(g)?)),
+    };
+    let local = form.local();
+    let (dim, mu) = (local.dim, &local.mu[..]);
+    let m = local.q.len();
+    let mut r = match guess {
+        Some(gs) if gs.r.len() != m => {
+            return Err(SolveError::Guess(format!(
+                "r has length {}, expected {m}",
+                gs.r.len()
+            )))
+        }
+        Some(gs) if gs.r.iter().any(|x| !x.is_finite()) => {
+            return Err(SolveError::Guess("r has non-finite entries".into()))
+        }
+        Some(gs) => gs.r.clone(),
+        None => vec![0.0; m],
+    };
+    crate::cone::project_product(dim, mu, &mut r);
+    let frictionless = mu.iter().all(|&x| x == 0.0);
+    // s from the guess (F at the guess), zero for a cold start
+    let mut s = if guess.is_some() {
+        fixed_point::evaluate_f(dim, &local.velocity(&r))
+    } else {
+        vec![0.0; mu.len()]
+    };
+    let mut solver = inner_solver(settings);
+    let mut pgs_fused = PgsSolver::new();
+    let mut update = OuterUpdate::new(settings.outer);
+    let mut history = Vec::new();
+    let mut inner_total = 0;
+    let mut b = Vec::with_capacity(m);
+    let w_scale = crate::inner::w_scale(dim, &local.w);
+    let mut verdict = Verdict::of(&form, &r);
+    let mut last_error = verdict.error;
+    let status = loop {
+        if verdict.converged(settings.tol) {
+            break Status::Converged;
+        }
+        if history.len() >= settings.max_outer {
+            break Status::MaxIterations;
+        }
+        if deadline.is_some_and(|t| Instant::now() >= t) {
+            break Status::TimeLimit;
+        }
+        // inner solve for r(s), warm-started
+        let inner_tol = if frictionless {
+            0.2 * settings.tol
+        } else {
+            (settings.inner_tol_factor * last_error).clamp(0.2 * settings.tol, 1e-2)
+        };
+        let limits = InnerLimits {
+            tol: inner_tol,
+            max_iterations: settings.max_inner,
+            deadline,
+        };
+        fixed_point::shifted(dim, &local.q, mu, &s, &mut b);
+        let mut report = match (&form, settings.inner, settings.outer) {
+            (_, _, OuterKind::Fused) => {
+                let limits = InnerLimits {
+                    tol: 0.5 * settings.tol,
+                    ..limits
+                };
+                pgs::solve_fused(&mut pgs_fused, dim, &local.w, &local.q, mu, &limits, &mut r)
+            }
+            (Form::Global(g, _), InnerKind::Ipm, _) => {
+                let mut shift = Vec::with_capacity(m);
+                fixed_point::shifted(dim, &g.w, mu, &s, &mut shift);
+                let out = ipm::solve_primal(g, &shift, &limits);
+                if out.r.len() == m {
+                    r = out.r;
+                }
+                out.report
+            }
+            _ => {
+                let inner = InnerProblem {
+                    dim,
+                    w: &local.w,
+                    b: &b,
+                    mu,
+                };
+                solver.solve(&inner, &limits, &mut r)
+            }
+        };
+        inner_total += report.iterations;
+        if r.iter().any(|x| !x.is_finite()) {
+            break Status::NumericalError;
+        }
+        // F(s) from ũ = W r + b (its tangential part is that of u = W r + q)
+        let u_local = local.velocity(&r);
+        let fs = fixed_point::evaluate_f(dim, &u_local);
+        if settings.outer == OuterKind::Fused {
+            fixed_point::shifted(dim, &local.q, mu, &fs, &mut b);
+        }
+        let wr: Vec<f64> = u_local.iter().zip(&local.q).map(|(a, c)| a - c).collect();
+        if crate::inner::unbounded_ray(&r, &wr, &b, w_scale) {
+            report.status = InnerStatus::Infeasible;
+        }
+        verdict = Verdict::of(&form, &r);
+        let (fp_residual, rule) = fixed_point::residuals(&s, &fs);
+        history.push(OuterRecord {
+            error: verdict.error,
+            fixed_point_residual: fp_residual,
+            rule_6_1: rule,
+            inner_iterations: report.iterations,
+        });
+        last_error = verdict.error;
+        if let Some(status) = inner_failure(&report) {
+            // an unbounded (4.7) is never reported as converged, whatever the relative error
+            if report.status == InnerStatus::Infeasible || !verdict.converged(settings.tol) {
+                break status;
+            }
+        }
+        if settings.fixed_point_tol.is_some_and(|eps| rule <= eps)
+            && !verdict.converged(settings.tol)
+            && !frictionless
+        {
+            break Status::FixedPointRule;
+        }
+        s = update.next(&s, &fs);
+    };
+    let (inner_iterations, outer_iterations) = (inner_total, history.len());
+    Ok(Solution {
+        r,
+        u: verdict.u,
+        v: verdict.v,
+        s,
+        status,
+        error: verdict.error,
+        balance_residual: verdict.balance,
+        outer_iterations,
+        inner_iterations,
+        history,
+        solve_time: start.elapsed(),
+    })
+}
+
+/// The outer status an inner failure forces (None: keep iterating, warm-started).
+fn inner_failure(report: &InnerReport) -> Option<Status> {
+    match report.status {
+        InnerStatus::Solved | InnerStatus::MaxIterations => None,
+        InnerStatus::TimeLimit => Some(Status::TimeLimit),
+        InnerStatus::Infeasible => Some(Status::InnerInfeasible),
+        InnerStatus::NumericalError => Some(Status::InnerFailure),
+    }
 }

@@ -1,10 +1,173 @@
-//! `coulomb info`.
+//! `coulomb info`: what is in FCLIB files.
+
+use coulomb::fclib::{self, FclibFile, ReadOptions, Symmetry};
+use coulomb::Problem;
+use serde::Serialize;
+use std::path::PathBuf;
 
 /// Arguments of `coulomb info`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    /// FCLIB files (.hdf5)
+    #[arg(required = true)]
+    pub files: Vec<PathBuf>,
+    /// Print JSON: one object per file, an array when several files are given
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Summary of one file. `nnz` counts the entries of W (local) or of M plus H (global) as
+/// coulomb holds them after reading: CSC, duplicates summed, explicit zeros kept.
+#[derive(Debug, Serialize)]
+pub struct Summary {
+    /// the path as given
+    pub file: String,
+    /// "local" or "global"
+    pub kind: &'static str,
+    /// space dimension d
+    pub dim: usize,
+    /// number of contacts
+    pub contacts: usize,
+    /// degrees of freedom n (null for a local problem)
+    pub dofs: Option<usize>,
+    /// stored entries of W, or of M + H
+    pub nnz: usize,
+    /// smallest friction coefficient (null without contacts)
+    pub mu_min: Option<f64>,
+    /// largest friction coefficient (null without contacts)
+    pub mu_max: Option<f64>,
+    /// whether /solution is present
+    pub has_solution: bool,
+    /// number of /guesses
+    pub guesses: usize,
+    /// /fclib_*/info/title, when present
+    pub title: Option<String>,
+    /// relative asymmetry of W (or M) when it exceeded 1e-6 and was symmetrized on reading
+    pub symmetrized_asymmetry: Option<f64>,
+}
+
+/// Reads a file for inspection: a W that is not symmetric within 1e-6 is replaced by
+/// ½(W + Wᵀ) and reported, rather than refused.
+pub fn read_relaxed(path: &std::path::Path) -> Result<FclibFile, fclib::FclibError> {
+    fclib::read_with(
+        path,
+        &ReadOptions {
+            symmetry: Symmetry::Symmetrize,
+        },
+    )
+}
+
+/// Summarizes a file already read.
+pub fn summarize(file: String, f: &FclibFile) -> Summary {
+    let p = &f.problem;
+    let nnz = match p {
+        Problem::Local(l) => l.w.nnz(),
+        Problem::Global(g) => g.m.nnz() + g.h.nnz(),
+    };
+    let mu = p.mu();
+    let (mu_min, mu_max) = if mu.is_empty() {
+        (None, None)
+    } else {
+        (
+            Some(mu.iter().cloned().fold(f64::INFINITY, f64::min)),
+            Some(mu.iter().cloned().fold(f64::NEG_INFINITY, f64::max)),
+        )
+    };
+    Summary {
+        file,
+        kind: p.kind(),
+        dim: p.dim(),
+        contacts: p.contacts(),
+        dofs: p.dofs(),
+        nnz,
+        mu_min,
+        mu_max,
+        has_solution: f.solution.is_some(),
+        guesses: f.guesses.len(),
+        title: f.info.as_ref().map(|i| i.title.clone()),
+        symmetrized_asymmetry: f.symmetrized,
+    }
+}
+
+fn opt<T: std::fmt::Display>(x: Option<T>) -> String {
+    x.map_or_else(|| "-".to_string(), |v| v.to_string())
+}
 
 /// Runs `coulomb info`.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("coulomb info is not available yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let mut rows = Vec::new();
+    let mut failures = 0;
+    for path in &args.files {
+        let name = path.display().to_string();
+        match read_relaxed(path) {
+            Ok(f) => rows.push(Ok(summarize(name, &f))),
+            Err(e) => {
+                failures += 1;
+                rows.push(Err((name, e.to_string())));
+            }
+        }
+    }
+    if args.json {
+        let values: Vec<serde_json::Value> = rows
+            .iter()
+            .map(|r| match r {
+                Ok(s) => serde_json::to_value(s),
+                Err((file, error)) => Ok(serde_json::json!({ "file": file, "error": error })),
+            })
+            .collect::<Result<_, _>>()?;
+        let out = if values.len() == 1 {
+            serde_json::to_string_pretty(&values[0])?
+        } else {
+            serde_json::to_string_pretty(&values)?
+        };
+        println!("{out}");
+    } else {
+        println!(
+            "{:<45} {:>6} {:>3} {:>8} {:>6} {:>8} {:>7} {:>7} {:>4} {:>7}",
+            "file", "kind", "d", "contacts", "dofs", "nnz", "mu_min", "mu_max", "sol", "guesses"
+        );
+        for r in &rows {
+            match r {
+                Ok(s) => {
+                    let name = std::path::Path::new(&s.file)
+                        .file_name()
+                        .map_or(s.file.clone(), |n| n.to_string_lossy().into_owned());
+                    println!(
+                        "{:<45} {:>6} {:>3} {:>8} {:>6} {:>8} {:>7} {:>7} {:>4} {:>7}",
+                        name,
+                        s.kind,
+                        s.dim,
+                        s.contacts,
+                        opt(s.dofs),
+                        s.nnz,
+                        opt(s.mu_min.map(|m| format!("{m:.3}"))),
+                        opt(s.mu_max.map(|m| format!("{m:.3}"))),
+                        if s.has_solution { "yes" } else { "no" },
+                        s.guesses
+                    );
+                }
+                Err((file, _)) => println!("{file:<45} (unreadable, see below)"),
+            }
+        }
+        for r in &rows {
+            if let Ok(s) = r {
+                if let Some(a) = s.symmetrized_asymmetry {
+                    let w = if s.kind == "local" { "W" } else { "M" };
+                    eprintln!(
+                        "warning: {}: {w} is not symmetric (relative asymmetry {a:.3e} > 1e-6); shown for ½({w} + {w}ᵀ)",
+                        s.file
+                    );
+                }
+            }
+        }
+        for r in &rows {
+            if let Err((_, e)) = r {
+                eprintln!("error: {e}");
+            }
+        }
+    }
+    if failures > 0 {
+        anyhow::bail!("{failures} of {} files could not be read", args.files.len());
+    }
+    Ok(())
 }

@@ -1,17 +1,98 @@
 //! Interior point (Clarabel) on the inner SOC-QP: the dual (4.7) on W, and the primal (3.15)
-//! on (M, H) for global problems (the paper's option (i)).
+//! on (M, H) for global problems (the paper's §6 option (i)).
+//!
+//! # Cone conventions
+//! Clarabel solves `min ½ xᵀ P x + qᵀ x  s.t.  A x + s = b, s ∈ K` and returns the dual
+//! variable z ∈ K* with `P x + q + Aᵀ z = 0`. Each contact's Coulomb cone is passed as a
+//! second-order cone `{(t, y) : ‖y‖ ≤ t}` after a diagonal scaling of its rows:
+//!
+//! | cone of the contact | scaled slack s of the contact | Clarabel cones |
+//! |---|---|---|
+//! | r ∈ K_μ, 0 < μ < ∞ (dual (4.7)) | s = (μ r_N, r_T) | `SecondOrderConeT(d)` |
+//! | r ∈ K_0 (μ = 0) | s_N = r_N, s_T = r_T | `NonnegativeConeT(1)`, `ZeroConeT(d − 1)` |
+//! | r ∈ K_∞ (μ = ∞) | s_N = r_N | `NonnegativeConeT(1)` (r_T free) |
+//! | u ∈ K_{1/μ} = K_μ*, 0 < μ < ∞ (primal (3.15)) | s = (u_N, μ u_T) | `SecondOrderConeT(d)` |
+//! | u ∈ K_0* (μ = 0, half-space) | s_N = u_N | `NonnegativeConeT(1)` (u_T free) |
+//! | u ∈ K_∞* (μ = ∞) | s_N = u_N, s_T = u_T | `NonnegativeConeT(1)`, `ZeroConeT(d − 1)` |
+//!
+//! The rows are ordered zero-cone rows first, then nonnegative rows, then one SOC block per
+//! frictional contact, so that Clarabel sees few, large cones.
+//!
+//! # Polish
+//! Clarabel stops on its duality gap. For a sliding contact (r and ũ on the boundaries of K_μ
+//! and K_μ*) the gap rᵀũ is quadratic in their angular misalignment, so in 3-D Clarabel's
+//! answer at gap 1e-12 still has a natural-map residual ‖r − P_L(r − ũ)‖ (what the error of
+//! docs/error.md measures) near 1e-7, and Clarabel stalls if asked for much less. Both
+//! solvers therefore finish with a few semismooth Newton steps on the natural map of (3.14)
+//! (Jacobian via the B-derivative of the SOC projection, faer sparse LU, a step kept only if
+//! it reduces the residual), which converge quadratically from Clarabel's point to rounding
+//! level. [`IpmSolver::with_polish`] / [`solve_primal_polished`] with 0 steps turn it off.
+//!
+//! # Warm start
+//! Clarabel is a primal-dual interior-point method started from its own central point; it
+//! offers no warm start, so the incoming r of [`InnerSolver::solve`] is ignored. What *is*
+//! reused is the setup: [`IpmSolver`] keeps the Clarabel solver of its last call and, when the
+//! next call has the same W and μ (as in the fixed-point iteration s ↦ F(s) of (3.19), where
+//! only b = q + E s changes), only overwrites the linear term through Clarabel's data-update
+//! API (`update_q`), skipping equilibration and the symbolic factorization of the KKT matrix.
 
 use super::{InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus};
 use crate::problem::GlobalProblem;
+use crate::sparse::CscMatrix;
+use clarabel::algebra::CscMatrix as ClarabelCsc;
+use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
+use std::time::Instant;
 
-/// Clarabel on the dual (4.7).
-#[derive(Debug, Clone, Default)]
-pub struct IpmSolver {}
+/// Clarabel on the dual (4.7): min over r ∈ L = ∏ K_{μⁱ} of ½ rᵀ W r + bᵀ r.
+///
+/// The returned r is Clarabel's primal solution x; W r + b is then ũ ∈ L* up to the
+/// tolerance (the multiplier z of the cone rows, rescaled, equals ũ).
+#[derive(Debug)]
+pub struct IpmSolver {
+    /// at most this many semismooth Newton steps polish Clarabel's r (0: none); see
+    /// [`DEFAULT_POLISH_STEPS`]
+    pub polish_steps: usize,
+    /// the Clarabel solver of the last call, reused while (d, μ, W) stay the same
+    cache: Option<QpCache>,
+}
+
+/// Default number of semismooth Newton polish steps after an interior-point solve.
+///
+/// Clarabel stops on the duality gap; for sliding contacts the gap is quadratic in the
+/// misalignment of r and ũ, so its r has a natural-map residual (the error of
+/// docs/error.md) of about the square root of the gap, e.g. 1e-7 for a gap of 1e-13 in 3-D.
+/// A few Newton steps on the natural map F(r) = r − P_L(r − ũ), each kept only if it
+/// reduces ‖F‖, bring it to rounding level.
+pub const DEFAULT_POLISH_STEPS: usize = 3;
+
+impl Default for IpmSolver {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Clone for IpmSolver {
+    /// A clone starts without the cached Clarabel setup (it is rebuilt on first use).
+    fn clone(&self) -> Self {
+        Self::with_polish(self.polish_steps)
+    }
+}
 
 impl IpmSolver {
-    /// A solver with default Clarabel settings.
+    /// A solver with default Clarabel settings (`verbose = false`; tolerances, iteration cap
+    /// and time limit come from the [`InnerLimits`] of each call) and
+    /// [`DEFAULT_POLISH_STEPS`] polish steps.
     pub fn new() -> Self {
-        Self {}
+        Self::with_polish(DEFAULT_POLISH_STEPS)
+    }
+
+    /// Like [`IpmSolver::new`] with at most `polish_steps` Newton polish steps (0: plain
+    /// Clarabel).
+    pub fn with_polish(polish_steps: usize) -> Self {
+        Self {
+            polish_steps,
+            cache: None,
+        }
     }
 }
 
@@ -19,17 +100,26 @@ impl InnerSolver for IpmSolver {
     fn name(&self) -> &'static str {
         "ipm"
     }
+
+    /// Solves (4.7) with Clarabel, then polishes r (see [`DEFAULT_POLISH_STEPS`]); `r` on
+    /// entry is ignored (no warm start, see module docs).
+    ///
+    /// The report's residual is the relative natural-map residual
+    /// ‖r − P_L(r − (W r + b))‖ / max(1, ‖b‖) of the returned r. The status is Clarabel's,
+    /// mapped by [`map_status`], except that a stalled Clarabel solve (`AlmostSolved`,
+    /// `InsufficientProgress`) whose polished r has residual ≤ `limits.tol` is `Solved`.
     fn solve(
         &mut self,
-        _problem: &InnerProblem<'_>,
-        _limits: &InnerLimits,
-        _r: &mut [f64],
+        problem: &InnerProblem<'_>,
+        limits: &InnerLimits,
+        r: &mut [f64],
     ) -> InnerReport {
-        InnerReport {
-            status: InnerStatus::NumericalError,
-            iterations: 0,
-            residual: f64::INFINITY,
-        }
+        let polish = self.polish_steps;
+        solve_dual_qp(&mut self.cache, 0, polish, problem, limits, r, || {
+            let layout = ConeLayout::dual_exact(problem.dim, problem.mu);
+            let a = layout.a_matrix(None);
+            (a, layout.cones())
+        })
     }
 }
 
@@ -46,18 +136,1054 @@ pub struct PrimalOutcome {
 
 /// Solves the primal inner problem (3.15) in FCLIB convention,
 /// min ½ vᵀ M v − fᵀ v  s.t.  Hᵀ v + shift ∈ L*, with shift = w + E s.
-pub fn solve_primal(
-    _problem: &GlobalProblem,
-    _shift: &[f64],
-    _limits: &InnerLimits,
+///
+/// (In the paper's notation (2.8) this is min ½ vᵀ M v + f_pᵀ v s.t. H_p v + w + E s ∈ L*.)
+/// M (upper triangle) and H go to Clarabel as sparse matrices; the constraint is posed as
+/// `−S Hᵀ v + s = S shift`, s ∈ K, with S the row scaling of the module docs (μ u_T for the
+/// tangential rows). Clarabel's stationarity `M v − f − H S z = 0` shows that the multiplier of
+/// (3.14) is r = S z: componentwise r_N = z_N and r_T = μ z_T, which lies in K_μ because z lies
+/// in the self-dual SOC. Hence `M v = H r + f` and L* ∋ Hᵀ v + shift ⊥ r ∈ L at the solution.
+///
+/// An empty feasible set C̄(s) (3.17) is reported as [`InnerStatus::Infeasible`]; v and r
+/// then hold Clarabel's last iterate (its infeasibility certificate), not a solution.
+/// Inconsistent sizes give [`InnerStatus::NumericalError`] with empty v and r.
+pub fn solve_primal(problem: &GlobalProblem, shift: &[f64], limits: &InnerLimits) -> PrimalOutcome {
+    solve_primal_polished(problem, shift, limits, DEFAULT_POLISH_STEPS)
+}
+
+/// [`solve_primal`] with at most `polish_steps` semismooth Newton steps on (3.14) after
+/// Clarabel (0: plain Clarabel): F₁ = M v − H r − f = 0, F₂ = r − P_L(r − (Hᵀ v + shift)) = 0.
+/// When polishing, the report's residual is max(‖F₁‖ / max(1, ‖f‖), ‖F₂‖ / max(1, ‖shift‖));
+/// a stalled Clarabel solve whose polished residual is ≤ `limits.tol` is `Solved`.
+pub fn solve_primal_polished(
+    problem: &GlobalProblem,
+    shift: &[f64],
+    limits: &InnerLimits,
+    polish_steps: usize,
 ) -> PrimalOutcome {
-    PrimalOutcome {
+    let fail = |status| PrimalOutcome {
         v: Vec::new(),
         r: Vec::new(),
         report: InnerReport {
-            status: InnerStatus::NumericalError,
+            status,
             iterations: 0,
             residual: f64::INFINITY,
         },
+    };
+    let dim = problem.dim;
+    let n = problem.m.nrows;
+    let nr = problem.h.ncols;
+    let consistent = (dim == 2 || dim == 3)
+        && problem.mu.len() * dim == nr
+        && shift.len() == nr
+        && problem.m.ncols == n
+        && problem.h.nrows == n
+        && problem.f.len() == n
+        && problem.m.check().is_ok()
+        && problem.h.check().is_ok()
+        && problem.m.first_non_finite().is_none()
+        && problem.h.first_non_finite().is_none()
+        && problem.f.iter().chain(shift).all(|x| x.is_finite())
+        && problem.mu.iter().all(|m| *m >= 0.0);
+    if !consistent {
+        return fail(InnerStatus::NumericalError);
+    }
+    let settings = match clarabel_settings(limits) {
+        Ok(s) => s,
+        Err(status) => return fail(status),
+    };
+    let layout = ConeLayout::primal(dim, &problem.mu);
+    let a = layout.a_matrix(Some(&problem.h));
+    let mut b = vec![0.0; layout.rows];
+    for (k, &sh) in shift.iter().enumerate() {
+        if let Some((row, scale)) = layout.map[k] {
+            b[row] = scale * sh;
+        }
+    }
+    let p = to_clarabel(&problem.m.upper_triangle());
+    let q: Vec<f64> = problem.f.iter().map(|x| -x).collect();
+    let mut solver = match DefaultSolver::new(&p, &q, &a, &b, &layout.cones(), settings) {
+        Ok(s) => s,
+        Err(_) => return fail(InnerStatus::NumericalError),
+    };
+    solver.solve();
+    let mut v = solver.solution.x.clone();
+    let z = &solver.solution.z;
+    let mut r: Vec<f64> = (0..nr)
+        .map(|k| layout.map[k].map_or(0.0, |(row, scale)| scale * z[row]))
+        .collect();
+    let mut report = report_of(&solver);
+    let finite = v.iter().chain(&r).all(|x| x.is_finite());
+    if !finite {
+        report.status = InnerStatus::NumericalError;
+    } else if polish_steps > 0 {
+        let raw = solver.info.status;
+        let stalled = matches!(
+            raw,
+            SolverStatus::AlmostSolved | SolverStatus::InsufficientProgress
+        );
+        if raw == SolverStatus::Solved || stalled {
+            report.residual = polish_primal(
+                problem,
+                shift,
+                &mut v,
+                &mut r,
+                polish_steps,
+                limits.deadline,
+            );
+            if stalled && report.residual <= limits.tol {
+                report.status = InnerStatus::Solved;
+            }
+        }
+    }
+    PrimalOutcome { v, r, report }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Shared Clarabel plumbing (also used by the faceted solver)
+// ---------------------------------------------------------------------------------------------
+
+/// Row layout of a product of per-contact cones in Clarabel's form: component k of the
+/// contact vector (r for the dual, u = Hᵀ v + shift for the primal) goes to slack row
+/// `map[k] = Some((row, scale))` with s_row = scale · x_k, or to no row at all (free).
+#[derive(Debug, Clone)]
+pub(crate) struct ConeLayout {
+    /// number of `ZeroConeT` rows (first)
+    zero: usize,
+    /// number of `NonnegativeConeT` rows (after the zero rows)
+    nonneg: usize,
+    /// sizes of the SOC blocks (after the nonnegative rows)
+    soc: Vec<usize>,
+    /// total number of rows
+    rows: usize,
+    /// row and scale of each component
+    map: Vec<Option<(usize, f64)>>,
+}
+
+/// Which row class a component is assigned to, before rows are numbered.
+#[derive(Clone, Copy)]
+enum RowClass {
+    Free,
+    Zero,
+    Nonneg,
+    Soc { block: usize },
+}
+
+impl ConeLayout {
+    /// Layout for r ∈ L = ∏ K_{μⁱ} of the dual (4.7): s = (μ r_N, r_T) ∈ SOC for
+    /// 0 < μ < ∞; r_N ≥ 0, r_T = 0 for μ = 0; r_N ≥ 0, r_T free for μ = ∞.
+    pub(crate) fn dual_exact(dim: usize, mu: &[f64]) -> Self {
+        Self::build(dim, mu, |m, tangential| {
+            if m == 0.0 {
+                (
+                    if tangential {
+                        RowClass::Zero
+                    } else {
+                        RowClass::Nonneg
+                    },
+                    1.0,
+                )
+            } else if m.is_infinite() {
+                (
+                    if tangential {
+                        RowClass::Free
+                    } else {
+                        RowClass::Nonneg
+                    },
+                    1.0,
+                )
+            } else {
+                (RowClass::Soc { block: 0 }, if tangential { 1.0 } else { m })
+            }
+        })
+    }
+
+    /// Layout for u ∈ L* = ∏ K_{1/μⁱ} of the primal (3.15): s = (u_N, μ u_T) ∈ SOC for
+    /// 0 < μ < ∞; u_N ≥ 0, u_T free for μ = 0; u_N ≥ 0, u_T = 0 for μ = ∞.
+    pub(crate) fn primal(dim: usize, mu: &[f64]) -> Self {
+        Self::build(dim, mu, |m, tangential| {
+            if m == 0.0 {
+                (
+                    if tangential {
+                        RowClass::Free
+                    } else {
+                        RowClass::Nonneg
+                    },
+                    1.0,
+                )
+            } else if m.is_infinite() {
+                (
+                    if tangential {
+                        RowClass::Zero
+                    } else {
+                        RowClass::Nonneg
+                    },
+                    1.0,
+                )
+            } else {
+                (RowClass::Soc { block: 0 }, if tangential { m } else { 1.0 })
+            }
+        })
+    }
+
+    /// Numbers the rows: `class(μ, tangential)` says where each component goes.
+    fn build(dim: usize, mu: &[f64], class: impl Fn(f64, bool) -> (RowClass, f64)) -> Self {
+        let mut classes = Vec::with_capacity(dim * mu.len());
+        let mut soc = Vec::new();
+        for &m in mu {
+            let mut block_size = 0;
+            for k in 0..dim {
+                let (mut c, scale) = class(m, k > 0);
+                if let RowClass::Soc { .. } = c {
+                    c = RowClass::Soc { block: soc.len() };
+                    block_size += 1;
+                }
+                classes.push((c, scale));
+            }
+            if block_size > 0 {
+                soc.push(block_size);
+            }
+        }
+        let zero = classes
+            .iter()
+            .filter(|(c, _)| matches!(c, RowClass::Zero))
+            .count();
+        let nonneg = classes
+            .iter()
+            .filter(|(c, _)| matches!(c, RowClass::Nonneg))
+            .count();
+        let mut soc_start = Vec::with_capacity(soc.len());
+        let mut next = zero + nonneg;
+        for &size in &soc {
+            soc_start.push(next);
+            next += size;
+        }
+        let rows = next;
+        let (mut next_zero, mut next_nonneg) = (0, zero);
+        let mut soc_fill = vec![0; soc.len()];
+        let map = classes
+            .iter()
+            .map(|&(c, scale)| match c {
+                RowClass::Free => None,
+                RowClass::Zero => {
+                    next_zero += 1;
+                    Some((next_zero - 1, scale))
+                }
+                RowClass::Nonneg => {
+                    next_nonneg += 1;
+                    Some((next_nonneg - 1, scale))
+                }
+                RowClass::Soc { block } => {
+                    let row = soc_start[block] + soc_fill[block];
+                    soc_fill[block] += 1;
+                    Some((row, scale))
+                }
+            })
+            .collect();
+        Self {
+            zero,
+            nonneg,
+            soc,
+            rows,
+            map,
+        }
+    }
+
+    /// Clarabel's cone list for this layout.
+    pub(crate) fn cones(&self) -> Vec<SupportedConeT<f64>> {
+        let mut cones = Vec::with_capacity(2 + self.soc.len());
+        if self.zero > 0 {
+            cones.push(SupportedConeT::ZeroConeT(self.zero));
+        }
+        if self.nonneg > 0 {
+            cones.push(SupportedConeT::NonnegativeConeT(self.nonneg));
+        }
+        cones.extend(
+            self.soc
+                .iter()
+                .map(|&d| SupportedConeT::SecondOrderConeT(d)),
+        );
+        cones
+    }
+
+    /// The constraint matrix A = −S (dual, `h = None`) or A = −S Hᵀ (primal), where S maps
+    /// component k to its row with its scale.
+    fn a_matrix(&self, h: Option<&CscMatrix>) -> ClarabelCsc<f64> {
+        let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+        match h {
+            None => {
+                for (k, entry) in self.map.iter().enumerate() {
+                    if let Some((row, scale)) = *entry {
+                        rows.push(row);
+                        cols.push(k);
+                        vals.push(-scale);
+                    }
+                }
+                let ncols = self.map.len();
+                triplets_to_clarabel(self.rows, ncols, &rows, &cols, &vals)
+            }
+            Some(h) => {
+                // (S Hᵀ)[row(k), j] = scale_k · H[j, k]
+                for k in 0..h.ncols {
+                    if let Some(Some((row, scale))) = self.map.get(k) {
+                        for p in h.col_ptr[k]..h.col_ptr[k + 1] {
+                            rows.push(*row);
+                            cols.push(h.row_idx[p]);
+                            vals.push(-scale * h.values[p]);
+                        }
+                    }
+                }
+                triplets_to_clarabel(self.rows, h.nrows, &rows, &cols, &vals)
+            }
+        }
+    }
+}
+
+/// Builds a Clarabel CSC matrix from in-range triplets (sorted, duplicates summed).
+pub(crate) fn triplets_to_clarabel(
+    nrows: usize,
+    ncols: usize,
+    rows: &[usize],
+    cols: &[usize],
+    vals: &[f64],
+) -> ClarabelCsc<f64> {
+    match CscMatrix::from_triplets(nrows, ncols, rows, cols, vals) {
+        Ok(a) => to_clarabel(&a),
+        // all indices are produced in range by the callers; an empty matrix keeps Clarabel's
+        // dimension check (and our status mapping) in charge if that ever failed
+        Err(_) => ClarabelCsc::zeros((nrows, ncols)),
+    }
+}
+
+/// Copies a (checked, sorted) [`CscMatrix`] into Clarabel's CSC type.
+pub(crate) fn to_clarabel(a: &CscMatrix) -> ClarabelCsc<f64> {
+    ClarabelCsc::new(
+        a.nrows,
+        a.ncols,
+        a.col_ptr.clone(),
+        a.row_idx.clone(),
+        a.values.clone(),
+    )
+}
+
+/// Clarabel's default settings with `verbose = false`, the tolerance `limits.tol` as
+/// `tol_gap_abs`, `tol_gap_rel` and `tol_feas` (Clarabel's defaults if it is not a positive
+/// finite number), `limits.max_iterations` as `max_iter` and the time left before
+/// `limits.deadline` as `time_limit`. A deadline already passed gives `Err(TimeLimit)`.
+pub(crate) fn clarabel_settings(limits: &InnerLimits) -> Result<DefaultSettings<f64>, InnerStatus> {
+    let mut settings = DefaultSettings::<f64> {
+        verbose: false,
+        max_iter: u32::try_from(limits.max_iterations).unwrap_or(u32::MAX),
+        ..DefaultSettings::default()
+    };
+    if limits.tol.is_finite() && limits.tol > 0.0 {
+        settings.tol_gap_abs = limits.tol;
+        settings.tol_gap_rel = limits.tol;
+        settings.tol_feas = limits.tol;
+    }
+    if let Some(deadline) = limits.deadline {
+        let left = deadline
+            .saturating_duration_since(Instant::now())
+            .as_secs_f64();
+        if left <= 0.0 {
+            return Err(InnerStatus::TimeLimit);
+        }
+        settings.time_limit = left;
+    }
+    Ok(settings)
+}
+
+/// Maps Clarabel's termination status to [`InnerStatus`].
+///
+/// `AlmostSolved` (Clarabel stalled short of the requested tolerance but met its reduced
+/// ones) is reported as [`InnerStatus::NumericalError`]: the iterate is written and usually
+/// usable, but the inner criterion was not met. Certificates of primal or dual infeasibility
+/// (full or reduced accuracy) are [`InnerStatus::Infeasible`].
+pub(crate) fn map_status(status: SolverStatus) -> InnerStatus {
+    match status {
+        SolverStatus::Solved => InnerStatus::Solved,
+        SolverStatus::PrimalInfeasible
+        | SolverStatus::DualInfeasible
+        | SolverStatus::AlmostPrimalInfeasible
+        | SolverStatus::AlmostDualInfeasible => InnerStatus::Infeasible,
+        SolverStatus::MaxIterations => InnerStatus::MaxIterations,
+        SolverStatus::MaxTime => InnerStatus::TimeLimit,
+        SolverStatus::AlmostSolved
+        | SolverStatus::Unsolved
+        | SolverStatus::NumericalError
+        | SolverStatus::InsufficientProgress
+        | SolverStatus::CallbackTerminated => InnerStatus::NumericalError,
+    }
+}
+
+/// The report of a finished Clarabel solve: mapped status, iterations and Clarabel's own
+/// stopping measure max(res_primal, res_dual, min(gap_abs, gap_rel)).
+pub(crate) fn report_of(solver: &DefaultSolver<f64>) -> InnerReport {
+    let info = &solver.info;
+    let residual = info
+        .res_primal
+        .max(info.res_dual)
+        .max(info.gap_abs.min(info.gap_rel));
+    InnerReport {
+        status: map_status(info.status),
+        iterations: info.iterations as usize,
+        residual,
+    }
+}
+
+/// A Clarabel solver set up for min ½ rᵀ W r + bᵀ r s.t. A r + s = 0, s ∈ K, with the data
+/// that determine P, A and K: (d, μ, W) and a variant tag (e.g. the number of facets).
+/// Only b changes between the inner solves of one fixed-point run, so a cached solver needs
+/// just `update_q`.
+pub(crate) struct QpCache {
+    dim: usize,
+    variant: usize,
+    mu: Vec<f64>,
+    w: CscMatrix,
+    solver: DefaultSolver<f64>,
+}
+
+impl std::fmt::Debug for QpCache {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("QpCache")
+            .field("dim", &self.dim)
+            .field("variant", &self.variant)
+            .field("contacts", &self.mu.len())
+            .field("w_nnz", &self.w.nnz())
+            .finish()
+    }
+}
+
+impl QpCache {
+    fn matches(&self, variant: usize, problem: &InnerProblem<'_>) -> bool {
+        self.dim == problem.dim
+            && self.variant == variant
+            && self.mu.len() == problem.mu.len()
+            && self
+                .mu
+                .iter()
+                .zip(problem.mu)
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+            && self.w == *problem.w
+    }
+}
+
+/// Whether an [`InnerProblem`] and the output slice fit together and hold finite data.
+pub(crate) fn valid_inner(problem: &InnerProblem<'_>, r: &[f64]) -> bool {
+    let m = problem.mu.len() * problem.dim;
+    (problem.dim == 2 || problem.dim == 3)
+        && problem.w.nrows == m
+        && problem.w.ncols == m
+        && problem.b.len() == m
+        && r.len() == m
+        && problem.w.check().is_ok()
+        && problem.w.first_non_finite().is_none()
+        && problem.b.iter().all(|x| x.is_finite())
+        && problem.mu.iter().all(|x| *x >= 0.0)
+}
+
+/// Solves min ½ rᵀ W r + bᵀ r s.t. A r + s = 0, s ∈ K with Clarabel, where `constraints`
+/// builds (A, K) for a new setup. Reuses `cache` when (d, μ, W, variant) are unchanged.
+/// Writes Clarabel's x into `r` (left untouched when no solve took place).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn solve_dual_qp(
+    cache: &mut Option<QpCache>,
+    variant: usize,
+    polish: usize,
+    problem: &InnerProblem<'_>,
+    limits: &InnerLimits,
+    r: &mut [f64],
+    constraints: impl FnOnce() -> (ClarabelCsc<f64>, Vec<SupportedConeT<f64>>),
+) -> InnerReport {
+    let fail = |status| InnerReport {
+        status,
+        iterations: 0,
+        residual: f64::INFINITY,
+    };
+    if !valid_inner(problem, r) {
+        return fail(InnerStatus::NumericalError);
+    }
+    let settings = match clarabel_settings(limits) {
+        Ok(s) => s,
+        Err(status) => return fail(status),
+    };
+    let reused = match cache.as_mut() {
+        Some(c) if c.matches(variant, problem) => {
+            c.solver.update_q(&problem.b.to_vec()).is_ok()
+                && c.solver.update_settings(settings.clone()).is_ok()
+        }
+        _ => false,
+    };
+    if !reused {
+        *cache = None;
+        let (a, cones) = constraints();
+        let p = to_clarabel(&problem.w.upper_triangle());
+        let zeros = vec![0.0; a.m];
+        match DefaultSolver::new(&p, problem.b, &a, &zeros, &cones, settings) {
+            Ok(solver) => {
+                *cache = Some(QpCache {
+                    dim: problem.dim,
+                    variant,
+                    mu: problem.mu.to_vec(),
+                    w: problem.w.clone(),
+                    solver,
+                })
+            }
+            Err(_) => return fail(InnerStatus::NumericalError),
+        }
+    }
+    let Some(c) = cache.as_mut() else {
+        return fail(InnerStatus::NumericalError);
+    };
+    c.solver.solve();
+    let x = &c.solver.solution.x;
+    let finite = x.len() == r.len() && x.iter().all(|v| v.is_finite());
+    if finite {
+        r.copy_from_slice(x);
+    }
+    let mut report = report_of(&c.solver);
+    if !finite {
+        report.status = InnerStatus::NumericalError;
+        return report;
+    }
+    if polish > 0 {
+        let raw = c.solver.info.status;
+        let stalled = matches!(
+            raw,
+            SolverStatus::AlmostSolved | SolverStatus::InsufficientProgress
+        );
+        let residual = if raw == SolverStatus::Solved || stalled {
+            polish_dual(problem, r, polish, limits.deadline)
+        } else {
+            dual_natural_residual(problem, r)
+        };
+        report.residual = residual;
+        if stalled && residual <= limits.tol {
+            report.status = InnerStatus::Solved;
+        }
+    }
+    report
+}
+
+// ---------------------------------------------------------------------------------------------
+// Semismooth Newton polish of an interior-point solution
+// ---------------------------------------------------------------------------------------------
+
+/// Whether `deadline` has passed.
+fn past(deadline: Option<Instant>) -> bool {
+    deadline.is_some_and(|d| Instant::now() >= d)
+}
+
+/// Projection of y onto K_μ (written into `p`) and its Jacobian ∂P_{K_μ}(y) (row-major d × d
+/// into `jac`). On the boundary piece (0 < μ < ∞, neither y ∈ K_μ nor −y ∈ K_μ*), with
+/// t = ‖y_T‖, ŷ = y_T / t and a = (y_N + μ t)/(1 + μ²):
+///
+/// ```text
+///     ∂P = (1/(1 + μ²)) (1, μ ŷ)(1, μ ŷ)ᵀ + (μ a / t) [0 0; 0 I − ŷ ŷᵀ].
+/// ```
+///
+/// Inside K_μ it is I, inside −K_μ* it is 0 (a B-subdifferential element on the kinks).
+fn projection_jacobian(mu: f64, y: &[f64], p: &mut [f64], jac: &mut [f64]) {
+    let d = y.len();
+    p.copy_from_slice(y);
+    crate::cone::project(mu, p);
+    jac.iter_mut().for_each(|x| *x = 0.0);
+    let t = crate::cone::tangent_norm(y);
+    if mu == 0.0 {
+        jac[0] = if y[0] > 0.0 { 1.0 } else { 0.0 };
+    } else if mu.is_infinite() {
+        jac[0] = if y[0] > 0.0 { 1.0 } else { 0.0 };
+        (1..d).for_each(|k| jac[k * d + k] = 1.0);
+    } else if t <= mu * y[0] {
+        (0..d).for_each(|k| jac[k * d + k] = 1.0);
+    } else if mu * t <= -y[0] || t == 0.0 {
+        // polar cone: P = 0
+    } else {
+        let a = (y[0] + mu * t) / (1.0 + mu * mu);
+        let mut g = [0.0; 3];
+        g[0] = 1.0;
+        for k in 1..d {
+            g[k] = mu * y[k] / t;
+        }
+        for i in 0..d {
+            for j in 0..d {
+                jac[i * d + j] = g[i] * g[j] / (1.0 + mu * mu);
+            }
+        }
+        let c = mu * a / t;
+        for i in 1..d {
+            for j in 1..d {
+                let e = if i == j { 1.0 } else { 0.0 };
+                jac[i * d + j] += c * (e - (y[i] / t) * (y[j] / t));
+            }
+        }
+    }
+}
+
+/// Natural-map residual F(r) = r − P_L(r − u) of the complementarity L* ∋ u ⊥ r ∈ L (3.14),
+/// with the Jacobians ∂P of every contact (row-major d × d blocks) in `jac`.
+fn natural_map(dim: usize, mu: &[f64], r: &[f64], u: &[f64], f: &mut [f64], jac: &mut [f64]) {
+    let mut y = [0.0; 3];
+    let mut p = [0.0; 3];
+    for (i, &m) in mu.iter().enumerate() {
+        let block = i * dim..(i + 1) * dim;
+        for k in 0..dim {
+            y[k] = r[block.start + k] - u[block.start + k];
+        }
+        projection_jacobian(
+            m,
+            &y[..dim],
+            &mut p[..dim],
+            &mut jac[i * dim * dim..(i + 1) * dim * dim],
+        );
+        for k in 0..dim {
+            f[block.start + k] = r[block.start + k] - p[k];
+        }
+    }
+}
+
+/// Solves J x = rhs for a square sparse J given as summed triplets, by faer's sparse LU.
+/// None if the factorization fails or the solution is not finite.
+fn sparse_lu_solve(
+    n: usize,
+    rows: &[usize],
+    cols: &[usize],
+    vals: &[f64],
+    rhs: &mut [f64],
+) -> Option<()> {
+    use faer::linalg::solvers::Solve;
+    let csc = CscMatrix::from_triplets(n, n, rows, cols, vals).ok()?;
+    let trip: Vec<faer::sparse::Triplet<usize, usize, f64>> = csc
+        .triplets()
+        .map(|(i, j, v)| faer::sparse::Triplet::new(i, j, v))
+        .collect();
+    let mat = faer::sparse::SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip).ok()?;
+    let lu = mat.sp_lu().ok()?;
+    lu.solve_in_place(faer::MatMut::from_column_major_slice_mut(rhs, n, 1));
+    rhs.iter().all(|x| x.is_finite()).then_some(())
+}
+
+/// Appends the triplets of `sign`·D·B (rows offset by `row0`) where D is the block diagonal
+/// of the d × d projection Jacobians and B is given by `(row k, column j, value)` entries;
+/// row k of B belongs to contact k / d.
+#[allow(clippy::too_many_arguments)]
+fn push_d_times(
+    dim: usize,
+    jac: &[f64],
+    sign: f64,
+    entries: impl Iterator<Item = (usize, usize, f64)>,
+    row0: usize,
+    rows: &mut Vec<usize>,
+    cols: &mut Vec<usize>,
+    vals: &mut Vec<f64>,
+) {
+    for (k, j, v) in entries {
+        let (c, a) = (k / dim, k % dim);
+        for a2 in 0..dim {
+            let dv = jac[c * dim * dim + a2 * dim + a];
+            if dv != 0.0 {
+                rows.push(row0 + c * dim + a2);
+                cols.push(j);
+                vals.push(sign * dv * v);
+            }
+        }
+    }
+}
+
+/// Appends the triplets of I − D (rows and columns offset by `off`).
+fn push_identity_minus_d(
+    dim: usize,
+    jac: &[f64],
+    off: usize,
+    rows: &mut Vec<usize>,
+    cols: &mut Vec<usize>,
+    vals: &mut Vec<f64>,
+) {
+    let contacts = jac.len() / (dim * dim);
+    for c in 0..contacts {
+        for a in 0..dim {
+            for b in 0..dim {
+                let e = if a == b { 1.0 } else { 0.0 };
+                rows.push(off + c * dim + a);
+                cols.push(off + c * dim + b);
+                vals.push(e - jac[c * dim * dim + a * dim + b]);
+            }
+        }
+    }
+}
+
+/// Relative natural-map residual ‖r − P_L(r − (W r + b))‖ / max(1, ‖b‖) of (4.7).
+pub(crate) fn dual_natural_residual(problem: &InnerProblem<'_>, r: &[f64]) -> f64 {
+    let m = r.len();
+    let mut u = problem.b.to_vec();
+    problem.w.gemv_acc(1.0, r, &mut u);
+    let mut f = vec![0.0; m];
+    let mut jac = vec![0.0; problem.mu.len() * problem.dim * problem.dim];
+    natural_map(problem.dim, problem.mu, r, &u, &mut f, &mut jac);
+    crate::law::norm(&f) / crate::law::norm(problem.b).max(1.0)
+}
+
+/// Polishes an approximate solution r of (4.7) by at most `steps` semismooth Newton steps on
+/// F(r) = r − P_L(r − (W r + b)), whose Jacobian is I − D + D W (D = ∂P_L), solved by faer's
+/// sparse LU. A step is kept only if it decreases ‖F‖; no step starts after `deadline`; returns the final relative residual ‖F(r)‖ / max(1, ‖b‖).
+///
+/// Why: an interior-point method stops on the duality gap rᵀũ, and for a sliding contact
+/// (r and ũ on the boundaries of K_μ and K_μ*) rᵀũ is *quadratic* in their misalignment, so a
+/// gap of 1e-12 leaves a natural residual (the error measure of docs/error.md) near 1e-7.
+/// Newton on F converges quadratically from there.
+pub(crate) fn polish_dual(
+    problem: &InnerProblem<'_>,
+    r: &mut [f64],
+    steps: usize,
+    deadline: Option<Instant>,
+) -> f64 {
+    let (dim, m) = (problem.dim, r.len());
+    let scale = crate::law::norm(problem.b).max(1.0);
+    let mut f = vec![0.0; m];
+    let mut jac = vec![0.0; problem.mu.len() * dim * dim];
+    let eval = |r: &[f64], f: &mut [f64], jac: &mut [f64]| {
+        let mut u = problem.b.to_vec();
+        problem.w.gemv_acc(1.0, r, &mut u);
+        natural_map(dim, problem.mu, r, &u, f, jac);
+        crate::law::norm(f)
+    };
+    let mut norm_f = eval(r, &mut f, &mut jac);
+    let mut trial = vec![0.0; m];
+    let mut f_trial = vec![0.0; m];
+    let mut jac_trial = vec![0.0; jac.len()];
+    for _ in 0..steps {
+        if norm_f.is_nan() || norm_f <= 1e-15 * scale || past(deadline) {
+            break;
+        }
+        // J = I − D + D W
+        let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+        push_identity_minus_d(dim, &jac, 0, &mut rows, &mut cols, &mut vals);
+        push_d_times(
+            dim,
+            &jac,
+            1.0,
+            problem.w.triplets(),
+            0,
+            &mut rows,
+            &mut cols,
+            &mut vals,
+        );
+        let mut delta: Vec<f64> = f.iter().map(|x| -x).collect();
+        if sparse_lu_solve(m, &rows, &cols, &vals, &mut delta).is_none() {
+            break;
+        }
+        for k in 0..m {
+            trial[k] = r[k] + delta[k];
+        }
+        let norm_trial = eval(&trial, &mut f_trial, &mut jac_trial);
+        if norm_trial.is_nan() || norm_trial >= norm_f {
+            break;
+        }
+        r.copy_from_slice(&trial);
+        std::mem::swap(&mut f, &mut f_trial);
+        std::mem::swap(&mut jac, &mut jac_trial);
+        norm_f = norm_trial;
+    }
+    norm_f / scale
+}
+
+/// Residuals of (3.14) for the primal unknowns (v, r): F₁ = M v − H r − f (into `f[..n]`) and
+/// F₂ = r − P_L(r − (Hᵀ v + shift)) (into `f[n..]`, Jacobians ∂P into `jac`); returns
+/// max(‖F₁‖ / max(1, ‖f‖), ‖F₂‖ / max(1, ‖shift‖)).
+fn primal_map(
+    problem: &GlobalProblem,
+    shift: &[f64],
+    x: &[f64],
+    f: &mut [f64],
+    jac: &mut [f64],
+) -> f64 {
+    let n = problem.m.nrows;
+    let (v, r) = x.split_at(n);
+    let (f1, f2) = f.split_at_mut(n);
+    f1.iter_mut().zip(&problem.f).for_each(|(a, b)| *a = -b);
+    problem.m.gemv_acc(1.0, v, f1);
+    problem.h.gemv_acc(-1.0, r, f1);
+    let mut u = shift.to_vec();
+    problem.h.gemv_t_acc(1.0, v, &mut u);
+    natural_map(problem.dim, &problem.mu, r, &u, f2, jac);
+    let s1 = crate::law::norm(&problem.f).max(1.0);
+    let s2 = crate::law::norm(shift).max(1.0);
+    (crate::law::norm(f1) / s1).max(crate::law::norm(f2) / s2)
+}
+
+/// Polishes (v, r) of (3.15) by at most `steps` semismooth Newton steps on
+/// (F₁, F₂) of [`primal_map`], with Jacobian [[M, −H], [D Hᵀ, I − D]]; a step is kept only
+/// if it decreases the residual. Returns the final residual (see [`polish_dual`] for why).
+fn polish_primal(
+    problem: &GlobalProblem,
+    shift: &[f64],
+    v: &mut [f64],
+    r: &mut [f64],
+    steps: usize,
+    deadline: Option<Instant>,
+) -> f64 {
+    let (dim, n, m) = (problem.dim, v.len(), r.len());
+    let mut x: Vec<f64> = v.iter().chain(r.iter()).copied().collect();
+    let mut f = vec![0.0; n + m];
+    let mut jac = vec![0.0; problem.mu.len() * dim * dim];
+    let mut res = primal_map(problem, shift, &x, &mut f, &mut jac);
+    let mut trial = vec![0.0; n + m];
+    let mut f_trial = vec![0.0; n + m];
+    let mut jac_trial = vec![0.0; jac.len()];
+    for _ in 0..steps {
+        if res.is_nan() || res <= 1e-15 || past(deadline) {
+            break;
+        }
+        let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+        for (i, j, val) in problem.m.triplets() {
+            rows.push(i);
+            cols.push(j);
+            vals.push(val);
+        }
+        for (i, k, val) in problem.h.triplets() {
+            rows.push(i);
+            cols.push(n + k);
+            vals.push(-val);
+        }
+        // ∂F₂/∂v = D Hᵀ (y = r − Hᵀ v − shift): entry (k, j) of Hᵀ is H[j, k]
+        push_d_times(
+            dim,
+            &jac,
+            1.0,
+            problem.h.triplets().map(|(j, k, val)| (k, j, val)),
+            n,
+            &mut rows,
+            &mut cols,
+            &mut vals,
+        );
+        push_identity_minus_d(dim, &jac, n, &mut rows, &mut cols, &mut vals);
+        let mut delta: Vec<f64> = f.iter().map(|a| -a).collect();
+        if sparse_lu_solve(n + m, &rows, &cols, &vals, &mut delta).is_none() {
+            break;
+        }
+        for k in 0..n + m {
+            trial[k] = x[k] + delta[k];
+        }
+        let res_trial = primal_map(problem, shift, &trial, &mut f_trial, &mut jac_trial);
+        if res_trial.is_nan() || res_trial >= res {
+            break;
+        }
+        std::mem::swap(&mut x, &mut trial);
+        std::mem::swap(&mut f, &mut f_trial);
+        std::mem::swap(&mut jac, &mut jac_trial);
+        res = res_trial;
+    }
+    v.copy_from_slice(&x[..n]);
+    r.copy_from_slice(&x[n..]);
+    res
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn limits() -> InnerLimits {
+        InnerLimits {
+            tol: 1e-9,
+            max_iterations: 100,
+            deadline: None,
+        }
+    }
+
+    #[test]
+    fn solver_is_send() {
+        fn assert_send<T: Send>() {}
+        assert_send::<IpmSolver>();
+    }
+
+    #[test]
+    fn layouts_order_rows_and_scale() {
+        let mu = [0.5, 0.0, f64::INFINITY];
+        let d = ConeLayout::dual_exact(3, &mu);
+        // μ = 0: 2 zero rows + 1 nonneg; μ = ∞: 1 nonneg; μ = 0.5: SOC(3)
+        assert_eq!(
+            (d.zero, d.nonneg, d.soc.clone(), d.rows),
+            (2, 2, vec![3], 7)
+        );
+        assert_eq!(d.map[0], Some((4, 0.5)));
+        assert_eq!(d.map[1], Some((5, 1.0)));
+        assert_eq!(d.map[3], Some((2, 1.0)));
+        assert_eq!(d.map[4], Some((0, 1.0)));
+        assert_eq!(d.map[7], None);
+        let p = ConeLayout::primal(3, &mu);
+        assert_eq!(
+            (p.zero, p.nonneg, p.soc.clone(), p.rows),
+            (2, 2, vec![3], 7)
+        );
+        assert_eq!(p.map[1], Some((5, 0.5)));
+        assert_eq!(p.map[4], None);
+        assert_eq!(p.map[7], Some((0, 1.0)));
+    }
+
+    #[test]
+    fn single_contact_take_off_and_stick() {
+        // W = I, b = (1, 0, 0): take-off, r = 0.
+        let w = CscMatrix::identity(3, 1.0);
+        let mut r = vec![5.0; 3];
+        let mut s = IpmSolver::new();
+        let p = InnerProblem {
+            dim: 3,
+            w: &w,
+            b: &[1.0, 0.0, 0.0],
+            mu: &[0.3],
+        };
+        let rep = s.solve(&p, &limits(), &mut r);
+        assert_eq!(rep.status, InnerStatus::Solved);
+        assert!(r.iter().all(|x| x.abs() < 1e-7), "{r:?}");
+        // b = (−1, 0.1, 0): stick, r = −b inside the cone (‖0.1‖ ≤ 0.3·1).
+        let p = InnerProblem {
+            b: &[-1.0, 0.1, 0.0],
+            ..p
+        };
+        let rep = s.solve(&p, &limits(), &mut r);
+        assert_eq!(rep.status, InnerStatus::Solved);
+        for (x, y) in r.iter().zip([1.0, -0.1, 0.0]) {
+            assert!((x - y).abs() < 1e-7, "{r:?}");
+        }
+        assert!(s.cache.is_some());
+    }
+
+    #[test]
+    fn cached_solver_matches_fresh_solve() {
+        let w = CscMatrix::from_dense(3, 3, &[2.0, 0.3, 0.1, 0.3, 1.5, -0.2, 0.1, -0.2, 1.0]);
+        let mu = [0.4];
+        let b1 = [-1.0, 2.0, 0.5];
+        let b2 = [-2.0, -0.3, 1.0];
+        let mut cached = IpmSolver::new();
+        let mut r1 = vec![0.0; 3];
+        cached.solve(
+            &InnerProblem {
+                dim: 3,
+                w: &w,
+                b: &b1,
+                mu: &mu,
+            },
+            &limits(),
+            &mut r1,
+        );
+        let mut r2 = vec![0.0; 3];
+        let rep = cached.solve(
+            &InnerProblem {
+                dim: 3,
+                w: &w,
+                b: &b2,
+                mu: &mu,
+            },
+            &limits(),
+            &mut r2,
+        );
+        assert_eq!(rep.status, InnerStatus::Solved);
+        let mut fresh = IpmSolver::new();
+        let mut r3 = vec![0.0; 3];
+        fresh.solve(
+            &InnerProblem {
+                dim: 3,
+                w: &w,
+                b: &b2,
+                mu: &mu,
+            },
+            &limits(),
+            &mut r3,
+        );
+        for (x, y) in r2.iter().zip(&r3) {
+            // same problem, different equilibration history: equal to IPM accuracy
+            assert!((x - y).abs() < 1e-6, "{r2:?} vs {r3:?}");
+        }
+        assert!(r1.iter().zip(&r2).any(|(x, y)| (x - y).abs() > 1e-3));
+    }
+
+    #[test]
+    fn bad_sizes_and_past_deadline() {
+        let w = CscMatrix::identity(3, 1.0);
+        let mut s = IpmSolver::new();
+        let mut r = vec![0.0; 2];
+        let p = InnerProblem {
+            dim: 3,
+            w: &w,
+            b: &[1.0, 0.0, 0.0],
+            mu: &[0.3],
+        };
+        assert_eq!(
+            s.solve(&p, &limits(), &mut r).status,
+            InnerStatus::NumericalError
+        );
+        let mut r = vec![0.0; 3];
+        let past = InnerLimits {
+            deadline: Some(Instant::now()),
+            ..limits()
+        };
+        std::thread::sleep(std::time::Duration::from_millis(1));
+        assert_eq!(s.solve(&p, &past, &mut r).status, InnerStatus::TimeLimit);
+        let few = InnerLimits {
+            max_iterations: 1,
+            ..limits()
+        };
+        let p = InnerProblem {
+            b: &[-1.0, 3.0, 2.0],
+            ..p
+        };
+        assert_eq!(s.solve(&p, &few, &mut r).status, InnerStatus::MaxIterations);
+    }
+
+    /// ∂P_{K_μ} against central differences, at points of all three pieces.
+    #[test]
+    fn projection_jacobian_matches_finite_differences() {
+        let points: [(f64, [f64; 3]); 6] = [
+            (0.5, [1.0, 0.1, -0.2]),  // inside
+            (0.5, [-1.0, 0.1, 0.2]),  // polar
+            (0.5, [0.3, 1.0, -0.7]),  // boundary piece
+            (0.8, [-0.2, -0.6, 0.9]), // boundary piece, y_N < 0
+            (0.0, [0.7, 0.4, 0.1]),   // μ = 0
+            (f64::INFINITY, [0.7, 0.4, 0.1]),
+        ];
+        for (mu, y) in points {
+            for d in [2, 3] {
+                let y = &y[..d];
+                let mut p = vec![0.0; d];
+                let mut jac = vec![0.0; d * d];
+                projection_jacobian(mu, y, &mut p, &mut jac);
+                let h = 1e-6;
+                for j in 0..d {
+                    let (mut yp, mut ym) = (y.to_vec(), y.to_vec());
+                    yp[j] += h;
+                    ym[j] -= h;
+                    crate::cone::project(mu, &mut yp);
+                    crate::cone::project(mu, &mut ym);
+                    for i in 0..d {
+                        let fd = (yp[i] - ym[i]) / (2.0 * h);
+                        assert!(
+                            (fd - jac[i * d + j]).abs() < 1e-6,
+                            "mu={mu} y={y:?} ({i},{j}): {fd} vs {}",
+                            jac[i * d + j]
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn polish_reaches_rounding_level_on_a_sliding_contact() {
+        // W = [[2, .3, 0], [.3, 1, .1], [0, .1, 1.5]], b pushes into sliding
+        let w = CscMatrix::from_dense(3, 3, &[2.0, 0.3, 0.0, 0.3, 1.0, 0.1, 0.0, 0.1, 1.5]);
+        let p = InnerProblem {
+            dim: 3,
+            w: &w,
+            b: &[-1.0, 2.0, -1.5],
+            mu: &[0.3],
+        };
+        let mut plain = vec![0.0; 3];
+        IpmSolver::with_polish(0).solve(&p, &limits(), &mut plain);
+        let mut polished = vec![0.0; 3];
+        let rep = IpmSolver::new().solve(&p, &limits(), &mut polished);
+        assert_eq!(rep.status, InnerStatus::Solved);
+        assert!(rep.residual < 1e-14, "{rep:?}");
+        assert!((dual_natural_residual(&p, &polished) - rep.residual).abs() < 1e-15);
+        assert!(dual_natural_residual(&p, &plain) >= rep.residual);
     }
 }

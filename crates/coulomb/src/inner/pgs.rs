@@ -1,1 +1,627 @@
-//! (under construction)
+//! Projected block Gauss–Seidel on the dual inner problem (4.7),
+//!
+//! ```text
+//!     min_{r ∈ L}  ½ rᵀ W r + bᵀ r,      L = ∏ K_{μⁱ},
+//! ```
+//!
+//! sweeping over the contacts and minimizing, for contact i with the other rʲ frozen, the
+//! one-contact SOC-QP
+//!
+//! ```text
+//!     min_{rᵢ ∈ K_{μⁱ}}  ½ rᵢᵀ Wᵢᵢ rᵢ + cᵢᵀ rᵢ,     cᵢ = bᵢ + Σ_{j≠i} Wᵢⱼ rⱼ.
+//! ```
+//!
+//! # The one-contact solve is exact
+//! [`solve_contact`] computes the minimizer exactly (to rounding), by cases:
+//! - interior: the unconstrained minimizer −Wᵢᵢ⁻¹ cᵢ lies in K_μ;
+//! - vertex: cᵢ ∈ K_μ* (then 0 satisfies the optimality condition K* ∋ Wᵢᵢ·0 + cᵢ ⊥ 0);
+//! - boundary: rᵢ = t (1, μ cos α, μ sin α) with t = −cᵀd/(dᵀAd) > 0; the angle α maximizes
+//!   ψ(α) = (cᵀd(α))² / (d(α)ᵀ A d(α)) among directions with cᵀd < 0, found by Newton's method
+//!   on ψ' (from the previous iterate's angle, or from the best of a few sampled angles), and
+//!   accepted only if the Lagrange multiplier is nonnegative (KKT of the convex problem, hence
+//!   the global minimizer). In d = 2 the boundary is two rays, both tried.
+//!
+//! μ = 0 (the half-line) and μ = ∞ (the half-space) have their own closed forms.
+//!
+//! # Bookkeeping
+//! The iteration keeps u = W r + b up to date: after contact i moves by δ, u ← u + W_{:,i} δ
+//! through the columns of W (W is symmetric, so its column i is its row i), which costs the
+//! nonzeros of those d columns. Then cᵢ = uᵢ − Wᵢᵢ rᵢ. The diagonal blocks Wᵢᵢ are extracted
+//! once per matrix. A diagonal block that is singular (a contact that W barely sees) is solved
+//! with a proximal term ε‖rᵢ − rᵢ_old‖²/2, which leaves the fixed points unchanged.
+//!
+//! # Stopping
+//! At the end of each sweep: the natural-map residual of (4.7), ‖r − P_L(r − (W r + b))‖,
+//! relative to max(‖b‖, ‖r‖, ‖W r + b‖), is compared with the tolerance.
+
+use super::{InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus};
+use crate::cone;
+use crate::sparse::CscMatrix;
+use std::time::Instant;
+
+/// The diagonal blocks of W, with what the one-contact solve needs.
+#[derive(Debug, Clone)]
+pub struct DiagonalBlocks {
+    dim: usize,
+    /// row-major d × d blocks, regularized when singular
+    blocks: Vec<[f64; 9]>,
+    /// inverses of `blocks`
+    inverses: Vec<[f64; 9]>,
+    /// identity of the matrix the blocks came from (pointer, nnz, size)
+    key: (usize, usize, usize),
+    /// estimate of ‖W‖ (largest block trace)
+    pub w_scale: f64,
+}
+
+fn key_of(w: &CscMatrix) -> (usize, usize, usize) {
+    (w.values.as_ptr() as usize, w.nnz(), w.ncols)
+}
+
+/// Inverse of a symmetric d × d (d ≤ 3) row-major matrix by cofactors; None if singular
+/// relative to `scale`.
+fn invert(a: &[f64; 9], d: usize, scale: f64) -> Option<[f64; 9]> {
+    let mut inv = [0.0; 9];
+    match d {
+        1 => {
+            if a[0].abs() <= 1e-13 * scale {
+                return None;
+            }
+            inv[0] = 1.0 / a[0];
+        }
+        2 => {
+            let det = a[0] * a[3] - a[1] * a[2];
+            if det.is_nan() || det <= 1e-13 * scale * scale {
+                return None;
+            }
+            inv[0] = a[3] / det;
+            inv[1] = -a[1] / det;
+            inv[2] = -a[2] / det;
+            inv[3] = a[0] / det;
+        }
+        _ => {
+            let c00 = a[4] * a[8] - a[5] * a[7];
+            let c01 = a[5] * a[6] - a[3] * a[8];
+            let c02 = a[3] * a[7] - a[4] * a[6];
+            let det = a[0] * c00 + a[1] * c01 + a[2] * c02;
+            if det.is_nan() || det <= 1e-13 * scale * scale * scale {
+                return None;
+            }
+            inv[0] = c00 / det;
+            inv[1] = (a[2] * a[7] - a[1] * a[8]) / det;
+            inv[2] = (a[1] * a[5] - a[2] * a[4]) / det;
+            inv[3] = c01 / det;
+            inv[4] = (a[0] * a[8] - a[2] * a[6]) / det;
+            inv[5] = (a[2] * a[3] - a[0] * a[5]) / det;
+            inv[6] = c02 / det;
+            inv[7] = (a[1] * a[6] - a[0] * a[7]) / det;
+            inv[8] = (a[0] * a[4] - a[1] * a[3]) / det;
+        }
+    }
+    Some(inv)
+}
+
+impl DiagonalBlocks {
+    /// Extracts and inverts the d × d diagonal blocks of W (d ∈ {2, 3}).
+    pub fn new(dim: usize, w: &CscMatrix) -> Self {
+        let nc = w.ncols / dim;
+        let mut blocks = vec![[0.0; 9]; nc];
+        for (i, blk) in blocks.iter_mut().enumerate() {
+            for k in 0..dim {
+                let col = i * dim + k;
+                for p in w.col_ptr[col]..w.col_ptr[col + 1] {
+                    let row = w.row_idx[p];
+                    if row >= i * dim && row < (i + 1) * dim {
+                        blk[(row - i * dim) * dim + k] += w.values[p];
+                    }
+                }
+            }
+            // exact symmetry
+            for a in 0..dim {
+                for b in a + 1..dim {
+                    let m = 0.5 * (blk[a * dim + b] + blk[b * dim + a]);
+                    blk[a * dim + b] = m;
+                    blk[b * dim + a] = m;
+                }
+            }
+        }
+        let global_scale = blocks
+            .iter()
+            .map(|b| (0..dim).map(|k| b[k * dim + k].abs()).sum::<f64>())
+            .fold(0.0f64, f64::max)
+            .max(f64::MIN_POSITIVE);
+        let mut inverses = Vec::with_capacity(nc);
+        for blk in blocks.iter_mut() {
+            let trace: f64 = (0..dim).map(|k| blk[k * dim + k]).sum();
+            let scale = trace.max(1e-12 * global_scale);
+            match invert(blk, dim, scale) {
+                Some(inv) if trace > 1e-12 * global_scale => {
+                    inverses.push(inv);
+                }
+                _ => {
+                    let eps = 1e-8 * scale;
+                    for k in 0..dim {
+                        blk[k * dim + k] += eps;
+                    }
+                    let inv = invert(blk, dim, 0.0).unwrap_or([0.0; 9]);
+                    inverses.push(inv);
+                }
+            }
+        }
+        Self {
+            dim,
+            blocks,
+            inverses,
+            key: key_of(w),
+            w_scale: global_scale,
+        }
+    }
+
+    fn matches(&self, dim: usize, w: &CscMatrix) -> bool {
+        self.dim == dim && self.key == key_of(w)
+    }
+}
+
+#[inline]
+fn matvec(a: &[f64; 9], d: usize, x: &[f64; 3]) -> [f64; 3] {
+    let mut y = [0.0; 3];
+    for i in 0..d {
+        let mut s = 0.0;
+        for j in 0..d {
+            s += a[i * d + j] * x[j];
+        }
+        y[i] = s;
+    }
+    y
+}
+
+#[inline]
+fn dot3(a: &[f64; 3], b: &[f64; 3], d: usize) -> f64 {
+    (0..d).map(|k| a[k] * b[k]).sum()
+}
+
+/// Minimizer of ½ xᵀ A x + cᵀ x along the ray t·dir, t ≥ 0: (t, value).
+#[inline]
+fn ray_minimizer(a: &[f64; 9], d: usize, c: &[f64; 3], dir: &[f64; 3]) -> (f64, f64) {
+    let cd = dot3(c, dir, d);
+    let dad = dot3(dir, &matvec(a, d, dir), d);
+    if cd >= 0.0 || dad <= 0.0 {
+        return (0.0, 0.0);
+    }
+    let t = -cd / dad;
+    (t, 0.5 * cd * t)
+}
+
+/// ψ(α) = log((cᵀd)² / dᵀAd) and its first two derivatives, for d(α) = (1, μ cos α, μ sin α)
+/// (d = 3). Also returns cᵀd.
+#[inline]
+fn psi(a: &[f64; 9], c: &[f64; 3], mu: f64, alpha: f64) -> (f64, f64, f64, f64) {
+    let (s, co) = alpha.sin_cos();
+    let (s2, c2) = (2.0 * alpha).sin_cos();
+    let n = c[0] + mu * (c[1] * co + c[2] * s);
+    let n1 = mu * (-c[1] * s + c[2] * co);
+    let n2 = -mu * (c[1] * co + c[2] * s);
+    let den = a[0]
+        + 2.0 * mu * (a[1] * co + a[2] * s)
+        + mu * mu * (a[4] * co * co + 2.0 * a[5] * co * s + a[8] * s * s);
+    let den1 =
+        2.0 * mu * (-a[1] * s + a[2] * co) + mu * mu * ((a[8] - a[4]) * s2 + 2.0 * a[5] * c2);
+    let den2 =
+        2.0 * mu * (-a[1] * co - a[2] * s) + mu * mu * (2.0 * (a[8] - a[4]) * c2 - 4.0 * a[5] * s2);
+    let p1 = 2.0 * n1 / n - den1 / den;
+    let p2 = 2.0 * (n2 * n - n1 * n1) / (n * n) - (den2 * den - den1 * den1) / (den * den);
+    (n, p1, p2, den)
+}
+
+/// Newton on ψ'(α) = 0 from α₀ (d = 3, boundary case); returns the boundary point if the
+/// iteration reaches a stationary point with cᵀd < 0 and a nonnegative multiplier.
+fn boundary_newton(a: &[f64; 9], c: &[f64; 3], mu: f64, alpha0: f64) -> Option<[f64; 3]> {
+    let mut alpha = alpha0;
+    for _ in 0..30 {
+        let (n, p1, p2, _) = psi(a, c, mu, alpha);
+        if n.is_nan() || n >= 0.0 {
+            return None;
+        }
+        // Newton step on ψ' when ψ is locally concave, a gradient step otherwise
+        let step = if p2 < 0.0 {
+            -p1 / p2
+        } else {
+            0.1 * p1.signum()
+        };
+        let step = step.clamp(-0.5, 0.5);
+        alpha += step;
+        if step.abs() <= 1e-14 * (1.0 + alpha.abs()) {
+            break;
+        }
+    }
+    let (n, p1, _, den) = psi(a, c, mu, alpha);
+    if n.is_nan() || n >= 0.0 || den.is_nan() || den <= 0.0 || p1.abs() > 1e-6 {
+        return None;
+    }
+    let t = -n / den;
+    let (s, co) = alpha.sin_cos();
+    let x = [t, t * mu * co, t * mu * s];
+    // multiplier: y = A x + c must be λ (μ² x_N, −x_T) with λ ≥ 0, i.e. y_N ≥ 0 (up to rounding)
+    let y = matvec(a, 3, &x);
+    let yn = y[0] + c[0];
+    let scale = c[0].abs() + c[1].abs() + c[2].abs();
+    if yn < -1e-10 * scale {
+        return None;
+    }
+    Some(x)
+}
+
+/// Exact minimizer of ½ xᵀ A x + cᵀ x over K_μ for one contact (d ∈ {2, 3}); A symmetric
+/// positive definite with inverse `ainv`. `warm` (the previous value) only seeds the angle
+/// search of the boundary case. Returns x.
+pub fn solve_contact(
+    a: &[f64; 9],
+    ainv: &[f64; 9],
+    d: usize,
+    mu: f64,
+    c: &[f64; 3],
+    warm: &[f64; 3],
+) -> [f64; 3] {
+    let mut x0 = matvec(ainv, d, c);
+    x0.iter_mut().for_each(|v| *v = -*v);
+    // interior
+    if cone::contains(mu, &x0[..d], 0.0) {
+        return x0;
+    }
+    // vertex: c ∈ K_μ* = K_{1/μ}, i.e. μ‖c_T‖ ≤ c_N
+    let ct = cone::tangent_norm(&c[..d]);
+    if mu.is_finite() && mu * ct <= c[0] {
+        return [0.0; 3];
+    }
+    if mu == 0.0 {
+        // half-line: x = (t, 0), t = max(0, −c_N / A_NN)
+        let t = if a[0] > 0.0 {
+            (-c[0] / a[0]).max(0.0)
+        } else {
+            0.0
+        };
+        return [t, 0.0, 0.0];
+    }
+    if mu.is_infinite() {
+        // half-space x_N ≥ 0 and the unconstrained minimizer has x_N < 0: x_N = 0,
+        // x_T minimizes the tangential block
+        let mut x = [0.0; 3];
+        if d == 2 {
+            if a[3] > 0.0 {
+                x[1] = -c[1] / a[3];
+            }
+        } else {
+            let (p, q, r) = (a[4], a[5], a[8]);
+            let det = p * r - q * q;
+            if det > 0.0 {
+                x[1] = -(r * c[1] - q * c[2]) / det;
+                x[2] = -(p * c[2] - q * c[1]) / det;
+            }
+        }
+        return x;
+    }
+    if d == 2 {
+        let (t1, v1) = ray_minimizer(a, 2, c, &[1.0, mu, 0.0]);
+        let (t2, v2) = ray_minimizer(a, 2, c, &[1.0, -mu, 0.0]);
+        return if v1 <= v2 {
+            [t1, mu * t1, 0.0]
+        } else {
+            [t2, -mu * t2, 0.0]
+        };
+    }
+    // d = 3 boundary: seed the angle from the previous iterate, then from −c_T and x0_T,
+    // then from sampled angles.
+    let mut seeds: [f64; 3] = [f64::NAN; 3];
+    if warm[1] != 0.0 || warm[2] != 0.0 {
+        seeds[0] = warm[2].atan2(warm[1]);
+    }
+    if ct > 0.0 {
+        seeds[1] = (-c[2]).atan2(-c[1]);
+    }
+    if x0[1] != 0.0 || x0[2] != 0.0 {
+        seeds[2] = x0[2].atan2(x0[1]);
+    }
+    for &s in seeds.iter().filter(|s| s.is_finite()) {
+        if let Some(x) = boundary_newton(a, c, mu, s) {
+            return x;
+        }
+    }
+    const SAMPLES: usize = 32;
+    let mut cands: Vec<(f64, f64)> = (0..SAMPLES)
+        .filter_map(|k| {
+            let alpha = 2.0 * std::f64::consts::PI * k as f64 / SAMPLES as f64;
+            let (n, _, _, den) = psi(a, c, mu, alpha);
+            (n < 0.0 && den > 0.0).then_some((n * n / den, alpha))
+        })
+        .collect();
+    cands.sort_by(|p, q| q.0.total_cmp(&p.0));
+    for &(_, alpha) in cands.iter().take(4) {
+        if let Some(x) = boundary_newton(a, c, mu, alpha) {
+            return x;
+        }
+    }
+    // last resort (never observed): many projected-gradient steps with step 1/‖A‖
+    let lip = (0..3)
+        .map(|i| (0..3).map(|j| a[i * 3 + j].abs()).sum::<f64>())
+        .fold(0.0f64, f64::max);
+    let mut x = *warm;
+    for _ in 0..500 {
+        let g = matvec(a, 3, &x);
+        for k in 0..3 {
+            x[k] -= (g[k] + c[k]) / lip;
+        }
+        cone::project(mu, &mut x);
+    }
+    x
+}
+
+/// Projected block Gauss–Seidel on (4.7) with exact one-contact solves.
+#[derive(Debug, Clone, Default)]
+pub struct PgsSolver {
+    blocks: Option<DiagonalBlocks>,
+    /// maintained u = W r + b
+    u: Vec<f64>,
+}
+
+impl PgsSolver {
+    /// A solver; the diagonal blocks are extracted at the first solve and kept while W is
+    /// the same matrix.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    fn blocks_for(&mut self, dim: usize, w: &CscMatrix) -> &DiagonalBlocks {
+        if !self.blocks.as_ref().is_some_and(|b| b.matches(dim, w)) {
+            self.blocks = Some(DiagonalBlocks::new(dim, w));
+        }
+        self.blocks.as_ref().expect("set just above")
+    }
+}
+
+/// One Gauss–Seidel pass over all contacts. `u` must equal W r + b on entry (b = `shift` for
+/// (4.7)); with `fused`, the linear term of contact i is uᵢ + μⁱ‖u_Tⁱ‖e where u = W r + q is
+/// maintained instead (Gauss–Seidel on the De Saxcé form of Coulomb's law, s updated at every
+/// contact). Returns the largest change ‖Δrᵢ‖.
+pub(crate) fn sweep(
+    blocks: &DiagonalBlocks,
+    w: &CscMatrix,
+    mu: &[f64],
+    r: &mut [f64],
+    u: &mut [f64],
+    fused: bool,
+) -> f64 {
+    let d = blocks.dim;
+    let mut max_change = 0.0f64;
+    for (i, &m) in mu.iter().enumerate() {
+        let j0 = i * d;
+        let a = &blocks.blocks[i];
+        let mut old = [0.0; 3];
+        old[..d].copy_from_slice(&r[j0..j0 + d]);
+        // cᵢ = uᵢ − Aᵢᵢ rᵢ (− ε rᵢ for the proximal term, already inside A)
+        let ar = matvec(a, d, &old);
+        let mut c = [0.0; 3];
+        for k in 0..d {
+            c[k] = u[j0 + k] - ar[k];
+        }
+        if fused {
+            c[0] += m * cone::tangent_norm(&u[j0..j0 + d]);
+        }
+        let new = solve_contact(a, &blocks.inverses[i], d, m, &c, &old);
+        let mut change = 0.0;
+        for k in 0..d {
+            let delta = new[k] - old[k];
+            if delta != 0.0 {
+                change += delta * delta;
+                let col = j0 + k;
+                for p in w.col_ptr[col]..w.col_ptr[col + 1] {
+                    u[w.row_idx[p]] += w.values[p] * delta;
+                }
+            }
+        }
+        r[j0..j0 + d].copy_from_slice(&new[..d]);
+        max_change = max_change.max(change.sqrt());
+    }
+    max_change
+}
+
+/// The natural-map residual of (4.7), ‖r − P_L(r − u)‖ / max(‖b‖, ‖r‖, ‖u‖) with u = W r + b.
+pub(crate) fn dual_residual(dim: usize, mu: &[f64], r: &[f64], u: &[f64], b_norm: f64) -> f64 {
+    let mut sum = 0.0;
+    let mut x = [0.0; 3];
+    for ((ri, ui), &m) in r.chunks_exact(dim).zip(u.chunks_exact(dim)).zip(mu) {
+        for k in 0..dim {
+            x[k] = ri[k] - ui[k];
+        }
+        cone::project(m, &mut x[..dim]);
+        sum += (0..dim).map(|k| (ri[k] - x[k]).powi(2)).sum::<f64>();
+    }
+    let scale = b_norm.max(crate::law::norm(r)).max(crate::law::norm(u));
+    if scale > f64::EPSILON {
+        sum.sqrt() / scale
+    } else {
+        sum.sqrt()
+    }
+}
+
+/// Sweeps between exact recomputations of u = W r + b (against drift).
+const REFRESH: usize = 16;
+
+impl InnerSolver for PgsSolver {
+    fn name(&self) -> &'static str {
+        "pgs"
+    }
+
+    fn solve(
+        &mut self,
+        problem: &InnerProblem<'_>,
+        limits: &InnerLimits,
+        r: &mut [f64],
+    ) -> InnerReport {
+        let dim = problem.dim;
+        let w = problem.w;
+        self.blocks_for(dim, w);
+        let blocks = self.blocks.as_ref().expect("set by blocks_for");
+        // start from a point of L
+        cone::project_product(dim, problem.mu, r);
+        let b_norm = crate::law::norm(problem.b);
+        let u = &mut self.u;
+        u.clear();
+        u.extend_from_slice(problem.b);
+        w.gemv_acc(1.0, r, u);
+        let mut residual = dual_residual(dim, problem.mu, r, u, b_norm);
+        let w_scale = blocks.w_scale;
+        let mut wr = vec![0.0; r.len()];
+        let mut iterations = 0;
+        let status = loop {
+            if !residual.is_finite() {
+                break InnerStatus::NumericalError;
+            }
+            if residual <= limits.tol {
+                break InnerStatus::Solved;
+            }
+            if iterations % REFRESH == 0 {
+                for ((x, a), b) in wr.iter_mut().zip(u.iter()).zip(problem.b) {
+                    *x = a - b;
+                }
+                if super::unbounded_ray(r, &wr, problem.b, w_scale) {
+                    break InnerStatus::Infeasible;
+                }
+            }
+            if iterations >= limits.max_iterations {
+                break InnerStatus::MaxIterations;
+            }
+            if limits.deadline.is_some_and(|t| Instant::now() >= t) {
+                break InnerStatus::TimeLimit;
+            }
+            sweep(blocks, w, problem.mu, r, u, false);
+            iterations += 1;
+            if iterations % REFRESH == 0 {
+                u.copy_from_slice(problem.b);
+                w.gemv_acc(1.0, r, u);
+            }
+            residual = dual_residual(dim, problem.mu, r, u, b_norm);
+        };
+        InnerReport {
+            status,
+            iterations,
+            residual,
+        }
+    }
+}
+
+/// The fused iteration: Gauss–Seidel directly on Coulomb's law in De Saxcé form (local
+/// problem u = W r + q), each contact solved as the one-contact SOC-QP with s = ‖u_T‖ taken
+/// from the current u. Stops when the error of docs/error.md, computed from the maintained
+/// u (recomputed exactly every few sweeps and before stopping), is ≤ `limits.tol`.
+/// Returns the report; `r` holds the warm start on entry and the result on exit.
+pub fn solve_fused(
+    solver: &mut PgsSolver,
+    dim: usize,
+    w: &CscMatrix,
+    q: &[f64],
+    mu: &[f64],
+    limits: &InnerLimits,
+    r: &mut [f64],
+) -> InnerReport {
+    solver.blocks_for(dim, w);
+    let blocks = solver.blocks.as_ref().expect("set by blocks_for");
+    cone::project_product(dim, mu, r);
+    let q_norm = crate::law::norm(q);
+    let u = &mut solver.u;
+    u.clear();
+    u.extend_from_slice(q);
+    w.gemv_acc(1.0, r, u);
+    let mut residual = crate::law::error_measure(dim, mu, r, u, q_norm).error;
+    let mut iterations = 0;
+    let mut exact = true;
+    let status = loop {
+        if !residual.is_finite() {
+            break InnerStatus::NumericalError;
+        }
+        if residual <= limits.tol {
+            if exact {
+                break InnerStatus::Solved;
+            }
+            u.copy_from_slice(q);
+            w.gemv_acc(1.0, r, u);
+            exact = true;
+            residual = crate::law::error_measure(dim, mu, r, u, q_norm).error;
+            continue;
+        }
+        if iterations >= limits.max_iterations {
+            break InnerStatus::MaxIterations;
+        }
+        if limits.deadline.is_some_and(|t| Instant::now() >= t) {
+            break InnerStatus::TimeLimit;
+        }
+        sweep(blocks, w, mu, r, u, true);
+        iterations += 1;
+        exact = false;
+        if iterations % REFRESH == 0 {
+            u.copy_from_slice(q);
+            w.gemv_acc(1.0, r, u);
+            exact = true;
+        }
+        residual = crate::law::error_measure(dim, mu, r, u, q_norm).error;
+    };
+    InnerReport {
+        status,
+        iterations,
+        residual,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// KKT residual of the one-contact problem: x ∈ K, y = A x + c ∈ K*, x ⊥ y.
+    fn kkt(a: &[f64; 9], d: usize, mu: f64, c: &[f64; 3], x: &[f64; 3]) -> f64 {
+        let mut y = matvec(a, d, x);
+        for k in 0..d {
+            y[k] += c[k];
+        }
+        let mut z = [0.0; 3];
+        for k in 0..d {
+            z[k] = x[k] - y[k];
+        }
+        cone::project(mu, &mut z[..d]);
+        (0..d).map(|k| (x[k] - z[k]).powi(2)).sum::<f64>().sqrt()
+    }
+
+    #[test]
+    fn one_contact_solve_satisfies_kkt() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for trial in 0..20_000 {
+            let d = if trial % 3 == 0 { 2 } else { 3 };
+            let mut g = [0.0; 9];
+            for v in g.iter_mut().take(d * d) {
+                *v = rng.random_range(-1.0..1.0);
+            }
+            let mut a = [0.0; 9];
+            for i in 0..d {
+                for j in 0..d {
+                    a[i * d + j] = (0..d).map(|k| g[i * d + k] * g[j * d + k]).sum::<f64>()
+                        + if i == j { 0.05 } else { 0.0 };
+                }
+            }
+            let ainv = invert(&a, d, 1.0).unwrap();
+            let mut c = [0.0; 3];
+            for v in c.iter_mut().take(d) {
+                *v = rng.random_range(-2.0..2.0);
+            }
+            let mu = match trial % 7 {
+                0 => 0.0,
+                1 => f64::INFINITY,
+                _ => rng.random_range(0.05..2.0),
+            };
+            let x = solve_contact(&a, &ainv, d, mu, &c, &[0.0; 3]);
+            let scale = 1.0 + c.iter().map(|v| v.abs()).sum::<f64>() * 20.0;
+            let e = kkt(&a, d, mu, &c, &x);
+            assert!(
+                e <= 1e-9 * scale,
+                "trial {trial}: d={d} mu={mu} kkt={e} x={x:?}"
+            );
+        }
+    }
+}

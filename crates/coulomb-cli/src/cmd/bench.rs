@@ -173,7 +173,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     names.len()
                 ),
                 color: inner_index(spec),
-                dashed: spec.outer == coulomb::solver::OuterKind::Anderson,
+                dashed: spec.outer != coulomb::solver::OuterKind::FixedPoint,
             })
             .collect();
         let title = format!(
@@ -252,8 +252,9 @@ fn bench_file(file: &Path, name: &str, plan: &Plan, progress: &str) -> Vec<Recor
 
 /// The problem stored in an FCLIB file.
 fn read_fclib(path: &Path) -> Result<coulomb::Problem, String> {
-    // TEMPORARY until the fclib reader is merged
-    Err(format!("{}: FCLIB reader not merged yet", path.display()))
+    coulomb::fclib::read(path)
+        .map(|f| f.problem)
+        .map_err(|e| e.to_string())
 }
 
 /// One cold-start solve, timed with the wall clock. A panic inside the solver is caught and

@@ -184,24 +184,3 @@ mod tests {
         ));
     }
 }
-#[cfg(test)]
-mod tmp_preview {
-    use super::super::profile::performance_profile;
-    use super::*;
-    #[test]
-    fn tmp_preview_write() {
-        let t: Vec<Vec<Option<f64>>> = (0..15)
-            .map(|p| {
-                (0..8)
-                    .map(|s| {
-                        if (p * 7 + s * 3) % 5 == 0 { None } else { Some(1.0 + ((p * 13 + s * 29) % 17) as f64 * 0.7) }
-                    })
-                    .collect()
-            })
-            .collect();
-        let prof = performance_profile(&t).unwrap();
-        let names = ["pgs","apgd","ipm","faceted","pgs+anderson","apgd+anderson","ipm+anderson","faceted+anderson"];
-        let curves: Vec<Curve> = names.iter().enumerate().map(|(i, n)| Curve { label: format!("{n} (3/15 solved)"), color: i % 4, dashed: i >= 4 }).collect();
-        write_svg(Path::new("/tmp/bench-preview.svg"), &prof, &curves, "Performance profile: 15 problems, tol 1e-8, time limit 60 s").unwrap();
-    }
-}

@@ -2,7 +2,9 @@
 //!
 //! A name is an inner solver of F(s) (§6 of the paper) — `pgs`, `apgd`, `ipm`, `faceted` — run
 //! inside the plain fixed-point outer iteration s ← F(s), optionally followed by `+anderson` for
-//! the Anderson-accelerated outer iteration.
+//! the Anderson-accelerated outer iteration. `pgs+fused` (Gauss–Seidel directly on the De Saxcé
+//! form, no separate outer loop) is accepted too but is not in the default list; the library
+//! rejects `+fused` with other inner solvers, which the benchmark records as a `solve_error`.
 
 use coulomb::solver::{InnerKind, OuterKind, Settings};
 use std::time::Duration;
@@ -48,15 +50,19 @@ impl SolverSpec {
         match self.outer {
             OuterKind::FixedPoint => inner.to_string(),
             OuterKind::Anderson => format!("{inner}+anderson"),
+            OuterKind::Fused => format!("{inner}+fused"),
         }
     }
 
     /// Parses one name (case-insensitive, surrounding blanks ignored).
     pub fn parse(name: &str) -> Result<Self, SolverNameError> {
         let lower = name.trim().to_ascii_lowercase();
-        let (inner_name, outer) = match lower.strip_suffix("+anderson") {
-            Some(base) => (base, OuterKind::Anderson),
-            None => (lower.as_str(), OuterKind::FixedPoint),
+        let (inner_name, outer) = if let Some(base) = lower.strip_suffix("+anderson") {
+            (base, OuterKind::Anderson)
+        } else if let Some(base) = lower.strip_suffix("+fused") {
+            (base, OuterKind::Fused)
+        } else {
+            (lower.as_str(), OuterKind::FixedPoint)
         };
         let inner = INNER
             .iter()
@@ -179,5 +185,6 @@ mod tests {
         assert_eq!(e, SolverNameError::Unknown("newton".into()));
         assert!(e.to_string().contains("faceted+anderson"));
         assert!(l(&["pgs+nesterov"]).is_err());
+        assert_eq!(l(&["pgs+fused"]).unwrap()[0].outer, OuterKind::Fused);
     }
 }

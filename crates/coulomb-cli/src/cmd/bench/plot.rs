@@ -17,6 +17,9 @@ const PALETTE: [RGBColor; 8] = [
     RGBColor(127, 127, 127),
 ];
 
+/// Width in pixels of the legend column right of the axes.
+const LEGEND_WIDTH: u32 = 240;
+
 /// How one solver's curve is drawn.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Curve {
@@ -79,8 +82,10 @@ pub fn render_svg(
     {
         let root = SVGBackend::with_string(&mut svg, (width, height)).into_drawing_area();
         root.fill(&WHITE).map_err(draw_err)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 20))
+        let root = root.titled(title, ("sans-serif", 20)).map_err(draw_err)?;
+        // the legend goes in a column right of the axes, where it hides no curve
+        let (plot_area, legend_area) = root.split_horizontally(width.saturating_sub(LEGEND_WIDTH));
+        let mut chart = ChartBuilder::on(&plot_area)
             .margin(12)
             .x_label_area_size(45)
             .y_label_area_size(55)
@@ -105,30 +110,31 @@ pub fn render_svg(
                 stroke_width: 2,
             };
             let points = profile.steps(s, end);
-            let series = if curve.dashed {
-                chart.draw_series(DashedLineSeries::new(points, 8, 5, style))
+            if curve.dashed {
+                chart
+                    .draw_series(DashedLineSeries::new(points, 8, 5, style))
+                    .map_err(draw_err)?;
             } else {
-                chart.draw_series(LineSeries::new(points, style))
-            };
-            // the legend swatch: two segments, touching (solid) or apart (dashed)
+                chart
+                    .draw_series(LineSeries::new(points, style))
+                    .map_err(draw_err)?;
+            }
+            // the legend swatch: two segments, touching (solid) or apart (dashed), then the label
             let (a, b) = if curve.dashed { (7, 12) } else { (10, 10) };
-            series
-                .map_err(draw_err)?
-                .label(&curve.label)
-                .legend(move |(x, y)| {
-                    EmptyElement::at((x, y))
-                        + PathElement::new(vec![(0, 0), (a, 0)], style)
-                        + PathElement::new(vec![(b, 0), (b + a, 0)], style)
-                });
+            let y = 40 + 24 * i32::try_from(s).unwrap_or(i32::MAX / 48);
+            for x0 in [8, 8 + b] {
+                legend_area
+                    .draw(&PathElement::new(vec![(x0, y), (x0 + a, y)], style))
+                    .map_err(draw_err)?;
+            }
+            legend_area
+                .draw(&Text::new(
+                    curve.label.clone(),
+                    (8 + b + a + 8, y - 8),
+                    ("sans-serif", 14),
+                ))
+                .map_err(draw_err)?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 14))
-            .draw()
-            .map_err(draw_err)?;
         root.present().map_err(draw_err)?;
     }
     Ok(svg)

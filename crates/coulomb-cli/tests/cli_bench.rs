@@ -183,7 +183,7 @@ fn cli_bench_bad_arguments_are_reported() {
     let missing = dir.join("missing.hdf5");
     let cases: [(&[&str], &str); 4] = [
         (&["--solvers", "newton"], "unknown solver"),
-        (&["--tol", "-1"], "--tol"),
+        (&["--tol=-1"], "--tol"),
         (&["--time-limit", "0"], "--time-limit"),
         (&["--repeat", "0"], "--repeat"),
     ];

@@ -1,0 +1,190 @@
+//! Solver names of `coulomb bench --solvers` and the [`Settings`] they stand for.
+//!
+//! A name is an inner solver of F(s) (§6 of the paper) — `pgs`, `apgd`, `ipm`, `faceted` — run
+//! inside the plain fixed-point outer iteration s ← F(s), optionally followed by `+anderson` for
+//! the Anderson-accelerated outer iteration. `pgs+fused` (Gauss–Seidel directly on the De Saxcé
+//! form, no separate outer loop) is accepted too but is not in the default list; the library
+//! rejects `+fused` with other inner solvers, which the benchmark records as a `solve_error`.
+
+use coulomb::solver::{InnerKind, OuterKind, Settings};
+use std::time::Duration;
+
+/// The inner solvers, in the order of the default list.
+const INNER: [(&str, InnerKind); 4] = [
+    ("pgs", InnerKind::Pgs),
+    ("apgd", InnerKind::Apgd),
+    ("ipm", InnerKind::Ipm),
+    ("faceted", InnerKind::Faceted),
+];
+
+/// One benchmarked solver: an inner solver and an outer iteration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SolverSpec {
+    /// the solver of the inner problem (3.15)/(4.7)
+    pub inner: InnerKind,
+    /// the outer iteration on s
+    pub outer: OuterKind,
+}
+
+/// A `--solvers` entry that is not understood.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum SolverNameError {
+    /// not one of the known names
+    #[error("unknown solver {0:?}; expected one of {list}", list = all_names().join(", "))]
+    Unknown(String),
+    /// the same solver was listed twice
+    #[error("solver {0:?} is listed twice")]
+    Duplicate(String),
+    /// the list is empty
+    #[error("the solver list is empty")]
+    Empty,
+}
+
+impl SolverSpec {
+    /// The name used on the command line and in reports, e.g. `apgd+anderson`.
+    pub fn name(&self) -> String {
+        let inner = INNER
+            .iter()
+            .find(|(_, k)| *k == self.inner)
+            .map_or("?", |(n, _)| n);
+        match self.outer {
+            OuterKind::FixedPoint => inner.to_string(),
+            OuterKind::Anderson => format!("{inner}+anderson"),
+            OuterKind::Fused => format!("{inner}+fused"),
+        }
+    }
+
+    /// Parses one name (case-insensitive, surrounding blanks ignored).
+    pub fn parse(name: &str) -> Result<Self, SolverNameError> {
+        let lower = name.trim().to_ascii_lowercase();
+        let (inner_name, outer) = if let Some(base) = lower.strip_suffix("+anderson") {
+            (base, OuterKind::Anderson)
+        } else if let Some(base) = lower.strip_suffix("+fused") {
+            (base, OuterKind::Fused)
+        } else {
+            (lower.as_str(), OuterKind::FixedPoint)
+        };
+        let inner = INNER
+            .iter()
+            .find(|(n, _)| *n == inner_name)
+            .map(|(_, k)| *k)
+            .ok_or_else(|| SolverNameError::Unknown(name.trim().to_string()))?;
+        Ok(Self { inner, outer })
+    }
+
+    /// The library settings: defaults, with this inner/outer pair, `tol` and `time_limit`.
+    pub fn settings(&self, tol: f64, time_limit: Duration) -> Settings {
+        Settings {
+            inner: self.inner,
+            outer: self.outer,
+            tol,
+            time_limit: Some(time_limit),
+            ..Default::default()
+        }
+    }
+}
+
+/// All eight solvers: the four inner solvers with the fixed-point outer iteration, then the same
+/// four with Anderson acceleration.
+pub fn all() -> Vec<SolverSpec> {
+    [OuterKind::FixedPoint, OuterKind::Anderson]
+        .into_iter()
+        .flat_map(|outer| {
+            INNER
+                .iter()
+                .map(move |&(_, inner)| SolverSpec { inner, outer })
+        })
+        .collect()
+}
+
+fn all_names() -> Vec<String> {
+    all().iter().map(SolverSpec::name).collect()
+}
+
+/// Parses a `--solvers` list (already split at commas); `all` stands for the eight solvers.
+/// Empty entries are ignored; an empty list or a repeated solver is an error.
+pub fn parse_list(names: &[String]) -> Result<Vec<SolverSpec>, SolverNameError> {
+    let mut out: Vec<SolverSpec> = Vec::new();
+    for name in names.iter().map(|n| n.trim()).filter(|n| !n.is_empty()) {
+        let specs = if name.eq_ignore_ascii_case("all") {
+            all()
+        } else {
+            vec![SolverSpec::parse(name)?]
+        };
+        for spec in specs {
+            if out.contains(&spec) {
+                return Err(SolverNameError::Duplicate(spec.name()));
+            }
+            out.push(spec);
+        }
+    }
+    if out.is_empty() {
+        return Err(SolverNameError::Empty);
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip_and_map_to_settings() {
+        let all = all();
+        assert_eq!(all.len(), 8);
+        let names: Vec<String> = all.iter().map(SolverSpec::name).collect();
+        assert_eq!(
+            names,
+            [
+                "pgs",
+                "apgd",
+                "ipm",
+                "faceted",
+                "pgs+anderson",
+                "apgd+anderson",
+                "ipm+anderson",
+                "faceted+anderson"
+            ]
+        );
+        for spec in &all {
+            assert_eq!(SolverSpec::parse(&spec.name()), Ok(*spec));
+        }
+        let s = SolverSpec::parse(" IPM+Anderson ")
+            .unwrap()
+            .settings(1e-6, Duration::from_secs(3));
+        assert_eq!(s.inner, InnerKind::Ipm);
+        assert_eq!(s.outer, OuterKind::Anderson);
+        assert_eq!(s.tol, 1e-6);
+        assert_eq!(s.time_limit, Some(Duration::from_secs(3)));
+        assert_eq!(s.max_outer, Settings::default().max_outer);
+    }
+
+    #[test]
+    fn lists_are_validated() {
+        let l = |v: &[&str]| parse_list(&v.iter().map(|s| s.to_string()).collect::<Vec<_>>());
+        assert_eq!(l(&["all"]).unwrap().len(), 8);
+        assert_eq!(
+            l(&["pgs", "", "apgd+anderson"]).unwrap(),
+            vec![
+                SolverSpec {
+                    inner: InnerKind::Pgs,
+                    outer: OuterKind::FixedPoint
+                },
+                SolverSpec {
+                    inner: InnerKind::Apgd,
+                    outer: OuterKind::Anderson
+                }
+            ]
+        );
+        assert_eq!(l(&[]), Err(SolverNameError::Empty));
+        assert_eq!(
+            l(&["pgs", "PGS"]),
+            Err(SolverNameError::Duplicate("pgs".into()))
+        );
+        let e = l(&["newton"]).unwrap_err();
+        assert_eq!(e, SolverNameError::Unknown("newton".into()));
+        assert!(e.to_string().contains("faceted+anderson"));
+        assert!(l(&["pgs+nesterov"]).is_err());
+        assert_eq!(l(&["pgs+fused"]).unwrap()[0].outer, OuterKind::Fused);
+    }
+}

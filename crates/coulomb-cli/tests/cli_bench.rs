@@ -1,0 +1,206 @@
+//! `coulomb bench`, run as the built binary.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn fclib_dir() -> Option<PathBuf> {
+    let dir = PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/fclib"
+    ));
+    if dir.is_dir() {
+        Some(dir)
+    } else {
+        println!("skipped: ../shared absent");
+        None
+    }
+}
+
+fn coulomb(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_coulomb"))
+        .args(args)
+        .output()
+        .expect("the coulomb binary runs")
+}
+
+/// A fresh empty directory under the system temp dir.
+fn temp_dir(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("coulomb-cli-bench-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+fn read_json(path: &Path) -> Value {
+    let text = std::fs::read_to_string(path).expect("the JSON file was written");
+    serde_json::from_str(&text).expect("valid JSON")
+}
+
+fn records(report: &Value) -> &Vec<Value> {
+    report["records"].as_array().expect("records is an array")
+}
+
+#[test]
+fn cli_bench_two_files_two_solvers_json_and_svg() {
+    let Some(dir) = fclib_dir() else { return };
+    let out_dir = temp_dir("two");
+    let json = out_dir.join("b.json");
+    let svg = out_dir.join("b.svg");
+    let a = dir.join("FrictionContact3D_1c.hdf5");
+    let b = dir.join("Rover4396.hdf5");
+    let out = coulomb(&[
+        "bench",
+        &a.display().to_string(),
+        &b.display().to_string(),
+        "--solvers",
+        "pgs,apgd+anderson",
+        "--tol",
+        "1e-8",
+        "--time-limit",
+        "20",
+        "--repeat",
+        "2",
+        "--json",
+        &json.display().to_string(),
+        "--svg",
+        &svg.display().to_string(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "stdout: {stdout}\nstderr: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // the terminal table names every problem and solver
+    for name in ["FrictionContact3D_1c", "Rover4396", "pgs", "apgd+anderson"] {
+        assert!(stdout.contains(name), "{name} missing from\n{stdout}");
+    }
+
+    let report = read_json(&json);
+    assert_eq!(report["tol"].as_f64(), Some(1e-8));
+    assert_eq!(report["repeat"].as_u64(), Some(2));
+    assert!(report["command"].as_str().unwrap().contains("bench"));
+    assert!(report["machine"].is_object());
+    let recs = records(&report);
+    assert_eq!(recs.len(), 4, "one record per (problem, solver) pair");
+    for problem in ["FrictionContact3D_1c", "Rover4396"] {
+        for solver in ["pgs", "apgd+anderson"] {
+            let r = recs
+                .iter()
+                .find(|r| r["problem"] == problem && r["solver"] == solver)
+                .unwrap_or_else(|| panic!("pair ({problem}, {solver}) missing"));
+            for key in [
+                "problem",
+                "contacts",
+                "solver",
+                "status",
+                "converged",
+                "error",
+                "time_s",
+                "outer_iterations",
+                "inner_iterations",
+            ] {
+                assert!(r.get(key).is_some(), "{key} missing in {r}");
+            }
+            assert_eq!(r["kind"], "local");
+            assert!(r["contacts"].as_u64().unwrap() >= 1);
+            let time = r["time_s"].as_f64().expect("a solve ran");
+            assert!(time >= 0.0);
+            if r["converged"].as_bool().unwrap() {
+                // solved means: converged status, error ≤ tol, both repeats run
+                assert_eq!(r["status"], "converged");
+                assert!(r["error"].as_f64().unwrap() <= 1e-8);
+                assert_eq!(r["runs"].as_u64(), Some(2));
+                assert!(time <= 20.0);
+            } else {
+                assert_ne!(r["status"], "converged");
+            }
+        }
+    }
+    assert_eq!(
+        recs.iter()
+            .find(|r| r["problem"] == "Rover4396")
+            .and_then(|r| r["contacts"].as_u64()),
+        Some(2)
+    );
+    let profile = report["profile"].as_array().expect("profile summary");
+    assert_eq!(profile.len(), 2);
+    for p in profile {
+        let solved = p["solved"].as_u64().unwrap();
+        let expected = recs
+            .iter()
+            .filter(|r| r["solver"] == p["solver"] && r["converged"] == true)
+            .count() as u64;
+        assert_eq!(solved, expected);
+        assert_eq!(p["rho_max"].as_f64().unwrap(), solved as f64 / 2.0);
+    }
+
+    let svg_text = std::fs::read_to_string(&svg).expect("the SVG file was written");
+    assert!(svg_text.trim_start().starts_with("<svg"), "not an SVG");
+    assert!(svg_text.contains("<polyline") || svg_text.contains("<path"));
+    assert!(svg_text.contains("pgs") && svg_text.contains("apgd+anderson"));
+    assert!(svg_text.trim_end().ends_with("</svg>"));
+    let _ = std::fs::remove_dir_all(&out_dir);
+}
+
+#[test]
+fn cli_bench_unreadable_file_is_a_failed_record_not_a_crash() {
+    let dir = temp_dir("bad");
+    std::fs::create_dir_all(dir.join("sub")).unwrap();
+    std::fs::write(dir.join("sub/garbage.hdf5"), b"not an hdf5 file").unwrap();
+    std::fs::write(dir.join("readme.txt"), b"ignored").unwrap();
+    let json = dir.join("out.json");
+    let out = coulomb(&[
+        "bench",
+        &dir.display().to_string(),
+        "--solvers",
+        "ipm,faceted+anderson",
+        "--json",
+        &json.display().to_string(),
+    ]);
+    assert!(
+        out.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report = read_json(&json);
+    let recs = records(&report);
+    assert_eq!(recs.len(), 2, "the .txt file is not benchmarked");
+    for r in recs {
+        assert_eq!(r["problem"], "garbage");
+        assert_eq!(r["status"], "read_error");
+        assert_eq!(r["converged"], false);
+        assert!(r["time_s"].is_null());
+        assert!(!r["message"].as_str().unwrap().is_empty());
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn cli_bench_bad_arguments_are_reported() {
+    let dir = temp_dir("args");
+    let missing = dir.join("missing.hdf5");
+    let cases: [(&[&str], &str); 4] = [
+        (&["--solvers", "newton"], "unknown solver"),
+        (&["--tol=-1"], "--tol"),
+        (&["--time-limit", "0"], "--time-limit"),
+        (&["--repeat", "0"], "--repeat"),
+    ];
+    for (extra, needle) in cases {
+        let mut args = vec!["bench", "."];
+        args.extend_from_slice(extra);
+        let out = coulomb(&args);
+        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(needle), "{args:?}: {err}");
+    }
+    let out = coulomb(&["bench", &missing.display().to_string()]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("missing.hdf5"));
+    // an empty directory holds nothing to run
+    let out = coulomb(&["bench", &dir.display().to_string()]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no FCLIB file"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

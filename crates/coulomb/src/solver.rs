@@ -51,6 +51,9 @@ pub enum Status {
     MaxIterations,
     /// the time limit was reached with the error above tol
     TimeLimit,
+    /// the error stopped decreasing in a first stage that has a fallback (see
+    /// [`Settings::fallback`]); the fallback then runs
+    Stalled,
     /// an inner solve failed (iteration cap, numerical breakdown)
     InnerFailure,
     /// an inner problem (3.15) was infeasible: C̄(s) = ∅
@@ -77,6 +80,10 @@ pub struct Settings {
     /// outer iteration
     pub outer: OuterKind,
     /// cap on outer iterations (subproblems)
+    /// a second (inner, outer) method, warm-started from the first one's r, run when the first
+    /// stops without converging (iteration cap, inner failure, or stalled: the error no longer
+    /// halves over [`STALL_WINDOW`] outer iterations); the time limit covers both
+    pub fallback: Option<(InnerKind, OuterKind)>,
     pub max_outer: usize,
     /// cap on iterations of each inner solve
     pub max_inner: usize,
@@ -96,8 +103,9 @@ impl Default for Settings {
     fn default() -> Self {
         Self {
             tol: 1e-8,
-            inner: InnerKind::Pgs,
-            outer: OuterKind::Fused,
+            inner: InnerKind::Apgd,
+            outer: OuterKind::Anderson,
+            fallback: Some((InnerKind::Pgs, OuterKind::Fused)),
             max_outer: 200,
             max_inner: 10_000,
             time_limit: Some(Duration::from_secs(60)),
@@ -202,6 +210,11 @@ impl Settings {
         if self.outer == OuterKind::Fused && self.inner != InnerKind::Pgs {
             return bad("the fused outer iteration needs the pgs inner solver");
         }
+        if let Some((inner, outer)) = self.fallback {
+            if outer == OuterKind::Fused && inner != InnerKind::Pgs {
+                return bad("the fused outer iteration needs the pgs inner solver (fallback)");
+            }
+        }
         Ok(())
     }
 }
@@ -299,6 +312,56 @@ pub fn solve_with_guess(
     settings.validate()?;
     let start = Instant::now();
     let deadline = settings.time_limit.map(|t| start + t);
+    let Some((inner, outer)) = settings.fallback else {
+        return solve_stage(problem, settings, guess, start, deadline, false);
+    };
+    let first = solve_stage(problem, settings, guess, start, deadline, true)?;
+    let handover = matches!(
+        first.status,
+        Status::MaxIterations | Status::Stalled | Status::InnerFailure | Status::NumericalError
+    );
+    if first.converged() || !handover || deadline.is_some_and(|t| Instant::now() >= t) {
+        return Ok(first);
+    }
+    let warm = Guess {
+        r: first.r.clone(),
+        v: first.v.clone(),
+    };
+    let second_settings = Settings {
+        inner,
+        outer,
+        fallback: None,
+        ..settings.clone()
+    };
+    let warm = if first.r.iter().all(|x| x.is_finite()) {
+        Some(&warm)
+    } else {
+        guess
+    };
+    let mut second = solve_stage(problem, &second_settings, warm, start, deadline, false)?;
+    let mut history = first.history;
+    history.append(&mut second.history);
+    second.history = history;
+    second.outer_iterations += first.outer_iterations;
+    second.inner_iterations += first.inner_iterations;
+    second.solve_time = start.elapsed();
+    Ok(second)
+}
+
+/// Outer iterations over which the error must halve for a first stage to be considered
+/// progressing (see [`Settings::fallback`]).
+pub const STALL_WINDOW: usize = 25;
+
+/// One run of the outer loop with `settings.inner` / `settings.outer`; `stop_on_stall` ends it
+/// with [`Status::Stalled`] when the error no longer decreases.
+fn solve_stage(
+    problem: &Problem,
+    settings: &Settings,
+    guess: Option<&Guess>,
+    start: Instant,
+    deadline: Option<Instant>,
+    stop_on_stall: bool,
+) -> Result<Solution, SolveError> {
     let form = match problem {
         Problem::Local(p) => Form::Local(p),
         Problem::Global(g) => Form::Global(g, Box::new(Delassus::new(g)?)),
@@ -426,6 +489,19 @@ pub fn solve_with_guess(
             && !frictionless
         {
             break Status::FixedPointRule;
+        }
+        if stop_on_stall && history.len() > STALL_WINDOW {
+            let recent = history[history.len() - STALL_WINDOW..]
+                .iter()
+                .map(|h| h.error)
+                .fold(f64::INFINITY, f64::min);
+            let before = history[..history.len() - STALL_WINDOW]
+                .iter()
+                .map(|h| h.error)
+                .fold(f64::INFINITY, f64::min);
+            if recent > 0.5 * before {
+                break Status::Stalled;
+            }
         }
         s = update.next(&s, &fs);
     };

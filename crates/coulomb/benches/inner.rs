@@ -51,6 +51,7 @@ fn bench(c: &mut Criterion) {
                 outer,
                 tol: 1e-8,
                 time_limit: Some(Duration::from_secs(5)),
+                fallback: None,
                 ..Settings::default()
             };
             // only time the combinations that reach 1e-8

@@ -545,7 +545,12 @@ mod tests {
             let mut x = b.clone();
             f.solve_in_place(&mut x);
             let ax = a.mul_vec(&x);
-            let res: f64 = ax.iter().zip(&b).map(|(p, q)| (p - q).powi(2)).sum::<f64>().sqrt();
+            let res: f64 = ax
+                .iter()
+                .zip(&b)
+                .map(|(p, q)| (p - q).powi(2))
+                .sum::<f64>()
+                .sqrt();
             assert!(res < 1e-10, "n = {n}: residual {res}");
         }
     }

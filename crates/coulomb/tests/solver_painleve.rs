@@ -19,14 +19,18 @@ fn all_settings() -> Vec<Settings> {
             out.push(Settings {
                 inner,
                 outer,
+                fallback: None,
                 ..Settings::default()
             });
         }
     }
     out.push(Settings {
+        inner: InnerKind::Pgs,
         outer: OuterKind::Fused,
+        fallback: None,
         ..Settings::default()
     });
+    out.push(Settings::default());
     out
 }
 

@@ -111,14 +111,18 @@ fn settings_under_test() -> Vec<Settings> {
             out.push(Settings {
                 inner,
                 outer,
+                fallback: None,
                 ..Settings::default()
             });
         }
     }
     out.push(Settings {
+        inner: InnerKind::Pgs,
         outer: OuterKind::Fused,
+        fallback: None,
         ..Settings::default()
     });
+    out.push(Settings::default());
     out
 }
 

@@ -122,6 +122,8 @@ pub fn solver_settings(
         // solve each subproblem accurately (down to tol / 5): with the loose rule (6.1) the
         // outer loop often stops after one subproblem, whose accuracy is then the step's
         inner_tol_factor: 1e-6,
+        // the named inner solver alone, so that statistics describe it
+        fallback: None,
         ..d
     }
 }

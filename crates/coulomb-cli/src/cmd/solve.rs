@@ -112,6 +112,10 @@ pub fn settings(args: &Args) -> anyhow::Result<Settings> {
             OuterArg::Fused => OuterKind::Fused,
         };
     }
+    if args.inner.is_some() || args.outer.is_some() {
+        // an explicit method runs alone
+        s.fallback = None;
+    }
     if let Some(n) = args.max_outer {
         s.max_outer = n;
     }

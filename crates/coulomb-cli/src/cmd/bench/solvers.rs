@@ -24,6 +24,8 @@ pub struct SolverSpec {
     pub inner: InnerKind,
     /// the outer iteration on s
     pub outer: OuterKind,
+    /// the library's default strategy (`default`): `inner`/`outer` first, then its fallback
+    pub fallback: bool,
 }
 
 /// A `--solvers` entry that is not understood.
@@ -43,6 +45,9 @@ pub enum SolverNameError {
 impl SolverSpec {
     /// The name used on the command line and in reports, e.g. `apgd+anderson`.
     pub fn name(&self) -> String {
+        if self.fallback {
+            return "default".into();
+        }
         let inner = INNER
             .iter()
             .find(|(_, k)| *k == self.inner)
@@ -57,6 +62,9 @@ impl SolverSpec {
     /// Parses one name (case-insensitive, surrounding blanks ignored).
     pub fn parse(name: &str) -> Result<Self, SolverNameError> {
         let lower = name.trim().to_ascii_lowercase();
+        if lower == "default" {
+            return Ok(Self::library_default());
+        }
         let (inner_name, outer) = if let Some(base) = lower.strip_suffix("+anderson") {
             (base, OuterKind::Anderson)
         } else if let Some(base) = lower.strip_suffix("+fused") {
@@ -69,7 +77,21 @@ impl SolverSpec {
             .find(|(n, _)| *n == inner_name)
             .map(|(_, k)| *k)
             .ok_or_else(|| SolverNameError::Unknown(name.trim().to_string()))?;
-        Ok(Self { inner, outer })
+        Ok(Self {
+            inner,
+            outer,
+            fallback: false,
+        })
+    }
+
+    /// The library's default settings (`Settings::default()`), named `default`.
+    pub fn library_default() -> Self {
+        let d = Settings::default();
+        Self {
+            inner: d.inner,
+            outer: d.outer,
+            fallback: true,
+        }
     }
 
     /// The library settings: defaults, with this inner/outer pair, `tol` and `time_limit`.
@@ -79,29 +101,39 @@ impl SolverSpec {
             outer: self.outer,
             tol,
             time_limit: Some(time_limit),
+            fallback: if self.fallback {
+                Settings::default().fallback
+            } else {
+                None
+            },
             ..Default::default()
         }
     }
 }
 
-/// All eight solvers: the four inner solvers with the fixed-point outer iteration, then the same
-/// four with Anderson acceleration.
+/// The library default, then the four inner solvers with the fixed-point outer iteration, then
+/// the same four with Anderson acceleration (each of these eight without fallback).
 pub fn all() -> Vec<SolverSpec> {
-    [OuterKind::FixedPoint, OuterKind::Anderson]
-        .into_iter()
-        .flat_map(|outer| {
-            INNER
-                .iter()
-                .map(move |&(_, inner)| SolverSpec { inner, outer })
-        })
-        .collect()
+    let mut out = vec![SolverSpec::library_default()];
+    out.extend(
+        [OuterKind::FixedPoint, OuterKind::Anderson]
+            .into_iter()
+            .flat_map(|outer| {
+                INNER.iter().map(move |&(_, inner)| SolverSpec {
+                    inner,
+                    outer,
+                    fallback: false,
+                })
+            }),
+    );
+    out
 }
 
 fn all_names() -> Vec<String> {
     all().iter().map(SolverSpec::name).collect()
 }
 
-/// Parses a `--solvers` list (already split at commas); `all` stands for the eight solvers.
+/// Parses a `--solvers` list (already split at commas); `all` stands for the nine solvers (default + eight).
 /// Empty entries are ignored; an empty list or a repeated solver is an error.
 pub fn parse_list(names: &[String]) -> Result<Vec<SolverSpec>, SolverNameError> {
     let mut out: Vec<SolverSpec> = Vec::new();
@@ -131,11 +163,20 @@ mod tests {
     #[test]
     fn names_round_trip_and_map_to_settings() {
         let all = all();
-        assert_eq!(all.len(), 8);
+        assert_eq!(all.len(), 9);
+        assert!(all[0]
+            .settings(1e-8, Duration::from_secs(1))
+            .fallback
+            .is_some());
+        assert!(all[1]
+            .settings(1e-8, Duration::from_secs(1))
+            .fallback
+            .is_none());
         let names: Vec<String> = all.iter().map(SolverSpec::name).collect();
         assert_eq!(
             names,
             [
+                "default",
                 "pgs",
                 "apgd",
                 "ipm",
@@ -162,17 +203,19 @@ mod tests {
     #[test]
     fn lists_are_validated() {
         let l = |v: &[&str]| parse_list(&v.iter().map(|s| s.to_string()).collect::<Vec<_>>());
-        assert_eq!(l(&["all"]).unwrap().len(), 8);
+        assert_eq!(l(&["all"]).unwrap().len(), 9);
         assert_eq!(
             l(&["pgs", "", "apgd+anderson"]).unwrap(),
             vec![
                 SolverSpec {
                     inner: InnerKind::Pgs,
-                    outer: OuterKind::FixedPoint
+                    outer: OuterKind::FixedPoint,
+                    fallback: false,
                 },
                 SolverSpec {
                     inner: InnerKind::Apgd,
-                    outer: OuterKind::Anderson
+                    outer: OuterKind::Anderson,
+                    fallback: false,
                 }
             ]
         );

@@ -183,7 +183,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     names.len()
                 ),
                 color: inner_index(spec),
-                dashed: spec.outer != coulomb::solver::OuterKind::FixedPoint,
+                dashed: !spec.fallback && spec.outer != coulomb::solver::OuterKind::FixedPoint,
             })
             .collect();
         let title = format!(
@@ -199,9 +199,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 }
 
 /// Colour slot of a solver: one per inner solver, so that `x` and `x+anderson` share a colour.
+/// Palette index: one colour per inner solver, a colour of its own for the library default.
 fn inner_index(spec: &SolverSpec) -> usize {
+    if spec.fallback {
+        return 5;
+    }
     solvers::all()
         .iter()
+        .filter(|s| !s.fallback)
         .position(|s| s.inner == spec.inner)
         .unwrap_or(0)
 }

@@ -147,6 +147,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         });
         fclib::write(out, &written).with_context(|| format!("writing {}", out.display()))?;
     }
+    // a solve that did not converge: say whether a solution can exist at all (§4–5)
+    let existence = if sol.converged() {
+        None
+    } else {
+        match coulomb::existence::check(&file.problem, &Default::default()) {
+            Ok(ex) => Some(super::check::to_json(&args.file, &ex, false)),
+            Err(e) => Some(serde_json::json!({ "error": e.to_string() })),
+        }
+    };
     let report = Report {
         file: args.file.display().to_string(),
         status: sol.status,
@@ -156,7 +165,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         outer_iterations: sol.outer_iterations,
         inner_iterations: sol.inner_iterations,
         solve_time_s: sol.solve_time.as_secs_f64(),
-        existence: None,
+        existence,
         symmetrized_asymmetry: file.symmetrized,
     };
     if args.json {
@@ -174,6 +183,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         println!("outer iterations  {}", report.outer_iterations);
         println!("inner iterations  {}", report.inner_iterations);
         println!("solve time        {:.3} ms", 1e3 * report.solve_time_s);
+        if let Some(ex) = &report.existence {
+            let conclusion = ex
+                .get("conclusion")
+                .and_then(|c| c.as_str())
+                .unwrap_or("unknown");
+            let verdict = match conclusion {
+                "none" => "no solution can exist: the model, not the solver, is at fault",
+                "exists" => "a solution exists: the solver missed it",
+                _ => "the existence criteria are inconclusive",
+            };
+            println!("existence         {conclusion} ({verdict})");
+            if let Some(by) = ex.get("by").and_then(|b| b.as_str()) {
+                println!("                  by criterion ({by})");
+            }
+        }
     }
     Ok(())
 }

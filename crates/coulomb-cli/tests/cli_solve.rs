@@ -1,0 +1,105 @@
+//! `coulomb solve`: JSON fields, --output read back by `coulomb error`, and the existence
+//! verdict printed beside a failure.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn coulomb(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_coulomb"))
+        .args(args)
+        .output()
+        .expect("run coulomb")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("coulomb-cli-solve-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn json(out: &std::process::Output) -> serde_json::Value {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("valid JSON")
+}
+
+/// The crushed ball (Fig. 3) has no solution: the solve fails and says the model is at fault.
+#[test]
+fn failed_solve_reports_that_no_solution_exists() {
+    let ball = tmp("crushed.hdf5");
+    let made = coulomb(&[
+        "example",
+        "crushed-ball",
+        "--output",
+        ball.to_str().unwrap(),
+    ]);
+    assert!(
+        made.status.success(),
+        "{}",
+        String::from_utf8_lossy(&made.stderr)
+    );
+    let j = json(&coulomb(&[
+        "solve",
+        ball.to_str().unwrap(),
+        "--json",
+        "--max-outer",
+        "30",
+    ]));
+    assert_eq!(j["converged"], false);
+    assert_ne!(j["status"], "converged");
+    assert_eq!(j["existence"]["conclusion"], "none");
+    assert_eq!(j["existence"]["criteria"]["4.5"]["verdict"], "fails");
+    let text = coulomb(&["solve", ball.to_str().unwrap(), "--max-outer", "30"]);
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(text.contains("no solution can exist"), "{text}");
+}
+
+/// A Painlevé case with a solution: converged, and the written /solution passes `coulomb error`.
+#[test]
+fn solve_output_is_a_solution_for_coulomb_error() {
+    let p = tmp("painleve.hdf5");
+    let made = coulomb(&[
+        "example",
+        "painleve",
+        "--theta",
+        "30",
+        "--mu",
+        "0.3",
+        "--u0",
+        "-1",
+        "--output",
+        p.to_str().unwrap(),
+    ]);
+    assert!(
+        made.status.success(),
+        "{}",
+        String::from_utf8_lossy(&made.stderr)
+    );
+    let out = tmp("painleve-solved.hdf5");
+    let j = json(&coulomb(&[
+        "solve",
+        p.to_str().unwrap(),
+        "--json",
+        "--output",
+        out.to_str().unwrap(),
+    ]));
+    for key in [
+        "file",
+        "status",
+        "converged",
+        "error",
+        "outer_iterations",
+        "inner_iterations",
+        "solve_time_s",
+    ] {
+        assert!(j.get(key).is_some(), "missing {key}");
+    }
+    assert_eq!(j["converged"], true);
+    assert!(j.get("existence").is_none());
+    let e = json(&coulomb(&["error", out.to_str().unwrap(), "--json"]));
+    assert!(e["error"].as_f64().unwrap() <= 1e-8);
+    assert!(e["balance_residual"].as_f64().unwrap() <= 1e-8);
+}

@@ -208,7 +208,7 @@ pub fn detect(world: &World, t: f64, h: f64, activation: &Activation) -> Vec<Con
             }
         }
     }
-    contacts.sort_by(|x, y| x.key().cmp(&y.key()));
+    contacts.sort_by_key(|c| c.key());
     contacts
 }
 

@@ -146,14 +146,20 @@ impl Simulation {
         if !(p.mu >= 0.0 && p.mu.is_finite()) {
             return bad(format!("mu = {} is not a finite nonnegative number", p.mu));
         }
-        if !(0.0..=1.0).contains(&p.activation.gamma) || !(p.activation.delta >= 0.0) {
+        if !(0.0..=1.0).contains(&p.activation.gamma)
+            || p.activation.delta.is_nan()
+            || p.activation.delta < 0.0
+        {
             return bad(format!("activation {:?} out of range", p.activation));
         }
         for (i, b) in world.bodies.iter().enumerate() {
-            if !(b.radius > 0.0 && b.mass > 0.0 && b.radius.is_finite() && b.mass.is_finite())
-                || !b.position.is_finite()
-                || !b.velocity.is_finite()
-            {
+            let valid = b.radius > 0.0
+                && b.mass > 0.0
+                && b.radius.is_finite()
+                && b.mass.is_finite()
+                && b.position.is_finite()
+                && b.velocity.is_finite();
+            if !valid {
                 return bad(format!("body {i} has invalid radius, mass or state"));
             }
         }

@@ -411,7 +411,10 @@ fn solve_stage(
             break Status::TimeLimit;
         }
         // inner solve for r(s), warm-started
-        let inner_tol = if frictionless {
+        // Interior point and faceted QPs start cold at every outer iteration: a loose inner
+        // tolerance would never tighten through warm starts, so they solve to the final one.
+        let cold_inner = matches!(settings.inner, InnerKind::Ipm | InnerKind::Faceted);
+        let inner_tol = if frictionless || cold_inner {
             0.2 * settings.tol
         } else {
             (settings.inner_tol_factor * last_error).clamp(0.2 * settings.tol, 1e-2)

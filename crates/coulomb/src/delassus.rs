@@ -9,7 +9,7 @@
 use crate::problem::{GlobalProblem, LocalProblem, ProblemError};
 use crate::sparse::CscMatrix;
 use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::sparse::linalg::solvers::{Llt, Lu, SymbolicLlt, SymbolicLu};
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{MatMut, Side};
 
@@ -23,11 +23,14 @@ enum Factor {
     Dense(Vec<f64>),
     /// faer sparse LLᵀ.
     Sparse(Box<Llt<usize, f64>>),
+    /// faer sparse LU with partial pivoting of a block that is not exactly symmetric: solves
+    /// then hold for M_b itself, not for its symmetric part.
+    Lu(Box<Lu<usize, f64>>),
 }
 
 struct Block {
     dofs: Vec<usize>,
-    /// factorization of the symmetric part ½(M_b + M_bᵀ)
+    /// Cholesky factor of M_b, or LU factors when M_b is not exactly symmetric
     factor: Factor,
     /// the block M_b itself when it is not exactly symmetric: solves are then refined
     /// iteratively against it, so that M v = b holds for the M of the problem
@@ -35,12 +38,13 @@ struct Block {
 }
 
 /// Cap on iterative-refinement steps against a non-symmetric block.
-const MAX_REFINEMENT: usize = 60;
+const MAX_REFINEMENT: usize = 10;
 
 /// Cholesky factorization of a symmetric positive definite M, split along the connected
 /// components of its sparsity graph. Files in the wild store M with rounding-level asymmetry;
-/// then the symmetric part is factored and each solve is refined against M itself (for an
-/// ill-conditioned M, a relative asymmetry of 1e-7 already moves M⁻¹ b by tens of percent).
+/// then positive definiteness is checked on the symmetric part, the block itself is solved by
+/// LU and each solve is refined against it (for an ill-conditioned M, a relative asymmetry of
+/// 1e-7 already moves M⁻¹ b by tens of percent, so the symmetric part is not a substitute).
 pub struct MassFactor {
     n: usize,
     blocks: Vec<Block>,
@@ -186,6 +190,14 @@ impl MassFactor {
                 )?;
                 Factor::Sparse(Box::new(llt))
             };
+            // the Cholesky factor of the symmetric part certified positive definiteness; a
+            // block that is not exactly symmetric is solved with its own LU factors
+            let factor = match &raw {
+                Some(a) => Factor::Lu(Box::new(lu_factor(a).map_err(|e| {
+                    ProblemError::NotPositiveDefinite(format!("{e} in block {b}"))
+                })?)),
+                None => factor,
+            };
             blocks.push(Block { dofs, factor, raw });
         }
         Ok(Self { n, blocks, place })
@@ -228,6 +240,10 @@ impl MassFactor {
                 let k = block.dofs.len();
                 llt.solve_in_place(MatMut::from_column_major_slice_mut(x, k, 1));
             }
+            Factor::Lu(lu) => {
+                let k = block.dofs.len();
+                lu.solve_in_place(MatMut::from_column_major_slice_mut(x, k, 1));
+            }
         }
     }
 
@@ -267,6 +283,18 @@ impl MassFactor {
             out.extend(dofs.iter().copied().zip(buf.iter().copied()));
         }
     }
+}
+
+/// Sparse LU factors of a square block.
+fn lu_factor(a: &CscMatrix) -> Result<Lu<usize, f64>, String> {
+    let trip: Vec<_> = a
+        .triplets()
+        .map(|(i, j, v)| Triplet::new(i, j, v))
+        .collect();
+    let mat = SparseColMat::<usize, f64>::try_new_from_triplets(a.nrows, a.ncols, &trip)
+        .map_err(|e| format!("{e:?}"))?;
+    let symbolic = SymbolicLu::try_new(mat.symbolic()).map_err(|e| format!("{e:?}"))?;
+    Lu::try_new_with_symbolic(symbolic, mat.as_ref()).map_err(|e| format!("LU: {e:?}"))
 }
 
 /// The Delassus operator x ↦ W x = Hᵀ M⁻¹ H x, without forming W.

@@ -19,6 +19,7 @@ pub mod fclib;
 pub mod fixed_point;
 pub mod inner;
 pub mod law;
+pub mod newton;
 pub mod problem;
 pub mod solver;
 pub mod sparse;

@@ -9,6 +9,7 @@ use crate::inner::{
     InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus,
 };
 use crate::law;
+use crate::newton;
 use crate::problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
 use serde::Serialize;
 use std::time::{Duration, Instant};
@@ -68,9 +69,9 @@ pub enum Status {
     BalanceResidual,
 }
 
-/// Typed settings with defaults suited to rigid-body problems. The default (PGS, fused) was
-/// the fastest combination that converged on every local FCLIB problem of ../shared/fclib
-/// measured so far; APGD with the plain fixed point is faster on BoxesStack1 and Capsules.
+/// Typed settings with defaults suited to rigid-body problems: APGD inside Anderson-mixed
+/// fixed-point iterations, a semismooth Newton end game on the whole law once the error is
+/// ≤ 1e-4, and fused Gauss–Seidel as fallback when the first stage stalls.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Settings {
     /// tolerance on the reported error (docs/error.md); also on the balance residual
@@ -97,6 +98,12 @@ pub struct Settings {
     /// the inner tolerance is `inner_tol_factor` × (error of the previous outer iterate),
     /// kept between `tol`/5 and 1e-2
     pub inner_tol_factor: f64,
+    /// end game: once the error is ≤ [`Settings::newton_start`], up to this many semismooth
+    /// Newton steps on the natural map of the whole law ([`crate::newton::polish`]) are tried
+    /// after an outer iteration, and kept if they lower the error; 0 turns it off
+    pub newton_steps: usize,
+    /// error below which the Newton end game is tried
+    pub newton_start: f64,
 }
 
 impl Default for Settings {
@@ -112,6 +119,8 @@ impl Default for Settings {
             fixed_point_tol: None,
             facets: 8,
             inner_tol_factor: 0.1,
+            newton_steps: 30,
+            newton_start: 1e-4,
         }
     }
 }
@@ -203,6 +212,9 @@ impl Settings {
         }
         if self.fixed_point_tol.is_some_and(|e| e.is_nan() || e <= 0.0) {
             return bad("fixed_point_tol must be positive");
+        }
+        if self.newton_start.is_nan() || self.newton_start < 0.0 {
+            return bad("newton_start must be nonnegative");
         }
         if self.facets < 3 {
             return bad("facets must be at least 3");
@@ -304,6 +316,13 @@ fn inner_solver(settings: &Settings) -> Box<dyn InnerSolver> {
 /// when it is ≤ tol; otherwise s ← F(s) (or Anderson mixing). With all μ = 0 the inner
 /// problem is the whole problem (§5.1) and s plays no role. With [`OuterKind::Fused`] each
 /// "outer iteration" is one batch of Gauss–Seidel sweeps on the De Saxcé form.
+///
+/// End game ([`Settings::newton_steps`]): once the error is ≤ [`Settings::newton_start`],
+/// semismooth Newton steps on the natural map of (3.9) for all contacts ([`crate::newton`])
+/// are tried from r; they are kept if they lower the error (one extra history record, s then
+/// restarts from F at the new r). A failed try is repeated only after the error has dropped a
+/// decade or when an inner solve hits its iteration cap, and Newton never takes more than
+/// [`NEWTON_TIME_RATIO`] times the time of the outer iterations.
 pub fn solve_with_guess(
     problem: &Problem,
     settings: &Settings,
@@ -347,6 +366,11 @@ pub fn solve_with_guess(
     second.solve_time = start.elapsed();
     Ok(second)
 }
+
+/// The Newton end game may take at most this many times the time spent in outer iterations
+/// (a Newton step factors a sparse matrix of the size of W: cheap when the fixed point is
+/// slow, wasteful when it is fast).
+pub const NEWTON_TIME_RATIO: u32 = 3;
 
 /// Outer iterations over which the error must halve for a first stage to be considered
 /// progressing (see [`Settings::fallback`]).
@@ -400,6 +424,10 @@ fn solve_stage(
     let mut verdict = Verdict::of(&form, &r);
     let mut last_error = verdict.error;
     let mut balance_stalls = 0;
+    let mut newton_gate = f64::INFINITY;
+    let mut newton_time = Duration::ZERO;
+    let stage_start = Instant::now();
+    let q_norm = law::norm(&local.q);
     let status = loop {
         if verdict.converged(settings.tol) {
             break Status::Converged;
@@ -505,6 +533,51 @@ fn solve_stage(
             if recent > 0.5 * before {
                 break Status::Stalled;
             }
+        }
+        if settings.newton_steps > 0
+            && verdict.error <= settings.newton_start
+            && (verdict.error <= newton_gate || report.status == InnerStatus::MaxIterations)
+            && !verdict.converged(settings.tol)
+            && newton_time < NEWTON_TIME_RATIO * (stage_start.elapsed() - newton_time)
+        {
+            // Newton end game from r, kept only if the error of docs/error.md drops; it may
+            // use at most NEWTON_TIME_RATIO times the time of the outer iterations so far
+            let now = Instant::now();
+            let budget = (NEWTON_TIME_RATIO * (stage_start.elapsed() - newton_time))
+                .saturating_sub(newton_time);
+            let newton_deadline = Some(deadline.map_or(now + budget, |t| t.min(now + budget)));
+            let mut trial = r.clone();
+            let nr = newton::polish(
+                local,
+                &mut trial,
+                0.5 * settings.tol * q_norm,
+                settings.newton_steps,
+                newton_deadline,
+            );
+            newton_time += now.elapsed();
+            let candidate = Verdict::of(&form, &trial);
+            inner_total += nr.steps;
+            if nr.steps > 0 && candidate.error < verdict.error {
+                r = trial;
+                verdict = candidate;
+                let fs_new = fixed_point::evaluate_f(dim, &local.velocity(&r));
+                let (fp_residual, rule) = fixed_point::residuals(&fs, &fs_new);
+                history.push(OuterRecord {
+                    error: verdict.error,
+                    fixed_point_residual: fp_residual,
+                    rule_6_1: rule,
+                    inner_iterations: nr.steps,
+                });
+                last_error = verdict.error;
+                s = fs_new;
+                update = OuterUpdate::new(settings.outer);
+                if !verdict.converged(settings.tol) {
+                    // try again only once the fixed point has gained a decade
+                    newton_gate = 0.1 * verdict.error;
+                }
+                continue;
+            }
+            newton_gate = 0.1 * verdict.error;
         }
         s = update.next(&s, &fs);
     };

@@ -37,6 +37,7 @@
 //! API (`update_q`), skipping equilibration and the symbolic factorization of the KKT matrix.
 
 use super::{InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus};
+use crate::newton::{natural_map, push_d_times, push_identity_minus_d, sparse_lu_solve};
 use crate::problem::GlobalProblem;
 use crate::sparse::CscMatrix;
 use clarabel::algebra::CscMatrix as ClarabelCsc;
@@ -683,144 +684,6 @@ fn past(deadline: Option<Instant>) -> bool {
     deadline.is_some_and(|d| Instant::now() >= d)
 }
 
-/// Projection of y onto K_μ (written into `p`) and its Jacobian ∂P_{K_μ}(y) (row-major d × d
-/// into `jac`). On the boundary piece (0 < μ < ∞, neither y ∈ K_μ nor −y ∈ K_μ*), with
-/// t = ‖y_T‖, ŷ = y_T / t and a = (y_N + μ t)/(1 + μ²):
-///
-/// ```text
-///     ∂P = (1/(1 + μ²)) (1, μ ŷ)(1, μ ŷ)ᵀ + (μ a / t) [0 0; 0 I − ŷ ŷᵀ].
-/// ```
-///
-/// Inside K_μ it is I, inside −K_μ* it is 0 (a B-subdifferential element on the kinks).
-fn projection_jacobian(mu: f64, y: &[f64], p: &mut [f64], jac: &mut [f64]) {
-    let d = y.len();
-    p.copy_from_slice(y);
-    crate::cone::project(mu, p);
-    jac.iter_mut().for_each(|x| *x = 0.0);
-    let t = crate::cone::tangent_norm(y);
-    if mu == 0.0 {
-        jac[0] = if y[0] > 0.0 { 1.0 } else { 0.0 };
-    } else if mu.is_infinite() {
-        jac[0] = if y[0] > 0.0 { 1.0 } else { 0.0 };
-        (1..d).for_each(|k| jac[k * d + k] = 1.0);
-    } else if t <= mu * y[0] {
-        (0..d).for_each(|k| jac[k * d + k] = 1.0);
-    } else if mu * t <= -y[0] || t == 0.0 {
-        // polar cone: P = 0
-    } else {
-        let a = (y[0] + mu * t) / (1.0 + mu * mu);
-        let mut g = [0.0; 3];
-        g[0] = 1.0;
-        for k in 1..d {
-            g[k] = mu * y[k] / t;
-        }
-        for i in 0..d {
-            for j in 0..d {
-                jac[i * d + j] = g[i] * g[j] / (1.0 + mu * mu);
-            }
-        }
-        let c = mu * a / t;
-        for i in 1..d {
-            for j in 1..d {
-                let e = if i == j { 1.0 } else { 0.0 };
-                jac[i * d + j] += c * (e - (y[i] / t) * (y[j] / t));
-            }
-        }
-    }
-}
-
-/// Natural-map residual F(r) = r − P_L(r − u) of the complementarity L* ∋ u ⊥ r ∈ L (3.14),
-/// with the Jacobians ∂P of every contact (row-major d × d blocks) in `jac`.
-fn natural_map(dim: usize, mu: &[f64], r: &[f64], u: &[f64], f: &mut [f64], jac: &mut [f64]) {
-    let mut y = [0.0; 3];
-    let mut p = [0.0; 3];
-    for (i, &m) in mu.iter().enumerate() {
-        let block = i * dim..(i + 1) * dim;
-        for k in 0..dim {
-            y[k] = r[block.start + k] - u[block.start + k];
-        }
-        projection_jacobian(
-            m,
-            &y[..dim],
-            &mut p[..dim],
-            &mut jac[i * dim * dim..(i + 1) * dim * dim],
-        );
-        for k in 0..dim {
-            f[block.start + k] = r[block.start + k] - p[k];
-        }
-    }
-}
-
-/// Solves J x = rhs for a square sparse J given as summed triplets, by faer's sparse LU.
-/// None if the factorization fails or the solution is not finite.
-fn sparse_lu_solve(
-    n: usize,
-    rows: &[usize],
-    cols: &[usize],
-    vals: &[f64],
-    rhs: &mut [f64],
-) -> Option<()> {
-    use faer::linalg::solvers::Solve;
-    let csc = CscMatrix::from_triplets(n, n, rows, cols, vals).ok()?;
-    let trip: Vec<faer::sparse::Triplet<usize, usize, f64>> = csc
-        .triplets()
-        .map(|(i, j, v)| faer::sparse::Triplet::new(i, j, v))
-        .collect();
-    let mat = faer::sparse::SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip).ok()?;
-    let lu = mat.sp_lu().ok()?;
-    lu.solve_in_place(faer::MatMut::from_column_major_slice_mut(rhs, n, 1));
-    rhs.iter().all(|x| x.is_finite()).then_some(())
-}
-
-/// Appends the triplets of `sign`·D·B (rows offset by `row0`) where D is the block diagonal
-/// of the d × d projection Jacobians and B is given by `(row k, column j, value)` entries;
-/// row k of B belongs to contact k / d.
-#[allow(clippy::too_many_arguments)]
-fn push_d_times(
-    dim: usize,
-    jac: &[f64],
-    sign: f64,
-    entries: impl Iterator<Item = (usize, usize, f64)>,
-    row0: usize,
-    rows: &mut Vec<usize>,
-    cols: &mut Vec<usize>,
-    vals: &mut Vec<f64>,
-) {
-    for (k, j, v) in entries {
-        let (c, a) = (k / dim, k % dim);
-        for a2 in 0..dim {
-            let dv = jac[c * dim * dim + a2 * dim + a];
-            if dv != 0.0 {
-                rows.push(row0 + c * dim + a2);
-                cols.push(j);
-                vals.push(sign * dv * v);
-            }
-        }
-    }
-}
-
-/// Appends the triplets of I − D (rows and columns offset by `off`).
-fn push_identity_minus_d(
-    dim: usize,
-    jac: &[f64],
-    off: usize,
-    rows: &mut Vec<usize>,
-    cols: &mut Vec<usize>,
-    vals: &mut Vec<f64>,
-) {
-    let contacts = jac.len() / (dim * dim);
-    for c in 0..contacts {
-        for a in 0..dim {
-            for b in 0..dim {
-                let e = if a == b { 1.0 } else { 0.0 };
-                rows.push(off + c * dim + a);
-                cols.push(off + c * dim + b);
-                vals.push(e - jac[c * dim * dim + a * dim + b]);
-            }
-        }
-    }
-}
-
 /// Relative natural-map residual ‖r − P_L(r − (W r + b))‖ / max(1, ‖b‖) of (4.7).
 pub(crate) fn dual_natural_residual(problem: &InnerProblem<'_>, r: &[f64]) -> f64 {
     let m = r.len();
@@ -990,6 +853,7 @@ fn polish_primal(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::newton::projection_jacobian;
 
     fn limits() -> InnerLimits {
         InnerLimits {

@@ -1,0 +1,465 @@
+//! Semismooth Newton on the natural map of Coulomb's law.
+//!
+//! With ũ = u + μ‖u_T‖e the De Saxcé velocity (3.7), Coulomb's law (2.9) at contact i is the
+//! complementarity K_μ ∋ rⁱ ⊥ ũⁱ ∈ K_μ* (Lemma 3.1, (3.9)), i.e. the zero of the natural map
+//!
+//! ```text
+//!     Gⁱ(r) = rⁱ − P_{K_μ}(rⁱ − ũⁱ),      u = W r + q,
+//! ```
+//!
+//! whose norm, divided by max(‖q‖, ‖r‖, ‖u‖), is exactly the error of docs/error.md. This
+//! module drives ‖G‖ to zero by semismooth Newton steps with a backtracking line search on ‖G‖:
+//! the generalized Jacobian is
+//!
+//! ```text
+//!     J = I − D + D A W,     D = blockdiag ∂P_{K_μ}(rⁱ − ũⁱ),
+//!     A = blockdiag ∂ũⁱ/∂uⁱ = [1  μ û_Tᵀ; 0  I],  û_T = u_T / ‖u_T‖,
+//! ```
+//!
+//! solved by faer's sparse LU with a diagonal shift λ I that vanishes with ‖G‖ (and grows when
+//! a direction gives no descent, as happens when J is singular: sticking contacts and more
+//! contact unknowns than degrees of freedom). It is
+//! the end game of [`crate::solver`]: the fixed point s = F(s) of §3.3 converges linearly, a
+//! Newton step from an r with error ~1e-5 converges quadratically. The same pieces
+//! (projection Jacobian, sparse LU) polish the interior-point solutions of the inner
+//! problems (3.15) and (4.7) in [`crate::inner::ipm`].
+
+use crate::problem::LocalProblem;
+use crate::sparse::CscMatrix;
+use faer::linalg::solvers::Solve;
+use std::time::Instant;
+
+/// Projection of y onto K_μ (written into `p`) and its Jacobian ∂P_{K_μ}(y) (row-major d × d
+/// into `jac`). On the boundary piece (0 < μ < ∞, neither y ∈ K_μ nor −y ∈ K_μ*), with
+/// t = ‖y_T‖, ŷ = y_T / t and a = (y_N + μ t)/(1 + μ²):
+///
+/// ```text
+///     ∂P = (1/(1 + μ²)) (1, μ ŷ)(1, μ ŷ)ᵀ + (μ a / t) [0 0; 0 I − ŷ ŷᵀ].
+/// ```
+///
+/// Inside K_μ it is I, inside −K_μ* it is 0 (a B-subdifferential element on the kinks).
+pub(crate) fn projection_jacobian(mu: f64, y: &[f64], p: &mut [f64], jac: &mut [f64]) {
+    let d = y.len();
+    p.copy_from_slice(y);
+    crate::cone::project(mu, p);
+    jac.iter_mut().for_each(|x| *x = 0.0);
+    let t = crate::cone::tangent_norm(y);
+    if mu == 0.0 {
+        jac[0] = if y[0] > 0.0 { 1.0 } else { 0.0 };
+    } else if mu.is_infinite() {
+        jac[0] = if y[0] > 0.0 { 1.0 } else { 0.0 };
+        (1..d).for_each(|k| jac[k * d + k] = 1.0);
+    } else if t <= mu * y[0] {
+        (0..d).for_each(|k| jac[k * d + k] = 1.0);
+    } else if mu * t <= -y[0] || t == 0.0 {
+        // polar cone: P = 0
+    } else {
+        let a = (y[0] + mu * t) / (1.0 + mu * mu);
+        let mut g = [0.0; 3];
+        g[0] = 1.0;
+        for k in 1..d {
+            g[k] = mu * y[k] / t;
+        }
+        for i in 0..d {
+            for j in 0..d {
+                jac[i * d + j] = g[i] * g[j] / (1.0 + mu * mu);
+            }
+        }
+        let c = mu * a / t;
+        for i in 1..d {
+            for j in 1..d {
+                let e = if i == j { 1.0 } else { 0.0 };
+                jac[i * d + j] += c * (e - (y[i] / t) * (y[j] / t));
+            }
+        }
+    }
+}
+
+/// Natural-map residual F(r) = r − P_L(r − u) of the complementarity L* ∋ u ⊥ r ∈ L (3.14),
+/// with the Jacobians ∂P of every contact (row-major d × d blocks) in `jac`.
+pub(crate) fn natural_map(
+    dim: usize,
+    mu: &[f64],
+    r: &[f64],
+    u: &[f64],
+    f: &mut [f64],
+    jac: &mut [f64],
+) {
+    let mut y = [0.0; 3];
+    let mut p = [0.0; 3];
+    for (i, &m) in mu.iter().enumerate() {
+        let block = i * dim..(i + 1) * dim;
+        for k in 0..dim {
+            y[k] = r[block.start + k] - u[block.start + k];
+        }
+        projection_jacobian(
+            m,
+            &y[..dim],
+            &mut p[..dim],
+            &mut jac[i * dim * dim..(i + 1) * dim * dim],
+        );
+        for k in 0..dim {
+            f[block.start + k] = r[block.start + k] - p[k];
+        }
+    }
+}
+
+/// Solves J x = rhs for a square sparse J given as summed triplets, by faer's sparse LU.
+/// None if the factorization fails or the solution is not finite.
+pub(crate) fn sparse_lu_solve(
+    n: usize,
+    rows: &[usize],
+    cols: &[usize],
+    vals: &[f64],
+    rhs: &mut [f64],
+) -> Option<()> {
+    let csc = CscMatrix::from_triplets(n, n, rows, cols, vals).ok()?;
+    let trip: Vec<faer::sparse::Triplet<usize, usize, f64>> = csc
+        .triplets()
+        .map(|(i, j, v)| faer::sparse::Triplet::new(i, j, v))
+        .collect();
+    let mat = faer::sparse::SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip).ok()?;
+    let lu = mat.sp_lu().ok()?;
+    lu.solve_in_place(faer::MatMut::from_column_major_slice_mut(rhs, n, 1));
+    rhs.iter().all(|x| x.is_finite()).then_some(())
+}
+
+/// Appends the triplets of `sign`·D·B (rows offset by `row0`) where D is the block diagonal
+/// of the d × d projection Jacobians and B is given by `(row k, column j, value)` entries;
+/// row k of B belongs to contact k / d.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn push_d_times(
+    dim: usize,
+    jac: &[f64],
+    sign: f64,
+    entries: impl Iterator<Item = (usize, usize, f64)>,
+    row0: usize,
+    rows: &mut Vec<usize>,
+    cols: &mut Vec<usize>,
+    vals: &mut Vec<f64>,
+) {
+    for (k, j, v) in entries {
+        let (c, a) = (k / dim, k % dim);
+        for a2 in 0..dim {
+            let dv = jac[c * dim * dim + a2 * dim + a];
+            if dv != 0.0 {
+                rows.push(row0 + c * dim + a2);
+                cols.push(j);
+                vals.push(sign * dv * v);
+            }
+        }
+    }
+}
+
+/// Appends the triplets of I − D (rows and columns offset by `off`).
+pub(crate) fn push_identity_minus_d(
+    dim: usize,
+    jac: &[f64],
+    off: usize,
+    rows: &mut Vec<usize>,
+    cols: &mut Vec<usize>,
+    vals: &mut Vec<f64>,
+) {
+    let contacts = jac.len() / (dim * dim);
+    for c in 0..contacts {
+        for a in 0..dim {
+            for b in 0..dim {
+                let e = if a == b { 1.0 } else { 0.0 };
+                rows.push(off + c * dim + a);
+                cols.push(off + c * dim + b);
+                vals.push(e - jac[c * dim * dim + a * dim + b]);
+            }
+        }
+    }
+}
+
+/// Consecutive slow steps (‖G‖ reduced by less than 1 − [`SLOW_RATIO`]) after which
+/// [`polish`] gives up.
+pub const SLOW_STEPS: usize = 4;
+
+/// A step with ‖G⁺‖ > `SLOW_RATIO` ‖G‖ counts as slow.
+pub const SLOW_RATIO: f64 = 0.9;
+
+/// Why [`polish`] stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NewtonStatus {
+    /// ‖G(r)‖ ≤ `target`
+    Reached,
+    /// the step cap was reached above the target
+    MaxSteps,
+    /// no step along the Newton direction decreased ‖G‖ (or the linear solve failed)
+    NoDescent,
+    /// [`SLOW_STEPS`] steps in a row were slow: far from the region of fast convergence
+    Slow,
+    /// the deadline passed
+    TimeLimit,
+}
+
+/// The outcome of [`polish`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NewtonReport {
+    /// how it stopped
+    pub status: NewtonStatus,
+    /// Newton steps taken (accepted)
+    pub steps: usize,
+    /// ‖G(r)‖ at the returned r
+    pub residual: f64,
+}
+
+/// G(r) of the De Saxcé natural map into `g`, the projection Jacobians D into `dblocks` and
+/// the blocks B = D A into `blocks` (row-major d × d per contact); returns ‖G(r)‖.
+fn de_saxce_map(
+    p: &LocalProblem,
+    r: &[f64],
+    g: &mut [f64],
+    dblocks: &mut [f64],
+    blocks: &mut [f64],
+) -> f64 {
+    let d = p.dim;
+    let mut u = p.q.clone();
+    p.w.gemv_acc(1.0, r, &mut u);
+    let mut y = [0.0; 3];
+    let mut proj = [0.0; 3];
+    for (i, &mu) in p.mu.iter().enumerate() {
+        let dj = &mut dblocks[i * d * d..(i + 1) * d * d];
+        let at = i * d;
+        let ui = &u[at..at + d];
+        let t = crate::cone::tangent_norm(ui);
+        let slide = mu.is_finite() && mu > 0.0 && t > 0.0;
+        for k in 0..d {
+            y[k] = r[at + k] - ui[k];
+        }
+        if slide {
+            y[0] -= mu * t;
+        }
+        projection_jacobian(mu, &y[..d], &mut proj[..d], dj);
+        for k in 0..d {
+            g[at + k] = r[at + k] - proj[k];
+        }
+        // B = D A: column 0 of A is e_N, column k ≥ 1 is μ û_k e_N + e_k
+        let b = &mut blocks[i * d * d..(i + 1) * d * d];
+        for a in 0..d {
+            b[a * d] = dj[a * d];
+            for k in 1..d {
+                let extra = if slide { mu * ui[k] / t } else { 0.0 };
+                b[a * d + k] = dj[a * d] * extra + dj[a * d + k];
+            }
+        }
+    }
+    crate::law::norm(g)
+}
+
+/// Semismooth Newton on G(r) = r − P_L(r − ũ(W r + q)) from `r` (overwritten by the best
+/// iterate): at most `max_steps` steps, each a direction from (J + λ I) δ = −G followed by a
+/// backtracking line search that accepts the first t ∈ {1, ½, ¼, …} (≥ 2⁻¹⁰) with
+/// ‖G(r + t δ)‖ ≤ (1 − 10⁻⁴ t) ‖G(r)‖. Stops once ‖G‖ ≤ `target`, when no step decreases ‖G‖,
+/// after [`SLOW_STEPS`] slow steps in a row, or at `deadline`.
+pub fn polish(
+    p: &LocalProblem,
+    r: &mut [f64],
+    target: f64,
+    max_steps: usize,
+    deadline: Option<Instant>,
+) -> NewtonReport {
+    let (d, m) = (p.dim, r.len());
+    let mut g = vec![0.0; m];
+    let mut blocks = vec![0.0; p.mu.len() * d * d];
+    let mut dblocks = blocks.clone();
+    let mut norm = de_saxce_map(p, r, &mut g, &mut dblocks, &mut blocks);
+    let mut trial = vec![0.0; m];
+    let mut g_trial = vec![0.0; m];
+    let mut blocks_trial = vec![0.0; blocks.len()];
+    let mut dblocks_trial = blocks_trial.clone();
+    let diag_scale = (0..m)
+        .map(|j| {
+            (p.w.col_ptr[j]..p.w.col_ptr[j + 1])
+                .filter(|&k| p.w.row_idx[k] == j)
+                .map(|k| p.w.values[k].abs())
+                .sum::<f64>()
+        })
+        .fold(0.0f64, f64::max)
+        .max(1.0);
+    let q_scale = crate::law::norm(&p.q).max(f64::MIN_POSITIVE);
+    let mut steps = 0;
+    let mut slow_steps = 0;
+    let status = loop {
+        if !norm.is_finite() {
+            break NewtonStatus::NoDescent;
+        }
+        if norm <= target {
+            break NewtonStatus::Reached;
+        }
+        if steps >= max_steps {
+            break NewtonStatus::MaxSteps;
+        }
+        if deadline.is_some_and(|t| Instant::now() >= t) {
+            break NewtonStatus::TimeLimit;
+        }
+        // J + λ I with J = I − D + (D A) W; λ starts at the relative residual (a regularized
+        // semismooth Newton step, exact in the limit) and grows a hundredfold whenever the
+        // direction gives no descent: a singular J (more contact unknowns than degrees of
+        // freedom) then still yields a Levenberg–Marquardt-like direction.
+        let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+        push_identity_minus_d(d, &dblocks, 0, &mut rows, &mut cols, &mut vals);
+        push_d_times(
+            d,
+            &blocks,
+            1.0,
+            p.w.triplets(),
+            0,
+            &mut rows,
+            &mut cols,
+            &mut vals,
+        );
+        let base = vals.len();
+        for j in 0..m {
+            rows.push(j);
+            cols.push(j);
+            vals.push(0.0);
+        }
+        let before = norm;
+        let mut lambda = (norm / q_scale).min(1e-2) * diag_scale;
+        let mut accepted = false;
+        for _ in 0..4 {
+            if deadline.is_some_and(|t| Instant::now() >= t) {
+                break;
+            }
+            vals[base..].iter_mut().for_each(|v| *v = lambda);
+            let mut delta: Vec<f64> = g.iter().map(|x| -x).collect();
+            if sparse_lu_solve(m, &rows, &cols, &vals, &mut delta).is_some() {
+                let mut t = 1.0;
+                for _ in 0..=10 {
+                    for k in 0..m {
+                        trial[k] = r[k] + t * delta[k];
+                    }
+                    let n_trial = de_saxce_map(
+                        p,
+                        &trial,
+                        &mut g_trial,
+                        &mut dblocks_trial,
+                        &mut blocks_trial,
+                    );
+                    if n_trial.is_finite() && n_trial <= (1.0 - 1e-4 * t) * norm {
+                        r.copy_from_slice(&trial);
+                        std::mem::swap(&mut g, &mut g_trial);
+                        std::mem::swap(&mut blocks, &mut blocks_trial);
+                        std::mem::swap(&mut dblocks, &mut dblocks_trial);
+                        norm = n_trial;
+                        accepted = true;
+                        break;
+                    }
+                    t *= 0.5;
+                }
+            }
+            if accepted {
+                break;
+            }
+            lambda = (lambda * 100.0).max(1e-10 * diag_scale);
+        }
+        if !accepted {
+            if deadline.is_some_and(|t| Instant::now() >= t) {
+                break NewtonStatus::TimeLimit;
+            }
+            break NewtonStatus::NoDescent;
+        }
+        steps += 1;
+        slow_steps = if norm > SLOW_RATIO * before {
+            slow_steps + 1
+        } else {
+            0
+        };
+        if slow_steps >= SLOW_STEPS && norm > target {
+            break NewtonStatus::Slow;
+        }
+    };
+    NewtonReport {
+        status,
+        steps,
+        residual: norm,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sparse::CscMatrix;
+
+    /// A deterministic pseudo-random local problem with W = AᵀA + δI (d = 3).
+    fn problem(contacts: usize, seed: u64, delta: f64) -> LocalProblem {
+        let mut state = seed;
+        let mut next = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        let m = 3 * contacts;
+        let k = m.saturating_sub(2).max(1);
+        let a: Vec<f64> = (0..k * m).map(|_| next()).collect();
+        let mut w = vec![0.0; m * m];
+        for i in 0..m {
+            for j in 0..m {
+                w[i * m + j] = (0..k).map(|l| a[l * m + i] * a[l * m + j]).sum::<f64>()
+                    + if i == j { delta } else { 0.0 };
+            }
+        }
+        LocalProblem {
+            dim: 3,
+            w: CscMatrix::from_dense(m, m, &w),
+            q: (0..m).map(|_| next()).collect(),
+            mu: (0..contacts).map(|_| 0.2 + 0.5 * next().abs()).collect(),
+        }
+    }
+
+    #[test]
+    fn jacobian_matches_finite_differences() {
+        let p = problem(4, 7, 0.1);
+        let m = 12;
+        for trial in 0..20u64 {
+            let r: Vec<f64> = (0..m)
+                .map(|k| ((k as f64 + 1.0) * (trial as f64 + 0.37)).sin())
+                .collect();
+            let dir: Vec<f64> = (0..m).map(|k| ((k * 7 + 3) as f64).cos()).collect();
+            let mut g = vec![0.0; m];
+            let mut db = vec![0.0; 36];
+            let mut b = vec![0.0; 36];
+            de_saxce_map(&p, &r, &mut g, &mut db, &mut b);
+            let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+            push_identity_minus_d(3, &db, 0, &mut rows, &mut cols, &mut vals);
+            push_d_times(
+                3,
+                &b,
+                1.0,
+                p.w.triplets(),
+                0,
+                &mut rows,
+                &mut cols,
+                &mut vals,
+            );
+            let j = CscMatrix::from_triplets(m, m, &rows, &cols, &vals).unwrap();
+            let jd = j.mul_vec(&dir);
+            let eps = 1e-7;
+            let rp: Vec<f64> = r.iter().zip(&dir).map(|(x, d)| x + eps * d).collect();
+            let mut gp = vec![0.0; m];
+            de_saxce_map(&p, &rp, &mut gp, &mut db, &mut b);
+            for k in 0..m {
+                let fd = (gp[k] - g[k]) / eps;
+                assert!(
+                    (fd - jd[k]).abs() <= 1e-4 * (1.0 + fd.abs()),
+                    "trial {trial} row {k}: J δ = {} but finite difference {fd}",
+                    jd[k]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn newton_reaches_rounding_level_from_a_rough_point() {
+        let p = problem(5, 3, 0.5);
+        let mut r = vec![0.0; 15];
+        let out = polish(&p, &mut r, 0.0, 50, None);
+        let u = p.velocity(&r);
+        let err = crate::law::error_measure(3, &p.mu, &r, &u, crate::law::norm(&p.q)).error;
+        assert!(err < 1e-12, "error {err:.3e} after {out:?}");
+    }
+}

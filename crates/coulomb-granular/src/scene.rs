@@ -360,4 +360,42 @@ mod tests {
             assert_eq!(Scene::from_name(scene.name()), Some(scene));
         }
     }
+
+    #[test]
+    fn calibrated_box_grows_with_the_beads_and_holds_them() {
+        let r = BEAD_RADIUS;
+        let mut last_area = 0.0;
+        for n in [1usize, 150, 300, 600, 10_000] {
+            let l = BoxLayout::for_beads(n);
+            let area = l.side_x * l.side_y;
+            assert!(area >= last_area, "{n}: {l:?}");
+            last_area = area;
+            // enough lattice sites per layer for n / BOX_LAYERS beads
+            let sites = |side: f64| ((side - 2.5 * r) / l.pitch).floor() + 1.0;
+            assert!(sites(l.side_x) * sites(l.side_y) >= n as f64 / BOX_LAYERS - 1e-9);
+            let world = Scene::Box.build(n, 1);
+            assert_eq!(world.bodies.len(), n);
+            let layers = (n as f64 / (sites(l.side_x) * sites(l.side_y))).ceil();
+            for b in &world.bodies {
+                let p = b.position;
+                assert!(p.x >= r && p.x <= l.side_x - r, "{n}: {p:?}");
+                assert!(p.y >= r && p.y <= l.side_y - r, "{n}: {p:?}");
+                assert!(p.z >= l.base - 0.2 * r - 1e-12, "{n}: {p:?}");
+                assert!(p.z <= l.base + (layers - 1.0) * l.layer_pitch + 0.2 * r + 1e-12);
+            }
+        }
+        // an explicit layout is used as given
+        let l = BoxLayout {
+            side_x: 0.5,
+            side_y: 0.5,
+            pitch: 2.5 * r,
+            layer_pitch: 0.3,
+            base: 0.2,
+        };
+        let world = Scene::Box.build_with(20, 2, &l);
+        assert_eq!(world.bodies.len(), 20);
+        // 4 × 4 sites per layer: 16 beads at z ≈ 0.2, 4 at z ≈ 0.5
+        let high = world.bodies.iter().filter(|b| b.position.z > 0.4).count();
+        assert_eq!(high, 4);
+    }
 }

@@ -495,34 +495,59 @@ fn fig9(a: Fig9Args) -> anyhow::Result<()> {
     let data = beside(&a.svg, "json");
     std::fs::write(&data, serde_json::to_string_pretty(&curves)?)
         .with_context(|| format!("writing {}", data.display()))?;
+    let root = SVGBackend::new(&a.svg, (1200, 560)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let (left, right) = root.split_horizontally(600);
+    let title = format!(
+        "{} beads, first step with >= {} contacts",
+        a.beads, a.contacts
+    );
+    fig9_panel(
+        &left,
+        &curves,
+        |c| &c.rule_6_1,
+        &format!("Fig. 9: (6.1), {title}"),
+        "(6.1): |F(s) - s| / (n (|s| + 1))",
+        a.fp_tol,
+    )?;
+    fig9_panel(
+        &right,
+        &curves,
+        |c| &c.error,
+        "error of docs/error.md per fixed-point iteration",
+        "error (docs/error.md)",
+        1e-4,
+    )?;
+    root.present()?;
+    eprintln!("wrote {} and {}", a.svg.display(), data.display());
+    Ok(())
+}
+
+/// One log-scale panel of Fig. 9: `get(curve)` per fixed-point iteration, one line per μ.
+fn fig9_panel(
+    area: &DrawingArea<SVGBackend<'_>, plotters::coord::Shift>,
+    curves: &[Fig9Curve],
+    get: impl Fn(&Fig9Curve) -> &Vec<f64>,
+    caption: &str,
+    ydesc: &str,
+    floor: f64,
+) -> anyhow::Result<()> {
     let positive = |x: f64| x.is_finite() && x > 0.0;
-    let ymin = curves
-        .iter()
-        .flat_map(|c| c.rule_6_1.iter().copied().filter(|x| positive(*x)))
-        .fold(1.0, f64::min)
-        .min(a.fp_tol)
-        * 0.5;
-    let ymax = curves
-        .iter()
-        .flat_map(|c| c.rule_6_1.iter().copied().filter(|x| positive(*x)))
-        .fold(ymin * 10.0, f64::max)
-        * 2.0;
+    let all = || {
+        curves
+            .iter()
+            .flat_map(|c| get(c).iter().copied().filter(|x| positive(*x)))
+    };
+    let ymin = all().fold(1.0, f64::min).min(floor) * 0.5;
+    let ymax = all().fold(ymin * 10.0, f64::max) * 2.0;
     let xmax = curves
         .iter()
-        .map(|c| c.rule_6_1.len())
+        .map(|c| get(c).len())
         .max()
         .unwrap_or(1)
         .max(2) as f64;
-    let root = SVGBackend::new(&a.svg, (800, 560)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(
-            format!(
-                "Fig. 9: fixed-point convergence, {} beads, first step with ≥ {} contacts",
-                a.beads, a.contacts
-            ),
-            ("sans-serif", 20),
-        )
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, ("sans-serif", 16))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(70)
@@ -530,29 +555,27 @@ fn fig9(a: Fig9Args) -> anyhow::Result<()> {
     chart
         .configure_mesh()
         .x_desc("fixed-point iteration")
-        .y_desc("(6.1): |F(s) - s| / (n (|s| + 1))")
+        .y_desc(ydesc)
         .draw()?;
     for (i, c) in curves.iter().enumerate() {
         let color = Palette99::pick(i).to_rgba();
+        let pts: Vec<(f64, f64)> = get(c)
+            .iter()
+            .enumerate()
+            .filter(|(_, y)| positive(**y))
+            .map(|(j, y)| ((j + 1) as f64, *y))
+            .collect();
         chart
-            .draw_series(LineSeries::new(
-                c.rule_6_1
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, y)| positive(**y))
-                    .map(|(j, y)| ((j + 1) as f64, *y)),
-                color,
-            ))?
+            .draw_series(LineSeries::new(pts.clone(), color))?
             .label(format!("mu = {:.1}", c.mu))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+        chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 2, color.filled())))?;
     }
     chart
         .configure_series_labels()
         .border_style(BLACK)
         .background_style(WHITE)
         .draw()?;
-    root.present()?;
-    eprintln!("wrote {} and {}", a.svg.display(), data.display());
     Ok(())
 }
 

@@ -46,6 +46,13 @@ pub struct Table1Args {
     /// tolerance on the reported error (docs/error.md) for "converged"
     #[arg(long, default_value_t = 1e-4)]
     pub tol: f64,
+    /// ε of the outer rule (6.1) (the paper's 0.01); 0 disables it, so that only err ≤ tol or
+    /// the cap ends a step
+    #[arg(long, default_value_t = 0.01)]
+    pub fp_tol: f64,
+    /// cap on subproblems (outer iterations) per step (the paper's 20)
+    #[arg(long, default_value_t = 20)]
+    pub max_outer: usize,
     /// seed of the initial arrangement
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -230,6 +237,22 @@ fn table1(a: Table1Args) -> anyhow::Result<()> {
     if a.steps == 0 || a.steps > 100_000 {
         bail!("--steps must be in 1..=100000");
     }
+    if a.max_outer == 0 || a.max_outer > 10_000 {
+        bail!("--max-outer must be in 1..=10000");
+    }
+    let valid = a.fp_tol.is_finite() && a.fp_tol >= 0.0 && a.tol.is_finite() && a.tol > 0.0;
+    if !valid {
+        bail!("--fp-tol must be ≥ 0 and --tol > 0");
+    }
+    let paper_rule = a.fp_tol == 0.01 && a.max_outer == 20 && a.tol == 1e-4;
+    let rule = if a.fp_tol > 0.0 {
+        format!(
+            "stopped by (6.1) with ε = {} or by err ≤ {:.0e}",
+            a.fp_tol, a.tol
+        )
+    } else {
+        format!("stopped by err ≤ {:.0e} ((6.1) disabled)", a.tol)
+    };
     let inners: &[InnerKind] = if a.pg_only {
         &[InnerKind::Apgd]
     } else {
@@ -240,9 +263,15 @@ fn table1(a: Table1Args) -> anyhow::Result<()> {
     let mut md = String::new();
     let _ = writeln!(
         md,
-        "# Table 1 reproduced: box scene (docs/granular.md)\n\nProduced by `coulomb paper table1 --beads {} --steps {}{}{} --seed {}` (this file is its standard output / `--markdown`). Setting: h = 0.02 s, e = 0.2, μ = 0.3, θ = 1/2, successive approximations stopped by (6.1) with ε = 0.01 or after 20 subproblems; {} time steps per run (the paper's #TS: 255–352); calibrated box of docs/granular.md.\n",
+        "# Table 1 reproduced: box scene (docs/granular.md){}\n\nProduced by `coulomb paper table1 --beads {} --steps {}{}{}{} --seed {}` (this file is its standard output / `--markdown`). Setting: h = 0.02 s, e = 0.2, μ = 0.3, θ = 1/2, successive approximations {rule} or after {} subproblems; {} time steps per run (the paper's #TS: 255–352); calibrated box of docs/granular.md.\n",
+        if paper_rule { "" } else { ", tighter outer rule than the paper's" },
         beads_arg.join(","),
         a.steps,
+        if paper_rule {
+            String::new()
+        } else {
+            format!(" --fp-tol {} --max-outer {} --tol {:.0e}", a.fp_tol, a.max_outer, a.tol)
+        },
         if a.pg_only { " --pg-only" } else { "" },
         if pg == InnerKind::Apgd {
             String::new()
@@ -250,6 +279,7 @@ fn table1(a: Table1Args) -> anyhow::Result<()> {
             format!(" --pg-inner {pg:?}").to_lowercase()
         },
         a.seed,
+        a.max_outer,
         a.steps
     );
     let _ = writeln!(
@@ -271,7 +301,7 @@ fn table1(a: Table1Args) -> anyhow::Result<()> {
         for &inner in inners {
             let label = format!("{beads} beads {}", inner_label(inner));
             let solver = if inner == InnerKind::Apgd { pg } else { inner };
-            let params = paper_params(solver, 0.3, a.tol, 0.01, 20);
+            let params = paper_params(solver, 0.3, a.tol, a.fp_tol, a.max_outer);
             let (s, stats) = box_run(
                 beads,
                 a.seed,

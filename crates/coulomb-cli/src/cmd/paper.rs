@@ -109,6 +109,9 @@ pub struct Fig9Args {
     /// step cap while looking for the step
     #[arg(long, default_value_t = 400)]
     pub max_steps: usize,
+    /// cap on projected-gradient iterations per subproblem (the paper's 250)
+    #[arg(long, default_value_t = 250)]
+    pub max_inner: usize,
     /// friction coefficients (default 0.1, 0.2, …, 0.9)
     #[arg(long, value_delimiter = ',')]
     pub mu: Vec<f64>,
@@ -467,6 +470,9 @@ fn fig9(a: Fig9Args) -> anyhow::Result<()> {
     if a.beads == 0 || a.beads > 100_000 || a.max_outer == 0 || a.max_outer > 10_000 {
         bail!("--beads must be in 1..=100000 and --max-outer in 1..=10000");
     }
+    if a.max_inner == 0 || a.max_inner > 1_000_000 {
+        bail!("--max-inner must be in 1..=1000000");
+    }
     if !(a.fp_tol.is_finite() && a.fp_tol > 0.0) {
         bail!("--fp-tol must be positive");
     }
@@ -481,7 +487,8 @@ fn fig9(a: Fig9Args) -> anyhow::Result<()> {
     let mut curves = Vec::new();
     for &mu in &mus {
         // tol 1e-12 on the error so that only (6.1) or the iteration cap stop the loop
-        let params = paper_params(InnerKind::Apgd, mu, 1e-12, a.fp_tol, a.max_outer);
+        let mut params = paper_params(InnerKind::Apgd, mu, 1e-12, a.fp_tol, a.max_outer);
+        params.solver.max_inner = a.max_inner;
         let mut found = None;
         let target = a.contacts;
         box_run(
@@ -586,6 +593,7 @@ fn fig9_panel(
         .configure_mesh()
         .x_desc("fixed-point iteration")
         .y_desc(ydesc)
+        .y_label_formatter(&|y: &f64| format!("{y:.0e}"))
         .draw()?;
     for (i, c) in curves.iter().enumerate() {
         let color = Palette99::pick(i).to_rgba();

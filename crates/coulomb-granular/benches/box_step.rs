@@ -1,17 +1,22 @@
 //! Mean time of one Moreau–Jean step of the `box` scene (600 beads, paper tolerance), after the
 //! pile has formed. Run: `cargo bench -p coulomb-granular`.
 
-use coulomb::solver::{InnerKind, Settings};
+use coulomb::solver::{InnerKind, OuterKind, Settings};
 use coulomb_granular::{Params, Scene, Simulation};
 use criterion::{criterion_group, criterion_main, Criterion};
 
 fn paper_params(inner: InnerKind) -> Params {
     Params {
+        // the paper's tolerance, as `coulomb paper table1|scaling` use it
         solver: Settings {
             inner,
-            tol: 1e-3,
+            outer: OuterKind::FixedPoint,
+            tol: 1e-4,
             max_outer: 20,
+            max_inner: 250,
             fixed_point_tol: Some(0.01),
+            inner_tol_factor: 1e-6,
+            fallback: None,
             ..Settings::default()
         },
         ..Params::default()
@@ -27,8 +32,8 @@ fn bench_box(c: &mut Criterion) {
                 Ok(s) => s,
                 Err(e) => panic!("{e}"),
             };
-        // let the pile form first
-        for _ in 0..150 {
+        // let the contacts form first (as `coulomb paper scaling --settle 50`)
+        for _ in 0..50 {
             if sim.step().is_err() {
                 return;
             }

@@ -9,12 +9,12 @@ use std::io;
 use std::path::{Path, PathBuf};
 
 /// Header of the per-step CSV.
-pub const CSV_HEADER: &str = "step,time,contacts,subproblems,inner_iterations,solve_ms,assembly_ms,error,rule_6_1,status,converged,kinetic_energy,potential_energy,max_penetration,warm_started";
+pub const CSV_HEADER: &str = "step,time,contacts,subproblems,inner_iterations,solve_ms,assembly_ms,delassus_ms,error,rule_6_1,status,converged,kinetic_energy,potential_energy,max_penetration,warm_started";
 
 /// One CSV line of a step's statistics.
 pub fn csv_line(s: &StepStats) -> String {
     format!(
-        "{},{:.6},{},{},{},{:.4},{:.4},{:.6e},{:.6e},{},{},{:.9e},{:.9e},{:.6e},{}",
+        "{},{:.6},{},{},{},{:.4},{:.4},{:.4},{:.6e},{:.6e},{},{},{:.9e},{:.9e},{:.6e},{}",
         s.step,
         s.time,
         s.contacts,
@@ -22,6 +22,7 @@ pub fn csv_line(s: &StepStats) -> String {
         s.inner_iterations,
         s.solve_ms,
         s.assembly_ms,
+        s.delassus_ms,
         s.error,
         s.rule_6_1,
         s.status,

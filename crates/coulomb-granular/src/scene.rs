@@ -12,8 +12,52 @@ use serde::Serialize;
 pub const BEAD_RADIUS: f64 = 0.05;
 /// Bead density (kg/m³, glass).
 pub const BEAD_DENSITY: f64 = 2500.0;
-/// Side of the square floor of the `box` scene (m): 8 bead diameters.
+/// Side of the square floor of the other scenes' bins (m): 8 bead diameters.
 pub const BOX_SIDE: f64 = 0.8;
+
+/// Initial layers of the calibrated `box` scene: beads per lattice layer = N / BOX_LAYERS
+/// (docs/granular.md, "Box calibration").
+pub const BOX_LAYERS: f64 = 1.18;
+
+/// Geometry of the `box` scene and of its initial loose arrangement (docs/granular.md,
+/// "Box calibration"): an open box with a `side_x` × `side_y` floor, the beads on a lattice of
+/// `pitch` horizontally and `layer_pitch` vertically, the lowest layer's centres `base` above
+/// the floor, each site jittered by ±0.2 R, initial velocities ±0.1 m/s.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct BoxLayout {
+    /// side of the floor along x (m)
+    pub side_x: f64,
+    /// side of the floor along y (m)
+    pub side_y: f64,
+    /// horizontal lattice pitch (m)
+    pub pitch: f64,
+    /// vertical pitch between layers (m)
+    pub layer_pitch: f64,
+    /// height of the lowest layer's centres above the floor (m)
+    pub base: f64,
+}
+
+impl BoxLayout {
+    /// The calibrated layout for `beads` beads: pitch 2.5 R in all directions, the first layer
+    /// 1.25 R above the floor (a gap of R/4), and a floor of nx × ny lattice sites with
+    /// nx = ⌈√(N / [`BOX_LAYERS`])⌉, ny = ⌈N / (BOX_LAYERS nx)⌉, so that the beads start in
+    /// about [`BOX_LAYERS`] layers and the footprint grows with N (the pile's height does not).
+    pub fn for_beads(beads: usize) -> Self {
+        let r = BEAD_RADIUS;
+        let pitch = 2.5 * r;
+        let sites = (beads.max(1) as f64 / BOX_LAYERS).ceil();
+        let nx = sites.sqrt().ceil().max(1.0);
+        let ny = (sites / nx).ceil().max(1.0);
+        let side = |n: f64| (n - 1.0) * pitch + 2.5 * r;
+        Self {
+            side_x: side(nx),
+            side_y: side(ny),
+            pitch,
+            layer_pitch: pitch,
+            base: 1.25 * r,
+        }
+    }
+}
 
 /// Which scene.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -53,20 +97,32 @@ impl Scene {
         Scene::ALL.into_iter().find(|x| x.name() == s)
     }
 
-    /// Builds the world of this scene with `beads` spheres, deterministically from `seed`.
+    /// Builds the world of this scene with `beads` spheres, deterministically from `seed`
+    /// (the `box` scene with [`BoxLayout::for_beads`]).
     pub fn build(self, beads: usize, seed: u64) -> World {
+        self.build_with(beads, seed, &BoxLayout::for_beads(beads))
+    }
+
+    /// Builds the world of this scene; `layout` is used by the `box` scene only.
+    pub fn build_with(self, beads: usize, seed: u64, layout: &BoxLayout) -> World {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let mut world = World::new();
         let r = BEAD_RADIUS;
         match self {
             Scene::Box => {
-                add_box(&mut world, BOX_SIDE, BOX_SIDE);
-                fill(
+                let l = layout;
+                add_box(&mut world, l.side_x, l.side_y);
+                fill_lattice(
                     &mut world,
                     &mut rng,
                     beads,
-                    Vec3::new(0.0, 0.0, 0.0),
-                    Vec3::new(BOX_SIDE, BOX_SIDE, f64::INFINITY),
+                    Lattice {
+                        lo: Vec3::new(0.0, 0.0, 0.0),
+                        hi: Vec3::new(l.side_x, l.side_y, f64::INFINITY),
+                        pitch: l.pitch,
+                        layer_pitch: l.layer_pitch,
+                        base: l.base,
+                    },
                     |_| true,
                 );
             }
@@ -199,12 +255,48 @@ fn fill(
     inside: impl Fn(Vec3) -> bool,
 ) {
     let r = BEAD_RADIUS;
+    let lattice = Lattice {
+        lo,
+        hi,
+        pitch: 2.5 * r,
+        layer_pitch: 2.5 * r,
+        base: 1.25 * r,
+    };
+    fill_lattice(world, rng, n, lattice, inside)
+}
+
+/// Sites of a loose initial arrangement in the box [lo, hi].
+struct Lattice {
+    lo: Vec3,
+    hi: Vec3,
+    pitch: f64,
+    layer_pitch: f64,
+    /// height of the first layer's centres above lo.z
+    base: f64,
+}
+
+/// Places `n` beads on the sites of `lattice` (jitter ±0.2 R, random initial velocities of
+/// ±0.1 m/s), layer by layer bottom up, keeping the sites where `inside` holds.
+fn fill_lattice(
+    world: &mut World,
+    rng: &mut ChaCha8Rng,
+    n: usize,
+    lattice: Lattice,
+    inside: impl Fn(Vec3) -> bool,
+) {
+    let Lattice {
+        lo,
+        hi,
+        pitch: s,
+        layer_pitch: sz,
+        base,
+    } = lattice;
+    let r = BEAD_RADIUS;
     let mass = BEAD_DENSITY * 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
-    let s = 2.5 * r;
-    let nx = (((hi.x - lo.x) - 2.0 * r) / s).floor().max(0.0) as usize + 1;
-    let ny = (((hi.y - lo.y) - 2.0 * r) / s).floor().max(0.0) as usize + 1;
+    let nx = (((hi.x - lo.x) - 2.5 * r) / s).floor().max(0.0) as usize + 1;
+    let ny = (((hi.y - lo.y) - 2.5 * r) / s).floor().max(0.0) as usize + 1;
     let nz_max = if hi.z.is_finite() {
-        (((hi.z - lo.z) - 2.0 * r) / s).floor().max(0.0) as usize + 1
+        (((hi.z - lo.z) - base - 1.25 * r) / sz).floor().max(0.0) as usize + 1
     } else {
         usize::MAX
     };
@@ -220,7 +312,7 @@ fn fill(
                 let site = Vec3::new(
                     lo.x + 1.25 * r + ix as f64 * s,
                     lo.y + 1.25 * r + iy as f64 * s,
-                    lo.z + 1.25 * r + iz as f64 * s,
+                    lo.z + base + iz as f64 * sz,
                 );
                 let p = site + Vec3::new(j(), j(), j());
                 if !inside(site) {
@@ -267,5 +359,43 @@ mod tests {
             );
             assert_eq!(Scene::from_name(scene.name()), Some(scene));
         }
+    }
+
+    #[test]
+    fn calibrated_box_grows_with_the_beads_and_holds_them() {
+        let r = BEAD_RADIUS;
+        let mut last_area = 0.0;
+        for n in [1usize, 150, 300, 600, 10_000] {
+            let l = BoxLayout::for_beads(n);
+            let area = l.side_x * l.side_y;
+            assert!(area >= last_area, "{n}: {l:?}");
+            last_area = area;
+            // enough lattice sites per layer for n / BOX_LAYERS beads
+            let sites = |side: f64| ((side - 2.5 * r) / l.pitch).floor() + 1.0;
+            assert!(sites(l.side_x) * sites(l.side_y) >= n as f64 / BOX_LAYERS - 1e-9);
+            let world = Scene::Box.build(n, 1);
+            assert_eq!(world.bodies.len(), n);
+            let layers = (n as f64 / (sites(l.side_x) * sites(l.side_y))).ceil();
+            for b in &world.bodies {
+                let p = b.position;
+                assert!(p.x >= r && p.x <= l.side_x - r, "{n}: {p:?}");
+                assert!(p.y >= r && p.y <= l.side_y - r, "{n}: {p:?}");
+                assert!(p.z >= l.base - 0.2 * r - 1e-12, "{n}: {p:?}");
+                assert!(p.z <= l.base + (layers - 1.0) * l.layer_pitch + 0.2 * r + 1e-12);
+            }
+        }
+        // an explicit layout is used as given
+        let l = BoxLayout {
+            side_x: 0.5,
+            side_y: 0.5,
+            pitch: 2.5 * r,
+            layer_pitch: 0.3,
+            base: 0.2,
+        };
+        let world = Scene::Box.build_with(20, 2, &l);
+        assert_eq!(world.bodies.len(), 20);
+        // 4 × 4 sites per layer: 16 beads at z ≈ 0.2, 4 at z ≈ 0.5
+        let high = world.bodies.iter().filter(|b| b.position.z > 0.4).count();
+        assert_eq!(high, 4);
     }
 }

@@ -89,6 +89,10 @@ pub struct StepStats {
     pub solve_ms: f64,
     /// assembly + detection time (ms)
     pub assembly_ms: f64,
+    /// time to form the Delassus operator W = Hᵀ M⁻¹ H and q (ms), measured by a separate
+    /// construction before the solve when [`Simulation::profile_delassus`] is set (the solver
+    /// does the same work inside `solve_ms`); 0 otherwise
+    pub delassus_ms: f64,
     /// error of docs/error.md of the returned solution (0 without contacts)
     pub error: f64,
     /// the paper's (6.1) measure at the last outer iteration (0 without contacts)
@@ -126,6 +130,8 @@ pub struct Simulation {
     pub last_problem: Option<GlobalProblem>,
     /// keep each step's problem in `last_problem`
     pub keep_problem: bool,
+    /// time the formation of the Delassus operator separately (`StepStats::delassus_ms`)
+    pub profile_delassus: bool,
     previous: HashMap<(usize, Partner), [f64; 3]>,
 }
 
@@ -172,6 +178,7 @@ impl Simulation {
             last_history: Vec::new(),
             last_problem: None,
             keep_problem: false,
+            profile_delassus: false,
             previous: HashMap::new(),
         })
     }
@@ -206,6 +213,7 @@ impl Simulation {
             inner_iterations: 0,
             solve_ms: 0.0,
             assembly_ms: 0.0,
+            delassus_ms: 0.0,
             error: 0.0,
             rule_6_1: 0.0,
             status: "no_contact".into(),
@@ -247,6 +255,13 @@ impl Simulation {
                 .collect();
             let guess = Guess { r: r0, v: Some(v0) };
             stats.assembly_ms = t0.elapsed().as_secs_f64() * 1e3;
+            if self.profile_delassus {
+                let td = Instant::now();
+                let delassus = coulomb::delassus::Delassus::new(&problem)
+                    .map_err(|source| SimulationError::Assembly { step: k, source })?;
+                stats.delassus_ms = td.elapsed().as_secs_f64() * 1e3;
+                drop(delassus);
+            }
             let wrapped = Problem::Global(problem);
             let t1 = Instant::now();
             let sol = solver::solve_with_guess(&wrapped, &self.params.solver, Some(&guess))

@@ -1,10 +1,11 @@
 //! `coulomb paper`: the granular experiments of §6 — Table 1 (150/300/600 beads, projected
-//! gradient and interior point), Fig. 8 (solve time per step against contacts, 600 beads) and
-//! Fig. 9 (convergence of the fixed point for μ = 0.1 … 0.9).
+//! gradient and interior point), Fig. 8 (solve time per step against contacts, 600 beads),
+//! Fig. 9 (convergence of the fixed point for μ = 0.1 … 0.9), and a scaling curve (time per
+//! step against the number of beads).
 
 use crate::cmd::simulate::{progress, solver_settings};
 use anyhow::{bail, Context};
-use coulomb::solver::InnerKind;
+use coulomb::solver::{InnerKind, OuterKind, Settings};
 use coulomb_granular::output::write_stats;
 use coulomb_granular::run::RestMonitor;
 use coulomb_granular::{Params, Scene, Simulation, StepStats, Stop, Summary};
@@ -29,6 +30,8 @@ pub enum Which {
     Fig8(Fig8Args),
     /// Fig. 9: (6.1) per fixed-point iteration for μ = 0.1 … 0.9 (300 beads), SVG
     Fig9(Fig9Args),
+    /// time per step against the number of beads (box scene, footprint growing with N), SVG + JSON
+    Scaling(ScalingArgs),
 }
 
 /// Arguments of `coulomb paper table1`.
@@ -37,12 +40,19 @@ pub struct Table1Args {
     /// bead counts
     #[arg(long, value_delimiter = ',', default_values_t = vec![150usize, 300, 600])]
     pub beads: Vec<usize>,
-    /// step cap of each run (runs stop earlier when the pile is at rest)
-    #[arg(long, default_value_t = 400)]
-    pub max_steps: usize,
+    /// time steps of each run (the paper's #TS is 255–352)
+    #[arg(long, default_value_t = 300)]
+    pub steps: usize,
     /// tolerance on the reported error (docs/error.md) for "converged"
     #[arg(long, default_value_t = 1e-4)]
     pub tol: f64,
+    /// ε of the outer rule (6.1) (the paper's 0.01); 0 disables it, so that only err ≤ tol or
+    /// the cap ends a step
+    #[arg(long, default_value_t = 0.01)]
+    pub fp_tol: f64,
+    /// cap on subproblems (outer iterations) per step (the paper's 20)
+    #[arg(long, default_value_t = 20)]
+    pub max_outer: usize,
     /// seed of the initial arrangement
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -67,13 +77,13 @@ pub struct Fig8Args {
     /// number of beads
     #[arg(long, default_value_t = 600)]
     pub beads: usize,
-    /// step cap
-    #[arg(long, default_value_t = 400)]
-    pub max_steps: usize,
+    /// time steps of each run
+    #[arg(long, default_value_t = 300)]
+    pub steps: usize,
     /// read the runs' stats.json from a `table1 --output` folder instead of simulating
     #[arg(long)]
     pub from: Option<PathBuf>,
-    /// SVG file
+    /// SVG file; the data go beside it as CSV (same name, .csv)
     #[arg(long, default_value = "fig8.svg")]
     pub svg: PathBuf,
     /// seed
@@ -99,12 +109,44 @@ pub struct Fig9Args {
     /// step cap while looking for the step
     #[arg(long, default_value_t = 400)]
     pub max_steps: usize,
-    /// SVG file
+    /// cap on projected-gradient iterations per subproblem (the paper's 250)
+    #[arg(long, default_value_t = 250)]
+    pub max_inner: usize,
+    /// friction coefficients (default 0.1, 0.2, …, 0.9)
+    #[arg(long, value_delimiter = ',')]
+    pub mu: Vec<f64>,
+    /// SVG file; the data go beside it as JSON (same name, .json)
     #[arg(long, default_value = "fig9.svg")]
     pub svg: PathBuf,
     /// seed
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+}
+
+/// Arguments of `coulomb paper scaling`.
+#[derive(clap::Args, Debug)]
+pub struct ScalingArgs {
+    /// bead counts
+    #[arg(long, value_delimiter = ',', default_values_t = vec![150usize, 300, 600, 1200, 2500, 5000, 10000])]
+    pub beads: Vec<usize>,
+    /// untimed steps first (the beads land and the contacts form)
+    #[arg(long, default_value_t = 50)]
+    pub settle: usize,
+    /// timed steps after the settling ones
+    #[arg(long, default_value_t = 50)]
+    pub window: usize,
+    /// inner solver (the paper's tolerance: (6.1) with ε = 0.01, ≤ 20 subproblems)
+    #[arg(long, value_enum, default_value_t = crate::cmd::simulate::Inner::Apgd)]
+    pub inner: crate::cmd::simulate::Inner,
+    /// seed
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// SVG file; the data go beside it as JSON (same name, .json)
+    #[arg(long, default_value = "scaling.svg")]
+    pub svg: PathBuf,
+    /// also write the table as Markdown into this file
+    #[arg(long)]
+    pub markdown: Option<PathBuf>,
 }
 
 /// The paper's Table 1: (beads, solver, #TS, #contacts/TS, #subprob./TS, CPU ms/TS).
@@ -117,17 +159,26 @@ const PAPER: [(usize, &str, f64, f64, f64, f64); 6] = [
     (600, "IP", 255.0, 524.0, 3.5, 949.0),
 ];
 
-/// The paper's setting (§6): h = 0.02 s, e = 0.2, μ, outer rule (6.1) with ε ≤ 20 iterations;
-/// projected gradient capped at 250 iterations per subproblem.
+/// The paper's setting (§6): h = 0.02 s, e = 0.2, μ, successive approximations s ← F(s)
+/// stopped by rule (6.1) with ε = `fp_tol` or after `max_outer` iterations; projected gradient
+/// capped at 250 iterations per subproblem.
 fn paper_params(inner: InnerKind, mu: f64, tol: f64, fp_tol: f64, max_outer: usize) -> Params {
-    let max_inner = (inner == InnerKind::Apgd).then_some(250);
+    let max_inner = matches!(inner, InnerKind::Apgd | InnerKind::Pgs).then_some(250);
     Params {
         h: 0.02,
         restitution: 0.2,
         mu,
-        solver: solver_settings(inner, tol, fp_tol, max_outer, max_inner),
+        solver: Settings {
+            outer: OuterKind::FixedPoint,
+            ..solver_settings(inner, tol, fp_tol, max_outer, max_inner)
+        },
         ..Params::default()
     }
+}
+
+/// `path` with its extension replaced by `ext`.
+fn beside(path: &Path, ext: &str) -> PathBuf {
+    path.with_extension(ext)
 }
 
 fn inner_label(inner: InnerKind) -> &'static str {
@@ -146,7 +197,7 @@ fn box_run(
     params: Params,
     stop: Stop,
     label: &str,
-    mut until: impl FnMut(&Simulation, &StepStats) -> bool,
+    mut until: impl FnMut(&mut Simulation, &StepStats) -> bool,
 ) -> anyhow::Result<(Summary, Vec<StepStats>)> {
     let mut sim = Simulation::new(Scene::Box.build(beads, seed), params)?;
     let pb = progress(stop.max_steps(), false);
@@ -160,7 +211,7 @@ fn box_run(
             .with_context(|| format!("{label}: time step failed"))?;
         pb.set_message(format!("{} contacts, {:.0} ms", s.contacts, s.solve_ms));
         pb.inc(1);
-        let done = until(&sim, &s);
+        let done = until(&mut sim, &s);
         stats.push(s);
         let (stop_now, rest) = monitor.should_stop(&stop, &sim);
         if done || stop_now {
@@ -172,20 +223,13 @@ fn box_run(
     Ok((Summary::from_stats("box", beads, &stats, at_rest), stats))
 }
 
-fn rest_stop(max_steps: usize) -> Stop {
-    Stop::UntilRest {
-        speed: 0.05,
-        window: 10,
-        max_steps,
-    }
-}
-
 /// Runs `coulomb paper`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     match args.which {
         Which::Table1(a) => table1(a),
         Which::Fig8(a) => fig8(a),
         Which::Fig9(a) => fig9(a),
+        Which::Scaling(a) => scaling(a),
     }
 }
 
@@ -193,41 +237,79 @@ fn table1(a: Table1Args) -> anyhow::Result<()> {
     if a.beads.is_empty() || a.beads.iter().any(|&b| b == 0 || b > 100_000) {
         bail!("--beads must list bead counts in 1..=100000");
     }
+    if a.steps == 0 || a.steps > 100_000 {
+        bail!("--steps must be in 1..=100000");
+    }
+    if a.max_outer == 0 || a.max_outer > 10_000 {
+        bail!("--max-outer must be in 1..=10000");
+    }
+    let valid = a.fp_tol.is_finite() && a.fp_tol >= 0.0 && a.tol.is_finite() && a.tol > 0.0;
+    if !valid {
+        bail!("--fp-tol must be ≥ 0 and --tol > 0");
+    }
+    let paper_rule = a.fp_tol == 0.01 && a.max_outer == 20 && a.tol == 1e-4;
+    let rule = if a.fp_tol > 0.0 {
+        format!(
+            "stopped by (6.1) with ε = {} or by err ≤ {:.0e}",
+            a.fp_tol, a.tol
+        )
+    } else {
+        format!("stopped by err ≤ {:.0e} ((6.1) disabled)", a.tol)
+    };
     let inners: &[InnerKind] = if a.pg_only {
         &[InnerKind::Apgd]
     } else {
         &[InnerKind::Apgd, InnerKind::Ipm]
     };
     let pg: InnerKind = a.pg_inner.into();
+    let beads_arg: Vec<String> = a.beads.iter().map(|b| b.to_string()).collect();
     let mut md = String::new();
     let _ = writeln!(
         md,
-        "# Table 1 reproduced: box scene (docs/granular.md), h = 0.02 s, e = 0.2, μ = 0.3, (6.1) with ε = 0.01, ≤ 20 outer iterations\n"
+        "# Table 1 reproduced: box scene (docs/granular.md){}\n\nProduced by `coulomb paper table1 --beads {} --steps {}{}{}{} --seed {}` (this file is its standard output / `--markdown`). Setting: h = 0.02 s, e = 0.2, μ = 0.3, θ = 1/2, successive approximations {rule} or after {} subproblems; {} time steps per run (the paper's #TS: 255–352); calibrated box of docs/granular.md.\n",
+        if paper_rule { "" } else { ", tighter outer rule than the paper's" },
+        beads_arg.join(","),
+        a.steps,
+        if paper_rule {
+            String::new()
+        } else {
+            format!(" --fp-tol {} --max-outer {} --tol {:.0e}", a.fp_tol, a.max_outer, a.tol)
+        },
+        if a.pg_only { " --pg-only" } else { "" },
+        if pg == InnerKind::Apgd {
+            String::new()
+        } else {
+            format!(" --pg-inner {pg:?}").to_lowercase()
+        },
+        a.seed,
+        a.max_outer,
+        a.steps
     );
     let _ = writeln!(
         md,
-        "PG rows: inner solver `{:?}`; IP rows: `Ipm` (Clarabel). Subproblems = outer iterations; CPU time = solver wall-clock per step on a shared 2-core machine; err = error of docs/error.md.\n",
-        pg
-    );
-    let _ = writeln!(
-        md,
-        "| #beads | solver | #TS | #contacts/TS | #subprob./TS | CPU time/TS (ms) | mean err | max err | converged (err ≤ {:.0e}) | max penetration (m) | paper #TS | paper #contacts/TS | paper #subprob./TS | paper CPU/TS (ms) |",
+        "PG: inner solver `{pg:?}` capped at 250 iterations per subproblem (the paper's); IP: `Ipm` (Clarabel, primal (3.15)). #subprob./TS = outer iterations per step with contacts (0 when the warm start already meets tol = {:.0e}). CPU time/TS = solver wall-clock per step (Delassus W = Hᵀ M⁻¹ H included, detection and assembly excluded: column asm) on a {}-thread machine shared with other jobs. err = error of docs/error.md (mean over steps with contacts, max over all); converged = steps with err ≤ {:.0e}.\n",
+        a.tol,
+        std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
         a.tol
     );
     let _ = writeln!(
         md,
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+        "| #beads | solver | #TS | #contacts/TS | #subprob./TS | CPU time/TS (ms) | asm/TS (ms) | mean err | max err | converged | max penetration (m) | paper #TS | paper #contacts/TS | paper #subprob./TS | paper CPU/TS (ms) |"
+    );
+    let _ = writeln!(
+        md,
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
     for &beads in &a.beads {
         for &inner in inners {
             let label = format!("{beads} beads {}", inner_label(inner));
             let solver = if inner == InnerKind::Apgd { pg } else { inner };
-            let params = paper_params(solver, 0.3, a.tol, 0.01, 20);
+            let params = paper_params(solver, 0.3, a.tol, a.fp_tol, a.max_outer);
             let (s, stats) = box_run(
                 beads,
                 a.seed,
                 params,
-                rest_stop(a.max_steps),
+                Stop::Steps(a.steps),
                 &label,
                 |_, _| false,
             )?;
@@ -242,15 +324,16 @@ fn table1(a: Table1Args) -> anyhow::Result<()> {
                 Some(p) => format!("{} | {} | {} | {}", p.2, p.3, p.4, p.5),
                 None => "– | – | – | –".into(),
             };
+            let asm = stats.iter().map(|x| x.assembly_ms).sum::<f64>() / stats.len().max(1) as f64;
             let _ = writeln!(
                 md,
-                "| {beads} | {} | {}{} | {:.0} | {:.2} | {:.1} | {:.1e} | {:.1e} | {}/{} | {:.1e} | {pcols} |",
+                "| {beads} | {} | {} | {:.0} | {:.2} | {:.1} | {:.1} | {:.1e} | {:.1e} | {}/{} | {:.1e} | {pcols} |",
                 inner_label(inner),
                 s.steps,
-                if s.at_rest { "" } else { " (cap)" },
                 s.mean_contacts,
                 s.mean_subproblems,
                 s.mean_solve_ms,
+                asm,
                 s.mean_error,
                 s.max_error,
                 s.converged_steps,
@@ -258,8 +341,8 @@ fn table1(a: Table1Args) -> anyhow::Result<()> {
                 s.max_penetration
             );
             eprintln!(
-                "{label}: {} TS, {:.0} contacts/TS, {:.2} subproblems/TS, {:.1} ms/TS",
-                s.steps, s.mean_contacts, s.mean_subproblems, s.mean_solve_ms
+                "{label}: {} TS, {:.0} contacts/TS, {:.2} subproblems/TS, {:.1} ms/TS, mean err {:.1e}",
+                s.steps, s.mean_contacts, s.mean_subproblems, s.mean_solve_ms, s.mean_error
             );
         }
     }
@@ -290,6 +373,9 @@ fn read_stats(path: &Path) -> anyhow::Result<Vec<(usize, f64)>> {
 }
 
 fn fig8(a: Fig8Args) -> anyhow::Result<()> {
+    if a.beads == 0 || a.beads > 100_000 || a.steps == 0 || a.steps > 100_000 {
+        bail!("--beads and --steps must be in 1..=100000");
+    }
     let mut series = Vec::new();
     for inner in [InnerKind::Apgd, InnerKind::Ipm] {
         let label = inner_label(inner);
@@ -304,7 +390,7 @@ fn fig8(a: Fig8Args) -> anyhow::Result<()> {
                     a.beads,
                     a.seed,
                     params,
-                    rest_stop(a.max_steps),
+                    Stop::Steps(a.steps),
                     &format!("{} beads {label}", a.beads),
                     |_, _| false,
                 )?;
@@ -313,6 +399,14 @@ fn fig8(a: Fig8Args) -> anyhow::Result<()> {
         };
         series.push((label, points));
     }
+    let mut csv = String::from("solver,step,contacts,solve_ms\n");
+    for (label, points) in &series {
+        for (k, (c, t)) in points.iter().enumerate() {
+            let _ = writeln!(csv, "{label},{k},{c},{t:.4}");
+        }
+    }
+    let data = beside(&a.svg, "csv");
+    std::fs::write(&data, csv).with_context(|| format!("writing {}", data.display()))?;
     let xmax = series
         .iter()
         .flat_map(|(_, p)| p.iter().map(|x| x.0 as f64))
@@ -355,16 +449,47 @@ fn fig8(a: Fig8Args) -> anyhow::Result<()> {
         .background_style(WHITE)
         .draw()?;
     root.present()?;
-    eprintln!("wrote {}", a.svg.display());
+    eprintln!("wrote {} and {}", a.svg.display(), data.display());
     Ok(())
 }
 
+/// One curve of Fig. 9.
+#[derive(serde::Serialize)]
+struct Fig9Curve {
+    mu: f64,
+    step: usize,
+    contacts: usize,
+    /// (6.1) after each fixed-point iteration
+    rule_6_1: Vec<f64>,
+    /// error of docs/error.md after each fixed-point iteration
+    error: Vec<f64>,
+    inner_iterations: Vec<usize>,
+}
+
 fn fig9(a: Fig9Args) -> anyhow::Result<()> {
+    if a.beads == 0 || a.beads > 100_000 || a.max_outer == 0 || a.max_outer > 10_000 {
+        bail!("--beads must be in 1..=100000 and --max-outer in 1..=10000");
+    }
+    if a.max_inner == 0 || a.max_inner > 1_000_000 {
+        bail!("--max-inner must be in 1..=1000000");
+    }
+    if !(a.fp_tol.is_finite() && a.fp_tol > 0.0) {
+        bail!("--fp-tol must be positive");
+    }
+    let mus: Vec<f64> = if a.mu.is_empty() {
+        (1..=9).map(|k| 0.1 * k as f64).collect()
+    } else {
+        a.mu.clone()
+    };
+    if mus.iter().any(|m| !(m.is_finite() && *m >= 0.0)) {
+        bail!("--mu must list nonnegative numbers");
+    }
     let mut curves = Vec::new();
-    for k in 1..=9 {
-        let mu = 0.1 * k as f64;
-        let params = paper_params(InnerKind::Apgd, mu, 1e-8, a.fp_tol, a.max_outer);
-        let mut history = None;
+    for &mu in &mus {
+        // tol 1e-12 on the error so that only (6.1) or the iteration cap stop the loop
+        let mut params = paper_params(InnerKind::Apgd, mu, 1e-12, a.fp_tol, a.max_outer);
+        params.solver.max_inner = a.max_inner;
+        let mut found = None;
         let target = a.contacts;
         box_run(
             a.beads,
@@ -374,14 +499,14 @@ fn fig9(a: Fig9Args) -> anyhow::Result<()> {
             &format!("mu = {mu:.1}"),
             |sim, s| {
                 if s.contacts >= target {
-                    history = Some((s.step, s.contacts, sim.last_history.clone()));
+                    found = Some((s.step, s.contacts, sim.last_history.clone()));
                     true
                 } else {
                     false
                 }
             },
         )?;
-        match history {
+        match found {
             Some((step, contacts, h)) => {
                 eprintln!(
                     "mu = {mu:.1}: step {step}, {contacts} contacts, {} fixed-point iterations, final (6.1) {:.2e}, err {:.2e}",
@@ -389,7 +514,14 @@ fn fig9(a: Fig9Args) -> anyhow::Result<()> {
                     h.last().map(|r| r.rule_6_1).unwrap_or(f64::NAN),
                     h.last().map(|r| r.error).unwrap_or(f64::NAN)
                 );
-                curves.push((mu, h.iter().map(|r| r.rule_6_1).collect::<Vec<f64>>()));
+                curves.push(Fig9Curve {
+                    mu,
+                    step,
+                    contacts,
+                    rule_6_1: h.iter().map(|r| r.rule_6_1).collect(),
+                    error: h.iter().map(|r| r.error).collect(),
+                    inner_iterations: h.iter().map(|r| r.inner_iterations).collect(),
+                });
             }
             None => eprintln!("mu = {mu:.1}: no step reached {target} contacts"),
         }
@@ -397,29 +529,62 @@ fn fig9(a: Fig9Args) -> anyhow::Result<()> {
     if curves.is_empty() {
         bail!("no run reached {} contacts", a.contacts);
     }
-    let positive = |x: f64| x.is_finite() && x > 0.0;
-    let ymin = curves
-        .iter()
-        .flat_map(|c| c.1.iter().copied().filter(|x| positive(*x)))
-        .fold(1.0, f64::min)
-        .min(a.fp_tol)
-        * 0.5;
-    let ymax = curves
-        .iter()
-        .flat_map(|c| c.1.iter().copied().filter(|x| positive(*x)))
-        .fold(ymin * 10.0, f64::max)
-        * 2.0;
-    let xmax = curves.iter().map(|c| c.1.len()).max().unwrap_or(1).max(2) as f64;
-    let root = SVGBackend::new(&a.svg, (800, 560)).into_drawing_area();
+    let data = beside(&a.svg, "json");
+    std::fs::write(&data, serde_json::to_string_pretty(&curves)?)
+        .with_context(|| format!("writing {}", data.display()))?;
+    let root = SVGBackend::new(&a.svg, (1200, 560)).into_drawing_area();
     root.fill(&WHITE)?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(
-            format!(
-                "Fig. 9: fixed-point convergence, {} beads, first step with ≥ {} contacts",
-                a.beads, a.contacts
-            ),
-            ("sans-serif", 20),
-        )
+    let (left, right) = root.split_horizontally(600);
+    let title = format!(
+        "{} beads, first step with >= {} contacts",
+        a.beads, a.contacts
+    );
+    fig9_panel(
+        &left,
+        &curves,
+        |c| &c.rule_6_1,
+        &format!("Fig. 9: (6.1), {title}"),
+        "(6.1): |F(s) - s| / (n (|s| + 1))",
+        a.fp_tol,
+    )?;
+    fig9_panel(
+        &right,
+        &curves,
+        |c| &c.error,
+        "error of docs/error.md per fixed-point iteration",
+        "error (docs/error.md)",
+        1e-4,
+    )?;
+    root.present()?;
+    eprintln!("wrote {} and {}", a.svg.display(), data.display());
+    Ok(())
+}
+
+/// One log-scale panel of Fig. 9: `get(curve)` per fixed-point iteration, one line per μ.
+fn fig9_panel(
+    area: &DrawingArea<SVGBackend<'_>, plotters::coord::Shift>,
+    curves: &[Fig9Curve],
+    get: impl Fn(&Fig9Curve) -> &Vec<f64>,
+    caption: &str,
+    ydesc: &str,
+    floor: f64,
+) -> anyhow::Result<()> {
+    let positive = |x: f64| x.is_finite() && x > 0.0;
+    let all = || {
+        curves
+            .iter()
+            .flat_map(|c| get(c).iter().copied().filter(|x| positive(*x)))
+    };
+    let ymin = all().fold(1.0, f64::min).min(floor) * 0.5;
+    let ymax = all().fold(ymin * 10.0, f64::max) * 2.0;
+    let xmax = curves
+        .iter()
+        .map(|c| get(c).len())
+        .max()
+        .unwrap_or(1)
+        .max(2) as f64;
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, ("sans-serif", 16))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(70)
@@ -427,27 +592,228 @@ fn fig9(a: Fig9Args) -> anyhow::Result<()> {
     chart
         .configure_mesh()
         .x_desc("fixed-point iteration")
-        .y_desc("(6.1): |F(s) - s| / (n (|s| + 1))")
+        .y_desc(ydesc)
+        .y_label_formatter(&|y: &f64| format!("{y:.0e}"))
         .draw()?;
-    for (i, (mu, ys)) in curves.iter().enumerate() {
+    for (i, c) in curves.iter().enumerate() {
         let color = Palette99::pick(i).to_rgba();
+        let pts: Vec<(f64, f64)> = get(c)
+            .iter()
+            .enumerate()
+            .filter(|(_, y)| positive(**y))
+            .map(|(j, y)| ((j + 1) as f64, *y))
+            .collect();
         chart
-            .draw_series(LineSeries::new(
-                ys.iter()
-                    .enumerate()
-                    .filter(|(_, y)| positive(**y))
-                    .map(|(j, y)| ((j + 1) as f64, *y)),
-                color,
-            ))?
-            .label(format!("mu = {mu:.1}"))
+            .draw_series(LineSeries::new(pts.clone(), color))?
+            .label(format!("mu = {:.1}", c.mu))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+        chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 2, color.filled())))?;
     }
     chart
         .configure_series_labels()
         .border_style(BLACK)
         .background_style(WHITE)
         .draw()?;
+    Ok(())
+}
+
+/// One point of the scaling curve: means over the timed window.
+#[derive(Debug, serde::Serialize)]
+struct ScalingPoint {
+    beads: usize,
+    /// floor of the box (m)
+    box_x: f64,
+    box_y: f64,
+    settle_steps: usize,
+    timed_steps: usize,
+    contacts: f64,
+    subproblems: f64,
+    inner_iterations: f64,
+    /// solver wall-clock per step (Delassus formation + inner iterations + checks)
+    solve_ms: f64,
+    /// detection + assembly per step
+    assembly_ms: f64,
+    /// formation of W = Hᵀ M⁻¹ H and q alone (a separate construction, same work as the
+    /// solver's own)
+    delassus_ms: f64,
+    /// solve_ms − delassus_ms: inner iterations, (6.1) and error evaluations
+    iterations_ms: f64,
+    /// assembly_ms + solve_ms
+    step_ms: f64,
+    mean_error: f64,
+    max_error: f64,
+    max_penetration: f64,
+}
+
+fn scaling(a: ScalingArgs) -> anyhow::Result<()> {
+    if a.beads.is_empty() || a.beads.iter().any(|&b| b == 0 || b > 1_000_000) {
+        bail!("--beads must list bead counts in 1..=1000000");
+    }
+    if a.window == 0 || a.window > 100_000 || a.settle > 100_000 {
+        bail!("--window must be in 1..=100000 and --settle at most 100000");
+    }
+    let inner: InnerKind = a.inner.into();
+    let mut points = Vec::new();
+    for &beads in &a.beads {
+        let label = format!("{beads} beads {}", inner_label(inner));
+        let params = paper_params(inner, 0.3, 1e-4, 0.01, 20);
+        let settle = a.settle;
+        let (_, stats) = box_run(
+            beads,
+            a.seed,
+            params,
+            Stop::Steps(a.settle + a.window),
+            &label,
+            |sim, _| {
+                // time the Delassus formation separately inside the window only
+                sim.profile_delassus = sim.steps_done >= settle;
+                false
+            },
+        )?;
+        let timed = stats.get(a.settle..).unwrap_or(&[]);
+        let n = timed.len().max(1) as f64;
+        let mean = |f: &dyn Fn(&StepStats) -> f64| timed.iter().map(f).sum::<f64>() / n;
+        let layout = coulomb_granular::scene::BoxLayout::for_beads(beads);
+        let solve_ms = mean(&|s| s.solve_ms);
+        let delassus_ms = mean(&|s| s.delassus_ms);
+        let assembly_ms = mean(&|s| s.assembly_ms);
+        let p = ScalingPoint {
+            beads,
+            box_x: layout.side_x,
+            box_y: layout.side_y,
+            settle_steps: a.settle,
+            timed_steps: timed.len(),
+            contacts: mean(&|s| s.contacts as f64),
+            subproblems: mean(&|s| s.subproblems as f64),
+            inner_iterations: mean(&|s| s.inner_iterations as f64),
+            solve_ms,
+            assembly_ms,
+            delassus_ms,
+            iterations_ms: (solve_ms - delassus_ms).max(0.0),
+            step_ms: solve_ms + assembly_ms,
+            mean_error: mean(&|s| s.error),
+            max_error: timed.iter().map(|s| s.error).fold(0.0, f64::max),
+            max_penetration: timed.iter().map(|s| s.max_penetration).fold(0.0, f64::max),
+        };
+        eprintln!(
+            "{label}: {:.0} contacts, {:.2} ms solve/step ({:.2} Delassus), {:.2} ms assembly, err {:.1e}",
+            p.contacts, p.solve_ms, p.delassus_ms, p.assembly_ms, p.mean_error
+        );
+        points.push(p);
+    }
+    let mut md = String::new();
+    let beads_arg: Vec<String> = a.beads.iter().map(|b| b.to_string()).collect();
+    let _ = writeln!(
+        md,
+        "Produced by `coulomb paper scaling --beads {} --settle {} --window {} --inner {} --seed {}` on a {}-thread machine. Box scene with the calibrated layout (footprint ∝ N, ≈ {} initial layers); h = 0.02 s, e = 0.2, μ = 0.3; {} with successive approximations stopped by (6.1), ε = 0.01, ≤ 20 subproblems. Means over steps {}..{} (the first {} steps are not timed).\n",
+        beads_arg.join(","),
+        a.settle,
+        a.window,
+        format!("{:?}", a.inner).to_lowercase(),
+        a.seed,
+        std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
+        coulomb_granular::scene::BOX_LAYERS,
+        inner_label(inner),
+        a.settle,
+        a.settle + a.window,
+        a.settle
+    );
+    let _ = writeln!(
+        md,
+        "| #beads | box (m) | #contacts | #subprob. | inner it. | solve ms/TS | of which Delassus | of which iterations | assembly ms/TS | step ms/TS | mean err | max err |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|---|");
+    for p in &points {
+        let _ = writeln!(
+            md,
+            "| {} | {:.2} × {:.2} | {:.0} | {:.2} | {:.0} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.1e} | {:.1e} |",
+            p.beads,
+            p.box_x,
+            p.box_y,
+            p.contacts,
+            p.subproblems,
+            p.inner_iterations,
+            p.solve_ms,
+            p.delassus_ms,
+            p.iterations_ms,
+            p.assembly_ms,
+            p.step_ms,
+            p.mean_error,
+            p.max_error
+        );
+    }
+    print!("{md}");
+    if let Some(path) = &a.markdown {
+        std::fs::write(path, &md).with_context(|| format!("writing {}", path.display()))?;
+    }
+    let data = beside(&a.svg, "json");
+    std::fs::write(&data, serde_json::to_string_pretty(&points)?)
+        .with_context(|| format!("writing {}", data.display()))?;
+    scaling_svg(&a.svg, &points, inner_label(inner))?;
+    eprintln!("wrote {} and {}", a.svg.display(), data.display());
+    Ok(())
+}
+
+/// Log–log plot of the time per step against the number of beads.
+fn scaling_svg(path: &Path, points: &[ScalingPoint], label: &str) -> anyhow::Result<()> {
+    let positive = |x: f64| x.is_finite() && x > 0.0;
+    let xs = || points.iter().map(|p| p.beads as f64);
+    let ys = || {
+        points
+            .iter()
+            .flat_map(|p| [p.step_ms, p.solve_ms, p.assembly_ms, p.delassus_ms])
+            .filter(|y| positive(*y))
+    };
+    let xmin = xs().fold(f64::INFINITY, f64::min).min(100.0) * 0.8;
+    let xmax = xs().fold(1.0, f64::max) * 1.25;
+    let ymin = ys().fold(f64::INFINITY, f64::min).min(1.0) * 0.5;
+    let ymax = ys().fold(10.0, f64::max) * 2.0;
+    let root = SVGBackend::new(path, (800, 560)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            format!("Time per step against beads ({label}, (6.1) eps = 0.01)"),
+            ("sans-serif", 20),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d((xmin..xmax).log_scale(), (ymin..ymax).log_scale())?;
+    chart
+        .configure_mesh()
+        .x_desc("beads")
+        .y_desc("ms per time step")
+        .draw()?;
+    type Get = fn(&ScalingPoint) -> f64;
+    let series: [(&str, Get, RGBColor); 4] = [
+        ("step (assembly + solve)", |p| p.step_ms, BLACK),
+        ("solve", |p| p.solve_ms, BLUE),
+        ("of which Delassus W", |p| p.delassus_ms, GREEN),
+        ("detection + assembly", |p| p.assembly_ms, RED),
+    ];
+    for (name, get, color) in series {
+        let pts: Vec<(f64, f64)> = points
+            .iter()
+            .map(|p| (p.beads as f64, get(p)))
+            .filter(|(_, y)| positive(*y))
+            .collect();
+        chart
+            .draw_series(LineSeries::new(pts.clone(), color))?
+            .label(name)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+        chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 3, color.filled())))?;
+    }
+    // the 10 ms aim
+    chart.draw_series(LineSeries::new(
+        [(xmin, 10.0), (xmax, 10.0)],
+        ShapeStyle::from(&BLACK.mix(0.3)).stroke_width(1),
+    ))?;
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .border_style(BLACK)
+        .background_style(WHITE)
+        .draw()?;
     root.present()?;
-    eprintln!("wrote {}", a.svg.display());
     Ok(())
 }

@@ -2,9 +2,10 @@
 //! statistics (CSV, JSON), VTK frames for ParaView and optional FCLIB dumps of each step.
 
 use anyhow::{bail, Context};
-use coulomb::solver::{InnerKind, Settings};
+use coulomb::solver::{InnerKind, OuterKind, Settings};
 use coulomb_granular::output::{write_stats, VtkWriter};
 use coulomb_granular::run::RestMonitor;
+use coulomb_granular::scene::BoxLayout;
 use coulomb_granular::{Activation, Params, Scene, Simulation, Stop, Summary};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
@@ -30,6 +31,24 @@ impl From<Inner> for InnerKind {
             Inner::Ipm => InnerKind::Ipm,
             Inner::Pgs => InnerKind::Pgs,
             Inner::Faceted => InnerKind::Faceted,
+        }
+    }
+}
+
+/// Outer iteration names on the command line.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outer {
+    /// successive approximations s ← F(s) (the paper's §6)
+    FixedPoint,
+    /// safeguarded Anderson mixing on s
+    Anderson,
+}
+
+impl From<Outer> for OuterKind {
+    fn from(o: Outer) -> Self {
+        match o {
+            Outer::FixedPoint => OuterKind::FixedPoint,
+            Outer::Anderson => OuterKind::Anderson,
         }
     }
 }
@@ -69,6 +88,9 @@ pub struct Args {
     /// inner solver
     #[arg(long, value_enum, default_value_t = Inner::Apgd)]
     pub inner: Inner,
+    /// outer iteration
+    #[arg(long, value_enum, default_value_t = Outer::FixedPoint)]
+    pub outer: Outer,
     /// tolerance on the error of docs/error.md
     #[arg(long, default_value_t = 1e-4)]
     pub tol: f64,
@@ -90,6 +112,15 @@ pub struct Args {
     /// seed of the initial arrangement
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// box scene: side of the square floor (m), instead of the calibrated one
+    #[arg(long)]
+    pub box_side: Option<f64>,
+    /// box scene: vertical pitch of the initial lattice (m), instead of the calibrated one
+    #[arg(long)]
+    pub layer_pitch: Option<f64>,
+    /// box scene: height of the lowest initial layer's centres (m), instead of the calibrated one
+    #[arg(long)]
+    pub drop_base: Option<f64>,
     /// output folder: stats.csv, stats.json, summary.json, beads.pvd, contacts.pvd, frames/
     #[arg(long)]
     pub output: Option<PathBuf>,
@@ -139,15 +170,43 @@ impl Args {
                 gamma: self.gamma,
                 ..Activation::default()
             },
-            solver: solver_settings(
-                self.inner.into(),
-                self.tol,
-                self.fp_tol,
-                self.max_outer,
-                self.max_inner,
-            ),
+            solver: Settings {
+                outer: self.outer.into(),
+                ..solver_settings(
+                    self.inner.into(),
+                    self.tol,
+                    self.fp_tol,
+                    self.max_outer,
+                    self.max_inner,
+                )
+            },
             warm_start: !self.cold,
         }
+    }
+    /// The box layout: the calibrated one for `--beads`, with the command line's overrides.
+    fn layout(&self) -> anyhow::Result<BoxLayout> {
+        let mut l = BoxLayout::for_beads(self.beads);
+        let r = coulomb_granular::scene::BEAD_RADIUS;
+        if let Some(x) = self.box_side {
+            if !(x.is_finite() && x >= 2.5 * r && x <= 1e4) {
+                bail!("--box-side {x} must be in [{}, 10000] m", 2.5 * r);
+            }
+            l.side_x = x;
+            l.side_y = x;
+        }
+        if let Some(x) = self.layer_pitch {
+            if !(x.is_finite() && x >= 2.5 * r && x <= 100.0) {
+                bail!("--layer-pitch {x} must be in [{}, 100] m", 2.5 * r);
+            }
+            l.layer_pitch = x;
+        }
+        if let Some(x) = self.drop_base {
+            if !(x.is_finite() && x >= 1.25 * r && x <= 1000.0) {
+                bail!("--drop-base {x} must be in [{}, 1000] m", 1.25 * r);
+            }
+            l.base = x;
+        }
+        Ok(l)
     }
     fn stop(&self) -> Stop {
         if self.until_rest {
@@ -193,7 +252,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         bail!("--beads {} is above the limit of 1000000", args.beads);
     }
     let stop = args.stop();
-    let world = scene.build(args.beads, args.seed);
+    let world = scene.build_with(args.beads, args.seed, &args.layout()?);
     let mut sim = Simulation::new(world, args.params()).context("invalid simulation parameters")?;
     sim.keep_problem = args.dump_fclib.is_some();
     if let Some(dir) = &args.dump_fclib {

@@ -17,6 +17,7 @@ fn paper_params(inner: InnerKind) -> Params {
             fixed_point_tol: Some(0.01),
             inner_tol_factor: 1e-6,
             fallback: None,
+            warmup_sweeps: 0,
             ..Settings::default()
         },
         ..Params::default()

@@ -47,12 +47,9 @@ fn bench(c: &mut Criterion) {
         group.measurement_time(Duration::from_secs(5));
         for (name, inner, outer) in combos() {
             let settings = Settings {
-                inner,
-                outer,
                 tol: 1e-8,
                 time_limit: Some(Duration::from_secs(5)),
-                fallback: None,
-                ..Settings::default()
+                ..Settings::method(inner, outer)
             };
             // only time the combinations that reach 1e-8
             match solve(&file.problem, &settings) {

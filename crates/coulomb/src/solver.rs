@@ -85,6 +85,10 @@ pub struct Settings {
     /// stops without converging (iteration cap, inner failure, or stalled: the error no longer
     /// halves over [`STALL_WINDOW`] outer iterations); the time limit covers both
     pub fallback: Option<(InnerKind, OuterKind)>,
+    /// quick first try: at most this many fused Gauss–Seidel sweeps on the De Saxcé form
+    /// before the main method (0: none); small problems are solved there, and otherwise the
+    /// main method starts from the caller's point as if the try had not happened
+    pub warmup_sweeps: usize,
     pub max_outer: usize,
     /// cap on iterations of each inner solve
     pub max_inner: usize,
@@ -113,6 +117,7 @@ impl Default for Settings {
             inner: InnerKind::Apgd,
             outer: OuterKind::Anderson,
             fallback: Some((InnerKind::Pgs, OuterKind::Fused)),
+            warmup_sweeps: 50,
             max_outer: 200,
             max_inner: 10_000,
             time_limit: Some(Duration::from_secs(60)),
@@ -196,6 +201,18 @@ pub enum SolveError {
 }
 
 impl Settings {
+    /// The default settings with (`inner`, `outer`) as the only method: no warm-up try and
+    /// no fallback, so that the result describes that method.
+    pub fn method(inner: InnerKind, outer: OuterKind) -> Self {
+        Self {
+            inner,
+            outer,
+            fallback: None,
+            warmup_sweeps: 0,
+            ..Self::default()
+        }
+    }
+
     fn validate(&self) -> Result<(), SolveError> {
         let bad = |m: &str| Err(SolveError::Settings(m.to_string()));
         if self.tol.is_nan() || self.tol <= 0.0 || self.tol.is_infinite() {
@@ -331,16 +348,41 @@ pub fn solve_with_guess(
     settings.validate()?;
     let start = Instant::now();
     let deadline = settings.time_limit.map(|t| start + t);
-    let Some((inner, outer)) = settings.fallback else {
-        return solve_stage(problem, settings, guess, start, deadline, false);
+    let form = match problem {
+        Problem::Local(p) => Form::Local(p),
+        Problem::Global(g) => Form::Global(g, Box::new(Delassus::new(g)?)),
     };
-    let first = solve_stage(problem, settings, guess, start, deadline, true)?;
+    let mut stages: Vec<Solution> = Vec::new();
+    if settings.warmup_sweeps > 0 {
+        let warm_settings = Settings {
+            inner: InnerKind::Pgs,
+            outer: OuterKind::Fused,
+            fallback: None,
+            max_outer: 1,
+            max_inner: settings.warmup_sweeps,
+            newton_steps: 0,
+            ..settings.clone()
+        };
+        let warm = solve_stage(&form, &warm_settings, guess, start, deadline, false)?;
+        if warm.converged() || deadline.is_some_and(|t| Instant::now() >= t) {
+            return Ok(merge(Vec::new(), warm, start));
+        }
+        stages.push(warm);
+    }
+    // the main method starts from the caller's point, not from the warm-up's r: on hard
+    // problems Gauss–Seidel's r leads the fixed point of the main method astray
+    let main_guess = guess;
+    let Some((inner, outer)) = settings.fallback else {
+        let main = solve_stage(&form, settings, main_guess, start, deadline, false)?;
+        return Ok(merge(stages, main, start));
+    };
+    let first = solve_stage(&form, settings, main_guess, start, deadline, true)?;
     let handover = matches!(
         first.status,
         Status::MaxIterations | Status::Stalled | Status::InnerFailure | Status::NumericalError
     );
     if first.converged() || !handover || deadline.is_some_and(|t| Instant::now() >= t) {
-        return Ok(first);
+        return Ok(merge(stages, first, start));
     }
     let warm = Guess {
         r: first.r.clone(),
@@ -355,43 +397,31 @@ pub fn solve_with_guess(
     let warm = if first.r.iter().all(|x| x.is_finite()) {
         Some(&warm)
     } else {
-        guess
+        main_guess
     };
-    let mut second = solve_stage(problem, &second_settings, warm, start, deadline, false)?;
-    let mut history = first.history;
-    history.append(&mut second.history);
-    second.history = history;
-    second.outer_iterations += first.outer_iterations;
-    second.inner_iterations += first.inner_iterations;
-    second.solve_time = start.elapsed();
-    Ok(second)
+    let second = solve_stage(&form, &second_settings, warm, start, deadline, false)?;
+    stages.push(first);
+    Ok(merge(stages, second, start))
 }
 
-/// The Newton end game may take at most this many times the time spent in outer iterations
-/// (a Newton step factors a sparse matrix of the size of W: cheap when the fixed point is
-/// slow, wasteful when it is fast).
-pub const NEWTON_TIME_RATIO: u32 = 3;
+/// The last stage's solution with the histories and iteration counts of the earlier ones
+/// prepended, and the total time.
+fn merge(earlier: Vec<Solution>, mut last: Solution, start: Instant) -> Solution {
+    let mut history = Vec::new();
+    for stage in earlier {
+        history.extend(stage.history);
+        last.outer_iterations += stage.outer_iterations;
+        last.inner_iterations += stage.inner_iterations;
+    }
+    history.append(&mut last.history);
+    last.history = history;
+    last.solve_time = start.elapsed();
+    last
+}
 
-/// Outer iterations over which the error must halve for a first stage to be considered
-/// progressing (see [`Settings::fallback`]).
-pub const STALL_WINDOW: usize = 25;
-
-/// One run of the outer loop with `settings.inner` / `settings.outer`; `stop_on_stall` ends it
-/// with [`Status::Stalled`] when the error no longer decreases.
-fn solve_stage(
-    problem: &Problem,
-    settings: &Settings,
-    guess: Option<&Guess>,
-    start: Instant,
-    deadline: Option<Instant>,
-    stop_on_stall: bool,
-) -> Result<Solution, SolveError> {
-    let form = match problem {
-        Problem::Local(p) => Form::Local(p),
-        Problem::Global(g) => Form::Global(g, Box::new(Delassus::new(g)?)),
-    };
+/// The checked starting impulses: the guess (projected onto L) or zero.
+fn start_point(form: &Form<'_>, guess: Option<&Guess>) -> Result<Vec<f64>, SolveError> {
     let local = form.local();
-    let (dim, mu) = (local.dim, &local.mu[..]);
     let m = local.q.len();
     let mut r = match guess {
         Some(gs) if gs.r.len() != m => {
@@ -406,7 +436,33 @@ fn solve_stage(
         Some(gs) => gs.r.clone(),
         None => vec![0.0; m],
     };
-    crate::cone::project_product(dim, mu, &mut r);
+    crate::cone::project_product(local.dim, &local.mu, &mut r);
+    Ok(r)
+}
+
+/// The Newton end game may take at most this many times the time spent in outer iterations
+/// (a Newton step factors a sparse matrix of the size of W: cheap when the fixed point is
+/// slow, wasteful when it is fast).
+pub const NEWTON_TIME_RATIO: u32 = 3;
+
+/// Outer iterations over which the error must halve for a first stage to be considered
+/// progressing (see [`Settings::fallback`]).
+pub const STALL_WINDOW: usize = 25;
+
+/// One run of the outer loop with `settings.inner` / `settings.outer`; `stop_on_stall` ends it
+/// with [`Status::Stalled`] when the error no longer decreases.
+fn solve_stage(
+    form: &Form<'_>,
+    settings: &Settings,
+    guess: Option<&Guess>,
+    start: Instant,
+    deadline: Option<Instant>,
+    stop_on_stall: bool,
+) -> Result<Solution, SolveError> {
+    let local = form.local();
+    let (dim, mu) = (local.dim, &local.mu[..]);
+    let m = local.q.len();
+    let mut r = start_point(form, guess)?;
     let frictionless = mu.iter().all(|&x| x == 0.0);
     // s from the guess (F at the guess), zero for a cold start
     let mut s = if guess.is_some() {
@@ -421,7 +477,7 @@ fn solve_stage(
     let mut inner_total = 0;
     let mut b = Vec::with_capacity(m);
     let w_scale = crate::inner::w_scale(dim, &local.w);
-    let mut verdict = Verdict::of(&form, &r);
+    let mut verdict = Verdict::of(form, &r);
     let mut last_error = verdict.error;
     let mut balance_stalls = 0;
     let mut newton_gate = f64::INFINITY;
@@ -453,7 +509,7 @@ fn solve_stage(
             deadline,
         };
         fixed_point::shifted(dim, &local.q, mu, &s, &mut b);
-        let mut report = match (&form, settings.inner, settings.outer) {
+        let mut report = match (form, settings.inner, settings.outer) {
             (_, _, OuterKind::Fused) => {
                 let limits = InnerLimits {
                     tol: 0.5 * settings.tol,
@@ -494,7 +550,7 @@ fn solve_stage(
         if crate::inner::unbounded_ray(&r, &wr, &b, w_scale) {
             report.status = InnerStatus::Infeasible;
         }
-        verdict = Verdict::of(&form, &r);
+        verdict = Verdict::of(form, &r);
         let (fp_residual, rule) = fixed_point::residuals(&s, &fs);
         history.push(OuterRecord {
             error: verdict.error,
@@ -555,7 +611,7 @@ fn solve_stage(
                 newton_deadline,
             );
             newton_time += now.elapsed();
-            let candidate = Verdict::of(&form, &trial);
+            let candidate = Verdict::of(form, &trial);
             inner_total += nr.steps;
             if nr.steps > 0 && candidate.error < verdict.error {
                 r = trial;

@@ -108,20 +108,10 @@ fn settings_under_test() -> Vec<Settings> {
     let mut out = Vec::new();
     for inner in [InnerKind::Pgs, InnerKind::Apgd] {
         for outer in [OuterKind::FixedPoint, OuterKind::Anderson] {
-            out.push(Settings {
-                inner,
-                outer,
-                fallback: None,
-                ..Settings::default()
-            });
+            out.push(Settings::method(inner, outer));
         }
     }
-    out.push(Settings {
-        inner: InnerKind::Pgs,
-        outer: OuterKind::Fused,
-        fallback: None,
-        ..Settings::default()
-    });
+    out.push(Settings::method(InnerKind::Pgs, OuterKind::Fused));
     out.push(Settings::default());
     out
 }

@@ -143,9 +143,9 @@ pub fn solver_settings(
     max_outer: usize,
     max_inner: Option<usize>,
 ) -> Settings {
-    let d = Settings::default();
+    // the named inner solver alone, so that statistics describe it
+    let d = Settings::method(inner, Settings::default().outer);
     Settings {
-        inner,
         tol,
         max_outer,
         max_inner: max_inner.unwrap_or(d.max_inner),
@@ -153,8 +153,6 @@ pub fn solver_settings(
         // solve each subproblem accurately (down to tol / 5): with the loose rule (6.1) the
         // outer loop often stops after one subproblem, whose accuracy is then the step's
         inner_tol_factor: 1e-6,
-        // the named inner solver alone, so that statistics describe it
-        fallback: None,
         ..d
     }
 }

@@ -115,6 +115,7 @@ pub fn settings(args: &Args) -> anyhow::Result<Settings> {
     if args.inner.is_some() || args.outer.is_some() {
         // an explicit method runs alone
         s.fallback = None;
+        s.warmup_sweeps = 0;
     }
     if let Some(n) = args.max_outer {
         s.max_outer = n;

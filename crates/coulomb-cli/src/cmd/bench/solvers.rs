@@ -106,6 +106,11 @@ impl SolverSpec {
             } else {
                 None
             },
+            warmup_sweeps: if self.fallback {
+                Settings::default().warmup_sweeps
+            } else {
+                0
+            },
             ..Default::default()
         }
     }

@@ -27,6 +27,8 @@
 use crate::problem::LocalProblem;
 use crate::sparse::CscMatrix;
 use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use std::time::Instant;
 
 /// Projection of y onto K_μ (written into `p`) and its Jacobian ∂P_{K_μ}(y) (row-major d × d
@@ -173,6 +175,111 @@ pub(crate) fn push_identity_minus_d(
     }
 }
 
+/// The sparsity pattern of J + λ I: every d × d block (i, j) with i = j or with a nonzero of
+/// W in block (i, j), and its symbolic LU factorization, computed once per [`polish`] call
+/// (the values change at every step, the pattern does not).
+struct JacobianPattern {
+    dim: usize,
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    /// for each contact (block column), the contacts of its block rows, ascending
+    neighbors: Vec<Vec<usize>>,
+    /// position of each diagonal entry in `row_idx`
+    diagonal: Vec<usize>,
+    symbolic: SymbolicLu<usize>,
+}
+
+impl JacobianPattern {
+    fn new(p: &LocalProblem) -> Option<Self> {
+        let d = p.dim;
+        let contacts = p.mu.len();
+        let mut neighbors: Vec<Vec<usize>> = (0..contacts).map(|c| vec![c]).collect();
+        for (i, j, _) in p.w.triplets() {
+            neighbors[j / d].push(i / d);
+        }
+        for n in &mut neighbors {
+            n.sort_unstable();
+            n.dedup();
+        }
+        let m = contacts * d;
+        let mut col_ptr = Vec::with_capacity(m + 1);
+        let mut row_idx = Vec::new();
+        let mut diagonal = vec![0; m];
+        col_ptr.push(0);
+        for j in 0..m {
+            for &ci in &neighbors[j / d] {
+                for a in 0..d {
+                    if ci * d + a == j {
+                        diagonal[j] = row_idx.len();
+                    }
+                    row_idx.push(ci * d + a);
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
+        let sym = SymbolicSparseColMatRef::new_checked(m, m, &col_ptr, None, &row_idx);
+        let symbolic = SymbolicLu::try_new(sym).ok()?;
+        Some(Self {
+            dim: d,
+            col_ptr,
+            row_idx,
+            neighbors,
+            diagonal,
+            symbolic,
+        })
+    }
+
+    /// The values of J = I − D + B W on the pattern (B = D A), column by column.
+    fn fill(
+        &self,
+        p: &LocalProblem,
+        dblocks: &[f64],
+        blocks: &[f64],
+        wcol: &mut [f64],
+        vals: &mut Vec<f64>,
+    ) {
+        let d = self.dim;
+        vals.clear();
+        for j in 0..p.w.ncols {
+            let (cj, b) = (j / d, j % d);
+            for k in p.w.col_ptr[j]..p.w.col_ptr[j + 1] {
+                wcol[p.w.row_idx[k]] += p.w.values[k];
+            }
+            for &ci in &self.neighbors[cj] {
+                let bl = &blocks[ci * d * d..(ci + 1) * d * d];
+                let dl = &dblocks[ci * d * d..(ci + 1) * d * d];
+                for a in 0..d {
+                    let mut v: f64 = (0..d).map(|k| bl[a * d + k] * wcol[ci * d + k]).sum();
+                    if ci == cj {
+                        v += if a == b { 1.0 } else { 0.0 } - dl[a * d + b];
+                    }
+                    vals.push(v);
+                }
+            }
+            for k in p.w.col_ptr[j]..p.w.col_ptr[j + 1] {
+                wcol[p.w.row_idx[k]] = 0.0;
+            }
+        }
+    }
+
+    fn shift_diagonal(&self, vals: &mut [f64], lambda: f64) {
+        for &k in &self.diagonal {
+            vals[k] += lambda;
+        }
+    }
+
+    /// Solves (J + λ I) x = rhs in place by LU with the cached symbolic factorization; None
+    /// if the factorization fails or x is not finite.
+    fn solve(&self, vals: &[f64], rhs: &mut [f64]) -> Option<()> {
+        let n = rhs.len();
+        let sym = SymbolicSparseColMatRef::new_checked(n, n, &self.col_ptr, None, &self.row_idx);
+        let mat = SparseColMatRef::new(sym, vals);
+        let lu = Lu::try_new_with_symbolic(self.symbolic.clone(), mat).ok()?;
+        lu.solve_in_place(faer::MatMut::from_column_major_slice_mut(rhs, n, 1));
+        rhs.iter().all(|x| x.is_finite()).then_some(())
+    }
+}
+
 /// Consecutive slow steps (‖G‖ reduced by less than 1 − [`SLOW_RATIO`]) after which
 /// [`polish`] gives up.
 pub const SLOW_STEPS: usize = 4;
@@ -280,6 +387,15 @@ pub fn polish(
         .fold(0.0f64, f64::max)
         .max(1.0);
     let q_scale = crate::law::norm(&p.q).max(f64::MIN_POSITIVE);
+    let Some(pattern) = JacobianPattern::new(p) else {
+        return NewtonReport {
+            status: NewtonStatus::NoDescent,
+            steps: 0,
+            residual: norm,
+        };
+    };
+    let mut vals = Vec::new();
+    let mut wcol = vec![0.0; m];
     let mut steps = 0;
     let mut slow_steps = 0;
     let status = loop {
@@ -299,24 +415,7 @@ pub fn polish(
         // semismooth Newton step, exact in the limit) and grows a hundredfold whenever the
         // direction gives no descent: a singular J (more contact unknowns than degrees of
         // freedom) then still yields a Levenberg–Marquardt-like direction.
-        let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
-        push_identity_minus_d(d, &dblocks, 0, &mut rows, &mut cols, &mut vals);
-        push_d_times(
-            d,
-            &blocks,
-            1.0,
-            p.w.triplets(),
-            0,
-            &mut rows,
-            &mut cols,
-            &mut vals,
-        );
-        let base = vals.len();
-        for j in 0..m {
-            rows.push(j);
-            cols.push(j);
-            vals.push(0.0);
-        }
+        pattern.fill(p, &dblocks, &blocks, &mut wcol, &mut vals);
         let before = norm;
         let mut lambda = (norm / q_scale).min(1e-2) * diag_scale;
         let mut accepted = false;
@@ -324,9 +423,10 @@ pub fn polish(
             if deadline.is_some_and(|t| Instant::now() >= t) {
                 break;
             }
-            vals[base..].iter_mut().for_each(|v| *v = lambda);
+            let mut shifted = vals.clone();
+            pattern.shift_diagonal(&mut shifted, lambda);
             let mut delta: Vec<f64> = g.iter().map(|x| -x).collect();
-            if sparse_lu_solve(m, &rows, &cols, &vals, &mut delta).is_some() {
+            if pattern.solve(&shifted, &mut delta).is_some() {
                 let mut t = 1.0;
                 for _ in 0..=10 {
                     for k in 0..m {

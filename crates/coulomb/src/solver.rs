@@ -125,7 +125,7 @@ impl Default for Settings {
             facets: 8,
             inner_tol_factor: 0.1,
             newton_steps: 30,
-            newton_start: 1e-4,
+            newton_start: 1e-3,
         }
     }
 }
@@ -338,7 +338,8 @@ fn inner_solver(settings: &Settings) -> Box<dyn InnerSolver> {
 /// semismooth Newton steps on the natural map of (3.9) for all contacts ([`crate::newton`])
 /// are tried from r; they are kept if they lower the error (one extra history record, s then
 /// restarts from F at the new r). A failed try is repeated only after the error has dropped a
-/// decade or when an inner solve hits its iteration cap, and Newton never takes more than
+/// decade, when an inner solve hits its iteration cap or when the fixed point stagnates
+/// ([`STAGNATION`] iterations without a new lowest error), and Newton never takes more than
 /// [`NEWTON_TIME_RATIO`] times the time of the outer iterations.
 pub fn solve_with_guess(
     problem: &Problem,
@@ -592,7 +593,9 @@ fn solve_stage(
         }
         if settings.newton_steps > 0
             && verdict.error <= settings.newton_start
-            && (verdict.error <= newton_gate || report.status == InnerStatus::MaxIterations)
+            && (verdict.error <= newton_gate
+                || report.status == InnerStatus::MaxIterations
+                || stagnating(&history))
             && !verdict.converged(settings.tol)
             && newton_time < NEWTON_TIME_RATIO * (stage_start.elapsed() - newton_time)
         {
@@ -651,6 +654,25 @@ fn solve_stage(
         history,
         solve_time: start.elapsed(),
     })
+}
+
+/// Outer iterations without a new lowest error after which the fixed point counts as
+/// stagnating (the Newton end game is then tried again whatever its gate).
+const STAGNATION: usize = 3;
+
+/// Whether the last [`STAGNATION`] outer iterations all failed to lower the best error.
+fn stagnating(history: &[OuterRecord]) -> bool {
+    let n = history.len();
+    if n <= STAGNATION {
+        return false;
+    }
+    let best_before = history[..n - STAGNATION]
+        .iter()
+        .map(|h| h.error)
+        .fold(f64::INFINITY, f64::min);
+    history[n - STAGNATION..]
+        .iter()
+        .all(|h| h.error >= best_before)
 }
 
 /// The outer status an inner failure forces (None: keep iterating, warm-started).

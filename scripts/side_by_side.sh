@@ -14,3 +14,4 @@ target/release/coulomb bench "$DIR" --tol 1e-8 --time-limit 20 --repeat 3 \
   done; echo "]"; } > docs/check-fclib.json
 python3 scripts/side_by_side_table.py docs/bench-fclib.json docs/siconos-fclib.json \
   docs/check-fclib.json > docs/side-by-side-table.md
+python3 scripts/side_by_side_table.py --matrix docs/bench-fclib.json > docs/bench-matrix.md

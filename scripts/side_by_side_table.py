@@ -5,6 +5,7 @@
 `coulomb check --json` when a file of those verdicts is given.
 
 usage: side_by_side_table.py BENCH.json SICONOS.json [CHECK.json]
+       side_by_side_table.py --matrix BENCH.json     (every coulomb method on every problem)
 """
 import json
 import sys
@@ -14,7 +15,27 @@ def ms(t):
     return f"{t * 1e3:.2f} ms"
 
 
+def matrix(path):
+    bench = json.load(open(path))
+    solvers = bench["solvers"]
+    rows = {}
+    for r in bench["records"]:
+        cell = f"{r['time_s'] * 1e3:.2f}" if r.get("converged") else r.get("status", "-")
+        rows.setdefault(r["problem"], {})[r["solver"]] = cell
+    print("| problem | " + " | ".join(solvers) + " |")
+    print("|---|" + "---|" * len(solvers))
+    for name in sorted(rows):
+        print(f"| {name} | " + " | ".join(rows[name].get(s, "-") for s in solvers) + " |")
+    print()
+    solved = {s: sum(1 for r in bench["records"] if r["solver"] == s and r.get("converged"))
+              for s in solvers}
+    print("Solved: " + ", ".join(f"{s} {n}/{len(rows)}" for s, n in solved.items()) + ".")
+
+
 def main():
+    if sys.argv[1] == "--matrix":
+        matrix(sys.argv[2])
+        return
     bench = json.load(open(sys.argv[1]))
     siconos = json.load(open(sys.argv[2]))
     checks = {}

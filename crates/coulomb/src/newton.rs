@@ -284,6 +284,11 @@ impl JacobianPattern {
 /// [`polish`] gives up.
 pub const SLOW_STEPS: usize = 4;
 
+/// The first shift of a step is λ = `LAMBDA_FACTOR` · (‖G‖ / ‖q‖) · max diag(W): small enough
+/// to keep the quadratic convergence of the exact step where J is regular, large enough to
+/// give a direction where it is singular (tuned on the FCLIB problems of ../shared/fclib).
+pub const LAMBDA_FACTOR: f64 = 1e-2;
+
 /// A step with ‖G⁺‖ > `SLOW_RATIO` ‖G‖ counts as slow.
 pub const SLOW_RATIO: f64 = 0.9;
 
@@ -411,13 +416,13 @@ pub fn polish(
         if deadline.is_some_and(|t| Instant::now() >= t) {
             break NewtonStatus::TimeLimit;
         }
-        // J + λ I with J = I − D + (D A) W; λ starts at the relative residual (a regularized
+        // J + λ I with J = I − D + (D A) W; λ starts at a fraction of the relative residual (a regularized
         // semismooth Newton step, exact in the limit) and grows a hundredfold whenever the
         // direction gives no descent: a singular J (more contact unknowns than degrees of
         // freedom) then still yields a Levenberg–Marquardt-like direction.
         pattern.fill(p, &dblocks, &blocks, &mut wcol, &mut vals);
         let before = norm;
-        let mut lambda = (norm / q_scale).min(1e-2) * diag_scale;
+        let mut lambda = LAMBDA_FACTOR * (norm / q_scale).min(1e-2) * diag_scale;
         let mut accepted = false;
         for _ in 0..4 {
             if deadline.is_some_and(|t| Instant::now() >= t) {

@@ -196,7 +196,7 @@ fn ray_minimizer(a: &[f64; 9], d: usize, c: &[f64; 3], dir: &[f64; 3]) -> (f64, 
 #[inline]
 fn psi(a: &[f64; 9], c: &[f64; 3], mu: f64, alpha: f64) -> (f64, f64, f64, f64) {
     let (s, co) = alpha.sin_cos();
-    let (s2, c2) = (2.0 * alpha).sin_cos();
+    let (s2, c2) = (2.0 * s * co, co * co - s * s);
     let n = c[0] + mu * (c[1] * co + c[2] * s);
     let n1 = mu * (-c[1] * s + c[2] * co);
     let n2 = -mu * (c[1] * co + c[2] * s);
@@ -229,7 +229,7 @@ fn boundary_newton(a: &[f64; 9], c: &[f64; 3], mu: f64, alpha0: f64) -> Option<[
         };
         let step = step.clamp(-0.5, 0.5);
         alpha += step;
-        if step.abs() <= 1e-14 * (1.0 + alpha.abs()) {
+        if step.abs() <= 1e-11 * (1.0 + alpha.abs()) {
             break;
         }
     }

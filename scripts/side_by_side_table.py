@@ -12,7 +12,7 @@ import sys
 
 
 def ms(t):
-    return f"{t * 1e3:.2f} ms"
+    return f"{t * 1e6:.1f} µs" if t < 1e-3 else f"{t * 1e3:.2f} ms"
 
 
 def matrix(path):

@@ -513,7 +513,7 @@ fn solve_stage(
         let mut report = match (form, settings.inner, settings.outer) {
             (_, _, OuterKind::Fused) => {
                 let limits = InnerLimits {
-                    tol: 0.5 * settings.tol,
+                    tol: 0.9 * settings.tol,
                     ..limits
                 };
                 pgs::solve_fused(&mut pgs_fused, dim, &local.w, &local.q, mu, &limits, &mut r)

@@ -216,8 +216,9 @@ fn psi(a: &[f64; 9], c: &[f64; 3], mu: f64, alpha: f64) -> (f64, f64, f64, f64) 
 /// iteration reaches a stationary point with cᵀd < 0 and a nonnegative multiplier.
 fn boundary_newton(a: &[f64; 9], c: &[f64; 3], mu: f64, alpha0: f64) -> Option<[f64; 3]> {
     let mut alpha = alpha0;
+    let mut at = psi(a, c, mu, alpha);
     for _ in 0..30 {
-        let (n, p1, p2, _) = psi(a, c, mu, alpha);
+        let (n, p1, p2, _) = at;
         if n.is_nan() || n >= 0.0 {
             return None;
         }
@@ -228,12 +229,14 @@ fn boundary_newton(a: &[f64; 9], c: &[f64; 3], mu: f64, alpha0: f64) -> Option<[
             0.1 * p1.signum()
         };
         let step = step.clamp(-0.5, 0.5);
-        alpha += step;
         if step.abs() <= 1e-11 * (1.0 + alpha.abs()) {
+            // converged: α is kept as is, and ψ and its derivatives at α are already known
             break;
         }
+        alpha += step;
+        at = psi(a, c, mu, alpha);
     }
-    let (n, p1, _, den) = psi(a, c, mu, alpha);
+    let (n, p1, _, den) = at;
     if n.is_nan() || n >= 0.0 || den.is_nan() || den <= 0.0 || p1.abs() > 1e-6 {
         return None;
     }
@@ -310,18 +313,15 @@ pub fn solve_contact(
     }
     // d = 3 boundary: seed the angle from the previous iterate, then from −c_T and x0_T,
     // then from sampled angles.
-    let mut seeds: [f64; 3] = [f64::NAN; 3];
-    if warm[1] != 0.0 || warm[2] != 0.0 {
-        seeds[0] = warm[2].atan2(warm[1]);
-    }
-    if ct > 0.0 {
-        seeds[1] = (-c[2]).atan2(-c[1]);
-    }
-    if x0[1] != 0.0 || x0[2] != 0.0 {
-        seeds[2] = x0[2].atan2(x0[1]);
-    }
-    for &s in seeds.iter().filter(|s| s.is_finite()) {
-        if let Some(x) = boundary_newton(a, c, mu, s) {
+    // (each angle is computed only when needed: the first seed usually succeeds)
+    for k in 0..3 {
+        let seed = match k {
+            0 if warm[1] != 0.0 || warm[2] != 0.0 => warm[2].atan2(warm[1]),
+            1 if ct > 0.0 => (-c[2]).atan2(-c[1]),
+            2 if x0[1] != 0.0 || x0[2] != 0.0 => x0[2].atan2(x0[1]),
+            _ => continue,
+        };
+        if let Some(x) = boundary_newton(a, c, mu, seed) {
             return x;
         }
     }

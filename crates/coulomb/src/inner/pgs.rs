@@ -192,9 +192,9 @@ fn ray_minimizer(a: &[f64; 9], d: usize, c: &[f64; 3], dir: &[f64; 3]) -> (f64, 
 }
 
 /// ψ(α) = log((cᵀd)² / dᵀAd) and its first two derivatives, for d(α) = (1, μ cos α, μ sin α)
-/// (d = 3). Also returns cᵀd.
+/// (d = 3). Also returns cᵀd, dᵀAd and (sin α, cos α).
 #[inline]
-fn psi(a: &[f64; 9], c: &[f64; 3], mu: f64, alpha: f64) -> (f64, f64, f64, f64) {
+fn psi(a: &[f64; 9], c: &[f64; 3], mu: f64, alpha: f64) -> (f64, f64, f64, f64, (f64, f64)) {
     let (s, co) = alpha.sin_cos();
     let (s2, c2) = (2.0 * s * co, co * co - s * s);
     let n = c[0] + mu * (c[1] * co + c[2] * s);
@@ -209,7 +209,7 @@ fn psi(a: &[f64; 9], c: &[f64; 3], mu: f64, alpha: f64) -> (f64, f64, f64, f64) 
         2.0 * mu * (-a[1] * co - a[2] * s) + mu * mu * (2.0 * (a[8] - a[4]) * c2 - 4.0 * a[5] * s2);
     let p1 = 2.0 * n1 / n - den1 / den;
     let p2 = 2.0 * (n2 * n - n1 * n1) / (n * n) - (den2 * den - den1 * den1) / (den * den);
-    (n, p1, p2, den)
+    (n, p1, p2, den, (s, co))
 }
 
 /// Newton on ψ'(α) = 0 from α₀ (d = 3, boundary case); returns the boundary point if the
@@ -218,7 +218,7 @@ fn boundary_newton(a: &[f64; 9], c: &[f64; 3], mu: f64, alpha0: f64) -> Option<[
     let mut alpha = alpha0;
     let mut at = psi(a, c, mu, alpha);
     for _ in 0..30 {
-        let (n, p1, p2, _) = at;
+        let (n, p1, p2, _, _) = at;
         if n.is_nan() || n >= 0.0 {
             return None;
         }
@@ -229,19 +229,17 @@ fn boundary_newton(a: &[f64; 9], c: &[f64; 3], mu: f64, alpha0: f64) -> Option<[
             0.1 * p1.signum()
         };
         let step = step.clamp(-0.5, 0.5);
-        if step.abs() <= 1e-11 * (1.0 + alpha.abs()) {
-            // converged: α is kept as is, and ψ and its derivatives at α are already known
-            break;
-        }
         alpha += step;
         at = psi(a, c, mu, alpha);
+        if step.abs() <= 1e-11 * (1.0 + alpha.abs()) {
+            break;
+        }
     }
-    let (n, p1, _, den) = at;
+    let (n, p1, _, den, (s, co)) = at;
     if n.is_nan() || n >= 0.0 || den.is_nan() || den <= 0.0 || p1.abs() > 1e-6 {
         return None;
     }
     let t = -n / den;
-    let (s, co) = alpha.sin_cos();
     let x = [t, t * mu * co, t * mu * s];
     // multiplier: y = A x + c must be λ (μ² x_N, −x_T) with λ ≥ 0, i.e. y_N ≥ 0 (up to rounding)
     let y = matvec(a, 3, &x);
@@ -329,7 +327,7 @@ pub fn solve_contact(
     let mut cands: Vec<(f64, f64)> = (0..SAMPLES)
         .filter_map(|k| {
             let alpha = 2.0 * std::f64::consts::PI * k as f64 / SAMPLES as f64;
-            let (n, _, _, den) = psi(a, c, mu, alpha);
+            let (n, _, _, den, _) = psi(a, c, mu, alpha);
             (n < 0.0 && den > 0.0).then_some((n * n / den, alpha))
         })
         .collect();

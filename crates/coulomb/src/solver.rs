@@ -337,9 +337,10 @@ fn inner_solver(settings: &Settings) -> Box<dyn InnerSolver> {
 /// End game ([`Settings::newton_steps`]): once the error is ≤ [`Settings::newton_start`],
 /// semismooth Newton steps on the natural map of (3.9) for all contacts ([`crate::newton`])
 /// are tried from r; they are kept if they lower the error (one extra history record, s then
-/// restarts from F at the new r). A failed try is repeated only after the error has dropped a
-/// decade, when an inner solve hits its iteration cap or when the fixed point stagnates
-/// ([`STAGNATION`] iterations without a new lowest error), and Newton never takes more than
+/// restarts from F at the new r). A failed try is repeated only after the error has dropped
+/// below [`NEWTON_RETRY`] times its starting value, when an inner solve hits its iteration
+/// cap, or when the fixed point stagnates ([`STAGNATION`] iterations without a new lowest
+/// error); Newton never takes more than
 /// [`NEWTON_TIME_RATIO`] times the time of the outer iterations.
 pub fn solve_with_guess(
     problem: &Problem,
@@ -445,6 +446,10 @@ fn start_point(form: &Form<'_>, guess: Option<&Guess>) -> Result<Vec<f64>, Solve
 /// (a Newton step factors a sparse matrix of the size of W: cheap when the fixed point is
 /// slow, wasteful when it is fast).
 pub const NEWTON_TIME_RATIO: u32 = 3;
+
+/// A failed Newton end game is tried again once the error is below this fraction of the error
+/// it started from.
+const NEWTON_RETRY: f64 = 0.1;
 
 /// Outer iterations over which the error must halve for a first stage to be considered
 /// progressing (see [`Settings::fallback`]).
@@ -631,12 +636,11 @@ fn solve_stage(
                 s = fs_new;
                 update = OuterUpdate::new(settings.outer);
                 if !verdict.converged(settings.tol) {
-                    // try again only once the fixed point has gained a decade
-                    newton_gate = 0.1 * verdict.error;
+                    newton_gate = NEWTON_RETRY * verdict.error;
                 }
                 continue;
             }
-            newton_gate = 0.1 * verdict.error;
+            newton_gate = NEWTON_RETRY * verdict.error;
         }
         s = update.next(&s, &fs);
     };

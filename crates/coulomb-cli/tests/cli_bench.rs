@@ -1,41 +1,9 @@
 //! `coulomb bench`, run as the built binary.
 
+mod common;
+use common::*;
+
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn fclib_dir() -> Option<PathBuf> {
-    let dir = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/fclib"
-    ));
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        println!("skipped: ../shared absent");
-        None
-    }
-}
-
-fn coulomb(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_coulomb"))
-        .args(args)
-        .output()
-        .expect("the coulomb binary runs")
-}
-
-/// A fresh empty directory under the system temp dir.
-fn temp_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("coulomb-cli-bench-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
-}
-
-fn read_json(path: &Path) -> Value {
-    let text = std::fs::read_to_string(path).expect("the JSON file was written");
-    serde_json::from_str(&text).expect("valid JSON")
-}
 
 fn records(report: &Value) -> &Vec<Value> {
     report["records"].as_array().expect("records is an array")
@@ -44,7 +12,7 @@ fn records(report: &Value) -> &Vec<Value> {
 #[test]
 fn cli_bench_two_files_two_solvers_json_and_svg() {
     let Some(dir) = fclib_dir() else { return };
-    let out_dir = temp_dir("two");
+    let out_dir = temp_dir("bench-two");
     let json = out_dir.join("b.json");
     let svg = out_dir.join("b.svg");
     let a = dir.join("FrictionContact3D_1c.hdf5");
@@ -146,7 +114,7 @@ fn cli_bench_two_files_two_solvers_json_and_svg() {
 
 #[test]
 fn cli_bench_unreadable_file_is_a_failed_record_not_a_crash() {
-    let dir = temp_dir("bad");
+    let dir = temp_dir("bench-bad");
     std::fs::create_dir_all(dir.join("sub")).unwrap();
     std::fs::write(dir.join("sub/garbage.hdf5"), b"not an hdf5 file").unwrap();
     std::fs::write(dir.join("readme.txt"), b"ignored").unwrap();
@@ -179,7 +147,7 @@ fn cli_bench_unreadable_file_is_a_failed_record_not_a_crash() {
 
 #[test]
 fn cli_bench_bad_arguments_are_reported() {
-    let dir = temp_dir("args");
+    let dir = temp_dir("bench-args");
     let missing = dir.join("missing.hdf5");
     let cases: [(&[&str], &str); 4] = [
         (&["--solvers", "newton"], "unknown solver"),

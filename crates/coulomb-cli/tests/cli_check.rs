@@ -1,20 +1,13 @@
 //! `coulomb example …` writes the paper's examples; `coulomb check` reads them back and
 //! reports the criteria (JSON format of the README).
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
+use common::*;
 
-fn coulomb(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_coulomb"))
-        .args(args)
-        .output()
-        .expect("run coulomb")
-}
+use std::path::{Path, PathBuf};
 
 fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("coulomb-cli-check-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+    scratch_file("check", name)
 }
 
 fn check_json(path: &Path) -> serde_json::Value {

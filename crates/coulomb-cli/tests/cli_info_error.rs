@@ -1,39 +1,11 @@
 //! `coulomb info` and `coulomb error`, run as the built binary.
 
+mod common;
+use common::*;
+
 use coulomb::fclib::{self, FclibFile, StoredSolution};
 use coulomb::{CscMatrix, LocalProblem, Problem};
 use serde_json::Value;
-use std::path::PathBuf;
-use std::process::{Command, Output};
-
-fn fclib_dir() -> Option<PathBuf> {
-    let dir = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/fclib"
-    ));
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        println!("skipped: ../shared absent");
-        None
-    }
-}
-
-fn coulomb(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_coulomb"))
-        .args(args)
-        .output()
-        .expect("the coulomb binary runs")
-}
-
-fn json(out: &Output) -> Value {
-    assert!(
-        out.status.success(),
-        "stderr: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("valid JSON")
-}
 
 fn path(dir: &std::path::Path, name: &str) -> String {
     dir.join(format!("{name}.hdf5")).display().to_string()
@@ -45,7 +17,7 @@ fn cli_info_json_several_files_is_an_array() {
     let a = path(&dir, "Capsules-i125-1213");
     let b = path(&dir, "Box_Stacks-i0122-82-5");
     let c = path(&dir, "LMGC_100_PR_PerioBox-i00361-60-03000");
-    let v = json(&coulomb(&["info", "--json", &a, &b, &c]));
+    let v = stdout_json(&coulomb(&["info", "--json", &a, &b, &c]));
     let arr = v.as_array().expect("an array for several files");
     assert_eq!(arr.len(), 3);
 
@@ -76,7 +48,7 @@ fn cli_info_json_several_files_is_an_array() {
     assert_eq!(arr[2]["has_solution"], false);
 
     // One file: a single object.
-    let one = json(&coulomb(&["info", "--json", &c]));
+    let one = stdout_json(&coulomb(&["info", "--json", &c]));
     assert!(one.is_object());
     assert_eq!(one["contacts"], 60);
 
@@ -90,7 +62,7 @@ fn cli_info_json_several_files_is_an_array() {
 #[test]
 fn cli_error_reproduces_documented_values() {
     let Some(dir) = fclib_dir() else { return };
-    let v = json(&coulomb(&[
+    let v = stdout_json(&coulomb(&[
         "error",
         "--json",
         &path(&dir, "Capsules-i125-1213"),
@@ -101,7 +73,7 @@ fn cli_error_reproduces_documented_values() {
     assert_eq!(v["converged"], false);
     assert_eq!(v["kind"], "local");
 
-    let v = json(&coulomb(&[
+    let v = stdout_json(&coulomb(&[
         "error",
         "--json",
         &path(&dir, "Box_Stacks-i0122-82-5"),
@@ -180,7 +152,7 @@ fn cli_error_with_solution_file() {
     fclib::write(&sol_path, &with_sol).unwrap();
     let p = prob_path.display().to_string();
     let s = sol_path.display().to_string();
-    let v = json(&coulomb(&["error", "--json", &p, "--solution", &s]));
+    let v = stdout_json(&coulomb(&["error", "--json", &p, "--solution", &s]));
     assert_eq!(v["error"].as_f64().unwrap(), 0.0);
     assert_eq!(v["converged"], true);
     assert_eq!(v["solution_file"], s.as_str());

@@ -1,39 +1,11 @@
 //! `coulomb simulate` and `coulomb paper table1|fig8|fig9|scaling`, run as the built binary on
 //! tiny sizes (a few beads, a few steps) so that the suite stays fast.
 
+mod common;
+use common::*;
+
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn coulomb(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_coulomb"))
-        .args(args)
-        .output()
-        .expect("the coulomb binary runs")
-}
-
-/// A fresh empty directory under the system temp dir.
-fn temp_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("coulomb-cli-paper-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
-}
-
-fn read_json(path: &Path) -> Value {
-    let text = std::fs::read_to_string(path).expect("the JSON file was written");
-    serde_json::from_str(&text).expect("valid JSON")
-}
-
-fn ok(out: &Output) -> String {
-    assert!(
-        out.status.success(),
-        "failed: {}\n{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
+use std::path::Path;
 
 fn is_svg(path: &Path) {
     let text = std::fs::read_to_string(path).expect("the SVG was written");
@@ -42,7 +14,7 @@ fn is_svg(path: &Path) {
 
 #[test]
 fn table1_tiny_runs_both_solvers_and_writes_markdown_and_stats() {
-    let dir = temp_dir("table1");
+    let dir = temp_dir("paper-table1");
     let md = dir.join("table1.md");
     let out = coulomb(&[
         "paper",
@@ -82,7 +54,7 @@ fn table1_tiny_runs_both_solvers_and_writes_markdown_and_stats() {
 
 #[test]
 fn fig8_from_table1_output_writes_svg_and_csv() {
-    let dir = temp_dir("fig8");
+    let dir = temp_dir("paper-fig8");
     ok(&coulomb(&[
         "paper",
         "table1",
@@ -116,7 +88,7 @@ fn fig8_from_table1_output_writes_svg_and_csv() {
 
 #[test]
 fn fig9_tiny_stops_by_rule_6_1_or_the_cap() {
-    let dir = temp_dir("fig9");
+    let dir = temp_dir("paper-fig9");
     let svg = dir.join("fig9.svg");
     ok(&coulomb(&[
         "paper",
@@ -158,7 +130,7 @@ fn fig9_tiny_stops_by_rule_6_1_or_the_cap() {
 
 #[test]
 fn scaling_tiny_writes_json_svg_and_markdown() {
-    let dir = temp_dir("scaling");
+    let dir = temp_dir("paper-scaling");
     let svg = dir.join("scaling.svg");
     let md = dir.join("scaling.md");
     ok(&coulomb(&[

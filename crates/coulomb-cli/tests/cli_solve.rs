@@ -1,29 +1,13 @@
 //! `coulomb solve`: JSON fields, --output read back by `coulomb error`, and the existence
 //! verdict printed beside a failure.
 
-use std::path::PathBuf;
-use std::process::Command;
+mod common;
+use common::*;
 
-fn coulomb(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_coulomb"))
-        .args(args)
-        .output()
-        .expect("run coulomb")
-}
+use std::path::PathBuf;
 
 fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("coulomb-cli-solve-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
-
-fn json(out: &std::process::Output) -> serde_json::Value {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("valid JSON")
+    scratch_file("solve", name)
 }
 
 /// The crushed ball (Fig. 3) has no solution: the solve fails and says the model is at fault.
@@ -41,7 +25,7 @@ fn failed_solve_reports_that_no_solution_exists() {
         "{}",
         String::from_utf8_lossy(&made.stderr)
     );
-    let j = json(&coulomb(&[
+    let j = stdout_json(&coulomb(&[
         "solve",
         ball.to_str().unwrap(),
         "--json",
@@ -79,7 +63,7 @@ fn solve_output_is_a_solution_for_coulomb_error() {
         String::from_utf8_lossy(&made.stderr)
     );
     let out = tmp("painleve-solved.hdf5");
-    let j = json(&coulomb(&[
+    let j = stdout_json(&coulomb(&[
         "solve",
         p.to_str().unwrap(),
         "--json",
@@ -99,7 +83,7 @@ fn solve_output_is_a_solution_for_coulomb_error() {
     }
     assert_eq!(j["converged"], true);
     assert!(j.get("existence").is_none());
-    let e = json(&coulomb(&["error", out.to_str().unwrap(), "--json"]));
+    let e = stdout_json(&coulomb(&["error", out.to_str().unwrap(), "--json"]));
     assert!(e["error"].as_f64().unwrap() <= 1e-8);
     assert!(e["balance_residual"].as_f64().unwrap() <= 1e-8);
 }

@@ -1,0 +1,66 @@
+//! Helpers shared by the CLI tests: run the built `coulomb` binary, find ../shared/fclib, make
+//! scratch folders, read JSON.
+#![allow(dead_code)] // each test crate uses its own subset
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Runs the built binary with `args`.
+pub fn coulomb(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_coulomb"))
+        .args(args)
+        .output()
+        .expect("the coulomb binary runs")
+}
+
+/// ../shared/fclib when present (tests print "skipped" and return otherwise).
+pub fn fclib_dir() -> Option<PathBuf> {
+    let dir = PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/fclib"
+    ));
+    if dir.is_dir() {
+        Some(dir)
+    } else {
+        println!("skipped: ../shared absent");
+        None
+    }
+}
+
+/// A fresh empty directory under the system temp dir.
+pub fn temp_dir(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("coulomb-cli-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+/// `name` inside a per-process scratch directory for `tag` (created if needed, kept).
+pub fn scratch_file(tag: &str, name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("coulomb-cli-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    dir.join(name)
+}
+
+/// The JSON document in the file at `path`.
+pub fn read_json(path: &Path) -> Value {
+    let text = std::fs::read_to_string(path).expect("the JSON file was written");
+    serde_json::from_str(&text).expect("valid JSON")
+}
+
+/// Asserts that the command succeeded and returns its stdout.
+pub fn ok(out: &Output) -> String {
+    assert!(
+        out.status.success(),
+        "failed: {}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// Asserts that the command succeeded and parses its stdout as JSON.
+pub fn stdout_json(out: &Output) -> Value {
+    serde_json::from_str(&ok(out)).expect("valid JSON on stdout")
+}

@@ -102,9 +102,10 @@ pub struct Settings {
     /// the inner tolerance is `inner_tol_factor` × (error of the previous outer iterate),
     /// kept between `tol`/5 and 1e-2
     pub inner_tol_factor: f64,
-    /// end game: once the error is ≤ [`Settings::newton_start`], up to this many semismooth
-    /// Newton steps on the natural map of the whole law ([`crate::newton::polish`]) are tried
-    /// after an outer iteration, and kept if they lower the error; 0 turns it off
+    /// end game: once the error is ≤ [`Settings::newton_start`], semismooth Newton steps on
+    /// the natural map of the whole law ([`crate::newton::polish`]) are tried after an outer
+    /// iteration and kept if they lower the error; this many steps at most per stage (see
+    /// [`solve_with_guess`]); 0 turns it off
     pub newton_steps: usize,
     /// error below which the Newton end game is tried
     pub newton_start: f64,
@@ -340,8 +341,8 @@ fn inner_solver(settings: &Settings) -> Box<dyn InnerSolver> {
 /// restarts from F at the new r). A failed try is repeated only after the error has dropped
 /// below [`NEWTON_RETRY`] times its starting value, when an inner solve hits its iteration
 /// cap, or when the fixed point stagnates ([`STAGNATION`] iterations without a new lowest
-/// error); Newton never takes more than
-/// [`NEWTON_TIME_RATIO`] times the time of the outer iterations.
+/// error); a try takes at most [`NEWTON_TRY_STEPS`] steps and all tries of a stage at most
+/// [`Settings::newton_steps`], so that the iteration is deterministic.
 pub fn solve_with_guess(
     problem: &Problem,
     settings: &Settings,
@@ -442,10 +443,9 @@ fn start_point(form: &Form<'_>, guess: Option<&Guess>) -> Result<Vec<f64>, Solve
     Ok(r)
 }
 
-/// The Newton end game may take at most this many times the time spent in outer iterations
-/// (a Newton step factors a sparse matrix of the size of W: cheap when the fixed point is
-/// slow, wasteful when it is fast).
-pub const NEWTON_TIME_RATIO: u32 = 3;
+/// Newton steps one end-game try may take (all tries of a stage share
+/// [`Settings::newton_steps`]).
+const NEWTON_TRY_STEPS: usize = 15;
 
 /// A failed Newton end game is tried again once the error is below this fraction of the error
 /// it started from.
@@ -487,8 +487,7 @@ fn solve_stage(
     let mut last_error = verdict.error;
     let mut balance_stalls = 0;
     let mut newton_gate = f64::INFINITY;
-    let mut newton_time = Duration::ZERO;
-    let stage_start = Instant::now();
+    let mut newton_used = 0;
     let q_norm = law::norm(&local.q);
     let status = loop {
         if verdict.converged(settings.tol) {
@@ -602,23 +601,19 @@ fn solve_stage(
                 || report.status == InnerStatus::MaxIterations
                 || stagnating(&history))
             && !verdict.converged(settings.tol)
-            && newton_time < NEWTON_TIME_RATIO * (stage_start.elapsed() - newton_time)
+            && newton_used < settings.newton_steps
         {
-            // Newton end game from r, kept only if the error of docs/error.md drops; it may
-            // use at most NEWTON_TIME_RATIO times the time of the outer iterations so far
-            let now = Instant::now();
-            let budget = (NEWTON_TIME_RATIO * (stage_start.elapsed() - newton_time))
-                .saturating_sub(newton_time);
-            let newton_deadline = Some(deadline.map_or(now + budget, |t| t.min(now + budget)));
+            // Newton end game from r, kept only if the error of docs/error.md drops; all the
+            // tries of a stage share `newton_steps` steps
             let mut trial = r.clone();
             let nr = newton::polish(
                 local,
                 &mut trial,
                 0.5 * settings.tol * q_norm,
-                settings.newton_steps,
-                newton_deadline,
+                NEWTON_TRY_STEPS.min(settings.newton_steps - newton_used),
+                deadline,
             );
-            newton_time += now.elapsed();
+            newton_used += nr.steps.max(1);
             let candidate = Verdict::of(form, &trial);
             inner_total += nr.steps;
             if nr.steps > 0 && candidate.error < verdict.error {
@@ -664,7 +659,11 @@ fn solve_stage(
 /// stagnating (the Newton end game is then tried again whatever its gate).
 const STAGNATION: usize = 3;
 
-/// Whether the last [`STAGNATION`] outer iterations all failed to lower the best error.
+/// A new lowest error counts as progress only below this fraction of the previous lowest.
+const STAGNATION_GAIN: f64 = 0.5;
+
+/// Whether the last [`STAGNATION`] outer iterations all failed to lower the best error to
+/// [`STAGNATION_GAIN`] times its previous value.
 fn stagnating(history: &[OuterRecord]) -> bool {
     let n = history.len();
     if n <= STAGNATION {
@@ -676,7 +675,7 @@ fn stagnating(history: &[OuterRecord]) -> bool {
         .fold(f64::INFINITY, f64::min);
     history[n - STAGNATION..]
         .iter()
-        .all(|h| h.error >= best_before)
+        .all(|h| h.error > STAGNATION_GAIN * best_before)
 }
 
 /// The outer status an inner failure forces (None: keep iterating, warm-started).

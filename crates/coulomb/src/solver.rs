@@ -366,7 +366,7 @@ pub fn solve_with_guess(
             newton_steps: 0,
             ..settings.clone()
         };
-        let warm = solve_stage(&form, &warm_settings, guess, start, deadline, false)?;
+        let warm = solve_stage(&form, &warm_settings, guess, start, deadline, false, true)?;
         if warm.converged() || deadline.is_some_and(|t| Instant::now() >= t) {
             return Ok(merge(Vec::new(), warm, start));
         }
@@ -376,10 +376,10 @@ pub fn solve_with_guess(
     // problems Gauss–Seidel's r leads the fixed point of the main method astray
     let main_guess = guess;
     let Some((inner, outer)) = settings.fallback else {
-        let main = solve_stage(&form, settings, main_guess, start, deadline, false)?;
+        let main = solve_stage(&form, settings, main_guess, start, deadline, false, false)?;
         return Ok(merge(stages, main, start));
     };
-    let first = solve_stage(&form, settings, main_guess, start, deadline, true)?;
+    let first = solve_stage(&form, settings, main_guess, start, deadline, true, false)?;
     let handover = matches!(
         first.status,
         Status::MaxIterations | Status::Stalled | Status::InnerFailure | Status::NumericalError
@@ -402,7 +402,7 @@ pub fn solve_with_guess(
     } else {
         main_guess
     };
-    let second = solve_stage(&form, &second_settings, warm, start, deadline, false)?;
+    let second = solve_stage(&form, &second_settings, warm, start, deadline, false, false)?;
     stages.push(first);
     Ok(merge(stages, second, start))
 }
@@ -456,7 +456,8 @@ const NEWTON_RETRY: f64 = 0.1;
 pub const STALL_WINDOW: usize = 25;
 
 /// One run of the outer loop with `settings.inner` / `settings.outer`; `stop_on_stall` ends it
-/// with [`Status::Stalled`] when the error no longer decreases.
+/// with [`Status::Stalled`] when the error no longer decreases; `warmup` lets the fused
+/// iteration give up as soon as its rate says the tolerance is out of reach.
 fn solve_stage(
     form: &Form<'_>,
     settings: &Settings,
@@ -464,6 +465,7 @@ fn solve_stage(
     start: Instant,
     deadline: Option<Instant>,
     stop_on_stall: bool,
+    warmup: bool,
 ) -> Result<Solution, SolveError> {
     let local = form.local();
     let (dim, mu) = (local.dim, &local.mu[..]);
@@ -520,7 +522,16 @@ fn solve_stage(
                     tol: 0.9 * settings.tol,
                     ..limits
                 };
-                pgs::solve_fused(&mut pgs_fused, dim, &local.w, &local.q, mu, &limits, &mut r)
+                pgs::solve_fused(
+                    &mut pgs_fused,
+                    dim,
+                    &local.w,
+                    &local.q,
+                    mu,
+                    &limits,
+                    warmup,
+                    &mut r,
+                )
             }
             (Form::Global(g, _), InnerKind::Ipm, _) => {
                 let mut shift = Vec::with_capacity(m);

@@ -440,6 +440,9 @@ pub(crate) fn dual_residual(dim: usize, mu: &[f64], r: &[f64], u: &[f64], b_norm
     }
 }
 
+/// Sweeps over which [`solve_fused`] measures its rate when asked to give up early.
+const GIVE_UP_WINDOW: usize = 10;
+
 /// Sweeps between exact recomputations of u = W r + b (against drift).
 const REFRESH: usize = 16;
 
@@ -509,7 +512,9 @@ impl InnerSolver for PgsSolver {
 /// The fused iteration: Gauss–Seidel directly on Coulomb's law in De Saxcé form (local
 /// problem u = W r + q), each contact solved as the one-contact SOC-QP with s = ‖u_T‖ taken
 /// from the current u. Stops when the error of docs/error.md, computed from the maintained
-/// u (recomputed exactly every few sweeps and before stopping), is ≤ `limits.tol`.
+/// u (recomputed exactly every few sweeps and before stopping), is ≤ `limits.tol`. With
+/// `give_up`, it also stops (status `MaxIterations`) as soon as the rate of the last
+/// [`GIVE_UP_WINDOW`] sweeps, extrapolated over the sweeps left, cannot reach `limits.tol`.
 /// Returns the report; `r` holds the warm start on entry and the result on exit.
 pub fn solve_fused(
     solver: &mut PgsSolver,
@@ -518,6 +523,7 @@ pub fn solve_fused(
     q: &[f64],
     mu: &[f64],
     limits: &InnerLimits,
+    give_up: bool,
     r: &mut [f64],
 ) -> InnerReport {
     solver.blocks_for(dim, w);
@@ -529,6 +535,7 @@ pub fn solve_fused(
     u.extend_from_slice(q);
     w.gemv_acc(1.0, r, u);
     let mut residual = crate::law::error_measure(dim, mu, r, u, q_norm).error;
+    let mut window_start = residual;
     let mut iterations = 0;
     let mut exact = true;
     let status = loop {
@@ -560,6 +567,17 @@ pub fn solve_fused(
             exact = true;
         }
         residual = crate::law::error_measure(dim, mu, r, u, q_norm).error;
+        if give_up && iterations % GIVE_UP_WINDOW == 0 {
+            // the rate over the last window, extrapolated over the sweeps left
+            let rate = residual / window_start;
+            let windows_left = (limits.max_iterations - iterations.min(limits.max_iterations))
+                as f64
+                / GIVE_UP_WINDOW as f64;
+            if rate >= 1.0 || rate.powf(windows_left) * residual > limits.tol {
+                break InnerStatus::MaxIterations;
+            }
+            window_start = residual;
+        }
     };
     InnerReport {
         status,

@@ -365,7 +365,8 @@ fn de_saxce_map(
 /// iterate): at most `max_steps` steps, each a direction from (J + λ I) δ = −G followed by a
 /// backtracking line search that accepts the first t ∈ {1, ½, ¼, …} (≥ 2⁻¹⁰) with
 /// ‖G(r + t δ)‖ ≤ (1 − 10⁻⁴ t) ‖G(r)‖. Stops once ‖G‖ ≤ `target`, when no step decreases ‖G‖,
-/// after [`SLOW_STEPS`] slow steps in a row, or at `deadline`.
+/// after [`SLOW_STEPS`] slow steps in a row, or at `deadline`. A problem whose sizes disagree
+/// (d, μ, q, W, r) takes no step (`NoDescent`, residual NaN).
 pub fn polish(
     p: &LocalProblem,
     r: &mut [f64],
@@ -374,6 +375,20 @@ pub fn polish(
     deadline: Option<Instant>,
 ) -> NewtonReport {
     let (d, m) = (p.dim, r.len());
+    let consistent = (d == 2 || d == 3)
+        && m == p.mu.len() * d
+        && p.q.len() == m
+        && p.w.nrows == m
+        && p.w.ncols == m
+        && p.w.check().is_ok();
+    if !consistent {
+        // inconsistent sizes (a hand-built problem that skipped validation): no step is taken
+        return NewtonReport {
+            status: NewtonStatus::NoDescent,
+            steps: 0,
+            residual: f64::NAN,
+        };
+    }
     let mut g = vec![0.0; m];
     let mut blocks = vec![0.0; p.mu.len() * d * d];
     let mut dblocks = blocks.clone();
@@ -556,6 +571,19 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn inconsistent_sizes_take_no_step_instead_of_panicking() {
+        let mut p = problem(2, 1, 0.5);
+        p.mu.push(0.3); // three friction coefficients for two contacts
+        let mut r = vec![0.0; 6];
+        let out = polish(&p, &mut r, 0.0, 5, None);
+        assert_eq!((out.status, out.steps), (NewtonStatus::NoDescent, 0));
+        assert!(r.iter().all(|&x| x == 0.0));
+        let p = problem(2, 1, 0.5);
+        let mut short = vec![0.0; 5];
+        assert_eq!(polish(&p, &mut short, 0.0, 5, None).steps, 0);
     }
 
     #[test]

@@ -374,12 +374,11 @@ pub fn solve_with_guess(
     }
     // the main method starts from the caller's point, not from the warm-up's r: on hard
     // problems Gauss–Seidel's r leads the fixed point of the main method astray
-    let main_guess = guess;
     let Some((inner, outer)) = settings.fallback else {
-        let main = solve_stage(&form, settings, main_guess, start, deadline, false, false)?;
+        let main = solve_stage(&form, settings, guess, start, deadline, false, false)?;
         return Ok(merge(stages, main, start));
     };
-    let first = solve_stage(&form, settings, main_guess, start, deadline, true, false)?;
+    let first = solve_stage(&form, settings, guess, start, deadline, true, false)?;
     let handover = matches!(
         first.status,
         Status::MaxIterations | Status::Stalled | Status::InnerFailure | Status::NumericalError
@@ -400,7 +399,7 @@ pub fn solve_with_guess(
     let warm = if first.r.iter().all(|x| x.is_finite()) {
         Some(&warm)
     } else {
-        main_guess
+        guess
     };
     let second = solve_stage(&form, &second_settings, warm, start, deadline, false, false)?;
     stages.push(first);

@@ -36,8 +36,8 @@ pub enum OuterKind {
     FixedPoint,
     /// safeguarded Anderson mixing on s
     Anderson,
-    /// no separate outer loop: Gauss–Seidel directly on Coulomb's law in De Saxcé form, sⁱ
-    /// updated from the current uⁱ each time contact i is solved (needs `InnerKind::Pgs`).
+    /// no separate outer loop: Gauss–Seidel directly on Coulomb's law, contact i given a
+    /// solution of its own law (2.9) with the others frozen (needs `InnerKind::Pgs`).
     /// Convergence is decided by the error measure like every other choice.
     Fused,
 }
@@ -333,7 +333,7 @@ fn inner_solver(settings: &Settings) -> Box<dyn InnerSolver> {
 /// ũ = W r + b and F(s)ⁱ = ‖ũ_Tⁱ‖ (3.19), compute the error of docs/error.md from r, and stop
 /// when it is ≤ tol; otherwise s ← F(s) (or Anderson mixing). With all μ = 0 the inner
 /// problem is the whole problem (§5.1) and s plays no role. With [`OuterKind::Fused`] each
-/// "outer iteration" is one batch of Gauss–Seidel sweeps on the De Saxcé form.
+/// "outer iteration" is one batch of Gauss–Seidel sweeps on Coulomb's law.
 ///
 /// End game ([`Settings::newton_steps`]): once the error is ≤ [`Settings::newton_start`],
 /// semismooth Newton steps on the natural map of (3.9) for all contacts ([`crate::newton`])

@@ -67,6 +67,18 @@ pub struct InnerLimits {
     pub deadline: Option<Instant>,
 }
 
+impl InnerLimits {
+    /// Whether the deadline has passed, before iteration `iteration` of a loop whose
+    /// iterations each touch about `work` nonzeros: the clock is read only every
+    /// ⌈20 000 / work⌉ iterations (at most 64), so that on the smallest problems reading it
+    /// does not cost more than the iteration, and a deadline is overrun by at most ~20 000
+    /// nonzeros' worth of work.
+    pub fn past_deadline(&self, iteration: usize, work: usize) -> bool {
+        let every = (20_000 / work.max(1)).clamp(1, 64);
+        iteration % every == 0 && self.deadline.is_some_and(|t| Instant::now() >= t)
+    }
+}
+
 /// A solver of the dual inner problem (4.7). `r` holds the warm start on entry (zeros for a
 /// cold start) and the solution on exit; solvers that cannot use a warm start ignore it.
 pub trait InnerSolver {

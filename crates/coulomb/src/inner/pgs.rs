@@ -420,7 +420,7 @@ fn slide_newton(a: &[f64; 9], c: &[f64; 3], mu: f64, tau0: (f64, f64)) -> Option
     for _ in 0..30 {
         let (g, dg, rn, beta) = slip_equation(a, c, mu, tau);
         // away from a root with β > 0 the derivative g' ≈ β is positive
-        if !(dg > 0.0) || !(rn > 0.0) {
+        if dg.is_nan() || rn.is_nan() || dg <= 0.0 || rn <= 0.0 {
             return None;
         }
         let step = (-g / dg).clamp(-0.5, 0.5);

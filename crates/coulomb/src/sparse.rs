@@ -462,6 +462,96 @@ fn check_pointers(ptr: &[usize], n: usize, avail: usize) -> Result<(), SparseErr
     Ok(())
 }
 
+/// A square matrix stored by dense d × d blocks in compressed block rows (d ∈ {2, 3}: one
+/// block per pair of contacts). W = H M⁻¹ Hᵀ is made of such blocks, and a product touching a
+/// block at a time (one index, d² multiply–adds on contiguous values, d outputs kept in
+/// registers) runs several times faster than the entry-wise CSC product. Neither faer nor
+/// sprs has block sparse storage, hence this type.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BlockCsr {
+    /// block size d
+    pub dim: usize,
+    /// number of block rows (= block columns)
+    pub blocks: usize,
+    /// `blocks + 1` pointers into `block_col` and the block values
+    pub row_ptr: Vec<usize>,
+    /// block column of each stored block, increasing within a block row
+    pub block_col: Vec<usize>,
+    /// d² values per stored block, row-major
+    pub values: Vec<f64>,
+}
+
+impl BlockCsr {
+    /// The block form of a square CSC matrix whose size is a multiple of d (d ∈ {2, 3});
+    /// None otherwise. Entries absent from a stored block are zeros.
+    pub fn from_csc(a: &CscMatrix, dim: usize) -> Option<Self> {
+        if !(2..=3).contains(&dim) || a.nrows != a.ncols || a.ncols % dim != 0 {
+            return None;
+        }
+        let blocks = a.ncols / dim;
+        // (block row, block col, position in block, value), sorted by block
+        let mut entries: Vec<(usize, usize, usize, f64)> = a
+            .triplets()
+            .map(|(i, j, v)| (i / dim, j / dim, (i % dim) * dim + j % dim, v))
+            .collect();
+        entries.sort_unstable_by_key(|e| (e.0, e.1));
+        let mut row_ptr = vec![0; blocks + 1];
+        let mut block_col = Vec::new();
+        let mut values = Vec::new();
+        let mut last = None;
+        for (bi, bj, pos, v) in entries {
+            if last != Some((bi, bj)) {
+                block_col.push(bj);
+                values.extend(std::iter::repeat_n(0.0, dim * dim));
+                row_ptr[bi + 1] += 1;
+                last = Some((bi, bj));
+            }
+            let base = values.len() - dim * dim;
+            values[base + pos] += v;
+        }
+        for k in 0..blocks {
+            row_ptr[k + 1] += row_ptr[k];
+        }
+        Some(Self {
+            dim,
+            blocks,
+            row_ptr,
+            block_col,
+            values,
+        })
+    }
+
+    /// Number of stored blocks.
+    pub fn stored_blocks(&self) -> usize {
+        self.block_col.len()
+    }
+
+    /// y ← A x.
+    pub fn gemv(&self, x: &[f64], y: &mut [f64]) {
+        match self.dim {
+            2 => self.gemv_d::<2>(x, y),
+            _ => self.gemv_d::<3>(x, y),
+        }
+    }
+
+    fn gemv_d<const D: usize>(&self, x: &[f64], y: &mut [f64]) {
+        for (bi, out) in y.chunks_exact_mut(D).enumerate().take(self.blocks) {
+            let mut acc = [0.0; D];
+            let range = self.row_ptr[bi]..self.row_ptr[bi + 1];
+            let vals = &self.values[range.start * D * D..range.end * D * D];
+            for (&bj, blk) in self.block_col[range].iter().zip(vals.chunks_exact(D * D)) {
+                let xj = &x[bj * D..bj * D + D];
+                for a in 0..D {
+                    for b in 0..D {
+                        acc[a] += blk[a * D + b] * xj[b];
+                    }
+                }
+            }
+            out.copy_from_slice(&acc);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -500,5 +590,32 @@ mod tests {
             CscMatrix::from_triplets(2, 2, &[5], &[0], &[1.0]),
             Err(SparseError::IndexOutOfRange { .. })
         ));
+    }
+
+    #[test]
+    fn block_product_equals_entrywise_product() {
+        for dim in [2usize, 3] {
+            let n = 4 * dim;
+            let mut dense = vec![0.0; n * n];
+            for (k, v) in dense.iter_mut().enumerate() {
+                // a pattern with empty blocks, full blocks and partly filled ones
+                if (k * 7) % 5 != 0 && (k / n + k % n) % 3 != 1 {
+                    *v = ((k * 37) % 11) as f64 - 5.0;
+                }
+            }
+            let a = CscMatrix::from_dense(n, n, &dense);
+            let b = BlockCsr::from_csc(&a, dim).unwrap();
+            let x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).sin()).collect();
+            let mut y = vec![f64::NAN; n];
+            b.gemv(&x, &mut y);
+            let expected = a.mul_vec(&x);
+            for (p, q) in y.iter().zip(&expected) {
+                assert!(
+                    (p - q).abs() <= 1e-12 * (1.0 + q.abs()),
+                    "{y:?} vs {expected:?}"
+                );
+            }
+        }
+        assert!(BlockCsr::from_csc(&CscMatrix::zeros(5, 5), 3).is_none());
     }
 }

@@ -18,14 +18,17 @@
 //! natural-map residual ‖r − P_L(r − ∇I(r))‖ / max(‖b‖, ‖r‖, ‖∇I(r)‖) ≤ tol.
 //!
 //! The iteration is generic over [`LinearOperator`], implemented for the assembled W
-//! ([`CscMatrix`]) and for the matrix-free Delassus operator x ↦ Hᵀ M⁻¹ H x
+//! ([`CscMatrix`], and [`BlockCsr`] — W by d × d blocks, which the solver uses whenever the
+//! blocks are mostly nonzero) and for the matrix-free Delassus operator x ↦ Hᵀ M⁻¹ H x
 //! ([`DelassusOperator`]).
 
-use super::{pgs::dual_residual, InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus};
+use super::{
+    pgs::dual_residual_shifted, InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus,
+};
 use crate::cone;
 use crate::delassus::DelassusOperator;
 use crate::law::norm;
-use crate::sparse::CscMatrix;
+use crate::sparse::{BlockCsr, CscMatrix};
 use std::time::Instant;
 
 /// A symmetric positive semi-definite operator x ↦ W x.
@@ -43,6 +46,15 @@ impl LinearOperator for CscMatrix {
     fn apply(&self, x: &[f64], y: &mut [f64]) {
         y.iter_mut().for_each(|v| *v = 0.0);
         self.gemv_acc(1.0, x, y);
+    }
+}
+
+impl LinearOperator for BlockCsr {
+    fn size(&self) -> usize {
+        self.blocks * self.dim
+    }
+    fn apply(&self, x: &[f64], y: &mut [f64]) {
+        self.gemv(x, y);
     }
 }
 
@@ -94,8 +106,27 @@ pub struct ApgdSolver {
     pub barzilai_borwein: bool,
     /// power iterations for the initial Lipschitz estimate
     pub power_iterations: usize,
-    /// cached λ_max(W) estimate, keyed by the matrix identity
-    cache: Option<((usize, usize, usize), f64)>,
+    /// for the last W seen (keyed by its identity and a checksum of its values): the
+    /// λ_max(W) estimate and W by d × d blocks (None where blocks would be mostly padding)
+    cache: Option<(MatrixKey, f64, Option<BlockCsr>)>,
+}
+
+/// Identity of a matrix: address, size, nnz and a checksum of its values.
+type MatrixKey = (usize, usize, usize, u64);
+
+fn key_of(w: &CscMatrix) -> MatrixKey {
+    let checksum = w
+        .values
+        .iter()
+        .enumerate()
+        .map(|(k, v)| v * (1.0 + k as f64 * 1e-3))
+        .sum::<f64>();
+    (
+        w.values.as_ptr() as usize,
+        w.ncols,
+        w.nnz(),
+        checksum.to_bits(),
+    )
 }
 
 impl Default for ApgdSolver {
@@ -127,21 +158,27 @@ impl InnerSolver for ApgdSolver {
         r: &mut [f64],
     ) -> InnerReport {
         let w = problem.w;
-        let key = (w.values.as_ptr() as usize, w.nnz(), w.ncols);
-        let lip = match self.cache {
-            Some((k, l)) if k == key => l,
-            _ => {
-                let l = lipschitz_estimate(w, self.power_iterations);
-                self.cache = Some((key, l));
-                l
-            }
+        let key = key_of(w);
+        if self.cache.as_ref().is_none_or(|(k, _, _)| *k != key) {
+            let blocks =
+                BlockCsr::from_csc(w, problem.dim).filter(|b| b.values.len() <= 2 * w.nnz().max(1));
+            let lip = match &blocks {
+                Some(b) => lipschitz_estimate(b, self.power_iterations),
+                None => lipschitz_estimate(w, self.power_iterations),
+            };
+            self.cache = Some((key, lip, blocks));
+        }
+        let (_, lip, blocks) = self.cache.as_ref().expect("set just above");
+        let op: &dyn LinearOperator = match blocks {
+            Some(b) => b,
+            None => w,
         };
         solve_operator(
-            w,
+            op,
             problem.dim,
             problem.b,
             problem.mu,
-            lip,
+            *lip,
             self.barzilai_borwein,
             limits,
             r,
@@ -183,13 +220,8 @@ pub fn solve_operator<A: LinearOperator + ?Sized>(
     let mut t = 1.0f64;
     let mut fx = objective(&x, &wx, b);
     let mut bb_step: Option<f64> = None;
-    let residual_of = |x: &[f64], wx: &[f64], buf: &mut Vec<f64>| {
-        buf.clear();
-        buf.extend(wx.iter().zip(b).map(|(a, c)| a + c));
-        dual_residual(dim, mu, x, buf, b_norm)
-    };
-    let mut scratch = Vec::with_capacity(n);
-    let mut residual = residual_of(&x, &wx, &mut scratch);
+    let residual_of = |x: &[f64], wx: &[f64]| dual_residual_shifted(dim, mu, x, wx, b, b_norm);
+    let mut residual = residual_of(&x, &wx);
     let mut iterations = 0;
     let status = loop {
         if !residual.is_finite() {
@@ -270,7 +302,7 @@ pub fn solve_operator<A: LinearOperator + ?Sized>(
         t = t_next;
         fx = fxn;
         l = (0.97 * l).max(l_floor);
-        residual = residual_of(&x, &wx, &mut scratch);
+        residual = residual_of(&x, &wx);
     };
     r.copy_from_slice(&x);
     InnerReport {

@@ -573,16 +573,45 @@ pub(crate) fn sweep(
 
 /// The natural-map residual of (4.7), ‖r − P_L(r − u)‖ / max(‖b‖, ‖r‖, ‖u‖) with u = W r + b.
 pub(crate) fn dual_residual(dim: usize, mu: &[f64], r: &[f64], u: &[f64], b_norm: f64) -> f64 {
-    let mut sum = 0.0;
+    dual_residual_parts(dim, mu, r, u, None, b_norm)
+}
+
+/// [`dual_residual`] with u = `wr` + `b` formed on the fly (one pass over r, W r and b).
+pub(crate) fn dual_residual_shifted(
+    dim: usize,
+    mu: &[f64],
+    r: &[f64],
+    wr: &[f64],
+    b: &[f64],
+    b_norm: f64,
+) -> f64 {
+    dual_residual_parts(dim, mu, r, wr, Some(b), b_norm)
+}
+
+#[inline]
+fn dual_residual_parts(
+    dim: usize,
+    mu: &[f64],
+    r: &[f64],
+    wr: &[f64],
+    b: Option<&[f64]>,
+    b_norm: f64,
+) -> f64 {
+    let (mut sum, mut r_sq, mut u_sq) = (0.0, 0.0, 0.0);
     let mut x = [0.0; 3];
-    for ((ri, ui), &m) in r.chunks_exact(dim).zip(u.chunks_exact(dim)).zip(mu) {
+    for (i, &m) in mu.iter().enumerate() {
+        let j0 = i * dim;
         for k in 0..dim {
-            x[k] = ri[k] - ui[k];
+            let rk = r[j0 + k];
+            let uk = wr[j0 + k] + b.map_or(0.0, |b| b[j0 + k]);
+            x[k] = rk - uk;
+            r_sq += rk * rk;
+            u_sq += uk * uk;
         }
         cone::project(m, &mut x[..dim]);
-        sum += (0..dim).map(|k| (ri[k] - x[k]).powi(2)).sum::<f64>();
+        sum += (0..dim).map(|k| (r[j0 + k] - x[k]).powi(2)).sum::<f64>();
     }
-    let scale = b_norm.max(crate::law::norm(r)).max(crate::law::norm(u));
+    let scale = b_norm.max(r_sq.sqrt()).max(u_sq.sqrt());
     if scale > f64::EPSILON {
         sum.sqrt() / scale
     } else {

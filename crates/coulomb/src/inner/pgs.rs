@@ -283,17 +283,29 @@ fn boundary_newton(a: &[f64; 9], c: &[f64; 3], mu: f64, e0: (f64, f64)) -> Optio
     Some(x)
 }
 
-/// Exact minimizer of ½ xᵀ A x + cᵀ x over K_μ for one contact (d ∈ {2, 3}); A symmetric
-/// positive definite with inverse `ainv`. `warm` (the previous value) only seeds the angle
-/// search of the boundary case. Returns x.
-pub fn solve_contact(
-    a: &[f64; 9],
-    ainv: &[f64; 9],
-    d: usize,
-    mu: f64,
-    c: &[f64; 3],
-    warm: &[f64; 3],
-) -> [f64; 3] {
+/// One contact with the others frozen: u = A r + c, r ∈ K_μ (d ∈ {2, 3}; A symmetric positive
+/// definite, row-major d × d, with inverse `ainv`).
+#[derive(Debug, Clone, Copy)]
+pub struct OneContact<'a> {
+    /// the diagonal block A = Wᵢᵢ
+    pub a: &'a [f64; 9],
+    /// A⁻¹
+    pub ainv: &'a [f64; 9],
+    /// d
+    pub d: usize,
+    /// μ
+    pub mu: f64,
+    /// c = uᵢ − Wᵢᵢ rᵢ (the other contacts' part of u)
+    pub c: [f64; 3],
+}
+
+/// Exact minimizer of ½ xᵀ A x + cᵀ x over K_μ for one contact. `warm` (the previous value)
+/// only seeds the angle search of the boundary case. Returns x.
+pub fn solve_contact(contact: &OneContact<'_>, warm: &[f64; 3]) -> [f64; 3] {
+    let OneContact {
+        a, ainv, d, mu, c, ..
+    } = *contact;
+    let c = &c;
     let mut x0 = matvec(ainv, d, c);
     x0.iter_mut().for_each(|v| *v = -*v);
     // interior
@@ -436,22 +448,21 @@ fn slide_newton(a: &[f64; 9], c: &[f64; 3], mu: f64, tau0: (f64, f64)) -> Option
     None
 }
 
-/// A solution r of Coulomb's law (2.9) for one contact with u = A r + c (d ∈ {2, 3}, A
-/// symmetric positive definite with inverse `ainv`), by cases: take-off r = 0 when c_N ≥ 0;
+/// A solution r of Coulomb's law (2.9) for one contact with u = A r + c, by cases: take-off r = 0 when c_N ≥ 0;
 /// stick r = −A⁻¹c when it lies in K_μ; slide r = r_N (1, −μτ) with u_N = 0 and u_T = βτ,
 /// β ≥ 0 — in d = 2 both directions τ = ±1 are tried, in d = 3 the slip equation is solved by
 /// Newton's method from the directions of −r_T (`warm`, the previous value) and of u_T
 /// (`u_seed`). None when no case applies (μ infinite, or the slip iteration fails); the
 /// caller then takes a step of the convex problem with s frozen instead.
 pub fn solve_contact_law(
-    a: &[f64; 9],
-    ainv: &[f64; 9],
-    d: usize,
-    mu: f64,
-    c: &[f64; 3],
+    contact: &OneContact<'_>,
     warm: &[f64; 3],
     u_seed: &[f64; 3],
 ) -> Option<[f64; 3]> {
+    let OneContact {
+        a, ainv, d, mu, c, ..
+    } = *contact;
+    let c = &c;
     if c[0] >= 0.0 {
         return Some([0.0; 3]);
     }
@@ -542,17 +553,22 @@ pub(crate) fn sweep(
         for k in 0..d {
             c[k] = u[j0 + k] - ar[k];
         }
+        let mut contact = OneContact {
+            a,
+            ainv: &blocks.inverses[i],
+            d,
+            mu: m,
+            c,
+        };
         let new = if fused {
             let mut u_seed = [0.0; 3];
             u_seed[..d].copy_from_slice(&u[j0..j0 + d]);
-            solve_contact_law(a, &blocks.inverses[i], d, m, &c, &old, &u_seed).unwrap_or_else(
-                || {
-                    c[0] += m * cone::tangent_norm(&u_seed[..d]);
-                    solve_contact(a, &blocks.inverses[i], d, m, &c, &old)
-                },
-            )
+            solve_contact_law(&contact, &old, &u_seed).unwrap_or_else(|| {
+                contact.c[0] += m * cone::tangent_norm(&u_seed[..d]);
+                solve_contact(&contact, &old)
+            })
         } else {
-            solve_contact(a, &blocks.inverses[i], d, m, &c, &old)
+            solve_contact(&contact, &old)
         };
         let mut change = 0.0;
         for k in 0..d {
@@ -785,24 +801,29 @@ mod tests {
         (0..d).map(|k| (x[k] - z[k]).powi(2)).sum::<f64>().sqrt()
     }
 
+    /// A random d × d block A = G Gᵀ + 0.05 I (row-major) and its inverse.
+    fn random_block(rng: &mut impl rand::Rng, d: usize) -> ([f64; 9], [f64; 9]) {
+        let mut g = [0.0; 9];
+        for v in g.iter_mut().take(d * d) {
+            *v = rng.random_range(-1.0..1.0);
+        }
+        let mut a = [0.0; 9];
+        for i in 0..d {
+            for j in 0..d {
+                a[i * d + j] = (0..d).map(|k| g[i * d + k] * g[j * d + k]).sum::<f64>()
+                    + if i == j { 0.05 } else { 0.0 };
+            }
+        }
+        (a, invert(&a, d, 1.0).unwrap())
+    }
+
     #[test]
     fn one_contact_solve_satisfies_kkt() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
         for trial in 0..20_000 {
             let d = if trial % 3 == 0 { 2 } else { 3 };
-            let mut g = [0.0; 9];
-            for v in g.iter_mut().take(d * d) {
-                *v = rng.random_range(-1.0..1.0);
-            }
-            let mut a = [0.0; 9];
-            for i in 0..d {
-                for j in 0..d {
-                    a[i * d + j] = (0..d).map(|k| g[i * d + k] * g[j * d + k]).sum::<f64>()
-                        + if i == j { 0.05 } else { 0.0 };
-                }
-            }
-            let ainv = invert(&a, d, 1.0).unwrap();
+            let (a, ainv) = random_block(&mut rng, d);
             let mut c = [0.0; 3];
             for v in c.iter_mut().take(d) {
                 *v = rng.random_range(-2.0..2.0);
@@ -812,7 +833,14 @@ mod tests {
                 1 => f64::INFINITY,
                 _ => rng.random_range(0.05..2.0),
             };
-            let x = solve_contact(&a, &ainv, d, mu, &c, &[0.0; 3]);
+            let contact = OneContact {
+                a: &a,
+                ainv: &ainv,
+                d,
+                mu,
+                c,
+            };
+            let x = solve_contact(&contact, &[0.0; 3]);
             let scale = 1.0 + c.iter().map(|v| v.abs()).sum::<f64>() * 20.0;
             let e = kkt(&a, d, mu, &c, &x);
             assert!(
@@ -831,18 +859,7 @@ mod tests {
         let (mut found, mut tried) = (0, 0);
         for trial in 0..20_000 {
             let d = if trial % 3 == 0 { 2 } else { 3 };
-            let mut g = [0.0; 9];
-            for v in g.iter_mut().take(d * d) {
-                *v = rng.random_range(-1.0..1.0);
-            }
-            let mut a = [0.0; 9];
-            for i in 0..d {
-                for j in 0..d {
-                    a[i * d + j] = (0..d).map(|k| g[i * d + k] * g[j * d + k]).sum::<f64>()
-                        + if i == j { 0.05 } else { 0.0 };
-                }
-            }
-            let ainv = invert(&a, d, 1.0).unwrap();
+            let (a, ainv) = random_block(&mut rng, d);
             let (mut c, mut warm, mut seed) = ([0.0; 3], [0.0; 3], [0.0; 3]);
             for k in 0..d {
                 c[k] = rng.random_range(-2.0..2.0);
@@ -855,7 +872,14 @@ mod tests {
                 rng.random_range(0.05..2.0)
             };
             tried += 1;
-            let Some(r) = solve_contact_law(&a, &ainv, d, mu, &c, &warm, &seed) else {
+            let contact = OneContact {
+                a: &a,
+                ainv: &ainv,
+                d,
+                mu,
+                c,
+            };
+            let Some(r) = solve_contact_law(&contact, &warm, &seed) else {
                 continue;
             };
             found += 1;

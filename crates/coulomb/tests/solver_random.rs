@@ -104,6 +104,52 @@ fn inner_solvers_solve_random_soc_qps() {
     }
 }
 
+/// A solver reused on a matrix changed in place (same allocation, same size and pattern)
+/// solves the new problem, not the one its caches were built for.
+#[test]
+fn inner_solvers_notice_a_matrix_changed_in_place() {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let (dim, nc) = (3, 6);
+    let m = dim * nc;
+    let mut w = random_spd(&mut rng, m, 0.5);
+    let b: Vec<f64> = (0..m).map(|_| rng.random_range(-1.0..1.0)).collect();
+    let mu = vec![0.5; nc];
+    let limits = InnerLimits {
+        tol: 1e-11,
+        max_iterations: 100_000,
+        deadline: None,
+    };
+    for mut solver in inner_solvers() {
+        let mut r = vec![0.0; m];
+        let problem = InnerProblem {
+            dim,
+            w: &w,
+            b: &b,
+            mu: &mu,
+        };
+        solver.solve(&problem, &limits, &mut r);
+        let before = w.values.as_ptr();
+        w.values.iter_mut().for_each(|v| *v *= 3.0);
+        assert_eq!(before, w.values.as_ptr());
+        let problem = InnerProblem {
+            dim,
+            w: &w,
+            b: &b,
+            mu: &mu,
+        };
+        let mut r = vec![0.0; m];
+        let report = solver.solve(&problem, &limits, &mut r);
+        assert_eq!(report.status, InnerStatus::Solved, "{}", solver.name());
+        let k = kkt_4_7(dim, &w, &b, &mu, &r);
+        assert!(
+            k <= 1e-8 * (1.0 + dot(&r, &r).sqrt()),
+            "{}: KKT {k}",
+            solver.name()
+        );
+        w.values.iter_mut().for_each(|v| *v /= 3.0);
+    }
+}
+
 fn settings_under_test() -> Vec<Settings> {
     let mut out = Vec::new();
     for inner in [InnerKind::Pgs, InnerKind::Apgd] {

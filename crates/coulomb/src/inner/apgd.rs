@@ -23,7 +23,8 @@
 //! ([`DelassusOperator`]).
 
 use super::{
-    pgs::dual_residual_shifted, InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus,
+    matrix_key, pgs::dual_residual_shifted, InnerLimits, InnerProblem, InnerReport, InnerSolver,
+    InnerStatus, MatrixKey,
 };
 use crate::cone;
 use crate::delassus::DelassusOperator;
@@ -111,24 +112,6 @@ pub struct ApgdSolver {
     cache: Option<(MatrixKey, f64, Option<BlockCsr>)>,
 }
 
-/// Identity of a matrix: address, size, nnz and a checksum of its values.
-type MatrixKey = (usize, usize, usize, u64);
-
-fn key_of(w: &CscMatrix) -> MatrixKey {
-    let checksum = w
-        .values
-        .iter()
-        .enumerate()
-        .map(|(k, v)| v * (1.0 + k as f64 * 1e-3))
-        .sum::<f64>();
-    (
-        w.values.as_ptr() as usize,
-        w.ncols,
-        w.nnz(),
-        checksum.to_bits(),
-    )
-}
-
 impl Default for ApgdSolver {
     fn default() -> Self {
         Self {
@@ -158,7 +141,7 @@ impl InnerSolver for ApgdSolver {
         r: &mut [f64],
     ) -> InnerReport {
         let w = problem.w;
-        let key = key_of(w);
+        let key = matrix_key(w);
         if self.cache.as_ref().is_none_or(|(k, _, _)| *k != key) {
             let blocks =
                 BlockCsr::from_csc(w, problem.dim).filter(|b| b.values.len() <= 2 * w.nnz().max(1));

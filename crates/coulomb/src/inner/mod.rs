@@ -67,6 +67,26 @@ pub struct InnerLimits {
     pub deadline: Option<Instant>,
 }
 
+/// Identity of a matrix for the caches of the inner solvers: address, size, nnz and a
+/// checksum of its values (so that another matrix at the same address is not mistaken for it).
+pub type MatrixKey = (usize, usize, usize, u64);
+
+/// The [`MatrixKey`] of W.
+pub fn matrix_key(w: &CscMatrix) -> MatrixKey {
+    let checksum = w
+        .values
+        .iter()
+        .enumerate()
+        .map(|(k, v)| v * (1.0 + k as f64 * 1e-3))
+        .sum::<f64>();
+    (
+        w.values.as_ptr() as usize,
+        w.ncols,
+        w.nnz(),
+        checksum.to_bits(),
+    )
+}
+
 impl InnerLimits {
     /// Whether the deadline has passed, before iteration `iteration` of a loop whose
     /// iterations each touch about `work` nonzeros: the clock is read only every

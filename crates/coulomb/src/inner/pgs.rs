@@ -44,7 +44,9 @@
 //! At the end of each sweep: the natural-map residual of (4.7), ‖r − P_L(r − (W r + b))‖,
 //! relative to max(‖b‖, ‖r‖, ‖W r + b‖), is compared with the tolerance.
 
-use super::{InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus};
+use super::{
+    matrix_key, InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus, MatrixKey,
+};
 use crate::cone;
 use crate::sparse::CscMatrix;
 
@@ -57,13 +59,9 @@ pub struct DiagonalBlocks {
     /// inverses of `blocks`
     inverses: Vec<[f64; 9]>,
     /// identity of the matrix the blocks came from (pointer, nnz, size)
-    key: (usize, usize, usize),
+    key: MatrixKey,
     /// estimate of ‖W‖ (largest block trace)
     pub w_scale: f64,
-}
-
-fn key_of(w: &CscMatrix) -> (usize, usize, usize) {
-    (w.values.as_ptr() as usize, w.nnz(), w.ncols)
 }
 
 /// Inverse of a symmetric d × d (d ≤ 3) row-major matrix by cofactors; None if singular
@@ -160,13 +158,13 @@ impl DiagonalBlocks {
             dim,
             blocks,
             inverses,
-            key: key_of(w),
+            key: matrix_key(w),
             w_scale: global_scale,
         }
     }
 
     fn matches(&self, dim: usize, w: &CscMatrix) -> bool {
-        self.dim == dim && self.key == key_of(w)
+        self.dim == dim && self.key == matrix_key(w)
     }
 }
 

@@ -489,28 +489,43 @@ impl BlockCsr {
             return None;
         }
         let blocks = a.ncols / dim;
-        // (block row, block col, position in block, value), sorted by block
-        let mut entries: Vec<(usize, usize, usize, f64)> = a
-            .triplets()
-            .map(|(i, j, v)| (i / dim, j / dim, (i % dim) * dim + j % dim, v))
-            .collect();
-        entries.sort_unstable_by_key(|e| (e.0, e.1));
+        // Columns are visited in increasing order, so for a fixed block row the block columns
+        // of its entries come in nondecreasing order: one marker per block row finds each
+        // new block (pass 1 counts them, pass 2 places them). Linear in nnz, no sort.
+        let mut last = vec![usize::MAX; blocks];
         let mut row_ptr = vec![0; blocks + 1];
-        let mut block_col = Vec::new();
-        let mut values = Vec::new();
-        let mut last = None;
-        for (bi, bj, pos, v) in entries {
-            if last != Some((bi, bj)) {
-                block_col.push(bj);
-                values.extend(std::iter::repeat_n(0.0, dim * dim));
-                row_ptr[bi + 1] += 1;
-                last = Some((bi, bj));
+        for j in 0..a.ncols {
+            let bj = j / dim;
+            for &i in &a.row_idx[a.col_ptr[j]..a.col_ptr[j + 1]] {
+                let bi = i / dim;
+                if last[bi] != bj {
+                    last[bi] = bj;
+                    row_ptr[bi + 1] += 1;
+                }
             }
-            let base = values.len() - dim * dim;
-            values[base + pos] += v;
         }
         for k in 0..blocks {
             row_ptr[k + 1] += row_ptr[k];
+        }
+        let stored = row_ptr[blocks];
+        let mut block_col = vec![0; stored];
+        let mut values = vec![0.0; stored * dim * dim];
+        let mut next = row_ptr[..blocks].to_vec();
+        let mut slot = vec![0; blocks];
+        last.iter_mut().for_each(|v| *v = usize::MAX);
+        for j in 0..a.ncols {
+            let bj = j / dim;
+            for p in a.col_ptr[j]..a.col_ptr[j + 1] {
+                let i = a.row_idx[p];
+                let bi = i / dim;
+                if last[bi] != bj {
+                    last[bi] = bj;
+                    slot[bi] = next[bi];
+                    block_col[next[bi]] = bj;
+                    next[bi] += 1;
+                }
+                values[slot[bi] * dim * dim + (i % dim) * dim + j % dim] += a.values[p];
+            }
         }
         Some(Self {
             dim,

@@ -146,27 +146,23 @@ impl MassFactor {
         let mut blocks = Vec::with_capacity(comps.len());
         for (b, dofs) in comps.into_iter().enumerate() {
             let k = dofs.len();
-            let mut local = Vec::new();
-            for &d in &dofs {
-                for p in m.col_ptr[d]..m.col_ptr[d + 1] {
-                    local.push((place[m.row_idx[p]].1, place[d].1, m.values[p]));
+            let (factor, raw) = if k <= DENSE_BLOCK_MAX {
+                // small block: straight into a dense array, no sparse intermediates
+                let mut a = vec![0.0; k * k];
+                for &d in &dofs {
+                    for p in m.col_ptr[d]..m.col_ptr[d + 1] {
+                        a[place[m.row_idx[p]].1 * k + place[d].1] += m.values[p];
+                    }
                 }
-            }
-            let (ri, ci, vi): (Vec<usize>, Vec<usize>, Vec<f64>) = (
-                local.iter().map(|e| e.0).collect(),
-                local.iter().map(|e| e.1).collect(),
-                local.iter().map(|e| e.2).collect(),
-            );
-            let block_matrix = CscMatrix::from_triplets(k, k, &ri, &ci, &vi)
-                .map_err(|e| ProblemError::NotPositiveDefinite(format!("{e}")))?;
-            let sym = {
-                let mut s = block_matrix.add_scaled(1.0, &block_matrix.transpose());
-                s.values.iter_mut().for_each(|v| *v *= 0.5);
-                s
-            };
-            let raw = (sym != block_matrix).then_some(block_matrix);
-            let factor = if k <= DENSE_BLOCK_MAX {
-                let mut a = sym.to_dense();
+                let symmetric = (0..k).all(|i| (0..i).all(|j| a[i * k + j] == a[j * k + i]));
+                let raw = (!symmetric).then(|| CscMatrix::from_dense(k, k, &a));
+                for i in 0..k {
+                    for j in 0..i {
+                        let mean = 0.5 * (a[i * k + j] + a[j * k + i]);
+                        a[i * k + j] = mean;
+                        a[j * k + i] = mean;
+                    }
+                }
                 dense_cholesky(&mut a, k).map_err(|e| {
                     ProblemError::NotPositiveDefinite(format!(
                         "{e} in the block of dofs {}..{}",
@@ -174,8 +170,27 @@ impl MassFactor {
                         dofs[k - 1]
                     ))
                 })?;
-                Factor::Dense(a)
+                (Factor::Dense(a), raw)
             } else {
+                let mut local = Vec::new();
+                for &d in &dofs {
+                    for p in m.col_ptr[d]..m.col_ptr[d + 1] {
+                        local.push((place[m.row_idx[p]].1, place[d].1, m.values[p]));
+                    }
+                }
+                let (ri, ci, vi): (Vec<usize>, Vec<usize>, Vec<f64>) = (
+                    local.iter().map(|e| e.0).collect(),
+                    local.iter().map(|e| e.1).collect(),
+                    local.iter().map(|e| e.2).collect(),
+                );
+                let block_matrix = CscMatrix::from_triplets(k, k, &ri, &ci, &vi)
+                    .map_err(|e| ProblemError::NotPositiveDefinite(format!("{e}")))?;
+                let sym = {
+                    let mut s = block_matrix.add_scaled(1.0, &block_matrix.transpose());
+                    s.values.iter_mut().for_each(|v| *v *= 0.5);
+                    s
+                };
+                let raw = (sym != block_matrix).then_some(block_matrix);
                 let trip: Vec<_> = sym
                     .triplets()
                     .filter(|&(i, j, _)| i <= j)
@@ -188,7 +203,7 @@ impl MassFactor {
                 let llt = Llt::try_new_with_symbolic(symbolic, mat.as_ref(), Side::Upper).map_err(
                     |e| ProblemError::NotPositiveDefinite(format!("{e:?} in block {b}")),
                 )?;
-                Factor::Sparse(Box::new(llt))
+                (Factor::Sparse(Box::new(llt)), raw)
             };
             // the Cholesky factor of the symmetric part certified positive definiteness; a
             // block that is not exactly symmetric is solved with its own LU factors

@@ -356,11 +356,10 @@ impl Delassus {
         // W is symmetric up to rounding when M is; store it exactly symmetric then. When M
         // itself is not exactly symmetric, W = Hᵀ M⁻¹ H is kept as computed so that the local
         // form stays equivalent to the global one.
-        let w = if factor.blocks.iter().all(|b| b.raw.is_none()) {
-            symmetrize(&w)
-        } else {
-            w
-        };
+        let mut w = w;
+        if factor.blocks.iter().all(|b| b.raw.is_none()) && !symmetrize_in_place(&mut w) {
+            w = symmetrize(&w);
+        }
         let local = LocalProblem {
             dim: problem.dim,
             w,
@@ -391,6 +390,51 @@ fn symmetrize(w: &CscMatrix) -> CscMatrix {
     let mut s = w.add_scaled(1.0, &t);
     s.values.iter_mut().for_each(|v| *v *= 0.5);
     s
+}
+
+/// W ← ½ (W + Wᵀ) in place, for a structurally symmetric W (sorted rows): each pair of
+/// entries (i, j), (j, i) gets (W_ij + W_ji)/2. Returns false, leaving W unchanged, when the
+/// pattern is not symmetric.
+fn symmetrize_in_place(w: &mut CscMatrix) -> bool {
+    let m = w.ncols;
+    // partner[p]: position of the transposed entry of entry p
+    let mut partner = vec![usize::MAX; w.nnz()];
+    // next[i]: the next entry of column i below the diagonal not yet paired; rows below the
+    // diagonal of column i are met in increasing order as the columns j > i are visited
+    let mut next: Vec<usize> = (0..m)
+        .map(|i| {
+            let col = &w.row_idx[w.col_ptr[i]..w.col_ptr[i + 1]];
+            w.col_ptr[i] + col.partition_point(|&r| r <= i)
+        })
+        .collect();
+    for j in 0..m {
+        for p in w.col_ptr[j]..w.col_ptr[j + 1] {
+            let i = w.row_idx[p];
+            if i >= j {
+                break;
+            }
+            let q = next[i];
+            if q >= w.col_ptr[i + 1] || w.row_idx[q] != j {
+                return false;
+            }
+            partner[p] = q;
+            partner[q] = p;
+            next[i] += 1;
+        }
+    }
+    // every entry below the diagonal must have been paired
+    if (0..m).any(|i| next[i] != w.col_ptr[i + 1]) {
+        return false;
+    }
+    for p in 0..w.nnz() {
+        let q = partner[p];
+        if q != usize::MAX && q > p {
+            let mean = (w.values[p] + w.values[q]) * 0.5;
+            w.values[p] = mean;
+            w.values[q] = mean;
+        }
+    }
+    true
 }
 
 /// W = Hᵀ M⁻¹ H, column by column: X_j = M⁻¹ H_j on the blocks that H_j touches, then
@@ -488,6 +532,11 @@ mod tests {
         let g = GlobalProblem::new(3, m, h.clone(), f.clone(), wv.clone(), mu).unwrap();
         let d = Delassus::new(&g).unwrap();
         let wref = dense_reference(mdense, hdense, n, k);
+        assert!(d.local.w.check().is_ok(), "W is a valid CSC matrix");
+        let m_symmetric = (0..n).all(|i| (0..n).all(|j| mdense[i * n + j] == mdense[j * n + i]));
+        if m_symmetric {
+            assert_eq!(d.local.w.asymmetry(), 0.0, "W is exactly symmetric");
+        }
         let wd = d.local.w.to_dense();
         for (a, b) in wd.iter().zip(&wref) {
             assert!((a - b).abs() < 1e-10 * (1.0 + b.abs()), "{a} vs {b}");
@@ -596,5 +645,29 @@ mod tests {
                 .sqrt();
             assert!(res < 1e-10, "n = {n}: residual {res}");
         }
+    }
+
+    #[test]
+    fn symmetrize_in_place_equals_the_half_sum() {
+        let n = 7;
+        let mut dense = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..n {
+                if (i * 3 + j * 3) % 4 != 1 {
+                    dense[i * n + j] = ((i * 7 + j * 13) % 17) as f64 - 8.0 + 0.1 * i as f64;
+                }
+            }
+        }
+        let w = CscMatrix::from_dense(n, n, &dense);
+        let mut v = w.clone();
+        assert!(symmetrize_in_place(&mut v));
+        assert_eq!(v, symmetrize(&w));
+        // a pattern that is not symmetric is left alone
+        dense[1] = 0.0;
+        dense[n] = 5.0;
+        let w = CscMatrix::from_dense(n, n, &dense);
+        let mut v = w.clone();
+        assert!(!symmetrize_in_place(&mut v));
+        assert_eq!(v, w);
     }
 }

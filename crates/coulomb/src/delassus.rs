@@ -426,8 +426,7 @@ fn symmetrize_in_place(w: &mut CscMatrix) -> bool {
     if (0..m).any(|i| next[i] != w.col_ptr[i + 1]) {
         return false;
     }
-    for p in 0..w.nnz() {
-        let q = partner[p];
+    for (p, &q) in partner.iter().enumerate() {
         if q != usize::MAX && q > p {
             let mean = (w.values[p] + w.values[q]) * 0.5;
             w.values[p] = mean;

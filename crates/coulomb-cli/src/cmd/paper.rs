@@ -168,8 +168,11 @@ fn paper_params(inner: InnerKind, mu: f64, tol: f64, fp_tol: f64, max_outer: usi
         h: 0.02,
         restitution: 0.2,
         mu,
+        // the paper's algorithm: successive approximations s ← F(s) alone, without the
+        // library's Newton end game
         solver: Settings {
             outer: OuterKind::FixedPoint,
+            newton_steps: 0,
             ..solver_settings(inner, tol, fp_tol, max_outer, max_inner)
         },
         ..Params::default()

@@ -85,7 +85,7 @@ pub struct Settings {
     /// stops without converging (iteration cap, inner failure, or stalled: the error no longer
     /// halves over [`STALL_WINDOW`] outer iterations); the time limit covers both
     pub fallback: Option<(InnerKind, OuterKind)>,
-    /// quick first try: at most this many fused Gauss–Seidel sweeps on the De Saxcé form
+    /// quick first try: at most this many Gauss–Seidel sweeps on Coulomb's law itself
     /// before the main method (0: none); small problems are solved there, and otherwise the
     /// main method starts from the caller's point as if the try had not happened
     pub warmup_sweeps: usize,

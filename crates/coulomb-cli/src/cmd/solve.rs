@@ -28,7 +28,7 @@ pub enum OuterArg {
     FixedPoint,
     /// safeguarded Anderson mixing
     Anderson,
-    /// Gauss–Seidel directly on the De Saxcé form (pgs only)
+    /// Gauss–Seidel directly on Coulomb's law, each contact's law solved exactly (pgs only)
     Fused,
 }
 

@@ -60,6 +60,15 @@ fn kkt_4_7(dim: usize, w: &CscMatrix, b: &[f64], mu: &[f64], r: &[f64]) -> f64 {
     worst
 }
 
+/// Inner limits for exact solves: tolerance 1e-11, no practical iteration cap, no deadline.
+fn tight_limits() -> InnerLimits {
+    InnerLimits {
+        tol: 1e-11,
+        max_iterations: 100_000,
+        deadline: None,
+    }
+}
+
 #[test]
 fn inner_solvers_solve_random_soc_qps() {
     let mut rng = ChaCha8Rng::seed_from_u64(11);
@@ -76,11 +85,7 @@ fn inner_solvers_solve_random_soc_qps() {
             b: &b,
             mu: &mu,
         };
-        let limits = InnerLimits {
-            tol: 1e-11,
-            max_iterations: 100_000,
-            deadline: None,
-        };
+        let limits = tight_limits();
         for mut solver in inner_solvers() {
             let mut r = vec![0.0; m];
             let report = solver.solve(&problem, &limits, &mut r);
@@ -114,11 +119,7 @@ fn inner_solvers_notice_a_matrix_changed_in_place() {
     let mut w = random_spd(&mut rng, m, 0.5);
     let b: Vec<f64> = (0..m).map(|_| rng.random_range(-1.0..1.0)).collect();
     let mu = vec![0.5; nc];
-    let limits = InnerLimits {
-        tol: 1e-11,
-        max_iterations: 100_000,
-        deadline: None,
-    };
+    let limits = tight_limits();
     for mut solver in inner_solvers() {
         let mut r = vec![0.0; m];
         let problem = InnerProblem {

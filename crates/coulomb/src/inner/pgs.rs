@@ -450,8 +450,9 @@ fn slide_newton(a: &[f64; 9], c: &[f64; 3], mu: f64, tau0: (f64, f64)) -> Option
 /// stick r = −A⁻¹c when it lies in K_μ; slide r = r_N (1, −μτ) with u_N = 0 and u_T = βτ,
 /// β ≥ 0 — in d = 2 both directions τ = ±1 are tried, in d = 3 the slip equation is solved by
 /// Newton's method from the directions of −r_T (`warm`, the previous value) and of u_T
-/// (`u_seed`). None when no case applies (μ infinite, or the slip iteration fails); the
-/// caller then takes a step of the convex problem with s frozen instead.
+/// (`u_seed`), and the result is kept if its residual of (2.9) is ≤ 1e-9 (‖A r‖ + ‖c‖).
+/// None when no case applies (μ infinite, or the slip iteration fails); the caller then takes
+/// a step of the convex problem with s frozen instead.
 pub fn solve_contact_law(
     contact: &OneContact<'_>,
     warm: &[f64; 3],
@@ -500,6 +501,14 @@ pub fn solve_contact_law(
     .into_iter()
     .flatten()
     .find_map(|tau| slide_newton(a, c, mu, tau))
+    .filter(|r| {
+        // the slip equation is solved to rounding; where A is so ill-conditioned that the
+        // law's residual is still above 1e-9 (relative), the caller's convex step is used
+        let ar = matvec(a, 3, r);
+        let u = [ar[0] + c[0], ar[1] + c[1], ar[2] + c[2]];
+        let scale = dot3(&ar, &ar, 3).sqrt() + dot3(c, c, 3).sqrt();
+        crate::law::contact_residual_sq(mu, &u, r) <= (1e-9 * scale).powi(2)
+    })
 }
 
 /// Projected block Gauss–Seidel on (4.7) with exact one-contact solves.

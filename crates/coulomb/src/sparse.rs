@@ -482,10 +482,11 @@ pub struct BlockCsr {
 }
 
 impl BlockCsr {
-    /// The block form of a square CSC matrix whose size is a multiple of d (d ∈ {2, 3});
-    /// None otherwise. Entries absent from a stored block are zeros.
+    /// The block form of a valid square CSC matrix whose size is a multiple of d
+    /// (d ∈ {2, 3}); None otherwise. Entries absent from a stored block are zeros.
     pub fn from_csc(a: &CscMatrix, dim: usize) -> Option<Self> {
-        if !(2..=3).contains(&dim) || a.nrows != a.ncols || a.ncols % dim != 0 {
+        if !(2..=3).contains(&dim) || a.nrows != a.ncols || a.ncols % dim != 0 || a.check().is_err()
+        {
             return None;
         }
         let blocks = a.ncols / dim;
@@ -541,7 +542,7 @@ impl BlockCsr {
         self.block_col.len()
     }
 
-    /// y ← A x.
+    /// y ← A x (x and y of length `blocks · dim`).
     pub fn gemv(&self, x: &[f64], y: &mut [f64]) {
         match self.dim {
             2 => self.gemv_d::<2>(x, y),
@@ -632,5 +633,9 @@ mod tests {
             }
         }
         assert!(BlockCsr::from_csc(&CscMatrix::zeros(5, 5), 3).is_none());
+        // arrays that do not describe a matrix: refused, not indexed out of range
+        let mut bad = CscMatrix::identity(6, 1.0);
+        bad.row_idx[2] = 99;
+        assert!(BlockCsr::from_csc(&bad, 3).is_none());
     }
 }

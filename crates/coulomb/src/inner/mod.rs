@@ -68,7 +68,8 @@ pub struct InnerLimits {
 }
 
 /// Identity of a matrix for the caches of the inner solvers: address, size, nnz and a
-/// checksum of its values (so that another matrix at the same address is not mistaken for it).
+/// checksum of its values and row indices (so that another matrix at the same address is not
+/// mistaken for it).
 pub type MatrixKey = (usize, usize, usize, u64);
 
 /// The [`MatrixKey`] of W.
@@ -76,8 +77,9 @@ pub fn matrix_key(w: &CscMatrix) -> MatrixKey {
     let checksum = w
         .values
         .iter()
+        .zip(&w.row_idx)
         .enumerate()
-        .map(|(k, v)| v * (1.0 + k as f64 * 1e-3))
+        .map(|(k, (v, &i))| v * (1.0 + k as f64 * 1e-3) + i as f64)
         .sum::<f64>();
     (
         w.values.as_ptr() as usize,
@@ -90,7 +92,7 @@ pub fn matrix_key(w: &CscMatrix) -> MatrixKey {
 impl InnerLimits {
     /// Whether the deadline has passed, before iteration `iteration` of a loop whose
     /// iterations each touch about `work` nonzeros: the clock is read only every
-    /// ⌈20 000 / work⌉ iterations (at most 64), so that on the smallest problems reading it
+    /// 20 000 / work iterations (rounded down, between 1 and 64), so that on the smallest problems reading it
     /// does not cost more than the iteration, and a deadline is overrun by at most ~20 000
     /// nonzeros' worth of work.
     pub fn past_deadline(&self, iteration: usize, work: usize) -> bool {

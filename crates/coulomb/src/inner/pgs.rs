@@ -232,6 +232,13 @@ fn rotate(e: (f64, f64), delta: f64) -> (f64, f64) {
     (co / norm, s / norm)
 }
 
+/// The unit vector along (x, y), if that is a finite nonzero vector.
+#[inline]
+fn unit(x: f64, y: f64) -> Option<(f64, f64)> {
+    let norm = (x * x + y * y).sqrt();
+    (norm > 0.0 && norm.is_finite()).then(|| (x / norm, y / norm))
+}
+
 /// Newton on ψ'(α) = 0 from the direction e₀ = (cos α₀, sin α₀) (d = 3, boundary case);
 /// returns the boundary point if the iteration reaches a stationary point with cᵀd < 0 and a
 /// nonnegative multiplier.
@@ -300,9 +307,7 @@ pub struct OneContact<'a> {
 /// Exact minimizer of ½ xᵀ A x + cᵀ x over K_μ for one contact. `warm` (the previous value)
 /// only seeds the angle search of the boundary case. Returns x.
 pub fn solve_contact(contact: &OneContact<'_>, warm: &[f64; 3]) -> [f64; 3] {
-    let OneContact {
-        a, ainv, d, mu, c, ..
-    } = *contact;
+    let OneContact { a, ainv, d, mu, c } = *contact;
     let c = &c;
     let mut x0 = matvec(ainv, d, c);
     x0.iter_mut().for_each(|v| *v = -*v);
@@ -354,10 +359,6 @@ pub fn solve_contact(contact: &OneContact<'_>, warm: &[f64; 3]) -> [f64; 3] {
     // d = 3 boundary: seed the angle from the previous iterate, then from −c_T and x0_T,
     // then from sampled angles.
     // (each angle is computed only when needed: the first seed usually succeeds)
-    let unit = |x: f64, y: f64| {
-        let norm = (x * x + y * y).sqrt();
-        (norm > 0.0 && norm.is_finite()).then(|| (x / norm, y / norm))
-    };
     for k in 0..3 {
         let seed = match k {
             0 => unit(warm[1], warm[2]),
@@ -458,9 +459,7 @@ pub fn solve_contact_law(
     warm: &[f64; 3],
     u_seed: &[f64; 3],
 ) -> Option<[f64; 3]> {
-    let OneContact {
-        a, ainv, d, mu, c, ..
-    } = *contact;
+    let OneContact { a, ainv, d, mu, c } = *contact;
     let c = &c;
     if c[0] >= 0.0 {
         return Some([0.0; 3]);
@@ -489,10 +488,6 @@ pub fn solve_contact_law(
         }
         return None;
     }
-    let unit = |x: f64, y: f64| {
-        let norm = (x * x + y * y).sqrt();
-        (norm > 0.0 && norm.is_finite()).then(|| (x / norm, y / norm))
-    };
     [
         unit(-warm[1], -warm[2]),
         unit(u_seed[1], u_seed[2]),

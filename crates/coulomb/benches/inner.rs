@@ -1,7 +1,7 @@
 //! Time to solve each problem of ../shared/fclib to error 1e-8 with each solver combination
 //! (skipped quietly when the directory is absent). `cargo bench -p coulomb --bench inner`.
 
-use coulomb::fclib::{read_with, ReadOptions, Symmetry};
+use coulomb::fclib::read;
 use coulomb::solver::{solve, InnerKind, OuterKind, Settings};
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::path::Path;
@@ -30,11 +30,8 @@ fn bench(c: &mut Criterion) {
         .filter(|p| p.extension().is_some_and(|x| x == "hdf5"))
         .collect();
     paths.sort();
-    let options = ReadOptions {
-        symmetry: Symmetry::Symmetrize,
-    };
     for path in paths {
-        let Ok(file) = read_with(&path, &options) else {
+        let Ok(file) = read(&path) else {
             continue;
         };
         let stem = path

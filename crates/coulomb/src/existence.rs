@@ -240,6 +240,10 @@ pub struct ExistenceReport {
     pub criteria: Criteria,
     /// what the theory concludes
     pub conclusion: Conclusion,
+    /// why the conclusion is weaker than the criteria suggest, when it is (a local problem
+    /// whose W is not symmetric: see [`check_local`])
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
     /// wall-clock seconds spent
     pub seconds: f64,
 }
@@ -291,22 +295,64 @@ pub fn check(problem: &Problem, settings: &CheckSettings) -> Result<ExistenceRep
     }
 }
 
-/// [`check`] on a global problem: the criteria on (H, w).
+/// [`check`] on a global problem: the criteria on (H, w). The theorems assume M symmetric
+/// positive definite: for an M that is not symmetric beyond rounding
+/// ([`ROUNDING_ASYMMETRY`]; CubeH8 and LMGC_GlobalFrictionContactProblem00046 store M with
+/// relative asymmetry 1.5e-7) a criterion that holds leaves the conclusion unknown.
 pub fn check_global(
     p: &GlobalProblem,
     settings: &CheckSettings,
 ) -> Result<ExistenceReport, CheckError> {
     let data = KinematicData::new(p.dim, &p.h, &p.w, &p.mu)?;
-    run_all(&data, "global", settings)
+    let mut report = run_all(&data, "global", settings)?;
+    let asymmetry = p.m.asymmetry();
+    if asymmetry > ROUNDING_ASYMMETRY {
+        downgrade(&mut report, "M", asymmetry);
+    }
+    Ok(report)
 }
 
-/// [`check`] on a local problem: the criteria on (W, q).
+/// A sufficient criterion proves existence only for a symmetric W (or M): for a matrix that
+/// is not symmetric beyond rounding the conclusion becomes [`Conclusion::Unknown`], and the
+/// note says which criterion held.
+fn downgrade(report: &mut ExistenceReport, what: &str, asymmetry: f64) {
+    if let Conclusion::Exists { by, theorem } = report.conclusion {
+        report.note = Some(format!(
+            "{by} holds, which proves existence by {theorem} for a symmetric {what}; this {what} \
+             is not symmetric (relative asymmetry {asymmetry:.2e}), for which the theorem is \
+             not established"
+        ));
+        report.conclusion = Conclusion::Unknown;
+    }
+}
+
+/// Relative asymmetry max|W − Wᵀ| / max|W| up to which W counts as symmetric for the
+/// theorems of [`check_local`]: the round-off of assembling Hᵀ M⁻¹ H in floating point
+/// (BoxesStack1-i100000-32: 1.6e-16).
+pub const ROUNDING_ASYMMETRY: f64 = 1e-12;
+
+/// [`check`] on a local problem: the criteria on x(v) = W v + q.
+///
+/// The sufficient criteria are theorems for W = Hᵀ M⁻¹ H, which is symmetric. When the
+/// stored W is not symmetric beyond rounding ([`ROUNDING_ASYMMETRY`]), (4.5) is still necessary (u = W r + q with u_N ≥ 0
+/// is such an x) and its failure still proves that no solution exists; but a sufficient
+/// criterion that holds proves existence only for a symmetric W, so the conclusion is then
+/// [`Conclusion::Unknown`], with the criterion that held named in
+/// [`ExistenceReport::note`].
 pub fn check_local(
     p: &LocalProblem,
     settings: &CheckSettings,
 ) -> Result<ExistenceReport, CheckError> {
-    let data = KinematicData::new(p.dim, &p.w, &p.q, &p.mu)?;
-    run_all(&data, "local", settings)
+    if p.w.asymmetry() <= ROUNDING_ASYMMETRY {
+        let data = KinematicData::new(p.dim, &p.w, &p.q, &p.mu)?;
+        return run_all(&data, "local", settings);
+    }
+    // B = Wᵀ, so that Bᵀ v + q = W v + q
+    let wt = p.w.transpose();
+    let data = KinematicData::new(p.dim, &wt, &p.q, &p.mu)?;
+    let mut report = run_all(&data, "local", settings)?;
+    downgrade(&mut report, "W", p.w.asymmetry());
+    Ok(report)
 }
 
 /// The purely kinematic data the criteria depend on (§5.5): x(v) = Bᵀ v + w with B = H
@@ -1126,6 +1172,7 @@ fn run_all(
         frictionless,
         criteria,
         conclusion,
+        note: None,
         seconds: start.elapsed().as_secs_f64(),
     })
 }

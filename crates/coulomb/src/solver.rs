@@ -254,18 +254,48 @@ pub fn solve(problem: &Problem, settings: &Settings) -> Result<Solution, SolveEr
     solve_with_guess(problem, settings, None)
 }
 
-/// The local form the solver works on, and what links it to a global problem.
-enum Form<'a> {
+/// The problem as stored, in the local form the solver works on.
+enum Stored<'a> {
     Local(&'a LocalProblem),
     Global(&'a GlobalProblem, Box<Delassus>),
 }
 
-impl Form<'_> {
-    fn local(&self) -> &LocalProblem {
-        match self {
-            Form::Local(p) => p,
-            Form::Global(_, d) => &d.local,
+/// The stored problem, and the surrogate matrix of the SOC-QP inner solvers.
+///
+/// A quadratic form has no antisymmetric part: the inner problems (3.15)/(4.7) solved as
+/// QPs (APGD, projected Gauss–Seidel, interior point, faceted) see ½(W + Wᵀ) when the
+/// stored W is not exactly symmetric. Everything else — u = W r + q, F(s) (3.19), the error
+/// of docs/error.md, the fused Gauss–Seidel on Coulomb's law and the Newton end game — uses
+/// the stored W.
+struct Form<'a> {
+    stored: Stored<'a>,
+    /// ½(W + Wᵀ) when W is not exactly symmetric
+    surrogate: Option<crate::sparse::CscMatrix>,
+}
+
+impl<'a> Form<'a> {
+    fn new(stored: Stored<'a>) -> Self {
+        let mut form = Self {
+            stored,
+            surrogate: None,
+        };
+        let w = &form.local().w;
+        if !w.is_exactly_symmetric() {
+            form.surrogate = Some(w.symmetric_part());
         }
+        form
+    }
+
+    fn local(&self) -> &LocalProblem {
+        match &self.stored {
+            Stored::Local(p) => p,
+            Stored::Global(_, d) => &d.local,
+        }
+    }
+
+    /// The matrix of the SOC-QP inner problems: W, or ½(W + Wᵀ) when W is not symmetric.
+    fn qp_w(&self) -> &crate::sparse::CscMatrix {
+        self.surrogate.as_ref().unwrap_or(&self.local().w)
     }
 }
 
@@ -283,8 +313,8 @@ impl Verdict {
     fn of(form: &Form<'_>, r: &[f64]) -> Self {
         let local = form.local();
         let q_norm = law::norm(&local.q);
-        match form {
-            Form::Local(p) => {
+        match &form.stored {
+            Stored::Local(p) => {
                 let u = p.velocity(r);
                 let error = law::error_measure(p.dim, &p.mu, r, &u, q_norm).error;
                 Verdict {
@@ -294,7 +324,7 @@ impl Verdict {
                     balance: None,
                 }
             }
-            Form::Global(g, d) => {
+            Stored::Global(g, d) => {
                 // v = M⁻¹(H r + f); the Cholesky factor reads one triangle of M, so for an M
                 // that is only nearly symmetric the balance residual (computed with the whole
                 // M) can stay above tol: Status::BalanceResidual
@@ -351,10 +381,10 @@ pub fn solve_with_guess(
     settings.validate()?;
     let start = Instant::now();
     let deadline = settings.time_limit.map(|t| start + t);
-    let form = match problem {
-        Problem::Local(p) => Form::Local(p),
-        Problem::Global(g) => Form::Global(g, Box::new(Delassus::new(g)?)),
-    };
+    let form = Form::new(match problem {
+        Problem::Local(p) => Stored::Local(p),
+        Problem::Global(g) => Stored::Global(g, Box::new(Delassus::new(g)?)),
+    });
     let mut stages: Vec<Solution> = Vec::new();
     if settings.warmup_sweeps > 0 {
         let warm_settings = Settings {
@@ -515,7 +545,7 @@ fn solve_stage(
             deadline,
         };
         fixed_point::shifted(dim, &local.q, mu, &s, &mut b);
-        let mut report = match (form, settings.inner, settings.outer) {
+        let mut report = match (&form.stored, settings.inner, settings.outer) {
             (_, _, OuterKind::Fused) => {
                 let limits = InnerLimits {
                     tol: 0.9 * settings.tol,
@@ -532,7 +562,7 @@ fn solve_stage(
                     &mut r,
                 )
             }
-            (Form::Global(g, _), InnerKind::Ipm, _) => {
+            (Stored::Global(g, _), InnerKind::Ipm, _) => {
                 let mut shift = Vec::with_capacity(m);
                 fixed_point::shifted(dim, &g.w, mu, &s, &mut shift);
                 let out = ipm::solve_primal(g, &shift, &limits);
@@ -544,7 +574,7 @@ fn solve_stage(
             _ => {
                 let inner = InnerProblem {
                     dim,
-                    w: &local.w,
+                    w: form.qp_w(),
                     b: &b,
                     mu,
                 };
@@ -614,19 +644,28 @@ fn solve_stage(
             && newton_used < settings.newton_steps
         {
             // Newton end game from r, kept only if the error of docs/error.md drops; all the
-            // tries of a stage share `newton_steps` steps
-            let mut trial = r.clone();
-            let nr = newton::polish(
-                local,
-                &mut trial,
-                0.5 * settings.tol * q_norm,
-                NEWTON_TRY_STEPS.min(settings.newton_steps - newton_used),
-                deadline,
-            );
-            newton_used += nr.steps.max(1);
-            let candidate = Verdict::of(form, &trial);
-            inner_total += nr.steps;
-            if nr.steps > 0 && candidate.error < verdict.error {
+            // tries of a stage share `newton_steps` steps. When the inner solver works on the
+            // surrogate ½(W + Wᵀ), a try that more than halved the error is followed by
+            // another one at once: an inner solve would pull r back towards the surrogate's
+            // solution.
+            let mut improved = false;
+            let mut fs = fs;
+            while newton_used < settings.newton_steps {
+                let mut trial = r.clone();
+                let nr = newton::polish(
+                    local,
+                    &mut trial,
+                    0.5 * settings.tol * q_norm,
+                    NEWTON_TRY_STEPS.min(settings.newton_steps - newton_used),
+                    deadline,
+                );
+                newton_used += nr.steps.max(1);
+                let candidate = Verdict::of(form, &trial);
+                inner_total += nr.steps;
+                if nr.steps == 0 || candidate.error >= verdict.error {
+                    break;
+                }
+                let gain = candidate.error / verdict.error;
                 r = trial;
                 verdict = candidate;
                 let fs_new = fixed_point::evaluate_f(dim, &local.velocity(&r));
@@ -638,7 +677,18 @@ fn solve_stage(
                     inner_iterations: nr.steps,
                 });
                 last_error = verdict.error;
-                s = fs_new;
+                fs = fs_new;
+                improved = true;
+                if verdict.converged(settings.tol)
+                    || form.surrogate.is_none()
+                    || gain > 0.5
+                    || deadline.is_some_and(|t| Instant::now() >= t)
+                {
+                    break;
+                }
+            }
+            if improved {
+                s = fs;
                 update = OuterUpdate::new(settings.outer);
                 if !verdict.converged(settings.tol) {
                     newton_gate = NEWTON_RETRY * verdict.error;
@@ -646,6 +696,8 @@ fn solve_stage(
                 continue;
             }
             newton_gate = NEWTON_RETRY * verdict.error;
+            s = update.next(&s, &fs);
+            continue;
         }
         s = update.next(&s, &fs);
     };

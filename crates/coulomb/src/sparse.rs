@@ -340,6 +340,33 @@ impl CscMatrix {
         }
     }
 
+    /// Whether A is square and every stored entry equals its transposed entry exactly (an
+    /// entry whose transposed partner is not stored must be zero).
+    /// Needs no allocation: each entry's partner is found by binary search in its column (rows
+    /// are sorted).
+    pub fn is_exactly_symmetric(&self) -> bool {
+        if self.nrows != self.ncols {
+            return false;
+        }
+        let partner = |i: usize, j: usize| -> f64 {
+            // A_ij from column j
+            let rows = &self.row_idx[self.col_ptr[j]..self.col_ptr[j + 1]];
+            rows.binary_search(&i)
+                .map_or(0.0, |k| self.values[self.col_ptr[j] + k])
+        };
+        (0..self.ncols).all(|j| {
+            (self.col_ptr[j]..self.col_ptr[j + 1])
+                .all(|p| self.row_idx[p] == j || partner(j, self.row_idx[p]) == self.values[p])
+        })
+    }
+
+    /// The symmetric part ½(A + Aᵀ) of a square matrix.
+    pub fn symmetric_part(&self) -> CscMatrix {
+        let mut s = self.add_scaled(1.0, &self.transpose());
+        s.values.iter_mut().for_each(|v| *v *= 0.5);
+        s
+    }
+
     /// A + alpha · B (same shape).
     pub fn add_scaled(&self, alpha: f64, other: &CscMatrix) -> CscMatrix {
         let mut rows = Vec::with_capacity(self.nnz() + other.nnz());
@@ -431,6 +458,36 @@ impl CscMatrix {
         }
         Ok(())
     }
+}
+
+/// Whether the sparse Cholesky factorization of S + τ I succeeds, where S is the symmetric
+/// part ½(A + Aᵀ) scaled on both sides by `scale` (S_ij = ½(A_ij + A_ji) scale_i scale_j):
+/// the test that S is positive semidefinite up to τ. Err with faer's reason otherwise.
+pub fn shifted_cholesky_succeeds(a: &CscMatrix, scale: &[f64], tau: f64) -> Result<(), String> {
+    use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+    use faer::sparse::{SparseColMat, Triplet};
+    use faer::Side;
+    let n = a.nrows;
+    let mut trip: Vec<Triplet<usize, usize, f64>> = Vec::with_capacity(a.nnz() + n);
+    for (i, j, v) in a.triplets() {
+        let x = 0.5 * v * scale[i] * scale[j];
+        // upper triangle of ½(A + Aᵀ): (i, j) and (j, i) both land on (min, max)
+        trip.push(Triplet::new(
+            i.min(j),
+            i.max(j),
+            if i == j { 2.0 * x } else { x },
+        ));
+    }
+    for i in 0..n {
+        trip.push(Triplet::new(i, i, tau));
+    }
+    let mat = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip)
+        .map_err(|e| format!("{e:?}"))?;
+    let symbolic =
+        SymbolicLlt::try_new(mat.symbolic(), Side::Upper).map_err(|e| format!("{e:?}"))?;
+    Llt::try_new_with_symbolic(symbolic, mat.as_ref(), Side::Upper)
+        .map(|_| ())
+        .map_err(|_| "its Cholesky factorization broke down".to_string())
 }
 
 fn check_pointers(ptr: &[usize], n: usize, avail: usize) -> Result<(), SparseError> {

@@ -2,7 +2,7 @@
 //! `coulomb check` prints it). Prints the table for the README.
 
 use coulomb::existence::{check, CheckSettings, Conclusion, Criterion, Verdict};
-use coulomb::fclib::{self, ReadOptions, Symmetry};
+use coulomb::fclib;
 use std::path::PathBuf;
 
 #[test]
@@ -22,13 +22,10 @@ fn every_fclib_problem_gets_a_conclusion() {
         .collect();
     files.sort();
     assert!(!files.is_empty());
-    let options = ReadOptions {
-        symmetry: Symmetry::Symmetrize,
-    };
     println!("| file | kind | contacts | (4.5) | (4.1) | (4.4) | (4.6) | (5.1) | conclusion | s |");
     println!("|---|---|---|---|---|---|---|---|---|---|");
     for path in files {
-        let file = fclib::read_with(&path, &options).unwrap();
+        let file = fclib::read(&path).unwrap();
         let rep = check(&file.problem, &CheckSettings::default()).unwrap();
         let v = |c: Criterion| match rep.criteria.get(c).verdict {
             Verdict::Holds => "holds",
@@ -67,12 +64,21 @@ fn every_fclib_problem_gets_a_conclusion() {
                 assert!(res <= 1e-6, "{} {c}: residual {res}", path.display());
             }
         }
-        // These are physical simulation snapshots: a solution exists.
-        assert!(
-            matches!(rep.conclusion, Conclusion::Exists { .. }),
-            "{}: {:?}",
-            path.display(),
-            rep.conclusion
-        );
+        // These are physical simulation snapshots: a solution exists. For the five local
+        // files whose W is not symmetric (relative asymmetry 9e-6 … 1.3e-3) the theorems
+        // are not established: the criterion holds, the conclusion stays unknown, and the
+        // note names the criterion.
+        if file.problem.asymmetry() > coulomb::existence::ROUNDING_ASYMMETRY {
+            assert_eq!(rep.conclusion, Conclusion::Unknown, "{}", path.display());
+            let note = rep.note.as_deref().unwrap_or_default();
+            assert!(note.contains("holds") && note.contains("not"), "{note}");
+        } else {
+            assert!(
+                matches!(rep.conclusion, Conclusion::Exists { .. }),
+                "{}: {:?}",
+                path.display(),
+                rep.conclusion
+            );
+        }
     }
 }

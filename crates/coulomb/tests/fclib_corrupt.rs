@@ -309,10 +309,10 @@ fn fclib_corrupt_inconsistent_storage() {
     let mut l = valid_local();
     l.insert("fclib_local/V/m".into(), Data::I32(vec![0]));
     expect_err(&l, "/fclib_local/V", "not supported");
-    // Readable but invalid: W not symmetric, NaN in q.
+    // Readable but invalid: ½(W + Wᵀ) indefinite (W₀₀ = 0, W₁₀ = 2), NaN in q.
     let mut l = valid_local();
     l.insert("fclib_local/W/i".into(), Data::I32(vec![1, 1, 2, 3, 4, 5]));
-    let kind = expect_err(&l, "/fclib_local", "not symmetric");
+    let kind = expect_err(&l, "/fclib_local", "not positive semidefinite");
     assert!(matches!(kind, FclibErrorKind::InvalidProblem { .. }));
     let mut l = valid_local();
     l.insert("fclib_local/vectors/q".into(), Data::F64(vec![f64::NAN; 6]));

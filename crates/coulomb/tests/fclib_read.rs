@@ -1,7 +1,7 @@
 //! Every real FCLIB file in ../shared/fclib is read and matches what h5py shows.
 
-use coulomb::fclib::{self, FclibErrorKind, FclibFile, ReadOptions, Symmetry};
-use coulomb::{Problem, ProblemError};
+use coulomb::fclib::{self, FclibFile};
+use coulomb::Problem;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -79,14 +79,11 @@ const EXPECTED: &[Row] = &[
     ),
 ];
 
-/// Reads with [`Symmetry::Symmetrize`]: five real W are not symmetric within 1e-6
-/// (see `fclib_strict_symmetry_on_real_files`).
+/// Reads a file as stored (five real W are not symmetric within 1e-6: see
+/// `fclib_non_symmetric_w_is_read_as_stored`).
 fn read(dir: &Path, name: &str) -> FclibFile {
     let path = dir.join(format!("{name}.hdf5"));
-    let opts = ReadOptions {
-        symmetry: Symmetry::Symmetrize,
-    };
-    match fclib::read_with(&path, &opts) {
+    match fclib::read(&path) {
         Ok(f) => f,
         Err(e) => panic!("{e}"),
     }
@@ -233,43 +230,21 @@ const ASYMMETRIC: &[(&str, f64)] = &[
 ];
 
 #[test]
-fn fclib_strict_symmetry_on_real_files() {
+fn fclib_non_symmetric_w_is_read_as_stored() {
     let Some(dir) = fclib_dir() else { return };
     for &(name, ..) in EXPECTED {
-        let path = dir.join(format!("{name}.hdf5"));
-        let strict = fclib::read(&path);
-        let relaxed = read(&dir, name);
+        let f = read(&dir, name);
+        let asym = f.problem.asymmetry();
         match ASYMMETRIC.iter().find(|a| a.0 == name) {
-            Some(&(_, asym)) => {
-                let err = strict.expect_err(name);
-                let msg = err.to_string();
-                match err.kind {
-                    FclibErrorKind::InvalidProblem {
-                        source:
-                            ProblemError::NotSymmetric {
-                                what: "W",
-                                asymmetry,
-                            },
-                        ..
-                    } => assert!((asymmetry / asym - 1.0).abs() < 1e-3, "{name}: {asymmetry}"),
-                    other => panic!("{name}: unexpected {other}"),
-                }
-                assert!(
-                    msg.contains("/fclib_local") && msg.contains("not symmetric"),
-                    "{msg}"
-                );
-                let got = relaxed.symmetrized.expect("recorded");
-                assert!((got / asym - 1.0).abs() < 1e-3);
-                let Problem::Local(p) = &relaxed.problem else {
-                    panic!()
+            Some(&(_, expected)) => {
+                // the matrix is the stored one, with its asymmetry, not ½(W + Wᵀ)
+                assert!((asym / expected - 1.0).abs() < 1e-3, "{name}: {asym}");
+                let Problem::Local(p) = &f.problem else {
+                    panic!("{name} is local")
                 };
-                assert_eq!(p.w.asymmetry(), 0.0);
+                assert!(!p.is_symmetric());
             }
-            None => {
-                let f = strict.unwrap_or_else(|e| panic!("{e}"));
-                assert_eq!(f.symmetrized, None);
-                assert_eq!(f, relaxed, "{name}: both policies agree on symmetric data");
-            }
+            None => assert!(asym <= 1e-6, "{name}: {asym}"),
         }
     }
 }

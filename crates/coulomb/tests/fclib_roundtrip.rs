@@ -95,7 +95,6 @@ fn local_file(seed: u64) -> FclibFile {
                 l: Some(rng.vec(2)),
             },
         ],
-        symmetrized: None,
     }
 }
 
@@ -127,7 +126,6 @@ fn global_file(seed: u64) -> FclibFile {
             r: rng.vec(m),
             l: None,
         }],
-        symmetrized: None,
     }
 }
 

@@ -4,7 +4,7 @@
 use coulomb::existence::{
     self, CheckSettings, Conclusion, Criterion, CriterionReport, ExistenceReport,
 };
-use coulomb::fclib::{self, ReadOptions, Symmetry};
+use coulomb::fclib;
 use coulomb::Problem;
 use std::path::{Path, PathBuf};
 
@@ -47,20 +47,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Reads an FCLIB problem. A W or M that is not symmetric within 1e-6 is symmetrized (the
-/// criteria only use H, W, w, q and μ) and the user is told.
+/// Reads an FCLIB problem, exactly as stored.
 fn read_problem(path: &Path) -> anyhow::Result<Problem> {
-    let options = ReadOptions {
-        symmetry: Symmetry::Symmetrize,
-    };
-    let file = fclib::read_with(path, &options)?;
-    if let Some(asym) = file.symmetrized {
-        eprintln!(
-            "note: {}: the matrix was not symmetric (relative asymmetry {asym:.2e}); its symmetric part is used",
-            path.display()
-        );
-    }
-    Ok(file.problem)
+    Ok(fclib::read(path)?.problem)
 }
 
 /// The criteria in the order they are printed: the necessary one first.

@@ -43,13 +43,14 @@ pub struct Report {
     pub tol: f64,
     /// err ≤ tol (and balance residual ≤ tol)
     pub converged: bool,
-    /// relative asymmetry of W (or M) when it exceeded 1e-6 and ½(W + Wᵀ) was used
-    pub symmetrized_asymmetry: Option<f64>,
+    /// relative asymmetry of W (local) or M (global) as stored (the error is always that of
+    /// the stored problem)
+    pub asymmetry: f64,
 }
 
 /// Runs `coulomb error`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let file = super::info::read_relaxed(&args.file)?;
+    let file = coulomb::fclib::read(&args.file)?;
     let (solution, source) = match &args.solution {
         Some(path) => {
             let s = fclib::read_solution(path)?
@@ -82,15 +83,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         balance_residual: eval.balance_residual,
         tol: args.tol,
         converged: eval.converged(args.tol),
-        symmetrized_asymmetry: file.symmetrized,
+        asymmetry: file.problem.asymmetry(),
     };
-    if let Some(a) = report.symmetrized_asymmetry {
-        let w = if report.kind == "local" { "W" } else { "M" };
-        eprintln!(
-            "warning: {}: {w} is not symmetric (relative asymmetry {a:.3e} > 1e-6); evaluated with ½({w} + {w}ᵀ)",
-            report.file
-        );
-    }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {

@@ -1,6 +1,6 @@
 //! `coulomb info`: what is in FCLIB files.
 
-use coulomb::fclib::{self, FclibFile, ReadOptions, Symmetry};
+use coulomb::fclib::{self, FclibFile};
 use coulomb::Problem;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -42,19 +42,9 @@ pub struct Summary {
     pub guesses: usize,
     /// /fclib_*/info/title, when present
     pub title: Option<String>,
-    /// relative asymmetry of W (or M) when it exceeded 1e-6 and was symmetrized on reading
-    pub symmetrized_asymmetry: Option<f64>,
-}
-
-/// Reads a file for inspection: a W that is not symmetric within 1e-6 is replaced by
-/// ½(W + Wᵀ) and reported, rather than refused.
-pub fn read_relaxed(path: &std::path::Path) -> Result<FclibFile, fclib::FclibError> {
-    fclib::read_with(
-        path,
-        &ReadOptions {
-            symmetry: Symmetry::Symmetrize,
-        },
-    )
+    /// relative asymmetry max|A − Aᵀ| / max|A| of W (local) or M (global) as stored; the
+    /// problem is solved as stored whatever its value
+    pub asymmetry: f64,
 }
 
 /// Summarizes a file already read.
@@ -85,7 +75,7 @@ pub fn summarize(file: String, f: &FclibFile) -> Summary {
         has_solution: f.solution.is_some(),
         guesses: f.guesses.len(),
         title: f.info.as_ref().map(|i| i.title.clone()),
-        symmetrized_asymmetry: f.symmetrized,
+        asymmetry: p.asymmetry(),
     }
 }
 
@@ -99,7 +89,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut failures = 0;
     for path in &args.files {
         let name = path.display().to_string();
-        match read_relaxed(path) {
+        match fclib::read(path) {
             Ok(f) => rows.push(Ok(summarize(name, &f))),
             Err(e) => {
                 failures += 1;
@@ -150,11 +140,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             }
         }
         for s in rows.iter().flatten() {
-            if let Some(a) = s.symmetrized_asymmetry {
+            if s.asymmetry > coulomb::problem::SYMMETRY_TOLERANCE {
                 let w = if s.kind == "local" { "W" } else { "M" };
                 eprintln!(
-                    "warning: {}: {w} is not symmetric (relative asymmetry {a:.3e} > 1e-6); shown for ½({w} + {w}ᵀ)",
-                    s.file
+                    "note: {}: {w} is not symmetric (relative asymmetry {:.3e}); it is used as stored",
+                    s.file, s.asymmetry
                 );
             }
         }

@@ -82,9 +82,9 @@ pub struct Report {
     /// existence check on failure (filled by the existence module when available)
     #[serde(skip_serializing_if = "Option::is_none")]
     pub existence: Option<serde_json::Value>,
-    /// relative asymmetry of W (or M) when it exceeded 1e-6 and ½(W + Wᵀ) was used
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub symmetrized_asymmetry: Option<f64>,
+    /// relative asymmetry of W (local) or M (global) as stored; the problem solved, and the
+    /// error reported, are always those of the stored data
+    pub asymmetry: f64,
 }
 
 /// Settings from the arguments, on top of the library defaults.
@@ -133,8 +133,8 @@ pub fn settings(args: &Args) -> anyhow::Result<Settings> {
 /// Runs `coulomb solve`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let settings = settings(&args)?;
-    let file = super::info::read_relaxed(&args.file)
-        .with_context(|| format!("reading {}", args.file.display()))?;
+    let file =
+        fclib::read(&args.file).with_context(|| format!("reading {}", args.file.display()))?;
     let sol = solver::solve(&file.problem, &settings)
         .with_context(|| format!("solving {}", args.file.display()))?;
     if let Some(out) = &args.output {
@@ -167,14 +167,22 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         inner_iterations: sol.inner_iterations,
         solve_time_s: sol.solve_time.as_secs_f64(),
         existence,
-        symmetrized_asymmetry: file.symmetrized,
+        asymmetry: file.problem.asymmetry(),
     };
     if args.json {
         println!("{}", serde_json::to_string(&report)?);
     } else {
         println!("file              {}", report.file);
-        if let Some(a) = report.symmetrized_asymmetry {
-            println!("note              W (or M) not symmetric ({a:.2e}); solved ½(A + Aᵀ)");
+        if report.asymmetry > coulomb::problem::SYMMETRY_TOLERANCE {
+            println!(
+                "note              {} not symmetric (relative asymmetry {:.2e}); solved as stored",
+                if file.problem.kind() == "local" {
+                    "W"
+                } else {
+                    "M"
+                },
+                report.asymmetry
+            );
         }
         println!("status            {:?}", report.status);
         println!("error             {:.3e}", report.error);

@@ -25,8 +25,8 @@
 //! (HDF5 returns their fill value, zero: `/solution/r` of Capsules-i125-1213 is such a
 //! dataset). They are strict about everything else: sizes that disagree, indices out of
 //! range, decreasing pointers, and the validation of [`LocalProblem::new`] /
-//! [`GlobalProblem::new`] (symmetry of W or M within
-//! [`crate::problem::SYMMETRY_TOLERANCE`], M positive definite, finite data, μ ≥ 0). FCLIB's
+//! [`GlobalProblem::new`] (½(W + Wᵀ) positive semidefinite, the symmetric part of M positive
+//! definite, finite data, μ ≥ 0; W and M are kept exactly as stored, symmetric or not). FCLIB's
 //! optional equality constraints (`/fclib_local/{V, R}`) and bilateral constraints
 //! (`/fclib_global/G`) are refused with [`FclibErrorKind::Unsupported`] rather than dropped.
 //! Every failure is an [`FclibError`] naming the file and the HDF5 object; a malformed file
@@ -89,10 +89,6 @@ pub struct FclibFile {
     pub solution: Option<StoredSolution>,
     /// `/guesses/1 .. /guesses/N`, in order
     pub guesses: Vec<StoredSolution>,
-    /// Set only when the file was read with [`Symmetry::Symmetrize`] and W (local) or M
-    /// (global) exceeded [`crate::problem::SYMMETRY_TOLERANCE`]: the relative asymmetry
-    /// max|A − Aᵀ| / max|A| of the matrix in the file, which was replaced by ½(A + Aᵀ).
-    pub symmetrized: Option<f64>,
 }
 
 impl FclibFile {
@@ -103,7 +99,6 @@ impl FclibFile {
             info: None,
             solution: None,
             guesses: Vec::new(),
-            symmetrized: None,
         }
     }
 }
@@ -140,26 +135,13 @@ pub struct WriteOptions {
     pub index: IndexWidth,
 }
 
-/// What to do with a W (local) or M (global) that is not symmetric within
-/// [`crate::problem::SYMMETRY_TOLERANCE`] (1e-6 relative). Several real files have such a W:
-/// Capsules-i101-404 (5.97e-4), Capsules-i125-1213 (1.34e-3), OneObject-i1028-138
-/// (1.15e-4), Rover1039 (9.16e-6), Rover4396 (2.56e-5).
+/// Options of [`read_with`]. The problem is always read exactly as stored: a W or M that is
+/// not exactly symmetric (several real files: Capsules-i101-404, relative asymmetry 5.97e-4;
+/// Capsules-i125-1213, 1.34e-3; OneObject-i1028-138, 1.15e-4; Rover1039, 9.16e-6; Rover4396,
+/// 2.56e-5) is valid data and is never replaced by ½(A + Aᵀ).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Symmetry {
-    /// refuse it: [`FclibErrorKind::InvalidProblem`] with [`ProblemError::NotSymmetric`]
-    #[default]
-    Strict,
-    /// replace it by ½(A + Aᵀ) and record the asymmetry in [`FclibFile::symmetrized`]
-    /// (the caller is expected to tell the user)
-    Symmetrize,
-}
-
-/// How [`read_with`] treats data that is readable but not a valid problem as stored.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct ReadOptions {
-    /// policy for a non-symmetric W or M
-    pub symmetry: Symmetry,
-}
+#[non_exhaustive]
+pub struct ReadOptions {}
 
 fn file_name(path: &Path) -> String {
     path.display().to_string()

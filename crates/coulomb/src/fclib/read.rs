@@ -4,8 +4,8 @@
 //! constraints coulomb does not model).
 
 use super::error::{FclibError, FclibErrorKind};
-use super::{FclibFile, Info, ReadOptions, StoredSolution, Symmetry};
-use crate::problem::{GlobalProblem, LocalProblem, Problem, SYMMETRY_TOLERANCE};
+use super::{FclibFile, Info, ReadOptions, StoredSolution};
+use crate::problem::{GlobalProblem, LocalProblem, Problem};
 use crate::sparse::CscMatrix;
 use hdf5_pure::{DType, Dataset, FormatError};
 
@@ -399,8 +399,8 @@ impl<'a> Reader<'a> {
         }))
     }
 
-    /// The local problem in `/fclib_local`, and the asymmetry of W when it was symmetrized.
-    fn local(&self, opts: &ReadOptions) -> Result<(Problem, Option<f64>), FclibError> {
+    /// The local problem in `/fclib_local`, exactly as stored.
+    fn local(&self) -> Result<Problem, FclibError> {
         let g = "fclib_local";
         self.refuse("fclib_local/V", "equality constraints (V, R, s)")?;
         self.refuse("fclib_local/R", "equality constraints (V, R, s)")?;
@@ -427,9 +427,9 @@ impl<'a> Reader<'a> {
         }
         let q = self.floats_len("fclib_local/vectors/q", m, "m of /fclib_local/W")?;
         let mu = self.floats_len("fclib_local/vectors/mu", m / d, "m / spacedim")?;
-        let (w, sym) = symmetrize(self.matrix(wg)?, opts);
+        let w = self.matrix(wg)?;
         LocalProblem::new(d as i64, w, q, mu)
-            .map(|p| (Problem::Local(p), sym))
+            .map(Problem::Local)
             .map_err(|source| {
                 self.err(FclibErrorKind::InvalidProblem {
                     group: shown(g),
@@ -438,8 +438,8 @@ impl<'a> Reader<'a> {
             })
     }
 
-    /// The global problem in `/fclib_global`, and the asymmetry of M when it was symmetrized.
-    fn global(&self, opts: &ReadOptions) -> Result<(Problem, Option<f64>), FclibError> {
+    /// The global problem in `/fclib_global`, exactly as stored.
+    fn global(&self) -> Result<Problem, FclibError> {
         let g = "fclib_global";
         self.refuse("fclib_global/G", "bilateral constraints (G, b)")?;
         let d = self.spacedim(g)?;
@@ -474,10 +474,10 @@ impl<'a> Reader<'a> {
         let f = self.floats_len("fclib_global/vectors/f", mm, "m of /fclib_global/M")?;
         let w = self.floats_len("fclib_global/vectors/w", hn, "n of /fclib_global/H")?;
         let mu = self.floats_len("fclib_global/vectors/mu", hn / d, "n of H / spacedim")?;
-        let (mmat, sym) = symmetrize(self.matrix("fclib_global/M")?, opts);
+        let mmat = self.matrix("fclib_global/M")?;
         let hmat = self.matrix("fclib_global/H")?;
         GlobalProblem::new(d as i64, mmat, hmat, f, w, mu)
-            .map(|p| (Problem::Global(p), sym))
+            .map(Problem::Global)
             .map_err(|source| {
                 self.err(FclibErrorKind::InvalidProblem {
                     group: shown(g),
@@ -538,13 +538,13 @@ impl<'a> Reader<'a> {
     }
 
     /// The whole file.
-    pub(super) fn fclib_file(&self, opts: &ReadOptions) -> Result<FclibFile, FclibError> {
+    pub(super) fn fclib_file(&self, _opts: &ReadOptions) -> Result<FclibFile, FclibError> {
         let local = self.has_group("fclib_local")?;
         let global = self.has_group("fclib_global")?;
-        let ((problem, symmetrized), group) =
+        let (problem, group) =
             match (local, global) {
-                (true, false) => (self.local(opts)?, "fclib_local"),
-                (false, true) => (self.global(opts)?, "fclib_global"),
+                (true, false) => (self.local()?, "fclib_local"),
+                (false, true) => (self.global()?, "fclib_global"),
                 (true, true) => return Err(self.err(FclibErrorKind::Unsupported {
                     path: "/".into(),
                     detail:
@@ -570,24 +570,8 @@ impl<'a> Reader<'a> {
             info,
             solution,
             guesses,
-            symmetrized,
         })
     }
-}
-
-/// Under [`Symmetry::Symmetrize`], replaces a square matrix whose relative asymmetry exceeds
-/// [`SYMMETRY_TOLERANCE`] by ½(A + Aᵀ), returning the asymmetry it had.
-fn symmetrize(a: CscMatrix, opts: &ReadOptions) -> (CscMatrix, Option<f64>) {
-    if opts.symmetry != Symmetry::Symmetrize || a.nrows != a.ncols {
-        return (a, None);
-    }
-    let asym = a.asymmetry();
-    if asym <= SYMMETRY_TOLERANCE || !asym.is_finite() {
-        return (a, None);
-    }
-    let mut s = a.add_scaled(1.0, &a.transpose());
-    s.values.iter_mut().for_each(|v| *v *= 0.5);
-    (s, Some(asym))
 }
 
 /// Human description of an HDF5 datatype for error messages.

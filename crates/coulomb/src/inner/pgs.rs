@@ -35,9 +35,13 @@
 //!
 //! # Bookkeeping
 //! The iteration keeps u = W r + b up to date: after contact i moves by δ, u ← u + W_{:,i} δ
-//! through the columns of W (W is symmetric, so its column i is its row i), which costs the
-//! nonzeros of those d columns. Then cᵢ = uᵢ − Wᵢᵢ rᵢ. The diagonal blocks Wᵢᵢ are extracted
-//! once per matrix. A diagonal block that is singular (a contact that W barely sees) is solved
+//! through the columns of W, which costs the nonzeros of those d columns. Then
+//! cᵢ = uᵢ − Wᵢᵢ rᵢ. The diagonal blocks Wᵢᵢ are extracted once per matrix, as stored: W need
+//! not be symmetric, and the fused iteration then solves each contact's law with its own
+//! non-symmetric block (the one-contact formulas of [`solve_contact_law`] hold for any
+//! block with a positive definite symmetric part). The SOC-QP step [`solve_contact`] reads
+//! a symmetric block; the inner solver is only given a symmetric W (the solver passes
+//! ½(W + Wᵀ) when the stored W is not symmetric). A diagonal block that is singular (a contact that W barely sees) is solved
 //! with a proximal term ε‖rᵢ − rᵢ_old‖²/2, which leaves the fixed points unchanged.
 //!
 //! # Stopping
@@ -64,8 +68,9 @@ pub struct DiagonalBlocks {
     pub w_scale: f64,
 }
 
-/// Inverse of a symmetric d × d (d ≤ 3) row-major matrix by cofactors; None if singular
-/// relative to `scale`.
+/// Inverse of a d × d (d ≤ 3) row-major matrix by cofactors; None if its determinant is not
+/// positive relative to `scale` (a block with a positive definite symmetric part has a
+/// positive determinant).
 fn invert(a: &[f64; 9], d: usize, scale: f64) -> Option<[f64; 9]> {
     let mut inv = [0.0; 9];
     match d {
@@ -120,14 +125,6 @@ impl DiagonalBlocks {
                     if row >= i * dim && row < (i + 1) * dim {
                         blk[(row - i * dim) * dim + k] += w.values[p];
                     }
-                }
-            }
-            // exact symmetry
-            for a in 0..dim {
-                for b in a + 1..dim {
-                    let m = 0.5 * (blk[a * dim + b] + blk[b * dim + a]);
-                    blk[a * dim + b] = m;
-                    blk[b * dim + a] = m;
                 }
             }
         }

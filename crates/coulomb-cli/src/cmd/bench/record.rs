@@ -102,8 +102,9 @@ pub struct ProblemInfo {
     pub kind: Option<String>,
     /// number of contacts (None when the file could not be read)
     pub contacts: Option<usize>,
-    /// relative asymmetry of the stored W (or M) when it was replaced by its symmetric part
-    pub symmetrized: Option<f64>,
+    /// relative asymmetry of W (or M) as stored (None when the file could not be read); the
+    /// problem is benchmarked as stored
+    pub asymmetry: Option<f64>,
 }
 
 /// One line of the results: a (problem, solver) pair.
@@ -117,9 +118,9 @@ pub struct Record {
     pub kind: Option<String>,
     /// number of contacts; null when the file could not be read
     pub contacts: Option<usize>,
-    /// relative asymmetry of the stored W (or M) when the benchmark ran on ½(W + Wᵀ)
+    /// relative asymmetry of W (or M) as stored
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub symmetrized: Option<f64>,
+    pub asymmetry: Option<f64>,
     /// solver name, e.g. `apgd+anderson`
     pub solver: String,
     /// status word (see [`Criteria::judge`]; `read_error` when the file could not be read)
@@ -173,7 +174,7 @@ impl Record {
             path: problem.path.clone(),
             kind: problem.kind.clone(),
             contacts: problem.contacts,
-            symmetrized: problem.symmetrized,
+            asymmetry: problem.asymmetry,
             solver: solver.to_string(),
             status: "not_run".into(),
             converged,
@@ -249,7 +250,7 @@ mod tests {
             path: "p.hdf5".into(),
             kind: Some("local".into()),
             contacts: Some(2),
-            symmetrized: None,
+            asymmetry: None,
         }
     }
 

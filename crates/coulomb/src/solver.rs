@@ -1,6 +1,21 @@
 //! The public entry point: `solve(&problem, &settings)` runs the outer fixed-point iteration
 //! s ← F(s) of §3.3 around an inner solver of (3.15)/(4.7), and reports the error of
 //! `docs/error.md` recomputed from the returned r (and v).
+//!
+//! # The problem solved is the problem stored
+//! W (local) or M (global) need not be symmetric: real files carry assembly round-off
+//! (relative asymmetry 1e-16 … 1.3e-3), and the problem is the one stored. When W is not
+//! symmetric the inner problem of §3.3 is no longer the QP (4.7) but the variational
+//! inequality: find r ∈ L with ⟨W r + q + E s, r′ − r⟩ ≥ 0 for all r′ ∈ L, strongly
+//! monotone when ½(W + Wᵀ) is positive definite. The QP inner solvers (APGD, projected
+//! Gauss–Seidel, interior point, faceted) see only the quadratic form, i.e. the surrogate
+//! ½(W + Wᵀ); they are a stage. What finishes on the stored W: the error measure and every
+//! status (always on the stored data), F(s) (3.19) (from u = W r + q), the fused
+//! Gauss–Seidel on Coulomb's law (each contact's law solved with its own stored diagonal
+//! block, u maintained through the stored columns), and the semismooth Newton end game
+//! ([`crate::newton`], J = I − D + D A W with W as stored). With the default settings
+//! every run on a non-symmetric W ends with the error of the stored problem; the Newton end
+//! game or the fused fallback brings it below tol.
 
 use crate::delassus::Delassus;
 use crate::fixed_point::{self, OuterUpdate};

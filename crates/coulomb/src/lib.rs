@@ -9,7 +9,17 @@
 //!   Coulomb's law (2.9) and the error measure results are reported in;
 //! - [`delassus`]: W = Hᵀ M⁻¹ H and q = Hᵀ M⁻¹ f + w;
 //! - [`inner`]: solvers of the second-order-cone QP (3.15)/(4.7) that defines F(s);
+//! - [`fixed_point`]: the map F(s) (3.19), rule (6.1) and Anderson mixing of §3.3;
+//! - [`newton`]: semismooth Newton on the natural map of the whole law (the end game);
+//! - [`solver`]: [`solve`] with typed [`Settings`], statuses and the [`Solution`];
+//! - [`existence`]: the criteria (4.1), (4.4), (4.5), (4.6), (5.1) with certificates;
+//! - [`examples`]: Painlevé (2.12) and the other examples of §4–5;
 //! - [`fclib`]: the FCLIB HDF5 exchange format.
+//!
+//! Every error and every "converged" is that of `docs/error.md`, computed on the problem as
+//! stored, from the returned r (and v).
+
+#![warn(missing_docs)]
 
 pub mod cone;
 pub mod delassus;
@@ -25,4 +35,5 @@ pub mod solver;
 pub mod sparse;
 
 pub use problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
+pub use solver::{solve, solve_with_guess, Guess, Settings, Solution, SolveError, Status};
 pub use sparse::CscMatrix;

@@ -84,9 +84,11 @@ pub enum Status {
     BalanceResidual,
 }
 
-/// Typed settings with defaults suited to rigid-body problems: APGD inside Anderson-mixed
-/// fixed-point iterations, a semismooth Newton end game on the whole law once the error is
-/// ≤ 1e-4, and fused Gauss–Seidel as fallback when the first stage stalls.
+/// Typed settings with defaults suited to rigid-body problems: a warm-up of at most 50
+/// Gauss–Seidel sweeps on Coulomb's law, then APGD inside Anderson-mixed fixed-point
+/// iterations, a semismooth Newton end game on the whole law once the error is
+/// ≤ [`Settings::newton_start`] (1e-3), and fused Gauss–Seidel as fallback when the first
+/// stage stalls.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Settings {
     /// tolerance on the reported error (docs/error.md); also on the balance residual
@@ -95,7 +97,6 @@ pub struct Settings {
     pub inner: InnerKind,
     /// outer iteration
     pub outer: OuterKind,
-    /// cap on outer iterations (subproblems)
     /// a second (inner, outer) method, warm-started from the first one's r, run when the first
     /// stops without converging (iteration cap, inner failure, or stalled: the error no longer
     /// halves over [`STALL_WINDOW`] outer iterations); the time limit covers both
@@ -104,6 +105,7 @@ pub struct Settings {
     /// before the main method (0: none); small problems are solved there, and otherwise the
     /// main method starts from the caller's point as if the try had not happened
     pub warmup_sweeps: usize,
+    /// cap on outer iterations (subproblems)
     pub max_outer: usize,
     /// cap on iterations of each inner solve
     pub max_inner: usize,

@@ -29,6 +29,11 @@ def _problem_error(msg: str, field: str, kind: str = "shape", index: Any = None)
     return e
 
 
+def _refuse_complex(name: str, a: Any) -> None:
+    if np.iscomplexobj(a):
+        raise TypeError(f"{name} is complex; the problem data are real")
+
+
 def _index_array(a: Any) -> np.ndarray:
     a = np.asarray(a)
     if a.dtype in (np.int32, np.int64) and a.flags.c_contiguous and a.ndim == 1:
@@ -41,9 +46,11 @@ def _csc(name: str, a: MatrixLike) -> CscTuple:
     CSC once (no copy if it already is CSC with float64 data); a dense array is compressed."""
     if hasattr(a, "tocsc") and hasattr(a, "nnz"):  # scipy.sparse, any format
         c = a.tocsc()
+        _refuse_complex(name, c.data)
         data = np.ascontiguousarray(c.data, dtype=np.float64)
         return (int(c.shape[0]), int(c.shape[1]), _index_array(c.indptr),
                 _index_array(c.indices), data)
+    _refuse_complex(name, a)
     d = np.asarray(a, dtype=np.float64)
     if d.ndim != 2:
         raise _problem_error(f"{name} must be a 2-D array or a scipy.sparse matrix, "
@@ -57,6 +64,7 @@ def _csc(name: str, a: MatrixLike) -> CscTuple:
 
 
 def _vector(name: str, x: ArrayLike) -> np.ndarray:
+    _refuse_complex(name, x)
     v = np.ascontiguousarray(x, dtype=np.float64)
     if v.ndim != 1:
         raise _problem_error(f"{name} must be 1-D, got shape {v.shape}", name)
@@ -64,6 +72,7 @@ def _vector(name: str, x: ArrayLike) -> np.ndarray:
 
 
 def _mu(mu: ArrayLike, contacts: int) -> np.ndarray:
+    _refuse_complex("mu", mu)
     m = np.asarray(mu, dtype=np.float64)
     if m.ndim == 0:
         return np.full(contacts, float(m))

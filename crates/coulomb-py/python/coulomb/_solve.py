@@ -100,6 +100,8 @@ def default_settings() -> Dict[str, Any]:
 def _vec(x: Optional[ArrayLike]) -> Optional[np.ndarray]:
     if x is None:
         return None
+    if np.iscomplexobj(x):
+        raise TypeError("complex input; r, v are real")
     v = np.ascontiguousarray(x, dtype=np.float64)
     return v.ravel() if v.ndim != 1 else v
 

@@ -122,21 +122,12 @@ pub fn csc_to_tuple<'py>(py: Python<'py>, a: &CscMatrix) -> PyResult<Bound<'py, 
     )
 }
 
-fn inner_name(k: InnerKind) -> &'static str {
-    match k {
-        InnerKind::Ipm => "ipm",
-        InnerKind::Apgd => "apgd",
-        InnerKind::Pgs => "pgs",
-        InnerKind::Faceted => "faceted",
-    }
+fn inner_name(k: InnerKind) -> String {
+    serde_name(&k)
 }
 
-fn outer_name(k: OuterKind) -> &'static str {
-    match k {
-        OuterKind::FixedPoint => "fixed_point",
-        OuterKind::Anderson => "anderson",
-        OuterKind::Fused => "fused",
-    }
+fn outer_name(k: OuterKind) -> String {
+    serde_name(&k)
 }
 
 fn parse_inner(py: Python<'_>, field: &str, s: &str) -> PyResult<InnerKind> {
@@ -327,19 +318,18 @@ pub fn settings_from_kwargs(
     Ok(s)
 }
 
-/// The Python name of a [`Status`] (the value of the `coulomb.Status` enum).
-pub fn status_name(s: Status) -> &'static str {
-    match s {
-        Status::Converged => "converged",
-        Status::MaxIterations => "max_iterations",
-        Status::TimeLimit => "time_limit",
-        Status::Stalled => "stalled",
-        Status::InnerFailure => "inner_failure",
-        Status::InnerInfeasible => "inner_infeasible",
-        Status::NumericalError => "numerical_error",
-        Status::FixedPointRule => "fixed_point_rule",
-        Status::BalanceResidual => "balance_residual",
+/// The snake_case name of a unit enum value of the library (`Status`, `InnerKind`,
+/// `OuterKind`), from its `Serialize` impl: a variant added to the library needs no edit here.
+pub fn serde_name<T: serde::Serialize>(x: &T) -> String {
+    match serde_json::to_value(x) {
+        Ok(serde_json::Value::String(s)) => s,
+        _ => String::from("unknown"),
     }
+}
+
+/// The Python name of a [`Status`] (the value of the `coulomb.Status` enum).
+pub fn status_name(s: Status) -> String {
+    serde_name(&s)
 }
 
 /// A [`Solution`] as a dict; the vectors are moved into numpy arrays (no copy).

@@ -53,6 +53,39 @@ fn parse_location(py: Python<'_>, location: &str) -> Py<PyAny> {
     obj(py, location)
 }
 
+/// The Debug name of an enum variant in snake_case (`NotSymmetric { .. }` → `not_symmetric`).
+fn variant_name<E: std::fmt::Debug>(e: &E) -> String {
+    let debug = format!("{e:?}");
+    let name: String = debug.chars().take_while(|c| c.is_alphanumeric()).collect();
+    let mut out = String::new();
+    for (i, c) in name.chars().enumerate() {
+        if c.is_uppercase() && i > 0 {
+            out.push('_');
+        }
+        out.extend(c.to_lowercase());
+    }
+    out
+}
+
+/// An error of a variant this module does not know (added to the library later): its
+/// message and variant name.
+fn variant_error<E: std::fmt::Debug + std::fmt::Display>(
+    py: Python<'_>,
+    class: &str,
+    e: &E,
+) -> PyErr {
+    raise(
+        py,
+        class,
+        e.to_string(),
+        vec![
+            ("kind", obj(py, variant_name(e))),
+            ("field", py.None()),
+            ("index", py.None()),
+        ],
+    )
+}
+
 /// [`ProblemError`] → `coulomb.ProblemError` (a `ValueError`) with `kind`, `field`, `index`.
 pub fn problem_error(py: Python<'_>, e: &ProblemError) -> PyErr {
     let msg = e.to_string();
@@ -72,6 +105,9 @@ pub fn problem_error(py: Python<'_>, e: &ProblemError) -> PyErr {
             };
             ("sparse", what, index)
         }
+        // a variant added to the library: its name, no field
+        #[allow(unreachable_patterns)]
+        _ => return variant_error(py, "ProblemError", e),
     };
     raise(
         py,
@@ -119,6 +155,8 @@ pub fn solve_error(py: Python<'_>, e: &SolveError) -> PyErr {
             let field = if m.starts_with('v') { "v0" } else { "r0" };
             input_error(py, field, None, e.to_string())
         }
+        #[allow(unreachable_patterns)]
+        _ => variant_error(py, "CoulombError", e),
     }
 }
 
@@ -128,6 +166,8 @@ pub fn evaluate_error(py: Python<'_>, e: &EvaluateError) -> PyErr {
         EvaluateError::Length { what, .. } => input_error(py, what, None, e.to_string()),
         EvaluateError::MissingVelocity => input_error(py, "v", None, e.to_string()),
         EvaluateError::Problem(p) => problem_error(py, p),
+        #[allow(unreachable_patterns)]
+        _ => variant_error(py, "InputError", e),
     }
 }
 
@@ -169,6 +209,8 @@ pub fn fclib_error(py: Python<'_>, e: FclibError) -> PyErr {
             ("invalid_problem", field, index)
         }
         FclibErrorKind::Write { .. } => ("write", py.None(), py.None()),
+        #[allow(unreachable_patterns)]
+        _ => ("other", py.None(), py.None()),
     };
     raise(
         py,

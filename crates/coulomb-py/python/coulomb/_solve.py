@@ -50,6 +50,16 @@ class Status(str, enum.Enum):
     def __str__(self) -> str:
         return self.value
 
+    @classmethod
+    def _missing_(cls, value: object) -> "Status":
+        # a status added to the library after this module: a pseudo-member, not a crash
+        if not isinstance(value, str):
+            return None  # type: ignore[return-value]
+        member = str.__new__(cls, value)
+        member._name_ = value.upper()
+        member._value_ = value
+        return member
+
 
 @dataclass(frozen=True)
 class Solution:

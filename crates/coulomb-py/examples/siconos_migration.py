@@ -46,12 +46,21 @@ def read(path: str):
         return f.problem
 
 
+def _csc64(a):
+    """CSC with int64 indices, the integer width Siconos 4.4 stores (no conversion warning)."""
+    import scipy.sparse as sp
+
+    c = sp.csc_matrix(a)
+    c.indices, c.indptr = c.indices.astype(np.int64), c.indptr.astype(np.int64)
+    return c
+
+
 def solve_siconos(p, tol: float, solver: str):
     """fc3d_driver / gfc3d_driver on the same data; returns (r, v, seconds, info, own error)."""
     import siconos.numerics as sn
 
     if p.kind == "local":
-        W = p.W.tocsc()
+        W = _csc64(p.W)
         P = sn.FrictionContactProblem(p.dim, p.contacts, W, p.q, p.mu)
         o = sn.SolverOptions(getattr(sn, "SICONOS_FRICTION_3D_" + solver))
         o.iparam[sn.SICONOS_IPARAM_MAX_ITER] = 100000
@@ -63,7 +72,7 @@ def solve_siconos(p, tol: float, solver: str):
     # Siconos' global problem reads M v = q + H r, u = Hᵀ v + b: FCLIB's f is its q, w its b
     P = sn.GlobalFrictionContactProblem()
     P.dimension, P.numberOfContacts = p.dim, p.contacts
-    P.M, P.H, P.q, P.b, P.mu = p.M.tocsc(), p.H.tocsc(), p.f, p.w, p.mu
+    P.M, P.H, P.q, P.b, P.mu = _csc64(p.M), _csc64(p.H), p.f, p.w, p.mu
     name = solver if solver.endswith("_WR") or solver in ("ADMM", "IPM") else solver + "_WR"
     o = sn.SolverOptions(getattr(sn, "SICONOS_GLOBAL_FRICTION_3D_" + name))
     o.iparam[sn.SICONOS_IPARAM_MAX_ITER] = 100000

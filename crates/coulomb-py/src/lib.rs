@@ -375,10 +375,13 @@ fn fclib_write(
     let file_name = path
         .file_name()
         .ok_or_else(|| PyValueError::new_err(format!("{name}: not a file name")))?;
+    // unique per process and call, so that concurrent writes (GIL released) never share it
+    static WRITES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
     let tmp = dir.join(format!(
-        ".{}.tmp-{}",
+        ".{}.tmp-{}-{}",
         file_name.to_string_lossy(),
-        std::process::id()
+        std::process::id(),
+        WRITES.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
     ));
     py.detach(|| {
         std::fs::write(&tmp, &bytes)

@@ -76,3 +76,28 @@ def test_error_of_zero_is_the_library_measure():
     ev = coulomb.evaluate(p, r)
     assert ev.error == pytest.approx(local_error(p.W, p.q, p.mu, r, p.dim), rel=1e-12)
     assert ev.balance_residual is None and not ev.converged(1e-8)
+
+
+def _h5_matrix(g):
+    """An FCLIB matrix group read with h5py alone (CSC nz = -1, CSR nz = -2, else triplets)."""
+    nz, m, n = int(g["nz"][0]), int(g["m"][0]), int(g["n"][0])
+    p, i, x = g["p"][:].astype(np.int64), g["i"][:].astype(np.int64), g["x"][:]
+    if nz == -1:
+        return sp.csc_matrix((x[: p[n]], i[: p[n]], p[: n + 1]), shape=(m, n))
+    if nz == -2:
+        return sp.csr_matrix((x[: p[m]], i[: p[m]], p[: m + 1]), shape=(m, n))
+    return sp.coo_matrix((x[:nz], (i[:nz], p[:nz])), shape=(m, n))
+
+
+@pytest.mark.parametrize("name", ["NESpheres_10_1.hdf5", "BoxesStack1-i100000-32.hdf5"])
+def test_arrays_read_by_h5py(name):
+    """The data as any Python user has them (h5py, scipy), with no coulomb reader involved."""
+    h5py = pytest.importorskip("h5py")
+    with h5py.File(fclib_file(name), "r") as f:
+        g = f["fclib_local"]
+        dim = int(g["spacedim"][0])
+        W, q, mu = _h5_matrix(g["W"]), g["vectors"]["q"][:], g["vectors"]["mu"][:]
+    sol = coulomb.solve(coulomb.LocalProblem(W, q, mu, dim=dim))
+    err = local_error(W, q, mu, sol.r, dim)
+    assert sol.converged and err <= 1e-8
+    assert err == pytest.approx(sol.err, rel=1e-6, abs=1e-15)

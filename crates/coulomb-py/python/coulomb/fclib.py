@@ -1,0 +1,90 @@
+"""FCLIB, the frictional-contact community's HDF5 exchange format (``coulomb::fclib``).
+
+One problem per file: ``/fclib_local`` (W, q, μ) or ``/fclib_global`` (M, H, f, w, μ), an
+optional ``/solution`` {r, u, v} and ``/guesses``. Reading validates the problem strictly
+(the library's ``LocalProblem::new`` / ``GlobalProblem::new``); writing writes what Siconos
+writes (CSC, int32 indices), atomically (a temporary file renamed over the target).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from typing import Any, List, Mapping, Optional, Union
+
+import numpy as np
+
+from . import _coulomb
+from ._problem import Problem
+
+__all__ = ["FclibFile", "StoredSolution", "read", "write"]
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+@dataclass(frozen=True)
+class StoredSolution:
+    """``/solution`` or ``/guesses/k``: data, not truth (check it with :func:`coulomb.error`)."""
+
+    r: np.ndarray
+    u: Optional[np.ndarray] = None
+    v: Optional[np.ndarray] = None
+    l: Optional[np.ndarray] = None  # noqa: E741 (FCLIB's name)
+
+
+@dataclass(frozen=True)
+class FclibFile:
+    """The contents of one FCLIB file."""
+
+    #: the problem, validated
+    problem: Problem
+    #: ``/fclib_*/info``: {"title", "description", "math_info"} or None
+    info: Optional[Mapping[str, str]] = None
+    #: ``/solution``, when present
+    solution: Optional[StoredSolution] = None
+    #: ``/guesses/1 .. N``
+    guesses: List[StoredSolution] = field(default_factory=list)
+    #: relative asymmetry of W (or M) when the file was read with ``symmetrize=True`` and it
+    #: exceeded 1e-6 (the matrix was then replaced by ½(A + Aᵀ)); else None
+    symmetrized: Optional[float] = None
+
+
+def _stored(d: Optional[Mapping[str, Any]]) -> Optional[StoredSolution]:
+    return None if d is None else StoredSolution(r=d["r"], u=d["u"], v=d["v"], l=d["l"])
+
+
+def read(path: PathLike, symmetrize: bool = False) -> FclibFile:
+    """Reads an FCLIB file.
+
+    ``symmetrize=False`` (the library's default) refuses a W or M that is not symmetric within
+    1e-6 relative (:class:`coulomb.FclibError` with kind ``invalid_problem``);
+    ``symmetrize=True`` replaces it by ½(A + Aᵀ) and records the asymmetry in
+    ``FclibFile.symmetrized``, as ``coulomb solve`` does. A missing or unreadable file raises
+    :class:`OSError`; a malformed one :class:`coulomb.FclibError` naming the HDF5 object.
+    """
+    d = _coulomb.fclib_read(os.fspath(path), bool(symmetrize))
+    return FclibFile(
+        problem=Problem._wrap(d["problem"]), info=d["info"], solution=_stored(d["solution"]),
+        guesses=[s for s in (_stored(g) for g in d["guesses"]) if s is not None],
+        symmetrized=d["symmetrized"])
+
+
+def _opt(x: Any) -> Optional[np.ndarray]:
+    return None if x is None else np.ascontiguousarray(x, dtype=np.float64).ravel()
+
+
+def write(path: PathLike, problem: Problem, solution: Any = None,
+          info: Optional[Mapping[str, str]] = None) -> None:
+    """Writes ``problem`` (and ``solution``: a :class:`coulomb.Solution`, a
+    :class:`StoredSolution` or a mapping with ``r`` and optionally ``u``, ``v``) to ``path``
+    as FCLIB, replacing it atomically. ``info`` may hold title, description, math_info."""
+    r = u = v = None
+    if solution is not None:
+        get = (solution.get if isinstance(solution, Mapping)
+               else lambda k: getattr(solution, k, None))
+        r, u, v = _opt(get("r")), _opt(get("u")), _opt(get("v"))
+    inf = None
+    if info is not None:
+        inf = (str(info.get("title", "")), str(info.get("description", "")),
+               str(info.get("math_info", "")))
+    _coulomb.fclib_write(os.fspath(path), problem._inner, r, u, v, inf)

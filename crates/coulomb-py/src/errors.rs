@@ -1,0 +1,227 @@
+//! The library's typed errors as Python exceptions (classes defined in `coulomb/_errors.py`).
+//!
+//! Every error carries what the Rust error says: the field (`"W"`, `"q"`, `"mu"`, ...), the
+//! index where there is one (an int, or a `(row, col)` tuple), and a `kind` naming the variant.
+
+use coulomb::fclib::{EvaluateError, FclibError, FclibErrorKind};
+use coulomb::problem::ProblemError;
+use coulomb::solver::SolveError;
+use coulomb::sparse::SparseError;
+use pyo3::exceptions::{
+    PyFileNotFoundError, PyIsADirectoryError, PyOSError, PyPermissionError, PyValueError,
+};
+use pyo3::prelude::*;
+use pyo3::types::PyTuple;
+
+/// An instance of `coulomb._errors.<class>` with message `msg` and attributes `attrs`;
+/// a plain `ValueError` if the Python package is not importable.
+fn raise(py: Python<'_>, class: &str, msg: String, attrs: Vec<(&str, Py<PyAny>)>) -> PyErr {
+    let build = || -> PyResult<PyErr> {
+        let cls = py.import("coulomb._errors")?.getattr(class)?;
+        let exc = cls.call1((msg.clone(),))?;
+        for (name, value) in attrs {
+            exc.setattr(name, value)?;
+        }
+        Ok(PyErr::from_value(exc))
+    };
+    build().unwrap_or_else(|_| PyValueError::new_err(msg))
+}
+
+fn obj<'py, T: IntoPyObject<'py>>(py: Python<'py>, x: T) -> Py<PyAny> {
+    use pyo3::BoundObject;
+    match x.into_pyobject(py) {
+        Ok(b) => b.into_any().unbind(),
+        Err(_) => py.None(),
+    }
+}
+
+/// `"index 5"` → 5, `"(3, 4)"` → (3, 4), as written by the library's validation.
+fn parse_location(py: Python<'_>, location: &str) -> Py<PyAny> {
+    if let Some(i) = location
+        .strip_prefix("index ")
+        .and_then(|s| s.parse::<usize>().ok())
+    {
+        return obj(py, i);
+    }
+    let inner = location.trim_start_matches('(').trim_end_matches(')');
+    let parts: Vec<Option<usize>> = inner.split(',').map(|s| s.trim().parse().ok()).collect();
+    if let [Some(r), Some(c)] = parts[..] {
+        if let Ok(t) = PyTuple::new(py, [r, c]) {
+            return t.into_any().unbind();
+        }
+    }
+    obj(py, location)
+}
+
+/// The Debug name of an enum variant in snake_case (`NotSymmetric { .. }` → `not_symmetric`).
+fn variant_name<E: std::fmt::Debug>(e: &E) -> String {
+    let debug = format!("{e:?}");
+    let name: String = debug.chars().take_while(|c| c.is_alphanumeric()).collect();
+    let mut out = String::new();
+    for (i, c) in name.chars().enumerate() {
+        if c.is_uppercase() && i > 0 {
+            out.push('_');
+        }
+        out.extend(c.to_lowercase());
+    }
+    out
+}
+
+/// An error of a variant this module does not know (added to the library later): its
+/// message and variant name.
+fn variant_error<E: std::fmt::Debug + std::fmt::Display>(
+    py: Python<'_>,
+    class: &str,
+    e: &E,
+) -> PyErr {
+    raise(
+        py,
+        class,
+        e.to_string(),
+        vec![
+            ("kind", obj(py, variant_name(e))),
+            ("field", py.None()),
+            ("index", py.None()),
+        ],
+    )
+}
+
+/// [`ProblemError`] → `coulomb.ProblemError` (a `ValueError`) with `kind`, `field`, `index`.
+pub fn problem_error(py: Python<'_>, e: &ProblemError) -> PyErr {
+    let msg = e.to_string();
+    let (kind, field, index): (&str, &str, Py<PyAny>) = match e {
+        ProblemError::Dimension(_) => ("dimension", "dim", py.None()),
+        ProblemError::Shape { what, .. } => ("shape", what, py.None()),
+        ProblemError::NonFinite { what, location } => {
+            ("non_finite", what, parse_location(py, location))
+        }
+        ProblemError::Friction { contact, .. } => ("friction", "mu", obj(py, *contact)),
+        ProblemError::NotSymmetric { what, .. } => ("not_symmetric", what, py.None()),
+        ProblemError::NotPositiveDefinite(_) => ("not_positive_definite", "M", py.None()),
+        ProblemError::Sparse { what, source } => {
+            let index = match source {
+                SparseError::IndexOutOfRange { entry, .. } => obj(py, *entry),
+                _ => py.None(),
+            };
+            ("sparse", what, index)
+        }
+        // a variant added to the library: its name, no field
+        #[allow(unreachable_patterns)]
+        _ => return variant_error(py, "ProblemError", e),
+    };
+    raise(
+        py,
+        "ProblemError",
+        msg,
+        vec![
+            ("kind", obj(py, kind)),
+            ("field", obj(py, field)),
+            ("index", index),
+        ],
+    )
+}
+
+/// A bad keyword setting → `coulomb.SettingsError` (a `ValueError`) naming the setting.
+pub fn settings_error(py: Python<'_>, field: &str, msg: String) -> PyErr {
+    raise(
+        py,
+        "SettingsError",
+        msg,
+        vec![("field", obj(py, field)), ("index", py.None())],
+    )
+}
+
+/// A bad argument array (r0, v0, r, v) → `coulomb.InputError` (a `ValueError`).
+pub fn input_error(py: Python<'_>, field: &str, index: Option<usize>, msg: String) -> PyErr {
+    let index = index.map_or_else(|| py.None(), |i| obj(py, i));
+    raise(
+        py,
+        "InputError",
+        msg,
+        vec![("field", obj(py, field)), ("index", index)],
+    )
+}
+
+/// [`SolveError`] → the matching Python exception.
+pub fn solve_error(py: Python<'_>, e: &SolveError) -> PyErr {
+    match e {
+        SolveError::Problem(p) => problem_error(py, p),
+        SolveError::Settings(m) => {
+            // the library names the setting first ("tol must be ...")
+            let field = m.split_whitespace().next().unwrap_or("settings");
+            settings_error(py, field, e.to_string())
+        }
+        SolveError::Guess(m) => {
+            let field = if m.starts_with('v') { "v0" } else { "r0" };
+            input_error(py, field, None, e.to_string())
+        }
+        #[allow(unreachable_patterns)]
+        _ => variant_error(py, "CoulombError", e),
+    }
+}
+
+/// [`EvaluateError`] → `InputError` (lengths, missing v) or `ProblemError`.
+pub fn evaluate_error(py: Python<'_>, e: &EvaluateError) -> PyErr {
+    match e {
+        EvaluateError::Length { what, .. } => input_error(py, what, None, e.to_string()),
+        EvaluateError::MissingVelocity => input_error(py, "v", None, e.to_string()),
+        EvaluateError::Problem(p) => problem_error(py, p),
+        #[allow(unreachable_patterns)]
+        _ => variant_error(py, "InputError", e),
+    }
+}
+
+/// [`FclibError`] → `OSError` (with errno and file name) for I/O failures, otherwise
+/// `coulomb.FclibError` (a `ValueError`) with `file`, `path` (the HDF5 object) and `kind`;
+/// for an invalid problem also the `field` and `index` of the [`ProblemError`].
+pub fn fclib_error(py: Python<'_>, e: FclibError) -> PyErr {
+    let msg = e.to_string();
+    let path = e.object_path().map(str::to_string);
+    let FclibError { file, kind } = e;
+    let (kind_name, field, index): (&str, Py<PyAny>, Py<PyAny>) = match &kind {
+        FclibErrorKind::Io(io) => {
+            let args = (io.raw_os_error().unwrap_or(0), io.to_string(), file.clone());
+            return match io.kind() {
+                std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(args),
+                std::io::ErrorKind::PermissionDenied => PyPermissionError::new_err(args),
+                std::io::ErrorKind::IsADirectory => PyIsADirectoryError::new_err(args),
+                _ => PyOSError::new_err(args),
+            };
+        }
+        FclibErrorKind::NotHdf5 => ("not_hdf5", py.None(), py.None()),
+        FclibErrorKind::Corrupt { .. } => ("corrupt", py.None(), py.None()),
+        FclibErrorKind::MissingGroup { .. } => ("missing_group", py.None(), py.None()),
+        FclibErrorKind::MissingDataset { .. } => ("missing_dataset", py.None(), py.None()),
+        FclibErrorKind::WrongType { .. } => ("wrong_type", py.None(), py.None()),
+        FclibErrorKind::WrongLength { .. } => ("wrong_length", py.None(), py.None()),
+        FclibErrorKind::BadValue { .. } => ("bad_value", py.None(), py.None()),
+        FclibErrorKind::Unsupported { .. } => ("unsupported", py.None(), py.None()),
+        FclibErrorKind::InvalidProblem { source, .. } => {
+            // reuse the field/index extraction of the problem error
+            let pe = problem_error(py, source);
+            let v = pe.value(py);
+            let field = v
+                .getattr("field")
+                .map_or_else(|_| py.None(), |x| x.unbind());
+            let index = v
+                .getattr("index")
+                .map_or_else(|_| py.None(), |x| x.unbind());
+            ("invalid_problem", field, index)
+        }
+        FclibErrorKind::Write { .. } => ("write", py.None(), py.None()),
+        #[allow(unreachable_patterns)]
+        _ => ("other", py.None(), py.None()),
+    };
+    raise(
+        py,
+        "FclibError",
+        msg,
+        vec![
+            ("file", obj(py, file)),
+            ("path", obj(py, path)),
+            ("kind", obj(py, kind_name)),
+            ("field", field),
+            ("index", index),
+        ],
+    )
+}

@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# The project's one test command (README, .ci/run): the Rust workspace tests, then the Python
+# package crates/coulomb-py built into a virtual environment and its pytest suite.
+#
+#   bash scripts/test-all.sh
+#
+# Environment: COULOMB_PY_VENV (default target/py-venv), PYTHON (default python3).
+# The Python extension is built in cargo's dev profile with opt-level 2, which is exactly the
+# test profile of Cargo.toml, so it reuses the artifacts `cargo test --workspace` just built
+# (only the binding crate compiles, ~20 s) instead of a release build of faer/Clarabel.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+cargo test --workspace
+
+VENV=${COULOMB_PY_VENV:-target/py-venv}
+PYTHON=${PYTHON:-python3}
+if [ ! -x "$VENV/bin/python" ]; then
+  "$PYTHON" -m venv "$VENV"
+fi
+"$VENV/bin/python" -m pip install --quiet --disable-pip-version-check \
+  "maturin>=1.7,<2" numpy scipy pytest h5py
+(
+  cd crates/coulomb-py
+  VIRTUAL_ENV="$PWD/../../$VENV" PATH="$PWD/../../$VENV/bin:$PATH" \
+    CARGO_PROFILE_DEV_OPT_LEVEL=2 maturin develop --quiet
+)
+
+# the CLI binary `cargo test` built, for the CLI-equality tests
+export COULOMB_CLI="$PWD/target/debug/coulomb"
+# pytest's own exit code is the script's: 1 for failures, 5 when no test was collected
+# (set -e makes both fail the run; nothing is masked)
+"$VENV/bin/python" -m pytest crates/coulomb-py/tests -q -rs

@@ -36,8 +36,8 @@ DEFAULT_FILES = [FCLIB / "NESpheres_10_1.hdf5", FCLIB / "BoxesStack1-i100000-32.
 
 
 def read(path: Path):
-    # as `coulomb solve` reads: a slightly non-symmetric W is symmetrized
-    return coulomb.fclib.read(path, symmetrize=True).problem
+    # as `coulomb solve` reads: exactly as stored
+    return coulomb.fclib.read(path).problem
 
 
 def measure(path: Path, repeat: int, cli: Path | None) -> dict:

@@ -33,17 +33,12 @@ DEFAULT = Path(__file__).resolve().parents[3].parent / "shared" / "fclib" / "Box
 
 
 def read(path: str):
-    """The problem as stored; a W (M) that is not symmetric within 1e-6 is symmetrized as
-    `coulomb solve` does, and the script says so."""
-    try:
-        return coulomb.fclib.read(path).problem
-    except coulomb.FclibError as e:
-        if e.kind != "invalid_problem" or "symmetric" not in str(e):
-            raise
-        f = coulomb.fclib.read(path, symmetrize=True)
-        print(f"note: {e.field} is not symmetric (relative asymmetry {f.symmetrized:.2e}); "
-              f"both tools get 1/2 ({e.field} + {e.field}^T)")
-        return f.problem
+    """The problem exactly as stored (both tools get the same W, symmetric or not)."""
+    f = coulomb.fclib.read(path)
+    if f.asymmetry > 1e-6:
+        print(f"note: the stored matrix is not symmetric (relative asymmetry {f.asymmetry:.2e}); "
+              "both tools solve it as stored")
+    return f.problem
 
 
 def _csc64(a):

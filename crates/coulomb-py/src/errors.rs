@@ -53,7 +53,7 @@ fn parse_location(py: Python<'_>, location: &str) -> Py<PyAny> {
     obj(py, location)
 }
 
-/// The Debug name of an enum variant in snake_case (`NotSymmetric { .. }` → `not_symmetric`).
+/// The Debug name of an enum variant in snake_case (`NonFinite { .. }` → `non_finite`).
 fn variant_name<E: std::fmt::Debug>(e: &E) -> String {
     let debug = format!("{e:?}");
     let name: String = debug.chars().take_while(|c| c.is_alphanumeric()).collect();
@@ -96,7 +96,9 @@ pub fn problem_error(py: Python<'_>, e: &ProblemError) -> PyErr {
             ("non_finite", what, parse_location(py, location))
         }
         ProblemError::Friction { contact, .. } => ("friction", "mu", obj(py, *contact)),
-        ProblemError::NotSymmetric { what, .. } => ("not_symmetric", what, py.None()),
+        ProblemError::NotPositiveSemidefinite { what, .. } => {
+            ("not_positive_semidefinite", what, py.None())
+        }
         ProblemError::NotPositiveDefinite(_) => ("not_positive_definite", "M", py.None()),
         ProblemError::Sparse { what, source } => {
             let index = match source {

@@ -11,7 +11,7 @@ mod errors;
 mod granular;
 
 use coulomb::existence::{self, CheckSettings};
-use coulomb::fclib::{self, FclibFile, Info, ReadOptions, StoredSolution, Symmetry};
+use coulomb::fclib::{self, FclibFile, Info, StoredSolution};
 use coulomb::problem::{GlobalProblem, LocalProblem, Problem};
 use coulomb::solver::{self, Guess};
 use numpy::{PyArray1, PyReadonlyArray1};
@@ -271,25 +271,15 @@ fn stored_to_dict<'py>(py: Python<'py>, s: StoredSolution) -> PyResult<Bound<'py
     Ok(d)
 }
 
-/// Reads an FCLIB file: dict with problem, info, solution, guesses, symmetrized.
+/// Reads an FCLIB file exactly as stored: dict with problem, info, solution, guesses,
+/// asymmetry (of W or M).
 #[pyfunction]
-#[pyo3(signature = (path, symmetrize=false))]
-fn fclib_read<'py>(
-    py: Python<'py>,
-    path: PathBuf,
-    symmetrize: bool,
-) -> PyResult<Bound<'py, PyDict>> {
-    let options = ReadOptions {
-        symmetry: if symmetrize {
-            Symmetry::Symmetrize
-        } else {
-            Symmetry::Strict
-        },
-    };
+fn fclib_read<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>> {
     let file = py
-        .detach(move || fclib::read_with(&path, &options))
+        .detach(move || fclib::read(&path))
         .map_err(|e| errors::fclib_error(py, e))?;
     let d = PyDict::new(py);
+    d.set_item("asymmetry", file.problem.asymmetry())?;
     d.set_item(
         "problem",
         PyProblem {
@@ -316,7 +306,6 @@ fn fclib_read<'py>(
         .map(|g| stored_to_dict(py, g))
         .collect::<PyResult<Vec<_>>>()?;
     d.set_item("guesses", guesses)?;
-    d.set_item("symmetrized", file.symmetrized)?;
     Ok(d)
 }
 

@@ -24,16 +24,14 @@ def test_same_result_as_cli(name, tmp_path):
                          capture_output=True, text=True, timeout=120)
     assert run.returncode in (0, 2), run.stderr  # 2: solved but not converged
     report = json.loads(run.stdout)
-    # read the way `coulomb solve` read it: symmetrized if it says so, else as stored
-    cli_symmetrized = report.get("symmetrized_asymmetry")
-    f = coulomb.fclib.read(path, symmetrize=cli_symmetrized is not None)
-    if cli_symmetrized is not None:
-        assert f.symmetrized == pytest.approx(cli_symmetrized, rel=1e-12)
+    # both read the problem as stored, asymmetry included
+    f = coulomb.fclib.read(path)
+    assert f.asymmetry == pytest.approx(report["asymmetry"], rel=1e-12, abs=1e-300)
     sol = coulomb.solve(f.problem)
     assert sol.status.value == report["status"]
     assert sol.converged == report["converged"]
     assert sol.outer_iterations == report["outer_iterations"]
     assert sol.inner_iterations == report["inner_iterations"]
     assert sol.err == pytest.approx(report["error"], rel=1e-9, abs=1e-18)
-    written = coulomb.fclib.read(out, symmetrize=cli_symmetrized is not None).solution
+    written = coulomb.fclib.read(out).solution
     np.testing.assert_allclose(sol.r, written.r, rtol=1e-10, atol=1e-14)

@@ -61,12 +61,17 @@ def test_shapes():
 
 
 def test_not_symmetric_and_not_positive_definite():
-    # not symmetric, and its symmetric part is indefinite: refused either way
+    # not symmetric, and its symmetric part is indefinite: refused
     W = np.eye(3)
     W[0, 1] = 3.0
     with pytest.raises(coulomb.ProblemError) as e:
         local(W=W)
-    assert e.value.field == "W" and e.value.kind.startswith("not_")
+    assert (e.value.field, e.value.kind) == ("W", "not_positive_semidefinite")
+    # not symmetric with a positive definite symmetric part: a valid problem, kept as given
+    W = np.eye(3)
+    W[0, 1] = 0.5
+    p = local(W=W)
+    assert p is not None
     M = np.diag([1.0, -1.0, 1.0])
     with pytest.raises(coulomb.ProblemError) as e:
         coulomb.GlobalProblem(M, np.eye(3), np.zeros(3), np.zeros(3), [0.3])

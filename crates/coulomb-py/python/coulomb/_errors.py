@@ -28,7 +28,7 @@ class ProblemError(CoulombError, ValueError):
     """The problem data are invalid (``coulomb::problem::ProblemError``).
 
     ``kind`` is one of ``dimension``, ``shape``, ``non_finite``, ``friction``,
-    ``not_symmetric``, ``not_positive_definite``, ``sparse``; ``field`` names the array
+    ``not_positive_semidefinite`` (W), ``not_positive_definite`` (M), ``sparse``; ``field`` names the array
     (``W``, ``q``, ``M``, ``H``, ``f``, ``w``, ``mu``, ``dim``) and ``index`` the entry
     (an int, or ``(row, col)`` for a matrix) where there is one.
     """

@@ -145,7 +145,8 @@ class LocalProblem(Problem):
     Parameters
     ----------
     W : dense 2-D array or scipy.sparse matrix, m × m, m = d · contacts
-        Delassus matrix W = Hᵀ M⁻¹ H (symmetric within 1e-6 relative, as the library checks).
+        Delassus matrix W = Hᵀ M⁻¹ H; it need not be exactly symmetric, but ½(W + Wᵀ) must be
+        positive semidefinite (the library checks it); it is kept as given.
     q : 1-D array, length m
         Free velocity q = Hᵀ M⁻¹ f + w.
     mu : 1-D array (one μ per contact) or a scalar for all contacts

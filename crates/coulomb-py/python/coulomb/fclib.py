@@ -44,29 +44,26 @@ class FclibFile:
     solution: Optional[StoredSolution] = None
     #: ``/guesses/1 .. N``
     guesses: List[StoredSolution] = field(default_factory=list)
-    #: relative asymmetry of W (or M) when the file was read with ``symmetrize=True`` and it
-    #: exceeded 1e-6 (the matrix was then replaced by ½(A + Aᵀ)); else None
-    symmetrized: Optional[float] = None
+    #: relative asymmetry max|A − Aᵀ| / max|A| of W (local) or M (global) as stored; the
+    #: problem is always the stored one, symmetric or not
+    asymmetry: float = 0.0
 
 
 def _stored(d: Optional[Mapping[str, Any]]) -> Optional[StoredSolution]:
     return None if d is None else StoredSolution(r=d["r"], u=d["u"], v=d["v"], l=d["l"])
 
 
-def read(path: PathLike, symmetrize: bool = False) -> FclibFile:
-    """Reads an FCLIB file.
-
-    ``symmetrize=False`` (the library's default) refuses a W or M that is not symmetric within
-    1e-6 relative (:class:`coulomb.FclibError` with kind ``invalid_problem``);
-    ``symmetrize=True`` replaces it by ½(A + Aᵀ) and records the asymmetry in
-    ``FclibFile.symmetrized``, as ``coulomb solve`` does. A missing or unreadable file raises
-    :class:`OSError`; a malformed one :class:`coulomb.FclibError` naming the HDF5 object.
+def read(path: PathLike) -> FclibFile:
+    """Reads an FCLIB file exactly as stored: a W (or M) that is not symmetric is valid data
+    and is kept as it is (its relative asymmetry is in ``FclibFile.asymmetry``); ½(W + Wᵀ)
+    must be positive semidefinite. A missing or unreadable file raises :class:`OSError`; a
+    malformed one :class:`coulomb.FclibError` naming the HDF5 object.
     """
-    d = _coulomb.fclib_read(os.fspath(path), bool(symmetrize))
+    d = _coulomb.fclib_read(os.fspath(path))
     return FclibFile(
         problem=Problem._wrap(d["problem"]), info=d["info"], solution=_stored(d["solution"]),
         guesses=[s for s in (_stored(g) for g in d["guesses"]) if s is not None],
-        symmetrized=d["symmetrized"])
+        asymmetry=d["asymmetry"])
 
 
 def _opt(x: Any) -> Optional[np.ndarray]:

@@ -209,12 +209,10 @@ fn problem(
                     *x = rng.uniform(-0.5, 0.5);
                 }
             }
-            "slide" => {
-                // the upper boxes pushed sideways
-                if b + 1 > nb / 2 {
-                    vb[0] = 0.5;
-                    vb[1] = rng.uniform(-0.2, 0.2);
-                }
+            // the upper boxes pushed sideways
+            "slide" if b + 1 > nb / 2 => {
+                vb[0] = 0.5;
+                vb[1] = rng.uniform(-0.2, 0.2);
             }
             _ => {}
         }

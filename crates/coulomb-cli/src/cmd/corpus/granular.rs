@@ -37,9 +37,13 @@ pub fn generate(
         Preset::Full => {
             let mus = [0.1, 0.3, 0.6, 1.0];
             for (s, scene) in Scene::ALL.into_iter().enumerate() {
-                for (b, beads) in [100, 300, 1000, 2500, 5000].into_iter().enumerate() {
+                let mut sizes = vec![100, 300, 1000, 2500];
+                if scene == Scene::Box {
+                    sizes.push(5000);
+                }
+                for (b, beads) in sizes.into_iter().enumerate() {
                     runs.push((scene, beads, mus[(s + b) % 4]));
-                    if beads <= 1000 {
+                    if beads <= 300 {
                         runs.push((scene, beads, mus[(s + b + 2) % 4]));
                     }
                 }

@@ -47,7 +47,8 @@ pub struct Args {
     /// seed of every random choice
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// print one JSON object (the manifest's summary) instead of text
+    /// print one JSON object (the manifest's summary) on stdout instead of text (the per-file
+    /// progress lines stay on stderr)
     #[arg(long)]
     pub json: bool,
 }
@@ -115,7 +116,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let start = std::time::Instant::now();
     let mut writer = Writer {
         dir: dir.clone(),
-        quiet: args.json,
         entries: Vec::new(),
     };
     generate(args.preset, args.seed, &mut |item| writer.add(item))?;
@@ -370,24 +370,21 @@ pub fn psd_rank(a: &CscMatrix) -> usize {
 /// Writes items into the corpus folder and keeps their manifest entries.
 struct Writer {
     dir: PathBuf,
-    quiet: bool,
     entries: Vec<Entry>,
 }
 
 impl Writer {
     fn add(&mut self, item: Item) -> anyhow::Result<()> {
         let e = write_item(&self.dir, item)?;
-        if !self.quiet {
-            eprintln!(
-                "{:<64} {:>6} {:>6} contacts, m {:>6}, n {:>6}, rank {}",
-                e.file,
-                e.kind,
-                e.contacts,
-                e.unknowns,
-                e.dofs.map_or("-".into(), |n| n.to_string()),
-                e.rank_w.map_or("-".into(), |r| r.to_string())
-            );
-        }
+        eprintln!(
+            "{:<64} {:>6} {:>6} contacts, m {:>6}, n {:>6}, rank {}",
+            e.file,
+            e.kind,
+            e.contacts,
+            e.unknowns,
+            e.dofs.map_or("-".into(), |n| n.to_string()),
+            e.rank_w.map_or("-".into(), |r| r.to_string())
+        );
         self.entries.push(e);
         Ok(())
     }

@@ -27,6 +27,14 @@ def fmt_time(t):
     return f"{t:.2f} s"
 
 
+def strip_ext(name):
+    """The file name without its .hdf5 / .h5 extension (names hold other dots: mu0.6)."""
+    for ext in (".hdf5", ".h5"):
+        if name.endswith(ext):
+            return name[: -len(ext)]
+    return name
+
+
 def from_log(path):
     """Records from the progress lines of `coulomb bench` on stderr
     (`[i/N] NAME SOLVER STATUS error ERR time T`), for a run cut short before its JSON."""
@@ -60,14 +68,14 @@ def main():
     else:
         bench = json.load(open(a.bench))
     manifest = json.load(open(a.manifest))
-    entries = {e["file"].rsplit(".", 1)[0]: e for e in manifest["files"]}
+    entries = {strip_ext(e["file"]): e for e in manifest["files"]}
     recs = [r for r in bench["records"] if r["solver"] == "default"]
     by_class = collections.OrderedDict()
     order = ["granular", "boxes", "nonsym", "painleve", "random"]
     for c in order:
         by_class[c] = []
     for r in recs:
-        stem = r["problem"].split("/")[-1].rsplit(".", 1)[0]
+        stem = strip_ext(r["problem"].split("/")[-1])
         e = entries.get(stem)
         cls = e["class"] if e else stem.split("--")[0]
         by_class.setdefault(cls, []).append((r, e))
@@ -149,6 +157,30 @@ def main():
           f"| {fmt_time(max(times) if times else None)} | {stt} |")
     p(f"| **all** | {total[0]} | | | {total[1]} / {total[0]} | | | |")
     p()
+
+    # solved against rank deficiency and μ (granular and boxes, local and global)
+    gb = [(c, r, e) for c in ("granular", "boxes") for r, e in by_class.get(c, []) if e]
+    if gb:
+        p("### granular and boxes: solved against rank(W) < m and against μ")
+        p()
+        p("| class | W | files | solved |")
+        p("|---|---|---|---|")
+        for c in ("granular", "boxes"):
+            for label, val in (("rank(W) < m", True), ("full rank", False), ("rank not computed", None)):
+                rows = [r for cc, r, e in gb if cc == c and e.get("rank_deficient") == val]
+                if rows:
+                    p(f"| {c} | {label} | {len(rows)} | {sum(r['converged'] for r in rows)} / {len(rows)} |")
+        p()
+        mus = sorted({e["params"].get("mu") for c, r, e in gb})
+        p("| class | " + " | ".join(f"μ = {m}" for m in mus) + " |")
+        p("|---|" + "---|" * len(mus))
+        for c in ("granular", "boxes"):
+            cells = []
+            for m in mus:
+                rows = [r for cc, r, e in gb if cc == c and e["params"].get("mu") == m]
+                cells.append(f"{sum(r['converged'] for r in rows)} / {len(rows)}" if rows else "-")
+            p(f"| {c} | " + " | ".join(cells) + " |")
+        p()
 
     # granular by scene and size
     g = by_class.get("granular", [])

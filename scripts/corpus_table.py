@@ -239,6 +239,10 @@ def main():
         p()
         p(f"- no solution by (2.13): {len(none)} files, reported converged: {len(wrong)} "
           "(must be 0);")
+        for r in wrong:
+            p(f"  - **false converged**: {r['problem']}, err {r['error']:.2e} (the relative "
+              "error of docs/error.md is scaled by max(‖q‖, ‖r‖, ‖u‖): r grows without bound "
+              "and err falls below tol although the absolute error does not);")
         p(f"- a solution exists by (2.13): {len(exists)} files, solved: "
           f"{sum(r['converged'] for r, e in exists)}.")
         p()

@@ -36,6 +36,8 @@ enum Command {
     Bench(cmd::bench::Args),
     /// Build a small problem, write it as FCLIB, read it back, solve it, simulate a few beads
     Demo(cmd::demo::Args),
+    /// Write a test corpus (granular dumps, rigid boxes, non-symmetric W, Painlevé, random)
+    Corpus(cmd::corpus::Args),
 }
 
 fn main() -> ExitCode {
@@ -50,6 +52,7 @@ fn main() -> ExitCode {
         Command::Paper(a) => cmd::paper::run(a),
         Command::Bench(a) => cmd::bench::run(a),
         Command::Demo(a) => cmd::demo::run(a),
+        Command::Corpus(a) => cmd::corpus::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -15,15 +15,6 @@ use std::path::Path;
 
 const TOL: f64 = 1e-8;
 
-/// Known false "converged" of the current solver, listed so that the test stays green while
-/// they are open and fails on any new one: Painlevé cases without a solution (2.13) where r
-/// grows without bound and the relative error abs / max(‖q‖, ‖r‖, ‖u‖) of docs/error.md falls
-/// below tol (measured: abs 0.63, scale 1e8, err 6.3e-9). A listed file that is no longer
-/// reported converged is printed; delete the entry then. Solver territory (issue #11).
-const KNOWN_FALSE_CONVERGED: &[&str] = &[
-    "painleve--th30-mu2.5-u2-global.hdf5",
-    "painleve--th30-mu2.5-u2-local.hdf5",
-];
 /// Rounding slack between the solver's and this test's arithmetic (relative).
 const SLACK: f64 = 1.0 + 1e-6;
 
@@ -307,7 +298,6 @@ struct ClassCount {
     files: usize,
     converged: usize,
     false_converged: Vec<String>,
-    surrogate: Vec<String>,
 }
 
 #[test]
@@ -359,16 +349,6 @@ fn small_corpus_has_no_false_converged_on_the_stored_data() {
         let claimed = report["converged"] == Value::Bool(true) || report["status"] == "converged";
         if e["expected_existence"] == "none" {
             painleve_none += 1;
-            if KNOWN_FALSE_CONVERGED.contains(&name) {
-                if claimed {
-                    println!("KNOWN BUG: {name}: no solution exists (2.13), reported {report}");
-                } else {
-                    println!(
-                        "{name}: fixed, no longer converged: remove it from KNOWN_FALSE_CONVERGED"
-                    );
-                }
-                continue;
-            }
             assert!(!claimed, "{name}: no solution exists (2.13), yet {report}");
         }
         if !claimed {
@@ -379,31 +359,18 @@ fn small_corpus_has_no_false_converged_on_the_stored_data() {
         let written = H5::open(&out);
         let (err, balance) = recompute(&data, &written);
         let ok = err <= TOL * SLACK && balance.is_none_or(|b| b <= TOL * SLACK);
-        // solve --output must hold the problem exactly as read; a file where it does not
-        // (½(W + Wᵀ) written back, #11 item 1) is counted apart, and only W may differ
-        let same = Data::read(&written).same(&data);
+        // solve --output holds the problem exactly as read
+        assert!(
+            Data::read(&written).same(&data),
+            "{name}: the written problem differs from the input"
+        );
         let line = format!(
             "{name}: claimed err {}, recomputed err {err:.3e}, balance {balance:?}",
             report["error"]
         );
-        if same {
-            c.converged += 1;
-            if !ok {
-                c.false_converged.push(line);
-            }
-        } else {
-            assert_eq!(
-                e["kind"], "local",
-                "{name}: the written global data differ from the input"
-            );
-            assert!(
-                e["asymmetry"].as_f64().unwrap() > 1e-6,
-                "{name}: a symmetric W was rewritten"
-            );
-            c.surrogate.push(format!("{line} (written W differs)"));
-            if ok {
-                c.converged += 1;
-            }
+        c.converged += 1;
+        if !ok {
+            c.false_converged.push(line);
         }
     }
     println!(
@@ -417,7 +384,7 @@ fn small_corpus_has_no_false_converged_on_the_stored_data() {
             c.converged,
             c.false_converged.len()
         );
-        for l in c.surrogate.iter().chain(&c.false_converged) {
+        for l in &c.false_converged {
             println!("    {l}");
         }
     }

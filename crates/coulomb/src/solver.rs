@@ -78,6 +78,11 @@ pub enum Status {
     NumericalError,
     /// the paper's rule (6.1) held (`Settings::fixed_point_tol`) but the error is above tol
     FixedPointRule,
+    /// the error is ≤ tol only because r is unbounded: ‖W‖ ‖r‖ > [`UNBOUNDED_RATIO`] ·
+    /// max(‖q‖, ‖u‖), so the scale max(‖q‖, ‖r‖, ‖u‖) of the relative error is ‖r‖ while u
+    /// still violates the law (e.g. penetrates). The iterates diverge, the mark of a problem
+    /// without a solution (Painlevé's paradox, §5.3); never reported as converged
+    Unbounded,
     /// the error is ≤ tol but the balance residual of the global problem stays above tol
     /// (v = M⁻¹(H r + f) from the Cholesky factor of one triangle of M does not balance the
     /// whole M: M ill-conditioned or not quite symmetric, as in some FEM files)
@@ -288,6 +293,8 @@ struct Form<'a> {
     stored: Stored<'a>,
     /// ½(W + Wᵀ) when W is not exactly symmetric
     surrogate: Option<crate::sparse::CscMatrix>,
+    /// ‖W‖ estimated by the largest trace of a diagonal block
+    w_scale: f64,
 }
 
 impl<'a> Form<'a> {
@@ -295,7 +302,9 @@ impl<'a> Form<'a> {
         let mut form = Self {
             stored,
             surrogate: None,
+            w_scale: 0.0,
         };
+        form.w_scale = crate::inner::w_scale(form.local().dim, &form.local().w);
         let w = &form.local().w;
         if !w.is_exactly_symmetric() {
             form.surrogate = Some(w.symmetric_part());
@@ -310,19 +319,34 @@ impl<'a> Form<'a> {
         }
     }
 
+    /// Whether ‖W‖ ‖r‖ > [`UNBOUNDED_RATIO`] · max(‖q‖, ‖u‖) (‖W‖ estimated by the largest
+    /// trace of a diagonal block).
+    fn unbounded(&self, r: &[f64], u: &[f64], q_norm: f64) -> bool {
+        let data = q_norm.max(law::norm(u)).max(f64::MIN_POSITIVE);
+        self.w_scale * law::norm(r) > UNBOUNDED_RATIO * data
+    }
+
     /// The matrix of the SOC-QP inner problems: W, or ½(W + Wᵀ) when W is not symmetric.
     fn qp_w(&self) -> &crate::sparse::CscMatrix {
         self.surrogate.as_ref().unwrap_or(&self.local().w)
     }
 }
 
-/// The checked outcome for impulses r: (u, v, error, balance residual).
+/// The checked outcome for impulses r: (u, v, error, balance residual, divergence).
 struct Verdict {
     u: Vec<f64>,
     v: Option<Vec<f64>>,
     error: f64,
     balance: Option<f64>,
+    /// ‖W‖ ‖r‖ > [`UNBOUNDED_RATIO`] · max(‖q‖, ‖u‖)
+    unbounded: bool,
 }
+
+/// Impulses with ‖W‖ ‖r‖ above this multiple of max(‖q‖, ‖u‖) count as unbounded
+/// ([`Status::Unbounded`]): for a bounded solution W r = u − q is of the order of the data;
+/// divergent iterates (a singular diagonal block regularized by 1e-8, Painlevé without a
+/// solution) reach 1e7 and more.
+pub const UNBOUNDED_RATIO: f64 = 1e6;
 
 impl Verdict {
     /// Recomputes u (and v) from r and evaluates the error of docs/error.md: u = W r + q for a
@@ -334,11 +358,13 @@ impl Verdict {
             Stored::Local(p) => {
                 let u = p.velocity(r);
                 let error = law::error_measure(p.dim, &p.mu, r, &u, q_norm).error;
+                let unbounded = form.unbounded(r, &u, q_norm);
                 Verdict {
                     u,
                     v: None,
                     error,
                     balance: None,
+                    unbounded,
                 }
             }
             Stored::Global(g, d) => {
@@ -349,18 +375,25 @@ impl Verdict {
                 let u = g.velocity(&v);
                 let error = law::error_measure(g.dim, &g.mu, r, &u, q_norm).error;
                 let balance = g.balance_residual(&v, r);
+                let unbounded = form.unbounded(r, &u, q_norm);
                 Verdict {
                     u,
                     v: Some(v),
                     error,
                     balance: Some(balance),
+                    unbounded,
                 }
             }
         }
     }
 
     fn converged(&self, tol: f64) -> bool {
-        self.error <= tol && self.balance.is_none_or(|b| b <= tol)
+        self.error <= tol && self.balance.is_none_or(|b| b <= tol) && !self.unbounded
+    }
+
+    /// The error is ≤ tol only because r diverges.
+    fn spurious(&self, tol: f64) -> bool {
+        self.unbounded && self.error <= tol
     }
 }
 
@@ -541,6 +574,9 @@ fn solve_stage(
         if verdict.converged(settings.tol) {
             break Status::Converged;
         }
+        if verdict.spurious(settings.tol) {
+            break Status::Unbounded;
+        }
         if history.len() >= settings.max_outer {
             break Status::MaxIterations;
         }
@@ -621,7 +657,10 @@ fn solve_stage(
             inner_iterations: report.iterations,
         });
         last_error = verdict.error;
-        if verdict.error <= settings.tol && !verdict.converged(settings.tol) {
+        if verdict.error <= settings.tol
+            && !verdict.converged(settings.tol)
+            && !verdict.spurious(settings.tol)
+        {
             balance_stalls += 1;
             if balance_stalls >= 3 {
                 break Status::BalanceResidual;

@@ -350,6 +350,7 @@ mod tests {
                 &Activation {
                     gamma: 0.0,
                     delta: 0.0,
+                    keep_separating: false,
                 },
             );
             assert!(

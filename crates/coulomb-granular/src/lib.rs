@@ -18,6 +18,7 @@ pub mod projection;
 pub mod run;
 pub mod scene;
 pub mod simulation;
+pub mod validation;
 pub mod world;
 
 pub use contact::{Activation, Contact, Partner};

@@ -36,6 +36,8 @@ enum Command {
     Bench(cmd::bench::Args),
     /// Build a small problem, write it as FCLIB, read it back, solve it, simulate a few beads
     Demo(cmd::demo::Args),
+    /// Physics validation suite of the granular simulator (docs/validation.md)
+    Validate(cmd::validate::Args),
 }
 
 fn main() -> ExitCode {
@@ -50,6 +52,7 @@ fn main() -> ExitCode {
         Command::Paper(a) => cmd::paper::run(a),
         Command::Bench(a) => cmd::bench::run(a),
         Command::Demo(a) => cmd::demo::run(a),
+        Command::Validate(a) => cmd::validate::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

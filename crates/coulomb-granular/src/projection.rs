@@ -86,10 +86,7 @@ fn gap_normal(world: &World, a: usize, partner: Partner, t: f64) -> Option<(f64,
         Partner::Body(j) => {
             let bb = world.bodies.get(j)?;
             let d = ba.position - bb.position;
-            Some((
-                d.norm() - ba.radius - bb.radius,
-                d.normalized_or(Vec3::Z),
-            ))
+            Some((d.norm() - ba.radius - bb.radius, d.normalized_or(Vec3::Z)))
         }
         Partner::Obstacle(o) => {
             let p = world.obstacles.get(o)?.proximity(ba.position, ba.radius, t);
@@ -246,7 +243,10 @@ mod tests {
         assert!(after.max <= 1e-4 * 0.05, "{after:?}");
         // moved radially towards the axis, to 0.95 from it, along the same radius
         let x = w.bodies[0].position;
-        assert!(((x.x * x.x + x.z * x.z).sqrt() - 0.95).abs() < 5e-6, "{x:?}");
+        assert!(
+            ((x.x * x.x + x.z * x.z).sqrt() - 0.95).abs() < 5e-6,
+            "{x:?}"
+        );
         assert!((x.x / x.z + sn / c).abs() < 1e-9);
         assert!((x.y - 0.3).abs() < 1e-15);
         // lifted by 0.02 cos 0.6

@@ -218,13 +218,7 @@ impl Simulation {
         let h = self.params.h;
         let t0 = Instant::now();
         let delta = self.activation_threshold();
-        let mut contacts = detect_with(
-            &self.world,
-            self.time,
-            h,
-            &self.params.activation,
-            delta,
-        );
+        let mut contacts = detect_with(&self.world, self.time, h, &self.params.activation, delta);
         let data = StepData {
             h,
             t_end: self.time + h,

@@ -124,7 +124,8 @@ pub fn incline(
 pub fn drop(h0: f64, e: f64, params: &Params) -> Result<(Check, Check), SimulationError> {
     let r = 0.05;
     let mut w = ground_world(Vec3::new(0.0, 0.0, -GRAVITY));
-    w.bodies.push(Sphere::new(Vec3::new(0.0, 0.0, r + h0), r, 1.0));
+    w.bodies
+        .push(Sphere::new(Vec3::new(0.0, 0.0, r + h0), r, 1.0));
     let p = Params {
         restitution: e,
         mu: 0.3,
@@ -290,8 +291,8 @@ pub fn cylinder_roll(
     } else {
         f64::NAN
     };
-    let expected = 2.0 * std::f64::consts::PI * (7.0 * d / (5.0 * GRAVITY)).sqrt()
-        * (1.0 + th * th / 16.0);
+    let expected =
+        2.0 * std::f64::consts::PI * (7.0 * d / (5.0 * GRAVITY)).sqrt() * (1.0 + th * th / 16.0);
     // θ-method phase error O((ωh)²) and the series' next term: 1 %
     let mut c1 = Check::new(
         format!("ball rolling in a cylinder R_c = 1 m, {deg}°: period"),

@@ -41,7 +41,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(path) = &args.markdown {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             if !dir.is_dir() {
-                bail!("cannot write {}: no folder {}", path.display(), dir.display());
+                bail!(
+                    "cannot write {}: no folder {}",
+                    path.display(),
+                    dir.display()
+                );
             }
         }
     }
@@ -102,7 +106,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if !args.quick {
         let bed = validation::settled_bed(400, 0.5, 1500, &p)?;
         let mk = |name: &str, expected: f64, measured: f64, tolerance: f64| Check {
-            name: format!("settled bed, 400 beads, 0.5 m box ({} steps): {name}", bed.steps),
+            name: format!(
+                "settled bed, 400 beads, 0.5 m box ({} steps): {name}",
+                bed.steps
+            ),
             expected,
             measured,
             tolerance,

@@ -1,3 +1,7 @@
+//! Solve time per step of the box scene at err ≤ 1e-4 for several solver methods (the table of
+//! docs/granular.md, "Solver settings in simulations"). Run:
+//! `cargo run --release -p coulomb-granular --example step_methods -- BEADS STEPS`.
+
 use coulomb::solver::{InnerKind, OuterKind, Settings};
 use coulomb_granular::{Params, Scene, Simulation};
 fn main() {

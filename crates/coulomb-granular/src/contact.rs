@@ -66,7 +66,7 @@ impl Contact {
 ///
 /// (unclamped, as Siconos' `MoreauJeanOSI::addInteractionInIndexSet`: a pair that separates
 /// at t_k leaves the index set as soon as its predicted gap is positive). γ = 1/2 by default.
-/// `delta` is the floor of δ_k; [`crate::Simulation`] raises δ_k each step to twice the lift
+/// `delta` is the floor of δ_k; with `delta_from_tolerance`, [`crate::Simulation`] raises δ_k each step to twice the lift
 /// h·ε_u that a contact solved to the step's tolerance can get (ε_u = err · scale of
 /// docs/error.md, a bound on the residual normal velocity of a resting contact), so that a
 /// resting contact lifted by solver error never leaves the index set (docs/granular.md,
@@ -83,6 +83,9 @@ pub struct Activation {
     /// lifts it slightly stays active; energy-safe with the impact law of
     /// [`crate::assembly::impact_offset`]
     pub keep_separating: bool,
+    /// raise δ each step to the lift the solver's residual allows
+    /// ([`crate::Simulation::activation_threshold`]); otherwise δ = `delta`
+    pub delta_from_tolerance: bool,
 }
 
 impl Default for Activation {
@@ -91,6 +94,7 @@ impl Default for Activation {
             gamma: 0.5,
             delta: 1e-8,
             keep_separating: false,
+            delta_from_tolerance: false,
         }
     }
 }
@@ -104,6 +108,7 @@ impl Activation {
             gamma: 1.0,
             delta: 1e-8,
             keep_separating: true,
+            delta_from_tolerance: true,
         }
     }
 
@@ -340,6 +345,7 @@ mod tests {
                 gamma: 0.4,
                 delta: 0.0,
                 keep_separating: false,
+                delta_from_tolerance: false,
             },
         );
         assert_eq!(c.len(), 1);

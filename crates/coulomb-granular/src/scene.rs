@@ -351,6 +351,7 @@ mod tests {
                     gamma: 0.0,
                     delta: 0.0,
                     keep_separating: false,
+                    delta_from_tolerance: false,
                 },
             );
             assert!(

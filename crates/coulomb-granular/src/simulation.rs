@@ -383,6 +383,9 @@ impl Simulation {
             .iter()
             .map(|b| b.radius)
             .fold(f64::INFINITY, f64::min);
+        if !self.params.activation.delta_from_tolerance {
+            return self.params.activation.delta;
+        }
         let lift = 2.0 * self.params.h * self.residual_velocity;
         let cap = if rmin.is_finite() { 0.01 * rmin } else { 0.0 };
         lift.min(cap).max(self.params.activation.delta)

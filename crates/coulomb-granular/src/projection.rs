@@ -32,6 +32,10 @@ pub struct Projection {
     pub target: f64,
     /// cap on Gauss–Seidel sweeps
     pub max_sweeps: usize,
+    /// balance the potential energy ΔE_p a moving bead gains (or loses) by the correction with
+    /// its own kinetic energy E_k: v and ω scaled by √(1 − ΔE_p / E_k), at most down to rest,
+    /// so that the correction neither feeds nor drains the energy of moving beads
+    pub conserve_energy: bool,
 }
 
 impl Default for Projection {
@@ -41,6 +45,7 @@ impl Default for Projection {
             trigger: 1e-3,
             target: 1e-4,
             max_sweeps: 200,
+            conserve_energy: true,
         }
     }
 }
@@ -54,7 +59,8 @@ pub struct ProjectionStats {
     pub max_after: f64,
     /// sweeps done (0: nothing to correct)
     pub sweeps: usize,
-    /// change of potential energy −Σ m g·Δx caused by the correction (J)
+    /// change of kinetic + potential energy caused by the correction (J): −Σ m g·Δx, less the
+    /// kinetic energy taken back with `conserve_energy`
     pub work: f64,
 }
 
@@ -206,12 +212,22 @@ pub fn project(world: &mut World, t: f64, settings: &Projection) -> ProjectionSt
         .filter_map(|c| gap_normal(world, c.a, c.partner, t))
         .map(|(g, _)| -g)
         .fold(0.0, f64::max);
-    stats.work = world
-        .bodies
-        .iter()
-        .zip(&start)
-        .map(|(b, x0)| -b.mass * world.gravity.dot(b.position - *x0))
-        .sum();
+    let gravity = world.gravity;
+    let mut work = 0.0;
+    for (b, x0) in world.bodies.iter_mut().zip(&start) {
+        let gained = -b.mass * gravity.dot(b.position - *x0);
+        work += gained;
+        if settings.conserve_energy && gained != 0.0 {
+            let ke = b.kinetic_energy();
+            if ke > 0.0 {
+                let f = (1.0 - gained / ke).max(0.0).sqrt();
+                work -= ke * (1.0 - f * f);
+                b.velocity = b.velocity * f;
+                b.angular_velocity = b.angular_velocity * f;
+            }
+        }
+    }
+    stats.work = work;
     stats
 }
 

@@ -38,6 +38,8 @@ enum Command {
     Demo(cmd::demo::Args),
     /// Write a test corpus (granular dumps, rigid boxes, non-symmetric W, Painlevé, random)
     Corpus(cmd::corpus::Args),
+    /// Physics validation suite of the granular simulator (docs/validation.md)
+    Validate(cmd::validate::Args),
 }
 
 fn main() -> ExitCode {
@@ -53,6 +55,7 @@ fn main() -> ExitCode {
         Command::Bench(a) => cmd::bench::run(a),
         Command::Demo(a) => cmd::demo::run(a),
         Command::Corpus(a) => cmd::corpus::run(a),
+        Command::Validate(a) => cmd::validate::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

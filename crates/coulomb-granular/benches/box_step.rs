@@ -20,6 +20,9 @@ fn paper_params(inner: InnerKind) -> Params {
             warmup_sweeps: 0,
             ..Settings::default()
         },
+        // the paper's time stepping (Siconos' activation, no position correction)
+        activation: coulomb_granular::Activation::default(),
+        projection: None,
         ..Params::default()
     }
 }

@@ -12,8 +12,9 @@
 //! (p − x_A) × tₖ on A's rotational rows, and the opposite for a sphere B, so that
 //! (Hᵀ v)ₖ = tₖ · (v_A(p) − v_B(p)). The obstacle's prescribed velocity V_B(p, t_{k+1})
 //! goes to w: wₖ = −tₖ · V_B. Moreau's rule (§2.1, after (2.10)) replaces the unknown normal
-//! velocity by U_N = u_{N,k+1} + e u_{N,k} for contacts approaching at t_k (u_{N,k} < 0):
-//! w_N += e u_{N,k}.
+//! velocity by U_N = u_{N,k+1} + e u_{N,k} for contacts approaching at t_k (u_{N,k} ≤ 0);
+//! a contact separating at t_k gets U_N = u_{N,k+1} + u_{N,k} ([`impact_offset`]), so that
+//! the step never creates energy.
 
 use crate::contact::{Contact, Partner};
 use crate::math::Vec3;
@@ -103,8 +104,18 @@ fn push_h(world: &World, contacts: &[Contact]) -> (Vec<usize>, Vec<usize>, Vec<f
     (rows, cols, vals)
 }
 
-/// w: the obstacles' prescribed motion −tₖ·V_B(p, t_{k+1}) plus e u_{N,k} on the normal row of
-/// contacts approaching at t_k.
+/// The term added to the normal row of an active contact by the impact law: the normal
+/// unknown is U_N = u_{N,k+1} + ê u_{N,k} with ê = e for a contact approaching at t_k
+/// (u_{N,k} ≤ 0, Moreau's rule) and ê = 1 for one that separates (u_{N,k} > 0, kept in the
+/// index set because it penetrates). With r_N ⊥ U_N the normal work of the step,
+/// ½ r_N (u_{N,k+1} + u_{N,k}) = ½ r_N (1 − ê) u_{N,k}, is then ≤ 0 for every e ∈ [0, 1]
+/// (docs/granular.md, "Energy"); ê u_{N,k} = max(e u_{N,k}, u_{N,k}).
+pub fn impact_offset(restitution: f64, u_nk: f64) -> f64 {
+    (restitution * u_nk).max(u_nk)
+}
+
+/// w: the obstacles' prescribed motion −tₖ·V_B(p, t_{k+1}) plus the impact law's
+/// [`impact_offset`] on the normal row.
 pub fn contact_offset(world: &World, contacts: &[Contact], data: &StepData) -> Vec<f64> {
     let mut w = vec![0.0; 3 * contacts.len()];
     for (i, c) in contacts.iter().enumerate() {
@@ -116,9 +127,7 @@ pub fn contact_offset(world: &World, contacts: &[Contact], data: &StepData) -> V
                 w[3 * i + 2] = -c.t2.dot(vb);
             }
         }
-        if c.normal_velocity < 0.0 {
-            w[3 * i] += data.restitution * c.normal_velocity;
-        }
+        w[3 * i] += impact_offset(data.restitution, c.normal_velocity);
     }
     w
 }
@@ -259,6 +268,11 @@ mod tests {
             assert_eq!(p.w[3 * i + 1], p0.w[3 * i + 1]);
         }
         assert!(contacts.iter().any(|c| c.normal_velocity < 0.0));
+        // the impact law: ê = e when approaching, 1 when separating
+        assert_eq!(impact_offset(0.2, -1.0), -0.2);
+        assert_eq!(impact_offset(0.2, 0.5), 0.5);
+        assert_eq!(impact_offset(1.0, 0.5), 0.5);
+        assert_eq!(impact_offset(0.0, -0.5), 0.0);
     }
 
     #[test]

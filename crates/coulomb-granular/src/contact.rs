@@ -56,22 +56,36 @@ impl Contact {
 }
 
 /// Moreau–Jean's activation rule. A candidate pair with gap g_k and normal relative velocity
-/// u_{N,k} enters the index set when its predicted gap is below the threshold:
+/// u_{N,k} enters the index set when its gap predicted at t_k + γh is below the threshold
+/// ([`detect`] passes min(u_{N,k}, u_{N,free}), u_{N,free} the normal velocity of the free
+/// motion at t_{k+1}, gravity included):
 ///
 /// ```text
-///     g_k + γ h min(u_{N,k}, 0) ≤ δ
+///     g_k + γ h u_{N,k} ≤ δ_k
 /// ```
 ///
-/// γ = 1/2 (the prediction of the gap at mid-step) and δ = 10⁻⁸ m by default: the small δ
-/// keeps a resting or sliding contact in the index set although the solver's round-off lifts it
-/// by ~10⁻¹² m, which would otherwise let it fall freely for one step (g h²/2 of sinking each
-/// time).
+/// (unclamped, as Siconos' `MoreauJeanOSI::addInteractionInIndexSet`: a pair that separates
+/// at t_k leaves the index set as soon as its predicted gap is positive). γ = 1/2 by default.
+/// `delta` is the floor of δ_k; with `delta_from_tolerance`, [`crate::Simulation`] raises δ_k each step to twice the lift
+/// h·ε_u that a contact solved to the step's tolerance can get (ε_u = err · scale of
+/// docs/error.md, a bound on the residual normal velocity of a resting contact), so that a
+/// resting contact lifted by solver error never leaves the index set (docs/granular.md,
+/// "Activation and tolerance"). `Default` is Siconos' rule (γ = 1/2, unclamped), used by
+/// `coulomb paper`; [`Activation::accurate`] is the rule of `coulomb simulate`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Activation {
     /// γ ∈ [0, 1]
     pub gamma: f64,
-    /// δ ≥ 0, an absolute distance
+    /// floor of δ ≥ 0, an absolute distance (m)
     pub delta: f64,
+    /// keep a pair with g_k ≤ δ in the index set even when it separates at t_k (the rule
+    /// becomes g_k + γ h min(u_{N,k}, 0) ≤ δ): a resting contact whose solver residual
+    /// lifts it slightly stays active; energy-safe with the impact law of
+    /// [`crate::assembly::impact_offset`]
+    pub keep_separating: bool,
+    /// raise δ each step to the lift the solver's residual allows
+    /// ([`crate::Simulation::activation_threshold`]); otherwise δ = `delta`
+    pub delta_from_tolerance: bool,
 }
 
 impl Default for Activation {
@@ -79,14 +93,38 @@ impl Default for Activation {
         Self {
             gamma: 0.5,
             delta: 1e-8,
+            keep_separating: false,
+            delta_from_tolerance: false,
         }
     }
 }
 
 impl Activation {
-    /// Whether a pair with gap g and normal velocity u_N is active for step size h.
+    /// The rule of `coulomb simulate`: γ = 1 (a pair that the linear prediction closes within
+    /// the step is active, so that an elastic contact does not penetrate), pairs with g ≤ δ kept
+    /// even when they separate.
+    pub fn accurate() -> Self {
+        Self {
+            gamma: 1.0,
+            delta: 1e-8,
+            keep_separating: true,
+            delta_from_tolerance: true,
+        }
+    }
+
+    /// Whether a pair with gap g and normal velocity u_N is active for step size h, with the
+    /// floor δ of `self`.
     pub fn is_active(&self, gap: f64, u_n: f64, h: f64) -> bool {
-        gap + self.gamma * h * u_n.min(0.0) <= self.delta
+        self.is_active_with(gap, u_n, h, self.delta)
+    }
+    /// Whether g + γ h u_N ≤ δ for the given δ.
+    pub fn is_active_with(&self, gap: f64, u_n: f64, h: f64, delta: f64) -> bool {
+        let u = if self.keep_separating {
+            u_n.min(0.0)
+        } else {
+            u_n
+        };
+        gap + self.gamma * h * u <= delta
     }
 }
 
@@ -162,17 +200,35 @@ pub fn candidate_pairs(world: &World, margin: f64) -> Vec<(usize, usize)> {
 /// a margin from the broad phase, exact gaps and frames, then the [`Activation`] rule.
 /// Contacts are ordered by (body, partner), obstacles after bodies.
 pub fn detect(world: &World, t: f64, h: f64, activation: &Activation) -> Vec<Contact> {
+    detect_with(world, t, h, activation, activation.delta)
+}
+
+/// [`detect`] with the threshold δ given (≥ the activation's floor).
+pub fn detect_with(
+    world: &World,
+    t: f64,
+    h: f64,
+    activation: &Activation,
+    delta: f64,
+) -> Vec<Contact> {
+    let delta = delta.max(activation.delta);
     let vmax = world
         .bodies
         .iter()
         .map(|b| b.velocity.norm() + b.angular_velocity.norm() * b.radius)
         .fold(0.0_f64, f64::max);
-    let margin = activation.delta + 2.0 * vmax * h * activation.gamma + 1e-12;
+    let margin = delta + 2.0 * vmax * h * activation.gamma + 1e-12;
     let mut contacts = Vec::new();
     let mut push = |a: usize, partner: Partner, normal: Vec3, point: Vec3, gap: f64| {
         let u = relative_velocity(world, a, partner, point, t);
         let un = u.dot(normal);
-        if activation.is_active(gap, un, h) {
+        // the free motion's normal velocity at t_{k+1}: gravity acts on A alone when B is an
+        // obstacle (it cancels between two spheres)
+        let free = match partner {
+            Partner::Obstacle(_) => un + h * world.gravity.dot(normal),
+            Partner::Body(_) => un,
+        };
+        if activation.is_active_with(gap, un.min(free), h, delta) {
             let (t1, t2) = normal.tangent_basis();
             contacts.push(Contact {
                 body: a,
@@ -288,6 +344,8 @@ mod tests {
             &Activation {
                 gamma: 0.4,
                 delta: 0.0,
+                keep_separating: false,
+                delta_from_tolerance: false,
             },
         );
         assert_eq!(c.len(), 1);

@@ -14,13 +14,16 @@ pub mod assembly;
 pub mod contact;
 pub mod math;
 pub mod output;
+pub mod projection;
 pub mod run;
 pub mod scene;
 pub mod simulation;
+pub mod validation;
 pub mod world;
 
 pub use contact::{Activation, Contact, Partner};
 pub use math::Vec3;
+pub use projection::{Penetration, Projection, ProjectionStats};
 pub use run::{run, run_with, SimulationSettings, Stop, Summary};
 pub use scene::Scene;
 pub use simulation::{Params, Simulation, SimulationError, StepStats};

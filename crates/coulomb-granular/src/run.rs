@@ -91,6 +91,14 @@ pub struct Summary {
     pub max_penetration: f64,
     /// steps whose solve reported convergence (or that had no contact)
     pub converged_steps: usize,
+    /// steps whose solve did not reach the tolerance
+    pub not_converged_steps: usize,
+    /// mean penetration over the pairs in touch at the end of the run (m)
+    pub end_mean_penetration: f64,
+    /// largest penetration at the end of the run (m)
+    pub end_max_penetration: f64,
+    /// total change of potential energy caused by the position correction (J)
+    pub projection_work: f64,
     /// whether the run stopped by the rest rule
     pub at_rest: bool,
 }
@@ -112,6 +120,10 @@ impl Summary {
             max_error: stats.iter().map(|s| s.error).fold(0.0, f64::max),
             max_penetration: stats.iter().map(|s| s.max_penetration).fold(0.0, f64::max),
             converged_steps: stats.iter().filter(|s| s.converged).count(),
+            not_converged_steps: stats.iter().filter(|s| !s.converged).count(),
+            end_mean_penetration: stats.last().map_or(0.0, |s| s.end_mean_penetration),
+            end_max_penetration: stats.last().map_or(0.0, |s| s.end_max_penetration),
+            projection_work: stats.iter().map(|s| s.projection_work).sum(),
             at_rest,
         }
     }

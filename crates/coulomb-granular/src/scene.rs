@@ -266,18 +266,18 @@ fn fill(
 }
 
 /// Sites of a loose initial arrangement in the box [lo, hi].
-struct Lattice {
-    lo: Vec3,
-    hi: Vec3,
-    pitch: f64,
-    layer_pitch: f64,
+pub(crate) struct Lattice {
+    pub(crate) lo: Vec3,
+    pub(crate) hi: Vec3,
+    pub(crate) pitch: f64,
+    pub(crate) layer_pitch: f64,
     /// height of the first layer's centres above lo.z
-    base: f64,
+    pub(crate) base: f64,
 }
 
 /// Places `n` beads on the sites of `lattice` (jitter ±0.2 R, random initial velocities of
 /// ±0.1 m/s), layer by layer bottom up, keeping the sites where `inside` holds.
-fn fill_lattice(
+pub(crate) fn fill_lattice(
     world: &mut World,
     rng: &mut ChaCha8Rng,
     n: usize,
@@ -350,6 +350,8 @@ mod tests {
                 &Activation {
                     gamma: 0.0,
                     delta: 0.0,
+                    keep_separating: false,
+                    delta_from_tolerance: false,
                 },
             );
             assert!(

@@ -3,7 +3,8 @@
 //! velocities and positions with the θ-method.
 
 use crate::assembly::{assemble, free_momentum, mass_diagonal, StepData};
-use crate::contact::{detect, Activation, Contact, Partner};
+use crate::contact::{detect_with, Activation, Contact, Partner};
+use crate::projection::{penetrations, project, Projection};
 use crate::world::World;
 use coulomb::problem::{GlobalProblem, Problem, ProblemError};
 use coulomb::solver::{self, Guess, OuterRecord, Settings, SolveError, Status};
@@ -29,6 +30,9 @@ pub struct Params {
     pub solver: Settings,
     /// warm start from the previous step's impulses of persisting contacts
     pub warm_start: bool,
+    /// position correction after each step ([`crate::projection`]); `None`: the plain
+    /// Moreau–Jean scheme (the paper's)
+    pub projection: Option<Projection>,
 }
 
 impl Default for Params {
@@ -38,9 +42,10 @@ impl Default for Params {
             theta: 0.5,
             restitution: 0.2,
             mu: 0.3,
-            activation: Activation::default(),
+            activation: Activation::accurate(),
             solver: Settings::default(),
             warm_start: true,
+            projection: Some(Projection::default()),
         }
     }
 }
@@ -109,6 +114,16 @@ pub struct StepStats {
     pub max_penetration: f64,
     /// contacts that were warm started
     pub warm_started: usize,
+    /// threshold δ_k of the activation rule used at this step (m)
+    pub delta: f64,
+    /// largest penetration max(0, −g) over all pairs at t_{k+1}, after the position correction
+    pub end_max_penetration: f64,
+    /// mean penetration over the pairs in touch (g ≤ 0) at t_{k+1}
+    pub end_mean_penetration: f64,
+    /// change of potential energy caused by the position correction (J; 0 without it)
+    pub projection_work: f64,
+    /// Gauss–Seidel sweeps of the position correction (0: nothing to correct)
+    pub projection_sweeps: usize,
 }
 
 /// The time-stepping simulation: a [`World`] advanced by [`Simulation::step`].
@@ -133,6 +148,8 @@ pub struct Simulation {
     /// time the formation of the Delassus operator separately (`StepStats::delassus_ms`)
     pub profile_delassus: bool,
     previous: HashMap<(usize, Partner), [f64; 3]>,
+    /// bound ε_u = max(err, tol) · scale on the residual velocity of the last step's contacts
+    residual_velocity: f64,
 }
 
 impl Simulation {
@@ -151,6 +168,12 @@ impl Simulation {
         }
         if !(p.mu >= 0.0 && p.mu.is_finite()) {
             return bad(format!("mu = {} is not a finite nonnegative number", p.mu));
+        }
+        if let Some(pr) = &p.projection {
+            let ok = |x: f64| x.is_finite() && x > 0.0 && x < 1.0;
+            if !(ok(pr.trigger) && ok(pr.target) && pr.max_sweeps > 0) {
+                return bad(format!("projection {pr:?} out of range"));
+            }
         }
         if !(0.0..=1.0).contains(&p.activation.gamma)
             || p.activation.delta.is_nan()
@@ -180,6 +203,7 @@ impl Simulation {
             keep_problem: false,
             profile_delassus: false,
             previous: HashMap::new(),
+            residual_velocity: 0.0,
         })
     }
 
@@ -193,7 +217,8 @@ impl Simulation {
         let k = self.steps_done;
         let h = self.params.h;
         let t0 = Instant::now();
-        let mut contacts = detect(&self.world, self.time, h, &self.params.activation);
+        let delta = self.activation_threshold();
+        let mut contacts = detect_with(&self.world, self.time, h, &self.params.activation, delta);
         let data = StepData {
             h,
             t_end: self.time + h,
@@ -222,6 +247,11 @@ impl Simulation {
             potential_energy: 0.0,
             max_penetration,
             warm_started: 0,
+            delta,
+            end_max_penetration: 0.0,
+            end_mean_penetration: 0.0,
+            projection_work: 0.0,
+            projection_sweeps: 0,
         };
         let v_new = if contacts.is_empty() {
             stats.assembly_ms = t0.elapsed().as_secs_f64() * 1e3;
@@ -290,6 +320,8 @@ impl Simulation {
                         .collect()
                 }
             };
+            self.residual_velocity =
+                sol.error.max(self.params.solver.tol) * local_scale(&problem, &sol.r, &v);
             self.previous.clear();
             for (i, c) in contacts.iter_mut().enumerate() {
                 if let Some(r) = sol.r.get(3 * i..3 * i + 3) {
@@ -318,13 +350,45 @@ impl Simulation {
         }
         if contacts.is_empty() {
             self.previous.clear();
+            self.residual_velocity = 0.0;
         }
         self.contacts = contacts;
         self.time += h;
+        let pen = match &self.params.projection {
+            Some(pr) => {
+                let p = project(&mut self.world, self.time, pr);
+                stats.projection_work = p.work;
+                stats.projection_sweeps = p.sweeps;
+                penetrations(&self.world, self.time)
+            }
+            None => penetrations(&self.world, self.time),
+        };
+        stats.end_max_penetration = pen.max;
+        stats.end_mean_penetration = pen.mean;
         self.steps_done += 1;
         stats.kinetic_energy = self.world.kinetic_energy();
         stats.potential_energy = self.world.potential_energy();
         Ok(stats)
+    }
+
+    /// The threshold δ_k of the activation rule at this step: twice the largest lift h ε_u
+    /// that the last step's solver error allows (ε_u = max(err, tol) · scale of
+    /// docs/error.md bounds the residual normal velocity of a resting contact), at least the
+    /// activation's floor, at most 1 % of the smallest radius (docs/granular.md, "Activation
+    /// and tolerance").
+    pub fn activation_threshold(&self) -> f64 {
+        let rmin = self
+            .world
+            .bodies
+            .iter()
+            .map(|b| b.radius)
+            .fold(f64::INFINITY, f64::min);
+        if !self.params.activation.delta_from_tolerance {
+            return self.params.activation.delta;
+        }
+        let lift = 2.0 * self.params.h * self.residual_velocity;
+        let cap = if rmin.is_finite() { 0.01 * rmin } else { 0.0 };
+        lift.min(cap).max(self.params.activation.delta)
     }
 
     /// Largest speed |ẋ| + R|ω| over the spheres.
@@ -335,4 +399,30 @@ impl Simulation {
             .map(|b| b.velocity.norm() + b.radius * b.angular_velocity.norm())
             .fold(0.0, f64::max)
     }
+}
+
+/// The scale max(‖q‖, ‖r‖, ‖u‖) of docs/error.md for a global problem (M diagonal):
+/// q = Hᵀ M⁻¹ f + w, u = Hᵀ v + w.
+fn local_scale(problem: &GlobalProblem, r: &[f64], v: &[f64]) -> f64 {
+    let h = &problem.h;
+    let minv_f: Vec<f64> = problem
+        .f
+        .iter()
+        .zip(&problem.m.values)
+        .map(|(f, m)| f / m)
+        .collect();
+    let mut q2 = 0.0;
+    let mut u2 = 0.0;
+    for j in 0..h.ncols {
+        let (mut q, mut u) = (problem.w[j], problem.w[j]);
+        for k in h.col_ptr[j]..h.col_ptr[j + 1] {
+            let (i, x) = (h.row_idx[k], h.values[k]);
+            q += x * minv_f.get(i).copied().unwrap_or(0.0);
+            u += x * v.get(i).copied().unwrap_or(0.0);
+        }
+        q2 += q * q;
+        u2 += u * u;
+    }
+    let r2: f64 = r.iter().map(|x| x * x).sum();
+    q2.sqrt().max(u2.sqrt()).max(r2.sqrt())
 }

@@ -10,3 +10,4 @@ pub mod info;
 pub mod paper;
 pub mod simulate;
 pub mod solve;
+pub mod validate;

@@ -175,6 +175,9 @@ fn paper_params(inner: InnerKind, mu: f64, tol: f64, fp_tol: f64, max_outer: usi
             newton_steps: 0,
             ..solver_settings(inner, tol, fp_tol, max_outer, max_inner)
         },
+        // the paper's time stepping: Siconos' activation rule (γ = 1/2), no position correction
+        activation: coulomb_granular::Activation::default(),
+        projection: None,
         ..Params::default()
     }
 }

@@ -6,7 +6,7 @@ use coulomb::solver::{InnerKind, OuterKind, Settings};
 use coulomb_granular::output::{write_stats, VtkWriter};
 use coulomb_granular::run::RestMonitor;
 use coulomb_granular::scene::BoxLayout;
-use coulomb_granular::{Activation, Params, Scene, Simulation, Stop, Summary};
+use coulomb_granular::{Activation, Params, Projection, Scene, Simulation, Stop, Summary};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -42,6 +42,9 @@ pub enum Outer {
     FixedPoint,
     /// safeguarded Anderson mixing on s
     Anderson,
+    /// Gauss–Seidel directly on Coulomb's law, each contact's law solved exactly (needs
+    /// `--inner pgs`)
+    Fused,
 }
 
 impl From<Outer> for OuterKind {
@@ -49,6 +52,7 @@ impl From<Outer> for OuterKind {
         match o {
             Outer::FixedPoint => OuterKind::FixedPoint,
             Outer::Anderson => OuterKind::Anderson,
+            Outer::Fused => OuterKind::Fused,
         }
     }
 }
@@ -85,17 +89,20 @@ pub struct Args {
     /// step cap of --until-rest
     #[arg(long, default_value_t = 2000)]
     pub max_steps: usize,
-    /// inner solver
-    #[arg(long, value_enum, default_value_t = Inner::Apgd)]
+    /// inner solver (default: Gauss–Seidel, the fastest to 1e-4 on the box scene, see
+    /// docs/granular.md)
+    #[arg(long, value_enum, default_value_t = Inner::Pgs)]
     pub inner: Inner,
-    /// outer iteration
-    #[arg(long, value_enum, default_value_t = Outer::FixedPoint)]
+    /// outer iteration (default: Gauss–Seidel fused with the law; apgd + Anderson as fallback)
+    #[arg(long, value_enum, default_value_t = Outer::Fused)]
     pub outer: Outer,
-    /// tolerance on the error of docs/error.md
+    /// tolerance on the error of docs/error.md, reached at every step (steps that do not
+    /// reach it are counted and reported)
     #[arg(long, default_value_t = 1e-4)]
     pub tol: f64,
-    /// ε of the paper's outer stopping rule (6.1); 0 disables it
-    #[arg(long, default_value_t = 0.01)]
+    /// ε of the paper's outer stopping rule (6.1); 0 (default) disables it, so that every
+    /// step is solved to --tol
+    #[arg(long, default_value_t = 0.0)]
     pub fp_tol: f64,
     /// cap on outer (fixed-point) iterations per step
     #[arg(long, default_value_t = 20)]
@@ -103,9 +110,12 @@ pub struct Args {
     /// cap on inner iterations per subproblem (default: the solver's)
     #[arg(long)]
     pub max_inner: Option<usize>,
-    /// γ of the activation rule g + γ h min(u_N, 0) ≤ δ
-    #[arg(long, default_value_t = 0.5)]
+    /// γ of the activation rule g + γ h min(u_N, 0) ≤ δ (docs/granular.md)
+    #[arg(long, default_value_t = 1.0)]
     pub gamma: f64,
+    /// no position correction (the plain Moreau–Jean scheme: penetrations stay)
+    #[arg(long)]
+    pub no_projection: bool,
     /// disable warm starts
     #[arg(long)]
     pub cold: bool,
@@ -158,7 +168,7 @@ pub fn solver_settings(
 }
 
 impl Args {
-    fn params(&self) -> Params {
+    pub(crate) fn params(&self) -> Params {
         Params {
             h: self.dt,
             theta: self.theta,
@@ -166,10 +176,16 @@ impl Args {
             mu: self.mu,
             activation: Activation {
                 gamma: self.gamma,
-                ..Activation::default()
+                ..Activation::accurate()
             },
             solver: Settings {
                 outer: self.outer.into(),
+                // a step the first method does not bring to --tol gets a second one
+                fallback: Some(if self.outer == Outer::Fused {
+                    (InnerKind::Apgd, OuterKind::Anderson)
+                } else {
+                    (InnerKind::Pgs, OuterKind::Fused)
+                }),
                 ..solver_settings(
                     self.inner.into(),
                     self.tol,
@@ -179,7 +195,42 @@ impl Args {
                 )
             },
             warm_start: !self.cold,
+            projection: (!self.no_projection).then(Projection::default),
         }
+    }
+
+    /// Refuses time steps for which the activation rule cannot work and warns about risky
+    /// ones: in one step a bead at rest free-falls g h² (velocity g h, moved ½ g h² … g h²
+    /// by the θ-method); above R the linear gap prediction misses contacts entirely (beads
+    /// pass through each other and through walls); above R/10 penetrations before the
+    /// position correction reach tens of % of R.
+    fn check_step(&self) -> anyhow::Result<()> {
+        let h = self.dt;
+        if !(h.is_finite() && h > 0.0) {
+            bail!("--dt {h} must be a positive number of seconds");
+        }
+        let r = coulomb_granular::scene::BEAD_RADIUS;
+        let g = coulomb_granular::world::GRAVITY;
+        let fall = g * h * h;
+        if fall > r {
+            bail!(
+                "--dt {h} is too large: a bead falls g·h² = {fall:.3} m in one step, more than its radius {r} m, so contacts cannot be detected or activated; use --dt ≤ {:.4}",
+                (r / g).sqrt()
+            );
+        }
+        if fall > 0.1 * r {
+            eprintln!(
+                "warning: --dt {h}: a bead falls g·h² = {fall:.4} m in one step (> R/10); expect large transient penetrations; --dt ≤ {:.4} is advised",
+                (0.1 * r / g).sqrt()
+            );
+        }
+        if !(self.fp_tol.is_finite() && self.fp_tol >= 0.0) {
+            bail!("--fp-tol {} must be a finite number ≥ 0", self.fp_tol);
+        }
+        if self.outer == Outer::Fused && self.inner != Inner::Pgs {
+            bail!("--outer fused needs --inner pgs");
+        }
+        Ok(())
     }
     /// The box layout: the calibrated one for `--beads`, with the command line's overrides.
     fn layout(&self) -> anyhow::Result<BoxLayout> {
@@ -249,6 +300,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.beads > 1_000_000 {
         bail!("--beads {} is above the limit of 1000000", args.beads);
     }
+    args.check_step()?;
     let stop = args.stop();
     let world = scene.build_with(args.beads, args.seed, &args.layout()?);
     let mut sim = Simulation::new(world, args.params()).context("invalid simulation parameters")?;
@@ -265,6 +317,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(w) = vtk.as_mut() {
         w.frame(&sim).context("writing VTK frame")?;
     }
+    let start_energy = sim.world.kinetic_energy() + sim.world.potential_energy();
     let pb = progress(stop.max_steps(), args.json);
     pb.set_prefix(format!("{} {}", scene.name(), args.beads));
     let mut stats = Vec::new();
@@ -293,7 +346,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     pb.finish_and_clear();
+    // the last state, when the run stopped between two frames
+    if let Some(w) = vtk.as_mut() {
+        let written = args.frames_every > 0 && sim.steps_done % args.frames_every == 0;
+        if !written && sim.steps_done > 0 {
+            w.frame(&sim).context("writing VTK frame")?;
+        }
+    }
     let summary = Summary::from_stats(scene.name(), args.beads, &stats, at_rest);
+    let end_energy = sim.world.kinetic_energy() + sim.world.potential_energy();
     if let Some(dir) = &args.output {
         write_stats(dir, &stats)
             .with_context(|| format!("writing stats into {}", dir.display()))?;
@@ -311,7 +372,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "mean_subproblems": summary.mean_subproblems,
             "mean_solve_ms": summary.mean_solve_ms,
             "max_penetration": summary.max_penetration,
+            "end_mean_penetration": summary.end_mean_penetration,
+            "end_max_penetration": summary.end_max_penetration,
+            "projection_work": summary.projection_work,
+            "start_energy": start_energy,
+            "end_energy": end_energy,
             "converged_steps": summary.converged_steps,
+            "not_converged_steps": summary.not_converged_steps,
             "mean_error": summary.mean_error,
             "max_error": summary.max_error,
             "at_rest": summary.at_rest,
@@ -319,7 +386,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         println!("{obj}");
     } else {
         println!(
-            "{}: {} beads, {} steps{}, {:.1} contacts/step, {:.2} subproblems/step, {:.2} ms solve/step, mean error {:.2e} (max {:.2e}), {} / {} steps converged, max penetration {:.2e} m",
+            "{}: {} beads, {} steps{}, {:.1} contacts/step, {:.2} subproblems/step, {:.2} ms solve/step, mean error {:.2e} (max {:.2e}), {} / {} steps converged ({} not converged), max penetration during the run {:.2e} m, at the end: mean {:.2e} m, max {:.2e} m",
             summary.scene,
             summary.beads,
             summary.steps,
@@ -331,7 +398,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             summary.max_error,
             summary.converged_steps,
             summary.steps,
-            summary.max_penetration
+            summary.not_converged_steps,
+            summary.max_penetration,
+            summary.end_mean_penetration,
+            summary.end_max_penetration
         );
     }
     Ok(())

@@ -1,0 +1,98 @@
+//! `coulomb simulate` physics defaults and `coulomb validate`, on tiny sizes.
+
+mod common;
+use common::*;
+
+#[test]
+fn simulate_reports_end_penetrations_and_unconverged_steps() {
+    let out = coulomb(&[
+        "simulate", "box", "--beads", "20", "--steps", "40", "--json",
+    ]);
+    let v = stdout_json(&out);
+    for key in [
+        "end_mean_penetration",
+        "end_max_penetration",
+        "not_converged_steps",
+        "projection_work",
+        "start_energy",
+        "end_energy",
+    ] {
+        assert!(v[key].is_number(), "{key} missing in {v}");
+    }
+    // every step solved to 1e-4 by default
+    assert_eq!(v["not_converged_steps"].as_u64(), Some(0), "{v}");
+    assert!(v["max_error"].as_f64().unwrap() <= 1e-4, "{v}");
+    // position correction on: penetrations at the end below 1 % of R = 5 cm
+    assert!(v["end_max_penetration"].as_f64().unwrap() <= 5e-4, "{v}");
+}
+
+#[test]
+fn simulate_elastic_frictionless_box_does_not_gain_energy() {
+    let out = coulomb(&[
+        "simulate",
+        "box",
+        "--beads",
+        "30",
+        "--steps",
+        "300",
+        "--restitution",
+        "1",
+        "--mu",
+        "0",
+        "--no-projection",
+        "--json",
+    ]);
+    let v = stdout_json(&out);
+    let (e0, e1) = (
+        v["start_energy"].as_f64().unwrap(),
+        v["end_energy"].as_f64().unwrap(),
+    );
+    assert!((e1 - e0).abs() <= 5e-3 * e0.abs(), "{e0} → {e1}");
+}
+
+#[test]
+fn simulate_refuses_a_time_step_too_large_for_contact_detection() {
+    let out = coulomb(&["simulate", "box", "--beads", "5", "--dt", "10"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--dt 10 is too large"), "{err}");
+    let out = coulomb(&[
+        "simulate", "box", "--beads", "5", "--steps", "2", "--dt", "0.03",
+    ]);
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("warning: --dt 0.03"));
+}
+
+#[test]
+fn simulate_writes_the_last_frame_between_two_frame_steps() {
+    let dir = temp_dir("sim-last-frame");
+    let out = coulomb(&[
+        "simulate",
+        "box",
+        "--beads",
+        "8",
+        "--steps",
+        "13",
+        "--frames-every",
+        "5",
+        "--output",
+        dir.to_str().unwrap(),
+    ]);
+    ok(&out);
+    for k in [0, 5, 10, 13] {
+        let f = dir.join(format!("frames/beads_{k:06}.vtp"));
+        assert!(f.is_file(), "{} missing", f.display());
+    }
+    let pvd = std::fs::read_to_string(dir.join("beads.pvd")).unwrap();
+    assert!(pvd.contains("beads_000013.vtp"));
+}
+
+#[test]
+fn validate_quick_passes_and_writes_markdown() {
+    let md = scratch_file("validate", "validation.md");
+    let out = coulomb(&["validate", "--quick", "--markdown", md.to_str().unwrap()]);
+    ok(&out);
+    let text = std::fs::read_to_string(&md).unwrap();
+    assert!(text.contains("| incline 30° μ = 0.3 rolling: acceleration |"));
+    assert!(!text.contains("**no**"), "{text}");
+}

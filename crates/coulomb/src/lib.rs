@@ -12,6 +12,7 @@
 //! - [`fclib`]: the FCLIB HDF5 exchange format.
 
 pub mod cone;
+pub mod deadline;
 pub mod delassus;
 pub mod examples;
 pub mod existence;

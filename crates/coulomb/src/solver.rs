@@ -350,7 +350,7 @@ pub fn solve_with_guess(
 ) -> Result<Solution, SolveError> {
     settings.validate()?;
     let start = Instant::now();
-    let deadline = settings.time_limit.map(|t| start + t);
+    let deadline = crate::deadline::deadline(start, settings.time_limit);
     let form = match problem {
         Problem::Local(p) => Form::Local(p),
         Problem::Global(g) => Form::Global(g, Box::new(Delassus::new(g)?)),

@@ -281,7 +281,7 @@ impl Evaluation {
     /// Converged at `tol` (docs/error.md): err ≤ tol and, for a global problem, the
     /// balance residual ≤ tol.
     pub fn converged(&self, tol: f64) -> bool {
-        self.measure.error <= tol && self.balance_residual.is_none_or(|b| b <= tol)
+        self.measure.converged(tol) && self.balance_residual.is_none_or(|b| b <= tol)
     }
 }
 

@@ -106,13 +106,14 @@ impl ErrorMeasure {
     }
 }
 
-/// Multiplier 2⁻ᵏ (exact) that brings `max_abs` (finite, > 2¹⁰⁰) to at most 1, so that the
+/// Multiplier 2⁻ᵏ (exact) that brings `max_abs` (finite, > 2¹⁰⁰) to at most 4, so that the
 /// squares of the scaled entries cannot overflow; 1 for smaller values.
 fn down_scale(max_abs: f64) -> f64 {
     if max_abs.is_finite() && max_abs > 2f64.powi(100) {
-        // log2 rounds, so add one: 2^-(e+1) · max_abs ≤ 1
+        // log2 rounds, so add one: 2^-(e+1) · max_abs ≤ 1; at most 2^-1022 (a normal
+        // number: entries then stay ≤ 4)
         let e = max_abs.log2().ceil() as i32 + 1;
-        2f64.powi(-e.min(1074))
+        2f64.powi(-e.min(1022))
     } else {
         1.0
     }
@@ -124,7 +125,7 @@ fn down_scale(max_abs: f64) -> f64 {
 ///
 /// The natural map eᵢ(u, r) = r − P_{K_μ}(r − ũ) is positively homogeneous (eᵢ(αu, αr) =
 /// α eᵢ(u, r) for α > 0), and so is every norm: all of r, u and ‖q‖ are first multiplied by a
-/// power of two α (exact) that brings the largest entry below 1, the ratio is taken on the
+/// power of two α (exact) that brings the largest entry below 4, the ratio is taken on the
 /// scaled values, and `absolute` and `scale` are reported divided by α. Nothing overflows on
 /// finite input; a NaN or ±∞ in r, u or ‖q‖ gives error NaN or +∞, never a small number.
 pub fn error_measure(dim: usize, mu: &[f64], r: &[f64], u: &[f64], q_norm: f64) -> ErrorMeasure {
@@ -194,8 +195,15 @@ pub fn norm(x: &[f64]) -> f64 {
         return max;
     }
     if max > 1e150 || max < 1e-150 {
-        let s = x.iter().map(|v| (v / max) * (v / max)).sum::<f64>().sqrt();
-        s * max
+        // an exact power of two near max, so that the scaling itself does not round
+        let e = max.log2().floor().clamp(-1022.0, 1023.0) as i32;
+        let (down, up) = (2f64.powi(-e), 2f64.powi(e));
+        let s = x
+            .iter()
+            .map(|v| (v * down) * (v * down))
+            .sum::<f64>()
+            .sqrt();
+        s * up
     } else {
         x.iter().map(|v| v * v).sum::<f64>().sqrt()
     }

@@ -291,6 +291,20 @@ pub fn check(problem: &Problem, settings: &CheckSettings) -> Result<ExistenceRep
     }
 }
 
+/// [`check`], calling `progress` with each criterion just before it is evaluated (for a
+/// progress display: each criterion is one or two conic solves, long on huge problems).
+pub fn check_with_progress(
+    problem: &Problem,
+    settings: &CheckSettings,
+    progress: &mut dyn FnMut(Criterion),
+) -> Result<ExistenceReport, CheckError> {
+    let data = match problem {
+        Problem::Global(p) => (KinematicData::new(p.dim, &p.h, &p.w, &p.mu)?, "global"),
+        Problem::Local(p) => (KinematicData::new(p.dim, &p.w, &p.q, &p.mu)?, "local"),
+    };
+    run_all_with(&data.0, data.1, settings, progress)
+}
+
 /// [`check`] on a global problem: the criteria on (H, w).
 pub fn check_global(
     p: &GlobalProblem,
@@ -1093,6 +1107,15 @@ fn run_all(
     kind: &'static str,
     settings: &CheckSettings,
 ) -> Result<ExistenceReport, CheckError> {
+    run_all_with(data, kind, settings, &mut |_| {})
+}
+
+fn run_all_with(
+    data: &KinematicData,
+    kind: &'static str,
+    settings: &CheckSettings,
+    progress: &mut dyn FnMut(Criterion),
+) -> Result<ExistenceReport, CheckError> {
     validate_settings(settings)?;
     let start = Instant::now();
     let frictionless = data.mu.iter().all(|&m| m == 0.0);
@@ -1106,9 +1129,13 @@ fn run_all(
             c5_1: h,
         }
     } else {
+        progress(Criterion::C4_5);
         let c4_5 = criterion_4_5(data, settings);
+        progress(Criterion::C4_4);
         let (c4_4, c4_6) = criteria_4_4_and_4_6(data, settings);
+        progress(Criterion::C4_1);
         let c4_1 = criterion_4_1(data, settings);
+        progress(Criterion::C5_1);
         let c5_1 = criterion_5_1(data, settings);
         Criteria {
             c4_1,

@@ -11,6 +11,7 @@
 //! - [`inner`]: solvers of the second-order-cone QP (3.15)/(4.7) that defines F(s);
 //! - [`fclib`]: the FCLIB HDF5 exchange format.
 
+pub mod atomic;
 pub mod cone;
 pub mod deadline;
 pub mod delassus;

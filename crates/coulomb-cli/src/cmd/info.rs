@@ -47,9 +47,21 @@ pub struct Summary {
 }
 
 /// Reads a file for inspection: a W that is not symmetric within 1e-6 is replaced by
-/// ½(W + Wᵀ) and reported, rather than refused.
+/// ½(W + Wᵀ) and reported, rather than refused; a malformed /solution or /guesses group
+/// (stored solutions are data, not truth) is left out with a warning on stderr.
 pub fn read_relaxed(path: &std::path::Path) -> Result<FclibFile, fclib::FclibError> {
-    fclib::read_with(
+    let (file, dropped) = read_relaxed_dropped(path)?;
+    for e in dropped {
+        eprintln!("warning: {e}; going on without it");
+    }
+    Ok(file)
+}
+
+/// [`read_relaxed`] without the warnings: the errors of the groups left out are returned.
+pub fn read_relaxed_dropped(
+    path: &std::path::Path,
+) -> Result<(FclibFile, Vec<fclib::FclibError>), fclib::FclibError> {
+    fclib::read_lenient(
         path,
         &ReadOptions {
             symmetry: Symmetry::Symmetrize,
@@ -93,8 +105,9 @@ fn opt<T: std::fmt::Display>(x: Option<T>) -> String {
     x.map_or_else(|| "-".to_string(), |v| v.to_string())
 }
 
-/// Runs `coulomb info`.
-pub fn run(args: Args) -> anyhow::Result<()> {
+/// Runs `coulomb info`: exit status 2 when a file could not be read (each is named in the
+/// table or the JSON), 0 otherwise.
+pub fn run(args: Args) -> anyhow::Result<crate::exit::Outcome> {
     let mut rows = Vec::new();
     let mut failures = 0;
     for path in &args.files {
@@ -116,9 +129,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             })
             .collect::<Result<_, _>>()?;
         let out = if values.len() == 1 {
-            serde_json::to_string_pretty(&values[0])?
+            crate::outputs::json(&values[0], true)?
         } else {
-            serde_json::to_string_pretty(&values)?
+            crate::outputs::json(&values, true)?
         };
         println!("{out}");
     } else {
@@ -165,7 +178,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     if failures > 0 {
-        anyhow::bail!("{failures} of {} files could not be read", args.files.len());
+        eprintln!(
+            "error: {failures} of {} files could not be read",
+            args.files.len()
+        );
+        return Ok(crate::exit::Outcome::BadInput);
     }
-    Ok(())
+    Ok(crate::exit::Outcome::Success)
 }

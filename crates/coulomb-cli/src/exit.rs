@@ -15,7 +15,8 @@
 use std::process::ExitCode;
 
 /// The text shown at the end of `coulomb --help`.
-pub const HELP: &str = "Exit status: 0 success (solve converged, error says yes, check: a solution exists); \
+pub const HELP: &str =
+    "Exit status: 0 success (solve converged, error says yes, check: a solution exists); \
 1 negative answer (solve did not converge, error says no, check: no solution exists); \
 2 bad input or usage (invalid option value, unreadable file, refused output path); \
 3 inconclusive (check); 4 an output could not be written (destination left as it was).";
@@ -66,7 +67,10 @@ pub fn status_of(e: &anyhow::Error) -> u8 {
     use crate::cmd::bench::{plot::PlotError, BenchError};
     let write_failed = |c: &(dyn std::error::Error + 'static)| {
         c.downcast_ref::<WriteFailed>().is_some()
-            || matches!(c.downcast_ref::<BenchError>(), Some(BenchError::Write { .. }))
+            || matches!(
+                c.downcast_ref::<BenchError>(),
+                Some(BenchError::Write { .. })
+            )
             || matches!(c.downcast_ref::<PlotError>(), Some(PlotError::Write { .. }))
     };
     if e.chain().any(write_failed) {

@@ -42,7 +42,10 @@ pub fn check(what: &str, path: &Path, inputs: &[&Path]) -> anyhow::Result<()> {
         }
     }
     if path.is_dir() {
-        bail!("{what} {} is a directory, expected a file name", path.display());
+        bail!(
+            "{what} {} is a directory, expected a file name",
+            path.display()
+        );
     }
     if let Err(e) = coulomb::atomic::check_writable(path) {
         bail!("{what} {}: cannot write there: {e}", path.display());
@@ -150,7 +153,11 @@ pub fn json<T: serde::Serialize + ?Sized>(x: &T, pretty: bool) -> serde_json::Re
 mod tests {
     #[test]
     fn json_has_no_negative_zero() {
-        let s = super::json(&serde_json::json!({"a": -0.0, "b": [-0.0, 1.5, -2.0]}), false).unwrap();
+        let s = super::json(
+            &serde_json::json!({"a": -0.0, "b": [-0.0, 1.5, -2.0]}),
+            false,
+        )
+        .unwrap();
         assert!(!s.contains("-0"), "{s}");
         assert!(s.contains("-2"), "{s}");
     }

@@ -74,7 +74,11 @@ fn cli_reliability_exit_statuses_of_every_subcommand() {
     std::fs::write(&garbage, b"not hdf5").unwrap();
 
     expect(&coulomb(&["info", s(&easy)]), 0, "info");
-    expect(&coulomb(&["info", s(&easy), s(&garbage)]), 2, "info with a bad file");
+    expect(
+        &coulomb(&["info", s(&easy), s(&garbage)]),
+        2,
+        "info with a bad file",
+    );
     expect(&coulomb(&["error", s(&easy)]), 0, "error yes");
     expect(&coulomb(&["error", s(&wrong)]), 1, "error no");
     expect(&coulomb(&["error", s(&missing)]), 2, "error unreadable");
@@ -95,10 +99,25 @@ fn cli_reliability_exit_statuses_of_every_subcommand() {
         0,
         "example",
     );
-    expect(&coulomb(&["check", s(&ball)]), 1, "check: no solution exists");
+    expect(
+        &coulomb(&["check", s(&ball)]),
+        1,
+        "check: no solution exists",
+    );
     expect(&coulomb(&["check", s(&garbage)]), 2, "check unreadable");
     expect(
-        &coulomb(&["example", "painleve", "--theta", "95", "--mu", "1", "--u0", "1", "--output", s(&dir.join("p.hdf5"))]),
+        &coulomb(&[
+            "example",
+            "painleve",
+            "--theta",
+            "95",
+            "--mu",
+            "1",
+            "--u0",
+            "1",
+            "--output",
+            s(&dir.join("p.hdf5")),
+        ]),
         2,
         "example bad theta",
     );
@@ -107,39 +126,76 @@ fn cli_reliability_exit_statuses_of_every_subcommand() {
         0,
         "simulate",
     );
-    expect(&coulomb(&["simulate", "box", "--beads", "0"]), 2, "simulate 0 beads");
+    expect(
+        &coulomb(&["simulate", "box", "--beads", "0"]),
+        2,
+        "simulate 0 beads",
+    );
     expect(&coulomb(&["demo", "--beads", "0"]), 2, "demo 0 beads");
     expect(&coulomb(&["demo", "--beads", "100000000"]), 2, "demo huge");
     expect(
-        &coulomb(&["bench", s(&easy), "--solvers", "pgs", "--json", s(&dir.join("b.json"))]),
+        &coulomb(&[
+            "bench",
+            s(&easy),
+            "--solvers",
+            "pgs",
+            "--json",
+            s(&dir.join("b.json")),
+        ]),
         0,
         "bench",
     );
     expect(&coulomb(&["bench", s(&missing)]), 2, "bench missing");
-    expect(&coulomb(&["paper", "table1", "--steps", "0"]), 2, "paper bad steps");
+    expect(
+        &coulomb(&["paper", "table1", "--steps", "0"]),
+        2,
+        "paper bad steps",
+    );
     expect(&coulomb(&["solve"]), 2, "usage: no file");
     expect(&coulomb(&["frobnicate"]), 2, "usage: unknown command");
     let help = coulomb(&["--help"]);
     expect(&help, 0, "help");
-    assert!(stdout(&help).contains("Exit status: 0 success"), "{}", stdout(&help));
+    assert!(
+        stdout(&help).contains("Exit status: 0 success"),
+        "{}",
+        stdout(&help)
+    );
 }
 
 #[test]
 fn cli_reliability_demo_runs_with_few_beads() {
     let dir = temp_dir("rel-demo");
-    let out = coulomb(&["demo", "--beads", "4", "--steps", "2", "--output", s(&dir.join("d"))]);
+    let out = coulomb(&[
+        "demo",
+        "--beads",
+        "4",
+        "--steps",
+        "2",
+        "--output",
+        s(&dir.join("d")),
+    ]);
     expect(&out, 0, "demo");
 }
 
 #[test]
 fn cli_reliability_every_numeric_option_refuses_bad_values_with_a_message() {
     let dir = temp_dir("rel-values");
-    let f = local_file(&dir, "f.hdf5", CscMatrix::identity(3, 1.0), vec![-1.0, 0.2, 0.1], None);
+    let f = local_file(
+        &dir,
+        "f.hdf5",
+        CscMatrix::identity(3, 1.0),
+        vec![-1.0, 0.2, 0.1],
+        None,
+    );
     let f = s(&f);
     // (arguments before the option, option, bad values)
     let cases: Vec<(Vec<&str>, &str, Vec<&str>)> = vec![
         (vec!["solve", f], "--tol", vec!["nan", "0", "inf", "-1"]),
-        (vec!["solve", f], "--time-limit", vec!["1e30", "1e19", "nan", "0", "-2"]),
+        (
+            vec!["solve", f],
+            "--time-limit",
+            vec!["1e30", "1e19", "nan", "0", "-2"],
+        ),
         (vec!["solve", f], "--max-outer", vec!["0", "-1", "1.5"]),
         (vec!["error", f], "--tol", vec!["nan", "0", "inf", "-1"]),
         (vec!["check", f], "--tol", vec!["nan", "inf", "-1"]),
@@ -148,11 +204,23 @@ fn cli_reliability_every_numeric_option_refuses_bad_values_with_a_message() {
         (vec!["bench", f], "--time-limit", vec!["1e30", "-1", "0"]),
         (vec!["bench", f], "--repeat", vec!["0", "-3"]),
         (vec!["simulate", "box"], "--fp-tol", vec!["nan", "-1"]),
-        (vec!["simulate", "box"], "--dt", vec!["-0.01", "0", "nan", "inf"]),
+        (
+            vec!["simulate", "box"],
+            "--dt",
+            vec!["-0.01", "0", "nan", "inf"],
+        ),
         (vec!["simulate", "box"], "--tol", vec!["-1", "nan"]),
         (vec!["simulate", "box"], "--mu", vec!["-0.3", "nan"]),
-        (vec!["simulate", "box"], "--restitution", vec!["-0.1", "1.5"]),
-        (vec!["simulate", "box"], "--beads", vec!["0", "-5", "100000000"]),
+        (
+            vec!["simulate", "box"],
+            "--restitution",
+            vec!["-0.1", "1.5"],
+        ),
+        (
+            vec!["simulate", "box"],
+            "--beads",
+            vec!["0", "-5", "100000000"],
+        ),
         (vec!["demo"], "--beads", vec!["0", "-5", "100000000"]),
         (vec!["demo"], "--steps", vec!["0", "-1"]),
         (vec!["paper", "table1"], "--tol", vec!["nan", "-1"]),
@@ -160,8 +228,16 @@ fn cli_reliability_every_numeric_option_refuses_bad_values_with_a_message() {
         (vec!["paper", "table1"], "--beads", vec!["0", "-1"]),
         (vec!["paper", "fig9"], "--mu", vec!["-0.1", "nan"]),
         (vec!["paper", "scaling"], "--window", vec!["0", "-1"]),
-        (vec!["example", "crushed-ball", "--output", "x.hdf5"], "--mu", vec!["-1", "nan"]),
-        (vec!["example", "crushed-ball", "--output", "x.hdf5"], "--u0", vec!["nan", "inf"]),
+        (
+            vec!["example", "crushed-ball", "--output", "x.hdf5"],
+            "--mu",
+            vec!["-1", "nan"],
+        ),
+        (
+            vec!["example", "crushed-ball", "--output", "x.hdf5"],
+            "--u0",
+            vec!["nan", "inf"],
+        ),
     ];
     for (before, opt, values) in cases {
         for v in values {
@@ -180,7 +256,12 @@ fn cli_reliability_every_numeric_option_refuses_bad_values_with_a_message() {
     }
     // a negative value where the sign is meaningful is accepted
     let out = coulomb(&[
-        "example", "crushed-ball", "--u0", "-0.5", "--output", s(&dir.join("b.hdf5")),
+        "example",
+        "crushed-ball",
+        "--u0",
+        "-0.5",
+        "--output",
+        s(&dir.join("b.hdf5")),
     ]);
     expect(&out, 0, "example with a negative speed");
 }
@@ -205,8 +286,20 @@ fn cli_reliability_no_false_converged_at_extreme_scales() {
     // solve: converged only with an r that is really a solution
     for f in [
         huge.clone(),
-        local_file(&dir, "w.hdf5", CscMatrix::identity(3, 1e308), vec![-1.0, 1.0, 3.0], None),
-        local_file(&dir, "q.hdf5", CscMatrix::identity(3, 1.0), vec![-1e308, 1e308, 1e308], None),
+        local_file(
+            &dir,
+            "w.hdf5",
+            CscMatrix::identity(3, 1e308),
+            vec![-1.0, 1.0, 3.0],
+            None,
+        ),
+        local_file(
+            &dir,
+            "q.hdf5",
+            CscMatrix::identity(3, 1.0),
+            vec![-1e308, 1e308, 1e308],
+            None,
+        ),
     ] {
         let out_file = dir.join("sol.hdf5");
         let out = coulomb(&["solve", s(&f), "--json", "--output", s(&out_file)]);
@@ -219,7 +312,10 @@ fn cli_reliability_no_false_converged_at_extreme_scales() {
             let e: serde_json::Value = serde_json::from_str(&stdout(&again)).unwrap();
             assert_eq!(e["converged"], true, "{v} / {e}");
             let written = fclib::read_solution(&out_file).unwrap().unwrap();
-            assert!(written.r.iter().any(|x| *x != 0.0), "r = 0 is no solution: {v}");
+            assert!(
+                written.r.iter().any(|x| *x != 0.0),
+                "r = 0 is no solution: {v}"
+            );
         } else {
             assert_eq!(code(&out), 1, "{v}");
         }
@@ -229,7 +325,13 @@ fn cli_reliability_no_false_converged_at_extreme_scales() {
 #[test]
 fn cli_reliability_outputs_never_destroy_inputs() {
     let dir = temp_dir("rel-out");
-    let f = local_file(&dir, "f.hdf5", CscMatrix::identity(3, 1.0), vec![-1.0, 0.2, 0.1], Some(vec![1.0, -0.2, -0.1]));
+    let f = local_file(
+        &dir,
+        "f.hdf5",
+        CscMatrix::identity(3, 1.0),
+        vec![-1.0, 0.2, 0.1],
+        Some(vec![1.0, -0.2, -0.1]),
+    );
     let before = std::fs::read(&f).unwrap();
     // solve F --output F, also through another spelling of the same path
     for alias in [f.clone(), dir.join(".").join("f.hdf5")] {
@@ -254,15 +356,26 @@ fn cli_reliability_outputs_never_destroy_inputs() {
         let t = std::time::Instant::now();
         let out = coulomb(&args);
         expect(&out, 2, &format!("{args:?}"));
-        assert!(t.elapsed().as_secs_f64() < 20.0, "{args:?} ran before failing");
-        assert!(stderr(&out).contains("cannot write"), "{args:?}: {}", stderr(&out));
+        assert!(
+            t.elapsed().as_secs_f64() < 20.0,
+            "{args:?} ran before failing"
+        );
+        assert!(
+            stderr(&out).contains("cannot write"),
+            "{args:?}: {}",
+            stderr(&out)
+        );
     }
     // replacing an existing output is said
     let o = dir.join("o.hdf5");
     std::fs::write(&o, b"old").unwrap();
     let out = coulomb(&["solve", s(&f), "--output", s(&o)]);
     expect(&out, 0, "solve --output existing");
-    assert!(stderr(&out).contains("replaced existing"), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("replaced existing"),
+        "{}",
+        stderr(&out)
+    );
     assert!(fclib::read(&o).is_ok());
     // no temporary file is left behind
     let left: Vec<_> = std::fs::read_dir(&dir)
@@ -305,11 +418,25 @@ fn cli_reliability_failed_write_leaves_the_old_file_intact() {
 fn cli_reliability_malformed_stored_solution_only_warns() {
     let dir = temp_dir("rel-sol");
     // /solution r of the wrong length: data, not truth
-    let f = local_file(&dir, "badsol.hdf5", CscMatrix::identity(3, 1.0), vec![-1.0, 0.2, 0.1], Some(vec![1.0, 2.0]));
-    for args in [vec!["info", s(&f)], vec!["solve", s(&f)], vec!["check", s(&f)]] {
+    let f = local_file(
+        &dir,
+        "badsol.hdf5",
+        CscMatrix::identity(3, 1.0),
+        vec![-1.0, 0.2, 0.1],
+        Some(vec![1.0, 2.0]),
+    );
+    for args in [
+        vec!["info", s(&f)],
+        vec!["solve", s(&f)],
+        vec!["check", s(&f)],
+    ] {
         let out = coulomb(&args);
         expect(&out, 0, &format!("{args:?}"));
-        assert!(stderr(&out).contains("warning") && stderr(&out).contains("/solution"), "{args:?}: {}", stderr(&out));
+        assert!(
+            stderr(&out).contains("warning") && stderr(&out).contains("/solution"),
+            "{args:?}: {}",
+            stderr(&out)
+        );
     }
     // `error` has nothing to evaluate: it says why
     let out = coulomb(&["error", s(&f)]);
@@ -325,22 +452,41 @@ fn cli_reliability_messages_and_json() {
     // the file name once
     let out = coulomb(&["solve", s(&garbage)]);
     expect(&out, 2, "solve garbage");
-    assert_eq!(stderr(&out).matches("garbage.hdf5").count(), 1, "{}", stderr(&out));
+    assert_eq!(
+        stderr(&out).matches("garbage.hdf5").count(),
+        1,
+        "{}",
+        stderr(&out)
+    );
     // --json: a JSON error object on stdout
     for cmd in ["solve", "check", "error", "info"] {
         let out = coulomb(&[cmd, s(&garbage), "--json"]);
         expect(&out, 2, cmd);
         let v: serde_json::Value = serde_json::from_str(stdout(&out).trim())
             .unwrap_or_else(|e| panic!("{cmd}: {e}: {}", stdout(&out)));
-        assert!(v["error"].as_str().is_some_and(|e| e.contains("garbage.hdf5")), "{cmd}: {v}");
+        assert!(
+            v["error"]
+                .as_str()
+                .is_some_and(|e| e.contains("garbage.hdf5")),
+            "{cmd}: {v}"
+        );
     }
     // check --json carries the margins the table shows
-    let f = local_file(&dir, "f.hdf5", CscMatrix::identity(3, 1.0), vec![-1.0, 0.2, 0.1], None);
+    let f = local_file(
+        &dir,
+        "f.hdf5",
+        CscMatrix::identity(3, 1.0),
+        vec![-1.0, 0.2, 0.1],
+        None,
+    );
     let out = coulomb(&["check", s(&f), "--json"]);
     expect(&out, 0, "check --json");
     let v: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
     let c = &v["criteria"]["4.1"];
-    assert!(c.get("margin").is_some() && c.get("detail").is_some(), "{v}");
+    assert!(
+        c.get("margin").is_some() && c.get("detail").is_some(),
+        "{v}"
+    );
     assert!(c["margin"].as_f64().is_some(), "{v}");
     // no −0.0 anywhere in JSON
     let out = coulomb(&["solve", s(&f), "--json"]);
@@ -372,7 +518,11 @@ fn cli_reliability_indefinite_w_is_refused() {
         for cmd in ["solve", "check", "info"] {
             let out = coulomb(&[cmd, s(&path)]);
             expect(&out, 2, &format!("{cmd} {name}"));
-            assert!(stderr(&out).contains("semidefinite"), "{cmd} {name}: {}", stderr(&out));
+            assert!(
+                stderr(&out).contains("semidefinite"),
+                "{cmd} {name}: {}",
+                stderr(&out)
+            );
         }
     }
 }

@@ -1,12 +1,12 @@
 //! `coulomb check FILE [--json]`: the existence criteria (4.1), (4.4), (4.5), (4.6), (5.1) of
 //! an FCLIB problem, each with a verified certificate, and what the theory concludes.
 
+use crate::exit::Outcome;
 use coulomb::existence::{
     self, CheckSettings, Conclusion, Criterion, CriterionReport, ExistenceReport,
 };
 use coulomb::fclib::{self, ReadOptions, Symmetry};
 use coulomb::Problem;
-use crate::exit::Outcome;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -53,10 +53,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     };
     let contacts = problem.contacts();
     let report = existence::check_with_progress(&problem, &settings, &mut |c| {
-        spinner.set_message(format!(
-            "criterion ({}) on {contacts} contacts",
-            c.label()
-        ));
+        spinner.set_message(format!("criterion ({}) on {contacts} contacts", c.label()));
     })?;
     spinner.finish_and_clear();
     if args.json {

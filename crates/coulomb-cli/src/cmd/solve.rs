@@ -1,8 +1,8 @@
 //! `coulomb solve`: solve an FCLIB problem with the convex fixed-point solver and report the
 //! error of docs/error.md recomputed from the returned r (and v).
 
-use anyhow::Context;
 use crate::exit::Outcome;
+use anyhow::Context;
 use coulomb::fclib::{FclibFile, StoredSolution};
 use coulomb::solver::{self, InnerKind, OuterKind, Settings};
 use serde::Serialize;

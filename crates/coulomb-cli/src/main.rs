@@ -72,17 +72,6 @@ fn allow_negative_numbers(cmd: clap::Command) -> clap::Command {
     .mut_subcommands(allow_negative_numbers)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// clap's own consistency checks on the whole command tree, as `main` builds it.
-    #[test]
-    fn command_tree_is_consistent() {
-        allow_negative_numbers(Cli::command()).debug_assert();
-    }
-}
-
 /// A closed stdout (`coulomb info … | head`) ends the process quietly with status 141
 /// (128 + SIGPIPE, what a shell reports for a killed writer) instead of a panic message.
 fn quiet_broken_pipe() {
@@ -134,5 +123,16 @@ fn main() -> ExitCode {
             eprintln!("error: {e:#}");
             ExitCode::from(status)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// clap's own consistency checks on the whole command tree, as `main` builds it.
+    #[test]
+    fn command_tree_is_consistent() {
+        allow_negative_numbers(Cli::command()).debug_assert();
     }
 }

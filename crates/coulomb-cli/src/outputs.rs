@@ -127,10 +127,10 @@ impl Drop for Staged {
 /// Replaces every −0.0 in a JSON value by 0.0 (a negative zero means nothing to a reader).
 pub fn clean(v: &mut serde_json::Value) {
     match v {
-        serde_json::Value::Number(n) => {
-            if n.as_f64() == Some(0.0) && n.as_f64().is_some_and(|x| x.is_sign_negative()) {
-                *v = serde_json::json!(0.0);
-            }
+        serde_json::Value::Number(n)
+            if n.as_f64().is_some_and(|x| x == 0.0 && x.is_sign_negative()) =>
+        {
+            *v = serde_json::json!(0.0);
         }
         serde_json::Value::Array(a) => a.iter_mut().for_each(clean),
         serde_json::Value::Object(o) => o.values_mut().for_each(clean),

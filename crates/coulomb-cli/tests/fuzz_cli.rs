@@ -142,7 +142,7 @@ fn command(rng: &mut Rng, f: &Files, case: u64) -> (Vec<String>, Option<PathBuf>
     let num = |rng: &mut Rng| rng.pick(NUMBERS).to_string();
     let mut a: Vec<String> = Vec::new();
     let mut out = None;
-    let mut opt =
+    let opt =
         |a: &mut Vec<String>, rng: &mut Rng, name: &str, p: f64, v: &dyn Fn(&mut Rng) -> String| {
             if rng.chance(p) {
                 a.push(name.to_string());

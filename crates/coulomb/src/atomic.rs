@@ -87,7 +87,7 @@ mod tests {
         assert!(write(&dir, b"x").is_err());
         assert!(dir.is_dir());
         // a folder that does not exist: an error, nothing created
-        assert!(write(&dir.join("no/such.txt"), b"x").is_err());
+        assert!(write(dir.join("no/such.txt"), b"x").is_err());
         assert!(check_writable(&p).is_ok());
         assert!(check_writable(&dir.join("no/such.txt")).is_err());
         std::fs::remove_dir_all(&dir).unwrap();

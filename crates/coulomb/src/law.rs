@@ -194,7 +194,7 @@ pub fn norm(x: &[f64]) -> f64 {
     if max == 0.0 || max.is_infinite() {
         return max;
     }
-    if max > 1e150 || max < 1e-150 {
+    if !(1e-150..=1e150).contains(&max) {
         // an exact power of two near max, so that the scaling itself does not round
         let e = max.log2().floor().clamp(-1022.0, 1023.0) as i32;
         let (down, up) = (2f64.powi(-e), 2f64.powi(e));

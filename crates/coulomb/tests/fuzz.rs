@@ -129,9 +129,9 @@ struct Outcome {
 
 /// y += A x by triplets.
 fn gemv(a: &CscMatrix, x: &[f64], y: &mut [f64]) {
-    for j in 0..a.ncols {
+    for (j, xj) in x.iter().enumerate().take(a.ncols) {
         for k in a.col_ptr[j]..a.col_ptr[j + 1] {
-            y[a.row_idx[k]] += a.values[k] * x[j];
+            y[a.row_idx[k]] += a.values[k] * xj;
         }
     }
 }

@@ -557,7 +557,7 @@ fn write_json(
         records,
         profile: summaries(records, prof, solvers, n_problems),
     };
-    let text = serde_json::to_string_pretty(&report)?;
+    let text = crate::outputs::json(&report, true)?;
     crate::outputs::write(path, (text + "\n").as_bytes()).map_err(|e| BenchError::Write {
         path: path.to_path_buf(),
         source: e.source,

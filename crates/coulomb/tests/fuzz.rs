@@ -853,7 +853,7 @@ fn quiet_panics() {
 #[test]
 fn fuzz_short() {
     quiet_panics();
-    let t = campaign(0, 150, Duration::from_secs(60), false);
+    let t = campaign(0, 1000, Duration::from_secs(30), false);
     assert!(t.cases >= 20, "{}", t.line(0.0));
     assert!(
         t.panics == 0 && t.hangs == 0 && t.false_converged == 0,

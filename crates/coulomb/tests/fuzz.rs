@@ -160,7 +160,7 @@ fn proj(mu: f64, x: &[f64]) -> Vec<f64> {
         return out;
     }
     let t = x[1..].iter().map(|v| v * v).sum::<f64>().sqrt();
-    if t <= mu * n {
+    if t <= mu * n && n >= 0.0 {
         return x.to_vec();
     }
     if mu * t <= -n {

@@ -214,3 +214,24 @@ fn reliability_existence_check_with_huge_time_limit_does_not_panic() {
         assert!(r.is_ok(), "{t:e}: {r:?}");
     }
 }
+
+/// μ = 0, x_T = 0, x_N < 0: the projection onto K_0 = {x_T = 0, x_N ≥ 0} is 0, not x (the
+/// test t ≤ μ x_N read 0 ≤ −0). Before the fix r = (−1, 0), u = 0 had error 0: a negative
+/// normal impulse "converged". Found while analysing the long fuzz run (docs/fuzz.md).
+#[test]
+fn reliability_frictionless_projection_of_negative_normal_is_zero() {
+    for mu in [0.0, -0.0] {
+        let mut x = [-1.0, 0.0];
+        coulomb::cone::project(mu, &mut x);
+        assert_eq!(x, [0.0, 0.0], "μ = {mu}");
+        let mut x = [-1.0, 0.0, 0.0];
+        coulomb::cone::project(mu, &mut x);
+        assert_eq!(x, [0.0, 0.0, 0.0], "μ = {mu}");
+        let e = error_measure(2, &[mu], &[-1.0, 0.0], &[0.0, 0.0], 1.0);
+        assert!(e.error > 0.1 && !e.converged(TOL), "μ = {mu}: {e:?}");
+    }
+    // the cone itself is unchanged
+    let mut x = [2.0, 0.0];
+    coulomb::cone::project(0.0, &mut x);
+    assert_eq!(x, [2.0, 0.0]);
+}

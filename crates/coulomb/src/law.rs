@@ -209,6 +209,27 @@ pub fn norm(x: &[f64]) -> f64 {
     }
 }
 
+/// ‖a‖ / max(1, ‖b‖) (e.g. the balance residual ‖M v − H r − f‖ / max(1, ‖f‖) of
+/// docs/error.md), computed on entries scaled by a common power of two, so that it is finite
+/// whenever a and b are, even when ‖b‖ itself would overflow; NaN or +∞ otherwise.
+pub fn relative_norm(a: &[f64], b: &[f64]) -> f64 {
+    let mut max = 0.0f64;
+    for x in a.iter().chain(b) {
+        if !x.is_finite() {
+            return if x.is_nan() { f64::NAN } else { f64::INFINITY };
+        }
+        max = max.max(x.abs());
+    }
+    let alpha = down_scale(max);
+    let scaled = |x: &[f64]| {
+        x.iter()
+            .map(|v| (v * alpha) * (v * alpha))
+            .sum::<f64>()
+            .sqrt()
+    };
+    scaled(a) / scaled(b).max(alpha)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -235,3 +235,24 @@ fn reliability_frictionless_projection_of_negative_normal_is_zero() {
     coulomb::cone::project(0.0, &mut x);
     assert_eq!(x, [2.0, 0.0]);
 }
+
+/// ‖M v − H r − f‖ / max(1, ‖f‖) with ‖f‖ beyond the largest f64: the ratio used to be
+/// finite / ∞ = 0, a false "balanced" (found by the long fuzz run, seed 5004999).
+#[test]
+fn reliability_balance_residual_of_huge_f_is_not_zero() {
+    let g = GlobalProblem::new_unfactored(
+        3,
+        CscMatrix::identity(3, 1.0),
+        CscMatrix::identity(3, 1.0),
+        vec![1.5e308, 1.5e308, 1.5e308],
+        vec![0.0; 3],
+        vec![0.5],
+    )
+    .unwrap();
+    // v = 0, r = 0: residual −f, relative residual 1
+    let b = g.balance_residual(&[0.0; 3], &[0.0; 3]);
+    assert!((b - 1.0).abs() < 1e-12, "{b}");
+    assert!((law::relative_norm(&[3.0, 4.0], &[0.5]) - 5.0).abs() < 1e-15);
+    assert!((law::relative_norm(&[3e300, 4e300], &[1e300]) - 5.0).abs() < 1e-12);
+    assert!(law::relative_norm(&[f64::NAN], &[1.0]).is_nan());
+}

@@ -507,7 +507,9 @@ fn solve_stage(
         let inner_tol = if frictionless || cold_inner {
             0.2 * settings.tol
         } else {
-            (settings.inner_tol_factor * last_error).clamp(0.2 * settings.tol, 1e-2)
+            (settings.inner_tol_factor * last_error)
+                .min(1e-2)
+                .max(0.2 * settings.tol)
         };
         let limits = InnerLimits {
             tol: inner_tol,

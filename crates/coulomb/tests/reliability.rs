@@ -256,3 +256,47 @@ fn reliability_balance_residual_of_huge_f_is_not_zero() {
     assert!((law::relative_norm(&[3e300, 4e300], &[1e300]) - 5.0).abs() < 1e-12);
     assert!(law::relative_norm(&[f64::NAN], &[1.0]).is_nan());
 }
+
+/// A tolerance above 0.05 made the inner tolerance's clamp(tol/5, 1e-2) panic (min > max);
+/// found by the command-line fuzz run (`solve F --tol 0.3`).
+#[test]
+fn reliability_large_tolerances_do_not_panic() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/fclib");
+    for name in ["Box_Stacks-i0122-82-5.hdf5", "Capsules-i125-1213.hdf5"] {
+        let Ok(f) = coulomb::fclib::read_with(
+            &dir.join(name),
+            &coulomb::fclib::ReadOptions {
+                symmetry: coulomb::fclib::Symmetry::Symmetrize,
+            },
+        ) else {
+            println!("skipped: ../shared absent");
+            return;
+        };
+        large_tolerances_on(&f.problem);
+    }
+}
+
+fn large_tolerances_on(problem: &Problem) {
+    for tol in [0.06, 0.3, 1.0, 1e3] {
+        for base in [
+            Settings::default(),
+            Settings::method(solver::InnerKind::Apgd, solver::OuterKind::FixedPoint),
+            Settings::method(solver::InnerKind::Apgd, solver::OuterKind::Anderson),
+        ] {
+            let s = Settings {
+                tol,
+                max_outer: 3,
+                // one inner iteration: the first outer iterate is far off, so the inner
+                // tolerance of the second one is computed
+                max_inner: 1,
+                time_limit: Some(Duration::from_secs(5)),
+                ..base
+            };
+            let sol = solver::solve(problem, &s).unwrap();
+            assert!(
+                sol.status != Status::Converged || sol.error <= tol,
+                "{tol}: {sol:?}"
+            );
+        }
+    }
+}

@@ -239,9 +239,12 @@ fn command(rng: &mut Rng, f: &Files, case: u64) -> (Vec<String>, Option<PathBuf>
                     .into(),
             );
             opt(&mut a, rng, "--tol", 0.4, &num);
-            opt(&mut a, rng, "--time-limit", 0.4, &num);
+            // always a short time limit (the default, 60 s per solve, over a folder is a long
+            // run on purpose, not a hang)
+            a.push("--time-limit".into());
+            a.push(rng.pick(&["0.2", "1", "0", "-1", "nan", "1e30"]).into());
             opt(&mut a, rng, "--repeat", 0.3, &|r: &mut Rng| {
-                r.pick(SMALL).to_string()
+                r.pick(&["1", "2", "0", "-1", "x"]).to_string()
             });
             if rng.chance(0.6) {
                 let o = output(rng, "json");
@@ -367,20 +370,6 @@ fn campaign(seed: u64, n: u64, budget: Duration) -> Option<Tally> {
             t.panics += 1;
             t.notes.push(format!("PANIC: {line}: {stderr}"));
         }
-        for (p, b) in f.inputs.iter().zip(&before) {
-            if std::fs::read(p).ok().as_ref() != Some(b) {
-                // an input of this run (named as such, not only as the output) must not change;
-                // a file named only as the output of a command without inputs may be replaced
-                let named = args.iter().filter(|x| Path::new(x.as_str()) == p).count();
-                let only_output = out.as_deref() == Some(p.as_path()) && named == 1;
-                if !only_output {
-                    t.inputs_changed += 1;
-                    t.notes
-                        .push(format!("INPUT CHANGED {}: {line}", p.display()));
-                }
-                std::fs::write(p, b).unwrap();
-            }
-        }
         // a converged solve wrote a real solution
         if args[0] == "solve" && status == Some(0) {
             if let Some(o) = &out {
@@ -405,6 +394,20 @@ fn campaign(seed: u64, n: u64, budget: Duration) -> Option<Tally> {
                     t.false_converged += 1;
                     t.notes.push(format!("FALSE CONVERGED: {line}: {stdout}"));
                 }
+            }
+        }
+        for (p, b) in f.inputs.iter().zip(&before) {
+            if std::fs::read(p).ok().as_ref() != Some(b) {
+                // an input of this run (named as such, not only as the output) must not change;
+                // a file named only as the output of a command without inputs may be replaced
+                let named = args.iter().filter(|x| Path::new(x.as_str()) == p).count();
+                let only_output = out.as_deref() == Some(p.as_path()) && named == 1;
+                if !only_output {
+                    t.inputs_changed += 1;
+                    t.notes
+                        .push(format!("INPUT CHANGED {}: {line}", p.display()));
+                }
+                std::fs::write(p, b).unwrap();
             }
         }
     }

@@ -1,15 +1,20 @@
 //! `coulomb`: solve, check, simulate and benchmark discrete Coulomb frictional contact problems.
 
 mod cmd;
+mod exit;
+mod outputs;
+mod values;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
+use exit::Outcome;
 use std::process::ExitCode;
 
 #[derive(Parser, Debug)]
 #[command(
     name = "coulomb",
     version,
-    about = "Discrete Coulomb frictional contact: FCLIB problems, convex fixed-point solver, existence checks, granular simulation"
+    about = "Discrete Coulomb frictional contact: FCLIB problems, convex fixed-point solver, existence checks, granular simulation",
+    after_help = exit::HELP
 )]
 struct Cli {
     #[command(subcommand)]
@@ -42,26 +47,100 @@ enum Command {
     Validate(cmd::validate::Args),
 }
 
+impl Command {
+    /// Whether the command prints JSON on stdout (then a failure is reported as a JSON object).
+    fn json(&self) -> bool {
+        match self {
+            Command::Info(a) => a.json,
+            Command::Error(a) => a.json,
+            Command::Solve(a) => a.json,
+            Command::Check(a) => a.json,
+            Command::Simulate(a) => a.json,
+            Command::Demo(a) => a.json,
+            Command::Corpus(a) => a.json,
+            Command::Validate(a) => a.json,
+            Command::Example(_) | Command::Paper(_) | Command::Bench(_) => false,
+        }
+    }
+}
+
+/// Every argument of every (sub)command accepts values that look like negative numbers, so
+/// that `--tol -1` reaches the value checks (and their message about the value) instead of
+/// clap's "unexpected argument '-1'".
+fn allow_negative_numbers(cmd: clap::Command) -> clap::Command {
+    cmd.mut_args(|a| {
+        if a.get_action().takes_values() {
+            a.allow_negative_numbers(true)
+        } else {
+            a
+        }
+    })
+    .mut_subcommands(allow_negative_numbers)
+}
+
+/// A closed stdout (`coulomb info … | head`) ends the process quietly with status 141
+/// (128 + SIGPIPE, what a shell reports for a killed writer) instead of a panic message.
+fn quiet_broken_pipe() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let msg = info
+            .payload()
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| info.payload().downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if msg.contains("Broken pipe") {
+            std::process::exit(141);
+        }
+        default(info);
+    }));
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
-    let result = match cli.command {
+    quiet_broken_pipe();
+    let matches = allow_negative_numbers(Cli::command()).get_matches();
+    let cli = match Cli::from_arg_matches(&matches) {
+        Ok(c) => c,
+        Err(e) => e.exit(),
+    };
+    let json = cli.command.json();
+    let result: anyhow::Result<Outcome> = match cli.command {
         Command::Info(a) => cmd::info::run(a),
         Command::Error(a) => cmd::error::run(a),
         Command::Solve(a) => cmd::solve::run(a),
         Command::Check(a) => cmd::check::run(a),
-        Command::Example(a) => cmd::example::run(a),
-        Command::Simulate(a) => cmd::simulate::run(a),
-        Command::Paper(a) => cmd::paper::run(a),
-        Command::Bench(a) => cmd::bench::run(a),
-        Command::Demo(a) => cmd::demo::run(a),
-        Command::Corpus(a) => cmd::corpus::run(a),
-        Command::Validate(a) => cmd::validate::run(a),
+        Command::Example(a) => cmd::example::run(a).map(|()| Outcome::Success),
+        Command::Simulate(a) => cmd::simulate::run(a).map(|()| Outcome::Success),
+        Command::Paper(a) => cmd::paper::run(a).map(|()| Outcome::Success),
+        Command::Bench(a) => cmd::bench::run(a).map(|()| Outcome::Success),
+        Command::Demo(a) => cmd::demo::run(a).map(|()| Outcome::Success),
+        Command::Corpus(a) => cmd::corpus::run(a).map(|()| Outcome::Success),
+        Command::Validate(a) => cmd::validate::run(a).map(|()| Outcome::Success),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(outcome) => outcome.code(),
         Err(e) => {
+            let status = exit::status_of(&e);
+            if json {
+                let obj = serde_json::json!({
+                    "error": format!("{e:#}"),
+                    "exit_status": status,
+                });
+                println!("{obj}");
+            }
             eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+            ExitCode::from(status)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// clap's own consistency checks on the whole command tree, as `main` builds it.
+    #[test]
+    fn command_tree_is_consistent() {
+        allow_negative_numbers(Cli::command()).debug_assert();
     }
 }

@@ -159,16 +159,17 @@ fn cli_bench_bad_arguments_are_reported() {
         let mut args = vec!["bench", "."];
         args.extend_from_slice(extra);
         let out = coulomb(&args);
-        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        // exit status 2: bad input or usage (README, `coulomb --help`)
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains(needle), "{args:?}: {err}");
     }
     let out = coulomb(&["bench", &missing.display().to_string()]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("missing.hdf5"));
     // an empty directory holds nothing to run
     let out = coulomb(&["bench", &dir.display().to_string()]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("no FCLIB file"));
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -10,14 +10,19 @@ fn tmp(name: &str) -> PathBuf {
     scratch_file("check", name)
 }
 
+/// `check --json`; the exit status follows the conclusion (0 exists, 1 none, 3 unknown).
 fn check_json(path: &Path) -> serde_json::Value {
     let out = coulomb(&["check", path.to_str().unwrap(), "--json"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("valid JSON")
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+        panic!("{e}: {}", String::from_utf8_lossy(&out.stderr));
+    });
+    let want = match j["conclusion"].as_str() {
+        Some("exists") => 0,
+        Some("none") => 1,
+        _ => 3,
+    };
+    assert_eq!(out.status.code(), Some(want), "{j}");
+    j
 }
 
 #[test]
@@ -119,7 +124,11 @@ fn crushed_ball_is_none_and_rectangle_satisfies_5_1() {
 
     // The table form names the conclusion too.
     let out = coulomb(&["check", ball.to_str().unwrap()]);
-    assert!(out.status.success());
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "no solution exists: exit status 1"
+    );
     assert!(String::from_utf8_lossy(&out.stdout).contains("NO solution exists"));
 }
 

@@ -63,29 +63,26 @@ fn cli_info_json_several_files_is_an_array() {
 #[test]
 fn cli_error_reproduces_documented_values() {
     let Some(dir) = fclib_dir() else { return };
-    let v = stdout_json(&coulomb(&[
-        "error",
-        "--json",
-        &path(&dir, "Capsules-i125-1213"),
-    ]));
+    // the answer is "no": exit status 1, JSON on stdout all the same
+    let out = coulomb(&["error", "--json", &path(&dir, "Capsules-i125-1213")]);
+    assert_eq!(out.status.code(), Some(1));
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     let e = v["error"].as_f64().unwrap();
     assert!((e / 1.58e-2 - 1.0).abs() < 0.01, "{v}");
     assert_eq!(v["balance_residual"], Value::Null);
     assert_eq!(v["converged"], false);
     assert_eq!(v["kind"], "local");
 
-    let v = stdout_json(&coulomb(&[
-        "error",
-        "--json",
-        &path(&dir, "Box_Stacks-i0122-82-5"),
-    ]));
+    let out = coulomb(&["error", "--json", &path(&dir, "Box_Stacks-i0122-82-5")]);
+    assert_eq!(out.status.code(), Some(1));
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["error"].as_f64().unwrap(), 0.0, "{v}");
     let b = v["balance_residual"].as_f64().unwrap();
     assert!((b / 3.97e-2 - 1.0).abs() < 0.01, "{v}");
     assert_eq!(v["converged"], false);
 
     let out = coulomb(&["error", &path(&dir, "Capsules-i125-1213")]);
-    assert!(out.status.success());
+    assert_eq!(out.status.code(), Some(1));
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
         text.contains("1.580e-2") && text.contains("solution at 1e-8: no"),

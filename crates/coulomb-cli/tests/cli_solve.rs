@@ -25,13 +25,16 @@ fn failed_solve_reports_that_no_solution_exists() {
         "{}",
         String::from_utf8_lossy(&made.stderr)
     );
-    let j = stdout_json(&coulomb(&[
+    let out = coulomb(&[
         "solve",
         ball.to_str().unwrap(),
         "--json",
         "--max-outer",
         "30",
-    ]));
+    ]);
+    // not converged: exit status 1
+    assert_eq!(out.status.code(), Some(1));
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(j["converged"], false);
     assert_ne!(j["status"], "converged");
     assert_eq!(j["existence"]["conclusion"], "none");

@@ -43,9 +43,9 @@ pub fn write_stats(dir: &Path, stats: &[StepStats]) -> io::Result<()> {
         csv.push_str(&csv_line(s));
         csv.push('\n');
     }
-    fs::write(dir.join("stats.csv"), csv)?;
+    coulomb::atomic::write(dir.join("stats.csv"), csv)?;
     let json = serde_json::to_string_pretty(stats).map_err(io::Error::other)?;
-    fs::write(dir.join("stats.json"), json)
+    coulomb::atomic::write(dir.join("stats.json"), json)
 }
 
 /// VTK PolyData (.vtp, ASCII) of the spheres: points = centres, point data radius, velocity,
@@ -180,8 +180,8 @@ impl VtkWriter {
         let k = sim.steps_done;
         let b = format!("frames/beads_{k:06}.vtp");
         let c = format!("frames/contacts_{k:06}.vtp");
-        fs::write(self.dir.join(&b), beads)?;
-        fs::write(self.dir.join(&c), contacts)?;
+        coulomb::atomic::write(self.dir.join(&b), beads)?;
+        coulomb::atomic::write(self.dir.join(&c), contacts)?;
         self.frames.push((sim.time, b, c));
         self.write_collections()
     }
@@ -198,7 +198,7 @@ impl VtkWriter {
                 );
             }
             s.push_str("</Collection>\n</VTKFile>\n");
-            fs::write(self.dir.join(name), s)?;
+            coulomb::atomic::write(self.dir.join(name), s)?;
         }
         Ok(())
     }

@@ -33,7 +33,8 @@ pub fn project(mu: f64, x: &mut [f64]) {
     }
     let n = x[0];
     let t = tangent_norm(x);
-    if t <= mu * n {
+    // n ≥ 0 too: with μ = 0 and x_T = 0, t ≤ μ n reads 0 ≤ −0 for every n < 0
+    if t <= mu * n && n >= 0.0 {
         return;
     }
     if mu * t <= -n {

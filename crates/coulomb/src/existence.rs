@@ -295,6 +295,19 @@ pub fn check(problem: &Problem, settings: &CheckSettings) -> Result<ExistenceRep
     }
 }
 
+/// [`check`], calling `progress` with each criterion just before it is evaluated (for a
+/// progress display: each criterion is one or two conic solves, long on huge problems).
+pub fn check_with_progress(
+    problem: &Problem,
+    settings: &CheckSettings,
+    progress: &mut dyn FnMut(Criterion),
+) -> Result<ExistenceReport, CheckError> {
+    match problem {
+        Problem::Global(p) => check_global_with(p, settings, progress),
+        Problem::Local(p) => check_local_with(p, settings, progress),
+    }
+}
+
 /// [`check`] on a global problem: the criteria on (H, w). The theorems assume M symmetric
 /// positive definite: for an M that is not symmetric beyond rounding
 /// ([`ROUNDING_ASYMMETRY`]; CubeH8 and LMGC_GlobalFrictionContactProblem00046 store M with
@@ -303,8 +316,16 @@ pub fn check_global(
     p: &GlobalProblem,
     settings: &CheckSettings,
 ) -> Result<ExistenceReport, CheckError> {
+    check_global_with(p, settings, &mut |_| {})
+}
+
+fn check_global_with(
+    p: &GlobalProblem,
+    settings: &CheckSettings,
+    progress: &mut dyn FnMut(Criterion),
+) -> Result<ExistenceReport, CheckError> {
     let data = KinematicData::new(p.dim, &p.h, &p.w, &p.mu)?;
-    let mut report = run_all(&data, "global", settings)?;
+    let mut report = run_all_with(&data, "global", settings, progress)?;
     let asymmetry = p.m.asymmetry();
     if asymmetry > ROUNDING_ASYMMETRY {
         downgrade(&mut report, "M", asymmetry);
@@ -343,14 +364,22 @@ pub fn check_local(
     p: &LocalProblem,
     settings: &CheckSettings,
 ) -> Result<ExistenceReport, CheckError> {
+    check_local_with(p, settings, &mut |_| {})
+}
+
+fn check_local_with(
+    p: &LocalProblem,
+    settings: &CheckSettings,
+    progress: &mut dyn FnMut(Criterion),
+) -> Result<ExistenceReport, CheckError> {
     if p.w.asymmetry() <= ROUNDING_ASYMMETRY {
         let data = KinematicData::new(p.dim, &p.w, &p.q, &p.mu)?;
-        return run_all(&data, "local", settings);
+        return run_all_with(&data, "local", settings, progress);
     }
     // B = Wᵀ, so that Bᵀ v + q = W v + q
     let wt = p.w.transpose();
     let data = KinematicData::new(p.dim, &wt, &p.q, &p.mu)?;
-    let mut report = run_all(&data, "local", settings)?;
+    let mut report = run_all_with(&data, "local", settings, progress)?;
     downgrade(&mut report, "W", p.w.asymmetry());
     Ok(report)
 }
@@ -1134,10 +1163,11 @@ fn trivially_holds(detail: &str) -> CriterionReport {
     }
 }
 
-fn run_all(
+fn run_all_with(
     data: &KinematicData,
     kind: &'static str,
     settings: &CheckSettings,
+    progress: &mut dyn FnMut(Criterion),
 ) -> Result<ExistenceReport, CheckError> {
     validate_settings(settings)?;
     let start = Instant::now();
@@ -1152,9 +1182,13 @@ fn run_all(
             c5_1: h,
         }
     } else {
+        progress(Criterion::C4_5);
         let c4_5 = criterion_4_5(data, settings);
+        progress(Criterion::C4_4);
         let (c4_4, c4_6) = criteria_4_4_and_4_6(data, settings);
+        progress(Criterion::C4_1);
         let c4_1 = criterion_4_1(data, settings);
+        progress(Criterion::C5_1);
         let c5_1 = criterion_5_1(data, settings);
         Criteria {
             c4_1,

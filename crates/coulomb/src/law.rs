@@ -76,7 +76,10 @@ pub fn contact_residual_sq(mu: f64, u: &[f64], r: &[f64]) -> f64 {
     for k in 0..d {
         x[k] = r[k] - u[k];
     }
-    x[0] -= mu * ut;
+    // μ‖u_T‖ with the convention ∞ · 0 = 0 (μ = ∞ and u_T = 0: ũ = u)
+    if ut != 0.0 {
+        x[0] -= mu * ut;
+    }
     cone::project(mu, &mut x[..d]);
     (0..d).map(|k| (r[k] - x[k]).powi(2)).sum()
 }
@@ -84,27 +87,90 @@ pub fn contact_residual_sq(mu: f64, u: &[f64], r: &[f64]) -> f64 {
 /// The error measure of `docs/error.md`, split into its parts.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct ErrorMeasure {
-    /// sqrt(Σᵢ ‖eᵢ‖²)
+    /// sqrt(Σᵢ ‖eᵢ‖²) (+∞ when it exceeds the largest f64, NaN when r or u holds a NaN)
     pub absolute: f64,
-    /// max(‖q‖, ‖r‖, ‖u‖)
+    /// max(‖q‖, ‖r‖, ‖u‖) (+∞ when it exceeds the largest f64 or an entry is infinite)
     pub scale: f64,
-    /// absolute / scale when scale > ε, else absolute: the number that is reported and compared
+    /// absolute / scale when scale > ε, else absolute: the number that is reported and
+    /// compared. Computed from scaled norms, so it is finite whenever r, u and ‖q‖ are
+    /// finite, even when ‖r‖ or ‖u‖ themselves overflow; +∞ (or NaN) otherwise, so that a
+    /// non-finite input is never "converged" ([`ErrorMeasure::converged`]).
     pub error: f64,
 }
 
-/// Computes the error measure from (r, u), the friction coefficients and ‖q‖. The caller is
-/// responsible for u being recomputed from the problem data (u = W r + q or u = Hᵀ v + w).
-pub fn error_measure(dim: usize, mu: &[f64], r: &[f64], u: &[f64], q_norm: f64) -> ErrorMeasure {
-    let mut sum = 0.0;
-    for ((ri, ui), &m) in r.chunks_exact(dim).zip(u.chunks_exact(dim)).zip(mu) {
-        sum += contact_residual_sq(m, ui, ri);
+impl ErrorMeasure {
+    /// Whether the error is a finite number ≤ `tol` (the definition of "converged" of
+    /// docs/error.md, balance residual aside).
+    pub fn converged(&self, tol: f64) -> bool {
+        self.error.is_finite() && self.error <= tol
     }
-    let absolute = sum.sqrt();
-    let scale = q_norm.max(norm(r)).max(norm(u));
-    let error = if scale > f64::EPSILON {
-        absolute / scale
+}
+
+/// Multiplier 2⁻ᵏ (exact) that brings `max_abs` (finite, > 2¹⁰⁰) to at most 4, so that the
+/// squares of the scaled entries cannot overflow; 1 for smaller values.
+fn down_scale(max_abs: f64) -> f64 {
+    if max_abs.is_finite() && max_abs > 2f64.powi(100) {
+        // log2 rounds, so add one: 2^-(e+1) · max_abs ≤ 1; at most 2^-1022 (a normal
+        // number: entries then stay ≤ 4)
+        let e = max_abs.log2().ceil() as i32 + 1;
+        2f64.powi(-e.min(1022))
     } else {
-        absolute
+        1.0
+    }
+}
+
+/// Computes the error measure from (r, u), the friction coefficients and ‖q‖ (computed with
+/// [`norm`]). The caller is responsible for u being recomputed from the problem data
+/// (u = W r + q or u = Hᵀ v + w).
+///
+/// The natural map eᵢ(u, r) = r − P_{K_μ}(r − ũ) is positively homogeneous (eᵢ(αu, αr) =
+/// α eᵢ(u, r) for α > 0), and so is every norm: all of r, u and ‖q‖ are first multiplied by a
+/// power of two α (exact) that brings the largest entry below 4, the ratio is taken on the
+/// scaled values, and `absolute` and `scale` are reported divided by α. Nothing overflows on
+/// finite input; a NaN or ±∞ in r, u or ‖q‖ gives error NaN or +∞, never a small number.
+pub fn error_measure(dim: usize, mu: &[f64], r: &[f64], u: &[f64], q_norm: f64) -> ErrorMeasure {
+    let nan = r.iter().chain(u).any(|x| x.is_nan()) || q_norm.is_nan();
+    let max_abs = r
+        .iter()
+        .chain(u)
+        .fold(q_norm.abs(), |m, x| if x.abs() > m { x.abs() } else { m });
+    if nan || !max_abs.is_finite() {
+        let bad = if nan { f64::NAN } else { f64::INFINITY };
+        return ErrorMeasure {
+            absolute: bad,
+            scale: f64::INFINITY,
+            error: bad,
+        };
+    }
+    let alpha = down_scale(max_abs);
+    let mut sum = 0.0;
+    let mut rs = [0.0; 3];
+    let mut us = [0.0; 3];
+    for ((ri, ui), &m) in r.chunks_exact(dim).zip(u.chunks_exact(dim)).zip(mu) {
+        let d = ri.len().min(3);
+        for k in 0..d {
+            rs[k] = ri[k] * alpha;
+            us[k] = ui[k] * alpha;
+        }
+        sum += contact_residual_sq(m, &us[..d], &rs[..d]);
+    }
+    let abs_scaled = sum.sqrt();
+    let scaled_norm = |x: &[f64]| {
+        x.iter()
+            .map(|v| (v * alpha) * (v * alpha))
+            .sum::<f64>()
+            .sqrt()
+    };
+    let scale_scaled = (q_norm * alpha).max(scaled_norm(r)).max(scaled_norm(u));
+    let absolute = abs_scaled / alpha;
+    let scale = scale_scaled / alpha;
+    let error = if !abs_scaled.is_finite() || !scale_scaled.is_finite() {
+        // a friction coefficient of ±∞ or NaN in the projection: no number to report
+        f64::NAN
+    } else if scale > f64::EPSILON {
+        abs_scaled / scale_scaled
+    } else {
+        abs_scaled / alpha
     };
     ErrorMeasure {
         absolute,
@@ -113,10 +179,55 @@ pub fn error_measure(dim: usize, mu: &[f64], r: &[f64], u: &[f64], q_norm: f64) 
     }
 }
 
-/// Euclidean norm.
+/// Euclidean norm, computed without intermediate overflow or underflow (the entries are
+/// scaled by the largest magnitude first, as LAPACK's dnrm2 does); +∞ only when the norm
+/// itself exceeds the largest f64 or an entry is infinite, NaN when an entry is NaN.
 #[inline]
 pub fn norm(x: &[f64]) -> f64 {
-    x.iter().map(|v| v * v).sum::<f64>().sqrt()
+    let mut max = 0.0f64;
+    for v in x {
+        if v.is_nan() {
+            return f64::NAN;
+        }
+        max = max.max(v.abs());
+    }
+    if max == 0.0 || max.is_infinite() {
+        return max;
+    }
+    if !(1e-150..=1e150).contains(&max) {
+        // an exact power of two near max, so that the scaling itself does not round
+        let e = max.log2().floor().clamp(-1022.0, 1023.0) as i32;
+        let (down, up) = (2f64.powi(-e), 2f64.powi(e));
+        let s = x
+            .iter()
+            .map(|v| (v * down) * (v * down))
+            .sum::<f64>()
+            .sqrt();
+        s * up
+    } else {
+        x.iter().map(|v| v * v).sum::<f64>().sqrt()
+    }
+}
+
+/// ‖a‖ / max(1, ‖b‖) (e.g. the balance residual ‖M v − H r − f‖ / max(1, ‖f‖) of
+/// docs/error.md), computed on entries scaled by a common power of two, so that it is finite
+/// whenever a and b are, even when ‖b‖ itself would overflow; NaN or +∞ otherwise.
+pub fn relative_norm(a: &[f64], b: &[f64]) -> f64 {
+    let mut max = 0.0f64;
+    for x in a.iter().chain(b) {
+        if !x.is_finite() {
+            return if x.is_nan() { f64::NAN } else { f64::INFINITY };
+        }
+        max = max.max(x.abs());
+    }
+    let alpha = down_scale(max);
+    let scaled = |x: &[f64]| {
+        x.iter()
+            .map(|v| (v * alpha) * (v * alpha))
+            .sum::<f64>()
+            .sqrt()
+    };
+    scaled(a) / scaled(b).max(alpha)
 }
 
 #[cfg(test)]

@@ -21,7 +21,9 @@
 
 #![warn(missing_docs)]
 
+pub mod atomic;
 pub mod cone;
+pub mod deadline;
 pub mod delassus;
 pub mod examples;
 pub mod existence;

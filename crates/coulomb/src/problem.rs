@@ -466,7 +466,7 @@ impl GlobalProblem {
         for (x, f) in res.iter_mut().zip(&self.f) {
             *x -= f;
         }
-        crate::law::norm(&res) / crate::law::norm(&self.f).max(1.0)
+        crate::law::relative_norm(&res, &self.f)
     }
 }
 

@@ -430,7 +430,7 @@ pub fn solve_with_guess(
 ) -> Result<Solution, SolveError> {
     settings.validate()?;
     let start = Instant::now();
-    let deadline = settings.time_limit.map(|t| start + t);
+    let deadline = crate::deadline::deadline(start, settings.time_limit);
     let form = Form::new(match problem {
         Problem::Local(p) => Stored::Local(p),
         Problem::Global(g) => Stored::Global(g, Box::new(Delassus::new(g)?)),
@@ -590,7 +590,9 @@ fn solve_stage(
         let inner_tol = if frictionless || cold_inner {
             0.2 * settings.tol
         } else {
-            (settings.inner_tol_factor * last_error).clamp(0.2 * settings.tol, 1e-2)
+            (settings.inner_tol_factor * last_error)
+                .min(1e-2)
+                .max(0.2 * settings.tol)
         };
         let limits = InnerLimits {
             tol: inner_tol,

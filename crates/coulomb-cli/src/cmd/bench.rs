@@ -16,7 +16,7 @@
 //! performance profile (see [`profile`]).
 
 mod files;
-mod plot;
+pub mod plot;
 mod profile;
 mod record;
 mod solvers;
@@ -44,13 +44,13 @@ pub struct Args {
     #[arg(long, value_delimiter = ',', default_value = "all")]
     pub solvers: Vec<String>,
     /// Tolerance on the error of docs/error.md (and on the balance residual of global problems)
-    #[arg(long, default_value_t = 1e-8)]
+    #[arg(long, default_value_t = 1e-8, value_parser = crate::values::positive)]
     pub tol: f64,
-    /// Time limit of each solve, in seconds
-    #[arg(long, value_name = "SECONDS", default_value_t = 60.0)]
+    /// Time limit of each solve, in seconds (at most one week)
+    #[arg(long, value_name = "SECONDS", default_value_t = 60.0, value_parser = crate::values::time_limit)]
     pub time_limit: f64,
     /// Number of runs of each (problem, solver) pair; the median time is reported
-    #[arg(long, value_name = "K", default_value_t = 1)]
+    #[arg(long, value_name = "K", default_value_t = 1, value_parser = crate::values::count)]
     pub repeat: usize,
     /// Write every record (and machine/command metadata) to this JSON file
     #[arg(long, value_name = "OUT.json")]
@@ -137,6 +137,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if files.is_empty() {
         let list: Vec<String> = args.paths.iter().map(|p| p.display().to_string()).collect();
         return Err(BenchError::NoFiles(list.join(", ")).into());
+    }
+    // outputs checked before the (long) run: not an input, folder writable, not each other
+    let inputs: Vec<&Path> = files.iter().map(|f| f.as_path()).collect();
+    if let Some(path) = &args.json {
+        crate::outputs::check("--json", path, &inputs)?;
+    }
+    if let Some(path) = &args.svg {
+        crate::outputs::check("--svg", path, &inputs)?;
+        if args.json.as_ref().is_some_and(|j| j == path) {
+            anyhow::bail!("--json and --svg name the same file {}", path.display());
+        }
     }
     let names = files::display_names(&files);
     let solver_names: Vec<String> = plan.solvers.iter().map(SolverSpec::name).collect();
@@ -550,10 +561,10 @@ fn write_json(
         records,
         profile: summaries(records, prof, solvers, n_problems),
     };
-    let text = serde_json::to_string_pretty(&report)?;
-    std::fs::write(path, text + "\n").map_err(|source| BenchError::Write {
+    let text = crate::outputs::json(&report, true)?;
+    crate::outputs::write(path, (text + "\n").as_bytes()).map_err(|e| BenchError::Write {
         path: path.to_path_buf(),
-        source,
+        source: e.source,
     })
 }
 

@@ -1,11 +1,14 @@
 //! `coulomb check FILE [--json]`: the existence criteria (4.1), (4.4), (4.5), (4.6), (5.1) of
 //! an FCLIB problem, each with a verified certificate, and what the theory concludes.
 
+use crate::exit::Outcome;
 use coulomb::existence::{
     self, CheckSettings, Conclusion, Criterion, CriterionReport, ExistenceReport,
 };
 use coulomb::fclib;
 use coulomb::Problem;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `coulomb check`.
@@ -17,39 +20,64 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     /// decision tolerance on margins and dual bounds (relative to ‖w‖∞)
-    #[arg(long, default_value_t = 1e-7)]
+    #[arg(long, default_value_t = 1e-7, value_parser = crate::values::nonnegative)]
     pub tol: f64,
     /// largest accepted certificate residual
-    #[arg(long, default_value_t = 1e-6)]
+    #[arg(long, default_value_t = 1e-6, value_parser = crate::values::nonnegative)]
     pub certificate_tol: f64,
     /// print the certificate vectors too (table: first entries; JSON: in full)
     #[arg(long)]
     pub certificates: bool,
 }
 
-/// Runs `coulomb check`.
-pub fn run(args: Args) -> anyhow::Result<()> {
+/// Runs `coulomb check`: exit status 0 when a solution exists, 1 when none can exist, 3 when
+/// the criteria are inconclusive. A spinner on stderr (terminal only, not with --json) names
+/// the criterion being evaluated.
+pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let problem = read_problem(&args.file)?;
     let settings = CheckSettings {
         tol: args.tol,
         certificate_tol: args.certificate_tol,
         ..CheckSettings::default()
     };
-    let report = existence::check(&problem, &settings)?;
+    let spinner = if args.json || !std::io::stderr().is_terminal() {
+        ProgressBar::hidden()
+    } else {
+        let pb = ProgressBar::new_spinner();
+        pb.set_draw_target(ProgressDrawTarget::stderr());
+        if let Ok(style) = ProgressStyle::with_template("{spinner} {elapsed} {msg}") {
+            pb.set_style(style);
+        }
+        pb.enable_steady_tick(std::time::Duration::from_millis(120));
+        pb
+    };
+    let contacts = problem.contacts();
+    let report = existence::check_with_progress(&problem, &settings, &mut |c| {
+        spinner.set_message(format!("criterion ({}) on {contacts} contacts", c.label()));
+    })?;
+    spinner.finish_and_clear();
     if args.json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&to_json(&args.file, &report, args.certificates))?
+            crate::outputs::json(&to_json(&args.file, &report, args.certificates), true)?
         );
     } else {
         print_table(&args.file, &report, args.certificates);
     }
-    Ok(())
+    Ok(match report.conclusion {
+        Conclusion::Exists { .. } => Outcome::Success,
+        Conclusion::None { .. } => Outcome::No,
+        Conclusion::Unknown => Outcome::Inconclusive,
+    })
 }
 
 /// Reads an FCLIB problem, exactly as stored.
 fn read_problem(path: &Path) -> anyhow::Result<Problem> {
-    Ok(fclib::read(path)?.problem)
+    let (file, dropped) = fclib::read_lenient(path, &fclib::ReadOptions::default())?;
+    for e in dropped {
+        eprintln!("warning: {e}; going on without it");
+    }
+    Ok(file.problem)
 }
 
 /// The criteria in the order they are printed: the necessary one first.
@@ -68,15 +96,16 @@ pub fn to_json(file: &Path, report: &ExistenceReport, certificates: bool) -> ser
     for criterion in ORDER {
         let label = criterion.label();
         let c: &CriterionReport = report.criteria.get(criterion);
+        // the same columns as the table: verdict, residual, margin, detail
         let mut o = serde_json::json!({
             "verdict": c.verdict,
             "certificate_residual": c.certificate_residual,
+            "margin": c.margin,
+            "detail": c.detail,
         });
         if certificates {
             o["certificate_kind"] = serde_json::json!(c.certificate_kind);
             o["certificate"] = serde_json::json!(c.certificate);
-            o["margin"] = serde_json::json!(c.margin);
-            o["detail"] = serde_json::json!(c.detail);
         }
         criteria.insert(label.to_string(), o);
     }

@@ -17,11 +17,11 @@ pub struct Args {
     /// folder for the demo's files (FCLIB problem and solution, simulation frames)
     #[arg(long, default_value = "coulomb-demo")]
     pub output: PathBuf,
-    /// beads in the demo simulation
-    #[arg(long, default_value_t = 60)]
+    /// beads in the demo simulation (1 to 1000000, as for `simulate`)
+    #[arg(long, default_value_t = 60, value_parser = crate::values::beads)]
     pub beads: usize,
     /// time steps of the demo simulation
-    #[arg(long, default_value_t = 40)]
+    #[arg(long, default_value_t = 40, value_parser = crate::values::count)]
     pub steps: usize,
     /// print one JSON object instead of text
     #[arg(long)]
@@ -41,8 +41,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // 1. a small problem built in memory: discs in a rigidly moving box (w = 0 when still)
     let problem = Problem::Global(coulomb::examples::moving_obstacle(0.3, [0.0, 0.0], 0.0)?);
     let path = args.output.join("discs-in-a-box.hdf5");
-    fclib::write(&path, &FclibFile::new(problem))
-        .with_context(|| format!("writing {}", path.display()))?;
+    crate::outputs::write_fclib(&path, &FclibFile::new(problem))?;
     let file = fclib::read(&path)?;
     let p = &file.problem;
     say(format!(
@@ -77,7 +76,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         l: None,
     });
     let sol_path = args.output.join("discs-in-a-box-solved.hdf5");
-    fclib::write(&sol_path, &with_solution)?;
+    crate::outputs::write_fclib(&sol_path, &with_solution)?;
     say(format!("wrote {}", sol_path.display()));
 
     // 4. a short granular simulation (Moreau–Jean, §6)
@@ -124,7 +123,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "error": sol.error,
             "simulation": summary,
         });
-        println!("{out}");
+        println!("{}", crate::outputs::json(&out, false)?);
     }
     Ok(())
 }

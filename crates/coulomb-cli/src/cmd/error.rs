@@ -1,5 +1,6 @@
 //! `coulomb error`: the error of docs/error.md of a stored or given solution.
 
+use crate::exit::Outcome;
 use anyhow::Context;
 use coulomb::fclib;
 use serde::Serialize;
@@ -15,7 +16,7 @@ pub struct Args {
     pub solution: Option<PathBuf>,
     /// Tolerance at which the result counts as a solution (err ≤ tol and, for a global
     /// problem, balance residual ≤ tol)
-    #[arg(long, default_value_t = 1e-8)]
+    #[arg(long, default_value_t = 1e-8, value_parser = crate::values::positive)]
     pub tol: f64,
     /// Print one JSON object
     #[arg(long)]
@@ -48,16 +49,35 @@ pub struct Report {
     pub asymmetry: f64,
 }
 
-/// Runs `coulomb error`.
-pub fn run(args: Args) -> anyhow::Result<()> {
-    let file = coulomb::fclib::read(&args.file)?;
+/// Runs `coulomb error`: exit status 0 when the solution is one at `--tol` ("yes"), 1 when
+/// it is not ("no"), 2 when it cannot be evaluated.
+pub fn run(args: Args) -> anyhow::Result<Outcome> {
+    let (file, mut dropped) = super::info::read_relaxed_dropped(&args.file)?;
     let (solution, source) = match &args.solution {
         Some(path) => {
+            for e in dropped {
+                eprintln!("warning: {e}; going on without it");
+            }
             let s = fclib::read_solution(path)?
                 .with_context(|| format!("{}: no /solution group", path.display()))?;
             (s, path.display().to_string())
         }
+        None if file.solution.is_none()
+            && dropped
+                .iter()
+                .any(|e| e.object_path().is_some_and(|p| p.starts_with("/solution"))) =>
+        {
+            // the group is there but unreadable: that is the answer
+            let i = dropped
+                .iter()
+                .position(|e| e.object_path().is_some_and(|p| p.starts_with("/solution")))
+                .unwrap_or(0);
+            return Err(dropped.swap_remove(i).into());
+        }
         None => {
+            for e in dropped {
+                eprintln!("warning: {e}; going on without it");
+            }
             let s = file.solution.clone().with_context(|| {
                 format!(
                     "{}: no /solution group; give one with --solution SOL.hdf5",
@@ -86,7 +106,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         asymmetry: file.problem.asymmetry(),
     };
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        println!("{}", crate::outputs::json(&report, true)?);
     } else {
         println!("file              {} ({})", report.file, report.kind);
         println!("solution from     {}", report.solution_file);
@@ -103,5 +123,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             if report.converged { "yes" } else { "no" }
         );
     }
-    Ok(())
+    Ok(if report.converged {
+        Outcome::Success
+    } else {
+        Outcome::No
+    })
 }

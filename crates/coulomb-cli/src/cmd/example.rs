@@ -3,7 +3,7 @@
 
 use coulomb::examples;
 use coulomb::existence::{self, CheckSettings};
-use coulomb::fclib::{self, FclibFile};
+use coulomb::fclib::FclibFile;
 use coulomb::{GlobalProblem, Problem};
 use std::path::{Path, PathBuf};
 
@@ -20,16 +20,16 @@ pub enum Which {
     /// Painlevé's rod (2.12), §2.2 and §5.2–§5.4 (m = l = h = 1, v0 = 0)
     Painleve {
         /// rod angle θ in degrees, in ]0, 90[
-        #[arg(long)]
+        #[arg(long, value_parser = crate::values::finite)]
         theta: f64,
         /// friction coefficient μ
-        #[arg(long)]
+        #[arg(long, value_parser = crate::values::nonnegative)]
         mu: f64,
         /// velocity u0 of the pivot A along Ox
-        #[arg(long, allow_hyphen_values = true)]
+        #[arg(long, allow_hyphen_values = true, value_parser = crate::values::finite)]
         u0: f64,
         /// gravity along Oy (g > 0: upwards; Example 2.1 has g = −1)
-        #[arg(long, default_value_t = -1.0, allow_hyphen_values = true)]
+        #[arg(long, default_value_t = -1.0, allow_hyphen_values = true, value_parser = crate::values::finite)]
         g: f64,
         /// output FCLIB file
         #[arg(long)]
@@ -38,13 +38,13 @@ pub enum Which {
     /// Fig. 7: a rigid rectangle on two circular supports, the right one moving; (5.1) holds
     Rectangle {
         /// friction coefficient μ
-        #[arg(long, default_value_t = 0.3)]
+        #[arg(long, default_value_t = 0.3, value_parser = crate::values::nonnegative)]
         mu: f64,
         /// velocity of the right support along x
-        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true, value_parser = crate::values::finite)]
         sx: f64,
         /// velocity of the right support along y
-        #[arg(long, default_value_t = -0.1, allow_hyphen_values = true)]
+        #[arg(long, default_value_t = -0.1, allow_hyphen_values = true, value_parser = crate::values::finite)]
         sy: f64,
         /// output FCLIB file
         #[arg(long)]
@@ -53,10 +53,10 @@ pub enum Which {
     /// Fig. 3: a ball crushed between the ground and a plane moving towards it; no solution
     CrushedBall {
         /// friction coefficient μ
-        #[arg(long, default_value_t = 0.3)]
+        #[arg(long, default_value_t = 0.3, value_parser = crate::values::nonnegative)]
         mu: f64,
         /// speed of the plane towards the ground
-        #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+        #[arg(long, default_value_t = 1.0, allow_hyphen_values = true, value_parser = crate::values::finite)]
         u0: f64,
         /// output FCLIB file
         #[arg(long)]
@@ -65,16 +65,16 @@ pub enum Which {
     /// §5.6: three discs in a box moving as a rigid body; (4.4) holds
     MovingObstacle {
         /// friction coefficient μ
-        #[arg(long, default_value_t = 0.3)]
+        #[arg(long, default_value_t = 0.3, value_parser = crate::values::nonnegative)]
         mu: f64,
         /// box velocity along x
-        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true, value_parser = crate::values::finite)]
         vx: f64,
         /// box velocity along y
-        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true, value_parser = crate::values::finite)]
         vy: f64,
         /// box angular velocity about its centre
-        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true, value_parser = crate::values::finite)]
         omega: f64,
         /// output FCLIB file
         #[arg(long)]
@@ -85,6 +85,7 @@ pub enum Which {
 /// Runs `coulomb example`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let (name, problem, output) = build(args.which)?;
+    crate::outputs::check("--output", &output, &[])?;
     write_global(&output, &problem)?;
     let report = existence::check(&Problem::Global(problem.clone()), &CheckSettings::default())?;
     let by = match &report.conclusion {
@@ -146,6 +147,6 @@ pub fn build(which: Which) -> anyhow::Result<(&'static str, GlobalProblem, PathB
 /// Writes a global problem as FCLIB.
 fn write_global(path: &Path, problem: &GlobalProblem) -> anyhow::Result<()> {
     let file = FclibFile::new(Problem::Global(problem.clone()));
-    fclib::write(path, &file)?;
+    crate::outputs::write_fclib(path, &file)?;
     Ok(())
 }

@@ -47,6 +47,23 @@ pub struct Summary {
     pub asymmetry: f64,
 }
 
+/// Reads a file exactly as stored for inspection; a malformed /solution or /guesses group
+/// (stored solutions are data, not truth) is left out with a warning on stderr.
+pub fn read_relaxed(path: &std::path::Path) -> Result<FclibFile, fclib::FclibError> {
+    let (file, dropped) = read_relaxed_dropped(path)?;
+    for e in dropped {
+        eprintln!("warning: {e}; going on without it");
+    }
+    Ok(file)
+}
+
+/// [`read_relaxed`] without the warnings: the errors of the groups left out are returned.
+pub fn read_relaxed_dropped(
+    path: &std::path::Path,
+) -> Result<(FclibFile, Vec<fclib::FclibError>), fclib::FclibError> {
+    fclib::read_lenient(path, &fclib::ReadOptions::default())
+}
+
 /// Summarizes a file already read.
 pub fn summarize(file: String, f: &FclibFile) -> Summary {
     let p = &f.problem;
@@ -83,8 +100,9 @@ fn opt<T: std::fmt::Display>(x: Option<T>) -> String {
     x.map_or_else(|| "-".to_string(), |v| v.to_string())
 }
 
-/// Runs `coulomb info`.
-pub fn run(args: Args) -> anyhow::Result<()> {
+/// Runs `coulomb info`: exit status 2 when a file could not be read (each is named in the
+/// table or the JSON), 0 otherwise.
+pub fn run(args: Args) -> anyhow::Result<crate::exit::Outcome> {
     let mut rows = Vec::new();
     let mut failures = 0;
     for path in &args.files {
@@ -106,9 +124,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             })
             .collect::<Result<_, _>>()?;
         let out = if values.len() == 1 {
-            serde_json::to_string_pretty(&values[0])?
+            crate::outputs::json(&values[0], true)?
         } else {
-            serde_json::to_string_pretty(&values)?
+            crate::outputs::json(&values, true)?
         };
         println!("{out}");
     } else {
@@ -155,7 +173,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     if failures > 0 {
-        anyhow::bail!("{failures} of {} files could not be read", args.files.len());
+        eprintln!(
+            "error: {failures} of {} files could not be read",
+            args.files.len()
+        );
+        return Ok(crate::exit::Outcome::BadInput);
     }
-    Ok(())
+    Ok(crate::exit::Outcome::Success)
 }

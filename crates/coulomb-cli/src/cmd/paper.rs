@@ -38,20 +38,20 @@ pub enum Which {
 #[derive(clap::Args, Debug)]
 pub struct Table1Args {
     /// bead counts
-    #[arg(long, value_delimiter = ',', default_values_t = vec![150usize, 300, 600])]
+    #[arg(long, value_delimiter = ',', default_values_t = vec![150usize, 300, 600], value_parser = crate::values::beads)]
     pub beads: Vec<usize>,
     /// time steps of each run (the paper's #TS is 255–352)
-    #[arg(long, default_value_t = 300)]
+    #[arg(long, default_value_t = 300, value_parser = crate::values::count)]
     pub steps: usize,
     /// tolerance on the reported error (docs/error.md) for "converged"
-    #[arg(long, default_value_t = 1e-4)]
+    #[arg(long, default_value_t = 1e-4, value_parser = crate::values::positive)]
     pub tol: f64,
     /// ε of the outer rule (6.1) (the paper's 0.01); 0 disables it, so that only err ≤ tol or
     /// the cap ends a step
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = 0.01, value_parser = crate::values::nonnegative)]
     pub fp_tol: f64,
     /// cap on subproblems (outer iterations) per step (the paper's 20)
-    #[arg(long, default_value_t = 20)]
+    #[arg(long, default_value_t = 20, value_parser = crate::values::count)]
     pub max_outer: usize,
     /// seed of the initial arrangement
     #[arg(long, default_value_t = 1)]
@@ -75,7 +75,7 @@ pub struct Table1Args {
 #[derive(clap::Args, Debug)]
 pub struct Fig8Args {
     /// number of beads
-    #[arg(long, default_value_t = 600)]
+    #[arg(long, default_value_t = 600, value_parser = crate::values::beads)]
     pub beads: usize,
     /// time steps of each run
     #[arg(long, default_value_t = 300)]
@@ -95,25 +95,25 @@ pub struct Fig8Args {
 #[derive(clap::Args, Debug)]
 pub struct Fig9Args {
     /// number of beads
-    #[arg(long, default_value_t = 300)]
+    #[arg(long, default_value_t = 300, value_parser = crate::values::beads)]
     pub beads: usize,
     /// the step studied is the first with at least this many contacts
-    #[arg(long, default_value_t = 250)]
+    #[arg(long, default_value_t = 250, value_parser = crate::values::count)]
     pub contacts: usize,
     /// ε of (6.1)
-    #[arg(long, default_value_t = 1e-4)]
+    #[arg(long, default_value_t = 1e-4, value_parser = crate::values::positive)]
     pub fp_tol: f64,
     /// cap on fixed-point iterations
-    #[arg(long, default_value_t = 50)]
+    #[arg(long, default_value_t = 50, value_parser = crate::values::count)]
     pub max_outer: usize,
     /// step cap while looking for the step
-    #[arg(long, default_value_t = 400)]
+    #[arg(long, default_value_t = 400, value_parser = crate::values::count)]
     pub max_steps: usize,
     /// cap on projected-gradient iterations per subproblem (the paper's 250)
-    #[arg(long, default_value_t = 250)]
+    #[arg(long, default_value_t = 250, value_parser = crate::values::count)]
     pub max_inner: usize,
     /// friction coefficients (default 0.1, 0.2, …, 0.9)
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', value_parser = crate::values::nonnegative)]
     pub mu: Vec<f64>,
     /// SVG file; the data go beside it as JSON (same name, .json)
     #[arg(long, default_value = "fig9.svg")]
@@ -127,13 +127,13 @@ pub struct Fig9Args {
 #[derive(clap::Args, Debug)]
 pub struct ScalingArgs {
     /// bead counts
-    #[arg(long, value_delimiter = ',', default_values_t = vec![150usize, 300, 600, 1200, 2500, 5000, 10000])]
+    #[arg(long, value_delimiter = ',', default_values_t = vec![150usize, 300, 600, 1200, 2500, 5000, 10000], value_parser = crate::values::beads)]
     pub beads: Vec<usize>,
     /// untimed steps first (the beads land and the contacts form)
-    #[arg(long, default_value_t = 50)]
+    #[arg(long, default_value_t = 50, value_parser = crate::values::count0)]
     pub settle: usize,
     /// timed steps after the settling ones
-    #[arg(long, default_value_t = 50)]
+    #[arg(long, default_value_t = 50, value_parser = crate::values::count)]
     pub window: usize,
     /// inner solver (the paper's tolerance: (6.1) with ε = 0.01, ≤ 20 subproblems)
     #[arg(long, value_enum, default_value_t = crate::cmd::simulate::Inner::Apgd)]
@@ -253,6 +253,9 @@ fn table1(a: Table1Args) -> anyhow::Result<()> {
     if !valid {
         bail!("--fp-tol must be ≥ 0 and --tol > 0");
     }
+    if let Some(path) = &a.markdown {
+        crate::outputs::check("--markdown", path, &[])?;
+    }
     let paper_rule = a.fp_tol == 0.01 && a.max_outer == 20 && a.tol == 1e-4;
     let rule = if a.fp_tol > 0.0 {
         format!(
@@ -354,7 +357,7 @@ fn table1(a: Table1Args) -> anyhow::Result<()> {
     }
     print!("{md}");
     if let Some(path) = &a.markdown {
-        std::fs::write(path, &md).with_context(|| format!("writing {}", path.display()))?;
+        crate::outputs::write(path, md.as_bytes())?;
     }
     Ok(())
 }
@@ -382,6 +385,8 @@ fn fig8(a: Fig8Args) -> anyhow::Result<()> {
     if a.beads == 0 || a.beads > 100_000 || a.steps == 0 || a.steps > 100_000 {
         bail!("--beads and --steps must be in 1..=100000");
     }
+    crate::outputs::check("--svg", &a.svg, &[])?;
+    crate::outputs::check("the data file", &beside(&a.svg, "csv"), &[])?;
     let mut series = Vec::new();
     for inner in [InnerKind::Apgd, InnerKind::Ipm] {
         let label = inner_label(inner);
@@ -412,7 +417,7 @@ fn fig8(a: Fig8Args) -> anyhow::Result<()> {
         }
     }
     let data = beside(&a.svg, "csv");
-    std::fs::write(&data, csv).with_context(|| format!("writing {}", data.display()))?;
+    crate::outputs::write(&data, csv.as_bytes())?;
     let xmax = series
         .iter()
         .flat_map(|(_, p)| p.iter().map(|x| x.0 as f64))
@@ -421,7 +426,9 @@ fn fig8(a: Fig8Args) -> anyhow::Result<()> {
         .iter()
         .flat_map(|(_, p)| p.iter().map(|x| x.1))
         .fold(1e-3, f64::max);
-    let root = SVGBackend::new(&a.svg, (800, 560)).into_drawing_area();
+    let staged = crate::outputs::Staged::new(&a.svg);
+    let staged_tmp = staged.path().to_path_buf();
+    let root = SVGBackend::new(&staged_tmp, (800, 560)).into_drawing_area();
     root.fill(&WHITE)?;
     let mut chart = ChartBuilder::on(&root)
         .caption(
@@ -455,6 +462,7 @@ fn fig8(a: Fig8Args) -> anyhow::Result<()> {
         .background_style(WHITE)
         .draw()?;
     root.present()?;
+    staged.commit()?;
     eprintln!("wrote {} and {}", a.svg.display(), data.display());
     Ok(())
 }
@@ -476,6 +484,8 @@ fn fig9(a: Fig9Args) -> anyhow::Result<()> {
     if a.beads == 0 || a.beads > 100_000 || a.max_outer == 0 || a.max_outer > 10_000 {
         bail!("--beads must be in 1..=100000 and --max-outer in 1..=10000");
     }
+    crate::outputs::check("--svg", &a.svg, &[])?;
+    crate::outputs::check("the data file", &beside(&a.svg, "json"), &[])?;
     if a.max_inner == 0 || a.max_inner > 1_000_000 {
         bail!("--max-inner must be in 1..=1000000");
     }
@@ -536,9 +546,10 @@ fn fig9(a: Fig9Args) -> anyhow::Result<()> {
         bail!("no run reached {} contacts", a.contacts);
     }
     let data = beside(&a.svg, "json");
-    std::fs::write(&data, serde_json::to_string_pretty(&curves)?)
-        .with_context(|| format!("writing {}", data.display()))?;
-    let root = SVGBackend::new(&a.svg, (1200, 560)).into_drawing_area();
+    crate::outputs::write(&data, crate::outputs::json(&curves, true)?.as_bytes())?;
+    let staged = crate::outputs::Staged::new(&a.svg);
+    let staged_tmp = staged.path().to_path_buf();
+    let root = SVGBackend::new(&staged_tmp, (1200, 560)).into_drawing_area();
     root.fill(&WHITE)?;
     let (left, right) = root.split_horizontally(600);
     let title = format!(
@@ -562,6 +573,7 @@ fn fig9(a: Fig9Args) -> anyhow::Result<()> {
         1e-4,
     )?;
     root.present()?;
+    staged.commit()?;
     eprintln!("wrote {} and {}", a.svg.display(), data.display());
     Ok(())
 }
@@ -658,6 +670,11 @@ fn scaling(a: ScalingArgs) -> anyhow::Result<()> {
     if a.window == 0 || a.window > 100_000 || a.settle > 100_000 {
         bail!("--window must be in 1..=100000 and --settle at most 100000");
     }
+    crate::outputs::check("--svg", &a.svg, &[])?;
+    crate::outputs::check("the data file", &beside(&a.svg, "json"), &[])?;
+    if let Some(path) = &a.markdown {
+        crate::outputs::check("--markdown", path, &[])?;
+    }
     let inner: InnerKind = a.inner.into();
     let mut points = Vec::new();
     for &beads in &a.beads {
@@ -750,11 +767,10 @@ fn scaling(a: ScalingArgs) -> anyhow::Result<()> {
     }
     print!("{md}");
     if let Some(path) = &a.markdown {
-        std::fs::write(path, &md).with_context(|| format!("writing {}", path.display()))?;
+        crate::outputs::write(path, md.as_bytes())?;
     }
     let data = beside(&a.svg, "json");
-    std::fs::write(&data, serde_json::to_string_pretty(&points)?)
-        .with_context(|| format!("writing {}", data.display()))?;
+    crate::outputs::write(&data, crate::outputs::json(&points, true)?.as_bytes())?;
     scaling_svg(&a.svg, &points, inner_label(inner))?;
     eprintln!("wrote {} and {}", a.svg.display(), data.display());
     Ok(())
@@ -774,7 +790,9 @@ fn scaling_svg(path: &Path, points: &[ScalingPoint], label: &str) -> anyhow::Res
     let xmax = xs().fold(1.0, f64::max) * 1.25;
     let ymin = ys().fold(f64::INFINITY, f64::min).min(1.0) * 0.5;
     let ymax = ys().fold(10.0, f64::max) * 2.0;
-    let root = SVGBackend::new(path, (800, 560)).into_drawing_area();
+    let staged = crate::outputs::Staged::new(path);
+    let staged_tmp = staged.path().to_path_buf();
+    let root = SVGBackend::new(&staged_tmp, (800, 560)).into_drawing_area();
     root.fill(&WHITE)?;
     let mut chart = ChartBuilder::on(&root)
         .caption(
@@ -821,5 +839,6 @@ fn scaling_svg(path: &Path, points: &[ScalingPoint], label: &str) -> anyhow::Res
         .background_style(WHITE)
         .draw()?;
     root.present()?;
+    staged.commit()?;
     Ok(())
 }

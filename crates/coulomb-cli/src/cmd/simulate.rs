@@ -63,31 +63,31 @@ pub struct Args {
     /// scene: box, funnel, vibrating-plate, rotating-drum
     pub scene: String,
     /// number of beads
-    #[arg(long, default_value_t = 150)]
+    #[arg(long, default_value_t = 150, value_parser = crate::values::beads)]
     pub beads: usize,
     /// friction coefficient μ
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(long, default_value_t = 0.3, value_parser = crate::values::nonnegative)]
     pub mu: f64,
     /// restitution coefficient e (Moreau's impact law)
-    #[arg(long, default_value_t = 0.2)]
+    #[arg(long, default_value_t = 0.2, value_parser = crate::values::unit_interval)]
     pub restitution: f64,
     /// time step h (s)
-    #[arg(long, default_value_t = 0.02)]
+    #[arg(long, default_value_t = 0.02, value_parser = crate::values::positive)]
     pub dt: f64,
     /// θ of the position update (2.7)
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, value_parser = crate::values::unit_interval)]
     pub theta: f64,
     /// number of steps (default 200 unless --until-rest)
-    #[arg(long, conflicts_with = "until_rest")]
+    #[arg(long, conflicts_with = "until_rest", value_parser = crate::values::count)]
     pub steps: Option<usize>,
     /// run until every bead moves slower than --rest-speed for 10 steps
     #[arg(long)]
     pub until_rest: bool,
     /// rest speed threshold (m/s) of --until-rest
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = 0.05, value_parser = crate::values::positive)]
     pub rest_speed: f64,
     /// step cap of --until-rest
-    #[arg(long, default_value_t = 2000)]
+    #[arg(long, default_value_t = 2000, value_parser = crate::values::count)]
     pub max_steps: usize,
     /// inner solver (default: Gauss–Seidel, the fastest to 1e-4 on the box scene, see
     /// docs/granular.md)
@@ -98,20 +98,20 @@ pub struct Args {
     pub outer: Outer,
     /// tolerance on the error of docs/error.md, reached at every step (steps that do not
     /// reach it are counted and reported)
-    #[arg(long, default_value_t = 1e-4)]
+    #[arg(long, default_value_t = 1e-4, value_parser = crate::values::positive)]
     pub tol: f64,
     /// ε of the paper's outer stopping rule (6.1); 0 (default) disables it, so that every
     /// step is solved to --tol
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = crate::values::nonnegative)]
     pub fp_tol: f64,
     /// cap on outer (fixed-point) iterations per step
-    #[arg(long, default_value_t = 20)]
+    #[arg(long, default_value_t = 20, value_parser = crate::values::count)]
     pub max_outer: usize,
     /// cap on inner iterations per subproblem (default: the solver's)
-    #[arg(long)]
+    #[arg(long, value_parser = crate::values::count)]
     pub max_inner: Option<usize>,
     /// γ of the activation rule g + γ h min(u_N, 0) ≤ δ (docs/granular.md)
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = crate::values::nonnegative)]
     pub gamma: f64,
     /// no position correction (the plain Moreau–Jean scheme: penetrations stay)
     #[arg(long)]
@@ -120,22 +120,22 @@ pub struct Args {
     #[arg(long)]
     pub cold: bool,
     /// seed of the initial arrangement
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = crate::values::seed)]
     pub seed: u64,
     /// box scene: side of the square floor (m), instead of the calibrated one
-    #[arg(long)]
+    #[arg(long, value_parser = crate::values::positive)]
     pub box_side: Option<f64>,
     /// box scene: vertical pitch of the initial lattice (m), instead of the calibrated one
-    #[arg(long)]
+    #[arg(long, value_parser = crate::values::positive)]
     pub layer_pitch: Option<f64>,
     /// box scene: height of the lowest initial layer's centres (m), instead of the calibrated one
-    #[arg(long)]
+    #[arg(long, value_parser = crate::values::positive)]
     pub drop_base: Option<f64>,
     /// output folder: stats.csv, stats.json, summary.json, beads.pvd, contacts.pvd, frames/
     #[arg(long)]
     pub output: Option<PathBuf>,
     /// write a VTK frame every K steps (with --output)
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = 10, value_parser = crate::values::count0)]
     pub frames_every: usize,
     /// write each step's problem as an FCLIB global file into this folder
     #[arg(long)]
@@ -358,9 +358,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(dir) = &args.output {
         write_stats(dir, &stats)
             .with_context(|| format!("writing stats into {}", dir.display()))?;
-        std::fs::write(
-            dir.join("summary.json"),
-            serde_json::to_string_pretty(&summary)?,
+        crate::outputs::write(
+            &dir.join("summary.json"),
+            crate::outputs::json(&summary, true)?.as_bytes(),
         )?;
     }
     if args.json {
@@ -383,7 +383,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "max_error": summary.max_error,
             "at_rest": summary.at_rest,
         });
-        println!("{obj}");
+        println!("{}", crate::outputs::json(&obj, false)?);
     } else {
         println!(
             "{}: {} beads, {} steps{}, {:.1} contacts/step, {:.2} subproblems/step, {:.2} ms solve/step, mean error {:.2e} (max {:.2e}), {} / {} steps converged ({} not converged), max penetration during the run {:.2e} m, at the end: mean {:.2e} m, max {:.2e} m",
@@ -413,7 +413,7 @@ fn dump_fclib(
     step: usize,
     problem: &coulomb::problem::GlobalProblem,
 ) -> anyhow::Result<()> {
-    use coulomb::fclib::{write, FclibFile, Info};
+    use coulomb::fclib::{FclibFile, Info};
     let path = dir.join(format!("step_{step:06}.hdf5"));
     let mut file = FclibFile::new(coulomb::problem::Problem::Global(problem.clone()));
     file.info = Some(Info {
@@ -421,5 +421,5 @@ fn dump_fclib(
         description: "Moreau-Jean step of coulomb simulate (coulomb-granular)".into(),
         math_info: String::new(),
     });
-    write(&path, &file).with_context(|| format!("writing {}", path.display()))
+    crate::outputs::write_fclib(&path, &file)
 }

@@ -1,8 +1,9 @@
 //! `coulomb solve`: solve an FCLIB problem with the convex fixed-point solver and report the
 //! error of docs/error.md recomputed from the returned r (and v).
 
+use crate::exit::Outcome;
 use anyhow::Context;
-use coulomb::fclib::{self, FclibFile, StoredSolution};
+use coulomb::fclib::{FclibFile, StoredSolution};
 use coulomb::solver::{self, InnerKind, OuterKind, Settings};
 use serde::Serialize;
 use std::path::PathBuf;
@@ -44,15 +45,16 @@ pub struct Args {
     #[arg(long, value_enum)]
     pub outer: Option<OuterArg>,
     /// Tolerance on the error of docs/error.md (and the balance residual)
-    #[arg(long, default_value_t = 1e-8)]
+    #[arg(long, default_value_t = 1e-8, value_parser = crate::values::positive)]
     pub tol: f64,
     /// Cap on outer iterations
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = crate::values::count)]
     pub max_outer: Option<usize>,
-    /// Wall-clock limit in seconds
-    #[arg(long, value_name = "SECONDS")]
+    /// Wall-clock limit in seconds (at most one week)
+    #[arg(long, value_name = "SECONDS", value_parser = crate::values::time_limit)]
     pub time_limit: Option<f64>,
-    /// Write the problem plus /solution {r, u, v} to this FCLIB file
+    /// Write the problem plus /solution {r, u, v} to this FCLIB file (replaced atomically;
+    /// never the input file)
     #[arg(long, value_name = "OUT.hdf5")]
     pub output: Option<PathBuf>,
     /// Print one JSON object
@@ -121,20 +123,27 @@ pub fn settings(args: &Args) -> anyhow::Result<Settings> {
         s.max_outer = n;
     }
     if let Some(t) = args.time_limit {
-        anyhow::ensure!(
-            t.is_finite() && t > 0.0,
-            "--time-limit must be a positive number of seconds, got {t}"
-        );
-        s.time_limit = Some(Duration::from_secs_f64(t));
+        let checked = crate::values::time_limit(&t.to_string())
+            .ok()
+            .and_then(|t| Duration::try_from_secs_f64(t).ok());
+        let Some(d) = checked else {
+            anyhow::bail!(
+                "--time-limit {t}: must be a positive number of seconds up to {}",
+                crate::values::MAX_TIME_LIMIT_S
+            );
+        };
+        s.time_limit = Some(d);
     }
     Ok(s)
 }
 
-/// Runs `coulomb solve`.
-pub fn run(args: Args) -> anyhow::Result<()> {
+/// Runs `coulomb solve`: exit status 0 when converged, 1 otherwise (see `crate::exit`).
+pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let settings = settings(&args)?;
-    let file =
-        fclib::read(&args.file).with_context(|| format!("reading {}", args.file.display()))?;
+    if let Some(out) = &args.output {
+        crate::outputs::check("--output", out, &[&args.file])?;
+    }
+    let file = super::info::read_relaxed(&args.file)?;
     let sol = solver::solve(&file.problem, &settings)
         .with_context(|| format!("solving {}", args.file.display()))?;
     if let Some(out) = &args.output {
@@ -146,7 +155,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             r: sol.r.clone(),
             l: None,
         });
-        fclib::write(out, &written).with_context(|| format!("writing {}", out.display()))?;
+        crate::outputs::write_fclib(out, &written)?;
     }
     // a solve that did not converge: say whether a solution can exist at all (§4–5)
     let existence = if sol.converged() {
@@ -170,7 +179,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         asymmetry: file.problem.asymmetry(),
     };
     if args.json {
-        println!("{}", serde_json::to_string(&report)?);
+        println!("{}", crate::outputs::json(&report, false)?);
     } else {
         println!("file              {}", report.file);
         if report.asymmetry > coulomb::problem::SYMMETRY_TOLERANCE {
@@ -208,5 +217,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             }
         }
     }
-    Ok(())
+    Ok(if report.converged {
+        Outcome::Success
+    } else {
+        Outcome::No
+    })
 }

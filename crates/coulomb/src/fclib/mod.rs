@@ -173,6 +173,21 @@ pub fn read_bytes_with(
     read::Reader::open(name, bytes)?.fclib_file(options)
 }
 
+/// Like [`read_with`], but stored solutions are data, not truth: a `/solution` or `/guesses`
+/// group that cannot be read (wrong lengths, NaN, wrong types, …) is left out of the result
+/// and its error returned in the list, instead of failing the read. The problem itself is
+/// validated as strictly as by [`read_with`].
+pub fn read_lenient(
+    path: &Path,
+    options: &ReadOptions,
+) -> Result<(FclibFile, Vec<FclibError>), FclibError> {
+    let name = file_name(path);
+    let bytes = std::fs::read(path).map_err(|e| FclibError::new(&name, e.into()))?;
+    let mut dropped = Vec::new();
+    let file = read::Reader::open(&name, bytes)?.fclib_file_with(options, Some(&mut dropped))?;
+    Ok((file, dropped))
+}
+
 /// Reads only `/solution` of a file (for instance one written by `coulomb solve`), without
 /// checking it against a problem; `Ok(None)` when the file has no `/solution` group.
 /// Check the lengths with [`StoredSolution::check_lengths`] before use.
@@ -186,16 +201,17 @@ pub fn read_solution(path: &Path) -> Result<Option<StoredSolution>, FclibError> 
     reader.solution("solution", None).map(Some)
 }
 
-/// Writes `file` in the default layout (CSC, int32 indices), replacing `path`.
+/// Writes `file` in the default layout (CSC, int32 indices), replacing `path` atomically
+/// ([`crate::atomic::write`]: a failed write leaves `path` as it was).
 pub fn write(path: &Path, file: &FclibFile) -> Result<(), FclibError> {
     write_with(path, file, &WriteOptions::default())
 }
 
-/// Writes `file` with the given matrix storage and index width, replacing `path`.
+/// Writes `file` with the given matrix storage and index width, replacing `path` atomically.
 pub fn write_with(path: &Path, file: &FclibFile, options: &WriteOptions) -> Result<(), FclibError> {
     let name = file_name(path);
     let bytes = write::to_bytes_named(&name, file, options)?;
-    std::fs::write(path, bytes).map_err(|e| FclibError::new(&name, e.into()))
+    crate::atomic::write(path, &bytes).map_err(|e| FclibError::new(&name, e.into()))
 }
 
 /// Serializes `file` to an in-memory HDF5 image (what [`write_with`] puts on disk).
@@ -263,7 +279,7 @@ impl Evaluation {
     /// Converged at `tol` (docs/error.md): err ≤ tol and, for a global problem, the
     /// balance residual ≤ tol.
     pub fn converged(&self, tol: f64) -> bool {
-        self.measure.error <= tol && self.balance_residual.is_none_or(|b| b <= tol)
+        self.measure.converged(tol) && self.balance_residual.is_none_or(|b| b <= tol)
     }
 }
 

@@ -538,7 +538,17 @@ impl<'a> Reader<'a> {
     }
 
     /// The whole file.
-    pub(super) fn fclib_file(&self, _opts: &ReadOptions) -> Result<FclibFile, FclibError> {
+    pub(super) fn fclib_file(&self, opts: &ReadOptions) -> Result<FclibFile, FclibError> {
+        self.fclib_file_with(opts, None)
+    }
+
+    /// The whole file; with `dropped`, a /solution or /guesses group that cannot be read is
+    /// left out and its error pushed there instead of failing the read.
+    pub(super) fn fclib_file_with(
+        &self,
+        _opts: &ReadOptions,
+        mut dropped: Option<&mut Vec<FclibError>>,
+    ) -> Result<FclibFile, FclibError> {
         let local = self.has_group("fclib_local")?;
         let global = self.has_group("fclib_global")?;
         let (problem, group) =
@@ -559,12 +569,26 @@ impl<'a> Reader<'a> {
                 }
             };
         let info = self.info(group)?;
-        let solution = if self.has_group("solution")? {
-            Some(self.solution("solution", Some(&problem))?)
-        } else {
-            None
+        let solution = self.has_group("solution").and_then(|has| {
+            has.then(|| self.solution("solution", Some(&problem)))
+                .transpose()
+        });
+        let solution = match (solution, dropped.as_deref_mut()) {
+            (Ok(s), _) => s,
+            (Err(e), Some(list)) => {
+                list.push(e);
+                None
+            }
+            (Err(e), None) => return Err(e),
         };
-        let guesses = self.guesses(&problem)?;
+        let guesses = match (self.guesses(&problem), dropped) {
+            (Ok(g), _) => g,
+            (Err(e), Some(list)) => {
+                list.push(e);
+                Vec::new()
+            }
+            (Err(e), None) => return Err(e),
+        };
         Ok(FclibFile {
             problem,
             info,

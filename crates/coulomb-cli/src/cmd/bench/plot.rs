@@ -148,9 +148,9 @@ pub fn write_svg(
     title: &str,
 ) -> Result<(), PlotError> {
     let svg = render_svg(profile, curves, title, (900, 600))?;
-    std::fs::write(path, svg).map_err(|source| PlotError::Write {
+    crate::outputs::write(path, svg.as_bytes()).map_err(|e| PlotError::Write {
         path: path.to_path_buf(),
-        source,
+        source: e.source,
     })
 }
 

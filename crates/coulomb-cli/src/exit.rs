@@ -1,0 +1,81 @@
+//! Exit statuses of `coulomb` (also listed in `coulomb --help` and the README):
+//!
+//! | status | meaning |
+//! |---|---|
+//! | 0 | success: `solve` converged, `error` says "yes", `check` proved that a solution exists, other commands finished |
+//! | 1 | the command ran and the answer is negative: `solve` did not converge (any status other than converged), `error` says "no", `check` proved that no solution exists |
+//! | 2 | bad input or usage: unknown option, invalid value, unreadable or invalid file, output path refused (same as an input, folder missing, not writable) |
+//! | 3 | inconclusive: `check` could neither prove nor disprove existence |
+//! | 4 | an output could not be written (disk full, permissions): the destination is left as it was |
+//!
+//! Clap's own usage errors exit with 2 too; `--help` and `--version` exit with 0. A closed
+//! standard output (`coulomb info … | head`) ends the process with 141, as a shell reports a
+//! writer killed by SIGPIPE.
+
+use std::process::ExitCode;
+
+/// The text shown at the end of `coulomb --help`.
+pub const HELP: &str =
+    "Exit status: 0 success (solve converged, error says yes, check: a solution exists); \
+1 negative answer (solve did not converge, error says no, check: no solution exists); \
+2 bad input or usage (invalid option value, unreadable file, refused output path); \
+3 inconclusive (check); 4 an output could not be written (destination left as it was).";
+
+/// How a command that ran to its end answered.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outcome {
+    /// status 0
+    Success,
+    /// status 1: not converged, "no", no solution exists
+    No,
+    /// status 3: the existence criteria are inconclusive
+    Inconclusive,
+    /// status 2, after the command reported its own failures (e.g. `info` on several files,
+    /// some unreadable: the table or JSON array names them)
+    BadInput,
+}
+
+impl Outcome {
+    /// The process exit code.
+    pub fn code(self) -> ExitCode {
+        match self {
+            Outcome::Success => ExitCode::SUCCESS,
+            Outcome::No => ExitCode::from(1),
+            Outcome::Inconclusive => ExitCode::from(3),
+            Outcome::BadInput => ExitCode::from(BAD_INPUT),
+        }
+    }
+}
+
+/// Exit code 2: bad input or usage.
+pub const BAD_INPUT: u8 = 2;
+/// Exit code 4: an output could not be written.
+pub const WRITE_FAILED: u8 = 4;
+
+/// An output that could not be written (the destination is untouched): exit status 4.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot write {path}: {source}")]
+pub struct WriteFailed {
+    /// the destination
+    pub path: String,
+    /// the OS error
+    pub source: std::io::Error,
+}
+
+/// The exit status of a failed command: 4 when an output could not be written, else 2.
+pub fn status_of(e: &anyhow::Error) -> u8 {
+    use crate::cmd::bench::{plot::PlotError, BenchError};
+    let write_failed = |c: &(dyn std::error::Error + 'static)| {
+        c.downcast_ref::<WriteFailed>().is_some()
+            || matches!(
+                c.downcast_ref::<BenchError>(),
+                Some(BenchError::Write { .. })
+            )
+            || matches!(c.downcast_ref::<PlotError>(), Some(PlotError::Write { .. }))
+    };
+    if e.chain().any(write_failed) {
+        WRITE_FAILED
+    } else {
+        BAD_INPUT
+    }
+}

@@ -1,0 +1,32 @@
+//! The instant at which a time-limited solve stops, computed without overflow.
+
+use std::time::{Duration, Instant};
+
+/// The deadline `start + limit`, or `None` (no deadline) when there is no limit or when
+/// `start + limit` is beyond what [`Instant`] can represent (e.g. `Duration::MAX`, or 10¹⁹ s
+/// on platforms whose clock counts nanoseconds in 64 bits): a limit that far away can never
+/// be reached, so the solve simply runs to its iteration caps.
+pub fn deadline(start: Instant, limit: Option<Duration>) -> Option<Instant> {
+    limit.and_then(|t| start.checked_add(t))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn huge_limits_mean_no_deadline_and_never_panic() {
+        let now = Instant::now();
+        assert_eq!(deadline(now, None), None);
+        assert_eq!(deadline(now, Some(Duration::MAX)), None);
+        // 1e19 s and 1e30 s (the latter saturates in Duration's own conversion)
+        for secs in [1e19, 1e30] {
+            let t = Duration::try_from_secs_f64(secs).unwrap_or(Duration::MAX);
+            if let Some(d) = deadline(now, Some(t)) {
+                assert!(d > now);
+            }
+        }
+        let d = deadline(now, Some(Duration::from_millis(5))).unwrap();
+        assert_eq!(d - now, Duration::from_millis(5));
+    }
+}

@@ -129,6 +129,9 @@ fn down_scale(max_abs: f64) -> f64 {
 /// scaled values, and `absolute` and `scale` are reported divided by α. Nothing overflows on
 /// finite input; a NaN or ±∞ in r, u or ‖q‖ gives error NaN or +∞, never a small number.
 pub fn error_measure(dim: usize, mu: &[f64], r: &[f64], u: &[f64], q_norm: f64) -> ErrorMeasure {
+    if let Some(m) = error_measure_plain(dim, mu, r, u, q_norm) {
+        return m;
+    }
     let nan = r.iter().chain(u).any(|x| x.is_nan()) || q_norm.is_nan();
     let max_abs = r
         .iter()
@@ -179,17 +182,70 @@ pub fn error_measure(dim: usize, mu: &[f64], r: &[f64], u: &[f64], q_norm: f64) 
     }
 }
 
+/// [`error_measure`] in one pass without scaling, when that is exact: every entry of r and u
+/// and ‖q‖ finite with magnitude at most 2¹⁰⁰ (no square can overflow). None otherwise.
+#[inline]
+fn error_measure_plain(
+    dim: usize,
+    mu: &[f64],
+    r: &[f64],
+    u: &[f64],
+    q_norm: f64,
+) -> Option<ErrorMeasure> {
+    const LIMIT: f64 = 1.2676506002282294e30; // 2¹⁰⁰
+    if q_norm.is_nan() || q_norm.abs() > LIMIT {
+        return None;
+    }
+    let (mut sum, mut r2, mut u2) = (0.0, 0.0, 0.0);
+    let mut bounded = true;
+    for ((ri, ui), &m) in r.chunks_exact(dim).zip(u.chunks_exact(dim)).zip(mu) {
+        for k in 0..ri.len() {
+            r2 += ri[k] * ri[k];
+            u2 += ui[k] * ui[k];
+            // false for NaN and for entries beyond the limit
+            bounded &= ri[k].abs() <= LIMIT && ui[k].abs() <= LIMIT;
+        }
+        sum += contact_residual_sq(m, ui, ri);
+    }
+    if !bounded || !sum.is_finite() {
+        return None;
+    }
+    let absolute = sum.sqrt();
+    let scale = q_norm.max(r2.sqrt()).max(u2.sqrt());
+    let error = if scale > f64::EPSILON {
+        absolute / scale
+    } else {
+        absolute
+    };
+    Some(ErrorMeasure {
+        absolute,
+        scale,
+        error,
+    })
+}
+
 /// Euclidean norm, computed without intermediate overflow or underflow (the entries are
 /// scaled by the largest magnitude first, as LAPACK's dnrm2 does); +∞ only when the norm
 /// itself exceeds the largest f64 or an entry is infinite, NaN when an entry is NaN.
 #[inline]
 pub fn norm(x: &[f64]) -> f64 {
+    // one pass for the common case: the plain sum of squares, exact when the largest entry
+    // lies in [1e-150, 1e150] (no overflow, no underflow of the squares that matter)
     let mut max = 0.0f64;
-    for v in x {
-        if v.is_nan() {
-            return f64::NAN;
+    let mut sum = 0.0;
+    for &v in x {
+        sum += v * v;
+        let a = v.abs();
+        // NaN compares false: it is caught by the test below, through `sum`
+        if a > max {
+            max = a;
         }
-        max = max.max(v.abs());
+    }
+    if (1e-150..=1e150).contains(&max) && sum.is_finite() {
+        return sum.sqrt();
+    }
+    if x.iter().any(|v| v.is_nan()) {
+        return f64::NAN;
     }
     if max == 0.0 || max.is_infinite() {
         return max;

@@ -291,8 +291,11 @@ enum Stored<'a> {
 /// the stored W.
 struct Form<'a> {
     stored: Stored<'a>,
-    /// ½(W + Wᵀ) when W is not exactly symmetric
-    surrogate: Option<crate::sparse::CscMatrix>,
+    /// ½(W + Wᵀ), formed at the first use of a QP inner solver when W is not exactly
+    /// symmetric (a fused Gauss–Seidel or Newton run never needs it)
+    surrogate: std::cell::OnceCell<crate::sparse::CscMatrix>,
+    /// whether W is exactly symmetric
+    symmetric: bool,
     /// ‖W‖ estimated by the largest trace of a diagonal block
     w_scale: f64,
 }
@@ -301,14 +304,12 @@ impl<'a> Form<'a> {
     fn new(stored: Stored<'a>) -> Self {
         let mut form = Self {
             stored,
-            surrogate: None,
+            surrogate: std::cell::OnceCell::new(),
+            symmetric: true,
             w_scale: 0.0,
         };
         form.w_scale = crate::inner::w_scale(form.local().dim, &form.local().w);
-        let w = &form.local().w;
-        if !w.is_exactly_symmetric() {
-            form.surrogate = Some(w.symmetric_part());
-        }
+        form.symmetric = form.local().w.is_exactly_symmetric();
         form
     }
 
@@ -328,7 +329,12 @@ impl<'a> Form<'a> {
 
     /// The matrix of the SOC-QP inner problems: W, or ½(W + Wᵀ) when W is not symmetric.
     fn qp_w(&self) -> &crate::sparse::CscMatrix {
-        self.surrogate.as_ref().unwrap_or(&self.local().w)
+        if self.symmetric {
+            &self.local().w
+        } else {
+            self.surrogate
+                .get_or_init(|| self.local().w.symmetric_part())
+        }
     }
 }
 
@@ -738,7 +744,7 @@ fn solve_stage(
                 fs = fs_new;
                 improved = true;
                 if verdict.converged(settings.tol)
-                    || form.surrogate.is_none()
+                    || form.symmetric
                     || gain > 0.5
                     || deadline.is_some_and(|t| Instant::now() >= t)
                 {

@@ -90,7 +90,8 @@ const ORDER: [Criterion; 5] = [
 ];
 
 /// The JSON of `--json`: {"file", "criteria": {"4.1": {"verdict", "certificate_residual"}, …},
-/// "conclusion": "exists" | "none" | "unknown", "by": "4.1" | … | null}.
+/// "conclusion": "exists" | "none" | "unknown", "by": "4.1" | … | null, "note": why the
+/// conclusion is weaker than a criterion that holds (non-symmetric W or M), or null}.
 pub fn to_json(file: &Path, report: &ExistenceReport, certificates: bool) -> serde_json::Value {
     let mut criteria = serde_json::Map::new();
     for criterion in ORDER {
@@ -120,6 +121,7 @@ pub fn to_json(file: &Path, report: &ExistenceReport, certificates: bool) -> ser
         "criteria": criteria,
         "conclusion": report.conclusion.label(),
         "by": by,
+        "note": report.note,
     })
 }
 
@@ -174,9 +176,12 @@ fn print_table(file: &Path, report: &ExistenceReport, certificates: bool) {
         Conclusion::None { by, theorem } => {
             println!("conclusion: NO solution exists, {by} fails: {theorem}")
         }
-        Conclusion::Unknown => println!(
-            "conclusion: UNKNOWN: no sufficient criterion holds and the necessary (4.5) does not fail"
-        ),
+        Conclusion::Unknown => match &report.note {
+            Some(note) => println!("conclusion: UNKNOWN: {note}"),
+            None => println!(
+                "conclusion: UNKNOWN: no sufficient criterion holds and the necessary (4.5) does not fail"
+            ),
+        },
     }
     println!("({:.3} s)", report.seconds);
 }

@@ -56,8 +56,11 @@ pub enum ProblemError {
         /// index, or (row, col)
         location: String,
     },
-    /// A friction coefficient is negative or NaN.
-    #[error("friction coefficient mu[{contact}] = {value} is not in [0, inf]")]
+    /// A friction coefficient is negative, NaN, or finite but above [`MU_MAX`] (the
+    /// projection onto K_μ needs 1 + μ²; μ = ∞, the half-space, is accepted).
+    #[error(
+        "friction coefficient mu[{contact}] = {value} is not in [0, {MU_MAX:e}] or inf (a finite μ above {MU_MAX:e} overflows 1 + μ²; write inf for a half-space)"
+    )]
     Friction {
         /// contact index
         contact: usize,
@@ -305,8 +308,13 @@ fn dense_psd(b: &[f64; 9], k: usize, tau: f64) -> bool {
     true
 }
 
+/// Largest finite friction coefficient accepted: the projection onto K_μ divides by 1 + μ²,
+/// which must stay finite (found by the fuzz harness: μ = f64::MAX gave a wrong error).
+pub const MU_MAX: f64 = 1e150;
+
 fn check_mu(mu: &[f64]) -> Result<(), ProblemError> {
-    if let Some(i) = mu.iter().position(|m| m.is_nan() || *m < 0.0) {
+    let bad = |m: &f64| m.is_nan() || *m < 0.0 || (m.is_finite() && *m > MU_MAX);
+    if let Some(i) = mu.iter().position(bad) {
         return Err(ProblemError::Friction {
             contact: i,
             value: mu[i],
@@ -538,6 +546,15 @@ mod tests {
             LocalProblem::new(2, w.clone(), vec![0.0; 2], vec![f64::NAN]),
             Err(ProblemError::Friction { .. })
         ));
+        // a finite μ whose square overflows is refused; μ = ∞ (half-space) is accepted
+        for huge in [f64::MAX, 1e200] {
+            assert!(matches!(
+                LocalProblem::new(2, w.clone(), vec![0.0; 2], vec![huge]),
+                Err(ProblemError::Friction { contact: 0, .. })
+            ));
+        }
+        LocalProblem::new(2, w.clone(), vec![0.0; 2], vec![f64::INFINITY]).unwrap();
+        LocalProblem::new(2, w.clone(), vec![0.0; 2], vec![MU_MAX]).unwrap();
         // a non-symmetric W with a positive definite symmetric part is a valid problem
         let asym = CscMatrix::from_dense(2, 2, &[1.0, 1.0, 0.0, 1.0]);
         let p = LocalProblem::new(2, asym, vec![0.0; 2], vec![0.1]).unwrap();

@@ -107,7 +107,7 @@ pub fn run(args: Args) -> anyhow::Result<crate::exit::Outcome> {
     let mut failures = 0;
     for path in &args.files {
         let name = path.display().to_string();
-        match fclib::read(path) {
+        match read_relaxed(path) {
             Ok(f) => rows.push(Ok(summarize(name, &f))),
             Err(e) => {
                 failures += 1;

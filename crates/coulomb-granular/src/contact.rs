@@ -4,6 +4,7 @@
 
 use crate::math::Vec3;
 use crate::world::World;
+use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::HashMap;
 
@@ -167,32 +168,41 @@ pub fn candidate_pairs(world: &World, margin: f64) -> Vec<(usize, usize)> {
     for (i, b) in world.bodies.iter().enumerate() {
         grid.entry(key(b.position)).or_default().push(i);
     }
-    let mut pairs = Vec::new();
-    for (i, b) in world.bodies.iter().enumerate() {
-        let (cx, cy, cz) = key(b.position);
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    let Some(list) = grid.get(&(cx + dx, cy + dy, cz + dz)) else {
-                        continue;
-                    };
-                    for &j in list {
-                        if j <= i {
-                            continue;
-                        }
-                        let Some(bj) = world.bodies.get(j) else {
+    // each sphere's neighbours in parallel (rayon), in sphere order
+    let mut pairs: Vec<(usize, usize)> = world
+        .bodies
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(i, b)| {
+            let (cx, cy, cz) = key(b.position);
+            let mut out = Vec::new();
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for dz in -1..=1 {
+                        let Some(list) = grid.get(&(cx + dx, cy + dy, cz + dz)) else {
                             continue;
                         };
-                        let reach = b.radius + bj.radius + margin;
-                        if (b.position - bj.position).norm_sq() <= reach * reach {
-                            pairs.push((i, j));
+                        for &j in list {
+                            if j <= i {
+                                continue;
+                            }
+                            let Some(bj) = world.bodies.get(j) else {
+                                continue;
+                            };
+                            let reach = b.radius + bj.radius + margin;
+                            if (b.position - bj.position).norm_sq() <= reach * reach {
+                                out.push((i, j));
+                            }
                         }
                     }
                 }
             }
-        }
-    }
-    pairs.sort_unstable();
+            out.sort_unstable();
+            out
+        })
+        .collect();
+    // already in (i, j) order; kept as a guarantee
+    pairs.par_sort_unstable();
     pairs
 }
 
@@ -218,8 +228,7 @@ pub fn detect_with(
         .map(|b| b.velocity.norm() + b.angular_velocity.norm() * b.radius)
         .fold(0.0_f64, f64::max);
     let margin = delta + 2.0 * vmax * h * activation.gamma + 1e-12;
-    let mut contacts = Vec::new();
-    let mut push = |a: usize, partner: Partner, normal: Vec3, point: Vec3, gap: f64| {
+    let make = |a: usize, partner: Partner, normal: Vec3, point: Vec3, gap: f64| {
         let u = relative_velocity(world, a, partner, point, t);
         let un = u.dot(normal);
         // the free motion's normal velocity at t_{k+1}: gravity acts on A alone when B is an
@@ -228,43 +237,60 @@ pub fn detect_with(
             Partner::Obstacle(_) => un + h * world.gravity.dot(normal),
             Partner::Body(_) => un,
         };
-        if activation.is_active_with(gap, un.min(free), h, delta) {
-            let (t1, t2) = normal.tangent_basis();
-            contacts.push(Contact {
-                body: a,
-                partner,
-                normal,
-                t1,
-                t2,
-                point,
-                gap,
-                normal_velocity: un,
-                impulse: [0.0; 3],
-            });
-        }
+        activation
+            .is_active_with(gap, un.min(free), h, delta)
+            .then(|| {
+                let (t1, t2) = normal.tangent_basis();
+                Contact {
+                    body: a,
+                    partner,
+                    normal,
+                    t1,
+                    t2,
+                    point,
+                    gap,
+                    normal_velocity: un,
+                    impulse: [0.0; 3],
+                }
+            })
     };
-    for (i, j) in candidate_pairs(world, margin) {
-        let (Some(a), Some(b)) = (world.bodies.get(i), world.bodies.get(j)) else {
-            continue;
-        };
-        let d = a.position - b.position;
-        let dist = d.norm();
-        let n = d.normalized_or(Vec3::Z);
-        let gap = dist - a.radius - b.radius;
-        // the point midway between the two surfaces
-        let point = b.position + n * (b.radius + 0.5 * gap);
-        push(i, Partner::Body(j), n, point, gap);
-    }
-    for (i, b) in world.bodies.iter().enumerate() {
-        for (o, ob) in world.obstacles.iter().enumerate() {
-            let p = ob.proximity(b.position, b.radius, t);
-            if p.gap <= margin {
-                let point = p.point + p.normal * (0.5 * p.gap);
-                push(i, Partner::Obstacle(o), p.normal, point, p.gap);
-            }
-        }
-    }
-    contacts.sort_by_key(|c| c.key());
+    // narrow phase in parallel (rayon); the result is sorted, so independent of threads
+    let mut contacts: Vec<Contact> = candidate_pairs(world, margin)
+        .par_iter()
+        .filter_map(|&(i, j)| {
+            let (a, b) = (world.bodies.get(i)?, world.bodies.get(j)?);
+            let d = a.position - b.position;
+            let dist = d.norm();
+            let n = d.normalized_or(Vec3::Z);
+            let gap = dist - a.radius - b.radius;
+            // the point midway between the two surfaces
+            let point = b.position + n * (b.radius + 0.5 * gap);
+            make(i, Partner::Body(j), n, point, gap)
+        })
+        .collect();
+    let walls: Vec<Contact> = world
+        .bodies
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(i, b)| {
+            world
+                .obstacles
+                .iter()
+                .enumerate()
+                .filter_map(move |(o, ob)| {
+                    let p = ob.proximity(b.position, b.radius, t);
+                    if p.gap <= margin {
+                        let point = p.point + p.normal * (0.5 * p.gap);
+                        make(i, Partner::Obstacle(o), p.normal, point, p.gap)
+                    } else {
+                        None
+                    }
+                })
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    contacts.extend(walls);
+    contacts.par_sort_by_key(|c| c.key());
     contacts
 }
 

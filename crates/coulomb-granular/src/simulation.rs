@@ -199,7 +199,8 @@ impl Simulation {
             }
         }
         if let StepMethod::Nsgs(n) = &p.method {
-            if !(n.tol.is_finite() && n.tol > 0.0 && n.max_sweeps > 0) {
+            let omega_ok = n.relaxation.is_finite() && (1.0..2.0).contains(&n.relaxation);
+            if !(n.tol.is_finite() && n.tol > 0.0 && n.max_sweeps > 0 && omega_ok) {
                 return bad(format!("NSGS settings {n:?} out of range"));
             }
         }

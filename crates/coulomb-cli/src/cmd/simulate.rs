@@ -108,6 +108,10 @@ pub struct Args {
     /// cap on Gauss–Seidel sweeps per step (--method nsgs)
     #[arg(long, default_value_t = 20_000, value_parser = crate::values::count)]
     pub max_sweeps: usize,
+    /// over-relaxation ω ∈ [1, 2) of the Gauss–Seidel updates (--method nsgs; reduced
+    /// towards 1 automatically when it does not help)
+    #[arg(long, default_value_t = 1.5, value_parser = crate::values::relaxation)]
+    pub relaxation: f64,
     /// worker threads (default: all cores); results do not depend on it
     #[arg(long, value_parser = crate::values::threads)]
     pub threads: Option<usize>,
@@ -222,6 +226,7 @@ impl Args {
                 Method::Nsgs => StepMethod::Nsgs(NsgsSettings {
                     tol: self.tol,
                     max_sweeps: self.max_sweeps,
+                    relaxation: self.relaxation,
                     ..NsgsSettings::default()
                 }),
                 Method::Library => StepMethod::Library,

@@ -160,50 +160,139 @@ pub fn candidate_pairs(world: &World, margin: f64) -> Vec<(usize, usize)> {
         .map(|b| b.radius)
         .fold(0.0_f64, f64::max);
     let cell = (2.0 * rmax + margin).max(1e-12);
-    let key = |x: Vec3| -> (i64, i64, i64) {
+    let key = |x: Vec3| -> [i64; 3] {
         let k = |c: f64| (c / cell).floor().clamp(-1e15, 1e15) as i64;
-        (k(x.x), k(x.y), k(x.z))
+        [k(x.x), k(x.y), k(x.z)]
     };
-    let mut grid: HashMap<(i64, i64, i64), Vec<usize>> = HashMap::with_capacity(world.bodies.len());
-    for (i, b) in world.bodies.iter().enumerate() {
-        grid.entry(key(b.position)).or_default().push(i);
-    }
-    // each sphere's neighbours in parallel (rayon), in sphere order
-    let mut pairs: Vec<(usize, usize)> = world
-        .bodies
-        .par_iter()
-        .enumerate()
-        .flat_map_iter(|(i, b)| {
-            let (cx, cy, cz) = key(b.position);
-            let mut out = Vec::new();
-            for dx in -1..=1 {
-                for dy in -1..=1 {
-                    for dz in -1..=1 {
-                        let Some(list) = grid.get(&(cx + dx, cy + dy, cz + dz)) else {
-                            continue;
-                        };
-                        for &j in list {
-                            if j <= i {
-                                continue;
-                            }
-                            let Some(bj) = world.bodies.get(j) else {
-                                continue;
-                            };
-                            let reach = b.radius + bj.radius + margin;
-                            if (b.position - bj.position).norm_sq() <= reach * reach {
-                                out.push((i, j));
+    let keys: Vec<[i64; 3]> = world.bodies.par_iter().map(|b| key(b.position)).collect();
+    let test = |i: usize, j: usize| -> bool {
+        let (Some(a), Some(b)) = (world.bodies.get(i), world.bodies.get(j)) else {
+            return false;
+        };
+        let reach = a.radius + b.radius + margin;
+        (a.position - b.position).norm_sq() <= reach * reach
+    };
+    let mut pairs: Vec<(usize, usize)> = match DenseGrid::new(&keys) {
+        // each sphere's neighbours in parallel (rayon), in sphere order
+        Some(grid) => (0..keys.len())
+            .into_par_iter()
+            .flat_map_iter(|i| {
+                let mut out = Vec::new();
+                grid.neighbours(keys[i], |j| {
+                    if j > i && test(i, j) {
+                        out.push((i, j));
+                    }
+                });
+                out.sort_unstable();
+                out
+            })
+            .collect(),
+        None => {
+            let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::with_capacity(keys.len());
+            for (i, k) in keys.iter().enumerate() {
+                grid.entry(*k).or_default().push(i);
+            }
+            (0..keys.len())
+                .into_par_iter()
+                .flat_map_iter(|i| {
+                    let [cx, cy, cz] = keys[i];
+                    let mut out = Vec::new();
+                    for dx in -1..=1 {
+                        for dy in -1..=1 {
+                            for dz in -1..=1 {
+                                let cell = grid.get(&[cx + dx, cy + dy, cz + dz]);
+                                for &j in cell.into_iter().flatten() {
+                                    if j > i && test(i, j) {
+                                        out.push((i, j));
+                                    }
+                                }
                             }
                         }
                     }
-                }
-            }
-            out.sort_unstable();
-            out
-        })
-        .collect();
+                    out.sort_unstable();
+                    out
+                })
+                .collect()
+        }
+    };
     // already in (i, j) order; kept as a guarantee
     pairs.par_sort_unstable();
     pairs
+}
+
+/// Cells of the broad phase as a dense array over the spheres' bounding box (compressed
+/// rows: the spheres of cell c are `items[start[c]..start[c + 1]]`), when that box has at
+/// most 8 cells per sphere (otherwise a hash map is used).
+struct DenseGrid {
+    lo: [i64; 3],
+    dims: [i64; 3],
+    start: Vec<usize>,
+    items: Vec<usize>,
+}
+
+impl DenseGrid {
+    fn new(keys: &[[i64; 3]]) -> Option<Self> {
+        let first = keys.first()?;
+        let (mut lo, mut hi) = (*first, *first);
+        for k in keys {
+            for d in 0..3 {
+                lo[d] = lo[d].min(k[d]);
+                hi[d] = hi[d].max(k[d]);
+            }
+        }
+        let dims = [hi[0] - lo[0] + 1, hi[1] - lo[1] + 1, hi[2] - lo[2] + 1];
+        let cells = dims
+            .iter()
+            .try_fold(1i64, |acc, &d| acc.checked_mul(d))
+            .filter(|&c| c <= 8 * keys.len() as i64 + 64)? as usize;
+        let index = |k: &[i64; 3]| {
+            (((k[2] - lo[2]) * dims[1] + (k[1] - lo[1])) * dims[0] + (k[0] - lo[0])) as usize
+        };
+        let mut start = vec![0usize; cells + 1];
+        for k in keys {
+            start[index(k) + 1] += 1;
+        }
+        for c in 0..cells {
+            start[c + 1] += start[c];
+        }
+        let mut next = start.clone();
+        let mut items = vec![0usize; keys.len()];
+        for (i, k) in keys.iter().enumerate() {
+            let c = index(k);
+            items[next[c]] = i;
+            next[c] += 1;
+        }
+        Some(Self {
+            lo,
+            dims,
+            start,
+            items,
+        })
+    }
+
+    /// Calls `f` on every sphere of the 27 cells around cell `k`.
+    fn neighbours(&self, k: [i64; 3], mut f: impl FnMut(usize)) {
+        for dz in -1..=1 {
+            let z = k[2] - self.lo[2] + dz;
+            if z < 0 || z >= self.dims[2] {
+                continue;
+            }
+            for dy in -1..=1 {
+                let y = k[1] - self.lo[1] + dy;
+                if y < 0 || y >= self.dims[1] {
+                    continue;
+                }
+                let row = (z * self.dims[1] + y) * self.dims[0];
+                let x0 = (k[0] - self.lo[0] - 1).max(0);
+                let x1 = (k[0] - self.lo[0] + 1).min(self.dims[0] - 1);
+                // cells x0..=x1 of this row are contiguous
+                let (a, b) = ((row + x0) as usize, (row + x1) as usize);
+                for &j in &self.items[self.start[a]..self.start[b + 1]] {
+                    f(j);
+                }
+            }
+        }
+    }
 }
 
 /// Detects the active contacts of `world` at time t for step size h: candidate pairs within
@@ -327,6 +416,12 @@ mod tests {
         }
         assert!(!brute.is_empty());
         assert_eq!(grid, brute);
+        // a far sphere makes the dense grid too large: the hash-map path, same pairs
+        world
+            .bodies
+            .push(Sphere::new(Vec3::new(1e6, -1e6, 3e5), 0.02, 1.0));
+        assert!(DenseGrid::new(&[[0, 0, 0], [1_000_000, 0, 0]]).is_none());
+        assert_eq!(candidate_pairs(&world, margin), brute);
     }
 
     #[test]

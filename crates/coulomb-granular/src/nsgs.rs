@@ -579,7 +579,8 @@ pub struct NsgsSettings {
     pub max_sweeps: usize,
     /// wall-clock cap of one solve
     pub time_limit: Option<Duration>,
-    /// over-relaxation ω ∈ [1, 2) of the updates at the start of a solve; halved towards 1
+    /// over-relaxation ω ∈ [1, 2) of the updates from the second sweep on (the first is
+    /// plain, so that isolated contacts are solved exactly); halved towards 1
     /// (ω ← 1 + (ω − 1)/2) whenever the sweep residual has not decreased over
     /// [`RELAX_WINDOW`] sweeps, so that a solve ends as plain Gauss–Seidel if needed
     pub relaxation: f64,
@@ -945,7 +946,8 @@ pub fn solve_coloured(
         if deadline.is_some_and(|d| Instant::now() >= d) {
             break NsgsStatus::TimeLimit;
         }
-        let s = state.sweep(omega);
+        // the first sweep is plain Gauss–Seidel: it solves isolated contacts exactly
+        let s = state.sweep(if sweeps == 0 { 1.0 } else { omega });
         sweeps += 1;
         let scale = qn.max(s.r_sq.sqrt()).max(s.u_sq.sqrt());
         let proxy = if scale > f64::EPSILON {
@@ -954,7 +956,7 @@ pub fn solve_coloured(
             s.residual_sq.sqrt()
         };
         if sweeps % RELAX_WINDOW == 0 {
-            if omega > 1.0 && !(proxy < window_start) {
+            if omega > 1.0 && proxy.partial_cmp(&window_start) != Some(std::cmp::Ordering::Less) {
                 omega = 1.0 + 0.5 * (omega - 1.0);
                 if omega < 1.01 {
                     omega = 1.0;

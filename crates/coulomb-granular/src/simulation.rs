@@ -352,7 +352,7 @@ impl Simulation {
                     self.previous.push((c.key(), c.impulse));
                 }
             }
-            self.previous.sort_unstable_by(|x, y| x.0.cmp(&y.0));
+            self.previous.sort_unstable_by_key(|x| x.0);
             self.last_history = sol.history;
             self.last_problem = self.keep_problem.then_some(problem);
             v
@@ -452,7 +452,7 @@ impl Simulation {
                 self.previous.push((c.key(), c.impulse));
             }
         }
-        self.previous.sort_unstable_by(|x, y| x.0.cmp(&y.0));
+        self.previous.sort_unstable_by_key(|x| x.0);
         self.last_history.clear();
         self.last_problem = if self.keep_problem {
             Some(

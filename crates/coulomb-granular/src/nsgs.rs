@@ -653,13 +653,13 @@ impl Shared {
     }
 }
 
-/// Runs `f` over the chunks of one colour (indices `ids`, impulses `rs` in colour order), in
-/// parallel when the colour is large, and returns the per-chunk sums in chunk order.
+/// Runs `f` over the chunks of one colour (rows `ids`, impulses `rs`, both in colour order),
+/// in parallel when the colour is large, and returns the per-chunk sums in chunk order.
 fn for_colour(
-    ids: &[usize],
+    ids: &[ContactRow],
     rs: &mut [[f64; 3]],
     parallel: bool,
-    f: impl Fn(&[usize], &mut [[f64; 3]]) -> UpdateSums + Sync,
+    f: impl Fn(&[ContactRow], &mut [[f64; 3]]) -> UpdateSums + Sync,
 ) -> UpdateSums {
     if parallel && ids.len() >= PARALLEL_MIN {
         let parts: Vec<UpdateSums> = ids
@@ -682,6 +682,8 @@ fn for_colour(
 struct State<'a> {
     problem: &'a StepProblem,
     colouring: &'a Colouring,
+    /// the rows in colour order (a copy: the sweeps stream through memory)
+    rows: Vec<ContactRow>,
     /// r in colour order
     r: Vec<[f64; 3]>,
     /// v per sphere
@@ -705,11 +707,10 @@ impl State<'_> {
         let mut total = UpdateSums::default();
         for c in 0..self.colouring.colours() {
             let range = self.colouring.starts[c]..self.colouring.starts[c + 1];
-            let ids = &self.colouring.order[range.clone()];
+            let ids = &self.rows[range.clone()];
             let sums = for_colour(ids, &mut self.r[range], self.parallel, |ids, rs| {
                 let mut s = UpdateSums::default();
-                for (&i, r) in ids.iter().zip(rs.iter_mut()) {
-                    let row = &p.rows[i];
+                for (row, r) in ids.iter().zip(rs.iter_mut()) {
                     // SAFETY: within one colour no other update touches spheres a, b ≠ a
                     let va = unsafe { &mut *v.at(row.a) };
                     let b = row.b.map(|j| (&p.inv_mass[j], unsafe { &mut *v.at(j) }));
@@ -731,10 +732,9 @@ impl State<'_> {
         let shared = Shared(mom.as_mut_ptr());
         for c in 0..self.colouring.colours() {
             let range = self.colouring.starts[c]..self.colouring.starts[c + 1];
-            let ids = &self.colouring.order[range.clone()];
+            let ids = &self.rows[range.clone()];
             for_colour(ids, &mut self.r[range], self.parallel, |ids, rs| {
-                for (&i, r) in ids.iter().zip(rs.iter()) {
-                    let row = &p.rows[i];
+                for (row, r) in ids.iter().zip(rs.iter()) {
                     let sides = [
                         (Some(row.a), row.jacobian(false)),
                         (row.b, row.jacobian(true)),
@@ -775,17 +775,14 @@ impl State<'_> {
     /// recomputed from scratch: u = Hᵀ v + w, scale max(‖q‖, ‖r‖, ‖u‖).
     fn evaluate(&mut self, q_norm: f64) -> Evaluation {
         let balance = self.recompute_velocity();
-        let p = self.problem;
         let v = &self.v;
         let parts: Vec<UpdateSums> = self
-            .colouring
-            .order
+            .rows
             .par_chunks(CHUNK)
             .zip(self.r.par_chunks(CHUNK))
             .map(|(ids, rs)| {
                 let mut s = UpdateSums::default();
-                for (&i, r) in ids.iter().zip(rs) {
-                    let row = &p.rows[i];
+                for (row, r) in ids.iter().zip(rs) {
                     let u = row.velocity(&v[row.a], row.b.map(|j| &v[j]));
                     s.residual_sq += law::contact_residual_sq(row.mu, &u, r);
                     s.r_sq += r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
@@ -910,9 +907,15 @@ pub fn solve_coloured(
     if r.len() != n {
         r.resize(n, [0.0; 3]);
     }
+    let rows: Vec<ContactRow> = colouring
+        .order
+        .par_iter()
+        .map(|&i| problem.rows[i].clone())
+        .collect();
     let mut state = State {
         problem,
         colouring,
+        rows,
         r,
         v: vec![[0.0; 6]; bodies],
         parallel,

@@ -157,6 +157,10 @@ pub struct Args {
     /// box scene: height of the lowest initial layer's centres (m), instead of the calibrated one
     #[arg(long, value_parser = crate::values::positive)]
     pub drop_base: Option<f64>,
+    /// box scene: spread the partial top layer over the whole floor at random sites (the
+    /// heap structure of `paper scaling --accurate`, docs/scaling.md)
+    #[arg(long)]
+    pub spread_top: bool,
     /// output folder: stats.csv, stats.json, summary.json, beads.pvd, contacts.pvd, frames/
     #[arg(long)]
     pub output: Option<PathBuf>,
@@ -354,7 +358,14 @@ fn run_on_pool(args: Args) -> anyhow::Result<()> {
     }
     args.check_step()?;
     let stop = args.stop();
-    let world = scene.build_with(args.beads, args.seed, &args.layout()?);
+    let world = if args.spread_top {
+        if scene != Scene::Box {
+            bail!("--spread-top applies to the box scene only");
+        }
+        Scene::box_spread(args.beads, args.seed)
+    } else {
+        scene.build_with(args.beads, args.seed, &args.layout()?)
+    };
     let mut sim = Simulation::new(world, args.params()).context("invalid simulation parameters")?;
     sim.keep_problem = args.dump_fclib.is_some();
     if let Some(dir) = &args.dump_fclib {

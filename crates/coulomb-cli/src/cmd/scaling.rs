@@ -58,6 +58,12 @@ pub struct AccuratePoint {
     assembly_ms: f64,
     /// step_ms per contact (µs)
     us_per_contact: f64,
+    /// CPU time per step summed over the process's threads (ms; Linux /proc/self/stat at
+    /// 10 ms resolution over the window, None elsewhere): on a machine shared with other jobs the wall-clock times above include
+    /// waiting for a core, this does not (rayon workers that spin while waiting count)
+    cpu_ms: Option<f64>,
+    /// cpu_ms per contact (µs)
+    cpu_us_per_contact: Option<f64>,
     /// steps of the window with err ≤ tol
     converged: usize,
     /// steps of the whole run (settling included) with err ≤ tol, and their number
@@ -79,6 +85,18 @@ fn peak_rss_mib() -> Option<f64> {
     let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb / 1024.0)
+}
+
+/// CPU time (user + system) of this process so far, all threads, in ns, from
+/// /proc/self/stat (clock ticks of 10 ms: meaningful over a window of many steps); None
+/// where that is missing.
+fn cpu_ns() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/self/stat").ok()?;
+    let rest = s.get(s.rfind(')')? + 1..)?;
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let utime: u64 = f.get(11)?.parse().ok()?;
+    let stime: u64 = f.get(12)?.parse().ok()?;
+    Some((utime + stime) * 10_000_000)
 }
 
 /// FNV-1a over the bits of every position and velocity.
@@ -125,7 +143,11 @@ fn run_one(beads: usize, threads: usize, a: &ScalingArgs) -> anyhow::Result<Accu
         pb.set_prefix(label.clone());
         let mut rows = Vec::new();
         let mut converged_all = 0;
-        for _ in 0..total {
+        let mut cpu_start = None;
+        for k in 0..total {
+            if k == a.settle {
+                cpu_start = cpu_ns();
+            }
             let t = Instant::now();
             let s = sim
                 .step()
@@ -141,6 +163,12 @@ fn run_one(beads: usize, threads: usize, a: &ScalingArgs) -> anyhow::Result<Accu
         }
         pb.finish_and_clear();
         let timed = rows.get(a.settle..).unwrap_or(&[]);
+        let cpu_ms = match (cpu_start, cpu_ns()) {
+            (Some(s), Some(e)) if !timed.is_empty() => {
+                Some(e.saturating_sub(s) as f64 * 1e-6 / timed.len() as f64)
+            }
+            _ => None,
+        };
         let n = timed.len().max(1) as f64;
         let mean = |f: &dyn Fn(&(f64, coulomb_granular::StepStats)) -> f64| {
             timed.iter().map(f).sum::<f64>() / n
@@ -171,6 +199,10 @@ fn run_one(beads: usize, threads: usize, a: &ScalingArgs) -> anyhow::Result<Accu
             } else {
                 0.0
             },
+            cpu_ms,
+            cpu_us_per_contact: cpu_ms
+                .filter(|_| contacts > 0.0)
+                .map(|c| 1e3 * c / contacts),
             converged: timed.iter().filter(|r| r.1.converged).count(),
             converged_all,
             steps_all: rows.len(),
@@ -242,6 +274,10 @@ pub fn accurate(a: &ScalingArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+fn opt(x: Option<f64>) -> String {
+    x.map(|v| format!("{v:.2}")).unwrap_or_else(|| "–".into())
+}
+
 fn table(
     a: &ScalingArgs,
     beads: &[usize],
@@ -275,11 +311,11 @@ fn table(
     );
     let _ = writeln!(
         md,
-        "| #beads | threads | box (m) | #contacts | sweeps (max) | step ms | of which solve | of which detect + build | µs / contact / step | speed-up | conv. | max err | end pen. / R | peak RSS (MiB) | same state |"
+        "| #beads | threads | box (m) | #contacts | sweeps (max) | step ms | of which solve | of which detect + build | µs / contact / step | CPU ms / step | CPU µs / contact | speed-up | conv. | max err | end pen. / R | peak RSS (MiB) | same state |"
     );
     let _ = writeln!(
         md,
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
     for p in points {
         let base = points
@@ -289,7 +325,7 @@ fn table(
         let same = base.map(|q| q.state_hash == p.state_hash).unwrap_or(true);
         let _ = writeln!(
             md,
-            "| {} | {} | {:.2} × {:.2} | {:.0} | {:.0} ({}) | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {}/{} | {:.1e} | {:.1e} | {} | {} |",
+            "| {} | {} | {:.2} × {:.2} | {:.0} | {:.0} ({}) | {:.2} | {:.2} | {:.2} | {:.2} | {} | {} | {:.2} | {}/{} | {:.1e} | {:.1e} | {} | {} |",
             p.beads,
             p.threads,
             p.box_x,
@@ -301,6 +337,8 @@ fn table(
             p.solve_ms,
             p.assembly_ms,
             p.us_per_contact,
+            opt(p.cpu_ms),
+            opt(p.cpu_us_per_contact),
             speedup,
             p.converged_all,
             p.steps_all,

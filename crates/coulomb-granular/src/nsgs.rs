@@ -39,6 +39,12 @@
 //! from scratch, v = M⁻¹ (f + H r), u = Hᵀ v + w, and the error of docs/error.md (and the
 //! balance residual) is evaluated on the stored (M, H, f, w, μ); converged only if that is
 //! ≤ tol. Iterations and time are capped ([`NsgsSettings`]) with a typed [`NsgsStatus`].
+//!
+//! # Over-relaxation
+//! From the second sweep on, r_i' is replaced by P_{K_μ}(r_i + ω (r_i' − r_i)) with ω = 1.5 by
+//! default, halved towards 1 when the sweep residual stalls (docs/scaling.md: 2–3× fewer
+//! sweeps on the box heaps); the first sweep is plain, so that an isolated contact is solved
+//! exactly. The fixed points are those of plain Gauss–Seidel: solutions of (2.10).
 
 use crate::assembly::{contact_offset, free_momentum, mass_diagonal, StepData};
 use crate::contact::{Contact, Partner};

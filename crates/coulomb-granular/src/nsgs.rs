@@ -617,7 +617,7 @@ pub enum NsgsStatus {
     MaxIterations,
     /// time cap reached with the error above tol
     TimeLimit,
-    /// r or v became non-finite
+    /// r or v became non-finite, or the problem's per-sphere data have inconsistent lengths
     NumericalError,
 }
 
@@ -888,6 +888,20 @@ pub fn solve_coloured(
     let start = Instant::now();
     let n = problem.rows.len();
     let bodies = problem.mass.len();
+    // per-sphere data of inconsistent lengths (a hand-made problem): refused, not indexed
+    if problem.f.len() != bodies || problem.inv_mass.len() != bodies {
+        return NsgsSolution {
+            r: vec![0.0; 3 * n],
+            v: Vec::new(),
+            status: NsgsStatus::NumericalError,
+            error: f64::NAN,
+            scale: f64::NAN,
+            balance_residual: f64::NAN,
+            sweeps: 0,
+            evaluations: 0,
+            colours: 0,
+        };
+    }
     let sequential;
     let colouring = if colouring.is_valid(&problem.rows, bodies) {
         colouring
@@ -1284,5 +1298,11 @@ mod tests {
         bad[0] = f64::NAN;
         let sol = solve(&p, &bad, &NsgsSettings::default(), true);
         assert_eq!(sol.status, NsgsStatus::Converged);
+        // inconsistent per-sphere data: refused with a typed status, never indexed
+        let mut broken = p.clone();
+        broken.f.pop();
+        let sol = solve(&broken, &r0, &NsgsSettings::default(), true);
+        assert_eq!(sol.status, NsgsStatus::NumericalError);
+        assert!(sol.error.is_nan());
     }
 }

@@ -5,7 +5,7 @@
 # converged, peak memory. Also the paper's 2 500-bead default `simulate box` check and the
 # 10 000-bead criterion bench.
 #
-#   scripts/scaling.sh [OUT_DIR]        (default: scaling-out; ~10 min on a quiet 2-core machine)
+#   scripts/scaling.sh [OUT_DIR]        (default: scaling-out; ~5–8 min on a quiet 2-core machine)
 #
 # Run on a quiet machine: thread speed-ups measured while other jobs run are pessimistic.
 set -euo pipefail

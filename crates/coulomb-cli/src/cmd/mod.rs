@@ -9,5 +9,7 @@ pub mod example;
 pub mod info;
 pub mod paper;
 pub mod simulate;
+#[cfg(feature = "mpi")]
+pub mod simulate_mpi;
 pub mod solve;
 pub mod validate;

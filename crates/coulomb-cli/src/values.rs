@@ -90,6 +90,15 @@ pub fn count0(s: &str) -> Result<usize, String> {
     usize::try_from(whole(s)?).map_err(|_| "is too large".into())
 }
 
+/// A number of worker threads: 1 to 1024.
+pub fn threads(s: &str) -> Result<usize, String> {
+    let n = count(s)?;
+    if n > 1024 {
+        return Err("must be at most 1024".into());
+    }
+    Ok(n)
+}
+
 /// A seed: any whole number ≥ 0.
 pub fn seed(s: &str) -> Result<u64, String> {
     whole(s)

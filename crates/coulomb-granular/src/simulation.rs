@@ -4,6 +4,7 @@
 
 use crate::assembly::{assemble, free_momentum, mass_diagonal, StepData};
 use crate::contact::{detect_with, Activation, Contact, Partner};
+use crate::nsgs::{self, NsgsSettings, NsgsStatus, StepProblem, StepProblemError};
 use crate::projection::{penetrations, project, Projection};
 use crate::world::World;
 use coulomb::problem::{GlobalProblem, Problem, ProblemError};
@@ -33,6 +34,19 @@ pub struct Params {
     /// position correction after each step ([`crate::projection`]); `None`: the plain
     /// Moreau–Jean scheme (the paper's)
     pub projection: Option<Projection>,
+    /// which solver takes each step (`solver` is used by [`StepMethod::Library`] only)
+    pub method: StepMethod,
+}
+
+/// Which solver takes each step.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum StepMethod {
+    /// `coulomb::solver::solve_with_guess` with [`Params::solver`] on the assembled global
+    /// problem (W = Hᵀ M⁻¹ H formed by the library)
+    Library,
+    /// body-level nonsmooth Gauss–Seidel, matrix-free and parallel ([`crate::nsgs`])
+    Nsgs(NsgsSettings),
 }
 
 impl Default for Params {
@@ -46,6 +60,7 @@ impl Default for Params {
             solver: Settings::default(),
             warm_start: true,
             projection: Some(Projection::default()),
+            method: StepMethod::Library,
         }
     }
 }
@@ -63,6 +78,14 @@ pub enum SimulationError {
         step: usize,
         /// the problem error
         source: ProblemError,
+    },
+    /// a contact of the body-level problem is invalid (should not happen with finite states)
+    #[error("body-level problem of step {step}: {source}")]
+    StepProblem {
+        /// step index
+        step: usize,
+        /// the problem error
+        source: StepProblemError,
     },
     /// the solver refused the problem
     #[error("solver failed at step {step}: {source}")]
@@ -175,6 +198,11 @@ impl Simulation {
                 return bad(format!("projection {pr:?} out of range"));
             }
         }
+        if let StepMethod::Nsgs(n) = &p.method {
+            if !(n.tol.is_finite() && n.tol > 0.0 && n.max_sweeps > 0) {
+                return bad(format!("NSGS settings {n:?} out of range"));
+            }
+        }
         if !(0.0..=1.0).contains(&p.activation.gamma)
             || p.activation.delta.is_nan()
             || p.activation.delta < 0.0
@@ -263,18 +291,12 @@ impl Simulation {
                 .zip(&diag)
                 .map(|(f, m)| f / m)
                 .collect()
+        } else if let StepMethod::Nsgs(settings) = self.params.method {
+            self.step_nsgs(&mut contacts, &data, &settings, &mut stats, t0)?
         } else {
             let problem = assemble(&self.world, &contacts, &data)
                 .map_err(|source| SimulationError::Assembly { step: k, source })?;
-            let mut r0 = vec![0.0; 3 * contacts.len()];
-            if self.params.warm_start {
-                for (i, c) in contacts.iter().enumerate() {
-                    if let Some(prev) = self.previous.get(&c.key()) {
-                        r0[3 * i..3 * i + 3].copy_from_slice(prev);
-                        stats.warm_started += 1;
-                    }
-                }
-            }
+            let r0 = self.warm_start(&contacts, &mut stats);
             // v consistent with the guess: v = M⁻¹ (H r + f)
             let mut hr = problem.f.clone();
             problem.h.gemv_acc(1.0, &r0, &mut hr);
@@ -369,6 +391,68 @@ impl Simulation {
         stats.kinetic_energy = self.world.kinetic_energy();
         stats.potential_energy = self.world.potential_energy();
         Ok(stats)
+    }
+
+    /// The warm start r₀ of the step: the previous impulse of each persisting contact (same
+    /// (body, partner) key), 0 for new ones; counts the warm-started contacts into `stats`.
+    fn warm_start(&self, contacts: &[Contact], stats: &mut StepStats) -> Vec<f64> {
+        let mut r0 = vec![0.0; 3 * contacts.len()];
+        if self.params.warm_start {
+            for (i, c) in contacts.iter().enumerate() {
+                if let Some(prev) = self.previous.get(&c.key()) {
+                    r0[3 * i..3 * i + 3].copy_from_slice(prev);
+                    stats.warm_started += 1;
+                }
+            }
+        }
+        r0
+    }
+
+    /// Steps 2–3 by body-level nonsmooth Gauss–Seidel ([`crate::nsgs`]): the step problem in
+    /// body-block form (no W), solved to `settings.tol`; returns v_{k+1}.
+    fn step_nsgs(
+        &mut self,
+        contacts: &mut [Contact],
+        data: &StepData,
+        settings: &NsgsSettings,
+        stats: &mut StepStats,
+        t0: Instant,
+    ) -> Result<Vec<f64>, SimulationError> {
+        let k = self.steps_done;
+        let problem = StepProblem::new(&self.world, contacts, data)
+            .map_err(|source| SimulationError::StepProblem { step: k, source })?;
+        let r0 = self.warm_start(contacts, stats);
+        stats.assembly_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let t1 = Instant::now();
+        let sol = nsgs::solve(&problem, &r0, settings, true);
+        stats.solve_ms = t1.elapsed().as_secs_f64() * 1e3;
+        stats.subproblems = 1;
+        stats.inner_iterations = sol.sweeps;
+        stats.error = sol.error;
+        stats.converged = sol.status == NsgsStatus::Converged;
+        stats.status = serde_json::to_value(sol.status)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_string))
+            .unwrap_or_else(|| format!("{:?}", sol.status));
+        self.residual_velocity = sol.error.max(settings.tol) * sol.scale;
+        self.previous.clear();
+        for (i, c) in contacts.iter_mut().enumerate() {
+            if let Some(r) = sol.r.get(3 * i..3 * i + 3) {
+                c.impulse = [r[0], r[1], r[2]];
+                self.previous.insert(c.key(), c.impulse);
+            }
+        }
+        self.last_history.clear();
+        self.last_problem = if self.keep_problem {
+            Some(
+                problem
+                    .to_global()
+                    .map_err(|source| SimulationError::Assembly { step: k, source })?,
+            )
+        } else {
+            None
+        };
+        Ok(sol.v)
     }
 
     /// The threshold δ_k of the activation rule at this step: twice the largest lift h ε_u

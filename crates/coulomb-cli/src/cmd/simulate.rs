@@ -6,7 +6,9 @@ use coulomb::solver::{InnerKind, OuterKind, Settings};
 use coulomb_granular::output::{write_stats, VtkWriter};
 use coulomb_granular::run::RestMonitor;
 use coulomb_granular::scene::BoxLayout;
-use coulomb_granular::{Activation, Params, Projection, Scene, Simulation, Stop, Summary};
+use coulomb_granular::{
+    Activation, NsgsSettings, Params, Projection, Scene, Simulation, StepMethod, Stop, Summary,
+};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -33,6 +35,16 @@ impl From<Inner> for InnerKind {
             Inner::Faceted => InnerKind::Faceted,
         }
     }
+}
+
+/// The solver of each step.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Method {
+    /// body-level nonsmooth Gauss–Seidel, matrix-free, parallel over a colouring of the
+    /// contacts (docs/scaling.md)
+    Nsgs,
+    /// the library's solver (`--inner`, `--outer`) on the assembled problem
+    Library,
 }
 
 /// Outer iteration names on the command line.
@@ -89,8 +101,18 @@ pub struct Args {
     /// step cap of --until-rest
     #[arg(long, default_value_t = 2000, value_parser = crate::values::count)]
     pub max_steps: usize,
-    /// inner solver (default: Gauss–Seidel, the fastest to 1e-4 on the box scene, see
-    /// docs/granular.md)
+    /// step solver: body-level Gauss–Seidel (default) or the library's solver with
+    /// --inner/--outer
+    #[arg(long, value_enum, default_value_t = Method::Nsgs)]
+    pub method: Method,
+    /// cap on Gauss–Seidel sweeps per step (--method nsgs)
+    #[arg(long, default_value_t = 20_000, value_parser = crate::values::count)]
+    pub max_sweeps: usize,
+    /// worker threads (default: all cores); results do not depend on it
+    #[arg(long, value_parser = crate::values::threads)]
+    pub threads: Option<usize>,
+    /// inner solver of --method library (default: Gauss–Seidel, the fastest to 1e-4 on the
+    /// box scene, see docs/granular.md)
     #[arg(long, value_enum, default_value_t = Inner::Pgs)]
     pub inner: Inner,
     /// outer iteration (default: Gauss–Seidel fused with the law; apgd + Anderson as fallback)
@@ -204,6 +226,14 @@ impl Args {
             },
             warm_start: !self.cold,
             projection: (!self.no_projection).then(Projection::default),
+            method: match self.method {
+                Method::Nsgs => StepMethod::Nsgs(NsgsSettings {
+                    tol: self.tol,
+                    max_sweeps: self.max_sweeps,
+                    ..NsgsSettings::default()
+                }),
+                Method::Library => StepMethod::Library,
+            },
         }
     }
 
@@ -284,16 +314,33 @@ pub fn progress(len: usize, hidden: bool) -> ProgressBar {
     if hidden || !std::io::stderr().is_terminal() {
         pb.set_draw_target(ProgressDrawTarget::hidden());
     }
-    if let Ok(style) =
-        ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} steps {msg} ({elapsed})")
-    {
+    if let Ok(style) = ProgressStyle::with_template(
+        "{prefix} [{bar:30}] {pos}/{len} steps {msg} ({elapsed}, ETA {eta})",
+    ) {
         pb.set_style(style.progress_chars("=> "));
     }
     pb
 }
 
+/// Runs `f` on a rayon pool of `threads` workers (default: all cores).
+pub fn with_threads<T: Send>(
+    threads: Option<usize>,
+    f: impl FnOnce() -> anyhow::Result<T> + Send,
+) -> anyhow::Result<T> {
+    let mut b = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = threads {
+        b = b.num_threads(n);
+    }
+    let pool = b.build().context("cannot start the worker threads")?;
+    pool.install(f)
+}
+
 /// Runs `coulomb simulate`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    with_threads(args.threads, || run_on_pool(args.clone()))
+}
+
+fn run_on_pool(args: Args) -> anyhow::Result<()> {
     let Some(scene) = Scene::from_name(&args.scene) else {
         let names: Vec<&str> = Scene::ALL.iter().map(|s| s.name()).collect();
         bail!(

@@ -26,6 +26,9 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<()> {
     if args.dump_fclib.is_some() {
         bail!("--dump-fclib is not available in a distributed run");
     }
+    if args.method != super::simulate::Method::Nsgs {
+        bail!("a distributed run steps with the body-level Gauss–Seidel (--method nsgs) only");
+    }
     let Some(universe) = coulomb_granular::distributed::mpi::initialize() else {
         bail!("MPI could not be initialized (already initialized?)");
     };
@@ -36,9 +39,6 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<()> {
     let mut sim = DistributedSimulation::new(comm, world, args.params())
         .context("invalid simulation parameters")?;
     sim.rebalance_every = args.rebalance_every;
-    if let Some(m) = args.max_inner {
-        sim.max_sweeps = m;
-    }
     let mut vtk = match &args.output {
         Some(dir) => Some(
             DistributedVtk::new(dir)

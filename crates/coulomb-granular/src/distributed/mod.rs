@@ -22,13 +22,15 @@
 //!   ghost beads reduced at their owners), so that the balance of (2.10) holds to rounding.
 //! * **Error.** The error of docs/error.md, err = √(Σᵢ‖eᵢ‖²) / max(‖q‖, ‖r‖, ‖u‖), from four
 //!   sums of squares over the contacts reduced over the ranks (each contact counted once, by its
-//!   owner), with uᵢ = Hᵢᵀ v + wᵢ and qᵢ = Hᵢᵀ M⁻¹ f + wᵢ. Overflow: the largest entry of r, u and
-//!   q is reduced first (a max), and when it exceeds 2¹⁰⁰ every entry is multiplied by the same
-//!   power of two α before squaring — exact, and eᵢ is positively homogeneous, so the ratio is
-//!   unchanged ([`coulomb::law::error_measure`] does the same on one process). The sweep loop
-//!   stops on that global err exactly as on one machine: err ≤ tol on the exact v, or the sweep
-//!   cap, or the time limit (a flag reduced with the max, so that every rank stops at the same
-//!   sweep).
+//!   owner), with uᵢ = Hᵢᵀ v + wᵢ and qᵢ = Hᵢᵀ M⁻¹ f + wᵢ, in one `MPI_Allreduce` of seven
+//!   numbers per sweep: the four sums and three flags (an entry above 2¹⁰⁰ on some rank, a NaN,
+//!   past the time limit). Overflow: plain squares cannot overflow while every entry is at most
+//!   2¹⁰⁰; when some rank has a larger one, the largest entry is reduced (a max) and every entry
+//!   is multiplied by the same power of two α before squaring — exact, and eᵢ is positively
+//!   homogeneous, so the ratio is unchanged ([`coulomb::law::error_measure`] does the same on
+//!   one process). The sweep loop stops on that global err exactly as on one machine: err ≤ tol
+//!   on the exact v, or the sweep cap, or the time limit (all ranks see the same reduced
+//!   numbers and flags, so they stop at the same sweep).
 //! * **Position correction** ([`crate::projection`]) on owned + ghost beads with ghost masses
 //!   made huge, so that each rank moves only its own beads (an interface pair is corrected from
 //!   both sides).
@@ -44,17 +46,18 @@ pub use comm::Comm;
 /// The MPI bindings (rsmpi), for `mpi::initialize()` in programs using this module.
 pub use mpi;
 
-use crate::assembly::{contact_offset, free_momentum, mass_diagonal, StepData};
+use crate::assembly::StepData;
 use crate::contact::{candidate_pairs, detect_with, Contact, Partner};
 use crate::math::Vec3;
+use crate::nsgs::StepProblem;
 use crate::projection::project;
-use crate::simulation::{Params, Simulation, SimulationError, StepStats};
+use crate::simulation::{Params, Simulation, SimulationError, StepMethod, StepStats};
 use crate::world::{Obstacle, Sphere, World};
 use serde::Serialize;
 use slab::{bin_of, quantile_bounds, Slabs, HISTOGRAM_BINS};
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
-use subdomain::{error_sums, impulses, max_entry, sweep, Block};
+use subdomain::{error_sums, impulses, max_entry, sweep, velocities};
 
 /// Words of a bead record: global id, x, v, ω, R, m, rotation lock.
 const BEAD_WORDS: usize = 13;
@@ -125,7 +128,9 @@ struct Local {
 pub struct DistributedSimulation {
     /// the communicator
     pub comm: Comm,
-    /// parameters (as [`Simulation`]); the solver's `tol` and `time_limit` are used
+    /// parameters (as [`Simulation`]); the tolerance and time limit of [`StepMethod::Nsgs`]
+    /// (or of the library's settings) are used, the step is always solved by the subdomain
+    /// Gauss–Seidel
     pub params: Params,
     /// t_k
     pub time: f64,
@@ -133,7 +138,7 @@ pub struct DistributedSimulation {
     pub steps_done: usize,
     /// recompute the slab bounds every this many steps (0: never after the start)
     pub rebalance_every: usize,
-    /// cap on Gauss–Seidel sweeps per step
+    /// cap on Gauss–Seidel sweeps per step (from [`StepMethod::Nsgs`], else 20 000)
     pub max_sweeps: usize,
     /// the owned beads (global id, state), sorted by global id
     pub beads: Vec<(usize, Sphere)>,
@@ -164,6 +169,10 @@ impl DistributedSimulation {
         let Simulation { world, params, .. } = sim;
         let (rank, size) = (comm.rank(), comm.size());
         let n = world.bodies.len();
+        let max_sweeps = match params.method {
+            StepMethod::Nsgs(s) => s.max_sweeps,
+            StepMethod::Library => 20_000,
+        };
         let spread = |f: fn(&Sphere) -> f64| {
             let (lo, hi) = world
                 .bodies
@@ -193,7 +202,7 @@ impl DistributedSimulation {
             time: 0.0,
             steps_done: 0,
             rebalance_every: 20,
-            max_sweeps: 5000,
+            max_sweeps,
             forces: vec![Vec3::ZERO; beads.len()],
             beads,
             contacts: Vec::new(),
@@ -427,7 +436,7 @@ impl DistributedSimulation {
     /// Adds the 6-vectors `x` (6 per local bead) of ghost beads into their owners' entries on
     /// the owning ranks, then zeroes the ghosts' entries: impulses or velocity changes of the
     /// interface reduced where the bead lives.
-    fn reduce_ghosts(&mut self, ghosts: &Ghosts, local: &Local, x: &mut [f64]) {
+    fn reduce_ghosts(&mut self, ghosts: &Ghosts, local: &Local, x: &mut [[f64; 6]]) {
         let size = self.comm.size();
         if size == 1 {
             return;
@@ -439,7 +448,7 @@ impl DistributedSimulation {
                 let mut b = Vec::with_capacity(6 * list.len());
                 for &gi in list {
                     match local.of_ghost.get(gi) {
-                        Some(&l) => b.extend_from_slice(&x[6 * l..6 * l + 6]),
+                        Some(&l) => b.extend_from_slice(&x[l]),
                         None => b.extend_from_slice(&[0.0; 6]),
                     }
                 }
@@ -452,17 +461,17 @@ impl DistributedSimulation {
             for (k, &oi) in ghosts.send[r].iter().enumerate() {
                 let l = local.of_owned[oi];
                 for d in 0..6 {
-                    x[6 * l + d] += buf.get(6 * k + d).copied().unwrap_or(0.0);
+                    x[l][d] += buf.get(6 * k + d).copied().unwrap_or(0.0);
                 }
             }
         }
         for &l in &local.of_ghost {
-            x[6 * l..6 * l + 6].fill(0.0);
+            x[l] = [0.0; 6];
         }
     }
 
     /// Copies the owners' velocities to the ghost copies.
-    fn broadcast_ghosts(&mut self, ghosts: &Ghosts, local: &Local, v: &mut [f64]) {
+    fn broadcast_ghosts(&mut self, ghosts: &Ghosts, local: &Local, v: &mut [[f64; 6]]) {
         if self.comm.size() == 1 {
             return;
         }
@@ -472,8 +481,7 @@ impl DistributedSimulation {
             .map(|list| {
                 let mut b = Vec::with_capacity(6 * list.len());
                 for &oi in list {
-                    let l = local.of_owned[oi];
-                    b.extend_from_slice(&v[6 * l..6 * l + 6]);
+                    b.extend_from_slice(&v[local.of_owned[oi]]);
                 }
                 b
             })
@@ -486,7 +494,7 @@ impl DistributedSimulation {
                     continue;
                 };
                 if let Some(src) = buf.get(6 * k..6 * k + 6) {
-                    v[6 * l..6 * l + 6].copy_from_slice(src);
+                    v[l].copy_from_slice(src);
                 }
             }
         }
@@ -495,23 +503,21 @@ impl DistributedSimulation {
     /// v = M⁻¹ (f + H r) on every local bead: impulses Gᵀ rᵢ of the local contacts, those of
     /// ghosts summed at their owners, v of owned beads formed, then copied to the ghosts.
     /// Returns the impulse of each local bead (owned beads: the total over all ranks).
-    #[allow(clippy::too_many_arguments)]
     fn sync_exact(
         &mut self,
         ghosts: &Ghosts,
         local: &Local,
-        blocks: &[Block],
+        p: &StepProblem,
         r: &[f64],
-        v_free: &[f64],
-        mass: &[f64],
-        v: &mut [f64],
-    ) -> Vec<f64> {
-        let mut imp = vec![0.0; v.len()];
-        impulses(blocks, r, &mut imp);
+        v_free: &[[f64; 6]],
+        v: &mut [[f64; 6]],
+    ) -> Vec<[f64; 6]> {
+        let mut imp = vec![[0.0; 6]; v.len()];
+        impulses(p, r, &mut imp);
         self.reduce_ghosts(ghosts, local, &mut imp);
         for &l in &local.of_owned {
-            for d in 6 * l..6 * l + 6 {
-                v[d] = v_free[d] + imp[d] / mass[d];
+            for d in 0..6 {
+                v[l][d] = v_free[l][d] + imp[l][d] * p.inv_mass[l][d];
             }
         }
         self.broadcast_ghosts(ghosts, local, v);
@@ -523,31 +529,54 @@ impl DistributedSimulation {
     /// value whether any rank is.
     fn global_error(
         &mut self,
-        blocks: &[Block],
+        p: &StepProblem,
+        q: &[[f64; 3]],
         r: &[f64],
-        v: &[f64],
+        v: &[[f64; 6]],
         late: bool,
     ) -> (f64, f64, bool) {
         const LIMIT: f64 = 1.2676506002282294e30; // 2¹⁰⁰
-        let m = max_entry(blocks, r, v);
-        let mut head = [
-            if m.is_nan() { f64::INFINITY } else { m },
-            if m.is_nan() { 1.0 } else { 0.0 },
-            if late { 1.0 } else { 0.0 },
-        ];
-        self.comm.max(&mut head);
-        let [max_abs, nan, any_late] = head;
-        if nan > 0.0 || !max_abs.is_finite() {
-            return (f64::NAN, f64::INFINITY, any_late > 0.0);
-        }
-        let alpha = if max_abs > LIMIT {
-            let e = max_abs.log2().ceil() as i32 + 1;
-            2f64.powi(-e.min(1022))
+        let u = velocities(p, v);
+        let m = max_entry(q, r, &u);
+        // one reduction in the common case: the plain sums of squares (exact when every
+        // entry is at most 2¹⁰⁰) with three flags: an entry above 2¹⁰⁰, a NaN, past the time
+        // limit
+        let big = m.is_nan() || m > LIMIT;
+        let mut s = if big {
+            [0.0; 4]
         } else {
-            1.0
+            error_sums(p, q, r, &u, 1.0)
         };
-        let mut s = error_sums(blocks, r, v, alpha);
-        self.comm.sum(&mut s);
+        let mut head = [
+            s[0],
+            s[1],
+            s[2],
+            s[3],
+            f64::from(u8::from(big)),
+            f64::from(u8::from(m.is_nan())),
+            f64::from(u8::from(late)),
+        ];
+        self.comm.sum(&mut head);
+        let (any_big, nan, any_late) = (head[4] > 0.0, head[5] > 0.0, head[6] > 0.0);
+        if nan {
+            return (f64::NAN, f64::INFINITY, any_late);
+        }
+        let mut alpha = 1.0;
+        if any_big {
+            // rare: the largest entry over the ranks (a max), then the sums of the entries
+            // multiplied by the same power of two α, exact, so that no square overflows
+            let mut mx = [if m.is_nan() { f64::INFINITY } else { m }];
+            self.comm.max(&mut mx);
+            if !mx[0].is_finite() {
+                return (f64::INFINITY, f64::INFINITY, any_late);
+            }
+            let e = mx[0].log2().ceil() as i32 + 1;
+            alpha = 2f64.powi(-e.min(1022));
+            s = error_sums(p, q, r, &u, alpha);
+            self.comm.sum(&mut s);
+        } else {
+            s.copy_from_slice(&head[..4]);
+        }
         let scaled_scale = s[1].sqrt().max(s[2].sqrt()).max(s[3].sqrt());
         let scale = scaled_scale / alpha;
         let err = if scale > f64::EPSILON {
@@ -555,7 +584,7 @@ impl DistributedSimulation {
         } else {
             s[0].sqrt() / alpha
         };
-        (err, scale, any_late > 0.0)
+        (err, scale, any_late)
     }
 
     /// The threshold δ_k of the activation rule, as [`Simulation::activation_threshold`]
@@ -614,19 +643,10 @@ impl DistributedSimulation {
             restitution: self.params.restitution,
             mu: self.params.mu,
         };
-        let offsets = contact_offset(&local.world, &contacts, &data);
-        let mass = mass_diagonal(&local.world);
-        let f = free_momentum(&local.world, h);
-        let v_free: Vec<f64> = f.iter().zip(&mass).map(|(f, m)| f / m).collect();
-        let mut blocks = Vec::with_capacity(contacts.len());
-        let mut bad = 0.0;
-        for (i, c) in contacts.iter().enumerate() {
-            let w = [offsets[3 * i], offsets[3 * i + 1], offsets[3 * i + 2]];
-            match Block::new(&local.world, c, w, self.params.mu, &v_free) {
-                Some(b) => blocks.push(b),
-                None => bad = 1.0,
-            }
-        }
+        // the body-level problem (2.10) of the subdomain: rows of the owned contacts over the
+        // owned and ghost beads (crate::nsgs)
+        let problem = StepProblem::new(&local.world, &contacts, &data);
+        let bad = if problem.is_err() { 1.0 } else { 0.0 };
         let key = |c: &Contact| -> (usize, Partner) {
             let p = match c.partner {
                 Partner::Body(j) => Partner::Body(local.gid[j]),
@@ -661,31 +681,41 @@ impl DistributedSimulation {
             migrated_here as f64,
         ];
         self.comm.sum(&mut counts);
-        if counts[2] > 0.0 {
-            return Err(SimulationError::Parameter(
-                "a contact's Delassus block is singular (a bead of zero or infinite mass?)".into(),
-            ));
-        }
+        let problem = match problem {
+            Ok(p) if counts[2] == 0.0 => p,
+            Ok(_) => {
+                return Err(SimulationError::Parameter(format!(
+                    "step {k}: an invalid contact on another rank"
+                )))
+            }
+            Err(source) => return Err(SimulationError::StepProblem { step: k, source }),
+        };
+        let v_free: Vec<[f64; 6]> = problem
+            .f
+            .iter()
+            .zip(&problem.inv_mass)
+            .map(|(f, m)| std::array::from_fn(|d| f[d] * m[d]))
+            .collect();
+        let q = velocities(&problem, &v_free);
         let n_contacts = counts[0] as usize;
         let assembly_ms = t0.elapsed().as_secs_f64() * 1e3;
 
         // the solve: subdomain nonsmooth Gauss–Seidel on the global error
         let t1 = Instant::now();
-        let tol = self.params.solver.tol;
-        let limit = self
-            .params
-            .solver
-            .time_limit
-            .unwrap_or(Duration::from_secs(600));
+        let (tol, limit) = match self.params.method {
+            StepMethod::Nsgs(s) => (s.tol, s.time_limit),
+            StepMethod::Library => (self.params.solver.tol, self.params.solver.time_limit),
+        };
+        let limit = limit.unwrap_or(Duration::from_secs(600));
         let mut v = v_free.clone();
         let mut sweeps = 0usize;
         let (mut err, mut status) = (0.0, "no_contact");
-        let mut imp = vec![0.0; v.len()];
+        let mut imp = vec![[0.0; 6]; v.len()];
         if n_contacts > 0 {
-            imp = self.sync_exact(&ghosts, &local, &blocks, &r, &v_free, &mass, &mut v);
-            let mut dv = vec![0.0; v.len()];
+            imp = self.sync_exact(&ghosts, &local, &problem, &r, &v_free, &mut v);
+            let mut dv = vec![[0.0; 6]; v.len()];
             let mut exact = true;
-            let (mut e, mut scale, mut late) = self.global_error(&blocks, &r, &v, false);
+            let (mut e, mut scale, mut late) = self.global_error(&problem, &q, &r, &v, false);
             status = loop {
                 if !e.is_finite() {
                     break "numerical_error";
@@ -694,9 +724,9 @@ impl DistributedSimulation {
                     if exact {
                         break "converged";
                     }
-                    imp = self.sync_exact(&ghosts, &local, &blocks, &r, &v_free, &mass, &mut v);
+                    imp = self.sync_exact(&ghosts, &local, &problem, &r, &v_free, &mut v);
                     exact = true;
-                    (e, scale, late) = self.global_error(&blocks, &r, &v, false);
+                    (e, scale, late) = self.global_error(&problem, &q, &r, &v, false);
                     continue;
                 }
                 if sweeps >= self.max_sweeps {
@@ -705,32 +735,32 @@ impl DistributedSimulation {
                 if late {
                     break "time_limit";
                 }
-                dv.fill(0.0);
-                sweep(&blocks, &mut r, &mut v, &mut dv);
+                dv.fill([0.0; 6]);
+                sweep(&problem, &mut r, &mut v, &mut dv);
                 sweeps += 1;
                 if sweeps % REFRESH == 0 {
-                    imp = self.sync_exact(&ghosts, &local, &blocks, &r, &v_free, &mass, &mut v);
+                    imp = self.sync_exact(&ghosts, &local, &problem, &r, &v_free, &mut v);
                     exact = true;
                 } else {
                     // the owned beads' own changes are in v already: send and add only
                     // the ghosts' changes
                     for &l in &local.of_owned {
-                        dv[6 * l..6 * l + 6].fill(0.0);
+                        dv[l] = [0.0; 6];
                     }
                     self.reduce_ghosts(&ghosts, &local, &mut dv);
                     for &l in &local.of_owned {
-                        for d in 6 * l..6 * l + 6 {
-                            v[d] += dv[d];
+                        for d in 0..6 {
+                            v[l][d] += dv[l][d];
                         }
                     }
                     self.broadcast_ghosts(&ghosts, &local, &mut v);
                     exact = false;
                 }
-                (e, scale, late) = self.global_error(&blocks, &r, &v, t1.elapsed() > limit);
+                (e, scale, late) = self.global_error(&problem, &q, &r, &v, t1.elapsed() > limit);
             };
             if !exact {
-                imp = self.sync_exact(&ghosts, &local, &blocks, &r, &v_free, &mass, &mut v);
-                (e, scale, _) = self.global_error(&blocks, &r, &v, false);
+                imp = self.sync_exact(&ghosts, &local, &problem, &r, &v_free, &mut v);
+                (e, scale, _) = self.global_error(&problem, &q, &r, &v, false);
             }
             err = e;
             self.residual_velocity = e.max(tol) * scale;
@@ -744,15 +774,15 @@ impl DistributedSimulation {
         let mut finite = 1.0;
         for (oi, (_, b)) in self.beads.iter_mut().enumerate() {
             let l = local.of_owned[oi];
-            let vn = Vec3::from_slice(&v[6 * l..6 * l + 3]);
-            let wn = Vec3::from_slice(&v[6 * l + 3..6 * l + 6]);
+            let vn = Vec3::from_slice(&v[l][..3]);
+            let wn = Vec3::from_slice(&v[l][3..]);
             if !(vn.is_finite() && wn.is_finite()) {
                 finite = 0.0;
             }
             b.position += (b.velocity * (1.0 - theta) + vn * theta) * h;
             b.velocity = vn;
             b.angular_velocity = if b.rotation_locked { Vec3::ZERO } else { wn };
-            self.forces[oi] = Vec3::from_slice(&imp[6 * l..6 * l + 3]) * (1.0 / h);
+            self.forces[oi] = Vec3::from_slice(&imp[l][..3]) * (1.0 / h);
         }
         let mut fin = [finite];
         self.comm.sum(&mut fin);

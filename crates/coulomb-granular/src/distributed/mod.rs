@@ -460,8 +460,10 @@ impl DistributedSimulation {
         for (r, buf) in recv.iter().enumerate() {
             for (k, &oi) in ghosts.send[r].iter().enumerate() {
                 let l = local.of_owned[oi];
-                for d in 0..6 {
-                    x[l][d] += buf.get(6 * k + d).copied().unwrap_or(0.0);
+                if let Some(src) = buf.get(6 * k..6 * k + 6) {
+                    for (xd, s) in x[l].iter_mut().zip(src) {
+                        *xd += s;
+                    }
                 }
             }
         }

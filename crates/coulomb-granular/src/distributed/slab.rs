@@ -82,7 +82,7 @@ pub fn quantile_bounds(counts: &[f64], lo: f64, hi: f64, parts: usize) -> Vec<f6
             below += counts[bin];
             bin += 1;
         }
-        let b = if !(width > 0.0) || bin >= counts.len() {
+        let b = if width.is_nan() || width <= 0.0 || bin >= counts.len() {
             if bin >= counts.len() {
                 hi
             } else {
@@ -104,7 +104,7 @@ pub fn quantile_bounds(counts: &[f64], lo: f64, hi: f64, parts: usize) -> Vec<f6
 
 /// The histogram bin of x over [lo, hi] with `HISTOGRAM_BINS` bins (clamped to the range).
 pub fn bin_of(x: f64, lo: f64, hi: f64) -> usize {
-    if !(hi > lo) || !x.is_finite() {
+    if hi.is_nan() || lo.is_nan() || hi <= lo || !x.is_finite() {
         return 0;
     }
     let t = ((x - lo) / (hi - lo) * HISTOGRAM_BINS as f64).floor();

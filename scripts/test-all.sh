@@ -13,7 +13,6 @@ cd "$(dirname "$0")/.."
 
 cargo test --workspace
 
-
 VENV=${COULOMB_PY_VENV:-target/py-venv}
 PYTHON=${PYTHON:-python3}
 if [ ! -x "$VENV/bin/python" ]; then

@@ -500,6 +500,7 @@ impl UpdateSums {
 /// - computes u_i = J_A v_A + J_B v_B + w_i, c = u_i − W_ii r_i, and a solution r_i' of the
 ///   one-contact Coulomb law with u_i' = W_ii r_i' + c (`solve_contact_law`, or the
 ///   one-contact SOC-QP with s = μ‖u_T‖ where that fails);
+/// - with `omega` ≠ 1 (over-relaxation), replaces r_i' by P_{K_μ}(r_i + ω (r_i' − r_i));
 /// - writes r_i', and v_A += M_A⁻¹ J_Aᵀ Δr, v_B += M_B⁻¹ J_Bᵀ Δr (so M v − H r stays fixed).
 ///
 /// Returns the sums of the pair (u_i, r_i) met before the update.
@@ -510,6 +511,7 @@ pub fn update_contact(
     va: &mut [f64; 6],
     b: Option<(&[f64; 6], &mut [f64; 6])>,
     r: &mut [f64; 3],
+    omega: f64,
 ) -> UpdateSums {
     let (minv_b, vb) = match b {
         Some((m, v)) => (Some(m), Some(v)),
@@ -533,6 +535,13 @@ pub fn update_contact(
         contact.c[0] += row.mu * cone::tangent_norm(&u);
         solve_contact(&contact, &old)
     });
+    let new = if omega != 1.0 {
+        let mut x: [f64; 3] = std::array::from_fn(|k| old[k] + omega * (new[k] - old[k]));
+        cone::project(row.mu, &mut x);
+        x
+    } else {
+        new
+    };
     let delta = [new[0] - old[0], new[1] - old[1], new[2] - old[2]];
     let sums = UpdateSums {
         residual_sq: law::contact_residual_sq(row.mu, &u, &old),
@@ -570,15 +579,24 @@ pub struct NsgsSettings {
     pub max_sweeps: usize,
     /// wall-clock cap of one solve
     pub time_limit: Option<Duration>,
+    /// over-relaxation ω ∈ [1, 2) of the updates from the second sweep on (the first is
+    /// plain, so that isolated contacts are solved exactly); halved towards 1
+    /// (ω ← 1 + (ω − 1)/2) whenever the sweep residual has not decreased over
+    /// [`RELAX_WINDOW`] sweeps, so that a solve ends as plain Gauss–Seidel if needed
+    pub relaxation: f64,
 }
 
+/// Sweeps over which the relaxation's progress is judged.
+pub const RELAX_WINDOW: usize = 10;
+
 impl Default for NsgsSettings {
-    /// tol 1e-4, at most 20 000 sweeps and 60 s.
+    /// tol 1e-4, at most 20 000 sweeps and 60 s, ω = 1.5 (docs/scaling.md).
     fn default() -> Self {
         Self {
             tol: 1e-4,
             max_sweeps: 20_000,
             time_limit: Some(Duration::from_secs(60)),
+            relaxation: 1.5,
         }
     }
 }
@@ -635,13 +653,13 @@ impl Shared {
     }
 }
 
-/// Runs `f` over the chunks of one colour (indices `ids`, impulses `rs` in colour order), in
-/// parallel when the colour is large, and returns the per-chunk sums in chunk order.
+/// Runs `f` over the chunks of one colour (rows `ids`, impulses `rs`, both in colour order),
+/// in parallel when the colour is large, and returns the per-chunk sums in chunk order.
 fn for_colour(
-    ids: &[usize],
+    ids: &[ContactRow],
     rs: &mut [[f64; 3]],
     parallel: bool,
-    f: impl Fn(&[usize], &mut [[f64; 3]]) -> UpdateSums + Sync,
+    f: impl Fn(&[ContactRow], &mut [[f64; 3]]) -> UpdateSums + Sync,
 ) -> UpdateSums {
     if parallel && ids.len() >= PARALLEL_MIN {
         let parts: Vec<UpdateSums> = ids
@@ -664,6 +682,8 @@ fn for_colour(
 struct State<'a> {
     problem: &'a StepProblem,
     colouring: &'a Colouring,
+    /// the rows in colour order (a copy: the sweeps stream through memory)
+    rows: Vec<ContactRow>,
     /// r in colour order
     r: Vec<[f64; 3]>,
     /// v per sphere
@@ -681,21 +701,20 @@ struct Evaluation {
 
 impl State<'_> {
     /// One sweep over the colours; sums of the pairs met.
-    fn sweep(&mut self) -> UpdateSums {
+    fn sweep(&mut self, omega: f64) -> UpdateSums {
         let p = self.problem;
         let v = Shared(self.v.as_mut_ptr());
         let mut total = UpdateSums::default();
         for c in 0..self.colouring.colours() {
             let range = self.colouring.starts[c]..self.colouring.starts[c + 1];
-            let ids = &self.colouring.order[range.clone()];
+            let ids = &self.rows[range.clone()];
             let sums = for_colour(ids, &mut self.r[range], self.parallel, |ids, rs| {
                 let mut s = UpdateSums::default();
-                for (&i, r) in ids.iter().zip(rs.iter_mut()) {
-                    let row = &p.rows[i];
+                for (row, r) in ids.iter().zip(rs.iter_mut()) {
                     // SAFETY: within one colour no other update touches spheres a, b ≠ a
                     let va = unsafe { &mut *v.at(row.a) };
                     let b = row.b.map(|j| (&p.inv_mass[j], unsafe { &mut *v.at(j) }));
-                    s = s.add(update_contact(row, &p.inv_mass[row.a], va, b, r));
+                    s = s.add(update_contact(row, &p.inv_mass[row.a], va, b, r, omega));
                 }
                 s
             });
@@ -713,10 +732,9 @@ impl State<'_> {
         let shared = Shared(mom.as_mut_ptr());
         for c in 0..self.colouring.colours() {
             let range = self.colouring.starts[c]..self.colouring.starts[c + 1];
-            let ids = &self.colouring.order[range.clone()];
+            let ids = &self.rows[range.clone()];
             for_colour(ids, &mut self.r[range], self.parallel, |ids, rs| {
-                for (&i, r) in ids.iter().zip(rs.iter()) {
-                    let row = &p.rows[i];
+                for (row, r) in ids.iter().zip(rs.iter()) {
                     let sides = [
                         (Some(row.a), row.jacobian(false)),
                         (row.b, row.jacobian(true)),
@@ -757,17 +775,14 @@ impl State<'_> {
     /// recomputed from scratch: u = Hᵀ v + w, scale max(‖q‖, ‖r‖, ‖u‖).
     fn evaluate(&mut self, q_norm: f64) -> Evaluation {
         let balance = self.recompute_velocity();
-        let p = self.problem;
         let v = &self.v;
         let parts: Vec<UpdateSums> = self
-            .colouring
-            .order
+            .rows
             .par_chunks(CHUNK)
             .zip(self.r.par_chunks(CHUNK))
             .map(|(ids, rs)| {
                 let mut s = UpdateSums::default();
-                for (&i, r) in ids.iter().zip(rs) {
-                    let row = &p.rows[i];
+                for (row, r) in ids.iter().zip(rs) {
                     let u = row.velocity(&v[row.a], row.b.map(|j| &v[j]));
                     s.residual_sq += law::contact_residual_sq(row.mu, &u, r);
                     s.r_sq += r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
@@ -892,9 +907,15 @@ pub fn solve_coloured(
     if r.len() != n {
         r.resize(n, [0.0; 3]);
     }
+    let rows: Vec<ContactRow> = colouring
+        .order
+        .par_iter()
+        .map(|&i| problem.rows[i].clone())
+        .collect();
     let mut state = State {
         problem,
         colouring,
+        rows,
         r,
         v: vec![[0.0; 6]; bodies],
         parallel,
@@ -908,6 +929,12 @@ pub fn solve_coloured(
     // after a failed exact check, wait this many sweeps before the next one
     let mut wait = 0usize;
     let mut backoff = 1usize;
+    let mut omega = if settings.relaxation.is_finite() {
+        settings.relaxation.clamp(1.0, 1.99)
+    } else {
+        1.0
+    };
+    let mut window_start = f64::INFINITY;
     let ok = |e: &Evaluation| e.error.is_finite() && e.error <= tol && e.balance <= tol;
     let status = loop {
         if !eval.error.is_finite() {
@@ -922,7 +949,8 @@ pub fn solve_coloured(
         if deadline.is_some_and(|d| Instant::now() >= d) {
             break NsgsStatus::TimeLimit;
         }
-        let s = state.sweep();
+        // the first sweep is plain Gauss–Seidel: it solves isolated contacts exactly
+        let s = state.sweep(if sweeps == 0 { 1.0 } else { omega });
         sweeps += 1;
         let scale = qn.max(s.r_sq.sqrt()).max(s.u_sq.sqrt());
         let proxy = if scale > f64::EPSILON {
@@ -930,6 +958,15 @@ pub fn solve_coloured(
         } else {
             s.residual_sq.sqrt()
         };
+        if sweeps % RELAX_WINDOW == 0 {
+            if omega > 1.0 && proxy.partial_cmp(&window_start) != Some(std::cmp::Ordering::Less) {
+                omega = 1.0 + 0.5 * (omega - 1.0);
+                if omega < 1.01 {
+                    omega = 1.0;
+                }
+            }
+            window_start = proxy;
+        }
         if !proxy.is_finite() {
             eval = state.evaluate(qn);
             evaluations += 1;
@@ -1232,6 +1269,7 @@ mod tests {
             tol: 1e-14,
             max_sweeps: usize::MAX,
             time_limit: Some(Duration::from_millis(20)),
+            ..NsgsSettings::default()
         };
         let sol = solve(&p, &r0, &s, true);
         assert_eq!(sol.status, NsgsStatus::TimeLimit);

@@ -10,7 +10,6 @@ use crate::world::World;
 use coulomb::problem::{GlobalProblem, Problem, ProblemError};
 use coulomb::solver::{self, Guess, OuterRecord, Settings, SolveError, Status};
 use serde::Serialize;
-use std::collections::HashMap;
 use std::time::Instant;
 
 /// Parameters of the time stepping.
@@ -170,7 +169,8 @@ pub struct Simulation {
     pub keep_problem: bool,
     /// time the formation of the Delassus operator separately (`StepStats::delassus_ms`)
     pub profile_delassus: bool,
-    previous: HashMap<(usize, Partner), [f64; 3]>,
+    /// the last step's impulses by contact key, sorted by key (warm starts by merge)
+    previous: Vec<((usize, Partner), [f64; 3])>,
     /// bound ε_u = max(err, tol) · scale on the residual velocity of the last step's contacts
     residual_velocity: f64,
 }
@@ -199,7 +199,8 @@ impl Simulation {
             }
         }
         if let StepMethod::Nsgs(n) = &p.method {
-            if !(n.tol.is_finite() && n.tol > 0.0 && n.max_sweeps > 0) {
+            let omega_ok = n.relaxation.is_finite() && (1.0..2.0).contains(&n.relaxation);
+            if !(n.tol.is_finite() && n.tol > 0.0 && n.max_sweeps > 0 && omega_ok) {
                 return bad(format!("NSGS settings {n:?} out of range"));
             }
         }
@@ -230,7 +231,7 @@ impl Simulation {
             last_problem: None,
             keep_problem: false,
             profile_delassus: false,
-            previous: HashMap::new(),
+            previous: Vec::new(),
             residual_velocity: 0.0,
         })
     }
@@ -348,9 +349,10 @@ impl Simulation {
             for (i, c) in contacts.iter_mut().enumerate() {
                 if let Some(r) = sol.r.get(3 * i..3 * i + 3) {
                     c.impulse = [r[0], r[1], r[2]];
-                    self.previous.insert(c.key(), c.impulse);
+                    self.previous.push((c.key(), c.impulse));
                 }
             }
+            self.previous.sort_unstable_by_key(|x| x.0);
             self.last_history = sol.history;
             self.last_problem = self.keep_problem.then_some(problem);
             v
@@ -398,10 +400,18 @@ impl Simulation {
     fn warm_start(&self, contacts: &[Contact], stats: &mut StepStats) -> Vec<f64> {
         let mut r0 = vec![0.0; 3 * contacts.len()];
         if self.params.warm_start {
+            // both lists are sorted by key ([`detect_with`] sorts the contacts): one merge
+            let mut k = 0;
             for (i, c) in contacts.iter().enumerate() {
-                if let Some(prev) = self.previous.get(&c.key()) {
-                    r0[3 * i..3 * i + 3].copy_from_slice(prev);
-                    stats.warm_started += 1;
+                let key = c.key();
+                while k < self.previous.len() && self.previous[k].0 < key {
+                    k += 1;
+                }
+                if let Some((pk, prev)) = self.previous.get(k) {
+                    if *pk == key {
+                        r0[3 * i..3 * i + 3].copy_from_slice(prev);
+                        stats.warm_started += 1;
+                    }
                 }
             }
         }
@@ -439,9 +449,10 @@ impl Simulation {
         for (i, c) in contacts.iter_mut().enumerate() {
             if let Some(r) = sol.r.get(3 * i..3 * i + 3) {
                 c.impulse = [r[0], r[1], r[2]];
-                self.previous.insert(c.key(), c.impulse);
+                self.previous.push((c.key(), c.impulse));
             }
         }
+        self.previous.sort_unstable_by_key(|x| x.0);
         self.last_history.clear();
         self.last_problem = if self.keep_problem {
             Some(

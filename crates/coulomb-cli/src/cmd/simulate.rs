@@ -108,6 +108,10 @@ pub struct Args {
     /// cap on Gauss–Seidel sweeps per step (--method nsgs)
     #[arg(long, default_value_t = 20_000, value_parser = crate::values::count)]
     pub max_sweeps: usize,
+    /// over-relaxation ω ∈ [1, 2) of the Gauss–Seidel updates (--method nsgs; reduced
+    /// towards 1 automatically when it does not help)
+    #[arg(long, default_value_t = 1.5, value_parser = crate::values::relaxation)]
+    pub relaxation: f64,
     /// worker threads (default: all cores); results do not depend on it
     #[arg(long, value_parser = crate::values::threads)]
     pub threads: Option<usize>,
@@ -153,6 +157,10 @@ pub struct Args {
     /// box scene: height of the lowest initial layer's centres (m), instead of the calibrated one
     #[arg(long, value_parser = crate::values::positive)]
     pub drop_base: Option<f64>,
+    /// box scene: spread the partial top layer over the whole floor at random sites (the
+    /// heap structure of `paper scaling --accurate`, docs/scaling.md)
+    #[arg(long)]
+    pub spread_top: bool,
     /// output folder: stats.csv, stats.json, summary.json, beads.pvd, contacts.pvd, frames/
     #[arg(long)]
     pub output: Option<PathBuf>,
@@ -230,6 +238,7 @@ impl Args {
                 Method::Nsgs => StepMethod::Nsgs(NsgsSettings {
                     tol: self.tol,
                     max_sweeps: self.max_sweeps,
+                    relaxation: self.relaxation,
                     ..NsgsSettings::default()
                 }),
                 Method::Library => StepMethod::Library,
@@ -361,7 +370,14 @@ fn run_on_pool(args: Args) -> anyhow::Result<()> {
         return super::simulate_mpi::run(args, scene);
     }
     let stop = args.stop();
-    let world = scene.build_with(args.beads, args.seed, &args.layout()?);
+    let world = if args.spread_top {
+        if scene != Scene::Box {
+            bail!("--spread-top applies to the box scene only");
+        }
+        Scene::box_spread(args.beads, args.seed)
+    } else {
+        scene.build_with(args.beads, args.seed, &args.layout()?)
+    };
     let mut sim = Simulation::new(world, args.params()).context("invalid simulation parameters")?;
     sim.keep_problem = args.dump_fclib.is_some();
     if let Some(dir) = &args.dump_fclib {

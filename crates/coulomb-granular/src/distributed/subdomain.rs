@@ -10,8 +10,9 @@
 
 use crate::nsgs::{update_contact, StepProblem};
 
-/// One Gauss–Seidel sweep over the contacts of `p` in order: r (3 per contact) and v (per
-/// local bead) updated in place; `dv` accumulates each bead's velocity change.
+/// One Gauss–Seidel sweep over the contacts of `p` in order (no over-relaxation, ω = 1: the
+/// interface is already coupled by Jacobi across ranks): r (3 per contact) and v (per local
+/// bead) updated in place; `dv` accumulates each bead's velocity change.
 pub fn sweep(p: &StepProblem, r: &mut [f64], v: &mut [[f64; 6]], dv: &mut [[f64; 6]]) {
     for (i, row) in p.rows.iter().enumerate() {
         let (a, b) = (row.a, row.b);
@@ -28,6 +29,7 @@ pub fn sweep(p: &StepProblem, r: &mut [f64], v: &mut [[f64; 6]], dv: &mut [[f64;
                     &mut va,
                     Some((&p.inv_mass[b], &mut vb)),
                     &mut ri,
+                    1.0,
                 );
                 v[b] = vb;
                 for d in 0..6 {
@@ -35,7 +37,7 @@ pub fn sweep(p: &StepProblem, r: &mut [f64], v: &mut [[f64; 6]], dv: &mut [[f64;
                 }
             }
             None => {
-                update_contact(row, &p.inv_mass[a], &mut va, None, &mut ri);
+                update_contact(row, &p.inv_mass[a], &mut va, None, &mut ri, 1.0);
             }
         }
         v[a] = va;

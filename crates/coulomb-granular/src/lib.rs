@@ -12,6 +12,8 @@
 
 pub mod assembly;
 pub mod contact;
+#[cfg(feature = "mpi")]
+pub mod distributed;
 pub mod math;
 pub mod nsgs;
 pub mod output;

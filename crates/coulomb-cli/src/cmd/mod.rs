@@ -10,5 +10,7 @@ pub mod info;
 pub mod paper;
 pub mod scaling;
 pub mod simulate;
+#[cfg(feature = "mpi")]
+pub mod simulate_mpi;
 pub mod solve;
 pub mod validate;

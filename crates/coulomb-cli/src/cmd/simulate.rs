@@ -173,6 +173,14 @@ pub struct Args {
     /// print one JSON summary object (no progress bar)
     #[arg(long)]
     pub json: bool,
+    /// run distributed over MPI (automatic when started by mpirun/srun; docs/distributed.md)
+    #[cfg(feature = "mpi")]
+    #[arg(long)]
+    pub mpi: bool,
+    /// distributed run: recompute the slab bounds every K steps (0: only at the start)
+    #[cfg(feature = "mpi")]
+    #[arg(long, default_value_t = 20, value_parser = crate::values::count0)]
+    pub rebalance_every: usize,
 }
 
 /// The solver settings of a simulation: the paper's outer rule (6.1) with ε = `fp_tol`.
@@ -243,7 +251,7 @@ impl Args {
     /// by the θ-method); above R the linear gap prediction misses contacts entirely (beads
     /// pass through each other and through walls); above R/10 penetrations before the
     /// position correction reach tens of % of R.
-    fn check_step(&self) -> anyhow::Result<()> {
+    pub(crate) fn check_step(&self) -> anyhow::Result<()> {
         let h = self.dt;
         if !(h.is_finite() && h > 0.0) {
             bail!("--dt {h} must be a positive number of seconds");
@@ -272,7 +280,7 @@ impl Args {
         Ok(())
     }
     /// The box layout: the calibrated one for `--beads`, with the command line's overrides.
-    fn layout(&self) -> anyhow::Result<BoxLayout> {
+    pub(crate) fn layout(&self) -> anyhow::Result<BoxLayout> {
         let mut l = BoxLayout::for_beads(self.beads);
         let r = coulomb_granular::scene::BEAD_RADIUS;
         if let Some(x) = self.box_side {
@@ -296,7 +304,7 @@ impl Args {
         }
         Ok(l)
     }
-    fn stop(&self) -> Stop {
+    pub(crate) fn stop(&self) -> Stop {
         if self.until_rest {
             Stop::UntilRest {
                 speed: self.rest_speed,
@@ -357,6 +365,10 @@ fn run_on_pool(args: Args) -> anyhow::Result<()> {
         bail!("--beads {} is above the limit of 1000000", args.beads);
     }
     args.check_step()?;
+    #[cfg(feature = "mpi")]
+    if args.mpi || super::simulate_mpi::under_launcher() {
+        return super::simulate_mpi::run(args, scene);
+    }
     let stop = args.stop();
     let world = if args.spread_top {
         if scene != Scene::Box {

@@ -15,6 +15,7 @@ pub mod contact;
 pub mod math;
 pub mod output;
 pub mod projection;
+pub mod rolling;
 pub mod run;
 pub mod scene;
 pub mod simulation;

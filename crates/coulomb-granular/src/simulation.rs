@@ -33,6 +33,9 @@ pub struct Params {
     /// position correction after each step ([`crate::projection`]); `None`: the plain
     /// Moreau–Jean scheme (the paper's)
     pub projection: Option<Projection>,
+    /// rolling-friction coefficient μ_r ≥ 0 (dimensionless): rolling torque impulse
+    /// ≤ μ_r R_e r_N ([`crate::rolling`]); 0 (default): no rolling resistance
+    pub rolling_friction: f64,
 }
 
 impl Default for Params {
@@ -46,6 +49,7 @@ impl Default for Params {
             solver: Settings::default(),
             warm_start: true,
             projection: Some(Projection::default()),
+            rolling_friction: 0.0,
         }
     }
 }
@@ -150,6 +154,8 @@ pub struct Simulation {
     previous: HashMap<(usize, Partner), [f64; 3]>,
     /// bound ε_u = max(err, tol) · scale on the residual velocity of the last step's contacts
     residual_velocity: f64,
+    /// rolling resistance (crate::rolling): warm start and last rolling impulses
+    pub rolling: crate::rolling::RollingState,
 }
 
 impl Simulation {
@@ -168,6 +174,12 @@ impl Simulation {
         }
         if !(p.mu >= 0.0 && p.mu.is_finite()) {
             return bad(format!("mu = {} is not a finite nonnegative number", p.mu));
+        }
+        if !(p.rolling_friction >= 0.0 && p.rolling_friction.is_finite()) {
+            return bad(format!(
+                "rolling friction = {} is not a finite nonnegative number",
+                p.rolling_friction
+            ));
         }
         if let Some(pr) = &p.projection {
             let ok = |x: f64| x.is_finite() && x > 0.0 && x < 1.0;
@@ -204,6 +216,7 @@ impl Simulation {
             profile_delassus: false,
             previous: HashMap::new(),
             residual_velocity: 0.0,
+            rolling: Default::default(),
         })
     }
 
@@ -292,10 +305,29 @@ impl Simulation {
                 stats.delassus_ms = td.elapsed().as_secs_f64() * 1e3;
                 drop(delassus);
             }
-            let wrapped = Problem::Global(problem);
+            let mut problem = problem;
             let t1 = Instant::now();
-            let sol = solver::solve_with_guess(&wrapped, &self.params.solver, Some(&guess))
-                .map_err(|source| SimulationError::Solve { step: k, source })?;
+            // ---- hook: rolling resistance (crate::rolling). With μ_r > 0 the step's
+            // 5-component problem is solved there (problem.f then holds the rolling impulses);
+            // otherwise the library's solver, as before.
+            let rolling = (self.params.rolling_friction > 0.0).then(|| {
+                crate::rolling::solve_step(
+                    &self.world,
+                    &contacts,
+                    &mut problem,
+                    self.params.rolling_friction,
+                    &self.params.solver,
+                    &guess.r,
+                    &mut self.rolling,
+                )
+            });
+            let wrapped = Problem::Global(problem);
+            let sol = match rolling {
+                Some(sol) => sol,
+                None => solver::solve_with_guess(&wrapped, &self.params.solver, Some(&guess)),
+            }
+            .map_err(|source| SimulationError::Solve { step: k, source })?;
+            // ---- end of the rolling-resistance hook
             stats.solve_ms = t1.elapsed().as_secs_f64() * 1e3;
             stats.subproblems = sol.outer_iterations;
             stats.inner_iterations = sol.inner_iterations;

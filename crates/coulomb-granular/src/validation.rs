@@ -118,6 +118,91 @@ pub fn incline(
     Ok(c)
 }
 
+/// A sphere (R = 0.05 m) released at rest on an incline of `deg` degrees (gravity tilted over
+/// a horizontal ground), friction μ and rolling friction μ_r = `params.rolling_friction`
+/// (rolling torque ≤ μ_r R N, [`crate::rolling`]), simulated for `duration` s. Mechanics of a
+/// ball with rolling resistance: it stays at rest when tan θ ≤ μ_r (and tan θ ≤ μ); otherwise
+/// it rolls without slipping with a = 5/7 g (sin θ − μ_r cos θ) when the friction this needs,
+/// F = 2/5 m a + μ_r m g cos θ, is ≤ μ m g cos θ, and slides with a = g (sin θ − μ cos θ) when
+/// not. The measured acceleration is v_x(T) / T.
+pub fn incline_rolling_resistance(
+    deg: f64,
+    mu: f64,
+    duration: f64,
+    params: &Params,
+) -> Result<Check, SimulationError> {
+    let th = deg.to_radians();
+    let g = GRAVITY;
+    let mu_r = params.rolling_friction;
+    let mut w = ground_world(Vec3::new(g * th.sin(), 0.0, -g * th.cos()));
+    w.bodies
+        .push(Sphere::new(Vec3::new(0.0, 0.0, 0.05), 0.05, 1.0));
+    let p = Params {
+        mu,
+        restitution: 0.0,
+        ..params.clone()
+    };
+    let n = (duration / p.h).round().max(1.0) as usize;
+    let mut sim = Simulation::new(w, p.clone())?;
+    let bad = steps(&mut sim, n)?;
+    let t = n as f64 * p.h;
+    let a = sim.world.bodies[0].velocity.x / t;
+    let roll = 5.0 / 7.0 * g * (th.sin() - mu_r * th.cos());
+    let expected = if th.tan() <= mu_r && th.tan() <= mu {
+        0.0
+    } else if 0.4 * roll + mu_r * g * th.cos() <= mu * g * th.cos() {
+        roll
+    } else {
+        g * (th.sin() - mu * th.cos())
+    };
+    let mut c = Check::new(
+        format!("incline {deg}° μ = {mu} μ_r = {mu_r}: acceleration"),
+        expected,
+        a,
+        1e-3 * g,
+        "m/s²",
+    );
+    c.not_converged = bad;
+    Ok(c)
+}
+
+/// A sphere (R = 0.05 m) rolling without slipping at `v0` on a horizontal floor with friction
+/// μ = 0.5 and rolling friction μ_r = `params.rolling_friction`, for `duration` s (before it
+/// stops: T < 7 v0 / (5 μ_r g)). Mechanics: the rolling torque μ_r R m g decelerates it at
+/// a = −5/7 μ_r g (m a = −F, I a / R = F R − μ_r R m g). Measured: (v_x(T) − v0) / T.
+pub fn rolling_deceleration(
+    v0: f64,
+    duration: f64,
+    params: &Params,
+) -> Result<Check, SimulationError> {
+    let r = 0.05;
+    let mu_r = params.rolling_friction;
+    let mut w = ground_world(Vec3::new(0.0, 0.0, -GRAVITY));
+    let mut b = Sphere::new(Vec3::new(0.0, 0.0, r), r, 1.0);
+    b.velocity = Vec3::new(v0, 0.0, 0.0);
+    b.angular_velocity = Vec3::new(0.0, v0 / r, 0.0);
+    w.bodies.push(b);
+    let p = Params {
+        mu: 0.5,
+        restitution: 0.0,
+        ..params.clone()
+    };
+    let n = (duration / p.h).round().max(1.0) as usize;
+    let mut sim = Simulation::new(w, p.clone())?;
+    let bad = steps(&mut sim, n)?;
+    let t = n as f64 * p.h;
+    let a = (sim.world.bodies[0].velocity.x - v0) / t;
+    let mut c = Check::new(
+        format!("ball rolling at {v0} m/s on a floor, μ_r = {mu_r}: deceleration"),
+        -5.0 / 7.0 * mu_r * GRAVITY,
+        a,
+        1e-3 * GRAVITY,
+        "m/s²",
+    );
+    c.not_converged = bad;
+    Ok(c)
+}
+
 /// A sphere dropped from height `h0` (bottom above the ground) with restitution e: the ratio
 /// of the first rebound velocity to the impact velocity (expected e) and the time until it
 /// rests (expected √(2 h0 / g) (1 + e) / (1 − e), the sum of the bounce series).

@@ -1,56 +1,61 @@
-//! Rolling resistance: the contact law of (2.9) extended by a rolling-friction cone, and the
-//! step's 5-component problem solved by a per-contact block Gauss–Seidel (docs/granular.md,
+//! Rolling resistance: the contact law (2.9) extended by a rolling-friction cone, and the
+//! step's 6-component problem solved by a per-contact block Gauss–Seidel (docs/granular.md,
 //! "Rolling resistance").
 //!
 //! # The law
 //! Contact i between sphere A and B (sphere or obstacle) gets, besides r = (r_N, r_T) of
-//! (2.9), a rolling impulse y ∈ ℝ² (components on t₁, t₂): a torque impulse R_e (y₁ t₁ + y₂ t₂)
-//! on A and its opposite on a sphere B, with the effective radius R_e = R_A R_B / (R_A + R_B)
-//! between two spheres and R_e = R_A against an obstacle (Ai et al., Powder Technol. 206,
-//! 2011, "model A"). Its velocity is the scaled relative rolling velocity
+//! (2.9), a resisting impulse y ∈ ℝ³ on the axes (t₁, t₂, n): a torque impulse
+//! R_e (y₁ t₁ + y₂ t₂ + y₃ n) on A and its opposite on a sphere B, with the effective radius
+//! R_e = R_A R_B / (R_A + R_B) between two spheres and R_e = R_A against an obstacle (Ai et al.,
+//! Powder Technol. 206, 2011, "model A"). y₁, y₂ resist rolling, y₃ spinning (without it a
+//! sphere spinning about the normal on a floor never stops). Its velocity is the scaled
+//! relative angular velocity
 //!
 //! ```text
-//!     ω_R = R_e (t₁·(ω_A − ω_B), t₂·(ω_A − ω_B))        (ω_B: the obstacle's own rotation)
+//!     ω_R = R_e (t₁, t₂, n)·(ω_A − ω_B)        (ω_B: the obstacle's own rotation)
 //! ```
 //!
 //! so that y is an impulse (N s) and ω_R a velocity (m/s), like r and u. With a dimensionless
-//! rolling-friction coefficient μ_r the law is the cone of Siconos' rolling friction and
-//! LMGC90, ‖torque‖ ≤ μ_r R_e r_N, with maximal dissipation on ω_R at t_{k+1}:
+//! rolling-friction coefficient μ_r the cone is the one of Siconos' rolling friction and
+//! LMGC90 for the resisting torque, ‖torque‖ ≤ μ_r R_e r_N (one coefficient for rolling and
+//! spinning), with maximal dissipation on ω_R at t_{k+1}:
 //!
 //! ```text
 //!     ‖y‖ ≤ μ_r r_N,    y = −μ_r r_N ω_R / ‖ω_R‖ when ω_R ≠ 0
-//!     ⇔  y = P_{D(μ_r r_N)}(y − ω_R)            (D(ρ): the disc of radius ρ)
+//!     ⇔  y = P_{B(μ_r r_N)}(y − ω_R)            (B(ρ): the ball of radius ρ)
 //! ```
 //!
-//! Spinning (torque about n) is not resisted. μ_r = 0 is the law (2.9) alone.
+//! μ_r = 0 is the law (2.9) alone (and [`crate::Simulation::step`] then does not call this
+//! module).
 //!
 //! # The step
-//! With the 5-component Jacobian J (rows n, t₁, t₂ of H's columns, then the two rolling rows),
-//! M v = f + Jᵀ(r, y), the step's unknowns satisfy (2.9) on (u, r) and the rolling law on
-//! (ω_R, y). [`solve_step`] solves it by Gauss–Seidel over the contacts; for each contact the
-//! 5×5 block with the others frozen is solved by alternating the exact one-contact solve of
-//! (2.9) of `coulomb::inner::pgs::solve_contact_law` (rolling frozen) and the projection onto
-//! the disc (Coulomb part frozen). It stops when the error below is ≤ tol (typed status,
-//! capped by `Settings::max_inner` sweeps and `Settings::time_limit`).
+//! With the 6-component Jacobian J of a contact (the rows n, t₁, t₂ of H's columns, then the
+//! three rolling rows), M v = f + Jᵀ(r, y), the step's unknowns satisfy (2.9) on (u, r) and
+//! the rolling law on (ω_R, y). [`solve_step`] solves it by Gauss–Seidel over the contacts;
+//! each contact's 6×6 block with the others frozen is solved by alternating the exact
+//! one-contact solve of (2.9) of `coulomb::inner::pgs::solve_contact_law` (y frozen) and the
+//! exact minimizer over the ball (r frozen; the rolling block of W is β I₃ for spheres),
+//! at most [`LOCAL`] times. It stops when the error below is ≤ tol, else with a typed status
+//! after `Settings::max_inner` sweeps or `Settings::time_limit`.
 //!
 //! # Error
-//! The measure of docs/error.md on the 5-component problem, computed from the returned (r, y)
+//! The measure of docs/error.md on the 6-component problem, computed from the returned (r, y)
 //! with v = M⁻¹(f + Jᵀ(r, y)) recomputed:
 //!
 //! ```text
-//!     err = sqrt(Σᵢ ‖eᵢ‖² + ‖e_R,ᵢ‖²) / max(‖q₅‖, ‖(r, y)‖, ‖(u, ω_R)‖)
-//!     eᵢ = r − P_{K_μ}(r − ũ)               (docs/error.md)
-//!     e_R,ᵢ = y − P_{D(μ_r max(r_N, 0))}(y − ω_R)
+//!     err = sqrt(Σᵢ ‖eᵢ‖² + ‖e_R,ᵢ‖²) / max(‖q₆‖, ‖(r, y)‖, ‖(u, ω_R)‖)
+//!     eᵢ   = r − P_{K_μ}(r − ũ)                    (docs/error.md)
+//!     e_R,ᵢ = y − P_{B(μ_r max(r_N, 0))}(y − ω_R)
 //! ```
 //!
-//! with q₅ = J M⁻¹ f + w₅. e_R,ᵢ = 0 exactly when the rolling law holds (with r_N ≥ 0, which
-//! eᵢ = 0 enforces).
+//! with q₆ = J M⁻¹ f + w₆. e_R,ᵢ = 0 exactly when the rolling law holds (given r_N ≥ 0, which
+//! eᵢ = 0 enforces). A step is converged iff err ≤ tol.
 //!
 //! # Energy
-//! With θ = ½ the step's contact work is ½ (r, y)·((u, ω_R)_{k+1} + (u, ω_R)_k) =
-//! (r, y)·(u, ω_R)_{k+1} − ½ (r, y)ᵀ W₅ (r, y) with W₅ = J M⁻¹ Jᵀ positive semidefinite, and
-//! y·ω_R ≤ 0 by maximal dissipation: the rolling part never adds energy (docs/granular.md,
-//! "Energy").
+//! With θ = ½ the rolling part adds ½ y·(ω_R,k+1 + ω_R,k) to the step's energy change
+//! (docs/granular.md, "Energy"): y·ω_R,k+1 ≤ 0 by maximal dissipation, the midpoint term has no
+//! sign only when ω_R turns within a step, as for Coulomb friction. Measured: no increase
+//! (tests/rolling.rs, docs/validation.md).
 
 use crate::contact::{Contact, Partner};
 use crate::math::Vec3;
@@ -63,16 +68,16 @@ use std::time::Instant;
 
 /// Sweeps between two recomputations of v from scratch (round-off of the updates).
 const REFRESH: usize = 25;
-/// Alternations of the Coulomb solve and the disc projection inside one contact's block.
+/// Alternations of the Coulomb solve and the ball projection inside one contact's block.
 const LOCAL: usize = 10;
 
 /// State kept across steps: the rolling impulses of the last step (warm start and output).
 #[derive(Debug, Clone, Default)]
 pub struct RollingState {
-    previous: HashMap<(usize, Partner), [f64; 2]>,
+    previous: HashMap<(usize, Partner), [f64; 3]>,
     /// the rolling impulses y of the last step's contacts (same order as
     /// `Simulation::contacts`; empty when μ_r = 0)
-    pub impulses: Vec<[f64; 2]>,
+    pub impulses: Vec<[f64; 3]>,
     /// the last step's rolling part of the residual sqrt(Σ ‖e_R,ᵢ‖²) / scale
     pub rolling_error: f64,
 }
@@ -94,22 +99,23 @@ pub fn effective_radius(world: &World, c: &Contact) -> f64 {
     }
 }
 
-/// Projection of x onto the disc of radius ρ ≥ 0.
-pub fn project_disc(rho: f64, x: [f64; 2]) -> [f64; 2] {
-    let n = (x[0] * x[0] + x[1] * x[1]).sqrt();
+/// Projection of x onto the ball B(ρ) = {‖x‖ ≤ ρ}, ρ ≥ 0.
+pub fn project_ball(rho: f64, x: [f64; 3]) -> [f64; 3] {
+    let n = (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
     if n <= rho {
         x
     } else if n > 0.0 {
-        [x[0] * rho / n, x[1] * rho / n]
+        [x[0] * rho / n, x[1] * rho / n, x[2] * rho / n]
     } else {
-        [0.0; 2]
+        [0.0; 3]
     }
 }
 
-/// ‖e_R‖² = ‖y − P_{D(μ_r max(r_N, 0))}(y − ω_R)‖² of the rolling law of one contact.
-pub fn rolling_residual_sq(mu_r: f64, r_n: f64, y: [f64; 2], omega: [f64; 2]) -> f64 {
-    let p = project_disc(mu_r * r_n.max(0.0), [y[0] - omega[0], y[1] - omega[1]]);
-    (y[0] - p[0]).powi(2) + (y[1] - p[1]).powi(2)
+/// ‖e_R‖² = ‖y − P_{B(μ_r max(r_N, 0))}(y − ω_R)‖² of the rolling law of one contact.
+pub fn rolling_residual_sq(mu_r: f64, r_n: f64, y: [f64; 3], omega: [f64; 3]) -> f64 {
+    let x = [y[0] - omega[0], y[1] - omega[1], y[2] - omega[2]];
+    let p = project_ball(mu_r * r_n.max(0.0), x);
+    (0..3).map(|k| (y[k] - p[k]).powi(2)).sum()
 }
 
 /// One contact's rows of J on at most two bodies: 5 rows (n, t₁, t₂, rolling t₁, t₂) × 12
@@ -118,11 +124,11 @@ pub fn rolling_residual_sq(mu_r: f64, r_n: f64, y: [f64; 2], omega: [f64; 2]) ->
 struct Block {
     /// first dof of A and of B (None: obstacle)
     dofs: [Option<usize>; 2],
-    j: [[f64; 12]; 5],
-    w: [f64; 5],
+    j: [[f64; 12]; 6],
+    w: [f64; 6],
     mu: f64,
     /// W₅ = J M⁻¹ Jᵀ (diagonal block)
-    a: [[f64; 5]; 5],
+    a: [[f64; 6]; 6],
 }
 
 impl Block {
@@ -136,7 +142,7 @@ impl Block {
         x
     }
     /// (u, ω_R) = J v + w₅
-    fn velocity(&self, v: &[f64]) -> [f64; 5] {
+    fn velocity(&self, v: &[f64]) -> [f64; 6] {
         let x = self.gather(v);
         let mut u = self.w;
         for (k, row) in self.j.iter().enumerate() {
@@ -145,12 +151,12 @@ impl Block {
         u
     }
     /// v += M⁻¹ Jᵀ Δ
-    fn scatter(&self, minv: &[f64], delta: &[f64; 5], v: &mut [f64]) {
+    fn scatter(&self, minv: &[f64], delta: &[f64; 6], v: &mut [f64]) {
         for (s, d) in self.dofs.iter().enumerate() {
             let Some(d) = d else { continue };
             for l in 0..6 {
                 let col = 6 * s + l;
-                let t: f64 = (0..5).map(|k| self.j[k][col] * delta[k]).sum();
+                let t: f64 = (0..6).map(|k| self.j[k][col] * delta[k]).sum();
                 if t != 0.0 {
                     v[d + l] += minv[d + l] * t;
                 }
@@ -175,10 +181,10 @@ fn blocks(
         };
         let mut blk = Block {
             dofs: [Some(a), b],
-            j: [[0.0; 12]; 5],
-            w: [0.0; 5],
+            j: [[0.0; 12]; 6],
+            w: [0.0; 6],
             mu: problem.mu.get(i).copied().unwrap_or(0.0),
-            a: [[0.0; 5]; 5],
+            a: [[0.0; 6]; 6],
         };
         // the Coulomb rows: H's columns 3i + k, as assembled (so that u = Hᵀ v + w)
         for k in 0..3 {
@@ -205,7 +211,7 @@ fn blocks(
         }
         // the rolling rows: R_e t_k on A's rotational dofs, −R_e t_k on B's
         let re = effective_radius(world, c);
-        for (k, t) in [c.t1, c.t2].iter().enumerate() {
+        for (k, t) in [c.t1, c.t2, c.normal].iter().enumerate() {
             let row = t.to_array();
             let locked_a = world.bodies.get(c.body).is_none_or(|s| s.rotation_locked);
             if !locked_a {
@@ -237,8 +243,8 @@ fn blocks(
                 md[6 * s..6 * s + 6].copy_from_slice(&minv[*d..*d + 6]);
             }
         }
-        for p in 0..5 {
-            for q in 0..5 {
+        for p in 0..6 {
+            for q in 0..6 {
                 blk.a[p][q] = (0..12).map(|l| blk.j[p][l] * md[l] * blk.j[q][l]).sum();
             }
         }
@@ -264,23 +270,23 @@ fn inverse3(a: &[f64; 9]) -> [f64; 9] {
     ]
 }
 
-/// Solves contact i's 5-component law with the other contacts frozen: (u, ω_R) = A₅ x + c.
+/// Solves contact i's 6-component law with the other contacts frozen: (u, ω_R) = A₆ x + c.
 /// Alternates the exact solve of (2.9) for the Coulomb part with y frozen and the minimizer of
-/// ½ β‖y‖² + bᵀy over the disc D(μ_r r_N) with r frozen (A₅'s rolling block is β I₂ for spheres:
+/// ½ β‖y‖² + bᵀy over the ball B(μ_r r_N) with r frozen (A₆'s rolling block is β I₃ for spheres:
 /// scalar inertia), at most [`LOCAL`] times.
-fn solve_block(blk: &Block, mu_r: f64, c: &[f64; 5], old: &[f64; 5]) -> [f64; 5] {
+fn solve_block(blk: &Block, mu_r: f64, c: &[f64; 6], old: &[f64; 6]) -> [f64; 6] {
     let a = &blk.a;
     let a3 = [
         a[0][0], a[0][1], a[0][2], a[1][0], a[1][1], a[1][2], a[2][0], a[2][1], a[2][2],
     ];
     let ainv = inverse3(&a3);
-    let beta = 0.5 * (a[3][3] + a[4][4]);
+    let beta = (a[3][3] + a[4][4] + a[5][5]) / 3.0;
     let mut x = *old;
     for _ in 0..LOCAL {
         // Coulomb part, y frozen: c_C + C y
         let mut cc = [0.0; 3];
         for k in 0..3 {
-            cc[k] = c[k] + a[k][3] * x[3] + a[k][4] * x[4];
+            cc[k] = c[k] + a[k][3] * x[3] + a[k][4] * x[4] + a[k][5] * x[5];
         }
         let mut one = OneContact {
             a: &a3,
@@ -302,19 +308,20 @@ fn solve_block(blk: &Block, mu_r: f64, c: &[f64; 5], old: &[f64; 5]) -> [f64; 5]
             solve_contact(&one, &warm)
         });
         // rolling part, r frozen: b = c_R + Cᵀ r
-        let mut b = [0.0; 2];
-        for k in 0..2 {
+        let mut b = [0.0; 3];
+        for k in 0..3 {
             b[k] = c[3 + k] + (0..3).map(|l| a[3 + k][l] * r[l]).sum::<f64>();
         }
         let rho = mu_r * r[0].max(0.0);
         let y = if beta > 0.0 {
-            project_disc(rho, [-b[0] / beta, -b[1] / beta])
+            project_ball(rho, [-b[0] / beta, -b[1] / beta, -b[2] / beta])
         } else {
             // no rotational dof on either side: y does not act, the law only fixes its
             // direction
-            project_disc(rho, [-b[0] * f64::MAX.sqrt(), -b[1] * f64::MAX.sqrt()])
+            let big = f64::MAX.sqrt();
+            project_ball(rho, [-b[0] * big, -b[1] * big, -b[2] * big])
         };
-        let new = [r[0], r[1], r[2], y[0], y[1]];
+        let new = [r[0], r[1], r[2], y[0], y[1], y[2]];
         let change: f64 = new.iter().zip(&x).map(|(p, q)| (p - q).abs()).sum();
         let size: f64 = new.iter().map(|p| p.abs()).sum();
         x = new;
@@ -325,12 +332,12 @@ fn solve_block(blk: &Block, mu_r: f64, c: &[f64; 5], old: &[f64; 5]) -> [f64; 5]
     x
 }
 
-/// The error of the 5-component problem (module doc) and its rolling part, from (r, y) and v.
+/// The error of the 6-component problem (module doc) and its rolling part, from (r, y) and v.
 fn error_of(
     blocks: &[Block],
     mu_r: f64,
     r: &[f64],
-    y: &[[f64; 2]],
+    y: &[[f64; 3]],
     v: &[f64],
     q_norm: f64,
 ) -> (f64, f64) {
@@ -339,8 +346,8 @@ fn error_of(
         let u = blk.velocity(v);
         let ri = &r[3 * i..3 * i + 3];
         e2 += coulomb::law::contact_residual_sq(blk.mu, &u[..3], ri);
-        er2 += rolling_residual_sq(mu_r, ri[0], y[i], [u[3], u[4]]);
-        r2 += ri.iter().map(|x| x * x).sum::<f64>() + y[i][0] * y[i][0] + y[i][1] * y[i][1];
+        er2 += rolling_residual_sq(mu_r, ri[0], y[i], [u[3], u[4], u[5]]);
+        r2 += ri.iter().chain(&y[i]).map(|x| x * x).sum::<f64>();
         u2 += u.iter().map(|x| x * x).sum::<f64>();
     }
     let scale = q_norm.max(r2.sqrt()).max(u2.sqrt());
@@ -355,23 +362,23 @@ fn error_of(
 }
 
 /// v = M⁻¹ (f + Jᵀ (r, y)).
-fn velocities(problem: &GlobalProblem, blocks: &[Block], r: &[f64], y: &[[f64; 2]]) -> Vec<f64> {
+fn velocities(problem: &GlobalProblem, blocks: &[Block], r: &[f64], y: &[[f64; 3]]) -> Vec<f64> {
     let minv: Vec<f64> = problem.m.values.iter().map(|m| 1.0 / m).collect();
     let mut v: Vec<f64> = problem.f.iter().zip(&minv).map(|(f, mi)| f * mi).collect();
     for (i, blk) in blocks.iter().enumerate() {
-        let d = [r[3 * i], r[3 * i + 1], r[3 * i + 2], y[i][0], y[i][1]];
+        let d = [r[3 * i], r[3 * i + 1], r[3 * i + 2], y[i][0], y[i][1], y[i][2]];
         blk.scatter(&minv, &d, &mut v);
     }
     v
 }
 
-/// Solves one step's 5-component problem (module doc) for the assembled Coulomb problem
+/// Solves one step's 6-component problem (module doc) for the assembled Coulomb problem
 /// `problem` (M diagonal, H, f, w, μ of `crate::assembly::assemble`) and the contacts it was
 /// assembled from, warm started from `guess_r` (3 per contact) and the previous step's rolling
 /// impulses of persisting contacts. On return `problem.f` holds f + J_Rᵀ y (the rolling
 /// impulses as given external impulses), so that the returned r, v solve the Coulomb problem
-/// as stored with the error of docs/error.md ≤ the reported 5-component error; the reported
-/// `error` and status are those of the 5-component problem.
+/// as stored with the error of docs/error.md ≤ the reported 6-component error; the reported
+/// `error` and status are those of the 6-component problem.
 pub fn solve_step(
     world: &World,
     contacts: &[Contact],
@@ -400,11 +407,11 @@ pub fn solve_step(
     } else {
         vec![0.0; 3 * n]
     };
-    let mut y: Vec<[f64; 2]> = contacts
+    let mut y: Vec<[f64; 3]> = contacts
         .iter()
-        .map(|c| state.previous.get(&c.key()).copied().unwrap_or([0.0; 2]))
+        .map(|c| state.previous.get(&c.key()).copied().unwrap_or([0.0; 3]))
         .collect();
-    // ‖q₅‖, q₅ = J M⁻¹ f + w₅
+    // ‖q₆‖, q₆ = J M⁻¹ f + w₆
     let v_free: Vec<f64> = problem.f.iter().zip(&minv).map(|(f, m)| f * m).collect();
     let q_norm = blocks
         .iter()
@@ -430,19 +437,26 @@ pub fn solve_step(
         }
         for (i, blk) in blocks.iter().enumerate() {
             let u = blk.velocity(&v);
-            let old = [r[3 * i], r[3 * i + 1], r[3 * i + 2], y[i][0], y[i][1]];
-            let mut c = [0.0; 5];
-            for k in 0..5 {
-                c[k] = u[k] - (0..5).map(|l| blk.a[k][l] * old[l]).sum::<f64>();
+            let old = [
+                r[3 * i],
+                r[3 * i + 1],
+                r[3 * i + 2],
+                y[i][0],
+                y[i][1],
+                y[i][2],
+            ];
+            let mut c = [0.0; 6];
+            for k in 0..6 {
+                c[k] = u[k] - (0..6).map(|l| blk.a[k][l] * old[l]).sum::<f64>();
             }
             let new = solve_block(blk, mu_r, &c, &old);
-            let mut delta = [0.0; 5];
-            for k in 0..5 {
+            let mut delta = [0.0; 6];
+            for k in 0..6 {
                 delta[k] = new[k] - old[k];
             }
             blk.scatter(&minv, &delta, &mut v);
             r[3 * i..3 * i + 3].copy_from_slice(&new[..3]);
-            y[i] = [new[3], new[4]];
+            y[i] = [new[3], new[4], new[5]];
         }
         sweeps += 1;
         if sweeps % REFRESH == 0 {
@@ -492,7 +506,7 @@ pub fn solve_step(
 }
 
 /// The rolling torque impulse on A of contact `c` with rolling impulse y: R_e (y₁ t₁ + y₂ t₂).
-pub fn torque(world: &World, c: &Contact, y: [f64; 2]) -> Vec3 {
+pub fn torque(world: &World, c: &Contact, y: [f64; 3]) -> Vec3 {
     (c.t1 * y[0] + c.t2 * y[1]) * effective_radius(world, c)
 }
 
@@ -501,19 +515,19 @@ mod tests {
     use super::*;
 
     #[test]
-    fn disc_projection_and_residual() {
-        assert_eq!(project_disc(1.0, [0.3, 0.4]), [0.3, 0.4]);
-        let p = project_disc(1.0, [3.0, 4.0]);
-        assert!((p[0] - 0.6).abs() < 1e-15 && (p[1] - 0.8).abs() < 1e-15);
-        assert_eq!(project_disc(0.0, [3.0, 4.0]), [0.0, 0.0]);
-        // sliding roll: y = −μ_r r_N ω/‖ω‖ satisfies the law
-        assert!(rolling_residual_sq(0.1, 2.0, [-0.2, 0.0], [0.5, 0.0]) < 1e-30);
+    fn ball_projection_and_residual() {
+        assert_eq!(project_ball(1.0, [0.3, 0.4, 0.0]), [0.3, 0.4, 0.0]);
+        let p = project_ball(1.0, [3.0, 0.0, 4.0]);
+        assert!((p[0] - 0.6).abs() < 1e-15 && (p[2] - 0.8).abs() < 1e-15 && p[1] == 0.0);
+        assert_eq!(project_ball(0.0, [3.0, 4.0, 1.0]), [0.0; 3]);
+        // rolling and spinning: y = −μ_r r_N ω/‖ω‖ satisfies the law
+        assert!(rolling_residual_sq(0.1, 2.0, [-0.12, 0.0, -0.16], [0.3, 0.0, 0.4]) < 1e-30);
         // wrong direction: violated
-        assert!(rolling_residual_sq(0.1, 2.0, [0.2, 0.0], [0.5, 0.0]) > 0.01);
-        // rolling stopped with y inside the disc: satisfied
-        assert!(rolling_residual_sq(0.1, 2.0, [0.05, -0.1], [0.0, 0.0]) < 1e-30);
+        assert!(rolling_residual_sq(0.1, 2.0, [0.2, 0.0, 0.0], [0.5, 0.0, 0.0]) > 0.01);
+        // rotation stopped with y inside the ball: satisfied
+        assert!(rolling_residual_sq(0.1, 2.0, [0.05, -0.1, 0.1], [0.0; 3]) < 1e-30);
         // no normal impulse: y must vanish
-        assert!(rolling_residual_sq(0.1, 0.0, [0.05, 0.0], [0.0, 0.0]) > 1e-4);
+        assert!(rolling_residual_sq(0.1, 0.0, [0.05, 0.0, 0.0], [0.0; 3]) > 1e-4);
     }
 
     #[test]

@@ -69,7 +69,7 @@ use std::time::Instant;
 /// Sweeps between two recomputations of v from scratch (round-off of the updates).
 const REFRESH: usize = 25;
 /// Alternations of the Coulomb solve and the ball projection inside one contact's block.
-const LOCAL: usize = 10;
+const LOCAL: usize = 20;
 
 /// State kept across steps: the rolling impulses of the last step (warm start and output).
 #[derive(Debug, Clone, Default)]
@@ -270,15 +270,61 @@ fn inverse3(a: &[f64; 9]) -> [f64; 9] {
     ]
 }
 
+/// The solution x of A x = −c (6 × 6, Gaussian elimination with partial pivoting); None when
+/// A is singular to rounding (a body without rotational dof gives zero rolling rows).
+fn solve6(a: &[[f64; 6]; 6], c: &[f64; 6]) -> Option<[f64; 6]> {
+    let mut m = [[0.0; 7]; 6];
+    let scale = (0..6).map(|k| a[k][k].abs()).fold(0.0, f64::max);
+    for i in 0..6 {
+        m[i][..6].copy_from_slice(&a[i]);
+        m[i][6] = -c[i];
+    }
+    for col in 0..6 {
+        let p = (col..6).max_by(|&i, &j| m[i][col].abs().total_cmp(&m[j][col].abs()))?;
+        if !(m[p][col].abs() > 1e-12 * scale) {
+            return None;
+        }
+        m.swap(col, p);
+        for i in col + 1..6 {
+            let f = m[i][col] / m[col][col];
+            if f != 0.0 {
+                for k in col..7 {
+                    m[i][k] -= f * m[col][k];
+                }
+            }
+        }
+    }
+    let mut x = [0.0; 6];
+    for i in (0..6).rev() {
+        let s: f64 = (i + 1..6).map(|k| m[i][k] * x[k]).sum();
+        x[i] = (m[i][6] - s) / m[i][i];
+    }
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
 /// Solves contact i's 6-component law with the other contacts frozen: (u, ω_R) = A₆ x + c.
 /// Alternates the exact solve of (2.9) for the Coulomb part with y frozen and the minimizer of
 /// ½ β‖y‖² + bᵀy over the ball B(μ_r r_N) with r frozen (A₆'s rolling block is β I₃ for spheres:
-/// scalar inertia), at most [`LOCAL`] times.
+/// scalar inertia), at most [`LOCAL`] times, after two exact cases: take-off (c_N ≥ 0) and
+/// stick without rotation (A₆ x = −c inside both cones).
 fn solve_block(blk: &Block, mu_r: f64, c: &[f64; 6], old: &[f64; 6]) -> [f64; 6] {
     let a = &blk.a;
     let a3 = [
         a[0][0], a[0][1], a[0][2], a[1][0], a[1][1], a[1][2], a[2][0], a[2][1], a[2][2],
     ];
+    // take-off: r = 0, y = 0 (the ball shrinks to {0}) solves the block when c_N ≥ 0
+    if c[0] >= 0.0 {
+        return [0.0; 6];
+    }
+    // stick and no rotation: A₆ x = −c, accepted when r ∈ K_μ and ‖y‖ ≤ μ_r r_N (the common
+    // case in a pile at rest)
+    if let Some(x) = solve6(a, c) {
+        let rt = (x[1] * x[1] + x[2] * x[2]).sqrt();
+        let ry = (x[3] * x[3] + x[4] * x[4] + x[5] * x[5]).sqrt();
+        if x[0] >= 0.0 && rt <= blk.mu * x[0] && ry <= mu_r * x[0] {
+            return x;
+        }
+    }
     let ainv = inverse3(&a3);
     let beta = (a[3][3] + a[4][4] + a[5][5]) / 3.0;
     let mut x = *old;
@@ -325,7 +371,7 @@ fn solve_block(blk: &Block, mu_r: f64, c: &[f64; 6], old: &[f64; 6]) -> [f64; 6]
         let change: f64 = new.iter().zip(&x).map(|(p, q)| (p - q).abs()).sum();
         let size: f64 = new.iter().map(|p| p.abs()).sum();
         x = new;
-        if change <= 1e-12 * size {
+        if change <= 1e-9 * size {
             break;
         }
     }
@@ -528,6 +574,24 @@ mod tests {
         assert!(rolling_residual_sq(0.1, 2.0, [0.05, -0.1, 0.1], [0.0; 3]) < 1e-30);
         // no normal impulse: y must vanish
         assert!(rolling_residual_sq(0.1, 0.0, [0.05, 0.0, 0.0], [0.0; 3]) > 1e-4);
+    }
+
+    #[test]
+    fn six_by_six_solve() {
+        let mut a = [[0.0; 6]; 6];
+        for i in 0..6 {
+            for j in 0..6 {
+                a[i][j] = 1.0 / (1.0 + (i as f64 - j as f64).abs());
+            }
+            a[i][i] += 2.0;
+        }
+        let c = [1.0, -2.0, 0.5, 0.0, 3.0, -1.0];
+        let x = solve6(&a, &c).unwrap();
+        for i in 0..6 {
+            let r: f64 = (0..6).map(|j| a[i][j] * x[j]).sum::<f64>() + c[i];
+            assert!(r.abs() < 1e-13);
+        }
+        assert!(solve6(&[[0.0; 6]; 6], &c).is_none());
     }
 
     #[test]

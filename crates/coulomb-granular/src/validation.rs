@@ -513,6 +513,95 @@ pub fn drum_angle(
     Ok((sum / count.max(1) as f64, bad))
 }
 
+/// The `funnel` scene with `beads` beads run until rest (speeds < 0.05 m/s for 10 steps) or
+/// `max_steps`: the flank angle of the heap on the floor (degrees), seen along y — the highest
+/// bead top (z + R) of each 2R-wide slice in x, least-squares lines through the slices whose
+/// top is between 20 % and 80 % of the heap's height on each side of the summit, the mean of
+/// the two flanks' angles.
+pub fn funnel_heap(
+    beads: usize,
+    max_steps: usize,
+    params: &Params,
+) -> Result<HeapResult, SimulationError> {
+    let mut sim = Simulation::new(Scene::Funnel.build(beads, 1), params.clone())?;
+    let mut out = HeapResult::default();
+    let mut calm = 0;
+    while sim.steps_done < max_steps {
+        if !sim.step()?.converged {
+            out.not_converged += 1;
+        }
+        calm = if sim.max_speed() < 0.05 { calm + 1 } else { 0 };
+        if calm >= 10 {
+            out.at_rest = true;
+            break;
+        }
+    }
+    out.steps = sim.steps_done;
+    let r = crate::scene::BEAD_RADIUS;
+    let w = 2.0 * r;
+    let mut top: std::collections::BTreeMap<i64, f64> = Default::default();
+    for b in sim.world.bodies.iter().filter(|b| b.position.z < 0.9) {
+        let k = (b.position.x / w).floor() as i64;
+        let e = top.entry(k).or_insert(0.0);
+        *e = f64::max(*e, b.position.z + b.radius);
+    }
+    let pts: Vec<(f64, f64)> = top
+        .iter()
+        .map(|(k, z)| ((*k as f64 + 0.5) * w, *z))
+        .collect();
+    let Some(&(xs, peak)) = pts.iter().max_by(|a, b| a.1.total_cmp(&b.1)) else {
+        return Ok(out);
+    };
+    out.height = peak;
+    let flank = |left: bool| -> Option<f64> {
+        let sel: Vec<(f64, f64)> = pts
+            .iter()
+            .copied()
+            .filter(|p| (p.0 < xs) == left && p.0 != xs)
+            .filter(|p| p.1 >= 0.2 * peak && p.1 <= 0.8 * peak)
+            .collect();
+        slope(&sel).map(|s| s.atan().to_degrees().abs())
+    };
+    let (a, b) = (flank(true), flank(false));
+    out.angle = match (a, b) {
+        (Some(a), Some(b)) => 0.5 * (a + b),
+        (Some(a), None) | (None, Some(a)) => a,
+        _ => f64::NAN,
+    };
+    Ok(out)
+}
+
+/// Least-squares slope of z over x (None with fewer than 2 distinct x).
+fn slope(pts: &[(f64, f64)]) -> Option<f64> {
+    if pts.len() < 2 {
+        return None;
+    }
+    let m = pts.len() as f64;
+    let (sx, sz) = pts.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
+    let (mx, mz) = (sx / m, sz / m);
+    let (mut sxx, mut sxz) = (0.0, 0.0);
+    for p in pts {
+        sxx += (p.0 - mx) * (p.0 - mx);
+        sxz += (p.0 - mx) * (p.1 - mz);
+    }
+    (sxx > 0.0).then(|| sxz / sxx)
+}
+
+/// Result of [`funnel_heap`].
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct HeapResult {
+    /// steps taken
+    pub steps: usize,
+    /// reached the rest rule
+    pub at_rest: bool,
+    /// height of the summit (m)
+    pub height: f64,
+    /// mean flank angle (degrees)
+    pub angle: f64,
+    /// steps not converged
+    pub not_converged: usize,
+}
+
 /// Angle (degrees) of the free surface of the beads, seen along the y axis.
 fn surface_angle(world: &World) -> Option<f64> {
     let r = crate::scene::BEAD_RADIUS;

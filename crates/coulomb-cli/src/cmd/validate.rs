@@ -103,6 +103,55 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let (a, b) = validation::cylinder_roll(10.0, 6.0, &p)?;
     section("Cylinder", a, &mut checks);
     section("Cylinder", b, &mut checks);
+    // rolling resistance (--rolling-friction): the defaults with μ_r set
+    let with_mu_r = |mu_r: f64| Params {
+        rolling_friction: mu_r,
+        ..p.clone()
+    };
+    for (deg, mu) in [(5.0, 0.5), (20.0, 0.5), (30.0, 0.1)] {
+        let c = validation::incline_rolling_resistance(deg, mu, 1.0, &with_mu_r(0.1))?;
+        section("Rolling resistance", c, &mut checks);
+    }
+    for mu_r in [0.05, 0.1] {
+        let c = validation::rolling_deceleration(1.0, 1.0, &with_mu_r(mu_r))?;
+        section("Rolling resistance", c, &mut checks);
+    }
+    for (e, mu) in [(1.0, 0.0), (0.2, 0.3), (0.5, 0.8)] {
+        let b = validation::box_energy(150, e, mu, steps, &with_mu_r(0.1))?;
+        let c = Check {
+            name: format!(
+                "box, 150 beads, μ_r = 0.1, e = {e}, μ = {mu}, {steps} steps: largest one-step increase of E − W_p, / E₀"
+            ),
+            expected: 0.0,
+            measured: b.worst_increase.max(0.0) / b.e0,
+            tolerance: p.solver.tol,
+            unit: String::new(),
+            not_converged: b.not_converged,
+        };
+        section("Rolling resistance", c, &mut checks);
+    }
+    if !args.quick {
+        let settings = coulomb_granular::SimulationSettings {
+            scene: coulomb_granular::Scene::Box,
+            beads: 600,
+            seed: 1,
+            params: with_mu_r(0.1),
+            stop: coulomb_granular::Stop::until_rest(),
+        };
+        let s = coulomb_granular::run(&settings)?;
+        let c = Check {
+            name: format!(
+                "box, 600 beads, μ_r = 0.1, `--until-rest` (speeds < 0.05 m/s for 10 steps, cap 2000): at rest (1 = yes), after {} steps",
+                s.steps
+            ),
+            expected: 1.0,
+            measured: if s.at_rest { 1.0 } else { 0.0 },
+            tolerance: 0.0,
+            unit: String::new(),
+            not_converged: s.not_converged_steps,
+        };
+        section("Rolling resistance", c, &mut checks);
+    }
     if !args.quick {
         let bed = validation::settled_bed(400, 0.5, 1500, &p)?;
         let mk = |name: &str, expected: f64, measured: f64, tolerance: f64| Check {

@@ -215,15 +215,15 @@ fn blocks(
             let row = t.to_array();
             let locked_a = world.bodies.get(c.body).is_none_or(|s| s.rotation_locked);
             if !locked_a {
-                for l in 0..3 {
-                    blk.j[3 + k][3 + l] = re * row[l];
+                for (dst, x) in blk.j[3 + k][3..6].iter_mut().zip(row) {
+                    *dst = re * x;
                 }
             }
             match c.partner {
                 Partner::Body(j) => {
                     if !world.bodies.get(j).is_none_or(|s| s.rotation_locked) {
-                        for l in 0..3 {
-                            blk.j[3 + k][9 + l] = -re * row[l];
+                        for (dst, x) in blk.j[3 + k][9..12].iter_mut().zip(row) {
+                            *dst = -re * x;
                         }
                     }
                 }
@@ -281,15 +281,17 @@ fn solve6(a: &[[f64; 6]; 6], c: &[f64; 6]) -> Option<[f64; 6]> {
     }
     for col in 0..6 {
         let p = (col..6).max_by(|&i, &j| m[i][col].abs().total_cmp(&m[j][col].abs()))?;
-        if !(m[p][col].abs() > 1e-12 * scale) {
+        let pivot = m[p][col].abs();
+        if pivot.is_nan() || pivot <= 1e-12 * scale {
             return None;
         }
         m.swap(col, p);
-        for i in col + 1..6 {
-            let f = m[i][col] / m[col][col];
+        let top = m[col];
+        for row in m.iter_mut().skip(col + 1) {
+            let f = row[col] / top[col];
             if f != 0.0 {
-                for k in col..7 {
-                    m[i][k] -= f * m[col][k];
+                for (x, t) in row[col..].iter_mut().zip(&top[col..]) {
+                    *x -= f * t;
                 }
             }
         }
@@ -412,7 +414,14 @@ fn velocities(problem: &GlobalProblem, blocks: &[Block], r: &[f64], y: &[[f64; 3
     let minv: Vec<f64> = problem.m.values.iter().map(|m| 1.0 / m).collect();
     let mut v: Vec<f64> = problem.f.iter().zip(&minv).map(|(f, mi)| f * mi).collect();
     for (i, blk) in blocks.iter().enumerate() {
-        let d = [r[3 * i], r[3 * i + 1], r[3 * i + 2], y[i][0], y[i][1], y[i][2]];
+        let d = [
+            r[3 * i],
+            r[3 * i + 1],
+            r[3 * i + 2],
+            y[i][0],
+            y[i][1],
+            y[i][2],
+        ];
         blk.scatter(&minv, &d, &mut v);
     }
     v
@@ -514,7 +523,7 @@ pub fn solve_step(
     v = velocities(problem, &blocks, &r, &y);
     let (err, rolling_err) = error_of(&blocks, mu_r, &r, &y, &v, q_norm);
     let status = match status {
-        Status::Converged if !(err <= settings.tol) => Status::MaxIterations,
+        Status::Converged if err.is_nan() || err > settings.tol => Status::MaxIterations,
         s => s,
     };
     // the Coulomb problem as stored: f + J_Rᵀ y
@@ -578,13 +587,12 @@ mod tests {
 
     #[test]
     fn six_by_six_solve() {
-        let mut a = [[0.0; 6]; 6];
-        for i in 0..6 {
-            for j in 0..6 {
-                a[i][j] = 1.0 / (1.0 + (i as f64 - j as f64).abs());
-            }
-            a[i][i] += 2.0;
-        }
+        let a: [[f64; 6]; 6] = std::array::from_fn(|i| {
+            std::array::from_fn(|j| {
+                let diag = if i == j { 2.0 } else { 0.0 };
+                1.0 / (1.0 + (i as f64 - j as f64).abs()) + diag
+            })
+        });
         let c = [1.0, -2.0, 0.5, 0.0, 3.0, -1.0];
         let x = solve6(&a, &c).unwrap();
         for i in 0..6 {

@@ -1,8 +1,8 @@
 //! Rolling resistance (crate::rolling): textbook mechanics of a ball with a rolling-friction
 //! cone, the energy of a box run, and μ_r = 0 leaving the step unchanged. Fast (seconds).
 
-use coulomb_granular::validation::{incline_rolling_resistance, rolling_deceleration};
 use coulomb::solver::Settings;
+use coulomb_granular::validation::{incline_rolling_resistance, rolling_deceleration};
 use coulomb_granular::{Params, Scene, Simulation};
 
 /// The defaults with every step solved to err ≤ 1e-4 (as `coulomb simulate`).
@@ -77,7 +77,11 @@ fn energy_never_grows_with_rolling_resistance() {
                 s.projection_work
             );
             prev = en;
-            let largest = sim.rolling.impulses.iter().map(|y| (y[0] * y[0] + y[1] * y[1] + y[2] * y[2]).sqrt());
+            let largest = sim
+                .rolling
+                .impulses
+                .iter()
+                .map(|y| (y[0] * y[0] + y[1] * y[1] + y[2] * y[2]).sqrt());
             rolled = rolled.max(largest.fold(0.0, f64::max));
         }
         assert!(rolled > 0.0, "the rolling cone was never used");
@@ -91,7 +95,10 @@ fn rolling_impulses_stay_in_their_cone() {
         let s = sim.step().unwrap();
         assert!(s.converged);
         for (c, y) in sim.contacts.iter().zip(&sim.rolling.impulses) {
-            assert!((y[0] * y[0] + y[1] * y[1] + y[2] * y[2]).sqrt() <= 0.2 * c.impulse[0].max(0.0) * (1.0 + 1e-9) + 1e-15);
+            assert!(
+                (y[0] * y[0] + y[1] * y[1] + y[2] * y[2]).sqrt()
+                    <= 0.2 * c.impulse[0].max(0.0) * (1.0 + 1e-9) + 1e-15
+            );
         }
     }
 }

@@ -116,11 +116,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let c = validation::rolling_deceleration(1.0, 1.0, &with_mu_r(mu_r))?;
         section("Rolling resistance", c, &mut checks);
     }
+    let (beads, rsteps) = if args.quick { (60, 100) } else { (150, steps) };
     for (e, mu) in [(1.0, 0.0), (0.2, 0.3), (0.5, 0.8)] {
-        let b = validation::box_energy(150, e, mu, steps, &with_mu_r(0.1))?;
+        let b = validation::box_energy(beads, e, mu, rsteps, &with_mu_r(0.1))?;
         let c = Check {
             name: format!(
-                "box, 150 beads, μ_r = 0.1, e = {e}, μ = {mu}, {steps} steps: largest one-step increase of E − W_p, / E₀"
+                "box, {beads} beads, μ_r = 0.1, e = {e}, μ = {mu}, {rsteps} steps: largest one-step increase of E − W_p, / E₀"
             ),
             expected: 0.0,
             measured: b.worst_increase.max(0.0) / b.e0,

@@ -632,15 +632,9 @@ fn surface_angle(world: &World) -> Option<f64> {
     (sxx > 0.0).then(|| (sxz / sxx).atan().to_degrees().abs())
 }
 
-/// Collapse of a granular column (Lube et al. 2004, axisymmetric): `beads` beads settled in a
-/// vertical cylinder of radius `r0` on a floor, the cylinder removed, the heap run to rest.
-/// Returns the aspect ratio a = H₀ / r₀ and the normalised runout (R∞ − r₀) / r₀ (R∞: the
-/// 95th percentile of the beads' distances from the axis, plus R).
-pub fn column_collapse(
-    beads: usize,
-    r0: f64,
-    params: &Params,
-) -> Result<ColumnResult, SimulationError> {
+/// The column of [`column_collapse`] before settling: a floor, the gate (a vertical cylinder of
+/// radius `r0` about the z axis) and `beads` beads on a lattice inside it.
+pub fn column_world(beads: usize, r0: f64) -> World {
     let r = crate::scene::BEAD_RADIUS;
     let mut world = ground_world(Vec3::new(0.0, 0.0, -GRAVITY));
     world.obstacles.push(Obstacle::fixed(
@@ -665,6 +659,22 @@ pub fn column_collapse(
         },
         |x| (x.x * x.x + x.y * x.y).sqrt() <= r0 - 1.2 * r,
     );
+    world
+}
+
+/// Collapse of a granular column (Lube et al. 2004, axisymmetric): `beads` beads settled in a
+/// vertical cylinder of radius `r0` on a floor (until speeds < 0.02 m/s for 10 steps, at most
+/// `settle_steps`), the cylinder removed, the heap run to rest (same rule, at most `max_steps`).
+/// Returns the aspect ratio a = H₀ / r₀ and the normalised runout (R∞ − r₀) / r₀ (R∞: the
+/// 95th percentile of the beads' distances from the axis, plus R).
+pub fn column_collapse(
+    beads: usize,
+    r0: f64,
+    settle_steps: usize,
+    max_steps: usize,
+    params: &Params,
+) -> Result<ColumnResult, SimulationError> {
+    let world = column_world(beads, r0);
     let mut sim = Simulation::new(world, params.clone())?;
     let mut out = ColumnResult::default();
     let rest = |sim: &mut Simulation, cap: usize, out: &mut ColumnResult| {
@@ -680,7 +690,7 @@ pub fn column_collapse(
         }
         Ok::<bool, SimulationError>(false)
     };
-    out.settled = rest(&mut sim, 600, &mut out)?;
+    out.settled = rest(&mut sim, settle_steps, &mut out)?;
     let h0 = sim
         .world
         .bodies
@@ -689,7 +699,7 @@ pub fn column_collapse(
         .fold(0.0, f64::max);
     out.aspect = h0 / r0;
     sim.world.obstacles.truncate(1);
-    out.at_rest = rest(&mut sim, 1500, &mut out)?;
+    out.at_rest = rest(&mut sim, max_steps, &mut out)?;
     let mut d: Vec<f64> = sim
         .world
         .bodies

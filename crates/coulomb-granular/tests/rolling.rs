@@ -60,11 +60,11 @@ fn energy_never_grows_with_rolling_resistance() {
             mu,
             ..params(0.1)
         };
-        let mut sim = Simulation::new(Scene::Box.build(100, 1), p).unwrap();
+        let mut sim = Simulation::new(Scene::Box.build(60, 1), p).unwrap();
         let e0 = sim.world.kinetic_energy() + sim.world.potential_energy();
         let mut prev = e0;
         let mut rolled = 0.0f64;
-        for _ in 0..120 {
+        for _ in 0..100 {
             let s = sim.step().unwrap();
             assert!(s.converged, "e = {e}: step {} {s:?}", s.step);
             assert!(s.error <= 1e-4);
@@ -90,8 +90,8 @@ fn energy_never_grows_with_rolling_resistance() {
 
 #[test]
 fn rolling_impulses_stay_in_their_cone() {
-    let mut sim = Simulation::new(Scene::Box.build(80, 2), params(0.2)).unwrap();
-    for _ in 0..80 {
+    let mut sim = Simulation::new(Scene::Box.build(50, 2), params(0.2)).unwrap();
+    for _ in 0..60 {
         let s = sim.step().unwrap();
         assert!(s.converged);
         for (c, y) in sim.contacts.iter().zip(&sim.rolling.impulses) {

@@ -68,6 +68,11 @@ use std::time::Instant;
 
 /// Sweeps between two recomputations of v from scratch (round-off of the updates).
 const REFRESH: usize = 25;
+/// Sweeps over which the error must halve; otherwise the sweeps become damped and alternate
+/// their order (a cycling Gauss–Seidel).
+const WINDOW: usize = 200;
+/// Relaxation of the damped sweeps.
+const DAMPING: f64 = 0.5;
 /// Sweeps between two error measurements while the error is above 10 tol.
 const CHECK_EVERY: usize = 4;
 /// Alternations of the Coulomb solve and the ball projection inside one contact's block.
@@ -478,6 +483,7 @@ pub fn solve_step(
     let mut v = velocities(problem, &blocks, &r, &y);
     let (mut err, _) = error_of(&blocks, mu_r, &r, &y, &v, q_norm);
     let mut sweeps = 0;
+    let (mut stalled, mut window_start) = (false, err);
     let max_sweeps = settings.max_inner.max(1);
     let status = loop {
         if !err.is_finite() {
@@ -492,7 +498,17 @@ pub fn solve_step(
         if settings.time_limit.is_some_and(|t| start.elapsed() >= t) {
             break Status::TimeLimit;
         }
-        for (i, blk) in blocks.iter().enumerate() {
+        if sweeps > 0 && sweeps % WINDOW == 0 {
+            if err > 0.5 * window_start {
+                stalled = true;
+            }
+            window_start = err;
+        }
+        let omega = if stalled { DAMPING } else { 1.0 };
+        let backward = stalled && sweeps % 2 == 1;
+        for idx in 0..blocks.len() {
+            let i = if backward { blocks.len() - 1 - idx } else { idx };
+            let blk = &blocks[i];
             let u = blk.velocity(&v);
             let old = [
                 r[3 * i],
@@ -506,7 +522,13 @@ pub fn solve_step(
             for k in 0..6 {
                 c[k] = u[k] - (0..6).map(|l| blk.a[k][l] * old[l]).sum::<f64>();
             }
-            let new = solve_block(blk, mu_r, &c, &old);
+            let mut new = solve_block(blk, mu_r, &c, &old);
+            if omega != 1.0 {
+                // a convex combination of two points of the cones stays in them
+                for k in 0..6 {
+                    new[k] = old[k] + omega * (new[k] - old[k]);
+                }
+            }
             let mut delta = [0.0; 6];
             for k in 0..6 {
                 delta[k] = new[k] - old[k];

@@ -34,8 +34,18 @@ fn main() {
                 }
                 let s = sim.step().unwrap();
                 if k % 50 == 0 {
-                    let top = sim.world.bodies.iter().map(|b| b.position.z).fold(0.0, f64::max);
-                    let far = sim.world.bodies.iter().map(|b| (b.position - Vec3::new(0.0, 0.0, b.position.z)).norm()).fold(0.0, f64::max);
+                    let top = sim
+                        .world
+                        .bodies
+                        .iter()
+                        .map(|b| b.position.z)
+                        .fold(0.0, f64::max);
+                    let far = sim
+                        .world
+                        .bodies
+                        .iter()
+                        .map(|b| (b.position - Vec3::new(0.0, 0.0, b.position.z)).norm())
+                        .fold(0.0, f64::max);
                     eprintln!("{k} contacts {} sweeps {} ms {:.0} conv {} vmax {:.3} top {top:.3} far {far:.3}", s.contacts, s.inner_iterations, s.solve_ms, s.converged, sim.max_speed());
                 }
             }
@@ -43,7 +53,10 @@ fn main() {
         "column" => {
             let r0: f64 = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(0.25);
             let n: usize = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(300);
-            println!("{:?}", validation::column_collapse(n, r0, 150, 600, &p).unwrap())
+            println!(
+                "{:?}",
+                validation::column_collapse(n, r0, 150, 600, &p).unwrap()
+            )
         }
         "funnel" => {
             let n: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(300);

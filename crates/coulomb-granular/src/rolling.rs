@@ -507,7 +507,11 @@ pub fn solve_step(
         let omega = if stalled { DAMPING } else { 1.0 };
         let backward = stalled && sweeps % 2 == 1;
         for idx in 0..blocks.len() {
-            let i = if backward { blocks.len() - 1 - idx } else { idx };
+            let i = if backward {
+                blocks.len() - 1 - idx
+            } else {
+                idx
+            };
             let blk = &blocks[i];
             let u = blk.velocity(&v);
             let old = [

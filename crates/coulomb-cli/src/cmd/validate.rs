@@ -195,7 +195,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         // dense-flow bounds arctan μ_s … arctan μ₂ of glass beads (Jop, Forterre & Pouliquen
         // 2006), the upper one raised by the friction of the caps 5 d apart (Jop et al. 2005:
         // + μ_w h / W ≤ 0.3 · 0.5)
-        let (lo, hi) = (20.9_f64, (32.76_f64.to_radians().tan() + 0.15).atan().to_degrees());
+        let (lo, hi) = (
+            20.9_f64,
+            (32.76_f64.to_radians().tan() + 0.15).atan().to_degrees(),
+        );
         let c = Check {
             name: format!(
                 "rotating drum, 300 beads, R = 0.6 m, ω = 1 rad/s (Froude ω²R/g = 0.06), μ = {}, μ_r = 0: dynamic angle of the free surface, mean over t = 4…6 s (range {lo:.1}°…{hi:.1}°)",

@@ -82,8 +82,8 @@ const LOCAL: usize = 5;
 #[derive(Debug, Clone, Default)]
 pub struct RollingState {
     previous: HashMap<(usize, Partner), [f64; 3]>,
-    /// the rolling impulses y of the last step's contacts (same order as
-    /// `Simulation::contacts`; empty when μ_r = 0)
+    /// the rolling impulses y of the last step that had contacts, in the order of that
+    /// step's contacts (`Simulation::contacts` after it); empty when μ_r = 0
     pub impulses: Vec<[f64; 3]>,
     /// the last step's rolling part of the residual sqrt(Σ ‖e_R,ᵢ‖²) / scale
     pub rolling_error: f64,

@@ -308,7 +308,7 @@ impl Simulation {
             let mut problem = problem;
             let t1 = Instant::now();
             // ---- hook: rolling resistance (crate::rolling). With μ_r > 0 the step's
-            // 5-component problem is solved there (problem.f then holds the rolling impulses);
+            // 6-component problem is solved there (problem.f then holds the rolling impulses);
             // otherwise the library's solver, as before.
             let rolling = (self.params.rolling_friction > 0.0).then(|| {
                 crate::rolling::solve_step(

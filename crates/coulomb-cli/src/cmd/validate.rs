@@ -261,7 +261,7 @@ fn markdown(checks: &[(String, Check)], quick: bool) -> String {
         s,
         "# Physics validation\n\nProduced by `coulomb validate{}` at the default settings of `coulomb simulate` \
          (h = 0.02 s, θ = ½, every step solved to err ≤ 1e-4 by Gauss–Seidel on the law, activation γ = 1 with δ from the \
-         tolerance, position correction on). {passed} of {} checks pass. Why each tolerance: docs/granular.md, \"Validation\".\n",
+         tolerance, position correction on; μ_r set where a row names it). {passed} of {} checks pass. Why each tolerance: docs/granular.md, \"Validation\".\n",
         if quick { " --quick" } else { "" },
         checks.len()
     );

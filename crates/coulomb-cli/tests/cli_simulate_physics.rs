@@ -96,3 +96,26 @@ fn validate_quick_passes_and_writes_markdown() {
     assert!(text.contains("| incline 30° μ = 0.3 rolling: acceleration |"));
     assert!(!text.contains("**no**"), "{text}");
 }
+
+#[test]
+fn simulate_with_rolling_friction_comes_to_rest() {
+    // without rolling resistance spheres on a monolayer never stop rolling (#17 §4)
+    let out = coulomb(&[
+        "simulate",
+        "box",
+        "--beads",
+        "30",
+        "--until-rest",
+        "--max-steps",
+        "400",
+        "--rolling-friction",
+        "0.2",
+        "--json",
+    ]);
+    let v = stdout_json(&out);
+    assert_eq!(v["at_rest"].as_bool(), Some(true), "{v}");
+    assert_eq!(v["not_converged_steps"].as_u64(), Some(0), "{v}");
+    assert!(v["max_error"].as_f64().unwrap() <= 1e-4, "{v}");
+    let out = coulomb(&["simulate", "box", "--rolling-friction", "-1"]);
+    assert!(!out.status.success());
+}

@@ -18,6 +18,7 @@ pub mod math;
 pub mod nsgs;
 pub mod output;
 pub mod projection;
+pub mod rolling;
 pub mod run;
 pub mod scene;
 pub mod simulation;

@@ -35,6 +35,9 @@ pub struct Params {
     pub projection: Option<Projection>,
     /// which solver takes each step (`solver` is used by [`StepMethod::Library`] only)
     pub method: StepMethod,
+    /// rolling-friction coefficient μ_r ≥ 0 (dimensionless): rolling torque impulse
+    /// ≤ μ_r R_e r_N ([`crate::rolling`]); 0 (default): no rolling resistance
+    pub rolling_friction: f64,
 }
 
 /// Which solver takes each step.
@@ -60,6 +63,7 @@ impl Default for Params {
             warm_start: true,
             projection: Some(Projection::default()),
             method: StepMethod::Library,
+            rolling_friction: 0.0,
         }
     }
 }
@@ -173,6 +177,8 @@ pub struct Simulation {
     previous: Vec<((usize, Partner), [f64; 3])>,
     /// bound ε_u = max(err, tol) · scale on the residual velocity of the last step's contacts
     residual_velocity: f64,
+    /// rolling resistance (crate::rolling): warm start and last rolling impulses
+    pub rolling: crate::rolling::RollingState,
 }
 
 impl Simulation {
@@ -191,6 +197,12 @@ impl Simulation {
         }
         if !(p.mu >= 0.0 && p.mu.is_finite()) {
             return bad(format!("mu = {} is not a finite nonnegative number", p.mu));
+        }
+        if !(p.rolling_friction >= 0.0 && p.rolling_friction.is_finite()) {
+            return bad(format!(
+                "rolling friction = {} is not a finite nonnegative number",
+                p.rolling_friction
+            ));
         }
         if let Some(pr) = &p.projection {
             let ok = |x: f64| x.is_finite() && x > 0.0 && x < 1.0;
@@ -233,6 +245,7 @@ impl Simulation {
             profile_delassus: false,
             previous: Vec::new(),
             residual_velocity: 0.0,
+            rolling: Default::default(),
         })
     }
 
@@ -292,7 +305,11 @@ impl Simulation {
                 .zip(&diag)
                 .map(|(f, m)| f / m)
                 .collect()
-        } else if let StepMethod::Nsgs(settings) = self.params.method {
+        } else if let (StepMethod::Nsgs(settings), true) =
+            (self.params.method, self.params.rolling_friction == 0.0)
+        {
+            // with rolling resistance the step is the 6-component law of crate::rolling,
+            // solved below whatever the method
             self.step_nsgs(&mut contacts, &data, &settings, &mut stats, t0)?
         } else {
             let problem = assemble(&self.world, &contacts, &data)
@@ -315,10 +332,29 @@ impl Simulation {
                 stats.delassus_ms = td.elapsed().as_secs_f64() * 1e3;
                 drop(delassus);
             }
-            let wrapped = Problem::Global(problem);
+            let mut problem = problem;
             let t1 = Instant::now();
-            let sol = solver::solve_with_guess(&wrapped, &self.params.solver, Some(&guess))
-                .map_err(|source| SimulationError::Solve { step: k, source })?;
+            // ---- hook: rolling resistance (crate::rolling). With μ_r > 0 the step's
+            // 6-component problem is solved there (problem.f then holds the rolling impulses);
+            // otherwise the library's solver, as before.
+            let rolling = (self.params.rolling_friction > 0.0).then(|| {
+                crate::rolling::solve_step(
+                    &self.world,
+                    &contacts,
+                    &mut problem,
+                    self.params.rolling_friction,
+                    &self.params.solver,
+                    &guess.r,
+                    &mut self.rolling,
+                )
+            });
+            let wrapped = Problem::Global(problem);
+            let sol = match rolling {
+                Some(sol) => sol,
+                None => solver::solve_with_guess(&wrapped, &self.params.solver, Some(&guess)),
+            }
+            .map_err(|source| SimulationError::Solve { step: k, source })?;
+            // ---- end of the rolling-resistance hook
             stats.solve_ms = t1.elapsed().as_secs_f64() * 1e3;
             stats.subproblems = sol.outer_iterations;
             stats.inner_iterations = sol.inner_iterations;

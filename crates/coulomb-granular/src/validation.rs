@@ -118,6 +118,91 @@ pub fn incline(
     Ok(c)
 }
 
+/// A sphere (R = 0.05 m) released at rest on an incline of `deg` degrees (gravity tilted over
+/// a horizontal ground), friction μ and rolling friction μ_r = `params.rolling_friction`
+/// (rolling torque ≤ μ_r R N, [`crate::rolling`]), simulated for `duration` s. Mechanics of a
+/// ball with rolling resistance: it stays at rest when tan θ ≤ μ_r (and tan θ ≤ μ); otherwise
+/// it rolls without slipping with a = 5/7 g (sin θ − μ_r cos θ) when the friction this needs,
+/// F = 2/5 m a + μ_r m g cos θ, is ≤ μ m g cos θ, and slides with a = g (sin θ − μ cos θ) when
+/// not. The measured acceleration is v_x(T) / T.
+pub fn incline_rolling_resistance(
+    deg: f64,
+    mu: f64,
+    duration: f64,
+    params: &Params,
+) -> Result<Check, SimulationError> {
+    let th = deg.to_radians();
+    let g = GRAVITY;
+    let mu_r = params.rolling_friction;
+    let mut w = ground_world(Vec3::new(g * th.sin(), 0.0, -g * th.cos()));
+    w.bodies
+        .push(Sphere::new(Vec3::new(0.0, 0.0, 0.05), 0.05, 1.0));
+    let p = Params {
+        mu,
+        restitution: 0.0,
+        ..params.clone()
+    };
+    let n = (duration / p.h).round().max(1.0) as usize;
+    let mut sim = Simulation::new(w, p.clone())?;
+    let bad = steps(&mut sim, n)?;
+    let t = n as f64 * p.h;
+    let a = sim.world.bodies[0].velocity.x / t;
+    let roll = 5.0 / 7.0 * g * (th.sin() - mu_r * th.cos());
+    let expected = if th.tan() <= mu_r && th.tan() <= mu {
+        0.0
+    } else if 0.4 * roll + mu_r * g * th.cos() <= mu * g * th.cos() {
+        roll
+    } else {
+        g * (th.sin() - mu * th.cos())
+    };
+    let mut c = Check::new(
+        format!("incline {deg}° μ = {mu} μ_r = {mu_r}: acceleration"),
+        expected,
+        a,
+        1e-3 * g,
+        "m/s²",
+    );
+    c.not_converged = bad;
+    Ok(c)
+}
+
+/// A sphere (R = 0.05 m) rolling without slipping at `v0` on a horizontal floor with friction
+/// μ = 0.5 and rolling friction μ_r = `params.rolling_friction`, for `duration` s (before it
+/// stops: T < 7 v0 / (5 μ_r g)). Mechanics: the rolling torque μ_r R m g decelerates it at
+/// a = −5/7 μ_r g (m a = −F, I a / R = F R − μ_r R m g). Measured: (v_x(T) − v0) / T.
+pub fn rolling_deceleration(
+    v0: f64,
+    duration: f64,
+    params: &Params,
+) -> Result<Check, SimulationError> {
+    let r = 0.05;
+    let mu_r = params.rolling_friction;
+    let mut w = ground_world(Vec3::new(0.0, 0.0, -GRAVITY));
+    let mut b = Sphere::new(Vec3::new(0.0, 0.0, r), r, 1.0);
+    b.velocity = Vec3::new(v0, 0.0, 0.0);
+    b.angular_velocity = Vec3::new(0.0, v0 / r, 0.0);
+    w.bodies.push(b);
+    let p = Params {
+        mu: 0.5,
+        restitution: 0.0,
+        ..params.clone()
+    };
+    let n = (duration / p.h).round().max(1.0) as usize;
+    let mut sim = Simulation::new(w, p.clone())?;
+    let bad = steps(&mut sim, n)?;
+    let t = n as f64 * p.h;
+    let a = (sim.world.bodies[0].velocity.x - v0) / t;
+    let mut c = Check::new(
+        format!("ball rolling at {v0} m/s on a floor, μ_r = {mu_r}: deceleration"),
+        -5.0 / 7.0 * mu_r * GRAVITY,
+        a,
+        1e-3 * GRAVITY,
+        "m/s²",
+    );
+    c.not_converged = bad;
+    Ok(c)
+}
+
 /// A sphere dropped from height `h0` (bottom above the ground) with restitution e: the ratio
 /// of the first rebound velocity to the impact velocity (expected e) and the time until it
 /// rests (expected √(2 h0 / g) (1 + e) / (1 − e), the sum of the bounce series).
@@ -428,6 +513,95 @@ pub fn drum_angle(
     Ok((sum / count.max(1) as f64, bad))
 }
 
+/// The `funnel` scene with `beads` beads run until rest (speeds < 0.05 m/s for 10 steps) or
+/// `max_steps`: the flank angle of the heap on the floor (degrees), seen along y — the highest
+/// bead top (z + R) of each 2R-wide slice in x, least-squares lines through the slices whose
+/// top is between 20 % and 80 % of the heap's height on each side of the summit, the mean of
+/// the two flanks' angles.
+pub fn funnel_heap(
+    beads: usize,
+    max_steps: usize,
+    params: &Params,
+) -> Result<HeapResult, SimulationError> {
+    let mut sim = Simulation::new(Scene::Funnel.build(beads, 1), params.clone())?;
+    let mut out = HeapResult::default();
+    let mut calm = 0;
+    while sim.steps_done < max_steps {
+        if !sim.step()?.converged {
+            out.not_converged += 1;
+        }
+        calm = if sim.max_speed() < 0.05 { calm + 1 } else { 0 };
+        if calm >= 10 {
+            out.at_rest = true;
+            break;
+        }
+    }
+    out.steps = sim.steps_done;
+    let r = crate::scene::BEAD_RADIUS;
+    let w = 2.0 * r;
+    let mut top: std::collections::BTreeMap<i64, f64> = Default::default();
+    for b in sim.world.bodies.iter().filter(|b| b.position.z < 0.9) {
+        let k = (b.position.x / w).floor() as i64;
+        let e = top.entry(k).or_insert(0.0);
+        *e = f64::max(*e, b.position.z + b.radius);
+    }
+    let pts: Vec<(f64, f64)> = top
+        .iter()
+        .map(|(k, z)| ((*k as f64 + 0.5) * w, *z))
+        .collect();
+    let Some(&(xs, peak)) = pts.iter().max_by(|a, b| a.1.total_cmp(&b.1)) else {
+        return Ok(out);
+    };
+    out.height = peak;
+    let flank = |left: bool| -> Option<f64> {
+        let sel: Vec<(f64, f64)> = pts
+            .iter()
+            .copied()
+            .filter(|p| (p.0 < xs) == left && p.0 != xs)
+            .filter(|p| p.1 >= 0.2 * peak && p.1 <= 0.8 * peak)
+            .collect();
+        slope(&sel).map(|s| s.atan().to_degrees().abs())
+    };
+    let (a, b) = (flank(true), flank(false));
+    out.angle = match (a, b) {
+        (Some(a), Some(b)) => 0.5 * (a + b),
+        (Some(a), None) | (None, Some(a)) => a,
+        _ => f64::NAN,
+    };
+    Ok(out)
+}
+
+/// Least-squares slope of z over x (None with fewer than 2 distinct x).
+fn slope(pts: &[(f64, f64)]) -> Option<f64> {
+    if pts.len() < 2 {
+        return None;
+    }
+    let m = pts.len() as f64;
+    let (sx, sz) = pts.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
+    let (mx, mz) = (sx / m, sz / m);
+    let (mut sxx, mut sxz) = (0.0, 0.0);
+    for p in pts {
+        sxx += (p.0 - mx) * (p.0 - mx);
+        sxz += (p.0 - mx) * (p.1 - mz);
+    }
+    (sxx > 0.0).then(|| sxz / sxx)
+}
+
+/// Result of [`funnel_heap`].
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct HeapResult {
+    /// steps taken
+    pub steps: usize,
+    /// reached the rest rule
+    pub at_rest: bool,
+    /// height of the summit (m)
+    pub height: f64,
+    /// mean flank angle (degrees)
+    pub angle: f64,
+    /// steps not converged
+    pub not_converged: usize,
+}
+
 /// Angle (degrees) of the free surface of the beads, seen along the y axis.
 fn surface_angle(world: &World) -> Option<f64> {
     let r = crate::scene::BEAD_RADIUS;
@@ -458,15 +632,9 @@ fn surface_angle(world: &World) -> Option<f64> {
     (sxx > 0.0).then(|| (sxz / sxx).atan().to_degrees().abs())
 }
 
-/// Collapse of a granular column (Lube et al. 2004, axisymmetric): `beads` beads settled in a
-/// vertical cylinder of radius `r0` on a floor, the cylinder removed, the heap run to rest.
-/// Returns the aspect ratio a = H₀ / r₀ and the normalised runout (R∞ − r₀) / r₀ (R∞: the
-/// 95th percentile of the beads' distances from the axis, plus R).
-pub fn column_collapse(
-    beads: usize,
-    r0: f64,
-    params: &Params,
-) -> Result<ColumnResult, SimulationError> {
+/// The column of [`column_collapse`] before settling: a floor, the gate (a vertical cylinder of
+/// radius `r0` about the z axis) and `beads` beads on a lattice inside it.
+pub fn column_world(beads: usize, r0: f64) -> World {
     let r = crate::scene::BEAD_RADIUS;
     let mut world = ground_world(Vec3::new(0.0, 0.0, -GRAVITY));
     world.obstacles.push(Obstacle::fixed(
@@ -491,6 +659,22 @@ pub fn column_collapse(
         },
         |x| (x.x * x.x + x.y * x.y).sqrt() <= r0 - 1.2 * r,
     );
+    world
+}
+
+/// Collapse of a granular column (Lube et al. 2004, axisymmetric): `beads` beads settled in a
+/// vertical cylinder of radius `r0` on a floor (until speeds < 0.02 m/s for 10 steps, at most
+/// `settle_steps`), the cylinder removed, the heap run to rest (same rule, at most `max_steps`).
+/// Returns the aspect ratio a = H₀ / r₀ and the normalised runout (R∞ − r₀) / r₀ (R∞: the
+/// 95th percentile of the beads' distances from the axis, plus R).
+pub fn column_collapse(
+    beads: usize,
+    r0: f64,
+    settle_steps: usize,
+    max_steps: usize,
+    params: &Params,
+) -> Result<ColumnResult, SimulationError> {
+    let world = column_world(beads, r0);
     let mut sim = Simulation::new(world, params.clone())?;
     let mut out = ColumnResult::default();
     let rest = |sim: &mut Simulation, cap: usize, out: &mut ColumnResult| {
@@ -506,7 +690,7 @@ pub fn column_collapse(
         }
         Ok::<bool, SimulationError>(false)
     };
-    out.settled = rest(&mut sim, 600, &mut out)?;
+    out.settled = rest(&mut sim, settle_steps, &mut out)?;
     let h0 = sim
         .world
         .bodies
@@ -515,7 +699,7 @@ pub fn column_collapse(
         .fold(0.0, f64::max);
     out.aspect = h0 / r0;
     sim.world.obstacles.truncate(1);
-    out.at_rest = rest(&mut sim, 1500, &mut out)?;
+    out.at_rest = rest(&mut sim, max_steps, &mut out)?;
     let mut d: Vec<f64> = sim
         .world
         .bodies

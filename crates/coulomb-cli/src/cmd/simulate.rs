@@ -80,6 +80,10 @@ pub struct Args {
     /// friction coefficient μ
     #[arg(long, default_value_t = 0.3, value_parser = crate::values::nonnegative)]
     pub mu: f64,
+    /// rolling-friction coefficient μ_r (dimensionless): rolling torque ≤ μ_r R_e r_N, R_e the
+    /// effective radius (docs/granular.md, "Rolling resistance"); 0 (default): none
+    #[arg(long, default_value_t = 0.0, value_parser = crate::values::nonnegative)]
+    pub rolling_friction: f64,
     /// restitution coefficient e (Moreau's impact law)
     #[arg(long, default_value_t = 0.2, value_parser = crate::values::unit_interval)]
     pub restitution: f64,
@@ -243,6 +247,7 @@ impl Args {
                 }),
                 Method::Library => StepMethod::Library,
             },
+            rolling_friction: self.rolling_friction,
         }
     }
 

@@ -373,6 +373,17 @@ impl Delassus {
         })
     }
 
+    /// Recomputes M⁻¹ f and q = Hᵀ M⁻¹ f + w for new f and w of `problem` (same M and H:
+    /// the factorization and W are kept), as a time step needs.
+    pub fn update_rhs(&mut self, problem: &GlobalProblem) {
+        self.free_velocity.clone_from(&problem.f);
+        self.factor.solve_in_place(&mut self.free_velocity);
+        self.local.q.clone_from(&problem.w);
+        problem
+            .h
+            .gemv_t_acc(1.0, &self.free_velocity, &mut self.local.q);
+    }
+
     /// v = M⁻¹ (H r + f).
     pub fn velocity(&self, h: &CscMatrix, r: &[f64]) -> Vec<f64> {
         let mut v = h.mul_vec(r);

@@ -180,7 +180,7 @@ fn check_dim(dim: i64) -> Result<usize, ProblemError> {
     }
 }
 
-fn check_len(what: &'static str, v: &[f64], n: usize) -> Result<(), ProblemError> {
+pub(crate) fn check_len(what: &'static str, v: &[f64], n: usize) -> Result<(), ProblemError> {
     if v.len() != n {
         return Err(ProblemError::Shape {
             what,

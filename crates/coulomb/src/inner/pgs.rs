@@ -25,7 +25,7 @@
 //! μ = 0 (the half-line) and μ = ∞ (the half-space) have their own closed forms.
 //!
 //! # The fused iteration
-//! [`solve_fused`] is Gauss–Seidel on Coulomb's law itself rather than on (4.7): contact i,
+//! [`solve_fused`] ([`crate::outer::fused`]) is Gauss–Seidel on Coulomb's law itself rather than on (4.7): contact i,
 //! the others frozen, gets a solution of its own law (2.9) by [`solve_contact_law`] — take-off
 //! r = 0 when c_N ≥ 0, stick r = −A⁻¹c when that lies in K_μ, otherwise slide
 //! r = r_N (1, −μτ) with u_N = 0 and u_T ∥ τ, a scalar equation in the slip angle solved by
@@ -524,7 +524,21 @@ impl PgsSolver {
         }
         self.blocks.as_ref().expect("set just above")
     }
+
+    /// The diagonal blocks of `w` (extracted if W changed) and the buffer of the maintained
+    /// u, for the fused iteration ([`crate::outer::fused`]).
+    pub(crate) fn parts(&mut self, dim: usize, w: &CscMatrix) -> (&DiagonalBlocks, &mut Vec<f64>) {
+        self.blocks_for(dim, w);
+        (
+            self.blocks.as_ref().expect("set by blocks_for"),
+            &mut self.u,
+        )
+    }
 }
+
+/// The fused Gauss–Seidel iteration now lives with the outer methods; re-exported here so that
+/// `coulomb::inner::pgs::solve_fused` keeps working.
+pub use crate::outer::fused::solve_fused;
 
 /// One Gauss–Seidel pass over all contacts. `u` must equal W r + b on entry (b = `shift` for
 /// (4.7)); with `fused`, u = W r + q is maintained instead and contact i is given a solution
@@ -634,11 +648,8 @@ fn dual_residual_parts(
     }
 }
 
-/// Sweeps over which [`solve_fused`] measures its rate when asked to give up early.
-const GIVE_UP_WINDOW: usize = 10;
-
 /// Sweeps between exact recomputations of u = W r + b (against drift).
-const REFRESH: usize = 16;
+pub(crate) const REFRESH: usize = 16;
 
 impl InnerSolver for PgsSolver {
     fn name(&self) -> &'static str {
@@ -700,85 +711,6 @@ impl InnerSolver for PgsSolver {
             iterations,
             residual,
         }
-    }
-}
-
-/// The fused iteration: Gauss–Seidel directly on Coulomb's law (local problem u = W r + q),
-/// each contact given a solution of its one-contact law (take-off, stick or slide, see
-/// [`solve_contact_law`]) — or, where the slip equation fails, a step of the one-contact
-/// SOC-QP with De Saxcé's s = μ‖u_T‖ taken from the current u. Stops when the error of docs/error.md, computed from the maintained
-/// u (recomputed exactly every few sweeps and before stopping), is ≤ `limits.tol`. With
-/// `give_up`, it also stops (status `MaxIterations`) as soon as the rate of the last
-/// [`GIVE_UP_WINDOW`] sweeps, extrapolated over the sweeps left, cannot reach `limits.tol`.
-/// Returns the report; `r` holds the warm start on entry and the result on exit.
-#[allow(clippy::too_many_arguments)]
-pub fn solve_fused(
-    solver: &mut PgsSolver,
-    dim: usize,
-    w: &CscMatrix,
-    q: &[f64],
-    mu: &[f64],
-    limits: &InnerLimits,
-    give_up: bool,
-    r: &mut [f64],
-) -> InnerReport {
-    solver.blocks_for(dim, w);
-    let blocks = solver.blocks.as_ref().expect("set by blocks_for");
-    cone::project_product(dim, mu, r);
-    let q_norm = crate::law::norm(q);
-    let u = &mut solver.u;
-    u.clear();
-    u.extend_from_slice(q);
-    w.gemv_acc(1.0, r, u);
-    let mut residual = crate::law::error_measure(dim, mu, r, u, q_norm).error;
-    let mut window_start = residual;
-    let mut iterations = 0;
-    let mut exact = true;
-    let status = loop {
-        if !residual.is_finite() {
-            break InnerStatus::NumericalError;
-        }
-        if residual <= limits.tol {
-            if exact {
-                break InnerStatus::Solved;
-            }
-            u.copy_from_slice(q);
-            w.gemv_acc(1.0, r, u);
-            exact = true;
-            residual = crate::law::error_measure(dim, mu, r, u, q_norm).error;
-            continue;
-        }
-        if iterations >= limits.max_iterations {
-            break InnerStatus::MaxIterations;
-        }
-        if limits.past_deadline(iterations, w.nnz()) {
-            break InnerStatus::TimeLimit;
-        }
-        sweep(blocks, w, mu, r, u, true);
-        iterations += 1;
-        exact = false;
-        if iterations % REFRESH == 0 {
-            u.copy_from_slice(q);
-            w.gemv_acc(1.0, r, u);
-            exact = true;
-        }
-        residual = crate::law::error_measure(dim, mu, r, u, q_norm).error;
-        if give_up && iterations % GIVE_UP_WINDOW == 0 {
-            // the rate over the last window, extrapolated over the sweeps left
-            let rate = residual / window_start;
-            let windows_left = (limits.max_iterations - iterations.min(limits.max_iterations))
-                as f64
-                / GIVE_UP_WINDOW as f64;
-            if rate >= 1.0 || rate.powf(windows_left) * residual > limits.tol {
-                break InnerStatus::MaxIterations;
-            }
-            window_start = residual;
-        }
-    };
-    InnerReport {
-        status,
-        iterations,
-        residual,
     }
 }
 

@@ -1,8 +1,12 @@
 //! `coulomb`: solve, check, simulate and benchmark discrete Coulomb frictional contact problems.
 
 mod cmd;
+mod existence_json;
 mod exit;
+mod method;
 mod outputs;
+mod progress;
+mod read;
 mod values;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};

@@ -127,13 +127,13 @@ impl FromStr for OuterKind {
 
 impl fmt::Display for InnerKind {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.as_str())
+        f.pad(self.as_str())
     }
 }
 
 impl fmt::Display for OuterKind {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.as_str())
+        f.pad(self.as_str())
     }
 }
 
@@ -176,8 +176,8 @@ impl fmt::Display for Method {
     /// `inner` for the plain fixed point, `inner+outer` otherwise.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self.outer {
-            OuterKind::FixedPoint => write!(f, "{}", self.inner),
-            outer => write!(f, "{}+{}", self.inner, outer),
+            OuterKind::FixedPoint => f.pad(self.inner.as_str()),
+            outer => f.pad(&format!("{}+{}", self.inner, outer)),
         }
     }
 }

@@ -2,60 +2,12 @@
 //! statistics (CSV, JSON), VTK frames for ParaView and optional FCLIB dumps of each step.
 
 use anyhow::{bail, Context};
-use coulomb::solver::{InnerKind, OuterKind, Settings};
+use coulomb::{InnerKind, OuterKind, Settings};
 use coulomb_granular::output::{write_stats, VtkWriter};
 use coulomb_granular::run::RestMonitor;
 use coulomb_granular::scene::BoxLayout;
 use coulomb_granular::{Activation, Params, Projection, Scene, Simulation, Stop, Summary};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use std::io::IsTerminal;
 use std::path::PathBuf;
-
-/// Inner solver names on the command line.
-#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Inner {
-    /// accelerated projected gradient on (4.7) (the paper's "PG")
-    Apgd,
-    /// interior point on (3.15) (the paper's "IP" column)
-    Ipm,
-    /// projected Gauss–Seidel
-    Pgs,
-    /// faceted cone, QP by interior point
-    Faceted,
-}
-
-impl From<Inner> for InnerKind {
-    fn from(i: Inner) -> Self {
-        match i {
-            Inner::Apgd => InnerKind::Apgd,
-            Inner::Ipm => InnerKind::Ipm,
-            Inner::Pgs => InnerKind::Pgs,
-            Inner::Faceted => InnerKind::Faceted,
-        }
-    }
-}
-
-/// Outer iteration names on the command line.
-#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Outer {
-    /// successive approximations s ← F(s) (the paper's §6)
-    FixedPoint,
-    /// safeguarded Anderson mixing on s
-    Anderson,
-    /// Gauss–Seidel directly on Coulomb's law, each contact's law solved exactly (needs
-    /// `--inner pgs`)
-    Fused,
-}
-
-impl From<Outer> for OuterKind {
-    fn from(o: Outer) -> Self {
-        match o {
-            Outer::FixedPoint => OuterKind::FixedPoint,
-            Outer::Anderson => OuterKind::Anderson,
-            Outer::Fused => OuterKind::Fused,
-        }
-    }
-}
 
 /// Arguments of `coulomb simulate`.
 #[derive(clap::Args, Debug, Clone)]
@@ -91,11 +43,11 @@ pub struct Args {
     pub max_steps: usize,
     /// inner solver (default: Gauss–Seidel, the fastest to 1e-4 on the box scene, see
     /// docs/granular.md)
-    #[arg(long, value_enum, default_value_t = Inner::Pgs)]
-    pub inner: Inner,
+    #[arg(long, default_value_t = InnerKind::Pgs, value_parser = crate::method::inner())]
+    pub inner: InnerKind,
     /// outer iteration (default: Gauss–Seidel fused with the law; apgd + Anderson as fallback)
-    #[arg(long, value_enum, default_value_t = Outer::Fused)]
-    pub outer: Outer,
+    #[arg(long, default_value_t = OuterKind::Fused, value_parser = crate::method::outer())]
+    pub outer: OuterKind,
     /// tolerance on the error of docs/error.md, reached at every step (steps that do not
     /// reach it are counted and reported)
     #[arg(long, default_value_t = 1e-4, value_parser = crate::values::positive)]
@@ -145,28 +97,6 @@ pub struct Args {
     pub json: bool,
 }
 
-/// The solver settings of a simulation: the paper's outer rule (6.1) with ε = `fp_tol`.
-pub fn solver_settings(
-    inner: InnerKind,
-    tol: f64,
-    fp_tol: f64,
-    max_outer: usize,
-    max_inner: Option<usize>,
-) -> Settings {
-    // the named inner solver alone, so that statistics describe it
-    let d = Settings::method(inner, Settings::default().outer);
-    Settings {
-        tol,
-        max_outer,
-        max_inner: max_inner.unwrap_or(d.max_inner),
-        fixed_point_tol: (fp_tol > 0.0).then_some(fp_tol),
-        // solve each subproblem accurately (down to tol / 5): with the loose rule (6.1) the
-        // outer loop often stops after one subproblem, whose accuracy is then the step's
-        inner_tol_factor: 1e-6,
-        ..d
-    }
-}
-
 impl Args {
     pub(crate) fn params(&self) -> Params {
         Params {
@@ -179,15 +109,15 @@ impl Args {
                 ..Activation::accurate()
             },
             solver: Settings {
-                outer: self.outer.into(),
+                outer: self.outer,
                 // a step the first method does not bring to --tol gets a second one
-                fallback: Some(if self.outer == Outer::Fused {
+                fallback: Some(if self.outer == OuterKind::Fused {
                     (InnerKind::Apgd, OuterKind::Anderson)
                 } else {
                     (InnerKind::Pgs, OuterKind::Fused)
                 }),
-                ..solver_settings(
-                    self.inner.into(),
+                ..crate::method::time_stepping_settings(
+                    self.inner,
                     self.tol,
                     self.fp_tol,
                     self.max_outer,
@@ -227,7 +157,7 @@ impl Args {
         if !(self.fp_tol.is_finite() && self.fp_tol >= 0.0) {
             bail!("--fp-tol {} must be a finite number ≥ 0", self.fp_tol);
         }
-        if self.outer == Outer::Fused && self.inner != Inner::Pgs {
+        if self.outer == OuterKind::Fused && self.inner != InnerKind::Pgs {
             bail!("--outer fused needs --inner pgs");
         }
         Ok(())
@@ -270,20 +200,6 @@ impl Args {
     }
 }
 
-/// A progress bar on stderr, hidden when stderr is not a terminal or when `hidden`.
-pub fn progress(len: usize, hidden: bool) -> ProgressBar {
-    let pb = ProgressBar::new(len as u64);
-    if hidden || !std::io::stderr().is_terminal() {
-        pb.set_draw_target(ProgressDrawTarget::hidden());
-    }
-    if let Ok(style) =
-        ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} steps {msg} ({elapsed})")
-    {
-        pb.set_style(style.progress_chars("=> "));
-    }
-    pb
-}
-
 /// Runs `coulomb simulate`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let Some(scene) = Scene::from_name(&args.scene) else {
@@ -318,7 +234,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         w.frame(&sim).context("writing VTK frame")?;
     }
     let start_energy = sim.world.kinetic_energy() + sim.world.potential_energy();
-    let pb = progress(stop.max_steps(), args.json);
+    let pb = crate::progress::bar(stop.max_steps(), args.json);
     pb.set_prefix(format!("{} {}", scene.name(), args.beads));
     let mut stats = Vec::new();
     let mut monitor = RestMonitor::default();

@@ -7,6 +7,7 @@
 //! - [`problem`]: the incremental problem (2.10), global (M, H, f, w, μ) and local (W, q, μ);
 //! - [`cone`] and [`law`]: Coulomb cones (3.2), projections, the De Saxcé change (3.7),
 //!   Coulomb's law (2.9) and the error measure results are reported in;
+//! - [`mass`]: the block Cholesky factorization of M, with its own [`mass::MassError`];
 //! - [`delassus`]: W = Hᵀ M⁻¹ H and q = Hᵀ M⁻¹ f + w;
 //! - [`settings`] and [`solution`]: the typed [`Settings`] (with [`Settings::paper`], the
 //!   paper's algorithm, and the [`settings::Tuning`] constants), the [`Method`] names, the
@@ -36,6 +37,7 @@ pub mod existence;
 pub mod fclib;
 pub mod inner;
 pub mod law;
+pub mod mass;
 pub mod newton;
 pub mod outer;
 pub mod problem;

@@ -25,7 +25,7 @@
 //! μ = 0 (the half-line) and μ = ∞ (the half-space) have their own closed forms.
 //!
 //! # The fused iteration
-//! [`solve_fused`] ([`crate::outer::fused`]) is Gauss–Seidel on Coulomb's law itself rather than on (4.7): contact i,
+//! [`crate::outer::fused::solve_fused`] is Gauss–Seidel on Coulomb's law itself rather than on (4.7): contact i,
 //! the others frozen, gets a solution of its own law (2.9) by [`solve_contact_law`] — take-off
 //! r = 0 when c_N ≥ 0, stick r = −A⁻¹c when that lies in K_μ, otherwise slide
 //! r = r_N (1, −μτ) with u_N = 0 and u_T ∥ τ, a scalar equation in the slip angle solved by
@@ -535,10 +535,6 @@ impl PgsSolver {
         )
     }
 }
-
-/// The fused Gauss–Seidel iteration now lives with the outer methods; re-exported here so that
-/// `coulomb::inner::pgs::solve_fused` keeps working.
-pub use crate::outer::fused::solve_fused;
 
 /// One Gauss–Seidel pass over all contacts. `u` must equal W r + b on entry (b = `shift` for
 /// (4.7)); with `fused`, u = W r + q is maintained instead and contact i is given a solution

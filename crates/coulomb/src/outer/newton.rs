@@ -10,10 +10,11 @@
 //! try takes at most [`crate::settings::NewtonParams::try_steps`] steps and all tries of a
 //! stage at most [`crate::Settings::newton_steps`], so that the iteration is deterministic.
 
-use super::fixed_point::{self, OuterUpdate};
-use super::stage::Stage;
+use super::fixed_point;
+use super::form::{Form, Verdict};
+use crate::deadline::Deadline;
 use crate::inner::{InnerReport, InnerStatus};
-use crate::settings::NewtonParams;
+use crate::settings::{NewtonParams, Settings};
 use crate::solution::OuterRecord;
 
 /// What the end game of a stage remembers between outer iterations.
@@ -50,69 +51,102 @@ fn stagnating(history: &[OuterRecord], p: &NewtonParams) -> bool {
         .all(|h| h.error > p.stagnation_gain * best_before)
 }
 
-/// Tries the end game after an outer iteration that produced F(s) = `fs`; true if r moved
-/// (s is then F at the new r and the outer update restarts), false if the caller should take
-/// its usual step s ← F(s).
-///
-/// When the inner solver works on the surrogate ½(W + Wᵀ), a try that more than halved the
-/// error is followed by another one at once: an inner solve would pull r back towards the
-/// surrogate's solution.
-pub(super) fn try_end_game(stage: &mut Stage<'_, '_>, report: &InnerReport, fs: &[f64]) -> bool {
-    let settings = stage.settings;
-    let (tol, p) = (settings.tol, settings.tuning.newton);
-    let gate_open = stage.verdict.error <= stage.end_game.gate
-        || report.status == InnerStatus::MaxIterations
-        || stagnating(&stage.history, &p);
-    if settings.newton_steps == 0
-        || stage.verdict.error > settings.newton_start
-        || !gate_open
-        || stage.verdict.converged(tol)
-        || stage.end_game.used >= settings.newton_steps
-    {
-        return false;
-    }
-    let local = stage.form.local();
-    let mut improved = false;
-    let mut fs = fs.to_vec();
-    while stage.end_game.used < settings.newton_steps {
-        let mut trial = stage.r.clone();
-        let nr = crate::newton::polish(
-            local,
-            &mut trial,
-            p.target_fraction * tol * stage.form.q_norm,
-            p.try_steps.min(settings.newton_steps - stage.end_game.used),
-            stage.deadline.instant(),
-        );
-        stage.end_game.used += nr.steps.max(1);
-        let candidate = stage.form.verdict(&trial);
-        stage.inner_total += nr.steps;
-        if nr.steps == 0 || candidate.error >= stage.verdict.error {
-            break;
-        }
-        let gain = candidate.error / stage.verdict.error;
-        stage.r = trial;
-        stage.verdict = candidate;
-        let fs_new = fixed_point::evaluate_f(local.dim, &local.velocity(&stage.r));
-        let (fp_residual, rule) = fixed_point::residuals(&fs, &fs_new);
-        stage.push_record(fp_residual, rule, nr.steps);
-        fs = fs_new;
-        improved = true;
-        if stage.verdict.converged(tol)
-            || stage.form.symmetric
-            || gain > 0.5
-            || stage.deadline.passed()
+/// What a kept end game produced: the new r and its verdict, one history record per kept
+/// try, and F at the new r (the next s).
+pub(super) struct Improved {
+    pub(super) r: Vec<f64>,
+    pub(super) verdict: Verdict,
+    pub(super) records: Vec<OuterRecord>,
+    pub(super) fs: Vec<f64>,
+}
+
+/// The state of the outer iterate the end game starts from.
+pub(super) struct Iterate<'x> {
+    pub(super) r: &'x [f64],
+    pub(super) verdict: &'x Verdict,
+    pub(super) history: &'x [OuterRecord],
+    /// F(s) of the last outer iteration
+    pub(super) fs: &'x [f64],
+}
+
+impl EndGame {
+    /// Tries the end game from `at` after an outer iteration whose inner solve ended with
+    /// `report`: None if the gate is closed, otherwise the Newton steps spent and, if the
+    /// error dropped, what replaces the iterate (s then restarts from F at the new r).
+    ///
+    /// When the inner solver works on the surrogate ½(W + Wᵀ), a try that more than halved
+    /// the error is followed by another one at once: an inner solve would pull r back towards
+    /// the surrogate's solution.
+    pub(super) fn attempt(
+        &mut self,
+        form: &Form<'_>,
+        settings: &Settings,
+        deadline: Deadline,
+        at: Iterate<'_>,
+        report: &InnerReport,
+    ) -> Option<(usize, Option<Improved>)> {
+        let (tol, p) = (settings.tol, settings.tuning.newton);
+        let gate_open = at.verdict.error <= self.gate
+            || report.status == InnerStatus::MaxIterations
+            || stagnating(at.history, &p);
+        if settings.newton_steps == 0
+            || at.verdict.error > settings.newton_start
+            || !gate_open
+            || at.verdict.converged(tol)
+            || self.used >= settings.newton_steps
         {
-            break;
+            return None;
         }
-    }
-    if improved {
-        stage.s = fs;
-        stage.update = OuterUpdate::with_params(settings.outer, &settings.tuning.anderson);
-        if !stage.verdict.converged(tol) {
-            stage.end_game.gate = p.retry * stage.verdict.error;
+        let local = form.local();
+        let mut spent = 0;
+        let mut best: Option<Improved> = None;
+        while self.used < settings.newton_steps {
+            let (r, error, fs) = match &best {
+                Some(b) => (&b.r[..], b.verdict.error, &b.fs[..]),
+                None => (at.r, at.verdict.error, at.fs),
+            };
+            let mut trial = r.to_vec();
+            let nr = crate::newton::polish(
+                local,
+                &mut trial,
+                p.target_fraction * tol * form.q_norm,
+                p.try_steps.min(settings.newton_steps - self.used),
+                deadline.instant(),
+            );
+            self.used += nr.steps.max(1);
+            let candidate = form.verdict(&trial);
+            spent += nr.steps;
+            if nr.steps == 0 || candidate.error >= error {
+                break;
+            }
+            let gain = candidate.error / error;
+            let fs_new = fixed_point::evaluate_f(local.dim, &local.velocity(&trial));
+            let (fixed_point_residual, rule_6_1) = fixed_point::residuals(fs, &fs_new);
+            let record = OuterRecord {
+                error: candidate.error,
+                fixed_point_residual,
+                rule_6_1,
+                inner_iterations: nr.steps,
+            };
+            let mut records = best.map_or_else(Vec::new, |b| b.records);
+            records.push(record);
+            let done =
+                candidate.converged(tol) || form.symmetric || gain > 0.5 || deadline.passed();
+            best = Some(Improved {
+                r: trial,
+                verdict: candidate,
+                records,
+                fs: fs_new,
+            });
+            if done {
+                break;
+            }
         }
-        return true;
+        match &best {
+            Some(b) if !b.verdict.converged(tol) => self.gate = p.retry * b.verdict.error,
+            Some(_) => {}
+            None => self.gate = p.retry * at.verdict.error,
+        }
+        Some((spent, best))
     }
-    stage.end_game.gate = p.retry * stage.verdict.error;
-    false
 }

@@ -17,7 +17,7 @@
 
 use super::fixed_point::{self, OuterUpdate};
 use super::form::{Form, Stored, Verdict};
-use super::newton::EndGame;
+use super::newton::{EndGame, Iterate};
 use super::InnerSolvers;
 use crate::deadline::Deadline;
 use crate::inner::{ipm, InnerLimits, InnerProblem, InnerReport, InnerStatus};
@@ -27,25 +27,25 @@ use std::time::Duration;
 
 /// The state of one stage: r, s, the history, and what the stopping tests remember.
 pub(super) struct Stage<'f, 'a> {
-    pub(super) form: &'f Form<'a>,
-    pub(super) settings: &'f Settings,
-    pub(super) deadline: Deadline,
+    form: &'f Form<'a>,
+    settings: &'f Settings,
+    deadline: Deadline,
     /// end with [`Status::Stalled`] when the error no longer decreases (a stage with a fallback)
     stop_on_stall: bool,
     /// the warm-up try: the fused iteration may give up as soon as its rate says the
     /// tolerance is out of reach
     warmup: bool,
     frictionless: bool,
-    pub(super) r: Vec<f64>,
-    pub(super) s: Vec<f64>,
+    r: Vec<f64>,
+    s: Vec<f64>,
     /// b = q + E s
     b: Vec<f64>,
-    pub(super) update: OuterUpdate,
-    pub(super) history: Vec<OuterRecord>,
-    pub(super) inner_total: usize,
-    pub(super) verdict: Verdict,
+    update: OuterUpdate,
+    history: Vec<OuterRecord>,
+    inner_total: usize,
+    verdict: Verdict,
     balance_stalls: usize,
-    pub(super) end_game: EndGame,
+    end_game: EndGame,
 }
 
 impl<'f, 'a> Stage<'f, 'a> {
@@ -252,7 +252,28 @@ impl<'f, 'a> Stage<'f, 'a> {
     /// The Newton end game ([`super::newton`]) when its gate is open; true if it moved r
     /// (s then restarts from F at the new r).
     fn try_end_game(&mut self, report: &InnerReport, fs: &[f64]) -> bool {
-        super::newton::try_end_game(self, report, fs)
+        let at = Iterate {
+            r: &self.r,
+            verdict: &self.verdict,
+            history: &self.history,
+            fs,
+        };
+        let attempt = self
+            .end_game
+            .attempt(self.form, self.settings, self.deadline, at, report);
+        let Some((steps, improved)) = attempt else {
+            return false;
+        };
+        self.inner_total += steps;
+        let Some(better) = improved else {
+            return false;
+        };
+        self.r = better.r;
+        self.verdict = better.verdict;
+        self.history.extend(better.records);
+        self.s = better.fs;
+        self.update = OuterUpdate::with_params(self.settings.outer, &self.settings.tuning.anderson);
+        true
     }
 
     /// s ← F(s), or Anderson mixing of it.

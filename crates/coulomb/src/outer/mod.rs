@@ -285,3 +285,76 @@ pub fn solve_with_guess(
 ) -> Result<Solution, SolveError> {
     Solver::new(problem, settings.clone())?.solve(guess)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two 3-D contacts on an SPD W; q pushes both into contact with some sliding.
+    fn local(q: Vec<f64>) -> LocalProblem {
+        let mut w = vec![0.0; 36];
+        for i in 0..6 {
+            w[i * 6 + i] = 2.0 + i as f64 * 0.1;
+            if i + 1 < 6 {
+                w[i * 6 + i + 1] = 0.3;
+                w[(i + 1) * 6 + i] = 0.3;
+            }
+        }
+        LocalProblem::new(3, CscMatrix::from_dense(6, 6, &w), q, vec![0.3, 0.5]).unwrap()
+    }
+
+    #[test]
+    fn a_solver_set_up_once_solves_like_fresh_solves() {
+        let q1 = vec![-1.0, 0.4, 0.1, -0.5, -0.2, 0.3];
+        let q2 = vec![-0.7, -0.1, 0.6, 0.2, 0.1, 0.0];
+        let p1 = Problem::Local(local(q1));
+        let p2 = Problem::Local(local(q2.clone()));
+        for settings in [
+            Settings::default(),
+            Settings::paper(InnerKind::Apgd),
+            Settings::method(InnerKind::Pgs, OuterKind::Fused),
+        ] {
+            let mut solver = Solver::new(&p1, settings.clone()).unwrap();
+            let a = solver.solve(None).unwrap();
+            let fresh = solve(&p1, &settings).unwrap();
+            assert_eq!((a.status, &a.r, a.error), (fresh.status, &fresh.r, fresh.error));
+            assert!(a.converged(), "{:?}", a.status);
+            // the next step: new q, same W
+            solver.update_q(q2.clone()).unwrap();
+            let guess = Guess { r: a.r.clone(), v: None };
+            let b = solver.solve(Some(&guess)).unwrap();
+            let fresh = solve_with_guess(&p2, &settings, Some(&guess)).unwrap();
+            assert_eq!((b.status, &b.r, b.error), (fresh.status, &fresh.r, fresh.error));
+            assert!(b.converged());
+        }
+        let mut solver = Solver::new(&p1, Settings::default()).unwrap();
+        assert!(solver.update_q(vec![0.0; 5]).is_err());
+        assert!(solver.update_q(vec![f64::NAN; 6]).is_err());
+        assert!(solver.update_rhs(vec![], vec![]).is_err());
+        let bad = Settings {
+            tol: -1.0,
+            ..Settings::default()
+        };
+        assert!(matches!(solver.set_settings(bad), Err(SolveError::Settings(_))));
+    }
+
+    #[test]
+    fn a_global_solver_updates_f_and_w_like_a_fresh_problem() {
+        let g = crate::examples::crushed_ball(0.3, 1.0).unwrap();
+        let mut g2 = g.clone();
+        g2.f.iter_mut().for_each(|x| *x *= 0.5);
+        g2.w.iter_mut().for_each(|x| *x += 0.1);
+        let (p, p2) = (Problem::Global(g), Problem::Global(g2.clone()));
+        let settings = Settings::default();
+        let mut solver = Solver::new(&p, settings.clone()).unwrap();
+        solver.solve(None).unwrap();
+        solver.update_rhs(g2.f.clone(), g2.w.clone()).unwrap();
+        let a = solver.solve(None).unwrap();
+        let b = solve(&p2, &settings).unwrap();
+        assert_eq!(a.status, b.status);
+        assert!((a.error - b.error).abs() <= 1e-12, "{} {}", a.error, b.error);
+        let dr = a.r.iter().zip(&b.r).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+        assert!(dr <= 1e-12, "{dr}");
+        assert!(solver.update_q(vec![]).is_err());
+    }
+}

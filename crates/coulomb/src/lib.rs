@@ -12,6 +12,8 @@
 //! - [`settings`] and [`solution`]: the typed [`Settings`] (with [`Settings::paper`], the
 //!   paper's algorithm, and the [`settings::Tuning`] constants), the [`Method`] names, the
 //!   [`Solution`], its [`Status`] and the [`SolveError`];
+//! - [`natural_map`]: the natural map r − P_K(r − ũ) and its Jacobian (one home for the
+//!   error measure, the inner solvers' stopping tests and the Newton systems);
 //! - [`inner`]: solvers of the second-order-cone QP (3.15)/(4.7) that defines F(s);
 //! - [`outer`]: the algorithm of §3.3 — the stage loop s ← F(s) with rule (6.1)
 //!   ([`outer::fixed_point`]), Anderson mixing, the fused Gauss–Seidel, the Newton end game —
@@ -38,6 +40,7 @@ pub mod fclib;
 pub mod inner;
 pub mod law;
 pub mod mass;
+pub mod natural_map;
 pub mod newton;
 pub mod outer;
 pub mod problem;

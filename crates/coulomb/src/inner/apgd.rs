@@ -23,12 +23,12 @@
 //! ([`DelassusOperator`]).
 
 use super::{
-    matrix_key, pgs::dual_residual_shifted, InnerLimits, InnerProblem, InnerReport, InnerSolver,
-    InnerStatus, MatrixKey,
+    matrix_key, InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus, MatrixKey,
 };
 use crate::cone;
 use crate::delassus::DelassusOperator;
 use crate::law::norm;
+use crate::natural_map::dual_residual_shifted;
 use crate::sparse::{BlockCsr, CscMatrix};
 use std::time::Instant;
 

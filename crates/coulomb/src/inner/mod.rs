@@ -9,9 +9,12 @@
 //! (3.15) on (M, H) for global problems.
 
 pub mod apgd;
+pub(crate) mod clarabel;
+pub mod contact;
 pub mod faceted;
 pub mod ipm;
 pub mod pgs;
+pub(crate) mod polish;
 
 use crate::sparse::CscMatrix;
 use std::time::Instant;

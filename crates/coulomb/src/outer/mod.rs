@@ -317,14 +317,23 @@ mod tests {
             let mut solver = Solver::new(&p1, settings.clone()).unwrap();
             let a = solver.solve(None).unwrap();
             let fresh = solve(&p1, &settings).unwrap();
-            assert_eq!((a.status, &a.r, a.error), (fresh.status, &fresh.r, fresh.error));
+            assert_eq!(
+                (a.status, &a.r, a.error),
+                (fresh.status, &fresh.r, fresh.error)
+            );
             assert!(a.converged(), "{:?}", a.status);
             // the next step: new q, same W
             solver.update_q(q2.clone()).unwrap();
-            let guess = Guess { r: a.r.clone(), v: None };
+            let guess = Guess {
+                r: a.r.clone(),
+                v: None,
+            };
             let b = solver.solve(Some(&guess)).unwrap();
             let fresh = solve_with_guess(&p2, &settings, Some(&guess)).unwrap();
-            assert_eq!((b.status, &b.r, b.error), (fresh.status, &fresh.r, fresh.error));
+            assert_eq!(
+                (b.status, &b.r, b.error),
+                (fresh.status, &fresh.r, fresh.error)
+            );
             assert!(b.converged());
         }
         let mut solver = Solver::new(&p1, Settings::default()).unwrap();
@@ -335,7 +344,10 @@ mod tests {
             tol: -1.0,
             ..Settings::default()
         };
-        assert!(matches!(solver.set_settings(bad), Err(SolveError::Settings(_))));
+        assert!(matches!(
+            solver.set_settings(bad),
+            Err(SolveError::Settings(_))
+        ));
     }
 
     #[test]
@@ -352,8 +364,17 @@ mod tests {
         let a = solver.solve(None).unwrap();
         let b = solve(&p2, &settings).unwrap();
         assert_eq!(a.status, b.status);
-        assert!((a.error - b.error).abs() <= 1e-12, "{} {}", a.error, b.error);
-        let dr = a.r.iter().zip(&b.r).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+        assert!(
+            (a.error - b.error).abs() <= 1e-12,
+            "{} {}",
+            a.error,
+            b.error
+        );
+        let dr =
+            a.r.iter()
+                .zip(&b.r)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max);
         assert!(dr <= 1e-12, "{dr}");
         assert!(solver.update_q(vec![]).is_err());
     }

@@ -22,6 +22,8 @@
 //! - [`solver`]: where [`solve`] and the settings and results have always been re-exported;
 //! - [`deadline`]: the one [`deadline::Deadline`] type of every time limit;
 //! - [`existence`]: the criteria (4.1), (4.4), (4.5), (4.6), (5.1) with certificates;
+//! - [`evaluation`]: the error of `docs/error.md` and the balance residual of a candidate,
+//!   shared by the solver and [`fclib::evaluate`];
 //! - [`examples`]: Painlevé (2.12) and the other examples of §4–5;
 //! - [`fclib`]: the FCLIB HDF5 exchange format.
 //!
@@ -34,6 +36,7 @@ pub mod atomic;
 pub mod cone;
 pub mod deadline;
 pub mod delassus;
+pub mod evaluation;
 pub mod examples;
 pub mod existence;
 pub mod fclib;

@@ -16,6 +16,7 @@
 //! game ([`crate::newton`], J = I − D + D A W with W as stored).
 
 use crate::delassus::Delassus;
+use crate::evaluation;
 use crate::law;
 use crate::problem::{GlobalProblem, LocalProblem};
 use crate::sparse::CscMatrix;
@@ -99,18 +100,18 @@ impl<'a> Form<'a> {
         }
     }
 
-    /// Recomputes u (and v) from r and evaluates the error of docs/error.md: u = W r + q for a
+    /// Recomputes u (and v) from r and evaluates the error of docs/error.md ([`crate::evaluation`],
+    /// as [`crate::fclib::evaluate`] does for stored solutions): u = W r + q for a
     /// local problem; v = M⁻¹(H r + f), u = Hᵀ v + w and the balance residual for a global one.
     pub(crate) fn verdict(&self, r: &[f64]) -> Verdict {
         match &self.stored {
             Stored::Local(p) => {
-                let u = p.velocity(r);
-                let error = law::error_measure(p.dim, &p.mu, r, &u, self.q_norm).error;
+                let (u, e) = evaluation::local(p, r, self.q_norm);
                 let unbounded = self.unbounded(r, &u);
                 Verdict {
                     u,
                     v: None,
-                    error,
+                    error: e.measure.error,
                     balance: None,
                     unbounded,
                 }
@@ -120,15 +121,13 @@ impl<'a> Form<'a> {
                 // that is only nearly symmetric the balance residual (computed with the whole
                 // M) can stay above tol: Status::BalanceResidual
                 let v = d.velocity(&g.h, r);
-                let u = g.velocity(&v);
-                let error = law::error_measure(g.dim, &g.mu, r, &u, self.q_norm).error;
-                let balance = g.balance_residual(&v, r);
+                let (u, e) = evaluation::global(g, &v, r, self.q_norm);
                 let unbounded = self.unbounded(r, &u);
                 Verdict {
                     u,
                     v: Some(v),
-                    error,
-                    balance: Some(balance),
+                    error: e.measure.error,
+                    balance: e.balance_residual,
                     unbounded,
                 }
             }

@@ -22,8 +22,7 @@ impl Deadline {
         self.0.is_some_and(|t| Instant::now() >= t)
     }
 
-    /// The instant, None for no deadline (what [`crate::inner::InnerLimits`] and the
-    /// lower-level solvers take).
+    /// The instant, None for no deadline (for the time left, e.g. Clarabel's time limit).
     pub fn instant(&self) -> Option<Instant> {
         self.0
     }
@@ -32,6 +31,12 @@ impl Deadline {
 impl From<Option<Instant>> for Deadline {
     fn from(t: Option<Instant>) -> Self {
         Self(t)
+    }
+}
+
+impl From<Instant> for Deadline {
+    fn from(t: Instant) -> Self {
+        Self(Some(t))
     }
 }
 

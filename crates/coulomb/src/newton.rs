@@ -24,13 +24,13 @@
 //! (projection Jacobian, sparse LU) polish the interior-point solutions of the inner
 //! problems (3.15) and (4.7) in [`crate::inner::ipm`].
 
+use crate::deadline::Deadline;
 use crate::natural_map::de_saxce_map;
 use crate::problem::LocalProblem;
 use crate::sparse::CscMatrix;
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use std::time::Instant;
 
 /// Solves J x = rhs for a square sparse J given as summed triplets, by faer's sparse LU.
 /// None if the factorization fails or the solution is not finite.
@@ -221,7 +221,7 @@ pub fn polish(
     r: &mut [f64],
     target: f64,
     max_steps: usize,
-    deadline: Option<Instant>,
+    deadline: Deadline,
 ) -> NewtonReport {
     let (d, m) = (p.dim, r.len());
     let consistent = (d == 2 || d == 3)
@@ -277,7 +277,7 @@ pub fn polish(
         if steps >= max_steps {
             break NewtonStatus::MaxSteps;
         }
-        if deadline.is_some_and(|t| Instant::now() >= t) {
+        if deadline.passed() {
             break NewtonStatus::TimeLimit;
         }
         // J + λ I with J = I − D + (D A) W; λ starts at a fraction of the relative residual (a regularized
@@ -289,7 +289,7 @@ pub fn polish(
         let mut lambda = LAMBDA_FACTOR * (norm / q_scale).min(1e-2) * diag_scale;
         let mut accepted = false;
         for _ in 0..4 {
-            if deadline.is_some_and(|t| Instant::now() >= t) {
+            if deadline.passed() {
                 break;
             }
             let mut shifted = vals.clone();
@@ -326,7 +326,7 @@ pub fn polish(
             lambda = (lambda * 100.0).max(1e-10 * diag_scale);
         }
         if !accepted {
-            if deadline.is_some_and(|t| Instant::now() >= t) {
+            if deadline.passed() {
                 break NewtonStatus::TimeLimit;
             }
             break NewtonStatus::NoDescent;
@@ -428,19 +428,19 @@ mod tests {
         let mut p = problem(2, 1, 0.5);
         p.mu.push(0.3); // three friction coefficients for two contacts
         let mut r = vec![0.0; 6];
-        let out = polish(&p, &mut r, 0.0, 5, None);
+        let out = polish(&p, &mut r, 0.0, 5, Deadline::NEVER);
         assert_eq!((out.status, out.steps), (NewtonStatus::NoDescent, 0));
         assert!(r.iter().all(|&x| x == 0.0));
         let p = problem(2, 1, 0.5);
         let mut short = vec![0.0; 5];
-        assert_eq!(polish(&p, &mut short, 0.0, 5, None).steps, 0);
+        assert_eq!(polish(&p, &mut short, 0.0, 5, Deadline::NEVER).steps, 0);
     }
 
     #[test]
     fn newton_reaches_rounding_level_from_a_rough_point() {
         let p = problem(5, 3, 0.5);
         let mut r = vec![0.0; 15];
-        let out = polish(&p, &mut r, 0.0, 50, None);
+        let out = polish(&p, &mut r, 0.0, 50, Deadline::NEVER);
         let u = p.velocity(&r);
         let err = crate::law::error_measure(3, &p.mu, &r, &u, crate::law::norm(&p.q)).error;
         assert!(err < 1e-12, "error {err:.3e} after {out:?}");

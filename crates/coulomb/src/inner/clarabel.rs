@@ -52,7 +52,7 @@ pub(crate) fn clarabel_settings(limits: &InnerLimits) -> Result<DefaultSettings<
         settings.tol_gap_rel = limits.tol;
         settings.tol_feas = limits.tol;
     }
-    if let Some(deadline) = limits.deadline {
+    if let Some(deadline) = limits.deadline.instant() {
         let left = deadline
             .saturating_duration_since(Instant::now())
             .as_secs_f64();

@@ -163,7 +163,7 @@ mod tests {
         InnerLimits {
             tol: 1e-9,
             max_iterations: 100,
-            deadline: None,
+            deadline: crate::deadline::Deadline::NEVER,
         }
     }
 

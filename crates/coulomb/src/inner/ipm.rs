@@ -40,13 +40,13 @@ use super::clarabel::{clarabel_settings, report_of, to_clarabel};
 pub(crate) use super::clarabel::{solve_dual_qp, triplets_to_clarabel, QpCache};
 use super::polish::past;
 use super::{InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus};
+use crate::deadline::Deadline;
 use crate::natural_map::{natural_map, push_d_times, push_identity_minus_d};
 use crate::newton::sparse_lu_solve;
 use crate::problem::GlobalProblem;
 use crate::sparse::CscMatrix;
 use clarabel::algebra::CscMatrix as ClarabelCsc;
 use clarabel::solver::{DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
-use std::time::Instant;
 
 /// Clarabel on the dual (4.7): min over r ∈ L = ∏ K_{μⁱ} of ½ rᵀ W r + bᵀ r.
 ///
@@ -484,7 +484,7 @@ fn polish_primal(
     v: &mut [f64],
     r: &mut [f64],
     steps: usize,
-    deadline: Option<Instant>,
+    deadline: Deadline,
 ) -> f64 {
     let (dim, n, m) = (problem.dim, v.len(), r.len());
     let mut x: Vec<f64> = v.iter().chain(r.iter()).copied().collect();
@@ -552,7 +552,7 @@ mod tests {
         InnerLimits {
             tol: 1e-9,
             max_iterations: 100,
-            deadline: None,
+            deadline: Deadline::NEVER,
         }
     }
 
@@ -680,7 +680,7 @@ mod tests {
         );
         let mut r = vec![0.0; 3];
         let past = InnerLimits {
-            deadline: Some(Instant::now()),
+            deadline: std::time::Instant::now().into(),
             ..limits()
         };
         std::thread::sleep(std::time::Duration::from_millis(1));

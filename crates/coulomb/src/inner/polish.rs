@@ -2,13 +2,13 @@
 //! its natural map ([`crate::natural_map`]).
 
 use super::InnerProblem;
+use crate::deadline::Deadline;
 use crate::natural_map::{natural_map, push_d_times, push_identity_minus_d};
 use crate::newton::sparse_lu_solve;
-use std::time::Instant;
 
 /// Whether `deadline` has passed.
-pub(crate) fn past(deadline: Option<Instant>) -> bool {
-    deadline.is_some_and(|d| Instant::now() >= d)
+pub(crate) fn past(deadline: Deadline) -> bool {
+    deadline.passed()
 }
 
 /// Polishes an approximate solution r of (4.7) by at most `steps` semismooth Newton steps on
@@ -23,7 +23,7 @@ pub(crate) fn polish_dual(
     problem: &InnerProblem<'_>,
     r: &mut [f64],
     steps: usize,
-    deadline: Option<Instant>,
+    deadline: Deadline,
 ) -> f64 {
     let (dim, m) = (problem.dim, r.len());
     let scale = crate::law::norm(problem.b).max(1.0);

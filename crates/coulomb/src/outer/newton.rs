@@ -111,7 +111,7 @@ impl EndGame {
                 &mut trial,
                 p.target_fraction * tol * form.q_norm,
                 p.try_steps.min(settings.newton_steps - self.used),
-                deadline.instant(),
+                deadline,
             );
             self.used += nr.steps.max(1);
             let candidate = form.verdict(&trial);

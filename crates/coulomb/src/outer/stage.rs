@@ -137,7 +137,7 @@ impl<'f, 'a> Stage<'f, 'a> {
                 .tuning
                 .inner_tol(settings, self.verdict.error, cold || self.frictionless),
             max_iterations: settings.max_inner,
-            deadline: self.deadline.instant(),
+            deadline: self.deadline,
         };
         fixed_point::shifted(dim, &local.q, mu, &self.s, &mut self.b);
         let report = match (&form.stored, settings.inner, settings.outer) {

@@ -13,14 +13,14 @@
 //! - [`Settings::newton_start`]: an error level (of `docs/error.md`) below which the Newton end
 //!   game is tried; not a stopping test.
 
-use serde::Serialize;
 use std::fmt;
 use std::str::FromStr;
 use std::time::Duration;
 
 /// Which method computes F(s) (§6, options (i), (iv), (v)).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum InnerKind {
     /// Clarabel interior point on the SOC-QP (primal (3.15) for global problems, dual (4.7) for local).
     Ipm,
@@ -33,8 +33,9 @@ pub enum InnerKind {
 }
 
 /// How the fixed point s = F(s) is sought.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum OuterKind {
     /// successive approximation s ← F(s)
     FixedPoint,
@@ -140,7 +141,8 @@ impl fmt::Display for OuterKind {
 /// One method: an inner solver of F(s) inside an outer iteration on s. Written `inner` (plain
 /// fixed point s ← F(s)) or `inner+outer`, e.g. `apgd+anderson`, `pgs+fused`; the one
 /// spelling of every CLI command and of the Python bindings.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Method {
     /// the solver of the inner problem (3.15)/(4.7)
     pub inner: InnerKind,
@@ -195,7 +197,8 @@ impl FromStr for Method {
 }
 
 /// Parameters of safeguarded Anderson mixing on s ([`crate::outer::anderson`]).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct AndersonParams {
     /// number of previous differences kept (≥ 1)
     pub memory: usize,
@@ -203,7 +206,8 @@ pub struct AndersonParams {
 
 /// Parameters of the semismooth Newton end game ([`crate::outer::newton`]); the budget and
 /// the starting level are [`Settings::newton_steps`] and [`Settings::newton_start`].
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct NewtonParams {
     /// Newton steps one end-game try may take (all tries of a stage share
     /// [`Settings::newton_steps`])
@@ -222,7 +226,8 @@ pub struct NewtonParams {
 
 /// Every tuning constant of the outer loop, in one place. The defaults are those the solver
 /// has always used; they are not meant to be changed per problem.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Tuning {
     /// the inner tolerance is kept at least `inner_tol_floor` × tol (see [`Tuning::inner_tol`])
     pub inner_tol_floor: f64,
@@ -325,7 +330,8 @@ pub const STALL_WINDOW: usize = 25;
 /// iterations, a semismooth Newton end game on the whole law once the error is
 /// ≤ [`Settings::newton_start`] (1e-3), and fused Gauss–Seidel as fallback when the first
 /// stage stalls. [`Settings::paper`] is the paper's algorithm.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Settings {
     /// tolerance on the reported error (docs/error.md); also on the balance residual
     pub tol: f64,

@@ -3,13 +3,13 @@
 //! [`SolveError`] of a solve that could not start.
 
 use crate::problem::ProblemError;
-use serde::Serialize;
 use std::fmt;
 use std::time::Duration;
 
 /// How a solve ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum Status {
     /// the error of docs/error.md (and, for global problems, the balance residual) is ≤ tol
     Converged,
@@ -65,7 +65,8 @@ impl fmt::Display for Status {
 }
 
 /// One outer iteration of the history.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct OuterRecord {
     /// the error of docs/error.md after this iteration
     pub error: f64,
@@ -87,7 +88,8 @@ pub struct Guess {
 }
 
 /// The result of a solve.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Solution {
     /// impulses r
     pub r: Vec<f64>,
@@ -138,6 +140,7 @@ pub enum SolveError {
 mod tests {
     use super::*;
 
+    #[cfg(feature = "serde")]
     #[test]
     fn status_names_match_their_serialization() {
         for s in [

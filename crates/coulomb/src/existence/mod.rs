@@ -69,7 +69,6 @@ use clarabel::algebra as ca;
 use clarabel::solver::{self as cs, IPSolver};
 use criteria::run_all_with;
 use margin::KinematicData;
-use serde::{Serialize, Serializer};
 use std::time::Instant;
 use thiserror::Error;
 
@@ -107,15 +106,17 @@ impl std::fmt::Display for Criterion {
     }
 }
 
-impl Serialize for Criterion {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+#[cfg(feature = "serde")]
+impl serde::Serialize for Criterion {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         s.serialize_str(self.label())
     }
 }
 
 /// Outcome of one criterion.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum Verdict {
     /// the criterion holds, with a verified certificate (within tolerance)
     Holds,
@@ -126,8 +127,9 @@ pub enum Verdict {
 }
 
 /// What a certificate vector is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum CertificateKind {
     /// generalized velocities v (length n; length m for a local problem) with Hᵀ v + w in the
     /// criterion's cone
@@ -140,7 +142,8 @@ pub enum CertificateKind {
 }
 
 /// The verdict on one criterion, with its verified certificate.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct CriterionReport {
     /// holds, fails or undecided
     pub verdict: Verdict,
@@ -164,22 +167,23 @@ pub struct CriterionReport {
 }
 
 /// The five verdicts, serialized under the paper's equation numbers.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Criteria {
     /// (4.1)
-    #[serde(rename = "4.1")]
+    #[cfg_attr(feature = "serde", serde(rename = "4.1"))]
     pub c4_1: CriterionReport,
     /// (4.4)
-    #[serde(rename = "4.4")]
+    #[cfg_attr(feature = "serde", serde(rename = "4.4"))]
     pub c4_4: CriterionReport,
     /// (4.5)
-    #[serde(rename = "4.5")]
+    #[cfg_attr(feature = "serde", serde(rename = "4.5"))]
     pub c4_5: CriterionReport,
     /// (4.6)
-    #[serde(rename = "4.6")]
+    #[cfg_attr(feature = "serde", serde(rename = "4.6"))]
     pub c4_6: CriterionReport,
     /// (5.1)
-    #[serde(rename = "5.1")]
+    #[cfg_attr(feature = "serde", serde(rename = "5.1"))]
     pub c5_1: CriterionReport,
 }
 
@@ -197,8 +201,9 @@ impl Criteria {
 }
 
 /// What the theory concludes from the verdicts.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(tag = "kind", rename_all = "snake_case"))]
 pub enum Conclusion {
     /// a solution of (2.10) exists, by this criterion and this result of the paper
     Exists {
@@ -231,7 +236,8 @@ impl Conclusion {
 }
 
 /// The result of [`check`].
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct ExistenceReport {
     /// "local" or "global"
     pub kind: &'static str,
@@ -247,14 +253,15 @@ pub struct ExistenceReport {
     pub conclusion: Conclusion,
     /// why the conclusion is weaker than the criteria suggest, when it is (a local problem
     /// whose W is not symmetric: see [`check_local`])
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[cfg_attr(feature = "serde", serde(skip_serializing_if = "Option::is_none"))]
     pub note: Option<String>,
     /// wall-clock seconds spent
     pub seconds: f64,
 }
 
 /// Settings of [`check`].
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct CheckSettings {
     /// decision tolerance on margins and dual bounds (relative to ‖w‖∞)
     pub tol: f64,

@@ -33,8 +33,9 @@ pub struct InnerProblem<'a> {
 }
 
 /// How an inner solve ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum InnerStatus {
     /// the inner stopping criterion was met
     Solved,

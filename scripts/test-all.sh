@@ -28,6 +28,15 @@ fi
 
 # the CLI binary `cargo test` built, for the CLI-equality tests
 export COULOMB_CLI="$PWD/target/debug/coulomb"
-# pytest's own exit code is the script's: 1 for failures, 5 when no test was collected
+# pytest's exit code fails the script: 1 for failures, 5 when no test was collected
 # (set -e makes both fail the run; nothing is masked)
 "$VENV/bin/python" -m pytest crates/coulomb-py/tests -q -rs
+
+# the distributed feature (docs/distributed.md): its unit tests and `coulomb simulate` under
+# `mpirun -np 2`, when an MPI implementation is installed (.ci/run installs one); last, because
+# its build replaces target/debug/coulomb by the MPI-enabled binary
+if command -v mpicc >/dev/null && command -v mpirun >/dev/null; then
+  cargo test --workspace --features coulomb-cli/mpi --lib --test cli_mpi -- distributed
+else
+  echo "skipped: the distributed (mpi) tests need mpicc and mpirun (apt-get install libopenmpi-dev openmpi-bin libclang-dev)"
+fi

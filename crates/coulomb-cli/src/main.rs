@@ -7,6 +7,7 @@ mod method;
 mod outputs;
 mod progress;
 mod read;
+mod threads;
 mod values;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};

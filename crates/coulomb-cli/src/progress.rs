@@ -10,9 +10,9 @@ pub fn bar(len: usize, hidden: bool) -> ProgressBar {
     if hidden || !std::io::stderr().is_terminal() {
         pb.set_draw_target(ProgressDrawTarget::hidden());
     }
-    if let Ok(style) =
-        ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} steps {msg} ({elapsed})")
-    {
+    if let Ok(style) = ProgressStyle::with_template(
+        "{prefix} [{bar:30}] {pos}/{len} steps {msg} ({elapsed}, ETA {eta})",
+    ) {
         pb.set_style(style.progress_chars("=> "));
     }
     pb

@@ -90,6 +90,27 @@ pub fn count0(s: &str) -> Result<usize, String> {
     usize::try_from(whole(s)?).map_err(|_| "is too large".into())
 }
 
+/// An over-relaxation factor ω ∈ [1, 2).
+pub fn relaxation(s: &str) -> Result<f64, String> {
+    let x: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| "is not a number".to_string())?;
+    if !(1.0..2.0).contains(&x) {
+        return Err("must be in [1, 2)".into());
+    }
+    Ok(x)
+}
+
+/// A number of worker threads: 1 to 1024.
+pub fn threads(s: &str) -> Result<usize, String> {
+    let n = count(s)?;
+    if n > 1024 {
+        return Err("must be at most 1024".into());
+    }
+    Ok(n)
+}
+
 /// A seed: any whole number ≥ 0.
 pub fn seed(s: &str) -> Result<u64, String> {
     whole(s)

@@ -205,3 +205,46 @@ fn simulate_box_layout_overrides_are_checked() {
     // most the four walls touch each bead
     assert!(v["mean_contacts"].as_f64().unwrap() <= 2.0 * 8.0);
 }
+
+#[test]
+fn scaling_accurate_converges_and_matches_across_threads() {
+    let dir = temp_dir("paper-scaling-accurate");
+    let svg = dir.join("acc.svg");
+    let md = dir.join("acc.md");
+    ok(&coulomb(&[
+        "paper",
+        "scaling",
+        "--accurate",
+        "--beads",
+        "60",
+        "--threads",
+        "1,2",
+        "--settle",
+        "6",
+        "--window",
+        "4",
+        "--svg",
+        svg.to_str().unwrap(),
+        "--markdown",
+        md.to_str().unwrap(),
+    ]));
+    is_svg(&svg);
+    let data = read_json(&dir.join("acc.json"));
+    let points = data.as_array().expect("array of points");
+    assert_eq!(points.len(), 2);
+    for p in points {
+        assert_eq!(p["beads"], 60);
+        assert_eq!(p["timed_steps"], 4);
+        assert_eq!(p["steps_all"], 10);
+        assert_eq!(p["converged_all"], 10, "{p}");
+        assert!(p["max_error"].as_f64().unwrap() <= 1e-4);
+        assert!(p["contacts"].as_f64().unwrap() > 0.0);
+    }
+    // bitwise the same final state for 1 and 2 threads
+    assert_eq!(points[0]["state_hash"], points[1]["state_hash"]);
+    let text = std::fs::read_to_string(&md).unwrap();
+    assert!(
+        text.contains("| 60 | 2 |") && !text.contains("| NO |"),
+        "{text}"
+    );
+}

@@ -1,8 +1,11 @@
-//! Mean time of one Moreau–Jean step of the `box` scene (600 beads, paper tolerance), after the
-//! pile has formed. Run: `cargo bench -p coulomb-granular`.
+//! Mean time of one Moreau–Jean step of the `box` scene after the pile has formed: the paper's
+//! tolerance with the library's APGD (150 and 600 beads), and the accurate step of `coulomb
+//! simulate` — body-level Gauss–Seidel to err ≤ 1e-4 (`nsgs_*`, 600 and 10 000 beads, on the
+//! ambient rayon pool: `RAYON_NUM_THREADS=1` for one thread). Run: `cargo bench -p
+//! coulomb-granular` (or `--bench box_step -- nsgs_10000`).
 
 use coulomb::solver::{InnerKind, OuterKind, Settings};
-use coulomb_granular::{Params, Scene, Simulation};
+use coulomb_granular::{NsgsSettings, Params, Scene, Simulation, StepMethod};
 use criterion::{criterion_group, criterion_main, Criterion};
 
 fn paper_params(inner: InnerKind) -> Params {
@@ -43,6 +46,25 @@ fn bench_box(c: &mut Criterion) {
             }
         }
         group.bench_function(format!("apgd_{beads}"), |b| {
+            b.iter(|| sim.step().map(|s| s.contacts).unwrap_or(0))
+        });
+    }
+    // the accurate step (docs/scaling.md), each bench step continuing the same simulation
+    for beads in [600usize, 10_000] {
+        let params = Params {
+            method: StepMethod::Nsgs(NsgsSettings::default()),
+            ..Params::default()
+        };
+        let mut sim = match Simulation::new(Scene::box_spread(beads, 1), params) {
+            Ok(s) => s,
+            Err(e) => panic!("{e}"),
+        };
+        for _ in 0..40 {
+            if sim.step().is_err() {
+                return;
+            }
+        }
+        group.bench_function(format!("nsgs_{beads}"), |b| {
             b.iter(|| sim.step().map(|s| s.contacts).unwrap_or(0))
         });
     }

@@ -4,6 +4,7 @@
 
 use crate::math::Vec3;
 use crate::world::World;
+use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::HashMap;
 
@@ -159,41 +160,139 @@ pub fn candidate_pairs(world: &World, margin: f64) -> Vec<(usize, usize)> {
         .map(|b| b.radius)
         .fold(0.0_f64, f64::max);
     let cell = (2.0 * rmax + margin).max(1e-12);
-    let key = |x: Vec3| -> (i64, i64, i64) {
+    let key = |x: Vec3| -> [i64; 3] {
         let k = |c: f64| (c / cell).floor().clamp(-1e15, 1e15) as i64;
-        (k(x.x), k(x.y), k(x.z))
+        [k(x.x), k(x.y), k(x.z)]
     };
-    let mut grid: HashMap<(i64, i64, i64), Vec<usize>> = HashMap::with_capacity(world.bodies.len());
-    for (i, b) in world.bodies.iter().enumerate() {
-        grid.entry(key(b.position)).or_default().push(i);
-    }
-    let mut pairs = Vec::new();
-    for (i, b) in world.bodies.iter().enumerate() {
-        let (cx, cy, cz) = key(b.position);
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    let Some(list) = grid.get(&(cx + dx, cy + dy, cz + dz)) else {
-                        continue;
-                    };
-                    for &j in list {
-                        if j <= i {
-                            continue;
-                        }
-                        let Some(bj) = world.bodies.get(j) else {
-                            continue;
-                        };
-                        let reach = b.radius + bj.radius + margin;
-                        if (b.position - bj.position).norm_sq() <= reach * reach {
-                            pairs.push((i, j));
+    let keys: Vec<[i64; 3]> = world.bodies.par_iter().map(|b| key(b.position)).collect();
+    let test = |i: usize, j: usize| -> bool {
+        let (Some(a), Some(b)) = (world.bodies.get(i), world.bodies.get(j)) else {
+            return false;
+        };
+        let reach = a.radius + b.radius + margin;
+        (a.position - b.position).norm_sq() <= reach * reach
+    };
+    let mut pairs: Vec<(usize, usize)> = match DenseGrid::new(&keys) {
+        // each sphere's neighbours in parallel (rayon), in sphere order
+        Some(grid) => (0..keys.len())
+            .into_par_iter()
+            .flat_map_iter(|i| {
+                let mut out = Vec::new();
+                grid.neighbours(keys[i], |j| {
+                    if j > i && test(i, j) {
+                        out.push((i, j));
+                    }
+                });
+                out.sort_unstable();
+                out
+            })
+            .collect(),
+        None => {
+            let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::with_capacity(keys.len());
+            for (i, k) in keys.iter().enumerate() {
+                grid.entry(*k).or_default().push(i);
+            }
+            (0..keys.len())
+                .into_par_iter()
+                .flat_map_iter(|i| {
+                    let [cx, cy, cz] = keys[i];
+                    let mut out = Vec::new();
+                    for dx in -1..=1 {
+                        for dy in -1..=1 {
+                            for dz in -1..=1 {
+                                let cell = grid.get(&[cx + dx, cy + dy, cz + dz]);
+                                for &j in cell.into_iter().flatten() {
+                                    if j > i && test(i, j) {
+                                        out.push((i, j));
+                                    }
+                                }
+                            }
                         }
                     }
+                    out.sort_unstable();
+                    out
+                })
+                .collect()
+        }
+    };
+    // already in (i, j) order; kept as a guarantee
+    pairs.par_sort_unstable();
+    pairs
+}
+
+/// Cells of the broad phase as a dense array over the spheres' bounding box (compressed
+/// rows: the spheres of cell c are `items[start[c]..start[c + 1]]`), when that box has at
+/// most 8 cells per sphere (otherwise a hash map is used).
+struct DenseGrid {
+    lo: [i64; 3],
+    dims: [i64; 3],
+    start: Vec<usize>,
+    items: Vec<usize>,
+}
+
+impl DenseGrid {
+    fn new(keys: &[[i64; 3]]) -> Option<Self> {
+        let first = keys.first()?;
+        let (mut lo, mut hi) = (*first, *first);
+        for k in keys {
+            for d in 0..3 {
+                lo[d] = lo[d].min(k[d]);
+                hi[d] = hi[d].max(k[d]);
+            }
+        }
+        let dims = [hi[0] - lo[0] + 1, hi[1] - lo[1] + 1, hi[2] - lo[2] + 1];
+        let cells = dims
+            .iter()
+            .try_fold(1i64, |acc, &d| acc.checked_mul(d))
+            .filter(|&c| c <= 8 * keys.len() as i64 + 64)? as usize;
+        let index = |k: &[i64; 3]| {
+            (((k[2] - lo[2]) * dims[1] + (k[1] - lo[1])) * dims[0] + (k[0] - lo[0])) as usize
+        };
+        let mut start = vec![0usize; cells + 1];
+        for k in keys {
+            start[index(k) + 1] += 1;
+        }
+        for c in 0..cells {
+            start[c + 1] += start[c];
+        }
+        let mut next = start.clone();
+        let mut items = vec![0usize; keys.len()];
+        for (i, k) in keys.iter().enumerate() {
+            let c = index(k);
+            items[next[c]] = i;
+            next[c] += 1;
+        }
+        Some(Self {
+            lo,
+            dims,
+            start,
+            items,
+        })
+    }
+
+    /// Calls `f` on every sphere of the 27 cells around cell `k`.
+    fn neighbours(&self, k: [i64; 3], mut f: impl FnMut(usize)) {
+        for dz in -1..=1 {
+            let z = k[2] - self.lo[2] + dz;
+            if z < 0 || z >= self.dims[2] {
+                continue;
+            }
+            for dy in -1..=1 {
+                let y = k[1] - self.lo[1] + dy;
+                if y < 0 || y >= self.dims[1] {
+                    continue;
+                }
+                let row = (z * self.dims[1] + y) * self.dims[0];
+                let x0 = (k[0] - self.lo[0] - 1).max(0);
+                let x1 = (k[0] - self.lo[0] + 1).min(self.dims[0] - 1);
+                // cells x0..=x1 of this row are contiguous
+                let (a, b) = ((row + x0) as usize, (row + x1) as usize);
+                for &j in &self.items[self.start[a]..self.start[b + 1]] {
+                    f(j);
                 }
             }
         }
     }
-    pairs.sort_unstable();
-    pairs
 }
 
 /// Detects the active contacts of `world` at time t for step size h: candidate pairs within
@@ -218,8 +317,7 @@ pub fn detect_with(
         .map(|b| b.velocity.norm() + b.angular_velocity.norm() * b.radius)
         .fold(0.0_f64, f64::max);
     let margin = delta + 2.0 * vmax * h * activation.gamma + 1e-12;
-    let mut contacts = Vec::new();
-    let mut push = |a: usize, partner: Partner, normal: Vec3, point: Vec3, gap: f64| {
+    let make = |a: usize, partner: Partner, normal: Vec3, point: Vec3, gap: f64| {
         let u = relative_velocity(world, a, partner, point, t);
         let un = u.dot(normal);
         // the free motion's normal velocity at t_{k+1}: gravity acts on A alone when B is an
@@ -228,43 +326,60 @@ pub fn detect_with(
             Partner::Obstacle(_) => un + h * world.gravity.dot(normal),
             Partner::Body(_) => un,
         };
-        if activation.is_active_with(gap, un.min(free), h, delta) {
-            let (t1, t2) = normal.tangent_basis();
-            contacts.push(Contact {
-                body: a,
-                partner,
-                normal,
-                t1,
-                t2,
-                point,
-                gap,
-                normal_velocity: un,
-                impulse: [0.0; 3],
-            });
-        }
+        activation
+            .is_active_with(gap, un.min(free), h, delta)
+            .then(|| {
+                let (t1, t2) = normal.tangent_basis();
+                Contact {
+                    body: a,
+                    partner,
+                    normal,
+                    t1,
+                    t2,
+                    point,
+                    gap,
+                    normal_velocity: un,
+                    impulse: [0.0; 3],
+                }
+            })
     };
-    for (i, j) in candidate_pairs(world, margin) {
-        let (Some(a), Some(b)) = (world.bodies.get(i), world.bodies.get(j)) else {
-            continue;
-        };
-        let d = a.position - b.position;
-        let dist = d.norm();
-        let n = d.normalized_or(Vec3::Z);
-        let gap = dist - a.radius - b.radius;
-        // the point midway between the two surfaces
-        let point = b.position + n * (b.radius + 0.5 * gap);
-        push(i, Partner::Body(j), n, point, gap);
-    }
-    for (i, b) in world.bodies.iter().enumerate() {
-        for (o, ob) in world.obstacles.iter().enumerate() {
-            let p = ob.proximity(b.position, b.radius, t);
-            if p.gap <= margin {
-                let point = p.point + p.normal * (0.5 * p.gap);
-                push(i, Partner::Obstacle(o), p.normal, point, p.gap);
-            }
-        }
-    }
-    contacts.sort_by_key(|c| c.key());
+    // narrow phase in parallel (rayon); the result is sorted, so independent of threads
+    let mut contacts: Vec<Contact> = candidate_pairs(world, margin)
+        .par_iter()
+        .filter_map(|&(i, j)| {
+            let (a, b) = (world.bodies.get(i)?, world.bodies.get(j)?);
+            let d = a.position - b.position;
+            let dist = d.norm();
+            let n = d.normalized_or(Vec3::Z);
+            let gap = dist - a.radius - b.radius;
+            // the point midway between the two surfaces
+            let point = b.position + n * (b.radius + 0.5 * gap);
+            make(i, Partner::Body(j), n, point, gap)
+        })
+        .collect();
+    let walls: Vec<Contact> = world
+        .bodies
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(i, b)| {
+            world
+                .obstacles
+                .iter()
+                .enumerate()
+                .filter_map(move |(o, ob)| {
+                    let p = ob.proximity(b.position, b.radius, t);
+                    if p.gap <= margin {
+                        let point = p.point + p.normal * (0.5 * p.gap);
+                        make(i, Partner::Obstacle(o), p.normal, point, p.gap)
+                    } else {
+                        None
+                    }
+                })
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    contacts.extend(walls);
+    contacts.par_sort_by_key(|c| c.key());
     contacts
 }
 
@@ -301,6 +416,12 @@ mod tests {
         }
         assert!(!brute.is_empty());
         assert_eq!(grid, brute);
+        // a far sphere makes the dense grid too large: the hash-map path, same pairs
+        world
+            .bodies
+            .push(Sphere::new(Vec3::new(1e6, -1e6, 3e5), 0.02, 1.0));
+        assert!(DenseGrid::new(&[[0, 0, 0], [1_000_000, 0, 0]]).is_none());
+        assert_eq!(candidate_pairs(&world, margin), brute);
     }
 
     #[test]

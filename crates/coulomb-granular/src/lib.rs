@@ -12,7 +12,10 @@
 
 pub mod assembly;
 pub mod contact;
+#[cfg(feature = "mpi")]
+pub mod distributed;
 pub mod math;
+pub mod nsgs;
 pub mod output;
 pub mod projection;
 pub mod run;
@@ -23,8 +26,9 @@ pub mod world;
 
 pub use contact::{Activation, Contact, Partner};
 pub use math::Vec3;
+pub use nsgs::{NsgsSettings, NsgsStatus, StepProblem};
 pub use projection::{Penetration, Projection, ProjectionStats};
 pub use run::{run, run_with, SimulationSettings, Stop, Summary};
 pub use scene::Scene;
-pub use simulation::{Params, Simulation, SimulationError, StepStats};
+pub use simulation::{Params, Simulation, SimulationError, StepMethod, StepStats};
 pub use world::{Motion, Obstacle, Shape, Sphere, World};

@@ -21,6 +21,7 @@
 use crate::contact::{candidate_pairs, Partner};
 use crate::math::Vec3;
 use crate::world::World;
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// Settings of the position correction.
@@ -103,22 +104,31 @@ fn gap_normal(world: &World, a: usize, partner: Partner, t: f64) -> Option<(f64,
 
 /// All pairs with gap ≤ `margin` at time t (sphere pairs through the grid broad phase).
 fn pairs_within(world: &World, t: f64, margin: f64) -> Vec<(usize, Partner, f64)> {
-    let mut out = Vec::new();
-    for (i, j) in candidate_pairs(world, margin.max(0.0)) {
-        if let Some((g, _)) = gap_normal(world, i, Partner::Body(j), t) {
-            if g <= margin {
-                out.push((i, Partner::Body(j), g));
-            }
-        }
-    }
-    for (i, b) in world.bodies.iter().enumerate() {
-        for (o, ob) in world.obstacles.iter().enumerate() {
-            let g = ob.proximity(b.position, b.radius, t).gap;
-            if g <= margin {
-                out.push((i, Partner::Obstacle(o), g));
-            }
-        }
-    }
+    // in parallel (rayon), in a fixed order: spheres pairs, then obstacles by sphere
+    let mut out: Vec<(usize, Partner, f64)> = candidate_pairs(world, margin.max(0.0))
+        .par_iter()
+        .filter_map(|&(i, j)| {
+            let (g, _) = gap_normal(world, i, Partner::Body(j), t)?;
+            (g <= margin).then_some((i, Partner::Body(j), g))
+        })
+        .collect();
+    let walls: Vec<(usize, Partner, f64)> = world
+        .bodies
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(i, b)| {
+            world
+                .obstacles
+                .iter()
+                .enumerate()
+                .filter_map(move |(o, ob)| {
+                    let g = ob.proximity(b.position, b.radius, t).gap;
+                    (g <= margin).then_some((i, Partner::Obstacle(o), g))
+                })
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    out.extend(walls);
     out
 }
 

@@ -103,6 +103,50 @@ impl Scene {
         self.build_with(beads, seed, &BoxLayout::for_beads(beads))
     }
 
+    /// The `box` scene with the calibrated layout of [`BoxLayout::for_beads`], except that
+    /// the beads of the partial top layer sit at random sites spread over the whole floor
+    /// (chosen by `seed`) instead of filling its first rows: the heap then has the same
+    /// structure at every N (docs/scaling.md, "Scene sizing"), while the calibrated layout's
+    /// two-layer strip grows as √N.
+    pub fn box_spread(beads: usize, seed: u64) -> World {
+        let layout = BoxLayout::for_beads(beads);
+        let plain = Scene::Box.build_with(beads, seed, &layout);
+        let layer = |z: f64| ((z - layout.base) / layout.layer_pitch).round().max(0.0) as usize;
+        let per_layer = plain
+            .bodies
+            .iter()
+            .filter(|b| layer(b.position.z) == 0)
+            .count()
+            .max(1);
+        let full = beads / per_layer;
+        let partial = beads - full * per_layer;
+        if partial == 0 {
+            return plain;
+        }
+        let mut world = Scene::Box.build_with((full + 1) * per_layer, seed, &layout);
+        // keep `partial` of the top layer's beads, chosen by a seeded shuffle
+        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_5eed);
+        let top: Vec<usize> = (0..world.bodies.len())
+            .filter(|&i| layer(world.bodies[i].position.z) == full)
+            .collect();
+        let mut pick = top.clone();
+        for k in 0..pick.len() {
+            let j = rng.random_range(k..pick.len());
+            pick.swap(k, j);
+        }
+        let mut drop = vec![false; world.bodies.len()];
+        for &i in pick.iter().skip(partial) {
+            drop[i] = true;
+        }
+        let mut k = 0;
+        world.bodies.retain(|_| {
+            let keep = !drop[k];
+            k += 1;
+            keep
+        });
+        world
+    }
+
     /// Builds the world of this scene; `layout` is used by the `box` scene only.
     pub fn build_with(self, beads: usize, seed: u64, layout: &BoxLayout) -> World {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);

@@ -4,12 +4,12 @@
 
 use crate::assembly::{assemble, free_momentum, mass_diagonal, StepData};
 use crate::contact::{detect_with, Activation, Contact, Partner};
+use crate::nsgs::{self, NsgsSettings, NsgsStatus, StepProblem, StepProblemError};
 use crate::projection::{penetrations, project, Projection};
 use crate::world::World;
 use coulomb::problem::{GlobalProblem, Problem, ProblemError};
 use coulomb::solver::{self, Guess, OuterRecord, Settings, SolveError, Status};
 use serde::Serialize;
-use std::collections::HashMap;
 use std::time::Instant;
 
 /// Parameters of the time stepping.
@@ -33,6 +33,19 @@ pub struct Params {
     /// position correction after each step ([`crate::projection`]); `None`: the plain
     /// Moreau–Jean scheme (the paper's)
     pub projection: Option<Projection>,
+    /// which solver takes each step (`solver` is used by [`StepMethod::Library`] only)
+    pub method: StepMethod,
+}
+
+/// Which solver takes each step.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum StepMethod {
+    /// `coulomb::solver::solve_with_guess` with [`Params::solver`] on the assembled global
+    /// problem (W = Hᵀ M⁻¹ H formed by the library)
+    Library,
+    /// body-level nonsmooth Gauss–Seidel, matrix-free and parallel ([`crate::nsgs`])
+    Nsgs(NsgsSettings),
 }
 
 impl Default for Params {
@@ -46,6 +59,7 @@ impl Default for Params {
             solver: Settings::default(),
             warm_start: true,
             projection: Some(Projection::default()),
+            method: StepMethod::Library,
         }
     }
 }
@@ -63,6 +77,14 @@ pub enum SimulationError {
         step: usize,
         /// the problem error
         source: ProblemError,
+    },
+    /// a contact of the body-level problem is invalid (should not happen with finite states)
+    #[error("body-level problem of step {step}: {source}")]
+    StepProblem {
+        /// step index
+        step: usize,
+        /// the problem error
+        source: StepProblemError,
     },
     /// the solver refused the problem
     #[error("solver failed at step {step}: {source}")]
@@ -147,7 +169,8 @@ pub struct Simulation {
     pub keep_problem: bool,
     /// time the formation of the Delassus operator separately (`StepStats::delassus_ms`)
     pub profile_delassus: bool,
-    previous: HashMap<(usize, Partner), [f64; 3]>,
+    /// the last step's impulses by contact key, sorted by key (warm starts by merge)
+    previous: Vec<((usize, Partner), [f64; 3])>,
     /// bound ε_u = max(err, tol) · scale on the residual velocity of the last step's contacts
     residual_velocity: f64,
 }
@@ -173,6 +196,12 @@ impl Simulation {
             let ok = |x: f64| x.is_finite() && x > 0.0 && x < 1.0;
             if !(ok(pr.trigger) && ok(pr.target) && pr.max_sweeps > 0) {
                 return bad(format!("projection {pr:?} out of range"));
+            }
+        }
+        if let StepMethod::Nsgs(n) = &p.method {
+            let omega_ok = n.relaxation.is_finite() && (1.0..2.0).contains(&n.relaxation);
+            if !(n.tol.is_finite() && n.tol > 0.0 && n.max_sweeps > 0 && omega_ok) {
+                return bad(format!("NSGS settings {n:?} out of range"));
             }
         }
         if !(0.0..=1.0).contains(&p.activation.gamma)
@@ -202,7 +231,7 @@ impl Simulation {
             last_problem: None,
             keep_problem: false,
             profile_delassus: false,
-            previous: HashMap::new(),
+            previous: Vec::new(),
             residual_velocity: 0.0,
         })
     }
@@ -263,18 +292,12 @@ impl Simulation {
                 .zip(&diag)
                 .map(|(f, m)| f / m)
                 .collect()
+        } else if let StepMethod::Nsgs(settings) = self.params.method {
+            self.step_nsgs(&mut contacts, &data, &settings, &mut stats, t0)?
         } else {
             let problem = assemble(&self.world, &contacts, &data)
                 .map_err(|source| SimulationError::Assembly { step: k, source })?;
-            let mut r0 = vec![0.0; 3 * contacts.len()];
-            if self.params.warm_start {
-                for (i, c) in contacts.iter().enumerate() {
-                    if let Some(prev) = self.previous.get(&c.key()) {
-                        r0[3 * i..3 * i + 3].copy_from_slice(prev);
-                        stats.warm_started += 1;
-                    }
-                }
-            }
+            let r0 = self.warm_start(&contacts, &mut stats);
             // v consistent with the guess: v = M⁻¹ (H r + f)
             let mut hr = problem.f.clone();
             problem.h.gemv_acc(1.0, &r0, &mut hr);
@@ -326,9 +349,10 @@ impl Simulation {
             for (i, c) in contacts.iter_mut().enumerate() {
                 if let Some(r) = sol.r.get(3 * i..3 * i + 3) {
                     c.impulse = [r[0], r[1], r[2]];
-                    self.previous.insert(c.key(), c.impulse);
+                    self.previous.push((c.key(), c.impulse));
                 }
             }
+            self.previous.sort_unstable_by_key(|x| x.0);
             self.last_history = sol.history;
             self.last_problem = self.keep_problem.then_some(problem);
             v
@@ -369,6 +393,77 @@ impl Simulation {
         stats.kinetic_energy = self.world.kinetic_energy();
         stats.potential_energy = self.world.potential_energy();
         Ok(stats)
+    }
+
+    /// The warm start r₀ of the step: the previous impulse of each persisting contact (same
+    /// (body, partner) key), 0 for new ones; counts the warm-started contacts into `stats`.
+    fn warm_start(&self, contacts: &[Contact], stats: &mut StepStats) -> Vec<f64> {
+        let mut r0 = vec![0.0; 3 * contacts.len()];
+        if self.params.warm_start {
+            // both lists are sorted by key ([`detect_with`] sorts the contacts): one merge
+            let mut k = 0;
+            for (i, c) in contacts.iter().enumerate() {
+                let key = c.key();
+                while k < self.previous.len() && self.previous[k].0 < key {
+                    k += 1;
+                }
+                if let Some((pk, prev)) = self.previous.get(k) {
+                    if *pk == key {
+                        r0[3 * i..3 * i + 3].copy_from_slice(prev);
+                        stats.warm_started += 1;
+                    }
+                }
+            }
+        }
+        r0
+    }
+
+    /// Steps 2–3 by body-level nonsmooth Gauss–Seidel ([`crate::nsgs`]): the step problem in
+    /// body-block form (no W), solved to `settings.tol`; returns v_{k+1}.
+    fn step_nsgs(
+        &mut self,
+        contacts: &mut [Contact],
+        data: &StepData,
+        settings: &NsgsSettings,
+        stats: &mut StepStats,
+        t0: Instant,
+    ) -> Result<Vec<f64>, SimulationError> {
+        let k = self.steps_done;
+        let problem = StepProblem::new(&self.world, contacts, data)
+            .map_err(|source| SimulationError::StepProblem { step: k, source })?;
+        let r0 = self.warm_start(contacts, stats);
+        stats.assembly_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let t1 = Instant::now();
+        let sol = nsgs::solve(&problem, &r0, settings, true);
+        stats.solve_ms = t1.elapsed().as_secs_f64() * 1e3;
+        stats.subproblems = 1;
+        stats.inner_iterations = sol.sweeps;
+        stats.error = sol.error;
+        stats.converged = sol.status == NsgsStatus::Converged;
+        stats.status = serde_json::to_value(sol.status)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_string))
+            .unwrap_or_else(|| format!("{:?}", sol.status));
+        self.residual_velocity = sol.error.max(settings.tol) * sol.scale;
+        self.previous.clear();
+        for (i, c) in contacts.iter_mut().enumerate() {
+            if let Some(r) = sol.r.get(3 * i..3 * i + 3) {
+                c.impulse = [r[0], r[1], r[2]];
+                self.previous.push((c.key(), c.impulse));
+            }
+        }
+        self.previous.sort_unstable_by_key(|x| x.0);
+        self.last_history.clear();
+        self.last_problem = if self.keep_problem {
+            Some(
+                problem
+                    .to_global()
+                    .map_err(|source| SimulationError::Assembly { step: k, source })?,
+            )
+        } else {
+            None
+        };
+        Ok(sol.v)
     }
 
     /// The threshold δ_k of the activation rule at this step: twice the largest lift h ε_u

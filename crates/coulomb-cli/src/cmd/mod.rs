@@ -8,6 +8,9 @@ pub mod error;
 pub mod example;
 pub mod info;
 pub mod paper;
+pub mod scaling;
 pub mod simulate;
+#[cfg(feature = "mpi")]
+pub mod simulate_mpi;
 pub mod solve;
 pub mod validate;

@@ -6,8 +6,20 @@ use coulomb::{InnerKind, OuterKind, Settings};
 use coulomb_granular::output::{write_stats, VtkWriter};
 use coulomb_granular::run::RestMonitor;
 use coulomb_granular::scene::BoxLayout;
-use coulomb_granular::{Activation, Params, Projection, Scene, Simulation, Stop, Summary};
+use coulomb_granular::{
+    Activation, NsgsSettings, Params, Projection, Scene, Simulation, StepMethod, Stop, Summary,
+};
 use std::path::PathBuf;
+
+/// The solver of each step.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Method {
+    /// body-level nonsmooth Gauss–Seidel, matrix-free, parallel over a colouring of the
+    /// contacts (docs/scaling.md)
+    Nsgs,
+    /// the library's solver (`--inner`, `--outer`) on the assembled problem
+    Library,
+}
 
 /// Arguments of `coulomb simulate`.
 #[derive(clap::Args, Debug, Clone)]
@@ -41,8 +53,22 @@ pub struct Args {
     /// step cap of --until-rest
     #[arg(long, default_value_t = 2000, value_parser = crate::values::count)]
     pub max_steps: usize,
-    /// inner solver (default: Gauss–Seidel, the fastest to 1e-4 on the box scene, see
-    /// docs/granular.md)
+    /// step solver: body-level Gauss–Seidel (default) or the library's solver with
+    /// --inner/--outer
+    #[arg(long, value_enum, default_value_t = Method::Nsgs)]
+    pub method: Method,
+    /// cap on Gauss–Seidel sweeps per step (--method nsgs)
+    #[arg(long, default_value_t = 20_000, value_parser = crate::values::count)]
+    pub max_sweeps: usize,
+    /// over-relaxation ω ∈ [1, 2) of the Gauss–Seidel updates (--method nsgs; reduced
+    /// towards 1 automatically when it does not help)
+    #[arg(long, default_value_t = 1.5, value_parser = crate::values::relaxation)]
+    pub relaxation: f64,
+    /// worker threads (default: all cores); results do not depend on it
+    #[arg(long, value_parser = crate::values::threads)]
+    pub threads: Option<usize>,
+    /// inner solver of --method library (default: Gauss–Seidel, the fastest to 1e-4 on the
+    /// box scene, see docs/granular.md)
     #[arg(long, default_value_t = InnerKind::Pgs, value_parser = crate::method::inner())]
     pub inner: InnerKind,
     /// outer iteration (default: Gauss–Seidel fused with the law; apgd + Anderson as fallback)
@@ -83,6 +109,10 @@ pub struct Args {
     /// box scene: height of the lowest initial layer's centres (m), instead of the calibrated one
     #[arg(long, value_parser = crate::values::positive)]
     pub drop_base: Option<f64>,
+    /// box scene: spread the partial top layer over the whole floor at random sites (the
+    /// heap structure of `paper scaling --accurate`, docs/scaling.md)
+    #[arg(long)]
+    pub spread_top: bool,
     /// output folder: stats.csv, stats.json, summary.json, beads.pvd, contacts.pvd, frames/
     #[arg(long)]
     pub output: Option<PathBuf>,
@@ -95,6 +125,14 @@ pub struct Args {
     /// print one JSON summary object (no progress bar)
     #[arg(long)]
     pub json: bool,
+    /// run distributed over MPI (automatic when started by mpirun/srun; docs/distributed.md)
+    #[cfg(feature = "mpi")]
+    #[arg(long)]
+    pub mpi: bool,
+    /// distributed run: recompute the slab bounds every K steps (0: only at the start)
+    #[cfg(feature = "mpi")]
+    #[arg(long, default_value_t = 20, value_parser = crate::values::count0)]
+    pub rebalance_every: usize,
 }
 
 impl Args {
@@ -126,6 +164,15 @@ impl Args {
             },
             warm_start: !self.cold,
             projection: (!self.no_projection).then(Projection::default),
+            method: match self.method {
+                Method::Nsgs => StepMethod::Nsgs(NsgsSettings {
+                    tol: self.tol,
+                    max_sweeps: self.max_sweeps,
+                    relaxation: self.relaxation,
+                    ..NsgsSettings::default()
+                }),
+                Method::Library => StepMethod::Library,
+            },
         }
     }
 
@@ -134,7 +181,7 @@ impl Args {
     /// by the θ-method); above R the linear gap prediction misses contacts entirely (beads
     /// pass through each other and through walls); above R/10 penetrations before the
     /// position correction reach tens of % of R.
-    fn check_step(&self) -> anyhow::Result<()> {
+    pub(crate) fn check_step(&self) -> anyhow::Result<()> {
         let h = self.dt;
         if !(h.is_finite() && h > 0.0) {
             bail!("--dt {h} must be a positive number of seconds");
@@ -163,7 +210,7 @@ impl Args {
         Ok(())
     }
     /// The box layout: the calibrated one for `--beads`, with the command line's overrides.
-    fn layout(&self) -> anyhow::Result<BoxLayout> {
+    pub(crate) fn layout(&self) -> anyhow::Result<BoxLayout> {
         let mut l = BoxLayout::for_beads(self.beads);
         let r = coulomb_granular::scene::BEAD_RADIUS;
         if let Some(x) = self.box_side {
@@ -187,7 +234,7 @@ impl Args {
         }
         Ok(l)
     }
-    fn stop(&self) -> Stop {
+    pub(crate) fn stop(&self) -> Stop {
         if self.until_rest {
             Stop::UntilRest {
                 speed: self.rest_speed,
@@ -202,6 +249,10 @@ impl Args {
 
 /// Runs `coulomb simulate`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    crate::threads::with_threads(args.threads, || run_on_pool(args.clone()))
+}
+
+fn run_on_pool(args: Args) -> anyhow::Result<()> {
     let Some(scene) = Scene::from_name(&args.scene) else {
         let names: Vec<&str> = Scene::ALL.iter().map(|s| s.name()).collect();
         bail!(
@@ -217,8 +268,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         bail!("--beads {} is above the limit of 1000000", args.beads);
     }
     args.check_step()?;
+    #[cfg(feature = "mpi")]
+    if args.mpi || super::simulate_mpi::under_launcher() {
+        return super::simulate_mpi::run(args, scene);
+    }
     let stop = args.stop();
-    let world = scene.build_with(args.beads, args.seed, &args.layout()?);
+    let world = if args.spread_top {
+        if scene != Scene::Box {
+            bail!("--spread-top applies to the box scene only");
+        }
+        Scene::box_spread(args.beads, args.seed)
+    } else {
+        scene.build_with(args.beads, args.seed, &args.layout()?)
+    };
     let mut sim = Simulation::new(world, args.params()).context("invalid simulation parameters")?;
     sim.keep_problem = args.dump_fclib.is_some();
     if let Some(dir) = &args.dump_fclib {

@@ -1,0 +1,181 @@
+//! `coulomb simulate` distributed over MPI (feature `mpi`): started by `mpirun -np K coulomb
+//! simulate …` or `srun -n K coulomb simulate …`, or with `--mpi`. Every rank builds the same
+//! scene, keeps its slab of beads and steps with the others
+//! ([`coulomb_granular::distributed`], docs/distributed.md); rank 0 prints the summary and
+//! writes stats.csv, stats.json (the statistics of `coulomb simulate`), summary.json and
+//! distributed.json (per step: sweeps, communication time, ghosts, interface contacts,
+//! migration, imbalance); every rank writes its VTK pieces, rank 0 the .pvtp/.pvd collections.
+
+use super::simulate::Args;
+use crate::progress::bar as progress;
+use anyhow::{bail, Context};
+use coulomb_granular::distributed::output::DistributedVtk;
+use coulomb_granular::distributed::{Comm, DistributedSimulation, DistributedStats};
+use coulomb_granular::output::write_stats;
+use coulomb_granular::{Scene, StepStats, Stop, Summary};
+
+/// Whether this process was started by an MPI launcher (Open MPI's mpirun, or a PMI/PMIx
+/// launcher such as srun or MPICH's mpiexec).
+pub fn under_launcher() -> bool {
+    ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"]
+        .iter()
+        .any(|v| std::env::var_os(v).is_some())
+}
+
+/// Runs `coulomb simulate` on the ranks of MPI_COMM_WORLD.
+pub fn run(args: Args, scene: Scene) -> anyhow::Result<()> {
+    if args.dump_fclib.is_some() {
+        bail!("--dump-fclib is not available in a distributed run");
+    }
+    if args.method != super::simulate::Method::Nsgs {
+        bail!("a distributed run steps with the body-level Gauss–Seidel (--method nsgs) only");
+    }
+    let Some(universe) = coulomb_granular::distributed::mpi::initialize() else {
+        bail!("MPI could not be initialized (already initialized?)");
+    };
+    let comm = Comm::new(universe.world());
+    let rank = comm.rank();
+    let stop = args.stop();
+    let world = scene.build_with(args.beads, args.seed, &args.layout()?);
+    let mut sim = DistributedSimulation::new(comm, world, args.params())
+        .context("invalid simulation parameters")?;
+    sim.rebalance_every = args.rebalance_every;
+    let mut vtk = match &args.output {
+        Some(dir) => Some(
+            DistributedVtk::new(dir)
+                .with_context(|| format!("cannot write into {}", dir.display()))?,
+        ),
+        None => None,
+    };
+    let frame = |sim: &mut DistributedSimulation, vtk: &mut Option<DistributedVtk>| {
+        let failed = match vtk.as_mut() {
+            Some(w) => w.frame(sim).err(),
+            None => None,
+        };
+        // every rank learns whether one failed, so that none waits for the others forever
+        let mut flag = [if failed.is_some() { 1.0 } else { 0.0 }];
+        sim.comm.sum(&mut flag);
+        match failed {
+            Some(e) => Err(anyhow::Error::new(e).context("writing VTK frame")),
+            None if flag[0] > 0.0 => bail!("another rank failed to write its VTK frame"),
+            None => Ok(()),
+        }
+    };
+    frame(&mut sim, &mut vtk)?;
+    let start_energy = sim.energy();
+    let pb = progress(stop.max_steps(), args.json || rank != 0);
+    pb.set_prefix(format!(
+        "{} {} on {} ranks",
+        scene.name(),
+        args.beads,
+        sim.comm.size()
+    ));
+    let mut stats: Vec<DistributedStats> = Vec::new();
+    let (mut calm, mut at_rest) = (0usize, false);
+    while sim.steps_done < stop.max_steps() {
+        let s = sim.step().context("time step failed")?;
+        pb.set_message(format!(
+            "{} contacts, {} sweeps, {:.1} ms ({:.1} ms comm), err {:.1e}",
+            s.step.contacts, s.sweeps, s.step_ms, s.comm_ms, s.step.error
+        ));
+        pb.inc(1);
+        if args.frames_every > 0 && sim.steps_done % args.frames_every == 0 {
+            frame(&mut sim, &mut vtk)?;
+        }
+        stats.push(s);
+        match stop {
+            Stop::Steps(n) if sim.steps_done >= n => break,
+            Stop::UntilRest { speed, window, .. } => {
+                if sim.max_speed() < speed {
+                    calm += 1;
+                } else {
+                    calm = 0;
+                }
+                if calm >= window.max(1) {
+                    at_rest = true;
+                    break;
+                }
+            }
+            _ => {}
+        }
+    }
+    pb.finish_and_clear();
+    let written = args.frames_every > 0 && sim.steps_done % args.frames_every == 0;
+    if !written && sim.steps_done > 0 {
+        frame(&mut sim, &mut vtk)?;
+    }
+    let end_energy = sim.energy();
+    let ranks = sim.comm.size();
+    if rank != 0 {
+        return Ok(());
+    }
+    let steps: Vec<StepStats> = stats.iter().map(|s| s.step.clone()).collect();
+    let summary = Summary::from_stats(scene.name(), args.beads, &steps, at_rest);
+    let n = stats.len().max(1) as f64;
+    let mean = |f: fn(&DistributedStats) -> f64| stats.iter().map(f).sum::<f64>() / n;
+    let (step_ms, comm_ms, sweeps) = (
+        mean(|s| s.step_ms),
+        mean(|s| s.comm_ms),
+        mean(|s| s.sweeps as f64),
+    );
+    if let Some(dir) = &args.output {
+        write_stats(dir, &steps)
+            .with_context(|| format!("writing stats into {}", dir.display()))?;
+        crate::outputs::write(
+            &dir.join("summary.json"),
+            crate::outputs::json(&summary, true)?.as_bytes(),
+        )?;
+        crate::outputs::write(
+            &dir.join("distributed.json"),
+            crate::outputs::json(&stats, true)?.as_bytes(),
+        )?;
+    }
+    if args.json {
+        let obj = serde_json::json!({
+            "scene": summary.scene,
+            "beads": summary.beads,
+            "steps": summary.steps,
+            "mean_contacts": summary.mean_contacts,
+            "mean_subproblems": summary.mean_subproblems,
+            "mean_solve_ms": summary.mean_solve_ms,
+            "max_penetration": summary.max_penetration,
+            "end_mean_penetration": summary.end_mean_penetration,
+            "end_max_penetration": summary.end_max_penetration,
+            "projection_work": summary.projection_work,
+            "start_energy": start_energy,
+            "end_energy": end_energy,
+            "converged_steps": summary.converged_steps,
+            "not_converged_steps": summary.not_converged_steps,
+            "mean_error": summary.mean_error,
+            "max_error": summary.max_error,
+            "at_rest": summary.at_rest,
+            "ranks": ranks,
+            "mean_sweeps": sweeps,
+            "mean_step_ms": step_ms,
+            "mean_comm_ms": comm_ms,
+        });
+        println!("{}", crate::outputs::json(&obj, false)?);
+    } else {
+        println!(
+            "{}: {} beads on {} ranks, {} steps{}, {:.1} contacts/step, {:.1} sweeps/step, {:.2} ms/step ({:.2} ms communication), mean error {:.2e} (max {:.2e}), {} / {} steps converged ({} not converged), max penetration during the run {:.2e} m, at the end: mean {:.2e} m, max {:.2e} m",
+            summary.scene,
+            summary.beads,
+            ranks,
+            summary.steps,
+            if summary.at_rest { " (at rest)" } else { "" },
+            summary.mean_contacts,
+            sweeps,
+            step_ms,
+            comm_ms,
+            summary.mean_error,
+            summary.max_error,
+            summary.converged_steps,
+            summary.steps,
+            summary.not_converged_steps,
+            summary.max_penetration,
+            summary.end_mean_penetration,
+            summary.end_max_penetration
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,116 @@
+//! `coulomb simulate` distributed over two MPI ranks (`mpirun -np 2`, feature `mpi`): every
+//! step reaches the tolerance on the global error, the run matches the single-process one
+//! statistically, and the outputs (stats, .pvd/.pvtp collection of the ranks' pieces) are
+//! complete.
+#![cfg(feature = "mpi")]
+
+mod common;
+
+use common::{read_json, stdout_json, temp_dir};
+use std::process::Command;
+
+/// `mpirun` with the options this machine needs: --oversubscribe (more ranks than cores) for
+/// Open MPI, and root allowed by its environment variables.
+fn mpirun(np: usize, args: &[&str]) -> std::process::Output {
+    let version = Command::new("mpirun")
+        .arg("--version")
+        .output()
+        .expect("mpirun is installed (the feature mpi needs an MPI implementation)");
+    let open_mpi = String::from_utf8_lossy(&version.stdout).contains("Open MPI");
+    let mut cmd = Command::new("mpirun");
+    if open_mpi {
+        cmd.arg("--oversubscribe");
+    }
+    cmd.args(["-np", &np.to_string(), env!("CARGO_BIN_EXE_coulomb")])
+        .args(args)
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .output()
+        .expect("mpirun runs")
+}
+
+#[test]
+fn distributed_two_ranks_match_one_process() {
+    let dir = temp_dir("mpi-two");
+    let out = dir.join("run");
+    let common = [
+        "simulate",
+        "box",
+        "--beads",
+        "300",
+        "--steps",
+        "60",
+        "--json",
+        "--frames-every",
+        "30",
+    ];
+    let mut args: Vec<&str> = common.to_vec();
+    let out_s = out.to_string_lossy().into_owned();
+    args.extend(["--output", &out_s]);
+    let two = stdout_json(&mpirun(2, &args));
+    let one = stdout_json(&common::coulomb(&common));
+    assert_eq!(two["ranks"], 2);
+    assert_eq!(two["steps"], 60);
+    // every step solved to the tolerance 1e-4 on the global error of docs/error.md
+    assert_eq!(two["converged_steps"], 60, "{two}");
+    assert!(two["max_error"].as_f64().unwrap() <= 1e-4, "{two}");
+    // the same physics as one process, statistically
+    let rel = |k: &str| {
+        let (a, b) = (two[k].as_f64().unwrap(), one[k].as_f64().unwrap());
+        (a - b).abs() / b.abs()
+    };
+    assert!(rel("mean_contacts") < 0.03, "{two}\n{one}");
+    assert!(rel("end_energy") < 0.01, "{two}\n{one}");
+    // the position correction leaves no penetration above its trigger (1e-3 R)
+    assert!(
+        two["end_max_penetration"].as_f64().unwrap() <= 1e-3 * 0.05,
+        "{two}"
+    );
+    // stats.json: one entry per step with the keys of the single-process statistics
+    let stats = read_json(&out.join("stats.json"));
+    let stats = stats.as_array().unwrap();
+    assert_eq!(stats.len(), 60);
+    for key in [
+        "contacts",
+        "error",
+        "converged",
+        "kinetic_energy",
+        "end_mean_penetration",
+    ] {
+        assert!(stats[59].get(key).is_some(), "{key}");
+    }
+    // warm starts follow the contacts across ranks (and migrations)
+    let c = stats[59]["contacts"].as_u64().unwrap();
+    let w = stats[59]["warm_started"].as_u64().unwrap();
+    assert!(w * 10 >= c * 7, "{w} of {c} contacts warm started");
+    // distributed.json: per step, two ranks, balanced slabs, ghosts exchanged
+    let dist = read_json(&out.join("distributed.json"));
+    let dist = dist.as_array().unwrap();
+    assert_eq!(dist.len(), 60);
+    for d in dist {
+        assert_eq!(d["ranks"], 2);
+        assert!(d["imbalance"].as_f64().unwrap() <= 1.1, "{d}");
+        assert!(d["ghosts"].as_u64().unwrap() > 0, "{d}");
+    }
+    // the ParaView collection: frames 0, 30, 60, each a .pvtp joining two pieces whose beads
+    // add up to all of them
+    let pvd = std::fs::read_to_string(out.join("beads.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 3, "{pvd}");
+    let pvtp = std::fs::read_to_string(out.join("frames/beads_000060.pvtp")).unwrap();
+    assert_eq!(pvtp.matches("<Piece").count(), 2, "{pvtp}");
+    let mut points = 0;
+    for r in 0..2 {
+        let piece = std::fs::read_to_string(out.join(format!("frames/beads_000060_{r}.vtp")))
+            .expect("each rank writes its piece");
+        let n: usize = piece
+            .split("NumberOfPoints=\"")
+            .nth(1)
+            .and_then(|s| s.split('"').next())
+            .and_then(|s| s.parse().ok())
+            .unwrap();
+        assert!(n > 50, "rank {r} owns {n} beads");
+        points += n;
+    }
+    assert_eq!(points, 300);
+    let _ = std::fs::remove_dir_all(&dir);
+}

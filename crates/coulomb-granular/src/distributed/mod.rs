@@ -1,0 +1,1009 @@
+//! Distributed Moreau–Jean time stepping over MPI (feature `mpi`; design and measurements in
+//! docs/distributed.md).
+//!
+//! * **Decomposition.** Slabs along the wider horizontal axis of the initial bead cloud
+//!   ([`slab`]): rank r owns the beads whose coordinate lies in its slab, the inner bounds at
+//!   bead-count quantiles of a histogram reduced over all ranks, recomputed every
+//!   [`DistributedSimulation::rebalance_every`] steps (the heap spreads as it settles). Beads
+//!   that leave a slab migrate to their new owner at the start of every step, with the warm
+//!   start impulses of the contacts they own.
+//! * **Ghosts.** Each rank receives copies of the beads of other ranks within a halo
+//!   2 R_max + margin of its slab, the margin of the broad phase (δ_k + 2 v_max h γ); every pair
+//!   that can be active at this step then has both beads on the rank owning its lower-id bead.
+//! * **Contacts.** Detected on owned + ghost beads (ordered by global id, so that a contact has
+//!   the same frame as on one process); contact (A, B) with id A < id B, and every contact with an
+//!   obstacle, is owned by the owner of A. Interface contacts are those with a ghost B.
+//! * **Solve.** The step's problem (2.10) by subdomain nonsmooth Gauss–Seidel ([`subdomain`]),
+//!   pe's scheme: each rank sweeps its contacts on its copy of v (owned and ghost beads), then
+//!   the velocity changes of ghost beads are sent to their owners and summed there, and the
+//!   owners' velocities sent back to the ghost copies: two neighbour exchanges per sweep
+//!   (Gauss–Seidel inside a subdomain, Jacobi across the interface). Every 16 sweeps, and
+//!   before the step is accepted, v = M⁻¹(f + H r) is recomputed exactly from r (impulses of
+//!   ghost beads reduced at their owners), so that the balance of (2.10) holds to rounding.
+//! * **Error.** The error of docs/error.md, err = √(Σᵢ‖eᵢ‖²) / max(‖q‖, ‖r‖, ‖u‖), from four
+//!   sums of squares over the contacts reduced over the ranks (each contact counted once, by its
+//!   owner), with uᵢ = Hᵢᵀ v + wᵢ and qᵢ = Hᵢᵀ M⁻¹ f + wᵢ, in one `MPI_Allreduce` of seven
+//!   numbers per sweep: the four sums and three flags (an entry above 2¹⁰⁰ on some rank, a NaN,
+//!   past the time limit). Overflow: plain squares cannot overflow while every entry is at most
+//!   2¹⁰⁰; when some rank has a larger one, the largest entry is reduced (a max) and every entry
+//!   is multiplied by the same power of two α before squaring — exact, and eᵢ is positively
+//!   homogeneous, so the ratio is unchanged ([`coulomb::law::error_measure`] does the same on
+//!   one process). The sweep loop stops on that global err exactly as on one machine: err ≤ tol
+//!   on the exact v, or the sweep cap, or the time limit (all ranks see the same reduced
+//!   numbers and flags, so they stop at the same sweep).
+//! * **Position correction** ([`crate::projection`]) in rounds (at most 4): ghosts refreshed,
+//!   the largest penetration over all ranks reduced, and while it exceeds the trigger every
+//!   rank corrects its owned + ghost beads with the ghosts' true masses and keeps the new
+//!   positions of its own beads only (the ghost copies' are dropped), so an interface pair is
+//!   corrected half by each side in a round, as on one process.
+//!   (Ghosts held fixed instead made each side move its bead the whole way, and the larger
+//!   moves pushed beads into pairs the correction does not track: a 6 mm overlap at step 22
+//!   of the 2 000-bead box on 4 ranks.)
+//! * **Statistics** of each step reduced over the ranks into the [`StepStats`] of
+//!   `coulomb simulate` (same JSON), plus the communication time ([`DistributedStats`]).
+
+mod comm;
+pub mod output;
+pub mod slab;
+pub mod subdomain;
+
+pub use comm::Comm;
+/// The MPI bindings (rsmpi), for `mpi::initialize()` in programs using this module.
+pub use mpi;
+
+use crate::assembly::StepData;
+use crate::contact::{candidate_pairs, detect_with, Contact, Partner};
+use crate::math::Vec3;
+use crate::nsgs::StepProblem;
+use crate::projection::project;
+use crate::simulation::{Params, Simulation, SimulationError, StepMethod, StepStats};
+use crate::world::{Obstacle, Sphere, World};
+use serde::Serialize;
+use slab::{bin_of, quantile_bounds, Slabs, HISTOGRAM_BINS};
+use std::collections::HashMap;
+use std::time::{Duration, Instant};
+use subdomain::{error_sums, impulses, max_entry, sweep, velocities};
+
+/// Words of a bead record: global id, x, v, ω, R, m, rotation lock.
+const BEAD_WORDS: usize = 13;
+/// Words of a warm-start record: partner kind, partner index, r (3).
+const WARM_WORDS: usize = 5;
+/// Rounds of the distributed position correction at most (each: ghosts refreshed, every rank
+/// corrects its subdomain).
+const PROJECTION_ROUNDS: usize = 4;
+/// Sweeps between two exact recomputations of v from r.
+const REFRESH: usize = 16;
+
+/// Statistics of one distributed step: the [`StepStats`] of a single-process step (reduced
+/// over the ranks) and the decomposition's own numbers.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DistributedStats {
+    /// the step's statistics, as `coulomb simulate` reports them
+    pub step: StepStats,
+    /// ranks
+    pub ranks: usize,
+    /// Gauss–Seidel sweeps of the step
+    pub sweeps: usize,
+    /// wall-clock time of the step on this rank (ms)
+    pub step_ms: f64,
+    /// time spent in MPI calls during the step, largest over the ranks (ms)
+    pub comm_ms: f64,
+    /// time spent in MPI calls during the step, mean over the ranks (ms)
+    pub comm_mean_ms: f64,
+    /// MPI messages (nonempty peer buffers and reductions) of this rank during the step
+    pub messages: u64,
+    /// bytes sent by this rank during the step
+    pub bytes: u64,
+    /// ghost beads, summed over the ranks
+    pub ghosts: usize,
+    /// interface contacts (with a ghost bead), summed over the ranks
+    pub interface_contacts: usize,
+    /// beads that changed rank at the start of the step
+    pub migrated: usize,
+    /// most beads owned by one rank divided by the mean
+    pub imbalance: f64,
+}
+
+/// The ghost beads of a rank and the bookkeeping of the exchanges that refresh them.
+#[derive(Debug, Clone, Default)]
+struct Ghosts {
+    /// (global id, state, owner rank), sorted by global id
+    beads: Vec<(usize, Sphere, usize)>,
+    /// send[r]: owned bead indices sent to rank r, in order
+    send: Vec<Vec<usize>>,
+    /// recv[r]: ghost indices received from rank r, in order
+    recv: Vec<Vec<usize>>,
+}
+
+/// The beads a rank works on in a step: owned and ghost, in global id order.
+struct Local {
+    world: World,
+    /// local index of each owned bead
+    of_owned: Vec<usize>,
+    /// local index of each ghost
+    of_ghost: Vec<usize>,
+    /// whether a local bead is owned
+    owned: Vec<bool>,
+    /// global id of each local bead
+    gid: Vec<usize>,
+}
+
+/// A Moreau–Jean simulation distributed over the ranks of an MPI communicator (module doc).
+/// Every rank calls the same methods in the same order (they communicate).
+#[derive(Debug)]
+pub struct DistributedSimulation {
+    /// the communicator
+    pub comm: Comm,
+    /// parameters (as [`Simulation`]); the tolerance and time limit of [`StepMethod::Nsgs`]
+    /// (or of the library's settings) are used, the step is always solved by the subdomain
+    /// Gauss–Seidel
+    pub params: Params,
+    /// t_k
+    pub time: f64,
+    /// k
+    pub steps_done: usize,
+    /// recompute the slab bounds every this many steps (0: never after the start)
+    pub rebalance_every: usize,
+    /// cap on Gauss–Seidel sweeps per step (from [`StepMethod::Nsgs`], else 20 000)
+    pub max_sweeps: usize,
+    /// the owned beads (global id, state), sorted by global id
+    pub beads: Vec<(usize, Sphere)>,
+    /// contact force Σ r / h on each owned bead at the last step (translational part)
+    pub forces: Vec<Vec3>,
+    /// the owned contacts of the last step with their impulses, in global ids
+    pub contacts: Vec<Contact>,
+    /// the slab bounds
+    pub slabs: Slabs,
+    /// 0: slabs along x, 1: along y
+    pub axis: usize,
+    obstacles: Vec<Obstacle>,
+    gravity: Vec3,
+    warm: HashMap<(usize, Partner), [f64; 3]>,
+    residual_velocity: f64,
+    rmax: f64,
+    rmin: f64,
+    total: usize,
+}
+
+impl DistributedSimulation {
+    /// A distributed simulation of `world` (the same world on every rank, e.g. built from the
+    /// same scene and seed): parameters checked as by [`Simulation::new`], rank r first keeps
+    /// beads r N/P … (r+1) N/P − 1, then the slabs are placed at the quantiles and the beads
+    /// migrate to their owners.
+    pub fn new(comm: Comm, world: World, params: Params) -> Result<Self, SimulationError> {
+        let sim = Simulation::new(world, params)?;
+        let Simulation { world, params, .. } = sim;
+        let (rank, size) = (comm.rank(), comm.size());
+        let n = world.bodies.len();
+        let max_sweeps = match params.method {
+            StepMethod::Nsgs(s) => s.max_sweeps,
+            StepMethod::Library => 20_000,
+        };
+        let spread = |f: fn(&Sphere) -> f64| {
+            let (lo, hi) = world
+                .bodies
+                .iter()
+                .map(f)
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| {
+                    (l.min(x), h.max(x))
+                });
+            hi - lo
+        };
+        let axis = if spread(|b| b.position.y) > spread(|b| b.position.x) {
+            1
+        } else {
+            0
+        };
+        let rmax = world.bodies.iter().map(|b| b.radius).fold(0.0, f64::max);
+        let rmin = world
+            .bodies
+            .iter()
+            .map(|b| b.radius)
+            .fold(f64::INFINITY, f64::min);
+        let (lo, hi) = (rank * n / size, (rank + 1) * n / size);
+        let beads: Vec<(usize, Sphere)> = (lo..hi).map(|i| (i, world.bodies[i].clone())).collect();
+        let mut sim = Self {
+            comm,
+            params,
+            time: 0.0,
+            steps_done: 0,
+            rebalance_every: 20,
+            max_sweeps,
+            forces: vec![Vec3::ZERO; beads.len()],
+            beads,
+            contacts: Vec::new(),
+            slabs: Slabs::from_inner(&vec![0.0; size - 1]),
+            axis,
+            obstacles: world.obstacles,
+            gravity: world.gravity,
+            warm: HashMap::new(),
+            residual_velocity: 0.0,
+            rmax,
+            rmin,
+            total: n,
+        };
+        sim.rebalance();
+        sim.migrate();
+        Ok(sim)
+    }
+
+    /// Total number of beads.
+    pub fn total_beads(&self) -> usize {
+        self.total
+    }
+
+    fn coord(&self, p: Vec3) -> f64 {
+        if self.axis == 1 {
+            p.y
+        } else {
+            p.x
+        }
+    }
+
+    /// Places the slab bounds at the bead-count quantiles of the current positions: the
+    /// range [lo, hi] reduced (max), a histogram of [`HISTOGRAM_BINS`] bins reduced (sum), the
+    /// same bounds computed on every rank ([`quantile_bounds`]). Beads move at the next
+    /// [`Self::migrate`].
+    pub fn rebalance(&mut self) {
+        let size = self.comm.size();
+        if size == 1 {
+            return;
+        }
+        let mut range = [f64::NEG_INFINITY, f64::NEG_INFINITY];
+        for (_, b) in &self.beads {
+            let x = self.coord(b.position);
+            if x.is_finite() {
+                range[0] = range[0].max(-x);
+                range[1] = range[1].max(x);
+            }
+        }
+        self.comm.max(&mut range);
+        let (lo, hi) = if range[1].is_finite() {
+            (-range[0], range[1])
+        } else {
+            (0.0, 0.0)
+        };
+        let mut counts = vec![0.0; HISTOGRAM_BINS];
+        for (_, b) in &self.beads {
+            counts[bin_of(self.coord(b.position), lo, hi)] += 1.0;
+        }
+        self.comm.sum(&mut counts);
+        self.slabs = Slabs::from_inner(&quantile_bounds(&counts, lo, hi, size));
+    }
+
+    /// Sends every owned bead outside this rank's slab to its owner, with the warm-start
+    /// impulses of the contacts it owns; returns the number of beads sent.
+    pub fn migrate(&mut self) -> usize {
+        let (me, size) = (self.comm.rank(), self.comm.size());
+        if size == 1 {
+            return 0;
+        }
+        let mut leaving: HashMap<usize, usize> = HashMap::new();
+        for (gid, b) in &self.beads {
+            let dest = self.slabs.owner(self.coord(b.position));
+            if dest != me {
+                leaving.insert(*gid, dest);
+            }
+        }
+        let mut warm_of: HashMap<usize, Vec<(Partner, [f64; 3])>> = HashMap::new();
+        if !leaving.is_empty() {
+            let keys: Vec<(usize, Partner)> = self
+                .warm
+                .keys()
+                .filter(|k| leaving.contains_key(&k.0))
+                .copied()
+                .collect();
+            for k in keys {
+                if let Some(r) = self.warm.remove(&k) {
+                    warm_of.entry(k.0).or_default().push((k.1, r));
+                }
+            }
+        }
+        let mut send = vec![Vec::new(); size];
+        let mut kept = Vec::with_capacity(self.beads.len());
+        let mut kept_forces = Vec::with_capacity(self.beads.len());
+        for ((gid, b), f) in self.beads.drain(..).zip(self.forces.drain(..)) {
+            match leaving.get(&gid) {
+                Some(&dest) => {
+                    let buf = &mut send[dest];
+                    pack_bead(buf, gid, &b);
+                    let w = warm_of.remove(&gid).unwrap_or_default();
+                    buf.push(w.len() as f64);
+                    for (p, r) in w {
+                        let (kind, idx) = match p {
+                            Partner::Body(j) => (0.0, j),
+                            Partner::Obstacle(o) => (1.0, o),
+                        };
+                        buf.extend_from_slice(&[kind, idx as f64, r[0], r[1], r[2]]);
+                    }
+                }
+                None => {
+                    kept.push((gid, b));
+                    kept_forces.push(f);
+                }
+            }
+        }
+        let recv = self.comm.exchange(&send);
+        for buf in recv {
+            let mut at = 0;
+            while at + BEAD_WORDS <= buf.len() {
+                let (gid, b) = unpack_bead(&buf[at..at + BEAD_WORDS]);
+                at += BEAD_WORDS;
+                let nw = buf.get(at).map_or(0, |x| *x as usize);
+                at += 1;
+                for _ in 0..nw {
+                    if let Some(w) = buf.get(at..at + WARM_WORDS) {
+                        let idx = w[1] as usize;
+                        let p = if w[0] == 0.0 {
+                            Partner::Body(idx)
+                        } else {
+                            Partner::Obstacle(idx)
+                        };
+                        self.warm.insert((gid, p), [w[2], w[3], w[4]]);
+                    }
+                    at += WARM_WORDS;
+                }
+                kept.push((gid, b));
+                kept_forces.push(Vec3::ZERO);
+            }
+        }
+        let mut order: Vec<usize> = (0..kept.len()).collect();
+        order.sort_by_key(|&i| kept[i].0);
+        self.beads = order.iter().map(|&i| kept[i].clone()).collect();
+        self.forces = order.iter().map(|&i| kept_forces[i]).collect();
+        leaving.len()
+    }
+
+    /// Copies of the beads of other ranks within `halo` of this rank's slab.
+    fn exchange_ghosts(&mut self, halo: f64) -> Ghosts {
+        let (me, size) = (self.comm.rank(), self.comm.size());
+        let mut g = Ghosts {
+            beads: Vec::new(),
+            send: vec![Vec::new(); size],
+            recv: vec![Vec::new(); size],
+        };
+        if size == 1 {
+            return g;
+        }
+        let mut bufs = vec![Vec::new(); size];
+        let mut targets = Vec::new();
+        for (i, (gid, b)) in self.beads.iter().enumerate() {
+            self.slabs
+                .ghost_targets(me, self.coord(b.position), halo, &mut targets);
+            for &r in &targets {
+                pack_bead(&mut bufs[r], *gid, b);
+                g.send[r].push(i);
+            }
+        }
+        let recv = self.comm.exchange(&bufs);
+        let mut list = Vec::new();
+        for (r, buf) in recv.iter().enumerate() {
+            for (k, rec) in buf.chunks_exact(BEAD_WORDS).enumerate() {
+                let (gid, b) = unpack_bead(rec);
+                list.push((gid, b, r, k));
+            }
+        }
+        list.sort_by_key(|x| x.0);
+        for (idx, (gid, b, r, k)) in list.into_iter().enumerate() {
+            g.beads.push((gid, b, r));
+            let slot = &mut g.recv[r];
+            if slot.len() <= k {
+                slot.resize(k + 1, usize::MAX);
+            }
+            slot[k] = idx;
+        }
+        g
+    }
+
+    /// The local world: owned and ghost beads merged in global id order.
+    fn local(&self, ghosts: &Ghosts) -> Local {
+        let n = self.beads.len() + ghosts.beads.len();
+        let mut world = World {
+            bodies: Vec::with_capacity(n),
+            obstacles: self.obstacles.clone(),
+            gravity: self.gravity,
+        };
+        let mut of_owned = Vec::with_capacity(self.beads.len());
+        let mut of_ghost = Vec::with_capacity(ghosts.beads.len());
+        let mut owned = Vec::with_capacity(n);
+        let mut gid = Vec::with_capacity(n);
+        let (mut i, mut j) = (0, 0);
+        while i < self.beads.len() || j < ghosts.beads.len() {
+            let take_owned = j >= ghosts.beads.len()
+                || (i < self.beads.len() && self.beads[i].0 < ghosts.beads[j].0);
+            if take_owned {
+                of_owned.push(world.bodies.len());
+                gid.push(self.beads[i].0);
+                world.bodies.push(self.beads[i].1.clone());
+                owned.push(true);
+                i += 1;
+            } else {
+                of_ghost.push(world.bodies.len());
+                gid.push(ghosts.beads[j].0);
+                world.bodies.push(ghosts.beads[j].1.clone());
+                owned.push(false);
+                j += 1;
+            }
+        }
+        Local {
+            world,
+            of_owned,
+            of_ghost,
+            owned,
+            gid,
+        }
+    }
+
+    /// Adds the 6-vectors `x` (6 per local bead) of ghost beads into their owners' entries on
+    /// the owning ranks, then zeroes the ghosts' entries: impulses or velocity changes of the
+    /// interface reduced where the bead lives.
+    fn reduce_ghosts(&mut self, ghosts: &Ghosts, local: &Local, x: &mut [[f64; 6]]) {
+        let size = self.comm.size();
+        if size == 1 {
+            return;
+        }
+        let send: Vec<Vec<f64>> = ghosts
+            .recv
+            .iter()
+            .map(|list| {
+                let mut b = Vec::with_capacity(6 * list.len());
+                for &gi in list {
+                    match local.of_ghost.get(gi) {
+                        Some(&l) => b.extend_from_slice(&x[l]),
+                        None => b.extend_from_slice(&[0.0; 6]),
+                    }
+                }
+                b
+            })
+            .collect();
+        let lens: Vec<usize> = ghosts.send.iter().map(|s| 6 * s.len()).collect();
+        let recv = self.comm.exchange_known(&send, &lens);
+        for (r, buf) in recv.iter().enumerate() {
+            for (k, &oi) in ghosts.send[r].iter().enumerate() {
+                let l = local.of_owned[oi];
+                if let Some(src) = buf.get(6 * k..6 * k + 6) {
+                    for (xd, s) in x[l].iter_mut().zip(src) {
+                        *xd += s;
+                    }
+                }
+            }
+        }
+        for &l in &local.of_ghost {
+            x[l] = [0.0; 6];
+        }
+    }
+
+    /// Copies the owners' velocities to the ghost copies.
+    fn broadcast_ghosts(&mut self, ghosts: &Ghosts, local: &Local, v: &mut [[f64; 6]]) {
+        if self.comm.size() == 1 {
+            return;
+        }
+        let send: Vec<Vec<f64>> = ghosts
+            .send
+            .iter()
+            .map(|list| {
+                let mut b = Vec::with_capacity(6 * list.len());
+                for &oi in list {
+                    b.extend_from_slice(&v[local.of_owned[oi]]);
+                }
+                b
+            })
+            .collect();
+        let lens: Vec<usize> = ghosts.recv.iter().map(|s| 6 * s.len()).collect();
+        let recv = self.comm.exchange_known(&send, &lens);
+        for (r, buf) in recv.iter().enumerate() {
+            for (k, &gi) in ghosts.recv[r].iter().enumerate() {
+                let Some(&l) = local.of_ghost.get(gi) else {
+                    continue;
+                };
+                if let Some(src) = buf.get(6 * k..6 * k + 6) {
+                    v[l].copy_from_slice(src);
+                }
+            }
+        }
+    }
+
+    /// v = M⁻¹ (f + H r) on every local bead: impulses Gᵀ rᵢ of the local contacts, those of
+    /// ghosts summed at their owners, v of owned beads formed, then copied to the ghosts.
+    /// Returns the impulse of each local bead (owned beads: the total over all ranks).
+    fn sync_exact(
+        &mut self,
+        ghosts: &Ghosts,
+        local: &Local,
+        p: &StepProblem,
+        r: &[f64],
+        v_free: &[[f64; 6]],
+        v: &mut [[f64; 6]],
+    ) -> Vec<[f64; 6]> {
+        let mut imp = vec![[0.0; 6]; v.len()];
+        impulses(p, r, &mut imp);
+        self.reduce_ghosts(ghosts, local, &mut imp);
+        for &l in &local.of_owned {
+            for d in 0..6 {
+                v[l][d] = v_free[l][d] + imp[l][d] * p.inv_mass[l][d];
+            }
+        }
+        self.broadcast_ghosts(ghosts, local, v);
+        imp
+    }
+
+    /// The global error of docs/error.md over all ranks' contacts (module doc), and the scale
+    /// max(‖q‖, ‖r‖, ‖u‖); `late` tells that this rank is past the time limit, and the third
+    /// value whether any rank is.
+    fn global_error(
+        &mut self,
+        p: &StepProblem,
+        q: &[[f64; 3]],
+        r: &[f64],
+        v: &[[f64; 6]],
+        late: bool,
+    ) -> (f64, f64, bool) {
+        const LIMIT: f64 = 1.2676506002282294e30; // 2¹⁰⁰
+        let u = velocities(p, v);
+        let m = max_entry(q, r, &u);
+        // one reduction in the common case: the plain sums of squares (exact when every
+        // entry is at most 2¹⁰⁰) with three flags: an entry above 2¹⁰⁰, a NaN, past the time
+        // limit
+        let big = m.is_nan() || m > LIMIT;
+        let mut s = if big {
+            [0.0; 4]
+        } else {
+            error_sums(p, q, r, &u, 1.0)
+        };
+        let mut head = [
+            s[0],
+            s[1],
+            s[2],
+            s[3],
+            f64::from(u8::from(big)),
+            f64::from(u8::from(m.is_nan())),
+            f64::from(u8::from(late)),
+        ];
+        self.comm.sum(&mut head);
+        let (any_big, nan, any_late) = (head[4] > 0.0, head[5] > 0.0, head[6] > 0.0);
+        if nan {
+            return (f64::NAN, f64::INFINITY, any_late);
+        }
+        let mut alpha = 1.0;
+        if any_big {
+            // rare: the largest entry over the ranks (a max), then the sums of the entries
+            // multiplied by the same power of two α, exact, so that no square overflows
+            let mut mx = [if m.is_nan() { f64::INFINITY } else { m }];
+            self.comm.max(&mut mx);
+            if !mx[0].is_finite() {
+                return (f64::INFINITY, f64::INFINITY, any_late);
+            }
+            let e = mx[0].log2().ceil() as i32 + 1;
+            alpha = 2f64.powi(-e.min(1022));
+            s = error_sums(p, q, r, &u, alpha);
+            self.comm.sum(&mut s);
+        } else {
+            s.copy_from_slice(&head[..4]);
+        }
+        let scaled_scale = s[1].sqrt().max(s[2].sqrt()).max(s[3].sqrt());
+        let scale = scaled_scale / alpha;
+        let err = if scale > f64::EPSILON {
+            s[0].sqrt() / scaled_scale
+        } else {
+            s[0].sqrt() / alpha
+        };
+        (err, scale, any_late)
+    }
+
+    /// The threshold δ_k of the activation rule, as [`Simulation::activation_threshold`]
+    /// (from the last step's global error and scale, the same on every rank).
+    pub fn activation_threshold(&self) -> f64 {
+        let a = &self.params.activation;
+        if !a.delta_from_tolerance {
+            return a.delta;
+        }
+        let lift = 2.0 * self.params.h * self.residual_velocity;
+        let cap = if self.rmin.is_finite() {
+            0.01 * self.rmin
+        } else {
+            0.0
+        };
+        lift.min(cap).max(a.delta)
+    }
+
+    /// One distributed Moreau–Jean step from t_k to t_{k+1} (module doc); every rank gets
+    /// the same reduced statistics.
+    pub fn step(&mut self) -> Result<DistributedStats, SimulationError> {
+        let t0 = Instant::now();
+        let comm0 = self.comm.seconds();
+        let (msg0, bytes0) = (self.comm.messages(), self.comm.bytes());
+        let k = self.steps_done;
+        let h = self.params.h;
+        let size = self.comm.size();
+        if k > 0 && self.rebalance_every > 0 && k % self.rebalance_every == 0 {
+            self.rebalance();
+        }
+        let migrated_here = self.migrate();
+
+        // global v_max for the broad phase margin, and the step's δ_k
+        let vmax_local = self
+            .beads
+            .iter()
+            .map(|(_, b)| b.velocity.norm() + b.angular_velocity.norm() * b.radius)
+            .fold(0.0, f64::max);
+        let mut head = [vmax_local];
+        self.comm.max(&mut head);
+        let delta = self.activation_threshold();
+        let gamma = self.params.activation.gamma;
+        let margin = delta.max(self.params.activation.delta) + 2.0 * head[0] * h * gamma + 1e-12;
+        let ghosts = self.exchange_ghosts(2.0 * self.rmax + margin + 1e-9);
+        let local = self.local(&ghosts);
+
+        // the owned contacts, in global id order (the local order is the global one)
+        let contacts: Vec<Contact> =
+            detect_with(&local.world, self.time, h, &self.params.activation, delta)
+                .into_iter()
+                .filter(|c| local.owned[c.body])
+                .collect();
+        let data = StepData {
+            h,
+            t_end: self.time + h,
+            restitution: self.params.restitution,
+            mu: self.params.mu,
+        };
+        // the body-level problem (2.10) of the subdomain: rows of the owned contacts over the
+        // owned and ghost beads (crate::nsgs)
+        let problem = StepProblem::new(&local.world, &contacts, &data);
+        let bad = if problem.is_err() { 1.0 } else { 0.0 };
+        let key = |c: &Contact| -> (usize, Partner) {
+            let p = match c.partner {
+                Partner::Body(j) => Partner::Body(local.gid[j]),
+                o => o,
+            };
+            (local.gid[c.body], p)
+        };
+        let mut r = vec![0.0; 3 * contacts.len()];
+        let mut warm_started = 0usize;
+        if self.params.warm_start {
+            for (i, c) in contacts.iter().enumerate() {
+                if let Some(prev) = self.warm.get(&key(c)) {
+                    r[3 * i..3 * i + 3].copy_from_slice(prev);
+                    warm_started += 1;
+                }
+            }
+        }
+        let interface = contacts
+            .iter()
+            .filter(|c| matches!(c.partner, Partner::Body(j) if !local.owned[j]))
+            .count();
+        let max_penetration = contacts
+            .iter()
+            .map(|c| (-c.gap).max(0.0))
+            .fold(0.0, f64::max);
+        let mut counts = [
+            contacts.len() as f64,
+            warm_started as f64,
+            bad,
+            ghosts.beads.len() as f64,
+            interface as f64,
+            migrated_here as f64,
+        ];
+        self.comm.sum(&mut counts);
+        let problem = match problem {
+            Ok(p) if counts[2] == 0.0 => p,
+            Ok(_) => {
+                return Err(SimulationError::Parameter(format!(
+                    "step {k}: an invalid contact on another rank"
+                )))
+            }
+            Err(source) => return Err(SimulationError::StepProblem { step: k, source }),
+        };
+        let v_free: Vec<[f64; 6]> = problem
+            .f
+            .iter()
+            .zip(&problem.inv_mass)
+            .map(|(f, m)| std::array::from_fn(|d| f[d] * m[d]))
+            .collect();
+        let q = velocities(&problem, &v_free);
+        let n_contacts = counts[0] as usize;
+        let assembly_ms = t0.elapsed().as_secs_f64() * 1e3;
+
+        // the solve: subdomain nonsmooth Gauss–Seidel on the global error
+        let t1 = Instant::now();
+        let (tol, limit) = match self.params.method {
+            StepMethod::Nsgs(s) => (s.tol, s.time_limit),
+            StepMethod::Library => (self.params.solver.tol, self.params.solver.time_limit),
+        };
+        let limit = limit.unwrap_or(Duration::from_secs(600));
+        let mut v = v_free.clone();
+        let mut sweeps = 0usize;
+        let (mut err, mut status) = (0.0, "no_contact");
+        let mut imp = vec![[0.0; 6]; v.len()];
+        if n_contacts > 0 {
+            imp = self.sync_exact(&ghosts, &local, &problem, &r, &v_free, &mut v);
+            let mut dv = vec![[0.0; 6]; v.len()];
+            let mut exact = true;
+            let (mut e, mut scale, mut late) = self.global_error(&problem, &q, &r, &v, false);
+            status = loop {
+                if !e.is_finite() {
+                    break "numerical_error";
+                }
+                if e <= tol {
+                    if exact {
+                        break "converged";
+                    }
+                    imp = self.sync_exact(&ghosts, &local, &problem, &r, &v_free, &mut v);
+                    exact = true;
+                    (e, scale, late) = self.global_error(&problem, &q, &r, &v, false);
+                    continue;
+                }
+                if sweeps >= self.max_sweeps {
+                    break "max_iterations";
+                }
+                if late {
+                    break "time_limit";
+                }
+                dv.fill([0.0; 6]);
+                sweep(&problem, &mut r, &mut v, &mut dv);
+                sweeps += 1;
+                if sweeps % REFRESH == 0 {
+                    imp = self.sync_exact(&ghosts, &local, &problem, &r, &v_free, &mut v);
+                    exact = true;
+                } else {
+                    // the owned beads' own changes are in v already: send and add only
+                    // the ghosts' changes
+                    for &l in &local.of_owned {
+                        dv[l] = [0.0; 6];
+                    }
+                    self.reduce_ghosts(&ghosts, &local, &mut dv);
+                    for &l in &local.of_owned {
+                        for d in 0..6 {
+                            v[l][d] += dv[l][d];
+                        }
+                    }
+                    self.broadcast_ghosts(&ghosts, &local, &mut v);
+                    exact = false;
+                }
+                (e, scale, late) = self.global_error(&problem, &q, &r, &v, t1.elapsed() > limit);
+            };
+            if !exact {
+                imp = self.sync_exact(&ghosts, &local, &problem, &r, &v_free, &mut v);
+                (e, scale, _) = self.global_error(&problem, &q, &r, &v, false);
+            }
+            err = e;
+            self.residual_velocity = e.max(tol) * scale;
+        } else {
+            self.residual_velocity = 0.0;
+        }
+        let solve_ms = t1.elapsed().as_secs_f64() * 1e3;
+
+        // the θ-method (2.7) on the owned beads; contacts and warm starts kept in global ids
+        let theta = self.params.theta;
+        let mut finite = 1.0;
+        for (oi, (_, b)) in self.beads.iter_mut().enumerate() {
+            let l = local.of_owned[oi];
+            let vn = Vec3::from_slice(&v[l][..3]);
+            let wn = Vec3::from_slice(&v[l][3..]);
+            if !(vn.is_finite() && wn.is_finite()) {
+                finite = 0.0;
+            }
+            b.position += (b.velocity * (1.0 - theta) + vn * theta) * h;
+            b.velocity = vn;
+            b.angular_velocity = if b.rotation_locked { Vec3::ZERO } else { wn };
+            self.forces[oi] = Vec3::from_slice(&imp[l][..3]) * (1.0 / h);
+        }
+        let mut fin = [finite];
+        self.comm.sum(&mut fin);
+        if fin[0] < size as f64 {
+            return Err(SimulationError::NonFinite(k));
+        }
+        self.warm.clear();
+        self.contacts.clear();
+        for (i, c) in contacts.iter().enumerate() {
+            let rr = [r[3 * i], r[3 * i + 1], r[3 * i + 2]];
+            let (a, p) = key(c);
+            self.warm.insert((a, p), rr);
+            let mut g = c.clone();
+            g.body = a;
+            g.partner = p;
+            g.impulse = rr;
+            self.contacts.push(g);
+        }
+        self.time += h;
+
+        // position correction in rounds: ghosts refreshed, penetrations over owned pairs
+        // measured (reduced), and while some exceeds the trigger each rank corrects its
+        // owned + ghost beads and keeps its owned beads' new positions
+        let (mut proj_work, mut proj_sweeps) = (0.0, 0.0);
+        let (mut touching, mut pen_sum, mut pen_max);
+        let mut round = 0;
+        loop {
+            let ghosts = self.exchange_ghosts(2.0 * self.rmax + 0.05 * self.rmin + 1e-9);
+            let mut local = self.local(&ghosts);
+            (touching, pen_sum, pen_max) = self.owned_penetrations(&local);
+            let mut worst = [pen_max];
+            self.comm.max(&mut worst);
+            let Some(pr) = self.params.projection else {
+                break;
+            };
+            if round >= PROJECTION_ROUNDS || worst[0] <= pr.trigger * self.rmin {
+                break;
+            }
+            round += 1;
+            let energy = |b: &Sphere, g: Vec3| b.kinetic_energy() - b.mass * g.dot(b.position);
+            let before: f64 = self
+                .beads
+                .iter()
+                .map(|(_, b)| energy(b, self.gravity))
+                .sum();
+            let s = project(&mut local.world, self.time, &pr);
+            for (oi, (_, b)) in self.beads.iter_mut().enumerate() {
+                let src = &local.world.bodies[local.of_owned[oi]];
+                b.position = src.position;
+                b.velocity = src.velocity;
+                b.angular_velocity = src.angular_velocity;
+            }
+            let after: f64 = self
+                .beads
+                .iter()
+                .map(|(_, b)| energy(b, self.gravity))
+                .sum();
+            proj_work += after - before;
+            proj_sweeps += s.sweeps as f64;
+        }
+        let ke: f64 = self.beads.iter().map(|(_, b)| b.kinetic_energy()).sum();
+        let pe: f64 = self
+            .beads
+            .iter()
+            .map(|(_, b)| -b.mass * self.gravity.dot(b.position))
+            .sum();
+        let mut sums = [ke, pe, proj_work, touching, pen_sum];
+        self.comm.sum(&mut sums);
+        let step_comm = self.comm.seconds() - comm0;
+        let mut maxes = [
+            max_penetration,
+            pen_max,
+            proj_sweeps,
+            assembly_ms,
+            step_comm,
+            self.beads.len() as f64,
+        ];
+        self.comm.max(&mut maxes);
+        let mut mean_comm = [step_comm];
+        self.comm.sum(&mut mean_comm);
+        self.steps_done += 1;
+        let converged = status == "converged" || status == "no_contact";
+        let stats = StepStats {
+            step: k,
+            time: self.time,
+            contacts: n_contacts,
+            subproblems: usize::from(n_contacts > 0),
+            inner_iterations: sweeps,
+            solve_ms,
+            assembly_ms: maxes[3],
+            delassus_ms: 0.0,
+            error: err,
+            rule_6_1: 0.0,
+            status: status.to_string(),
+            converged,
+            kinetic_energy: sums[0],
+            potential_energy: sums[1],
+            max_penetration: maxes[0],
+            warm_started: counts[1] as usize,
+            delta,
+            end_max_penetration: maxes[1],
+            end_mean_penetration: if sums[3] > 0.0 {
+                sums[4] / sums[3]
+            } else {
+                0.0
+            },
+            projection_work: sums[2],
+            projection_sweeps: maxes[2] as usize,
+        };
+        Ok(DistributedStats {
+            step: stats,
+            ranks: size,
+            sweeps,
+            step_ms: t0.elapsed().as_secs_f64() * 1e3,
+            comm_ms: maxes[4] * 1e3,
+            comm_mean_ms: mean_comm[0] / size as f64 * 1e3,
+            messages: self.comm.messages() - msg0,
+            bytes: self.comm.bytes() - bytes0,
+            ghosts: counts[3] as usize,
+            interface_contacts: counts[4] as usize,
+            migrated: counts[5] as usize,
+            imbalance: maxes[5] * size as f64 / self.total.max(1) as f64,
+        })
+    }
+
+    /// Penetrations of the pairs owned here (bead pairs with the lower id owned, and every
+    /// owned bead with the obstacles) in the local world: (pairs with g ≤ 0, Σ −g, max −g).
+    fn owned_penetrations(&self, local: &Local) -> (f64, f64, f64) {
+        let (mut touching, mut sum, mut max) = (0.0, 0.0, 0.0f64);
+        let mut add = |g: f64| {
+            if g <= 0.0 {
+                touching += 1.0;
+                sum += -g;
+                max = max.max(-g);
+            }
+        };
+        for (i, j) in candidate_pairs(&local.world, 0.0) {
+            if local.owned[i] {
+                let (a, b) = (&local.world.bodies[i], &local.world.bodies[j]);
+                add((a.position - b.position).norm() - a.radius - b.radius);
+            }
+        }
+        for &l in &local.of_owned {
+            let b = &local.world.bodies[l];
+            for ob in &self.obstacles {
+                add(ob.proximity(b.position, b.radius, self.time).gap);
+            }
+        }
+        (touching, sum, max)
+    }
+
+    /// Largest speed |ẋ| + R|ω| over all beads (reduced).
+    pub fn max_speed(&mut self) -> f64 {
+        let mut m = [self
+            .beads
+            .iter()
+            .map(|(_, b)| b.velocity.norm() + b.radius * b.angular_velocity.norm())
+            .fold(0.0, f64::max)];
+        self.comm.max(&mut m);
+        m[0]
+    }
+
+    /// Total kinetic + potential energy (reduced).
+    pub fn energy(&mut self) -> f64 {
+        let mut e = [self
+            .beads
+            .iter()
+            .map(|(_, b)| b.kinetic_energy() - b.mass * self.gravity.dot(b.position))
+            .sum::<f64>()];
+        self.comm.sum(&mut e);
+        e[0]
+    }
+
+    /// All beads gathered on every rank in global id order (for tests and small runs: O(N)
+    /// data per rank).
+    pub fn gather_world(&mut self) -> World {
+        let size = self.comm.size();
+        let mut buf = Vec::with_capacity(BEAD_WORDS * self.beads.len());
+        for (gid, b) in &self.beads {
+            pack_bead(&mut buf, *gid, b);
+        }
+        let recv = self.comm.exchange(&vec![buf; size]);
+        let mut all: Vec<(usize, Sphere)> = recv
+            .iter()
+            .flat_map(|b| b.chunks_exact(BEAD_WORDS).map(unpack_bead))
+            .collect();
+        all.sort_by_key(|x| x.0);
+        World {
+            bodies: all.into_iter().map(|x| x.1).collect(),
+            obstacles: self.obstacles.clone(),
+            gravity: self.gravity,
+        }
+    }
+}
+
+fn pack_bead(buf: &mut Vec<f64>, gid: usize, b: &Sphere) {
+    let (x, v, w) = (b.position, b.velocity, b.angular_velocity);
+    buf.extend_from_slice(&[
+        gid as f64,
+        x.x,
+        x.y,
+        x.z,
+        v.x,
+        v.y,
+        v.z,
+        w.x,
+        w.y,
+        w.z,
+        b.radius,
+        b.mass,
+        if b.rotation_locked { 1.0 } else { 0.0 },
+    ]);
+}
+
+fn unpack_bead(s: &[f64]) -> (usize, Sphere) {
+    let mut b = Sphere::new(Vec3::new(s[1], s[2], s[3]), s[10], s[11]);
+    b.velocity = Vec3::new(s[4], s[5], s[6]);
+    b.angular_velocity = Vec3::new(s[7], s[8], s[9]);
+    b.rotation_locked = s[12] != 0.0;
+    (s[0] as usize, b)
+}

@@ -1,0 +1,172 @@
+//! Slab decomposition along one horizontal axis: rank r owns the beads whose coordinate lies in
+//! [b_r, b_{r+1}), b_0 = −∞, b_P = +∞, the inner bounds placed at bead-count quantiles so that
+//! every rank owns about N/P beads; ghosts are the beads within a halo of a slab.
+
+/// Bins of the histogram from which the quantiles are taken ([`quantile_bounds`]).
+pub const HISTOGRAM_BINS: usize = 4096;
+
+/// The slab bounds b_0 = −∞ < b_1 ≤ … ≤ b_{P−1} < b_P = +∞ (P + 1 values).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Slabs {
+    /// the bounds, P + 1 values
+    pub bounds: Vec<f64>,
+}
+
+impl Slabs {
+    /// P slabs from the P − 1 inner bounds (sorted).
+    pub fn from_inner(inner: &[f64]) -> Self {
+        let mut bounds = Vec::with_capacity(inner.len() + 2);
+        bounds.push(f64::NEG_INFINITY);
+        bounds.extend_from_slice(inner);
+        bounds.push(f64::INFINITY);
+        Self { bounds }
+    }
+    /// Number of slabs P.
+    pub fn len(&self) -> usize {
+        self.bounds.len().saturating_sub(1)
+    }
+    /// Whether there is no slab.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// The rank owning coordinate x: the r with b_r ≤ x < b_{r+1} (a NaN goes to rank 0).
+    pub fn owner(&self, x: f64) -> usize {
+        let p = self.len();
+        if p == 0 {
+            return 0;
+        }
+        // number of inner bounds ≤ x
+        let inner = &self.bounds[1..p];
+        inner.partition_point(|&b| b <= x).min(p - 1)
+    }
+    /// The ranks other than `me` whose slab, widened by `halo` on both sides, contains x:
+    /// b_r − halo ≤ x < b_{r+1} + halo. Walks outwards from `me`, so the cost is the number of
+    /// ranks returned (plus two), not P.
+    pub fn ghost_targets(&self, me: usize, x: f64, halo: f64, out: &mut Vec<usize>) {
+        out.clear();
+        let p = self.len();
+        let mut r = me;
+        while r > 0 {
+            r -= 1;
+            if x < self.bounds[r + 1] + halo {
+                out.push(r);
+            } else {
+                break;
+            }
+        }
+        let mut r = me + 1;
+        while r < p {
+            if x >= self.bounds[r] - halo {
+                out.push(r);
+                r += 1;
+            } else {
+                break;
+            }
+        }
+    }
+}
+
+/// Inner bounds at the bead-count quantiles k N / P (k = 1 … P − 1) of a histogram of
+/// `HISTOGRAM_BINS` equal bins over [lo, hi] (`counts`, summed over all ranks), linearly
+/// interpolated inside a bin. Every rank computes the same bounds from the same reduced
+/// histogram. With lo = hi (or no bead) all inner bounds are lo.
+pub fn quantile_bounds(counts: &[f64], lo: f64, hi: f64, parts: usize) -> Vec<f64> {
+    let total: f64 = counts.iter().sum();
+    let nb = counts.len().max(1);
+    let width = (hi - lo) / nb as f64;
+    let mut inner = Vec::with_capacity(parts.saturating_sub(1));
+    let (mut bin, mut below) = (0usize, 0.0f64);
+    for k in 1..parts {
+        let target = total * k as f64 / parts as f64;
+        while bin < counts.len() && below + counts[bin] < target {
+            below += counts[bin];
+            bin += 1;
+        }
+        let b = if width.is_nan() || width <= 0.0 || bin >= counts.len() {
+            if bin >= counts.len() {
+                hi
+            } else {
+                lo
+            }
+        } else {
+            let c = counts[bin];
+            let frac = if c > 0.0 {
+                ((target - below) / c).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            lo + width * (bin as f64 + frac)
+        };
+        inner.push(b);
+    }
+    inner
+}
+
+/// The histogram bin of x over [lo, hi] with `HISTOGRAM_BINS` bins (clamped to the range).
+pub fn bin_of(x: f64, lo: f64, hi: f64) -> usize {
+    if hi.is_nan() || lo.is_nan() || hi <= lo || !x.is_finite() {
+        return 0;
+    }
+    let t = ((x - lo) / (hi - lo) * HISTOGRAM_BINS as f64).floor();
+    (t.max(0.0) as usize).min(HISTOGRAM_BINS - 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn owners_and_ghost_targets() {
+        let s = Slabs::from_inner(&[1.0, 2.0, 3.0]);
+        assert_eq!(s.len(), 4);
+        assert_eq!(s.owner(-5.0), 0);
+        assert_eq!(s.owner(1.0), 1);
+        assert_eq!(s.owner(2.5), 2);
+        assert_eq!(s.owner(1e9), 3);
+        let mut t = Vec::new();
+        // 1.95 in slab 1: within 0.1 of slab 2, not of slab 0 (ends at 1)
+        s.ghost_targets(1, 1.95, 0.1, &mut t);
+        assert_eq!(t, vec![2]);
+        s.ghost_targets(1, 1.05, 0.1, &mut t);
+        assert_eq!(t, vec![0]);
+        // a halo wider than a slab reaches two slabs away
+        s.ghost_targets(0, 0.5, 1.6, &mut t);
+        assert_eq!(t, vec![1, 2]);
+        s.ghost_targets(3, 10.0, 0.1, &mut t);
+        assert!(t.is_empty());
+    }
+
+    #[test]
+    fn quantiles_split_the_beads_evenly() {
+        // 1000 beads spread uniformly over [0, 10) and 1000 packed into [0, 1)
+        let xs: Vec<f64> = (0..1000)
+            .map(|i| i as f64 * 0.01)
+            .chain((0..1000).map(|i| i as f64 * 0.001))
+            .collect();
+        let (lo, hi) = (0.0, 10.0);
+        let mut counts = vec![0.0; HISTOGRAM_BINS];
+        for &x in &xs {
+            counts[bin_of(x, lo, hi)] += 1.0;
+        }
+        for parts in [1usize, 2, 3, 4, 7] {
+            let inner = quantile_bounds(&counts, lo, hi, parts);
+            assert_eq!(inner.len(), parts - 1);
+            let s = Slabs::from_inner(&inner);
+            let mut own = vec![0usize; parts];
+            for &x in &xs {
+                own[s.owner(x)] += 1;
+            }
+            let ideal = xs.len() / parts;
+            for (r, &n) in own.iter().enumerate() {
+                // within a bin's worth of beads (at most 1000 · 10/4096 + 1 per bin here)
+                assert!(
+                    n.abs_diff(ideal) <= 5,
+                    "{parts} parts, rank {r}: {n} of {ideal}"
+                );
+            }
+        }
+        // degenerate range: all bounds at lo
+        let inner = quantile_bounds(&[5.0, 0.0], 1.0, 1.0, 3);
+        assert_eq!(inner, vec![1.0, 1.0]);
+    }
+}

@@ -1,8 +1,13 @@
 //! `coulomb`: solve, check, simulate and benchmark discrete Coulomb frictional contact problems.
 
 mod cmd;
+mod existence_json;
 mod exit;
+mod method;
 mod outputs;
+mod progress;
+mod read;
+mod threads;
 mod values;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};

@@ -4,7 +4,8 @@
 
 use crate::errors;
 use coulomb::problem::ProblemError;
-use coulomb::solver::{InnerKind, OuterKind, Settings, Solution, Status};
+use coulomb::settings::ParseMethodError;
+use coulomb::solver::{InnerKind, Method, OuterKind, Settings, Solution, Status};
 use coulomb::sparse::{CscMatrix, SparseError};
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
 use pyo3::exceptions::PyTypeError;
@@ -122,43 +123,32 @@ pub fn csc_to_tuple<'py>(py: Python<'py>, a: &CscMatrix) -> PyResult<Bound<'py, 
     )
 }
 
-fn inner_name(k: InnerKind) -> String {
-    serde_name(&k)
+fn inner_name(k: InnerKind) -> &'static str {
+    k.as_str()
 }
 
-fn outer_name(k: OuterKind) -> String {
-    serde_name(&k)
+fn outer_name(k: OuterKind) -> &'static str {
+    k.as_str()
+}
+
+/// A library name (`FromStr` of [`InnerKind`], [`OuterKind`], [`Method`]: the spelling of the
+/// CLI too), a `SettingsError` on `field` when unknown.
+fn parse_name<T: std::str::FromStr<Err = ParseMethodError>>(
+    py: Python<'_>,
+    field: &str,
+    s: &str,
+) -> PyResult<T> {
+    s.parse().map_err(|e: ParseMethodError| {
+        errors::settings_error(py, field, format!("{field} = {s:?}: {e}"))
+    })
 }
 
 fn parse_inner(py: Python<'_>, field: &str, s: &str) -> PyResult<InnerKind> {
-    Ok(match s {
-        "ipm" => InnerKind::Ipm,
-        "apgd" => InnerKind::Apgd,
-        "pgs" => InnerKind::Pgs,
-        "faceted" => InnerKind::Faceted,
-        _ => {
-            return Err(errors::settings_error(
-                py,
-                field,
-                format!("{field} = {s:?}: expected one of 'ipm', 'apgd', 'pgs', 'faceted'"),
-            ))
-        }
-    })
+    parse_name(py, field, s)
 }
 
 fn parse_outer(py: Python<'_>, field: &str, s: &str) -> PyResult<OuterKind> {
-    Ok(match s.replace('-', "_").as_str() {
-        "fixed_point" => OuterKind::FixedPoint,
-        "anderson" => OuterKind::Anderson,
-        "fused" => OuterKind::Fused,
-        _ => {
-            return Err(errors::settings_error(
-                py,
-                field,
-                format!("{field} = {s:?}: expected one of 'fixed_point', 'anderson', 'fused'"),
-            ))
-        }
-    })
+    parse_name(py, field, s)
 }
 
 /// The names accepted by [`settings_from_kwargs`], in the order of [`Settings`]' fields
@@ -219,30 +209,21 @@ fn text(name: &str, v: &Bound<'_, PyAny>) -> PyResult<String> {
         .map_err(|_| PyTypeError::new_err(format!("{name} must be a str")))
 }
 
-/// A (inner, outer) pair from `"pgs+fused"` or `("pgs", "fused")`.
+/// A (inner, outer) pair from `"pgs+fused"` (a [`Method`] name; `"pgs"` alone is the plain
+/// fixed point) or `("pgs", "fused")`.
 fn method_pair(
     py: Python<'_>,
     name: &str,
     v: &Bound<'_, PyAny>,
 ) -> PyResult<(InnerKind, OuterKind)> {
-    let (i, o): (String, String) = if let Ok(s) = v.extract::<String>() {
-        match s.split_once('+') {
-            Some((i, o)) => (i.to_string(), o.to_string()),
-            None => {
-                return Err(errors::settings_error(
-                    py,
-                    name,
-                    format!("{name} = {s:?}: expected 'inner+outer', e.g. 'apgd+anderson'"),
-                ))
-            }
-        }
-    } else {
-        v.extract().map_err(|_| {
-            PyTypeError::new_err(format!(
-                "{name} must be 'inner+outer' or a tuple (inner, outer)"
-            ))
-        })?
-    };
+    if let Ok(s) = v.extract::<String>() {
+        return parse_name::<Method>(py, name, &s).map(Into::into);
+    }
+    let (i, o): (String, String) = v.extract().map_err(|_| {
+        PyTypeError::new_err(format!(
+            "{name} must be 'inner+outer' or a tuple (inner, outer)"
+        ))
+    })?;
     Ok((parse_inner(py, name, &i)?, parse_outer(py, name, &o)?))
 }
 
@@ -318,18 +299,10 @@ pub fn settings_from_kwargs(
     Ok(s)
 }
 
-/// The snake_case name of a unit enum value of the library (`Status`, `InnerKind`,
-/// `OuterKind`), from its `Serialize` impl: a variant added to the library needs no edit here.
-pub fn serde_name<T: serde::Serialize>(x: &T) -> String {
-    match serde_json::to_value(x) {
-        Ok(serde_json::Value::String(s)) => s,
-        _ => String::from("unknown"),
-    }
-}
-
-/// The Python name of a [`Status`] (the value of the `coulomb.Status` enum).
+/// The Python name of a [`Status`] (the value of the `coulomb.Status` enum): the library's
+/// [`Status::as_str`].
 pub fn status_name(s: Status) -> String {
-    serde_name(&s)
+    s.as_str().to_string()
 }
 
 /// A [`Solution`] as a dict; the vectors are moved into numpy arrays (no copy).

@@ -1,6 +1,44 @@
-//! The instant at which a time-limited solve stops, computed without overflow.
+//! The instant at which a time-limited solve stops, computed without overflow: one
+//! [`Deadline`] type, made once per solve from [`crate::Settings::time_limit`].
 
 use std::time::{Duration, Instant};
+
+/// When a solve must stop: an instant, or never.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Deadline(Option<Instant>);
+
+impl Deadline {
+    /// No deadline.
+    pub const NEVER: Deadline = Deadline(None);
+
+    /// `start + limit` ([`deadline`]): never when there is no limit or when the sum is beyond
+    /// what [`Instant`] can represent.
+    pub fn after(start: Instant, limit: Option<Duration>) -> Self {
+        Self(deadline(start, limit))
+    }
+
+    /// Whether the deadline has passed (reads the clock; never for [`Deadline::NEVER`]).
+    pub fn passed(&self) -> bool {
+        self.0.is_some_and(|t| Instant::now() >= t)
+    }
+
+    /// The instant, None for no deadline (for the time left, e.g. Clarabel's time limit).
+    pub fn instant(&self) -> Option<Instant> {
+        self.0
+    }
+}
+
+impl From<Option<Instant>> for Deadline {
+    fn from(t: Option<Instant>) -> Self {
+        Self(t)
+    }
+}
+
+impl From<Instant> for Deadline {
+    fn from(t: Instant) -> Self {
+        Self(Some(t))
+    }
+}
 
 /// The deadline `start + limit`, or `None` (no deadline) when there is no limit or when
 /// `start + limit` is beyond what [`Instant`] can represent (e.g. `Duration::MAX`, or 10¹⁹ s

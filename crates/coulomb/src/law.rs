@@ -4,7 +4,6 @@
 //! Local vectors are ordered normal first: u = (u_N, u_T), r = (r_N, r_T).
 
 use crate::cone;
-use serde::Serialize;
 
 /// De Saxcé's change (3.7): ũ = u + μ‖u_T‖ e, written into `out`.
 #[inline]
@@ -23,8 +22,9 @@ pub fn de_saxce_all(dim: usize, mu: &[f64], u: &[f64]) -> Vec<f64> {
 }
 
 /// The three branches of Coulomb's law (2.9), as read off a pair (u, r).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum ContactStatus {
     /// r = 0 and u_N ≥ 0.
     TakeOff,
@@ -65,27 +65,13 @@ pub fn status(mu: f64, u: &[f64], r: &[f64], tol: f64) -> ContactStatus {
     ContactStatus::Violated
 }
 
-/// The natural-map residual of one contact: eᵢ = r − P_{K_μ}(r − ũ) with ũ = (u_N + μ‖u_T‖, u_T).
-/// Returns ‖eᵢ‖²; eᵢ = 0 exactly when (u, r) satisfies (2.9) (Lemma 3.1).
-#[inline]
-pub fn contact_residual_sq(mu: f64, u: &[f64], r: &[f64]) -> f64 {
-    debug_assert!(u.len() == r.len() && u.len() <= 3);
-    let mut x = [0.0; 3];
-    let d = u.len();
-    let ut = cone::tangent_norm(u);
-    for k in 0..d {
-        x[k] = r[k] - u[k];
-    }
-    // μ‖u_T‖ with the convention ∞ · 0 = 0 (μ = ∞ and u_T = 0: ũ = u)
-    if ut != 0.0 {
-        x[0] -= mu * ut;
-    }
-    cone::project(mu, &mut x[..d]);
-    (0..d).map(|k| (r[k] - x[k]).powi(2)).sum()
-}
+/// The natural-map residual of one contact, from its home [`crate::natural_map`] (re-exported
+/// here, where callers have always found it).
+pub use crate::natural_map::contact_residual_sq;
 
 /// The error measure of `docs/error.md`, split into its parts.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct ErrorMeasure {
     /// sqrt(Σᵢ ‖eᵢ‖²) (+∞ when it exceeds the largest f64, NaN when r or u holds a NaN)
     pub absolute: f64,

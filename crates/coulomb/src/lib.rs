@@ -7,12 +7,23 @@
 //! - [`problem`]: the incremental problem (2.10), global (M, H, f, w, μ) and local (W, q, μ);
 //! - [`cone`] and [`law`]: Coulomb cones (3.2), projections, the De Saxcé change (3.7),
 //!   Coulomb's law (2.9) and the error measure results are reported in;
+//! - [`mass`]: the block Cholesky factorization of M, with its own [`mass::MassError`];
 //! - [`delassus`]: W = Hᵀ M⁻¹ H and q = Hᵀ M⁻¹ f + w;
+//! - [`settings`] and [`solution`]: the typed [`Settings`] (with [`Settings::paper`], the
+//!   paper's algorithm, and the [`settings::Tuning`] constants), the [`Method`] names, the
+//!   [`Solution`], its [`Status`] and the [`SolveError`];
+//! - [`natural_map`]: the natural map r − P_K(r − ũ) and its Jacobian (one home for the
+//!   error measure, the inner solvers' stopping tests and the Newton systems);
 //! - [`inner`]: solvers of the second-order-cone QP (3.15)/(4.7) that defines F(s);
-//! - [`fixed_point`]: the map F(s) (3.19), rule (6.1) and Anderson mixing of §3.3;
-//! - [`newton`]: semismooth Newton on the natural map of the whole law (the end game);
-//! - [`solver`]: [`solve`] with typed [`Settings`], statuses and the [`Solution`];
+//! - [`outer`]: the algorithm of §3.3 — the stage loop s ← F(s) with rule (6.1)
+//!   ([`outer::fixed_point`]), Anderson mixing, the fused Gauss–Seidel, the Newton end game —
+//!   the policy around it (warm-up, fallback) and the set-up/solve split [`Solver`];
+//! - [`newton`]: semismooth Newton on the natural map of the whole law (the end game's steps);
+//! - [`solver`]: where [`solve`] and the settings and results have always been re-exported;
+//! - [`deadline`]: the one [`deadline::Deadline`] type of every time limit;
 //! - [`existence`]: the criteria (4.1), (4.4), (4.5), (4.6), (5.1) with certificates;
+//! - [`evaluation`]: the error of `docs/error.md` and the balance residual of a candidate,
+//!   shared by the solver and [`fclib::evaluate`];
 //! - [`examples`]: Painlevé (2.12) and the other examples of §4–5;
 //! - [`fclib`]: the FCLIB HDF5 exchange format.
 //!
@@ -25,17 +36,27 @@ pub mod atomic;
 pub mod cone;
 pub mod deadline;
 pub mod delassus;
+pub mod evaluation;
 pub mod examples;
 pub mod existence;
 pub mod fclib;
-pub mod fixed_point;
 pub mod inner;
 pub mod law;
+pub mod mass;
+pub mod natural_map;
 pub mod newton;
+pub mod outer;
 pub mod problem;
+pub mod settings;
+pub mod solution;
 pub mod solver;
 pub mod sparse;
 
+/// The outer iteration's pieces, at their former path (`coulomb::fixed_point`).
+pub use outer::fixed_point;
+
+pub use outer::{solve, solve_with_guess, Solver};
 pub use problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
-pub use solver::{solve, solve_with_guess, Guess, Settings, Solution, SolveError, Status};
+pub use settings::{InnerKind, Method, OuterKind, Settings};
+pub use solution::{Guess, Solution, SolveError, Status};
 pub use sparse::CscMatrix;

@@ -24,87 +24,13 @@
 //! (projection Jacobian, sparse LU) polish the interior-point solutions of the inner
 //! problems (3.15) and (4.7) in [`crate::inner::ipm`].
 
+use crate::deadline::Deadline;
+use crate::natural_map::de_saxce_map;
 use crate::problem::LocalProblem;
 use crate::sparse::CscMatrix;
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use std::time::Instant;
-
-/// Projection of y onto K_μ (written into `p`) and its Jacobian ∂P_{K_μ}(y) (row-major d × d
-/// into `jac`). On the boundary piece (0 < μ < ∞, neither y ∈ K_μ nor −y ∈ K_μ*), with
-/// t = ‖y_T‖, ŷ = y_T / t and a = (y_N + μ t)/(1 + μ²):
-///
-/// ```text
-///     ∂P = (1/(1 + μ²)) (1, μ ŷ)(1, μ ŷ)ᵀ + (μ a / t) [0 0; 0 I − ŷ ŷᵀ].
-/// ```
-///
-/// Inside K_μ it is I, inside −K_μ* it is 0 (a B-subdifferential element on the kinks).
-pub(crate) fn projection_jacobian(mu: f64, y: &[f64], p: &mut [f64], jac: &mut [f64]) {
-    let d = y.len();
-    p.copy_from_slice(y);
-    crate::cone::project(mu, p);
-    jac.iter_mut().for_each(|x| *x = 0.0);
-    let t = crate::cone::tangent_norm(y);
-    if mu == 0.0 {
-        jac[0] = if y[0] > 0.0 { 1.0 } else { 0.0 };
-    } else if mu.is_infinite() {
-        jac[0] = if y[0] > 0.0 { 1.0 } else { 0.0 };
-        (1..d).for_each(|k| jac[k * d + k] = 1.0);
-    } else if t <= mu * y[0] {
-        (0..d).for_each(|k| jac[k * d + k] = 1.0);
-    } else if mu * t <= -y[0] || t == 0.0 {
-        // polar cone: P = 0
-    } else {
-        let a = (y[0] + mu * t) / (1.0 + mu * mu);
-        let mut g = [0.0; 3];
-        g[0] = 1.0;
-        for k in 1..d {
-            g[k] = mu * y[k] / t;
-        }
-        for i in 0..d {
-            for j in 0..d {
-                jac[i * d + j] = g[i] * g[j] / (1.0 + mu * mu);
-            }
-        }
-        let c = mu * a / t;
-        for i in 1..d {
-            for j in 1..d {
-                let e = if i == j { 1.0 } else { 0.0 };
-                jac[i * d + j] += c * (e - (y[i] / t) * (y[j] / t));
-            }
-        }
-    }
-}
-
-/// Natural-map residual F(r) = r − P_L(r − u) of the complementarity L* ∋ u ⊥ r ∈ L (3.14),
-/// with the Jacobians ∂P of every contact (row-major d × d blocks) in `jac`.
-pub(crate) fn natural_map(
-    dim: usize,
-    mu: &[f64],
-    r: &[f64],
-    u: &[f64],
-    f: &mut [f64],
-    jac: &mut [f64],
-) {
-    let mut y = [0.0; 3];
-    let mut p = [0.0; 3];
-    for (i, &m) in mu.iter().enumerate() {
-        let block = i * dim..(i + 1) * dim;
-        for k in 0..dim {
-            y[k] = r[block.start + k] - u[block.start + k];
-        }
-        projection_jacobian(
-            m,
-            &y[..dim],
-            &mut p[..dim],
-            &mut jac[i * dim * dim..(i + 1) * dim * dim],
-        );
-        for k in 0..dim {
-            f[block.start + k] = r[block.start + k] - p[k];
-        }
-    }
-}
 
 /// Solves J x = rhs for a square sparse J given as summed triplets, by faer's sparse LU.
 /// None if the factorization fails or the solution is not finite.
@@ -124,55 +50,6 @@ pub(crate) fn sparse_lu_solve(
     let lu = mat.sp_lu().ok()?;
     lu.solve_in_place(faer::MatMut::from_column_major_slice_mut(rhs, n, 1));
     rhs.iter().all(|x| x.is_finite()).then_some(())
-}
-
-/// Appends the triplets of `sign`·D·B (rows offset by `row0`) where D is the block diagonal
-/// of the d × d projection Jacobians and B is given by `(row k, column j, value)` entries;
-/// row k of B belongs to contact k / d.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn push_d_times(
-    dim: usize,
-    jac: &[f64],
-    sign: f64,
-    entries: impl Iterator<Item = (usize, usize, f64)>,
-    row0: usize,
-    rows: &mut Vec<usize>,
-    cols: &mut Vec<usize>,
-    vals: &mut Vec<f64>,
-) {
-    for (k, j, v) in entries {
-        let (c, a) = (k / dim, k % dim);
-        for a2 in 0..dim {
-            let dv = jac[c * dim * dim + a2 * dim + a];
-            if dv != 0.0 {
-                rows.push(row0 + c * dim + a2);
-                cols.push(j);
-                vals.push(sign * dv * v);
-            }
-        }
-    }
-}
-
-/// Appends the triplets of I − D (rows and columns offset by `off`).
-pub(crate) fn push_identity_minus_d(
-    dim: usize,
-    jac: &[f64],
-    off: usize,
-    rows: &mut Vec<usize>,
-    cols: &mut Vec<usize>,
-    vals: &mut Vec<f64>,
-) {
-    let contacts = jac.len() / (dim * dim);
-    for c in 0..contacts {
-        for a in 0..dim {
-            for b in 0..dim {
-                let e = if a == b { 1.0 } else { 0.0 };
-                rows.push(off + c * dim + a);
-                cols.push(off + c * dim + b);
-                vals.push(e - jac[c * dim * dim + a * dim + b]);
-            }
-        }
-    }
 }
 
 /// The sparsity pattern of J + λ I: every d × d block (i, j) with i = j or with a nonzero of
@@ -318,46 +195,18 @@ pub struct NewtonReport {
     pub residual: f64,
 }
 
-/// G(r) of the De Saxcé natural map into `g`, the projection Jacobians D into `dblocks` and
-/// the blocks B = D A into `blocks` (row-major d × d per contact); returns ‖G(r)‖.
-fn de_saxce_map(
+/// ‖G(r)‖ of the De Saxcé natural map of `p` at r ([`de_saxce_map`] with u = W r + q; G, D
+/// and B = D A written as there).
+fn de_saxce_map_norm(
     p: &LocalProblem,
     r: &[f64],
     g: &mut [f64],
     dblocks: &mut [f64],
     blocks: &mut [f64],
 ) -> f64 {
-    let d = p.dim;
     let mut u = p.q.clone();
     p.w.gemv_acc(1.0, r, &mut u);
-    let mut y = [0.0; 3];
-    let mut proj = [0.0; 3];
-    for (i, &mu) in p.mu.iter().enumerate() {
-        let dj = &mut dblocks[i * d * d..(i + 1) * d * d];
-        let at = i * d;
-        let ui = &u[at..at + d];
-        let t = crate::cone::tangent_norm(ui);
-        let slide = mu.is_finite() && mu > 0.0 && t > 0.0;
-        for k in 0..d {
-            y[k] = r[at + k] - ui[k];
-        }
-        if slide {
-            y[0] -= mu * t;
-        }
-        projection_jacobian(mu, &y[..d], &mut proj[..d], dj);
-        for k in 0..d {
-            g[at + k] = r[at + k] - proj[k];
-        }
-        // B = D A: column 0 of A is e_N, column k ≥ 1 is μ û_k e_N + e_k
-        let b = &mut blocks[i * d * d..(i + 1) * d * d];
-        for a in 0..d {
-            b[a * d] = dj[a * d];
-            for k in 1..d {
-                let extra = if slide { mu * ui[k] / t } else { 0.0 };
-                b[a * d + k] = dj[a * d] * extra + dj[a * d + k];
-            }
-        }
-    }
+    de_saxce_map(p.dim, &p.mu, r, &u, g, dblocks, blocks);
     crate::law::norm(g)
 }
 
@@ -372,7 +221,7 @@ pub fn polish(
     r: &mut [f64],
     target: f64,
     max_steps: usize,
-    deadline: Option<Instant>,
+    deadline: Deadline,
 ) -> NewtonReport {
     let (d, m) = (p.dim, r.len());
     let consistent = (d == 2 || d == 3)
@@ -392,7 +241,7 @@ pub fn polish(
     let mut g = vec![0.0; m];
     let mut blocks = vec![0.0; p.mu.len() * d * d];
     let mut dblocks = blocks.clone();
-    let mut norm = de_saxce_map(p, r, &mut g, &mut dblocks, &mut blocks);
+    let mut norm = de_saxce_map_norm(p, r, &mut g, &mut dblocks, &mut blocks);
     let mut trial = vec![0.0; m];
     let mut g_trial = vec![0.0; m];
     let mut blocks_trial = vec![0.0; blocks.len()];
@@ -428,7 +277,7 @@ pub fn polish(
         if steps >= max_steps {
             break NewtonStatus::MaxSteps;
         }
-        if deadline.is_some_and(|t| Instant::now() >= t) {
+        if deadline.passed() {
             break NewtonStatus::TimeLimit;
         }
         // J + λ I with J = I − D + (D A) W; λ starts at a fraction of the relative residual (a regularized
@@ -440,7 +289,7 @@ pub fn polish(
         let mut lambda = LAMBDA_FACTOR * (norm / q_scale).min(1e-2) * diag_scale;
         let mut accepted = false;
         for _ in 0..4 {
-            if deadline.is_some_and(|t| Instant::now() >= t) {
+            if deadline.passed() {
                 break;
             }
             let mut shifted = vals.clone();
@@ -452,7 +301,7 @@ pub fn polish(
                     for k in 0..m {
                         trial[k] = r[k] + t * delta[k];
                     }
-                    let n_trial = de_saxce_map(
+                    let n_trial = de_saxce_map_norm(
                         p,
                         &trial,
                         &mut g_trial,
@@ -477,7 +326,7 @@ pub fn polish(
             lambda = (lambda * 100.0).max(1e-10 * diag_scale);
         }
         if !accepted {
-            if deadline.is_some_and(|t| Instant::now() >= t) {
+            if deadline.passed() {
                 break NewtonStatus::TimeLimit;
             }
             break NewtonStatus::NoDescent;
@@ -502,6 +351,7 @@ pub fn polish(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::natural_map::{push_d_times, push_identity_minus_d};
     use crate::sparse::CscMatrix;
 
     /// A deterministic pseudo-random local problem with W = AᵀA + δI (d = 3).
@@ -543,7 +393,7 @@ mod tests {
             let mut g = vec![0.0; m];
             let mut db = vec![0.0; 36];
             let mut b = vec![0.0; 36];
-            de_saxce_map(&p, &r, &mut g, &mut db, &mut b);
+            de_saxce_map_norm(&p, &r, &mut g, &mut db, &mut b);
             let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
             push_identity_minus_d(3, &db, 0, &mut rows, &mut cols, &mut vals);
             push_d_times(
@@ -561,7 +411,7 @@ mod tests {
             let eps = 1e-7;
             let rp: Vec<f64> = r.iter().zip(&dir).map(|(x, d)| x + eps * d).collect();
             let mut gp = vec![0.0; m];
-            de_saxce_map(&p, &rp, &mut gp, &mut db, &mut b);
+            de_saxce_map_norm(&p, &rp, &mut gp, &mut db, &mut b);
             for k in 0..m {
                 let fd = (gp[k] - g[k]) / eps;
                 assert!(
@@ -578,19 +428,19 @@ mod tests {
         let mut p = problem(2, 1, 0.5);
         p.mu.push(0.3); // three friction coefficients for two contacts
         let mut r = vec![0.0; 6];
-        let out = polish(&p, &mut r, 0.0, 5, None);
+        let out = polish(&p, &mut r, 0.0, 5, Deadline::NEVER);
         assert_eq!((out.status, out.steps), (NewtonStatus::NoDescent, 0));
         assert!(r.iter().all(|&x| x == 0.0));
         let p = problem(2, 1, 0.5);
         let mut short = vec![0.0; 5];
-        assert_eq!(polish(&p, &mut short, 0.0, 5, None).steps, 0);
+        assert_eq!(polish(&p, &mut short, 0.0, 5, Deadline::NEVER).steps, 0);
     }
 
     #[test]
     fn newton_reaches_rounding_level_from_a_rough_point() {
         let p = problem(5, 3, 0.5);
         let mut r = vec![0.0; 15];
-        let out = polish(&p, &mut r, 0.0, 50, None);
+        let out = polish(&p, &mut r, 0.0, 50, Deadline::NEVER);
         let u = p.velocity(&r);
         let err = crate::law::error_measure(3, &p.mu, &r, &u, crate::law::norm(&p.q)).error;
         assert!(err < 1e-12, "error {err:.3e} after {out:?}");

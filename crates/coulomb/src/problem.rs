@@ -130,6 +130,16 @@ pub enum Problem {
     Global(GlobalProblem),
 }
 
+impl From<crate::mass::MassError> for ProblemError {
+    fn from(e: crate::mass::MassError) -> Self {
+        match e {
+            crate::mass::MassError::NotPositiveDefinite(detail) => {
+                ProblemError::NotPositiveDefinite(detail)
+            }
+        }
+    }
+}
+
 impl Problem {
     /// Space dimension d.
     pub fn dim(&self) -> usize {
@@ -180,7 +190,7 @@ fn check_dim(dim: i64) -> Result<usize, ProblemError> {
     }
 }
 
-fn check_len(what: &'static str, v: &[f64], n: usize) -> Result<(), ProblemError> {
+pub(crate) fn check_len(what: &'static str, v: &[f64], n: usize) -> Result<(), ProblemError> {
     if v.len() != n {
         return Err(ProblemError::Shape {
             what,
@@ -386,7 +396,7 @@ impl GlobalProblem {
         mu: Vec<f64>,
     ) -> Result<Self, ProblemError> {
         let p = Self::new_unfactored(dim, m, h, f, w, mu)?;
-        crate::delassus::MassFactor::new(&p.m)?;
+        crate::mass::MassFactor::new(&p.m)?;
         Ok(p)
     }
 

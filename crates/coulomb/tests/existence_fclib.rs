@@ -1,27 +1,16 @@
 //! Every problem of ../shared/fclib gets an existence conclusion (time is not asserted here;
 //! `coulomb check` prints it). Prints the table for the README.
 
+mod common;
+
 use coulomb::existence::{check, CheckSettings, Conclusion, Criterion, Verdict};
 use coulomb::fclib;
-use std::path::PathBuf;
 
 #[test]
 fn every_fclib_problem_gets_a_conclusion() {
-    let dir = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/fclib"
-    ));
-    if !dir.is_dir() {
-        println!("skipped: ../shared absent");
+    let Some(files) = common::fclib_files() else {
         return;
-    }
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .unwrap()
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "hdf5"))
-        .collect();
-    files.sort();
-    assert!(!files.is_empty());
+    };
     println!("| file | kind | contacts | (4.5) | (4.1) | (4.4) | (4.6) | (5.1) | conclusion | s |");
     println!("|---|---|---|---|---|---|---|---|---|---|");
     for path in files {

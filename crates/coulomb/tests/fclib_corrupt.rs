@@ -2,11 +2,12 @@
 //! nothing panics. Files are made with a low-level HDF5 writer (hdf5-pure, coulomb's own
 //! HDF5 dependency) from a valid layout with one thing changed, or by byte edits.
 
+mod common;
+
 use coulomb::fclib::{self, FclibError, FclibErrorKind, FclibFile, WriteOptions};
 use coulomb::{CscMatrix, LocalProblem, Problem};
 use hdf5_pure::{FileBuilder, GroupBuilder};
 use std::collections::BTreeMap;
-use std::path::PathBuf;
 
 #[derive(Clone, Debug)]
 enum Data {
@@ -328,10 +329,7 @@ fn fclib_corrupt_byte_edits_never_panic() {
     files.push(
         fclib::to_bytes(&FclibFile::new(Problem::Local(p)), &WriteOptions::default()).unwrap(),
     );
-    let shared = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/fclib"
-    ));
+    let shared = common::shared_fclib();
     for name in ["Capsules-i125-1213", "Box_Stacks-i0122-82-5", "Rover4396"] {
         if let Ok(b) = std::fs::read(shared.join(format!("{name}.hdf5"))) {
             files.push(b);
@@ -392,10 +390,7 @@ fn patch_u64(bytes: &mut [u8], from: u64, to: u64) -> usize {
 /// never-written datasets that HDF5 would fill with zeros of the declared size.
 #[test]
 fn fclib_corrupt_huge_declared_size_is_refused() {
-    let path = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/fclib/Box_Stacks-i0122-82-5.hdf5"
-    ));
+    let path = common::shared_fclib().join("Box_Stacks-i0122-82-5.hdf5");
     let Ok(mut bytes) = std::fs::read(&path) else {
         println!("skipped: ../shared absent");
         return;

@@ -1,22 +1,13 @@
 //! Every real FCLIB file in ../shared/fclib is read and matches what h5py shows.
 
+mod common;
+
 use coulomb::fclib::{self, FclibFile};
 use coulomb::Problem;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
-fn fclib_dir() -> Option<PathBuf> {
-    let dir = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/fclib"
-    ));
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        println!("skipped: ../shared absent");
-        None
-    }
-}
+use common::{fclib_dir, h5py_available};
 
 /// (file, kind, d, contacts, dofs, has solution, guesses), as h5py lists them
 /// (`len(vectors/mu)`, `M/m`, `number_of_guesses`).
@@ -183,14 +174,6 @@ for fn in sorted(glob.glob(os.path.join(sys.argv[1], '*.hdf5'))):
     out.status
         .success()
         .then(|| String::from_utf8_lossy(&out.stdout).into_owned())
-}
-
-fn h5py_available() -> bool {
-    Command::new("python3")
-        .args(["-c", "import h5py"])
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false)
 }
 
 #[test]

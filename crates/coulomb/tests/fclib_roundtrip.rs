@@ -1,6 +1,8 @@
 //! write → read round trips in every storage and index width, and h5py reading what
 //! coulomb writes.
 
+mod common;
+
 use coulomb::fclib::{self, FclibFile, IndexWidth, Info, Storage, StoredSolution, WriteOptions};
 use coulomb::{CscMatrix, GlobalProblem, LocalProblem, Problem};
 use std::path::PathBuf;
@@ -196,13 +198,7 @@ fn tempdir(tag: &str) -> PathBuf {
     dir
 }
 
-fn h5py_available() -> bool {
-    Command::new("python3")
-        .args(["-c", "import h5py"])
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false)
-}
+use common::h5py_available;
 
 /// h5py dumps every dataset as {path: [dtype, shape, values]}.
 const DUMP: &str = r#"

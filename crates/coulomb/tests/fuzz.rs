@@ -20,6 +20,8 @@
 //!   `cargo test --release -p coulomb --test fuzz -- --ignored --nocapture fuzz_long`.
 //!   Results: docs/fuzz.md.
 
+mod common;
+
 use coulomb::existence::{self, CheckSettings};
 use coulomb::fclib::{self, FclibFile, StoredSolution};
 use coulomb::solver::{self, Guess, InnerKind, OuterKind, Settings, Status};
@@ -777,7 +779,7 @@ fn mutate_bytes(rng: &mut ChaCha8Rng, mut b: Vec<u8>) -> Vec<u8> {
 /// Seed images: the shared FCLIB files (the smaller ones) and structured images.
 fn seed_images() -> Vec<Vec<u8>> {
     let mut out = Vec::new();
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/fclib");
+    let dir = common::shared_fclib();
     if let Ok(rd) = std::fs::read_dir(&dir) {
         let mut paths: Vec<_> = rd.filter_map(|e| e.ok()).map(|e| e.path()).collect();
         paths.sort();

@@ -16,7 +16,7 @@ fn limits() -> InnerLimits {
     InnerLimits {
         tol: 1e-10,
         max_iterations: 200,
-        deadline: None,
+        deadline: coulomb::deadline::Deadline::NEVER,
     }
 }
 

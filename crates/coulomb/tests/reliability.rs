@@ -1,6 +1,8 @@
 //! Issue #12: no false "converged" from an overflowing error measure, and no panic on any
 //! `Settings` a caller can build (time limits beyond what `Instant` can hold).
 
+mod common;
+
 use coulomb::law::{self, error_measure};
 use coulomb::solver::{self, Settings, Status};
 use coulomb::{CscMatrix, GlobalProblem, LocalProblem, Problem};
@@ -261,7 +263,7 @@ fn reliability_balance_residual_of_huge_f_is_not_zero() {
 /// found by the command-line fuzz run (`solve F --tol 0.3`).
 #[test]
 fn reliability_large_tolerances_do_not_panic() {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/fclib");
+    let dir = common::shared_fclib();
     for name in ["Box_Stacks-i0122-82-5.hdf5", "Capsules-i125-1213.hdf5"] {
         let Ok(f) = coulomb::fclib::read(&dir.join(name)) else {
             println!("skipped: ../shared absent");

@@ -2,29 +2,17 @@
 //! independently: the solution is written as the file's /solution group, read back, and its
 //! error recomputed by `fclib::evaluate` from r (and v) alone.
 
+mod common;
+
 use coulomb::fclib::{self, read, FclibFile, StoredSolution};
 use coulomb::solver::{solve, Settings, Status};
-use std::path::Path;
 
 #[test]
 fn every_fclib_problem_converges_with_default_settings() {
-    let dir = Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/fclib"
-    ));
-    if !dir.is_dir() {
-        println!("skipped: ../shared absent");
+    let Some(paths) = common::fclib_files() else {
         return;
-    }
-    let mut paths: Vec<_> = std::fs::read_dir(dir)
-        .unwrap()
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "hdf5"))
-        .collect();
-    paths.sort();
-    assert!(!paths.is_empty());
-    let out_dir = std::env::temp_dir().join(format!("coulomb-solver-fclib-{}", std::process::id()));
-    std::fs::create_dir_all(&out_dir).unwrap();
+    };
+    let out_dir = common::tempdir("solver-fclib");
     for path in paths {
         let stem = path.file_stem().unwrap().to_string_lossy().to_string();
         let file = read(&path).unwrap();

@@ -65,7 +65,7 @@ fn tight_limits() -> InnerLimits {
     InnerLimits {
         tol: 1e-11,
         max_iterations: 100_000,
-        deadline: None,
+        deadline: coulomb::deadline::Deadline::NEVER,
     }
 }
 
@@ -259,7 +259,7 @@ fn apgd_runs_matrix_free() {
     let limits = InnerLimits {
         tol: 1e-12,
         max_iterations: 100_000,
-        deadline: None,
+        deadline: coulomb::deadline::Deadline::NEVER,
     };
     let b = d.local.q.clone();
     let mut r_free = vec![0.0; m];

@@ -52,7 +52,7 @@ pub struct Report {
 /// Runs `coulomb error`: exit status 0 when the solution is one at `--tol` ("yes"), 1 when
 /// it is not ("no"), 2 when it cannot be evaluated.
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
-    let (file, mut dropped) = super::info::read_relaxed_dropped(&args.file)?;
+    let (file, mut dropped) = crate::read::read_relaxed_dropped(&args.file)?;
     let (solution, source) = match &args.solution {
         Some(path) => {
             for e in dropped {

@@ -1,6 +1,7 @@
 //! `coulomb info`: what is in FCLIB files.
 
-use coulomb::fclib::{self, FclibFile};
+use crate::read::read_relaxed;
+use coulomb::fclib::FclibFile;
 use coulomb::Problem;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -45,23 +46,6 @@ pub struct Summary {
     /// relative asymmetry max|A − Aᵀ| / max|A| of W (local) or M (global) as stored; the
     /// problem is solved as stored whatever its value
     pub asymmetry: f64,
-}
-
-/// Reads a file exactly as stored for inspection; a malformed /solution or /guesses group
-/// (stored solutions are data, not truth) is left out with a warning on stderr.
-pub fn read_relaxed(path: &std::path::Path) -> Result<FclibFile, fclib::FclibError> {
-    let (file, dropped) = read_relaxed_dropped(path)?;
-    for e in dropped {
-        eprintln!("warning: {e}; going on without it");
-    }
-    Ok(file)
-}
-
-/// [`read_relaxed`] without the warnings: the errors of the groups left out are returned.
-pub fn read_relaxed_dropped(
-    path: &std::path::Path,
-) -> Result<(FclibFile, Vec<fclib::FclibError>), fclib::FclibError> {
-    fclib::read_lenient(path, &fclib::ReadOptions::default())
 }
 
 /// Summarizes a file already read.

@@ -3,9 +3,8 @@
 //! Fig. 9 (convergence of the fixed point for μ = 0.1 … 0.9), and a scaling curve (time per
 //! step against the number of beads).
 
-use crate::cmd::simulate::{progress, solver_settings};
 use anyhow::{bail, Context};
-use coulomb::solver::{InnerKind, OuterKind, Settings};
+use coulomb::InnerKind;
 use coulomb_granular::output::write_stats;
 use coulomb_granular::run::RestMonitor;
 use coulomb_granular::{Params, Scene, Simulation, StepStats, Stop, Summary};
@@ -67,8 +66,8 @@ pub struct Table1Args {
     pub pg_only: bool,
     /// inner solver of the "PG" rows (the paper's projected gradient is `apgd`; `pgs` is
     /// projected Gauss–Seidel)
-    #[arg(long, value_enum, default_value_t = crate::cmd::simulate::Inner::Apgd)]
-    pub pg_inner: crate::cmd::simulate::Inner,
+    #[arg(long, default_value_t = InnerKind::Apgd, value_parser = crate::method::inner())]
+    pub pg_inner: InnerKind,
 }
 
 /// Arguments of `coulomb paper fig8`.
@@ -136,8 +135,8 @@ pub struct ScalingArgs {
     #[arg(long, default_value_t = 50, value_parser = crate::values::count)]
     pub window: usize,
     /// inner solver (the paper's tolerance: (6.1) with ε = 0.01, ≤ 20 subproblems)
-    #[arg(long, value_enum, default_value_t = crate::cmd::simulate::Inner::Apgd)]
-    pub inner: crate::cmd::simulate::Inner,
+    #[arg(long, default_value_t = InnerKind::Apgd, value_parser = crate::method::inner())]
+    pub inner: InnerKind,
     /// seed
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -184,18 +183,13 @@ const PAPER: [(usize, &str, f64, f64, f64, f64); 6] = [
 /// stopped by rule (6.1) with ε = `fp_tol` or after `max_outer` iterations; projected gradient
 /// capped at 250 iterations per subproblem.
 fn paper_params(inner: InnerKind, mu: f64, tol: f64, fp_tol: f64, max_outer: usize) -> Params {
-    let max_inner = matches!(inner, InnerKind::Apgd | InnerKind::Pgs).then_some(250);
     Params {
         h: 0.02,
         restitution: 0.2,
         mu,
         // the paper's algorithm: successive approximations s ← F(s) alone, without the
-        // library's Newton end game
-        solver: Settings {
-            outer: OuterKind::FixedPoint,
-            newton_steps: 0,
-            ..solver_settings(inner, tol, fp_tol, max_outer, max_inner)
-        },
+        // library's Newton end game (Settings::paper)
+        solver: crate::method::paper_settings(inner, tol, fp_tol, max_outer),
         // the paper's time stepping: Siconos' activation rule (γ = 1/2), no position correction
         activation: coulomb_granular::Activation::default(),
         projection: None,
@@ -227,7 +221,7 @@ fn box_run(
     mut until: impl FnMut(&mut Simulation, &StepStats) -> bool,
 ) -> anyhow::Result<(Summary, Vec<StepStats>)> {
     let mut sim = Simulation::new(Scene::Box.build(beads, seed), params)?;
-    let pb = progress(stop.max_steps(), false);
+    let pb = crate::progress::bar(stop.max_steps(), false);
     pb.set_prefix(label.to_string());
     let mut stats = Vec::new();
     let mut monitor = RestMonitor::default();
@@ -291,7 +285,7 @@ fn table1(a: Table1Args) -> anyhow::Result<()> {
     } else {
         &[InnerKind::Apgd, InnerKind::Ipm]
     };
-    let pg: InnerKind = a.pg_inner.into();
+    let pg: InnerKind = a.pg_inner;
     let beads_arg: Vec<String> = a.beads.iter().map(|b| b.to_string()).collect();
     let mut md = String::new();
     let _ = writeln!(
@@ -699,7 +693,7 @@ fn scaling(a: ScalingArgs) -> anyhow::Result<()> {
     if let Some(path) = &a.markdown {
         crate::outputs::check("--markdown", path, &[])?;
     }
-    let inner: InnerKind = a.inner.into();
+    let inner: InnerKind = a.inner;
     let mut points = Vec::new();
     for &beads in &a.beads {
         let label = format!("{beads} beads {}", inner_label(inner));
@@ -756,7 +750,7 @@ fn scaling(a: ScalingArgs) -> anyhow::Result<()> {
         beads_arg.join(","),
         a.settle,
         a.window,
-        format!("{:?}", a.inner).to_lowercase(),
+        a.inner,
         a.seed,
         std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
         coulomb_granular::scene::BOX_LAYERS,

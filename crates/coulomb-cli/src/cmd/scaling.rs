@@ -5,7 +5,8 @@
 //! the runs with different thread counts ended in bitwise the same state.
 
 use crate::cmd::paper::ScalingArgs;
-use crate::cmd::simulate::{progress, with_threads};
+use crate::progress::bar as progress;
+use crate::threads::with_threads;
 use anyhow::{bail, Context};
 use coulomb_granular::scene::{BoxLayout, BEAD_RADIUS};
 use coulomb_granular::{NsgsSettings, Params, Scene, Simulation, StepMethod};

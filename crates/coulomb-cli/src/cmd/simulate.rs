@@ -2,40 +2,14 @@
 //! statistics (CSV, JSON), VTK frames for ParaView and optional FCLIB dumps of each step.
 
 use anyhow::{bail, Context};
-use coulomb::solver::{InnerKind, OuterKind, Settings};
+use coulomb::{InnerKind, OuterKind, Settings};
 use coulomb_granular::output::{write_stats, VtkWriter};
 use coulomb_granular::run::RestMonitor;
 use coulomb_granular::scene::BoxLayout;
 use coulomb_granular::{
     Activation, NsgsSettings, Params, Projection, Scene, Simulation, StepMethod, Stop, Summary,
 };
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use std::io::IsTerminal;
 use std::path::PathBuf;
-
-/// Inner solver names on the command line.
-#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Inner {
-    /// accelerated projected gradient on (4.7) (the paper's "PG")
-    Apgd,
-    /// interior point on (3.15) (the paper's "IP" column)
-    Ipm,
-    /// projected Gauss–Seidel
-    Pgs,
-    /// faceted cone, QP by interior point
-    Faceted,
-}
-
-impl From<Inner> for InnerKind {
-    fn from(i: Inner) -> Self {
-        match i {
-            Inner::Apgd => InnerKind::Apgd,
-            Inner::Ipm => InnerKind::Ipm,
-            Inner::Pgs => InnerKind::Pgs,
-            Inner::Faceted => InnerKind::Faceted,
-        }
-    }
-}
 
 /// The solver of each step.
 #[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
@@ -45,28 +19,6 @@ pub enum Method {
     Nsgs,
     /// the library's solver (`--inner`, `--outer`) on the assembled problem
     Library,
-}
-
-/// Outer iteration names on the command line.
-#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Outer {
-    /// successive approximations s ← F(s) (the paper's §6)
-    FixedPoint,
-    /// safeguarded Anderson mixing on s
-    Anderson,
-    /// Gauss–Seidel directly on Coulomb's law, each contact's law solved exactly (needs
-    /// `--inner pgs`)
-    Fused,
-}
-
-impl From<Outer> for OuterKind {
-    fn from(o: Outer) -> Self {
-        match o {
-            Outer::FixedPoint => OuterKind::FixedPoint,
-            Outer::Anderson => OuterKind::Anderson,
-            Outer::Fused => OuterKind::Fused,
-        }
-    }
 }
 
 /// Arguments of `coulomb simulate`.
@@ -121,11 +73,11 @@ pub struct Args {
     pub threads: Option<usize>,
     /// inner solver of --method library (default: Gauss–Seidel, the fastest to 1e-4 on the
     /// box scene, see docs/granular.md)
-    #[arg(long, value_enum, default_value_t = Inner::Pgs)]
-    pub inner: Inner,
+    #[arg(long, default_value_t = InnerKind::Pgs, value_parser = crate::method::inner())]
+    pub inner: InnerKind,
     /// outer iteration (default: Gauss–Seidel fused with the law; apgd + Anderson as fallback)
-    #[arg(long, value_enum, default_value_t = Outer::Fused)]
-    pub outer: Outer,
+    #[arg(long, default_value_t = OuterKind::Fused, value_parser = crate::method::outer())]
+    pub outer: OuterKind,
     /// tolerance on the error of docs/error.md, reached at every step (steps that do not
     /// reach it are counted and reported)
     #[arg(long, default_value_t = 1e-4, value_parser = crate::values::positive)]
@@ -187,28 +139,6 @@ pub struct Args {
     pub rebalance_every: usize,
 }
 
-/// The solver settings of a simulation: the paper's outer rule (6.1) with ε = `fp_tol`.
-pub fn solver_settings(
-    inner: InnerKind,
-    tol: f64,
-    fp_tol: f64,
-    max_outer: usize,
-    max_inner: Option<usize>,
-) -> Settings {
-    // the named inner solver alone, so that statistics describe it
-    let d = Settings::method(inner, Settings::default().outer);
-    Settings {
-        tol,
-        max_outer,
-        max_inner: max_inner.unwrap_or(d.max_inner),
-        fixed_point_tol: (fp_tol > 0.0).then_some(fp_tol),
-        // solve each subproblem accurately (down to tol / 5): with the loose rule (6.1) the
-        // outer loop often stops after one subproblem, whose accuracy is then the step's
-        inner_tol_factor: 1e-6,
-        ..d
-    }
-}
-
 impl Args {
     pub(crate) fn params(&self) -> Params {
         Params {
@@ -221,15 +151,15 @@ impl Args {
                 ..Activation::accurate()
             },
             solver: Settings {
-                outer: self.outer.into(),
+                outer: self.outer,
                 // a step the first method does not bring to --tol gets a second one
-                fallback: Some(if self.outer == Outer::Fused {
+                fallback: Some(if self.outer == OuterKind::Fused {
                     (InnerKind::Apgd, OuterKind::Anderson)
                 } else {
                     (InnerKind::Pgs, OuterKind::Fused)
                 }),
-                ..solver_settings(
-                    self.inner.into(),
+                ..crate::method::time_stepping_settings(
+                    self.inner,
                     self.tol,
                     self.fp_tol,
                     self.max_outer,
@@ -279,7 +209,7 @@ impl Args {
         if !(self.fp_tol.is_finite() && self.fp_tol >= 0.0) {
             bail!("--fp-tol {} must be a finite number ≥ 0", self.fp_tol);
         }
-        if self.outer == Outer::Fused && self.inner != Inner::Pgs {
+        if self.outer == OuterKind::Fused && self.inner != InnerKind::Pgs {
             bail!("--outer fused needs --inner pgs");
         }
         Ok(())
@@ -322,36 +252,9 @@ impl Args {
     }
 }
 
-/// A progress bar on stderr, hidden when stderr is not a terminal or when `hidden`.
-pub fn progress(len: usize, hidden: bool) -> ProgressBar {
-    let pb = ProgressBar::new(len as u64);
-    if hidden || !std::io::stderr().is_terminal() {
-        pb.set_draw_target(ProgressDrawTarget::hidden());
-    }
-    if let Ok(style) = ProgressStyle::with_template(
-        "{prefix} [{bar:30}] {pos}/{len} steps {msg} ({elapsed}, ETA {eta})",
-    ) {
-        pb.set_style(style.progress_chars("=> "));
-    }
-    pb
-}
-
-/// Runs `f` on a rayon pool of `threads` workers (default: all cores).
-pub fn with_threads<T: Send>(
-    threads: Option<usize>,
-    f: impl FnOnce() -> anyhow::Result<T> + Send,
-) -> anyhow::Result<T> {
-    let mut b = rayon::ThreadPoolBuilder::new();
-    if let Some(n) = threads {
-        b = b.num_threads(n);
-    }
-    let pool = b.build().context("cannot start the worker threads")?;
-    pool.install(f)
-}
-
 /// Runs `coulomb simulate`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    with_threads(args.threads, || run_on_pool(args.clone()))
+    crate::threads::with_threads(args.threads, || run_on_pool(args.clone()))
 }
 
 fn run_on_pool(args: Args) -> anyhow::Result<()> {
@@ -398,7 +301,7 @@ fn run_on_pool(args: Args) -> anyhow::Result<()> {
         w.frame(&sim).context("writing VTK frame")?;
     }
     let start_energy = sim.world.kinetic_energy() + sim.world.potential_energy();
-    let pb = progress(stop.max_steps(), args.json);
+    let pb = crate::progress::bar(stop.max_steps(), args.json);
     pb.set_prefix(format!("{} {}", scene.name(), args.beads));
     let mut stats = Vec::new();
     let mut monitor = RestMonitor::default();

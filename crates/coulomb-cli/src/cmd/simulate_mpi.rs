@@ -6,7 +6,8 @@
 //! distributed.json (per step: sweeps, communication time, ghosts, interface contacts,
 //! migration, imbalance); every rank writes its VTK pieces, rank 0 the .pvtp/.pvd collections.
 
-use super::simulate::{progress, Args};
+use super::simulate::Args;
+use crate::progress::bar as progress;
 use anyhow::{bail, Context};
 use coulomb_granular::distributed::output::DistributedVtk;
 use coulomb_granular::distributed::{Comm, DistributedSimulation, DistributedStats};

@@ -9,41 +9,17 @@ use serde::Serialize;
 use std::path::PathBuf;
 use std::time::Duration;
 
-/// Inner solver choice on the command line.
-#[derive(clap::ValueEnum, Clone, Copy, Debug)]
-pub enum InnerArg {
-    /// interior point (Clarabel)
-    Ipm,
-    /// accelerated projected gradient
-    Apgd,
-    /// projected block Gauss–Seidel
-    Pgs,
-    /// faceted cones + Clarabel
-    Faceted,
-}
-
-/// Outer iteration choice on the command line.
-#[derive(clap::ValueEnum, Clone, Copy, Debug)]
-pub enum OuterArg {
-    /// successive approximation s ← F(s)
-    FixedPoint,
-    /// safeguarded Anderson mixing
-    Anderson,
-    /// Gauss–Seidel directly on Coulomb's law, each contact's law solved exactly (pgs only)
-    Fused,
-}
-
 /// Arguments of `coulomb solve`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// FCLIB problem file (.hdf5)
     pub file: PathBuf,
     /// Inner solver (default: the library's default settings)
-    #[arg(long, value_enum)]
-    pub inner: Option<InnerArg>,
+    #[arg(long, value_parser = crate::method::inner())]
+    pub inner: Option<InnerKind>,
     /// Outer iteration (default: the library's default settings)
-    #[arg(long, value_enum)]
-    pub outer: Option<OuterArg>,
+    #[arg(long, value_parser = crate::method::outer())]
+    pub outer: Option<OuterKind>,
     /// Tolerance on the error of docs/error.md (and the balance residual)
     #[arg(long, default_value_t = 1e-8, value_parser = crate::values::positive)]
     pub tol: f64,
@@ -95,24 +71,11 @@ pub fn settings(args: &Args) -> anyhow::Result<Settings> {
         tol: args.tol,
         ..Settings::default()
     };
-    if let Some(i) = args.inner {
-        s.inner = match i {
-            InnerArg::Ipm => InnerKind::Ipm,
-            InnerArg::Apgd => InnerKind::Apgd,
-            InnerArg::Pgs => InnerKind::Pgs,
-            InnerArg::Faceted => InnerKind::Faceted,
-        };
-        // the fused iteration exists only for pgs
-        if s.outer == OuterKind::Fused && s.inner != InnerKind::Pgs && args.outer.is_none() {
-            s.outer = OuterKind::FixedPoint;
-        }
+    if let Some(inner) = args.inner {
+        s.inner = inner;
     }
-    if let Some(o) = args.outer {
-        s.outer = match o {
-            OuterArg::FixedPoint => OuterKind::FixedPoint,
-            OuterArg::Anderson => OuterKind::Anderson,
-            OuterArg::Fused => OuterKind::Fused,
-        };
+    if let Some(outer) = args.outer {
+        s.outer = outer;
     }
     if args.inner.is_some() || args.outer.is_some() {
         // an explicit method runs alone
@@ -143,7 +106,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     if let Some(out) = &args.output {
         crate::outputs::check("--output", out, &[&args.file])?;
     }
-    let file = super::info::read_relaxed(&args.file)?;
+    let file = crate::read::read_relaxed(&args.file)?;
     let sol = solver::solve(&file.problem, &settings)
         .with_context(|| format!("solving {}", args.file.display()))?;
     if let Some(out) = &args.output {
@@ -162,7 +125,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         None
     } else {
         match coulomb::existence::check(&file.problem, &Default::default()) {
-            Ok(ex) => Some(super::check::to_json(&args.file, &ex, false)),
+            Ok(ex) => Some(crate::existence_json::to_json(&args.file, &ex, false)),
             Err(e) => Some(serde_json::json!({ "error": e.to_string() })),
         }
     };

@@ -45,7 +45,7 @@ mod write;
 pub use error::{FclibError, FclibErrorKind};
 
 use crate::delassus::Delassus;
-use crate::law::{error_measure, norm, ErrorMeasure};
+use crate::law::norm;
 use crate::problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
 use std::path::Path;
 
@@ -266,22 +266,8 @@ impl StoredSolution {
     }
 }
 
-/// The error of `docs/error.md` of a candidate solution, with its parts.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Evaluation {
-    /// the error measure, u recomputed from the problem data
-    pub measure: ErrorMeasure,
-    /// ‖M v − H r − f‖ / max(1, ‖f‖) for a global problem, `None` for a local one
-    pub balance_residual: Option<f64>,
-}
-
-impl Evaluation {
-    /// Converged at `tol` (docs/error.md): err ≤ tol and, for a global problem, the
-    /// balance residual ≤ tol.
-    pub fn converged(&self, tol: f64) -> bool {
-        self.measure.converged(tol) && self.balance_residual.is_none_or(|b| b <= tol)
-    }
-}
+/// The evaluation of a candidate solution has its own module, shared with the solver.
+pub use crate::evaluation::Evaluation;
 
 /// Evaluates a stored solution against `problem` with the error of `docs/error.md`:
 /// local, u = W r + q recomputed from r; global, u = Hᵀ v + w recomputed from the stored v,
@@ -302,18 +288,10 @@ pub fn evaluate(problem: &Problem, solution: &StoredSolution) -> Result<Evaluati
 }
 
 fn evaluate_local(p: &LocalProblem, r: &[f64]) -> Evaluation {
-    Evaluation {
-        measure: p.error(r),
-        balance_residual: None,
-    }
+    crate::evaluation::local(p, r, norm(&p.q)).1
 }
 
 fn evaluate_global(p: &GlobalProblem, v: &[f64], r: &[f64]) -> Result<Evaluation, EvaluateError> {
     let delassus = Delassus::new(p)?;
-    let u = p.velocity(v);
-    let measure = error_measure(p.dim, &p.mu, r, &u, norm(&delassus.local.q));
-    Ok(Evaluation {
-        measure,
-        balance_residual: Some(p.balance_residual(v, r)),
-    })
+    Ok(crate::evaluation::global(p, v, r, norm(&delassus.local.q)).1)
 }

@@ -23,14 +23,13 @@
 //! ([`DelassusOperator`]).
 
 use super::{
-    matrix_key, pgs::dual_residual_shifted, InnerLimits, InnerProblem, InnerReport, InnerSolver,
-    InnerStatus, MatrixKey,
+    matrix_key, InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus, MatrixKey,
 };
 use crate::cone;
 use crate::delassus::DelassusOperator;
 use crate::law::norm;
+use crate::natural_map::dual_residual_shifted;
 use crate::sparse::{BlockCsr, CscMatrix};
-use std::time::Instant;
 
 /// A symmetric positive semi-definite operator x ↦ W x.
 pub trait LinearOperator {
@@ -216,7 +215,7 @@ pub fn solve_operator<A: LinearOperator + ?Sized>(
         if iterations >= limits.max_iterations {
             break InnerStatus::MaxIterations;
         }
-        if limits.deadline.is_some_and(|d| Instant::now() >= d) {
+        if limits.deadline.passed() {
             break InnerStatus::TimeLimit;
         }
         if iterations % 64 == 63 && super::unbounded_ray(&x, &wx, b, l_floor * 1e3) {

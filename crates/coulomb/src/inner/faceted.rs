@@ -30,7 +30,7 @@
 //! a level set by k for d = 3. As for [`super::ipm::IpmSolver`], Clarabel offers no warm
 //! start (the incoming r is ignored) and the setup is reused while W, μ and k are unchanged.
 
-use super::ipm::{solve_dual_qp, triplets_to_clarabel, QpCache};
+use super::clarabel::{solve_dual_qp, triplets_to_clarabel, QpCache};
 use super::{InnerLimits, InnerProblem, InnerReport, InnerSolver};
 use clarabel::algebra::CscMatrix as ClarabelCsc;
 use clarabel::solver::SupportedConeT;
@@ -163,7 +163,7 @@ mod tests {
         InnerLimits {
             tol: 1e-9,
             max_iterations: 100,
-            deadline: None,
+            deadline: crate::deadline::Deadline::NEVER,
         }
     }
 

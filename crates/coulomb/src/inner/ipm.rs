@@ -36,13 +36,17 @@
 //! only b = q + E s changes), only overwrites the linear term through Clarabel's data-update
 //! API (`update_q`), skipping equilibration and the symbolic factorization of the KKT matrix.
 
+use super::clarabel::{clarabel_settings, report_of, to_clarabel};
+pub(crate) use super::clarabel::{solve_dual_qp, triplets_to_clarabel, QpCache};
+use super::polish::past;
 use super::{InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus};
-use crate::newton::{natural_map, push_d_times, push_identity_minus_d, sparse_lu_solve};
+use crate::deadline::Deadline;
+use crate::natural_map::{natural_map, push_d_times, push_identity_minus_d};
+use crate::newton::sparse_lu_solve;
 use crate::problem::GlobalProblem;
 use crate::sparse::CscMatrix;
 use clarabel::algebra::CscMatrix as ClarabelCsc;
-use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
-use std::time::Instant;
+use clarabel::solver::{DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
 
 /// Clarabel on the dual (4.7): min over r ∈ L = ∏ K_{μⁱ} of ½ rᵀ W r + bᵀ r.
 ///
@@ -447,318 +451,6 @@ impl ConeLayout {
     }
 }
 
-/// Builds a Clarabel CSC matrix from in-range triplets (sorted, duplicates summed).
-pub(crate) fn triplets_to_clarabel(
-    nrows: usize,
-    ncols: usize,
-    rows: &[usize],
-    cols: &[usize],
-    vals: &[f64],
-) -> ClarabelCsc<f64> {
-    match CscMatrix::from_triplets(nrows, ncols, rows, cols, vals) {
-        Ok(a) => to_clarabel(&a),
-        // all indices are produced in range by the callers; an empty matrix keeps Clarabel's
-        // dimension check (and our status mapping) in charge if that ever failed
-        Err(_) => ClarabelCsc::zeros((nrows, ncols)),
-    }
-}
-
-/// Copies a (checked, sorted) [`CscMatrix`] into Clarabel's CSC type.
-pub(crate) fn to_clarabel(a: &CscMatrix) -> ClarabelCsc<f64> {
-    ClarabelCsc::new(
-        a.nrows,
-        a.ncols,
-        a.col_ptr.clone(),
-        a.row_idx.clone(),
-        a.values.clone(),
-    )
-}
-
-/// Clarabel's default settings with `verbose = false`, the tolerance `limits.tol` as
-/// `tol_gap_abs`, `tol_gap_rel` and `tol_feas` (Clarabel's defaults if it is not a positive
-/// finite number), `limits.max_iterations` as `max_iter` and the time left before
-/// `limits.deadline` as `time_limit`. A deadline already passed gives `Err(TimeLimit)`.
-pub(crate) fn clarabel_settings(limits: &InnerLimits) -> Result<DefaultSettings<f64>, InnerStatus> {
-    let mut settings = DefaultSettings::<f64> {
-        verbose: false,
-        max_iter: u32::try_from(limits.max_iterations).unwrap_or(u32::MAX),
-        ..DefaultSettings::default()
-    };
-    if limits.tol.is_finite() && limits.tol > 0.0 {
-        settings.tol_gap_abs = limits.tol;
-        settings.tol_gap_rel = limits.tol;
-        settings.tol_feas = limits.tol;
-    }
-    if let Some(deadline) = limits.deadline {
-        let left = deadline
-            .saturating_duration_since(Instant::now())
-            .as_secs_f64();
-        if left <= 0.0 {
-            return Err(InnerStatus::TimeLimit);
-        }
-        settings.time_limit = left;
-    }
-    Ok(settings)
-}
-
-/// Maps Clarabel's termination status to [`InnerStatus`].
-///
-/// `AlmostSolved` (Clarabel stalled short of the requested tolerance but met its reduced
-/// ones) is reported as [`InnerStatus::NumericalError`]: the iterate is written and usually
-/// usable, but the inner criterion was not met. Certificates of primal or dual infeasibility
-/// (full or reduced accuracy) are [`InnerStatus::Infeasible`].
-pub(crate) fn map_status(status: SolverStatus) -> InnerStatus {
-    match status {
-        SolverStatus::Solved => InnerStatus::Solved,
-        SolverStatus::PrimalInfeasible
-        | SolverStatus::DualInfeasible
-        | SolverStatus::AlmostPrimalInfeasible
-        | SolverStatus::AlmostDualInfeasible => InnerStatus::Infeasible,
-        SolverStatus::MaxIterations => InnerStatus::MaxIterations,
-        SolverStatus::MaxTime => InnerStatus::TimeLimit,
-        SolverStatus::AlmostSolved
-        | SolverStatus::Unsolved
-        | SolverStatus::NumericalError
-        | SolverStatus::InsufficientProgress
-        | SolverStatus::CallbackTerminated => InnerStatus::NumericalError,
-    }
-}
-
-/// The report of a finished Clarabel solve: mapped status, iterations and Clarabel's own
-/// stopping measure max(res_primal, res_dual, min(gap_abs, gap_rel)).
-pub(crate) fn report_of(solver: &DefaultSolver<f64>) -> InnerReport {
-    let info = &solver.info;
-    let residual = info
-        .res_primal
-        .max(info.res_dual)
-        .max(info.gap_abs.min(info.gap_rel));
-    InnerReport {
-        status: map_status(info.status),
-        iterations: info.iterations as usize,
-        residual,
-    }
-}
-
-/// A Clarabel solver set up for min ½ rᵀ W r + bᵀ r s.t. A r + s = 0, s ∈ K, with the data
-/// that determine P, A and K: (d, μ, W) and a variant tag (e.g. the number of facets).
-/// Only b changes between the inner solves of one fixed-point run, so a cached solver needs
-/// just `update_q`.
-pub(crate) struct QpCache {
-    dim: usize,
-    variant: usize,
-    mu: Vec<f64>,
-    w: CscMatrix,
-    solver: DefaultSolver<f64>,
-}
-
-impl std::fmt::Debug for QpCache {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("QpCache")
-            .field("dim", &self.dim)
-            .field("variant", &self.variant)
-            .field("contacts", &self.mu.len())
-            .field("w_nnz", &self.w.nnz())
-            .finish()
-    }
-}
-
-impl QpCache {
-    fn matches(&self, variant: usize, problem: &InnerProblem<'_>) -> bool {
-        self.dim == problem.dim
-            && self.variant == variant
-            && self.mu.len() == problem.mu.len()
-            && self
-                .mu
-                .iter()
-                .zip(problem.mu)
-                .all(|(a, b)| a.to_bits() == b.to_bits())
-            && self.w == *problem.w
-    }
-}
-
-/// Whether an [`InnerProblem`] and the output slice fit together and hold finite data.
-pub(crate) fn valid_inner(problem: &InnerProblem<'_>, r: &[f64]) -> bool {
-    let m = problem.mu.len() * problem.dim;
-    (problem.dim == 2 || problem.dim == 3)
-        && problem.w.nrows == m
-        && problem.w.ncols == m
-        && problem.b.len() == m
-        && r.len() == m
-        && problem.w.check().is_ok()
-        && problem.w.first_non_finite().is_none()
-        && problem.b.iter().all(|x| x.is_finite())
-        && problem.mu.iter().all(|x| *x >= 0.0)
-}
-
-/// Solves min ½ rᵀ W r + bᵀ r s.t. A r + s = 0, s ∈ K with Clarabel, where `constraints`
-/// builds (A, K) for a new setup. Reuses `cache` when (d, μ, W, variant) are unchanged.
-/// Writes Clarabel's x into `r` (left untouched when no solve took place).
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn solve_dual_qp(
-    cache: &mut Option<QpCache>,
-    variant: usize,
-    polish: usize,
-    problem: &InnerProblem<'_>,
-    limits: &InnerLimits,
-    r: &mut [f64],
-    constraints: impl FnOnce() -> (ClarabelCsc<f64>, Vec<SupportedConeT<f64>>),
-) -> InnerReport {
-    let fail = |status| InnerReport {
-        status,
-        iterations: 0,
-        residual: f64::INFINITY,
-    };
-    if !valid_inner(problem, r) {
-        return fail(InnerStatus::NumericalError);
-    }
-    let settings = match clarabel_settings(limits) {
-        Ok(s) => s,
-        Err(status) => return fail(status),
-    };
-    let reused = match cache.as_mut() {
-        Some(c) if c.matches(variant, problem) => {
-            c.solver.update_q(&problem.b.to_vec()).is_ok()
-                && c.solver.update_settings(settings.clone()).is_ok()
-        }
-        _ => false,
-    };
-    if !reused {
-        *cache = None;
-        let (a, cones) = constraints();
-        let p = to_clarabel(&problem.w.upper_triangle());
-        let zeros = vec![0.0; a.m];
-        match DefaultSolver::new(&p, problem.b, &a, &zeros, &cones, settings) {
-            Ok(solver) => {
-                *cache = Some(QpCache {
-                    dim: problem.dim,
-                    variant,
-                    mu: problem.mu.to_vec(),
-                    w: problem.w.clone(),
-                    solver,
-                })
-            }
-            Err(_) => return fail(InnerStatus::NumericalError),
-        }
-    }
-    let Some(c) = cache.as_mut() else {
-        return fail(InnerStatus::NumericalError);
-    };
-    c.solver.solve();
-    let x = &c.solver.solution.x;
-    let finite = x.len() == r.len() && x.iter().all(|v| v.is_finite());
-    if finite {
-        r.copy_from_slice(x);
-    }
-    let mut report = report_of(&c.solver);
-    if !finite {
-        if report.status != InnerStatus::Infeasible {
-            report.status = InnerStatus::NumericalError;
-        }
-        return report;
-    }
-    if polish > 0 {
-        let raw = c.solver.info.status;
-        let stalled = matches!(
-            raw,
-            SolverStatus::AlmostSolved | SolverStatus::InsufficientProgress
-        );
-        let residual = if raw == SolverStatus::Solved || stalled {
-            polish_dual(problem, r, polish, limits.deadline)
-        } else {
-            dual_natural_residual(problem, r)
-        };
-        report.residual = residual;
-        if stalled && residual <= limits.tol {
-            report.status = InnerStatus::Solved;
-        }
-    }
-    report
-}
-
-// ---------------------------------------------------------------------------------------------
-// Semismooth Newton polish of an interior-point solution
-// ---------------------------------------------------------------------------------------------
-
-/// Whether `deadline` has passed.
-fn past(deadline: Option<Instant>) -> bool {
-    deadline.is_some_and(|d| Instant::now() >= d)
-}
-
-/// Relative natural-map residual ‖r − P_L(r − (W r + b))‖ / max(1, ‖b‖) of (4.7).
-pub(crate) fn dual_natural_residual(problem: &InnerProblem<'_>, r: &[f64]) -> f64 {
-    let m = r.len();
-    let mut u = problem.b.to_vec();
-    problem.w.gemv_acc(1.0, r, &mut u);
-    let mut f = vec![0.0; m];
-    let mut jac = vec![0.0; problem.mu.len() * problem.dim * problem.dim];
-    natural_map(problem.dim, problem.mu, r, &u, &mut f, &mut jac);
-    crate::law::norm(&f) / crate::law::norm(problem.b).max(1.0)
-}
-
-/// Polishes an approximate solution r of (4.7) by at most `steps` semismooth Newton steps on
-/// F(r) = r − P_L(r − (W r + b)), whose Jacobian is I − D + D W (D = ∂P_L), solved by faer's
-/// sparse LU. A step is kept only if it decreases ‖F‖; no step starts after `deadline`; returns the final relative residual ‖F(r)‖ / max(1, ‖b‖).
-///
-/// Why: an interior-point method stops on the duality gap rᵀũ, and for a sliding contact
-/// (r and ũ on the boundaries of K_μ and K_μ*) rᵀũ is *quadratic* in their misalignment, so a
-/// gap of 1e-12 leaves a natural residual (the error measure of docs/error.md) near 1e-7.
-/// Newton on F converges quadratically from there.
-pub(crate) fn polish_dual(
-    problem: &InnerProblem<'_>,
-    r: &mut [f64],
-    steps: usize,
-    deadline: Option<Instant>,
-) -> f64 {
-    let (dim, m) = (problem.dim, r.len());
-    let scale = crate::law::norm(problem.b).max(1.0);
-    let mut f = vec![0.0; m];
-    let mut jac = vec![0.0; problem.mu.len() * dim * dim];
-    let eval = |r: &[f64], f: &mut [f64], jac: &mut [f64]| {
-        let mut u = problem.b.to_vec();
-        problem.w.gemv_acc(1.0, r, &mut u);
-        natural_map(dim, problem.mu, r, &u, f, jac);
-        crate::law::norm(f)
-    };
-    let mut norm_f = eval(r, &mut f, &mut jac);
-    let mut trial = vec![0.0; m];
-    let mut f_trial = vec![0.0; m];
-    let mut jac_trial = vec![0.0; jac.len()];
-    for _ in 0..steps {
-        if norm_f.is_nan() || norm_f <= 1e-15 * scale || past(deadline) {
-            break;
-        }
-        // J = I − D + D W
-        let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
-        push_identity_minus_d(dim, &jac, 0, &mut rows, &mut cols, &mut vals);
-        push_d_times(
-            dim,
-            &jac,
-            1.0,
-            problem.w.triplets(),
-            0,
-            &mut rows,
-            &mut cols,
-            &mut vals,
-        );
-        let mut delta: Vec<f64> = f.iter().map(|x| -x).collect();
-        if sparse_lu_solve(m, &rows, &cols, &vals, &mut delta).is_none() {
-            break;
-        }
-        for k in 0..m {
-            trial[k] = r[k] + delta[k];
-        }
-        let norm_trial = eval(&trial, &mut f_trial, &mut jac_trial);
-        if norm_trial.is_nan() || norm_trial >= norm_f {
-            break;
-        }
-        r.copy_from_slice(&trial);
-        std::mem::swap(&mut f, &mut f_trial);
-        std::mem::swap(&mut jac, &mut jac_trial);
-        norm_f = norm_trial;
-    }
-    norm_f / scale
-}
-
 /// Residuals of (3.14) for the primal unknowns (v, r): F₁ = M v − H r − f (into `f[..n]`) and
 /// F₂ = r − P_L(r − (Hᵀ v + shift)) (into `f[n..]`, Jacobians ∂P into `jac`); returns
 /// max(‖F₁‖ / max(1, ‖f‖), ‖F₂‖ / max(1, ‖shift‖)).
@@ -792,7 +484,7 @@ fn polish_primal(
     v: &mut [f64],
     r: &mut [f64],
     steps: usize,
-    deadline: Option<Instant>,
+    deadline: Deadline,
 ) -> f64 {
     let (dim, n, m) = (problem.dim, v.len(), r.len());
     let mut x: Vec<f64> = v.iter().chain(r.iter()).copied().collect();
@@ -853,13 +545,14 @@ fn polish_primal(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::newton::projection_jacobian;
+    use crate::natural_map::dual_natural_residual;
+    use crate::natural_map::projection_jacobian;
 
     fn limits() -> InnerLimits {
         InnerLimits {
             tol: 1e-9,
             max_iterations: 100,
-            deadline: None,
+            deadline: Deadline::NEVER,
         }
     }
 
@@ -987,7 +680,7 @@ mod tests {
         );
         let mut r = vec![0.0; 3];
         let past = InnerLimits {
-            deadline: Some(Instant::now()),
+            deadline: std::time::Instant::now().into(),
             ..limits()
         };
         std::thread::sleep(std::time::Duration::from_millis(1));

@@ -9,12 +9,15 @@
 //! (3.15) on (M, H) for global problems.
 
 pub mod apgd;
+pub(crate) mod clarabel;
+pub mod contact;
 pub mod faceted;
 pub mod ipm;
 pub mod pgs;
+pub(crate) mod polish;
 
+pub use crate::deadline::Deadline;
 use crate::sparse::CscMatrix;
-use std::time::Instant;
 
 /// The dual inner problem (4.7): min over r ∈ L = ∏ K_{μⁱ} of ½ rᵀ W r + bᵀ r.
 #[derive(Debug, Clone, Copy)]
@@ -30,8 +33,9 @@ pub struct InnerProblem<'a> {
 }
 
 /// How an inner solve ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum InnerStatus {
     /// the inner stopping criterion was met
     Solved,
@@ -63,8 +67,8 @@ pub struct InnerLimits {
     pub tol: f64,
     /// iteration cap
     pub max_iterations: usize,
-    /// wall-clock deadline
-    pub deadline: Option<Instant>,
+    /// wall-clock deadline ([`Deadline::NEVER`] for none)
+    pub deadline: Deadline,
 }
 
 /// Identity of a matrix for the caches of the inner solvers: address, size, nnz and a
@@ -97,7 +101,7 @@ impl InnerLimits {
     /// nonzeros' worth of work.
     pub fn past_deadline(&self, iteration: usize, work: usize) -> bool {
         let every = (20_000 / work.max(1)).clamp(1, 64);
-        iteration % every == 0 && self.deadline.is_some_and(|t| Instant::now() >= t)
+        iteration % every == 0 && self.deadline.passed()
     }
 }
 

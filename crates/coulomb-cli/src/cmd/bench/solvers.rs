@@ -6,16 +6,8 @@
 //! form, no separate outer loop) is accepted too but is not in the default list; the library
 //! rejects `+fused` with other inner solvers, which the benchmark records as a `solve_error`.
 
-use coulomb::solver::{InnerKind, OuterKind, Settings};
+use coulomb::{InnerKind, Method, OuterKind, Settings};
 use std::time::Duration;
-
-/// The inner solvers, in the order of the default list.
-const INNER: [(&str, InnerKind); 4] = [
-    ("pgs", InnerKind::Pgs),
-    ("apgd", InnerKind::Apgd),
-    ("ipm", InnerKind::Ipm),
-    ("faceted", InnerKind::Faceted),
-];
 
 /// One benchmarked solver: an inner solver and an outer iteration.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -43,43 +35,27 @@ pub enum SolverNameError {
 }
 
 impl SolverSpec {
-    /// The name used on the command line and in reports, e.g. `apgd+anderson`.
+    /// The name used on the command line and in reports, e.g. `apgd+anderson` (the
+    /// library's [`Method`] spelling).
     pub fn name(&self) -> String {
         if self.fallback {
             return "default".into();
         }
-        let inner = INNER
-            .iter()
-            .find(|(_, k)| *k == self.inner)
-            .map_or("?", |(n, _)| n);
-        match self.outer {
-            OuterKind::FixedPoint => inner.to_string(),
-            OuterKind::Anderson => format!("{inner}+anderson"),
-            OuterKind::Fused => format!("{inner}+fused"),
-        }
+        Method::new(self.inner, self.outer).to_string()
     }
 
-    /// Parses one name (case-insensitive, surrounding blanks ignored).
+    /// Parses one name (case-insensitive, surrounding blanks ignored): `default` or a
+    /// [`Method`].
     pub fn parse(name: &str) -> Result<Self, SolverNameError> {
-        let lower = name.trim().to_ascii_lowercase();
-        if lower == "default" {
+        if name.trim().eq_ignore_ascii_case("default") {
             return Ok(Self::library_default());
         }
-        let (inner_name, outer) = if let Some(base) = lower.strip_suffix("+anderson") {
-            (base, OuterKind::Anderson)
-        } else if let Some(base) = lower.strip_suffix("+fused") {
-            (base, OuterKind::Fused)
-        } else {
-            (lower.as_str(), OuterKind::FixedPoint)
-        };
-        let inner = INNER
-            .iter()
-            .find(|(n, _)| *n == inner_name)
-            .map(|(_, k)| *k)
-            .ok_or_else(|| SolverNameError::Unknown(name.trim().to_string()))?;
+        let m: Method = name
+            .parse()
+            .map_err(|_| SolverNameError::Unknown(name.trim().to_string()))?;
         Ok(Self {
-            inner,
-            outer,
+            inner: m.inner,
+            outer: m.outer,
             fallback: false,
         })
     }
@@ -124,7 +100,7 @@ pub fn all() -> Vec<SolverSpec> {
         [OuterKind::FixedPoint, OuterKind::Anderson]
             .into_iter()
             .flat_map(|outer| {
-                INNER.iter().map(move |&(_, inner)| SolverSpec {
+                InnerKind::ALL.iter().map(move |&inner| SolverSpec {
                     inner,
                     outer,
                     fallback: false,

@@ -4,7 +4,7 @@
 //! steady flow of the funnel and the drum), each in global and local form.
 
 use super::{both_forms, Item, Preset};
-use crate::cmd::simulate::solver_settings;
+use crate::method::time_stepping_settings;
 use anyhow::Context;
 use coulomb::solver::{InnerKind, OuterKind, Settings};
 use coulomb_granular::{Params, Scene, Simulation};
@@ -63,7 +63,7 @@ pub fn generate(
             mu,
             solver: Settings {
                 outer: OuterKind::FixedPoint,
-                ..solver_settings(InnerKind::Apgd, 1e-4, 0.01, 20, None)
+                ..time_stepping_settings(InnerKind::Apgd, 1e-4, 0.01, 20, None)
             },
             ..Params::default()
         };

@@ -1,0 +1,381 @@
+//! The outer method of §3.3 and the policy around it.
+//!
+//! The paper's algorithm is the loop of [`stage`]: s ← F(s) with F(s)ⁱ = ‖ũ_Tⁱ(s)‖ (3.19),
+//! each F(s) the solution of the SOC-QP (3.15)/(4.7) by an inner solver ([`crate::inner`]),
+//! stopped by the error of `docs/error.md` (and, if asked, by rule (6.1)). Its pieces, one
+//! file each: [`fixed_point`] (F, the shift b = q + E s, rule (6.1), the update rule),
+//! [`anderson`] (mixing on s), [`fused`] (Gauss–Seidel on Coulomb's law itself, the fused
+//! outer method) and [`newton`] (the semismooth Newton end game).
+//!
+//! The policy ([`Solver::solve`]): an optional warm-up of Gauss–Seidel sweeps on Coulomb's
+//! law, then the main method, then the fallback method when the main one stops without
+//! converging; every status is decided on the problem as stored ([`form`]).
+//!
+//! The setup/solve split: [`Solver::new`] checks the settings and builds the Delassus form of
+//! a global problem (W = Hᵀ M⁻¹ H, q = Hᵀ M⁻¹ f + w, the factorization of M) once;
+//! [`Solver::solve`] can be called many times (the inner solvers keep their per-matrix data:
+//! Lipschitz estimate, diagonal blocks, Clarabel setup), and [`Solver::update_q`] /
+//! [`Solver::update_rhs`] / [`Solver::update_w`] change the data of a time step.
+
+pub mod anderson;
+pub mod fixed_point;
+pub(crate) mod form;
+pub mod fused;
+pub mod newton;
+mod stage;
+
+use crate::deadline::Deadline;
+use crate::delassus::Delassus;
+use crate::inner::{
+    apgd::ApgdSolver, faceted::FacetedSolver, ipm::IpmSolver, pgs::PgsSolver, InnerSolver,
+};
+use crate::problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
+use crate::settings::{InnerKind, OuterKind, Settings};
+use crate::solution::{Guess, Solution, SolveError, Status};
+use crate::sparse::CscMatrix;
+use form::{Form, Stored};
+use stage::Stage;
+use std::borrow::Cow;
+use std::time::Instant;
+
+/// The inner solvers of a [`Solver`], made at first use and kept (with their per-matrix data)
+/// across stages and solves.
+pub(crate) struct InnerSolvers {
+    /// one per [`InnerKind`], in the order of [`InnerKind::ALL`]
+    qp: [Option<Box<dyn InnerSolver + Send>>; 4],
+    /// the Gauss–Seidel solver of the fused method (on the stored W)
+    pub(crate) fused: PgsSolver,
+    facets: usize,
+}
+
+impl InnerSolvers {
+    fn new(facets: usize) -> Self {
+        Self {
+            qp: [None, None, None, None],
+            fused: PgsSolver::new(),
+            facets,
+        }
+    }
+
+    /// The solver of `kind` for the QP (4.7).
+    pub(crate) fn get(&mut self, kind: InnerKind) -> &mut (dyn InnerSolver + Send) {
+        let facets = self.facets;
+        let slot = InnerKind::ALL
+            .iter()
+            .position(|&k| k == kind)
+            .expect("every kind is in ALL");
+        self.qp[slot]
+            .get_or_insert_with(|| match kind {
+                InnerKind::Pgs => Box::new(PgsSolver::new()),
+                InnerKind::Apgd => Box::new(ApgdSolver::new()),
+                InnerKind::Ipm => Box::new(IpmSolver::new()),
+                InnerKind::Faceted => Box::new(FacetedSolver::new(facets)),
+            })
+            .as_mut()
+    }
+}
+
+/// A solver set up for one problem: the stored data, its Delassus form, the inner solvers.
+pub struct Solver<'a> {
+    form: Form<'a>,
+    settings: Settings,
+    solvers: InnerSolvers,
+}
+
+impl<'a> Solver<'a> {
+    /// Checks `settings` and builds what every solve of `problem` needs: for a global problem
+    /// the factorization of M and the Delassus form (W, q).
+    pub fn new(problem: &'a Problem, settings: Settings) -> Result<Self, SolveError> {
+        match problem {
+            Problem::Local(p) => Self::with_stored(Stored::Local(Cow::Borrowed(p)), settings),
+            Problem::Global(g) => Self::global(Cow::Borrowed(g), settings),
+        }
+    }
+
+    /// [`Solver::new`] taking ownership of the problem (no borrow to keep alive).
+    pub fn new_owned(problem: Problem, settings: Settings) -> Result<Solver<'static>, SolveError> {
+        match problem {
+            Problem::Local(p) => Solver::with_stored(Stored::Local(Cow::Owned(p)), settings),
+            Problem::Global(g) => Solver::global(Cow::Owned(g), settings),
+        }
+    }
+
+    fn global(g: Cow<'a, GlobalProblem>, settings: Settings) -> Result<Self, SolveError> {
+        settings.validate()?;
+        let delassus = Box::new(Delassus::new(&g)?);
+        Self::with_stored(Stored::Global(g, delassus), settings)
+    }
+
+    fn with_stored(stored: Stored<'a>, settings: Settings) -> Result<Self, SolveError> {
+        settings.validate()?;
+        Ok(Self {
+            form: Form::new(stored, settings.tuning.unbounded_ratio),
+            solvers: InnerSolvers::new(settings.facets),
+            settings,
+        })
+    }
+
+    /// The settings of the next solves.
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// Replaces the settings (checked); the set-up data are kept.
+    pub fn set_settings(&mut self, settings: Settings) -> Result<(), SolveError> {
+        settings.validate()?;
+        if settings.facets != self.settings.facets {
+            self.solvers = InnerSolvers::new(settings.facets);
+        }
+        self.form.unbounded_ratio = settings.tuning.unbounded_ratio;
+        self.settings = settings;
+        Ok(())
+    }
+
+    /// The local form (W, q, μ) the solver works on: the problem itself, or the Delassus form
+    /// of a global problem.
+    pub fn local(&self) -> &LocalProblem {
+        self.form.local()
+    }
+
+    /// New free velocity q of a local problem (same W and μ), e.g. the next time step.
+    pub fn update_q(&mut self, q: Vec<f64>) -> Result<(), SolveError> {
+        let Stored::Local(p) = &mut self.form.stored else {
+            return Err(SolveError::Problem(ProblemError::Shape {
+                what: "q",
+                expected: "a local problem (use update_rhs for a global one)".into(),
+                found: "a global problem".into(),
+            }));
+        };
+        crate::problem::check_len("q", &q, p.q.len())?;
+        p.to_mut().q = q;
+        self.form.refresh();
+        Ok(())
+    }
+
+    /// New f and w of a global problem (same M, H and μ: the factorization and W are kept);
+    /// q = Hᵀ M⁻¹ f + w is recomputed.
+    pub fn update_rhs(&mut self, f: Vec<f64>, w: Vec<f64>) -> Result<(), SolveError> {
+        let Stored::Global(g, d) = &mut self.form.stored else {
+            return Err(SolveError::Problem(ProblemError::Shape {
+                what: "f",
+                expected: "a global problem (use update_q for a local one)".into(),
+                found: "a local problem".into(),
+            }));
+        };
+        crate::problem::check_len("f", &f, g.f.len())?;
+        crate::problem::check_len("w", &w, g.w.len())?;
+        let g = g.to_mut();
+        (g.f, g.w) = (f, w);
+        d.update_rhs(g);
+        self.form.refresh();
+        Ok(())
+    }
+
+    /// New Delassus matrix W of a local problem (same size; checked as
+    /// [`LocalProblem::new`] checks it). The inner solvers notice the new matrix and rebuild
+    /// their data for it.
+    pub fn update_w(&mut self, w: CscMatrix) -> Result<(), SolveError> {
+        let Stored::Local(p) = &mut self.form.stored else {
+            return Err(SolveError::Problem(ProblemError::Shape {
+                what: "W",
+                expected: "a local problem".into(),
+                found: "a global problem".into(),
+            }));
+        };
+        let checked = LocalProblem::new(p.dim as i64, w, p.q.clone(), p.mu.clone())?;
+        *p = Cow::Owned(checked);
+        self.form.refresh();
+        Ok(())
+    }
+
+    /// Solves the problem from `guess` (a cold start when None) under the settings' policy:
+    /// warm-up sweeps, the main method, the fallback. The time limit covers all of them.
+    pub fn solve(&mut self, guess: Option<&Guess>) -> Result<Solution, SolveError> {
+        let start = Instant::now();
+        let deadline = Deadline::after(start, self.settings.time_limit);
+        let settings = &self.settings;
+        let mut run = |s: &Settings, guess: Option<&Guess>, stop_on_stall: bool, warmup: bool| {
+            let stage = Stage::new(&self.form, s, guess, deadline, stop_on_stall, warmup)?;
+            Ok::<_, SolveError>(stage.run(&mut self.solvers))
+        };
+        let mut stages: Vec<Solution> = Vec::new();
+        if settings.warmup_sweeps > 0 {
+            let warm = run(&warmup_settings(settings), guess, false, true)?;
+            if warm.converged() || deadline.passed() {
+                return Ok(merge(Vec::new(), warm, start));
+            }
+            stages.push(warm);
+        }
+        // the main method starts from the caller's point, not from the warm-up's r: on hard
+        // problems Gauss–Seidel's r leads the fixed point of the main method astray
+        let Some((inner, outer)) = settings.fallback else {
+            let main = run(settings, guess, false, false)?;
+            return Ok(merge(stages, main, start));
+        };
+        let first = run(settings, guess, true, false)?;
+        let handover = matches!(
+            first.status,
+            Status::MaxIterations | Status::Stalled | Status::InnerFailure | Status::NumericalError
+        );
+        if first.converged() || !handover || deadline.passed() {
+            return Ok(merge(stages, first, start));
+        }
+        let from_first = Guess {
+            r: first.r.clone(),
+            v: first.v.clone(),
+        };
+        let second_settings = Settings {
+            inner,
+            outer,
+            fallback: None,
+            ..settings.clone()
+        };
+        let warm = if first.r.iter().all(|x| x.is_finite()) {
+            Some(&from_first)
+        } else {
+            guess
+        };
+        let second = run(&second_settings, warm, false, false)?;
+        stages.push(first);
+        Ok(merge(stages, second, start))
+    }
+}
+
+/// The warm-up try: at most `warmup_sweeps` fused Gauss–Seidel sweeps, one outer iteration,
+/// no end game.
+fn warmup_settings(settings: &Settings) -> Settings {
+    Settings {
+        inner: InnerKind::Pgs,
+        outer: OuterKind::Fused,
+        fallback: None,
+        max_outer: 1,
+        max_inner: settings.warmup_sweeps,
+        newton_steps: 0,
+        ..settings.clone()
+    }
+}
+
+/// The last stage's solution with the histories and iteration counts of the earlier ones
+/// prepended, and the total time.
+fn merge(earlier: Vec<Solution>, mut last: Solution, start: Instant) -> Solution {
+    let mut history = Vec::new();
+    for stage in earlier {
+        history.extend(stage.history);
+        last.outer_iterations += stage.outer_iterations;
+        last.inner_iterations += stage.inner_iterations;
+    }
+    history.append(&mut last.history);
+    last.history = history;
+    last.solve_time = start.elapsed();
+    last
+}
+
+/// Solves the incremental problem (2.10) from a cold start.
+pub fn solve(problem: &Problem, settings: &Settings) -> Result<Solution, SolveError> {
+    solve_with_guess(problem, settings, None)
+}
+
+/// Solves the incremental problem (2.10), warm-started from `guess` when given: a
+/// [`Solver`] set up for this one solve (see [`stage`] for the loop and [`newton`] for the
+/// end game).
+pub fn solve_with_guess(
+    problem: &Problem,
+    settings: &Settings,
+    guess: Option<&Guess>,
+) -> Result<Solution, SolveError> {
+    Solver::new(problem, settings.clone())?.solve(guess)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two 3-D contacts on an SPD W; q pushes both into contact with some sliding.
+    fn local(q: Vec<f64>) -> LocalProblem {
+        let mut w = vec![0.0; 36];
+        for i in 0..6 {
+            w[i * 6 + i] = 2.0 + i as f64 * 0.1;
+            if i + 1 < 6 {
+                w[i * 6 + i + 1] = 0.3;
+                w[(i + 1) * 6 + i] = 0.3;
+            }
+        }
+        LocalProblem::new(3, CscMatrix::from_dense(6, 6, &w), q, vec![0.3, 0.5]).unwrap()
+    }
+
+    #[test]
+    fn a_solver_set_up_once_solves_like_fresh_solves() {
+        let q1 = vec![-1.0, 0.4, 0.1, -0.5, -0.2, 0.3];
+        let q2 = vec![-0.7, -0.1, 0.6, 0.2, 0.1, 0.0];
+        let p1 = Problem::Local(local(q1));
+        let p2 = Problem::Local(local(q2.clone()));
+        for settings in [
+            Settings::default(),
+            Settings::paper(InnerKind::Apgd),
+            Settings::method(InnerKind::Pgs, OuterKind::Fused),
+        ] {
+            let mut solver = Solver::new(&p1, settings.clone()).unwrap();
+            let a = solver.solve(None).unwrap();
+            let fresh = solve(&p1, &settings).unwrap();
+            assert_eq!(
+                (a.status, &a.r, a.error),
+                (fresh.status, &fresh.r, fresh.error)
+            );
+            assert!(a.converged(), "{:?}", a.status);
+            // the next step: new q, same W
+            solver.update_q(q2.clone()).unwrap();
+            let guess = Guess {
+                r: a.r.clone(),
+                v: None,
+            };
+            let b = solver.solve(Some(&guess)).unwrap();
+            let fresh = solve_with_guess(&p2, &settings, Some(&guess)).unwrap();
+            assert_eq!(
+                (b.status, &b.r, b.error),
+                (fresh.status, &fresh.r, fresh.error)
+            );
+            assert!(b.converged());
+        }
+        let mut solver = Solver::new(&p1, Settings::default()).unwrap();
+        assert!(solver.update_q(vec![0.0; 5]).is_err());
+        assert!(solver.update_q(vec![f64::NAN; 6]).is_err());
+        assert!(solver.update_rhs(vec![], vec![]).is_err());
+        let bad = Settings {
+            tol: -1.0,
+            ..Settings::default()
+        };
+        assert!(matches!(
+            solver.set_settings(bad),
+            Err(SolveError::Settings(_))
+        ));
+    }
+
+    #[test]
+    fn a_global_solver_updates_f_and_w_like_a_fresh_problem() {
+        let g = crate::examples::crushed_ball(0.3, 1.0).unwrap();
+        let mut g2 = g.clone();
+        g2.f.iter_mut().for_each(|x| *x *= 0.5);
+        g2.w.iter_mut().for_each(|x| *x += 0.1);
+        let (p, p2) = (Problem::Global(g), Problem::Global(g2.clone()));
+        let settings = Settings::default();
+        let mut solver = Solver::new(&p, settings.clone()).unwrap();
+        solver.solve(None).unwrap();
+        solver.update_rhs(g2.f.clone(), g2.w.clone()).unwrap();
+        let a = solver.solve(None).unwrap();
+        let b = solve(&p2, &settings).unwrap();
+        assert_eq!(a.status, b.status);
+        assert!(
+            (a.error - b.error).abs() <= 1e-12,
+            "{} {}",
+            a.error,
+            b.error
+        );
+        let dr =
+            a.r.iter()
+                .zip(&b.r)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max);
+        assert!(dr <= 1e-12, "{dr}");
+        assert!(solver.update_q(vec![]).is_err());
+    }
+}

@@ -1,0 +1,152 @@
+//! The Newton end game of a stage: once the error of `docs/error.md` is ≤
+//! [`crate::Settings::newton_start`], semismooth Newton steps on the natural map of (3.9)
+//! for all contacts ([`crate::newton::polish`]) are tried from r; they are kept if they lower
+//! the error (one history record per kept try; s then restarts from F at the new r).
+//!
+//! A failed try is repeated only after the error has dropped below
+//! [`crate::settings::NewtonParams::retry`] times its starting value, when an inner solve hits
+//! its iteration cap, or when the fixed point stagnates
+//! ([`crate::settings::NewtonParams::stagnation`] iterations without a new lowest error); a
+//! try takes at most [`crate::settings::NewtonParams::try_steps`] steps and all tries of a
+//! stage at most [`crate::Settings::newton_steps`], so that the iteration is deterministic.
+
+use super::fixed_point;
+use super::form::{Form, Verdict};
+use crate::deadline::Deadline;
+use crate::inner::{InnerReport, InnerStatus};
+use crate::settings::{NewtonParams, Settings};
+use crate::solution::OuterRecord;
+
+/// What the end game of a stage remembers between outer iterations.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct EndGame {
+    /// a failed try is repeated once the error is below this
+    gate: f64,
+    /// Newton steps spent by this stage
+    used: usize,
+}
+
+impl EndGame {
+    pub(super) fn new() -> Self {
+        Self {
+            gate: f64::INFINITY,
+            used: 0,
+        }
+    }
+}
+
+/// Whether the last `p.stagnation` outer iterations all failed to lower the best error to
+/// `p.stagnation_gain` times its previous value.
+fn stagnating(history: &[OuterRecord], p: &NewtonParams) -> bool {
+    let n = history.len();
+    if n <= p.stagnation {
+        return false;
+    }
+    let best_before = history[..n - p.stagnation]
+        .iter()
+        .map(|h| h.error)
+        .fold(f64::INFINITY, f64::min);
+    history[n - p.stagnation..]
+        .iter()
+        .all(|h| h.error > p.stagnation_gain * best_before)
+}
+
+/// What a kept end game produced: the new r and its verdict, one history record per kept
+/// try, and F at the new r (the next s).
+pub(super) struct Improved {
+    pub(super) r: Vec<f64>,
+    pub(super) verdict: Verdict,
+    pub(super) records: Vec<OuterRecord>,
+    pub(super) fs: Vec<f64>,
+}
+
+/// The state of the outer iterate the end game starts from.
+pub(super) struct Iterate<'x> {
+    pub(super) r: &'x [f64],
+    pub(super) verdict: &'x Verdict,
+    pub(super) history: &'x [OuterRecord],
+    /// F(s) of the last outer iteration
+    pub(super) fs: &'x [f64],
+}
+
+impl EndGame {
+    /// Tries the end game from `at` after an outer iteration whose inner solve ended with
+    /// `report`: None if the gate is closed, otherwise the Newton steps spent and, if the
+    /// error dropped, what replaces the iterate (s then restarts from F at the new r).
+    ///
+    /// When the inner solver works on the surrogate ½(W + Wᵀ), a try that more than halved
+    /// the error is followed by another one at once: an inner solve would pull r back towards
+    /// the surrogate's solution.
+    pub(super) fn attempt(
+        &mut self,
+        form: &Form<'_>,
+        settings: &Settings,
+        deadline: Deadline,
+        at: Iterate<'_>,
+        report: &InnerReport,
+    ) -> Option<(usize, Option<Improved>)> {
+        let (tol, p) = (settings.tol, settings.tuning.newton);
+        let gate_open = at.verdict.error <= self.gate
+            || report.status == InnerStatus::MaxIterations
+            || stagnating(at.history, &p);
+        if settings.newton_steps == 0
+            || at.verdict.error > settings.newton_start
+            || !gate_open
+            || at.verdict.converged(tol)
+            || self.used >= settings.newton_steps
+        {
+            return None;
+        }
+        let local = form.local();
+        let mut spent = 0;
+        let mut best: Option<Improved> = None;
+        while self.used < settings.newton_steps {
+            let (r, error, fs) = match &best {
+                Some(b) => (&b.r[..], b.verdict.error, &b.fs[..]),
+                None => (at.r, at.verdict.error, at.fs),
+            };
+            let mut trial = r.to_vec();
+            let nr = crate::newton::polish(
+                local,
+                &mut trial,
+                p.target_fraction * tol * form.q_norm,
+                p.try_steps.min(settings.newton_steps - self.used),
+                deadline,
+            );
+            self.used += nr.steps.max(1);
+            let candidate = form.verdict(&trial);
+            spent += nr.steps;
+            if nr.steps == 0 || candidate.error >= error {
+                break;
+            }
+            let gain = candidate.error / error;
+            let fs_new = fixed_point::evaluate_f(local.dim, &local.velocity(&trial));
+            let (fixed_point_residual, rule_6_1) = fixed_point::residuals(fs, &fs_new);
+            let record = OuterRecord {
+                error: candidate.error,
+                fixed_point_residual,
+                rule_6_1,
+                inner_iterations: nr.steps,
+            };
+            let mut records = best.map_or_else(Vec::new, |b| b.records);
+            records.push(record);
+            let done =
+                candidate.converged(tol) || form.symmetric || gain > 0.5 || deadline.passed();
+            best = Some(Improved {
+                r: trial,
+                verdict: candidate,
+                records,
+                fs: fs_new,
+            });
+            if done {
+                break;
+            }
+        }
+        match &best {
+            Some(b) if !b.verdict.converged(tol) => self.gate = p.retry * b.verdict.error,
+            Some(_) => {}
+            None => self.gate = p.retry * at.verdict.error,
+        }
+        Some((spent, best))
+    }
+}

@@ -1,0 +1,537 @@
+//! What a solve is asked to do: the method (an inner solver of F(s) and an outer iteration on
+//! s, §3.3 and §6 of the paper), the stopping tolerance and caps, and every tuning constant of
+//! the outer loop in one typed, documented [`Tuning`] struct.
+//!
+//! # One meaning per tolerance
+//! - [`Settings::tol`]: the bound on the error of `docs/error.md` of the returned r (and on
+//!   the balance residual of a global problem); the only tolerance a status is decided by.
+//! - [`Settings::fixed_point_tol`]: ε of the paper's rule (6.1), an extra stopping test on
+//!   ‖F(s) − s‖ / (n (‖s‖ + 1)); it never makes a solve "converged".
+//! - The inner tolerance (see [`Tuning::inner_tol`]): the tolerance handed to an inner solver
+//!   in [`crate::inner::InnerLimits::tol`], on that solver's own relative optimality measure;
+//!   it is derived from `tol` and the error of the current outer iterate, never set directly.
+//! - [`Settings::newton_start`]: an error level (of `docs/error.md`) below which the Newton end
+//!   game is tried; not a stopping test.
+
+use std::fmt;
+use std::str::FromStr;
+use std::time::Duration;
+
+/// Which method computes F(s) (§6, options (i), (iv), (v)).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+pub enum InnerKind {
+    /// Clarabel interior point on the SOC-QP (primal (3.15) for global problems, dual (4.7) for local).
+    Ipm,
+    /// accelerated projected gradient (FISTA with adaptive restart) on (4.7)
+    Apgd,
+    /// projected block Gauss–Seidel on (4.7), exact one-contact solves
+    Pgs,
+    /// faceted cone: each K_μ replaced by a k-facet pyramid, QP solved by Clarabel
+    Faceted,
+}
+
+/// How the fixed point s = F(s) is sought.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+pub enum OuterKind {
+    /// successive approximation s ← F(s)
+    FixedPoint,
+    /// safeguarded Anderson mixing on s
+    Anderson,
+    /// no separate outer loop: Gauss–Seidel directly on Coulomb's law, contact i given a
+    /// solution of its own law (2.9) with the others frozen (needs `InnerKind::Pgs`).
+    /// Convergence is decided by the error measure like every other choice.
+    Fused,
+}
+
+impl InnerKind {
+    /// Every inner solver, in the order of reports.
+    pub const ALL: [InnerKind; 4] = [
+        InnerKind::Pgs,
+        InnerKind::Apgd,
+        InnerKind::Ipm,
+        InnerKind::Faceted,
+    ];
+
+    /// The name used on command lines, in the Python bindings and in reports.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            InnerKind::Ipm => "ipm",
+            InnerKind::Apgd => "apgd",
+            InnerKind::Pgs => "pgs",
+            InnerKind::Faceted => "faceted",
+        }
+    }
+}
+
+impl OuterKind {
+    /// Every outer iteration.
+    pub const ALL: [OuterKind; 3] = [OuterKind::FixedPoint, OuterKind::Anderson, OuterKind::Fused];
+
+    /// The name used on command lines, in the Python bindings and in reports.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            OuterKind::FixedPoint => "fixed_point",
+            OuterKind::Anderson => "anderson",
+            OuterKind::Fused => "fused",
+        }
+    }
+}
+
+/// A name that is not one of the known solvers.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown {what} {name:?}; expected one of {expected}")]
+pub struct ParseMethodError {
+    /// what was parsed ("inner solver", "outer iteration", "method")
+    pub what: &'static str,
+    /// the name given
+    pub name: String,
+    /// the accepted names, comma separated
+    pub expected: String,
+}
+
+fn parse_named<T: Copy>(
+    what: &'static str,
+    s: &str,
+    all: &[T],
+    name: impl Fn(T) -> &'static str,
+) -> Result<T, ParseMethodError> {
+    let key = s.trim().to_ascii_lowercase().replace('-', "_");
+    all.iter()
+        .copied()
+        .find(|&k| name(k) == key)
+        .ok_or_else(|| ParseMethodError {
+            what,
+            name: s.trim().to_string(),
+            expected: all.iter().map(|&k| name(k)).collect::<Vec<_>>().join(", "),
+        })
+}
+
+impl FromStr for InnerKind {
+    type Err = ParseMethodError;
+    /// `ipm`, `apgd`, `pgs` or `faceted` (case-insensitive).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        parse_named("inner solver", s, &Self::ALL, Self::as_str)
+    }
+}
+
+impl FromStr for OuterKind {
+    type Err = ParseMethodError;
+    /// `fixed_point` (or `fixed-point`), `anderson` or `fused` (case-insensitive).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        parse_named("outer iteration", s, &Self::ALL, Self::as_str)
+    }
+}
+
+impl fmt::Display for InnerKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.pad(self.as_str())
+    }
+}
+
+impl fmt::Display for OuterKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.pad(self.as_str())
+    }
+}
+
+/// One method: an inner solver of F(s) inside an outer iteration on s. Written `inner` (plain
+/// fixed point s ← F(s)) or `inner+outer`, e.g. `apgd+anderson`, `pgs+fused`; the one
+/// spelling of every CLI command and of the Python bindings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct Method {
+    /// the solver of the inner problem (3.15)/(4.7)
+    pub inner: InnerKind,
+    /// the outer iteration on s
+    pub outer: OuterKind,
+}
+
+impl Method {
+    /// The method (`inner`, `outer`).
+    pub const fn new(inner: InnerKind, outer: OuterKind) -> Self {
+        Self { inner, outer }
+    }
+
+    /// Whether the pair can run: the fused outer iteration needs the `pgs` inner solver.
+    pub fn is_valid(self) -> bool {
+        self.outer != OuterKind::Fused || self.inner == InnerKind::Pgs
+    }
+}
+
+impl From<(InnerKind, OuterKind)> for Method {
+    fn from((inner, outer): (InnerKind, OuterKind)) -> Self {
+        Self { inner, outer }
+    }
+}
+
+impl From<Method> for (InnerKind, OuterKind) {
+    fn from(m: Method) -> Self {
+        (m.inner, m.outer)
+    }
+}
+
+impl fmt::Display for Method {
+    /// `inner` for the plain fixed point, `inner+outer` otherwise.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.outer {
+            OuterKind::FixedPoint => f.pad(self.inner.as_str()),
+            outer => f.pad(&format!("{}+{}", self.inner, outer)),
+        }
+    }
+}
+
+impl FromStr for Method {
+    type Err = ParseMethodError;
+    /// `inner` or `inner+outer` (case-insensitive, blanks around the names ignored).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let (inner, outer) = match s.split_once('+') {
+            Some((i, o)) => (i.parse()?, o.parse()?),
+            None => (s.parse()?, OuterKind::FixedPoint),
+        };
+        Ok(Self { inner, outer })
+    }
+}
+
+/// Parameters of safeguarded Anderson mixing on s ([`crate::outer::anderson`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct AndersonParams {
+    /// number of previous differences kept (≥ 1)
+    pub memory: usize,
+}
+
+/// Parameters of the semismooth Newton end game ([`crate::outer::newton`]); the budget and
+/// the starting level are [`Settings::newton_steps`] and [`Settings::newton_start`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct NewtonParams {
+    /// Newton steps one end-game try may take (all tries of a stage share
+    /// [`Settings::newton_steps`])
+    pub try_steps: usize,
+    /// a failed try is tried again once the error is below this fraction of the error it
+    /// started from
+    pub retry: f64,
+    /// outer iterations without a new lowest error after which the fixed point counts as
+    /// stagnating (the end game is then tried again whatever its gate)
+    pub stagnation: usize,
+    /// a new lowest error counts as progress only below this fraction of the previous lowest
+    pub stagnation_gain: f64,
+    /// the natural map is driven below this fraction of tol · ‖q‖
+    pub target_fraction: f64,
+}
+
+/// Every tuning constant of the outer loop, in one place. The defaults are those the solver
+/// has always used; they are not meant to be changed per problem.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct Tuning {
+    /// the inner tolerance is kept at least `inner_tol_floor` × tol (see [`Tuning::inner_tol`])
+    pub inner_tol_floor: f64,
+    /// … and at most this (absolute, on the inner solver's relative measure)
+    pub inner_tol_ceiling: f64,
+    /// the fused Gauss–Seidel stops its batch of sweeps at this fraction of tol
+    pub fused_tol_fraction: f64,
+    /// outer iterations over which the error must halve for a first stage that has a fallback
+    /// to be considered progressing ([`crate::Status::Stalled`] otherwise)
+    pub stall_window: usize,
+    /// outer iterations with error ≤ tol but balance residual > tol after which the stage ends
+    /// with [`crate::Status::BalanceResidual`]
+    pub balance_stalls: usize,
+    /// impulses with ‖W‖ ‖r‖ above this multiple of max(‖q‖, ‖u‖) count as unbounded
+    /// ([`crate::Status::Unbounded`])
+    pub unbounded_ratio: f64,
+    /// Anderson mixing
+    pub anderson: AndersonParams,
+    /// Newton end game
+    pub newton: NewtonParams,
+}
+
+impl Default for Tuning {
+    fn default() -> Self {
+        Self {
+            inner_tol_floor: 0.2,
+            inner_tol_ceiling: 1e-2,
+            fused_tol_fraction: 0.9,
+            stall_window: STALL_WINDOW,
+            balance_stalls: 3,
+            unbounded_ratio: UNBOUNDED_RATIO,
+            anderson: AndersonParams { memory: 5 },
+            newton: NewtonParams {
+                try_steps: 15,
+                retry: 0.1,
+                stagnation: 3,
+                stagnation_gain: 0.5,
+                target_fraction: 0.5,
+            },
+        }
+    }
+}
+
+impl Tuning {
+    /// The tolerance of the next inner solve, on the inner solver's own relative measure:
+    /// `inner_tol_factor` × (error of the current outer iterate), kept in
+    /// [`Tuning::inner_tol_floor`] · tol … [`Tuning::inner_tol_ceiling`]; solvers that start
+    /// cold at each outer iteration (interior point, faceted), and frictionless problems
+    /// (where the inner problem is the whole problem, §5.1), get the floor at once.
+    pub fn inner_tol(&self, settings: &Settings, error: f64, cold_or_frictionless: bool) -> f64 {
+        let floor = self.inner_tol_floor * settings.tol;
+        if cold_or_frictionless {
+            floor
+        } else {
+            (settings.inner_tol_factor * error)
+                .min(self.inner_tol_ceiling)
+                .max(floor)
+        }
+    }
+
+    fn validate(&self) -> Result<(), String> {
+        let frac = |x: f64| x.is_finite() && x > 0.0 && x <= 1.0;
+        if !frac(self.inner_tol_floor)
+            || !frac(self.fused_tol_fraction)
+            || !frac(self.newton.retry)
+            || !frac(self.newton.stagnation_gain)
+            || !frac(self.newton.target_fraction)
+        {
+            return Err("tuning fractions must be in (0, 1]".into());
+        }
+        if !(self.inner_tol_ceiling.is_finite() && self.inner_tol_ceiling > 0.0) {
+            return Err("tuning.inner_tol_ceiling must be positive".into());
+        }
+        if !(self.unbounded_ratio.is_finite() && self.unbounded_ratio > 1.0) {
+            return Err("tuning.unbounded_ratio must be finite and above 1".into());
+        }
+        if self.stall_window == 0
+            || self.balance_stalls == 0
+            || self.anderson.memory == 0
+            || self.newton.try_steps == 0
+        {
+            return Err("tuning counts must be at least 1".into());
+        }
+        Ok(())
+    }
+}
+
+/// Impulses with ‖W‖ ‖r‖ above this multiple of max(‖q‖, ‖u‖) count as unbounded
+/// ([`crate::Status::Unbounded`]): for a bounded solution W r = u − q is of the order of the data;
+/// divergent iterates (a singular diagonal block regularized by 1e-8, Painlevé without a
+/// solution) reach 1e7 and more. The default of [`Tuning::unbounded_ratio`].
+pub const UNBOUNDED_RATIO: f64 = 1e6;
+
+/// Outer iterations over which the error must halve for a first stage to be considered
+/// progressing (see [`Settings::fallback`]). The default of [`Tuning::stall_window`].
+pub const STALL_WINDOW: usize = 25;
+
+/// Typed settings with defaults suited to rigid-body problems: a warm-up of at most 50
+/// Gauss–Seidel sweeps on Coulomb's law, then APGD inside Anderson-mixed fixed-point
+/// iterations, a semismooth Newton end game on the whole law once the error is
+/// ≤ [`Settings::newton_start`] (1e-3), and fused Gauss–Seidel as fallback when the first
+/// stage stalls. [`Settings::paper`] is the paper's algorithm.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct Settings {
+    /// tolerance on the reported error (docs/error.md); also on the balance residual
+    pub tol: f64,
+    /// inner solver
+    pub inner: InnerKind,
+    /// outer iteration
+    pub outer: OuterKind,
+    /// a second (inner, outer) method, warm-started from the first one's r, run when the first
+    /// stops without converging (iteration cap, inner failure, or stalled: the error no longer
+    /// halves over [`Tuning::stall_window`] outer iterations); the time limit covers both
+    pub fallback: Option<(InnerKind, OuterKind)>,
+    /// quick first try: at most this many Gauss–Seidel sweeps on Coulomb's law itself
+    /// before the main method (0: none); small problems are solved there, and otherwise the
+    /// main method starts from the caller's point as if the try had not happened
+    pub warmup_sweeps: usize,
+    /// cap on outer iterations (subproblems)
+    pub max_outer: usize,
+    /// cap on iterations of each inner solve
+    pub max_inner: usize,
+    /// wall-clock limit for the whole solve (None: no limit), turned into one
+    /// [`crate::deadline::Deadline`] when the solve starts
+    pub time_limit: Option<Duration>,
+    /// ε of the paper's stopping rule (6.1) ‖F(s) − s‖ / (n (‖s‖ + 1)) ≤ ε, used as an
+    /// additional internal stopping test when set (the reported status still requires err ≤ tol)
+    pub fixed_point_tol: Option<f64>,
+    /// number of facets of the pyramid replacing each K_μ (faceted inner solver, d = 3)
+    pub facets: usize,
+    /// the inner tolerance is `inner_tol_factor` × (error of the previous outer iterate),
+    /// kept between [`Tuning::inner_tol_floor`] · tol and [`Tuning::inner_tol_ceiling`]
+    pub inner_tol_factor: f64,
+    /// end game: once the error is ≤ [`Settings::newton_start`], semismooth Newton steps on
+    /// the natural map of the whole law ([`crate::newton::polish`]) are tried after an outer
+    /// iteration and kept if they lower the error; this many steps at most per stage; 0 turns
+    /// it off
+    pub newton_steps: usize,
+    /// error (docs/error.md) below which the Newton end game is tried
+    pub newton_start: f64,
+    /// the tuning constants of the outer loop
+    pub tuning: Tuning,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            tol: 1e-8,
+            inner: InnerKind::Apgd,
+            outer: OuterKind::Anderson,
+            fallback: Some((InnerKind::Pgs, OuterKind::Fused)),
+            warmup_sweeps: 50,
+            max_outer: 200,
+            max_inner: 10_000,
+            time_limit: Some(Duration::from_secs(60)),
+            fixed_point_tol: None,
+            facets: 8,
+            inner_tol_factor: 0.1,
+            newton_steps: 30,
+            newton_start: 1e-3,
+            tuning: Tuning::default(),
+        }
+    }
+}
+
+/// Inner iterations of the paper's Table 1 runs for the iterative inner solvers (APGD, PGS).
+pub const PAPER_MAX_INNER: usize = 250;
+
+impl Settings {
+    /// The default settings with (`inner`, `outer`) as the only method: no warm-up try and
+    /// no fallback, so that the result describes that method.
+    pub fn method(inner: InnerKind, outer: OuterKind) -> Self {
+        Self {
+            inner,
+            outer,
+            fallback: None,
+            warmup_sweeps: 0,
+            ..Self::default()
+        }
+    }
+
+    /// The paper's algorithm (§3.3, §6) with the inner solver `inner`: the plain fixed point
+    /// s ← F(s), each subproblem (3.15)/(4.7) solved accurately (inner tolerance 1e-6 × the
+    /// current error, down to the floor), no warm-up, no fallback, no Newton end game; the
+    /// iterative inner solvers capped at [`PAPER_MAX_INNER`] iterations as in Table 1. Set
+    /// [`Settings::fixed_point_tol`] to stop by rule (6.1) as the paper does.
+    pub fn paper(inner: InnerKind) -> Self {
+        Self {
+            max_inner: if matches!(inner, InnerKind::Apgd | InnerKind::Pgs) {
+                PAPER_MAX_INNER
+            } else {
+                Self::default().max_inner
+            },
+            newton_steps: 0,
+            ..Self::time_stepping(Method::new(inner, OuterKind::FixedPoint))
+        }
+    }
+
+    /// `method` alone, each subproblem solved accurately (inner tolerance 1e-6 × the current
+    /// error, down to the floor): the preset of time stepping, where the loose rule (6.1)
+    /// often stops the outer loop after one subproblem, whose accuracy is then the step's.
+    pub fn time_stepping(method: Method) -> Self {
+        Self {
+            inner_tol_factor: 1e-6,
+            ..Self::method(method.inner, method.outer)
+        }
+    }
+
+    /// The (inner, outer) pair of the main method.
+    pub fn main_method(&self) -> Method {
+        Method::new(self.inner, self.outer)
+    }
+
+    /// Checks every field; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), crate::solution::SolveError> {
+        let bad = |m: &str| Err(crate::solution::SolveError::Settings(m.to_string()));
+        if self.tol.is_nan() || self.tol <= 0.0 || self.tol.is_infinite() {
+            return bad("tol must be positive and finite");
+        }
+        if self.max_outer == 0 || self.max_inner == 0 {
+            return bad("max_outer and max_inner must be at least 1");
+        }
+        if self.inner_tol_factor.is_nan()
+            || self.inner_tol_factor <= 0.0
+            || self.inner_tol_factor > 1.0
+        {
+            return bad("inner_tol_factor must be in (0, 1]");
+        }
+        if self.fixed_point_tol.is_some_and(|e| e.is_nan() || e <= 0.0) {
+            return bad("fixed_point_tol must be positive");
+        }
+        if self.newton_start.is_nan() || self.newton_start < 0.0 {
+            return bad("newton_start must be nonnegative");
+        }
+        if self.facets < 3 {
+            return bad("facets must be at least 3");
+        }
+        if !self.main_method().is_valid() {
+            return bad("the fused outer iteration needs the pgs inner solver");
+        }
+        if let Some(fallback) = self.fallback {
+            if !Method::from(fallback).is_valid() {
+                return bad("the fused outer iteration needs the pgs inner solver (fallback)");
+            }
+        }
+        self.tuning
+            .validate()
+            .map_err(crate::solution::SolveError::Settings)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn method_names_round_trip() {
+        for inner in InnerKind::ALL {
+            assert_eq!(inner.as_str().parse::<InnerKind>(), Ok(inner));
+            for outer in OuterKind::ALL {
+                let m = Method::new(inner, outer);
+                assert_eq!(m.to_string().parse::<Method>(), Ok(m));
+            }
+        }
+        assert_eq!(
+            " APGD+Anderson ".parse::<Method>(),
+            Ok(Method::new(InnerKind::Apgd, OuterKind::Anderson))
+        );
+        assert_eq!("fixed-point".parse(), Ok(OuterKind::FixedPoint));
+        let e = "newton".parse::<InnerKind>().unwrap_err();
+        assert!(e.to_string().contains("ipm, apgd, pgs, faceted") || e.to_string().contains("pgs"));
+        assert!("pgs+".parse::<Method>().is_err());
+    }
+
+    #[test]
+    fn presets_validate_and_bad_tuning_is_refused() {
+        Settings::default().validate().unwrap();
+        for inner in InnerKind::ALL {
+            let p = Settings::paper(inner);
+            p.validate().unwrap();
+            assert_eq!(
+                (p.outer, p.fallback, p.newton_steps),
+                (OuterKind::FixedPoint, None, 0)
+            );
+        }
+        let mut s = Settings::default();
+        s.tuning.newton.retry = 0.0;
+        assert!(s.validate().is_err());
+        let mut s = Settings::default();
+        s.tuning.anderson.memory = 0;
+        assert!(s.validate().is_err());
+        assert!(Settings::method(InnerKind::Apgd, OuterKind::Fused)
+            .validate()
+            .is_err());
+    }
+
+    #[test]
+    fn inner_tolerance_stays_between_floor_and_ceiling() {
+        let s = Settings::default();
+        let t = s.tuning;
+        assert_eq!(t.inner_tol(&s, 1.0, false), 1e-2);
+        assert_eq!(t.inner_tol(&s, 1e-20, false), 0.2 * s.tol);
+        assert_eq!(t.inner_tol(&s, 1e-4, true), 0.2 * s.tol);
+        assert!((t.inner_tol(&s, 1e-4, false) - 1e-5).abs() < 1e-18);
+    }
+}

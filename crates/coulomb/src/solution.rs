@@ -1,0 +1,162 @@
+//! What a solve returns: the [`Solution`] (r, u, v, s, the error of `docs/error.md` recomputed
+//! on the problem as stored, the history of the outer iteration), its [`Status`], and the
+//! [`SolveError`] of a solve that could not start.
+
+use crate::problem::ProblemError;
+use std::fmt;
+use std::time::Duration;
+
+/// How a solve ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+pub enum Status {
+    /// the error of docs/error.md (and, for global problems, the balance residual) is ≤ tol
+    Converged,
+    /// the outer iteration cap was reached with the error above tol
+    MaxIterations,
+    /// the time limit was reached with the error above tol
+    TimeLimit,
+    /// the error stopped decreasing in a first stage that has a fallback (see
+    /// [`crate::Settings::fallback`]); the fallback then runs
+    Stalled,
+    /// an inner solve failed (iteration cap, numerical breakdown)
+    InnerFailure,
+    /// an inner problem (3.15) was infeasible: C̄(s) = ∅
+    InnerInfeasible,
+    /// the iterates became non-finite
+    NumericalError,
+    /// the paper's rule (6.1) held (`Settings::fixed_point_tol`) but the error is above tol
+    FixedPointRule,
+    /// the error is ≤ tol only because r is unbounded: ‖W‖ ‖r‖ >
+    /// [`crate::settings::Tuning::unbounded_ratio`] · max(‖q‖, ‖u‖), so the scale
+    /// max(‖q‖, ‖r‖, ‖u‖) of the relative error is ‖r‖ while u still violates the law (e.g.
+    /// penetrates). The iterates diverge, the mark of a problem without a solution
+    /// (Painlevé's paradox, §5.3); never reported as converged
+    Unbounded,
+    /// the error is ≤ tol but the balance residual of the global problem stays above tol
+    /// (v = M⁻¹(H r + f) from the Cholesky factor of one triangle of M does not balance the
+    /// whole M: M ill-conditioned or not quite symmetric, as in some FEM files)
+    BalanceResidual,
+}
+
+impl Status {
+    /// The snake_case name used in reports, JSON and the Python bindings.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Status::Converged => "converged",
+            Status::MaxIterations => "max_iterations",
+            Status::TimeLimit => "time_limit",
+            Status::Stalled => "stalled",
+            Status::InnerFailure => "inner_failure",
+            Status::InnerInfeasible => "inner_infeasible",
+            Status::NumericalError => "numerical_error",
+            Status::FixedPointRule => "fixed_point_rule",
+            Status::Unbounded => "unbounded",
+            Status::BalanceResidual => "balance_residual",
+        }
+    }
+}
+
+impl fmt::Display for Status {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.pad(self.as_str())
+    }
+}
+
+/// One outer iteration of the history.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct OuterRecord {
+    /// the error of docs/error.md after this iteration
+    pub error: f64,
+    /// ‖F(s) − s‖
+    pub fixed_point_residual: f64,
+    /// the paper's (6.1) measure ‖F(s) − s‖ / (n (‖s‖ + 1))
+    pub rule_6_1: f64,
+    /// inner iterations spent in this outer iteration
+    pub inner_iterations: usize,
+}
+
+/// A starting point: impulses r, and velocities v for global problems.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Guess {
+    /// impulses r (length d · contacts)
+    pub r: Vec<f64>,
+    /// velocities v (global problems; ignored for local ones)
+    pub v: Option<Vec<f64>>,
+}
+
+/// The result of a solve.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct Solution {
+    /// impulses r
+    pub r: Vec<f64>,
+    /// relative velocities u, recomputed from the problem data (W r + q or Hᵀ v + w)
+    pub u: Vec<f64>,
+    /// velocities v (global problems)
+    pub v: Option<Vec<f64>>,
+    /// the final fixed-point variable s (one entry per contact)
+    pub s: Vec<f64>,
+    /// how the solve ended
+    pub status: Status,
+    /// the error of docs/error.md, recomputed from r (and v)
+    pub error: f64,
+    /// ‖M v − H r − f‖ / max(1, ‖f‖) for global problems
+    pub balance_residual: Option<f64>,
+    /// outer iterations (subproblems solved)
+    pub outer_iterations: usize,
+    /// inner iterations, summed
+    pub inner_iterations: usize,
+    /// per outer iteration
+    pub history: Vec<OuterRecord>,
+    /// wall-clock time of the solve (excluding file reading)
+    pub solve_time: Duration,
+}
+
+impl Solution {
+    /// Whether the status is [`Status::Converged`].
+    pub fn converged(&self) -> bool {
+        self.status == Status::Converged
+    }
+}
+
+/// Why a solve could not start.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SolveError {
+    /// the problem data are invalid
+    #[error(transparent)]
+    Problem(#[from] ProblemError),
+    /// the settings are invalid
+    #[error("invalid settings: {0}")]
+    Settings(String),
+    /// the guess has the wrong size
+    #[error("invalid guess: {0}")]
+    Guess(String),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[cfg(feature = "serde")]
+    #[test]
+    fn status_names_match_their_serialization() {
+        for s in [
+            Status::Converged,
+            Status::MaxIterations,
+            Status::TimeLimit,
+            Status::Stalled,
+            Status::InnerFailure,
+            Status::InnerInfeasible,
+            Status::NumericalError,
+            Status::FixedPointRule,
+            Status::Unbounded,
+            Status::BalanceResidual,
+        ] {
+            let json = serde_json::to_string(&s).unwrap();
+            assert_eq!(json, format!("\"{s}\""));
+        }
+    }
+}

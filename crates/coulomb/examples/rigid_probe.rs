@@ -1,0 +1,786 @@
+//! Probe (experiment, issue #11 item 4; results in docs/rigid.md): end games for rigid,
+//! rank-deficient problems, started from the default solver's iterate.
+//!
+//! `cargo run --release --example rigid_probe -- FILE METHOD [WARM_SECONDS] [LIMIT_SECONDS]`
+//!
+//! The start point is `coulomb::solve` with the default settings (tol `WARM_TOL`, default
+//! 1e-8) stopped after WARM_SECONDS; then METHOD runs for at most LIMIT_SECONDS:
+//! - `lm`: Levenberg–Marquardt on the Alart–Curnier map Φ_ρ(r) = r − P(r − ρ u), u = W r + q,
+//!   P(y) = (max(0, y_N), proj onto the disc of radius μ max(0, y_N) of y_T), ρ_i = 1/‖W_ii‖_F;
+//!   direction (JᵀJ + λI) d = −JᵀΦ, J = I − D + ρ D W, damping by the trust-region ratio;
+//! - `lmsw`: `lm` in segments of 8 steps; a segment that does not lower err by 30 % switches
+//!   every ρ_i to another multiple (1, 0.1, 10, 0.3, 3, 0.03, 30): the pieces of Φ_ρ move
+//!   while r stays, so a stationary point of ‖Φ_ρ‖² with Φ_ρ ≠ 0 is left;
+//! - `nsnsw`: like `lmsw` with the regularized semismooth Newton step (J + λI) d = −Φ (LU);
+//! - `nsn`: semismooth Newton (LU of J), Armijo, full step when the search fails (Siconos'
+//!   NSN-AC globalization);
+//! - `ppa` / `ppalm`: proximal point: r_{k+1} solves the law for (W + σI, q − σ r_k) by `nsn`
+//!   (`ppa`) or `lm` (`ppalm`), σ = SIG · err^NU · max diag W (Siconos: σ = 5 err);
+//! - `diag`: the contacts that carry the residual at the start point;
+//! - `base`: the start point only.
+//!
+//! Env: LOG (per-step lines), RHO (multiplies every ρ_i), LM_MU (first damping factor),
+//! CGLS=N (matrix-free LM direction, N CGLS steps), DENSE_MAX (dense JᵀJ up to this m).
+//! err is always the error of docs/error.md on the stored local problem (a global file is
+//! turned into its Delassus form W = Hᵀ M⁻¹ H, q = Hᵀ M⁻¹ f + w first).
+#![allow(clippy::needless_range_loop)]
+
+use coulomb::problem::{LocalProblem, Problem};
+use coulomb::sparse::CscMatrix;
+use faer::linalg::solvers::Solve;
+use std::time::{Duration, Instant};
+
+fn err(p: &LocalProblem, r: &[f64]) -> f64 {
+    p.error(r).error
+}
+
+fn envf(name: &str, default: f64) -> f64 {
+    std::env::var(name)
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(default)
+}
+
+/// Alart–Curnier map Φ(r) for (W + σI, q − σ c) and the blocks D of ∂P (row-major per contact).
+struct Map<'a> {
+    p: &'a LocalProblem,
+    rho: Vec<f64>,
+    sigma: f64,
+    center: Vec<f64>,
+}
+
+impl Map<'_> {
+    fn eval(&self, r: &[f64], g: &mut [f64], dbl: &mut [f64]) -> f64 {
+        let p = self.p;
+        let d = p.dim;
+        let mut u = p.q.clone();
+        p.w.gemv_acc(1.0, r, &mut u);
+        if self.sigma != 0.0 {
+            for k in 0..u.len() {
+                u[k] += self.sigma * (r[k] - self.center[k]);
+            }
+        }
+        for (i, &mu) in p.mu.iter().enumerate() {
+            let at = i * d;
+            let dj = &mut dbl[i * d * d..(i + 1) * d * d];
+            dj.iter_mut().for_each(|x| *x = 0.0);
+            let ri = self.rho[i];
+            let mut y = [0.0; 3];
+            for k in 0..d {
+                y[k] = r[at + k] - ri * u[at + k];
+            }
+            let pn = y[0].max(0.0);
+            if y[0] > 0.0 {
+                dj[0] = 1.0;
+            }
+            let t = y[1..d].iter().map(|x| x * x).sum::<f64>().sqrt();
+            let radius = mu * pn;
+            let mut pt = [0.0; 2];
+            if t <= radius {
+                for k in 1..d {
+                    pt[k - 1] = y[k];
+                    dj[k * d + k] = 1.0;
+                }
+            } else if t > 0.0 {
+                let s = radius / t;
+                for a in 1..d {
+                    pt[a - 1] = s * y[a];
+                    for b in 1..d {
+                        let e = if a == b { 1.0 } else { 0.0 };
+                        dj[a * d + b] = s * (e - y[a] * y[b] / (t * t));
+                    }
+                    if y[0] > 0.0 {
+                        dj[a * d] = mu * y[a] / t;
+                    }
+                }
+            }
+            g[at] = r[at] - pn;
+            for k in 1..d {
+                g[at + k] = r[at + k] - pt[k - 1];
+            }
+        }
+        g.iter().map(|x| x * x).sum::<f64>().sqrt()
+    }
+
+    /// J = I − D + ρ D (W + σ I) as a CSC matrix.
+    fn jacobian(&self, dbl: &[f64]) -> CscMatrix {
+        let p = self.p;
+        let d = p.dim;
+        let m = p.q.len();
+        let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+        for i in 0..p.mu.len() {
+            let dj = &dbl[i * d * d..(i + 1) * d * d];
+            let ri = self.rho[i];
+            for a in 0..d {
+                for b in 0..d {
+                    let e = if a == b { 1.0 } else { 0.0 };
+                    let v = e - dj[a * d + b] + ri * self.sigma * dj[a * d + b];
+                    rows.push(i * d + a);
+                    cols.push(i * d + b);
+                    vals.push(v);
+                }
+            }
+        }
+        for j in 0..m {
+            for k in p.w.col_ptr[j]..p.w.col_ptr[j + 1] {
+                let row = p.w.row_idx[k];
+                let w = p.w.values[k];
+                let c = row / d;
+                let b = row % d;
+                let dj = &dbl[c * d * d..(c + 1) * d * d];
+                for a in 0..d {
+                    let v = self.rho[c] * dj[a * d + b] * w;
+                    rows.push(c * d + a);
+                    cols.push(j);
+                    vals.push(v);
+                }
+            }
+        }
+        CscMatrix::from_triplets(m, m, &rows, &cols, &vals).unwrap()
+    }
+}
+
+fn to_faer(a: &CscMatrix) -> faer::sparse::SparseColMat<usize, f64> {
+    let trip: Vec<faer::sparse::Triplet<usize, usize, f64>> = a
+        .triplets()
+        .map(|(i, j, v)| faer::sparse::Triplet::new(i, j, v))
+        .collect();
+    faer::sparse::SparseColMat::try_new_from_triplets(a.nrows, a.ncols, &trip).unwrap()
+}
+
+/// JᵀJ + λI.
+fn normal_matrix(j: &CscMatrix, lambda: f64) -> CscMatrix {
+    let jt = j.transpose();
+    let n = j.ncols;
+    let mut acc = vec![0.0; n];
+    let mut mark = vec![usize::MAX; n];
+    let mut list = Vec::new();
+    let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+    for c in 0..n {
+        list.clear();
+        for k in j.col_ptr[c]..j.col_ptr[c + 1] {
+            let row = j.row_idx[k];
+            let v = j.values[k];
+            for kk in jt.col_ptr[row]..jt.col_ptr[row + 1] {
+                let i = jt.row_idx[kk];
+                if mark[i] != c {
+                    mark[i] = c;
+                    acc[i] = 0.0;
+                    list.push(i);
+                }
+                acc[i] += v * jt.values[kk];
+            }
+        }
+        if mark[c] != c {
+            mark[c] = c;
+            acc[c] = 0.0;
+            list.push(c);
+        }
+        acc[c] += lambda;
+        for &i in &list {
+            rows.push(i);
+            cols.push(c);
+            vals.push(acc[i]);
+        }
+    }
+    CscMatrix::from_triplets(n, n, &rows, &cols, &vals).unwrap()
+}
+
+thread_local! {
+    static SYMLU: std::cell::RefCell<Option<(usize, faer::sparse::linalg::solvers::SymbolicLu<usize>)>> = const { std::cell::RefCell::new(None) };
+}
+
+/// LM direction from the augmented system [λI Jᵀ; J −I] [d; y] = [0; −Φ] (y = J d + Φ).
+fn aug_solve(j: &CscMatrix, lambda: f64, g: &[f64]) -> Option<Vec<f64>> {
+    use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+    let m = j.ncols;
+    let jt = j.transpose();
+    let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+    for c in 0..m {
+        rows.push(c);
+        cols.push(c);
+        vals.push(lambda);
+        rows.push(m + c);
+        cols.push(m + c);
+        vals.push(-1.0);
+        for k in j.col_ptr[c]..j.col_ptr[c + 1] {
+            rows.push(m + j.row_idx[k]);
+            cols.push(c);
+            vals.push(j.values[k]);
+        }
+        for k in jt.col_ptr[c]..jt.col_ptr[c + 1] {
+            rows.push(jt.row_idx[k]);
+            cols.push(m + c);
+            vals.push(jt.values[k]);
+        }
+    }
+    let a = CscMatrix::from_triplets(2 * m, 2 * m, &rows, &cols, &vals).ok()?;
+    let n = 2 * m;
+    let symm = SymbolicSparseColMatRef::new_checked(n, n, &a.col_ptr, None, &a.row_idx);
+    let key = a.row_idx.len() * 1_000_003 + n;
+    let sym = SYMLU.with(|c| {
+        let mut c = c.borrow_mut();
+        if c.as_ref().map(|x| x.0) != Some(key) {
+            *c = faer::sparse::linalg::solvers::SymbolicLu::try_new(symm)
+                .ok()
+                .map(|s| (key, s));
+        }
+        c.as_ref().map(|x| x.1.clone())
+    })?;
+    let mat = SparseColMatRef::new(symm, &a.values);
+    let lu = faer::sparse::linalg::solvers::Lu::try_new_with_symbolic(sym, mat).ok()?;
+    let mut rhs = vec![0.0; n];
+    for k in 0..m {
+        rhs[m + k] = -g[k];
+    }
+    lu.solve_in_place(faer::MatMut::from_column_major_slice_mut(&mut rhs, n, 1));
+    rhs.truncate(m);
+    rhs.iter().all(|x| x.is_finite()).then_some(rhs)
+}
+
+fn lu_solve(a: &CscMatrix, rhs: &mut [f64]) -> bool {
+    let f = to_faer(a);
+    let Ok(lu) = f.sp_lu() else { return false };
+    let n = rhs.len();
+    lu.solve_in_place(faer::MatMut::from_column_major_slice_mut(rhs, n, 1));
+    rhs.iter().all(|x| x.is_finite())
+}
+
+thread_local! {
+    static SYM: std::cell::RefCell<Option<(usize, faer::sparse::linalg::solvers::SymbolicLlt<usize>)>> = const { std::cell::RefCell::new(None) };
+}
+
+fn chol_solve(a: &CscMatrix, rhs: &mut [f64]) -> bool {
+    use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+    let n = a.nrows;
+    let symm = SymbolicSparseColMatRef::new_checked(n, n, &a.col_ptr, None, &a.row_idx);
+    let key = a.row_idx.len() * 1_000_003 + n;
+    let sym = SYM.with(|c| {
+        let mut c = c.borrow_mut();
+        if c.as_ref().map(|x| x.0) != Some(key) {
+            *c = faer::sparse::linalg::solvers::SymbolicLlt::try_new(symm, faer::Side::Lower)
+                .ok()
+                .map(|s| (key, s));
+        }
+        c.as_ref().map(|x| x.1.clone())
+    });
+    let Some(sym) = sym else { return false };
+    let mat = SparseColMatRef::new(symm, &a.values);
+    let Ok(llt) =
+        faer::sparse::linalg::solvers::Llt::try_new_with_symbolic(sym, mat, faer::Side::Lower)
+    else {
+        return false;
+    };
+    let n = rhs.len();
+    llt.solve_in_place(faer::MatMut::from_column_major_slice_mut(rhs, n, 1));
+    rhs.iter().all(|x| x.is_finite())
+}
+
+fn rho_of(p: &LocalProblem) -> Vec<f64> {
+    let d = p.dim;
+    let mut sq = vec![0.0; p.mu.len()];
+    for (i, j, v) in p.w.triplets() {
+        if i / d == j / d {
+            sq[i / d] += v * v;
+        }
+    }
+    let scale = envf("RHO", 1.0);
+    sq.iter()
+        .map(|&s| {
+            if s > 0.0 && s.is_finite() {
+                scale / s.sqrt()
+            } else {
+                scale
+            }
+        })
+        .collect()
+}
+
+/// Levenberg–Marquardt on ‖Φ‖² with the trust-region update of the damping.
+fn lm(
+    map: &Map,
+    r: &mut Vec<f64>,
+    deadline: Instant,
+    max_it: usize,
+    inner_target: f64,
+    log: bool,
+    mu_k: &mut f64,
+) -> usize {
+    let p = map.p;
+    let m = r.len();
+    let d = p.dim;
+    let nb = p.mu.len() * d * d;
+    let (mut g, mut dbl) = (vec![0.0; m], vec![0.0; nb]);
+    let (mut g2, mut dbl2) = (vec![0.0; m], vec![0.0; nb]);
+    let mut phi = map.eval(r, &mut g, &mut dbl);
+    let t0 = Instant::now();
+    let mut it = 0;
+    while it < max_it && Instant::now() < deadline && phi > inner_target {
+        it += 1;
+        let j = map.jacobian(&dbl);
+        let rn = coulomb::law::norm(r).max(1e-300);
+        let lambda = *mu_k * (phi / rn).min(1.0);
+        let dir = if std::env::var("CGLS").is_ok() {
+            // CGLS on min ‖J d + Φ‖² + λ‖d‖² (matrix-free)
+            let maxit = envf("CGLS", 200.0) as usize;
+            let mut x = vec![0.0; m];
+            let mut rr: Vec<f64> = g.iter().map(|v| -v).collect(); // b − J x
+            let mut sv = vec![0.0; m];
+            j.gemv_t_acc(1.0, &rr, &mut sv); // s = Jᵀ r − λ x
+            let mut pv = sv.clone();
+            let mut gamma: f64 = sv.iter().map(|v| v * v).sum();
+            let g0 = gamma;
+            for _ in 0..maxit {
+                let q = j.mul_vec(&pv);
+                let denom: f64 = q.iter().map(|v| v * v).sum::<f64>()
+                    + lambda * pv.iter().map(|v| v * v).sum::<f64>();
+                if denom <= 0.0 {
+                    break;
+                }
+                let alpha = gamma / denom;
+                for k in 0..m {
+                    x[k] += alpha * pv[k];
+                    rr[k] -= alpha * q[k];
+                }
+                sv.iter_mut().for_each(|v| *v = 0.0);
+                j.gemv_t_acc(1.0, &rr, &mut sv);
+                for k in 0..m {
+                    sv[k] -= lambda * x[k];
+                }
+                let gnew: f64 = sv.iter().map(|v| v * v).sum();
+                if gnew <= 1e-12 * g0 {
+                    break;
+                }
+                let beta = gnew / gamma;
+                gamma = gnew;
+                for k in 0..m {
+                    pv[k] = sv[k] + beta * pv[k];
+                }
+            }
+            Some(x)
+        } else if m <= envf("DENSE_MAX", 3000.0) as usize {
+            // dense JᵀJ + λI, Cholesky
+            let jt = j.transpose();
+            let mut a = faer::Mat::<f64>::zeros(m, m);
+            for c in 0..m {
+                for k in j.col_ptr[c]..j.col_ptr[c + 1] {
+                    let row = j.row_idx[k];
+                    let v = j.values[k];
+                    for kk in jt.col_ptr[row]..jt.col_ptr[row + 1] {
+                        let i = jt.row_idx[kk];
+                        a[(i, c)] += v * jt.values[kk];
+                    }
+                }
+                a[(c, c)] += lambda;
+            }
+            let mut dir = vec![0.0; m];
+            j.gemv_t_acc(-1.0, &g, &mut dir);
+            match a.llt(faer::Side::Lower) {
+                Ok(llt) => {
+                    llt.solve_in_place(faer::MatMut::from_column_major_slice_mut(&mut dir, m, 1));
+                    dir.iter().all(|x| x.is_finite()).then_some(dir)
+                }
+                Err(_) => None,
+            }
+        } else if std::env::var("AUG").is_err() {
+            let nm = normal_matrix(&j, lambda);
+            let mut dir = vec![0.0; m];
+            j.gemv_t_acc(-1.0, &g, &mut dir);
+            chol_solve(&nm, &mut dir).then_some(dir)
+        } else {
+            aug_solve(&j, lambda, &g)
+        };
+        let Some(dir) = dir else {
+            *mu_k *= 10.0;
+            continue;
+        };
+        let jd = j.mul_vec(&dir);
+        let grad = {
+            let mut gg = vec![0.0; m];
+            j.gemv_t_acc(1.0, &g, &mut gg);
+            coulomb::law::norm(&gg)
+        };
+        let pred = phi * phi
+            - jd.iter()
+                .zip(&g)
+                .map(|(a, b)| (a + b) * (a + b))
+                .sum::<f64>();
+        let trial: Vec<f64> = r.iter().zip(&dir).map(|(a, b)| a + b).collect();
+        let phi2 = map.eval(&trial, &mut g2, &mut dbl2);
+        let ratio = (phi * phi - phi2 * phi2) / pred.max(1e-300);
+        if log {
+            println!(
+                "  lm {it} phi {phi:.3e} -> {phi2:.3e} lam {lambda:.2e} ratio {ratio:.2} |J'g|/|g| {:.2e} |d| {:.2e} err {:.2e} t {:.2}", grad / phi, coulomb::law::norm(&dir),
+                err(p, &trial),
+                t0.elapsed().as_secs_f64()
+            );
+        }
+        if ratio > 1e-4 && phi2 < phi {
+            *r = trial;
+            std::mem::swap(&mut g, &mut g2);
+            std::mem::swap(&mut dbl, &mut dbl2);
+            phi = phi2;
+            if ratio > 0.75 {
+                *mu_k = (*mu_k / 4.0).max(1e-8);
+            }
+        } else {
+            *mu_k *= 4.0;
+        }
+    }
+    it
+}
+
+/// Semismooth Newton with J (LU), Armijo, full step after a failed search (Siconos-style).
+fn newton(
+    map: &Map,
+    r: &mut Vec<f64>,
+    deadline: Instant,
+    max_it: usize,
+    target: f64,
+    log: bool,
+) -> (usize, f64) {
+    let p = map.p;
+    let m = r.len();
+    let d = p.dim;
+    let nb = p.mu.len() * d * d;
+    let (mut g, mut dbl) = (vec![0.0; m], vec![0.0; nb]);
+    let (mut g2, mut dbl2) = (vec![0.0; m], vec![0.0; nb]);
+    let mut phi = map.eval(r, &mut g, &mut dbl);
+    let mut it = 0;
+    let mut best = (phi, r.clone());
+    while it < max_it && Instant::now() < deadline && phi > target {
+        it += 1;
+        let j = map.jacobian(&dbl);
+        let mut dir: Vec<f64> = g.iter().map(|x| -x).collect();
+        if !lu_solve(&j, &mut dir) {
+            if log {
+                println!("   lu failed");
+            }
+            break;
+        }
+        let mut t = 1.0;
+        let mut ok = false;
+        for _ in 0..30 {
+            let trial: Vec<f64> = r.iter().zip(&dir).map(|(a, b)| a + t * b).collect();
+            let phi2 = map.eval(&trial, &mut g2, &mut dbl2);
+            if phi2 <= (1.0 - 1e-4 * t) * phi {
+                *r = trial;
+                std::mem::swap(&mut g, &mut g2);
+                std::mem::swap(&mut dbl, &mut dbl2);
+                phi = phi2;
+                ok = true;
+                break;
+            }
+            t *= 0.5;
+        }
+        if !ok {
+            // full step anyway
+            for k in 0..m {
+                r[k] += dir[k];
+            }
+            phi = map.eval(r, &mut g, &mut dbl);
+            t = -1.0;
+        }
+        if phi < best.0 {
+            best = (phi, r.clone());
+        }
+        if log {
+            println!("   nsn {it} phi {phi:.3e} t {t} err {:.2e}", err(p, r));
+        }
+    }
+    *r = best.1;
+    (it, best.0)
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let path = std::path::Path::new(&args[1]);
+    let method = args.get(2).map(String::as_str).unwrap_or("lm");
+    let warm: f64 = args.get(3).map(|s| s.parse().unwrap()).unwrap_or(2.0);
+    let limit: f64 = args.get(4).map(|s| s.parse().unwrap()).unwrap_or(10.0);
+    let log = std::env::var("LOG").is_ok();
+    let file = coulomb::fclib::read(path).unwrap();
+    let p = match file.problem {
+        Problem::Local(p) => p,
+        Problem::Global(g) => {
+            let s = coulomb::Solver::new_owned(Problem::Global(g), coulomb::Settings::default())
+                .unwrap();
+            s.local().clone()
+        }
+    };
+    let name = path.file_stem().unwrap().to_string_lossy();
+    let t0 = Instant::now();
+    let s = coulomb::Settings {
+        tol: envf("WARM_TOL", 1e-8),
+        time_limit: Some(Duration::from_secs_f64(warm)),
+        ..Default::default()
+    };
+    let sol = coulomb::solve(&Problem::Local(p.clone()), &s).unwrap();
+    let mut r = sol.r.clone();
+    let e0 = err(&p, &r);
+    let tw = t0.elapsed().as_secs_f64();
+    if method == "base" || e0 <= 1e-8 {
+        println!(
+            "{name} {method}: warm {:?} err {e0:.2e} t {tw:.2}",
+            sol.status
+        );
+        return;
+    }
+    let deadline = Instant::now() + Duration::from_secs_f64(limit);
+    let rho = rho_of(&p);
+    let m = r.len();
+    let t1 = Instant::now();
+    let tol = 1e-8;
+    match method {
+        "lm" => {
+            let map = Map {
+                p: &p,
+                rho: rho.clone(),
+                sigma: 0.0,
+                center: vec![0.0; m],
+            };
+            // run LM until err ≤ tol: target on ‖Φ‖ checked via err every call
+            let mut total = 0;
+            let mut mu_k = envf("LM_MU", 1e-2);
+            while Instant::now() < deadline && err(&p, &r) > tol {
+                let n = lm(&map, &mut r, deadline, 5, 0.0, log, &mut mu_k);
+                total += n;
+                if n == 0 {
+                    break;
+                }
+            }
+            println!(
+                "{name} lm: warm err {e0:.2e} ({tw:.2}s) -> err {:.2e} in {:.2}s, {total} steps",
+                err(&p, &r),
+                t1.elapsed().as_secs_f64()
+            );
+        }
+        "lmsw" => {
+            // LM on the AC map; when ‖Φ‖ stalls, change ρ (the pieces of the map move, r stays)
+            let scales = [1.0, 0.1, 10.0, 0.3, 3.0, 0.03, 30.0];
+            let mut which = 0;
+            let mut mu_k = envf("LM_MU", 1e-2);
+            let mut total = 0;
+            let mut switches = 0;
+            let mut best = (e0, r.clone());
+            while Instant::now() < deadline && err(&p, &r) > tol {
+                let rho_s: Vec<f64> = rho.iter().map(|x| x * scales[which]).collect();
+                let map = Map {
+                    p: &p,
+                    rho: rho_s,
+                    sigma: 0.0,
+                    center: vec![0.0; m],
+                };
+                let e_before = err(&p, &r);
+                if e_before < best.0 {
+                    best = (e_before, r.clone());
+                }
+                let n = lm(&map, &mut r, deadline, 8, 0.0, false, &mut mu_k);
+                total += n;
+                let e_after = err(&p, &r);
+                if log {
+                    println!(
+                        "  seg rho x{} err {e_before:.2e} -> {e_after:.2e} t {:.2}",
+                        scales[which],
+                        t1.elapsed().as_secs_f64()
+                    );
+                }
+                if e_after > 0.7 * e_before {
+                    which = (which + 1) % scales.len();
+                    switches += 1;
+                    mu_k = envf("LM_MU", 1e-2);
+                }
+            }
+            if err(&p, &r) > best.0 {
+                r = best.1;
+            }
+            println!(
+                "{name} lmsw: warm err {e0:.2e} ({tw:.2}s) -> err {:.2e} in {:.2}s, {total} steps, {switches} switches",
+                err(&p, &r),
+                t1.elapsed().as_secs_f64()
+            );
+        }
+        "nsnsw" => {
+            // regularized semismooth Newton (J + λI, LU) on the AC map with Armijo; ρ switched on stall
+            let scales = [1.0, 0.1, 10.0, 0.3, 3.0, 0.03, 30.0];
+            let mut which = 0;
+            let mut total = 0;
+            let mut switches = 0;
+            let d = p.dim;
+            let nb = p.mu.len() * d * d;
+            while Instant::now() < deadline && err(&p, &r) > tol {
+                let rho_s: Vec<f64> = rho.iter().map(|x| x * scales[which]).collect();
+                let map = Map {
+                    p: &p,
+                    rho: rho_s,
+                    sigma: 0.0,
+                    center: vec![0.0; m],
+                };
+                let e_before = err(&p, &r);
+                let (mut g, mut dbl) = (vec![0.0; m], vec![0.0; nb]);
+                let (mut g2, mut dbl2) = (vec![0.0; m], vec![0.0; nb]);
+                let mut phi = map.eval(&r, &mut g, &mut dbl);
+                for _ in 0..8 {
+                    if Instant::now() >= deadline {
+                        break;
+                    }
+                    total += 1;
+                    let j = map.jacobian(&dbl);
+                    let rn = coulomb::law::norm(&r).max(1e-300);
+                    let mut lambda = envf("LAM", 1e-2) * (phi / rn).min(1.0);
+                    let mut moved = false;
+                    for _ in 0..4 {
+                        let shifted = j.add_scaled(1.0, &CscMatrix::identity(m, lambda));
+                        let mut dir: Vec<f64> = g.iter().map(|x| -x).collect();
+                        if lu_solve(&shifted, &mut dir) {
+                            let mut t = 1.0;
+                            for _ in 0..12 {
+                                let trial: Vec<f64> =
+                                    r.iter().zip(&dir).map(|(a, b)| a + t * b).collect();
+                                let phi2 = map.eval(&trial, &mut g2, &mut dbl2);
+                                if phi2 <= (1.0 - 1e-4 * t) * phi {
+                                    r = trial;
+                                    std::mem::swap(&mut g, &mut g2);
+                                    std::mem::swap(&mut dbl, &mut dbl2);
+                                    phi = phi2;
+                                    moved = true;
+                                    break;
+                                }
+                                t *= 0.5;
+                            }
+                        }
+                        if moved {
+                            break;
+                        }
+                        lambda = (lambda * 100.0).max(1e-10);
+                    }
+                    if !moved {
+                        break;
+                    }
+                }
+                let e_after = err(&p, &r);
+                if log {
+                    println!(
+                        "  seg rho x{} err {e_before:.2e} -> {e_after:.2e} t {:.2}",
+                        scales[which],
+                        t1.elapsed().as_secs_f64()
+                    );
+                }
+                if e_after > 0.7 * e_before {
+                    which = (which + 1) % scales.len();
+                    switches += 1;
+                }
+            }
+            println!(
+                "{name} nsnsw: warm err {e0:.2e} ({tw:.2}s) -> err {:.2e} in {:.2}s, {total} steps, {switches} switches",
+                err(&p, &r),
+                t1.elapsed().as_secs_f64()
+            );
+        }
+        "nsn" => {
+            let map = Map {
+                p: &p,
+                rho: rho.clone(),
+                sigma: 0.0,
+                center: vec![0.0; m],
+            };
+            let (n, _) = newton(&map, &mut r, deadline, 200, 0.0, log);
+            println!(
+                "{name} nsn: warm err {e0:.2e} ({tw:.2}s) -> err {:.2e} in {:.2}s, {n} steps",
+                err(&p, &r),
+                t1.elapsed().as_secs_f64()
+            );
+        }
+        "ppa" | "ppalm" => {
+            let wmax = p.w.diagonal().iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+            let c = envf("SIG", 5.0);
+            let nu = envf("NU", 1.0);
+            let mut e = e0;
+            let mut k = 0;
+            let mut sigma = c * e.powf(nu) * wmax;
+            while e > tol && Instant::now() < deadline && k < 500 {
+                k += 1;
+                let map = Map {
+                    p: &p,
+                    rho: rho.clone(),
+                    sigma,
+                    center: r.clone(),
+                };
+                let mut rk = r.clone();
+                let (n, phi) = if method == "ppa" {
+                    newton(&map, &mut rk, deadline, 50, 0.0, false)
+                } else {
+                    {
+                        let tgt = 1e-14 * coulomb::law::norm(&rk);
+                        {
+                            let mut mu_k = envf("LM_MU", 1e-2);
+                            (
+                                lm(
+                                    &map,
+                                    &mut rk,
+                                    deadline,
+                                    envf("INNER", 50.0) as usize,
+                                    tgt,
+                                    std::env::var("LOG2").is_ok(),
+                                    &mut mu_k,
+                                ),
+                                0.0,
+                            )
+                        }
+                    }
+                };
+                let e1 = err(&p, &rk);
+                if log {
+                    println!(
+                        "  ppa {k} sigma {sigma:.2e} inner {n} phi {phi:.2e} err {e:.2e} -> {e1:.2e} t {:.2}",
+                        t1.elapsed().as_secs_f64()
+                    );
+                }
+                r = rk;
+                e = e1;
+                sigma = c * e.powf(nu) * wmax;
+            }
+            println!(
+                "{name} {method}: warm err {e0:.2e} ({tw:.2}s) -> err {:.2e} in {:.2}s, {k} prox steps",
+                err(&p, &r),
+                t1.elapsed().as_secs_f64()
+            );
+        }
+        "diag" => {
+            let u = p.velocity(&r);
+            let d = p.dim;
+            let scale = p.error(&r).scale;
+            let rn_max = (0..p.mu.len()).map(|i| r[i * d]).fold(0.0f64, f64::max);
+            let un_max = (0..p.mu.len())
+                .map(|i| u[i * d].abs())
+                .fold(0.0f64, f64::max);
+            println!("scale {scale:.3e} max rN {rn_max:.3e} max |uN| {un_max:.3e}");
+            let mut rows: Vec<(f64, String)> = Vec::new();
+            for i in 0..p.mu.len() {
+                let ui = &u[i * d..(i + 1) * d];
+                let ri = &r[i * d..(i + 1) * d];
+                let e = coulomb::natural_map::contact_residual_sq(p.mu[i], ui, ri).sqrt();
+                let rt = ri[1..].iter().map(|x| x * x).sum::<f64>().sqrt();
+                let ut = ui[1..].iter().map(|x| x * x).sum::<f64>().sqrt();
+                rows.push((
+                    e,
+                    format!(
+                        "c{i} mu {} rN {:.2e} |rT|/mu rN {:.4} uN {:.2e} |uT| {:.2e} e {e:.2e}",
+                        p.mu[i],
+                        ri[0],
+                        rt / (p.mu[i] * ri[0]).max(1e-300),
+                        ui[0],
+                        ut
+                    ),
+                ));
+            }
+            rows.sort_by(|a, b| b.0.partial_cmp(&a.0).unwrap());
+            let tot: f64 = rows.iter().map(|x| x.0 * x.0).sum::<f64>().sqrt();
+            println!("total e {tot:.3e} err {:.3e}", err(&p, &r));
+            for x in rows.iter().take(25) {
+                println!("{}", x.1);
+            }
+        }
+        _ => panic!("method"),
+    }
+}

@@ -20,7 +20,8 @@
 //! - `base`: the start point only.
 //!
 //! Env: LOG (per-step lines), RHO (multiplies every ρ_i), LM_MU (first damping factor),
-//! CGLS=N (matrix-free LM direction, N CGLS steps), DENSE_MAX (dense JᵀJ up to this m).
+//! CGLS=N (matrix-free LM direction, N CGLS steps), DENSE_MAX (dense JᵀJ up to this m),
+//! PERCONTACT (`lmsw` draws a log-uniform factor in [0.1, 10] per contact at each switch).
 //! err is always the error of docs/error.md on the stored local problem (a global file is
 //! turned into its Delassus form W = Hᵀ M⁻¹ H, q = Hᵀ M⁻¹ f + w first).
 #![allow(clippy::needless_range_loop)]
@@ -564,7 +565,21 @@ fn main() {
             let mut switches = 0;
             let mut best = (e0, r.clone());
             while Instant::now() < deadline && err(&p, &r) > tol {
-                let rho_s: Vec<f64> = rho.iter().map(|x| x * scales[which]).collect();
+                let rho_s: Vec<f64> = if std::env::var("PERCONTACT").is_ok() && switches > 0 {
+                    // every ρ_i times its own log-uniform factor in [0.1, 10] (seeded by the switch)
+                    let mut state = 0x9E37_79B9_7F4A_7C15u64.wrapping_mul(switches as u64 + 1);
+                    rho.iter()
+                        .map(|x| {
+                            state = state
+                                .wrapping_mul(6364136223846793005)
+                                .wrapping_add(1442695040888963407);
+                            let u = (state >> 11) as f64 / (1u64 << 53) as f64;
+                            x * 10f64.powf(2.0 * u - 1.0)
+                        })
+                        .collect()
+                } else {
+                    rho.iter().map(|x| x * scales[which]).collect()
+                };
                 let map = Map {
                     p: &p,
                     rho: rho_s,

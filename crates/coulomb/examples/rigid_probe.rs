@@ -21,6 +21,7 @@
 //!
 //! Env: LOG (per-step lines), RHO (multiplies every ρ_i), LM_MU (first damping factor),
 //! CGLS=N (matrix-free LM direction, N CGLS steps), DENSE_MAX (dense JᵀJ up to this m),
+//! WATCH=K (`lmsw` takes K unconditional LM steps instead of switching ρ),
 //! PERCONTACT (`lmsw` draws a log-uniform factor in [0.1, 10] per contact at each switch).
 //! err is always the error of docs/error.md on the stored local problem (a global file is
 //! turned into its Delassus form W = Hᵀ M⁻¹ H, q = Hᵀ M⁻¹ f + w first).
@@ -297,7 +298,13 @@ fn rho_of(p: &LocalProblem) -> Vec<f64> {
         .collect()
 }
 
+thread_local! {
+    /// steps `lm` accepts whatever the ratio (the watchdog of `lmsw` with WATCH)
+    static FORCE: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
 /// Levenberg–Marquardt on ‖Φ‖² with the trust-region update of the damping.
+
 fn lm(
     map: &Map,
     r: &mut Vec<f64>,
@@ -416,7 +423,14 @@ fn lm(
                 t0.elapsed().as_secs_f64()
             );
         }
-        if ratio > 1e-4 && phi2 < phi {
+        let forced = FORCE.with(|c| {
+            let n = c.get();
+            if n > 0 {
+                c.set(n - 1);
+            }
+            n > 0
+        });
+        if forced || (ratio > 1e-4 && phi2 < phi) {
             *r = trial;
             std::mem::swap(&mut g, &mut g2);
             std::mem::swap(&mut dbl, &mut dbl2);
@@ -600,7 +614,12 @@ fn main() {
                         t1.elapsed().as_secs_f64()
                     );
                 }
-                if e_after > 0.7 * e_before {
+                if e_after > 0.7 * e_before && std::env::var("WATCH").is_ok() {
+                    // non-monotone escape: the next steps are taken whatever the merit says
+                    FORCE.with(|c| c.set(envf("WATCH", 2.0) as usize));
+                    mu_k = 1e-6;
+                    switches += 1;
+                } else if e_after > 0.7 * e_before {
                     which = (which + 1) % scales.len();
                     switches += 1;
                     mu_k = envf("LM_MU", 1e-2);

@@ -304,7 +304,6 @@ thread_local! {
 }
 
 /// Levenberg–Marquardt on ‖Φ‖² with the trust-region update of the damping.
-
 fn lm(
     map: &Map,
     r: &mut Vec<f64>,

@@ -162,8 +162,11 @@ pub fn project(world: &mut World, t: f64, settings: &Projection) -> ProjectionSt
     project_measured(world, t, settings).0
 }
 
-/// Constraints per chunk of a parallel pass over one colour.
-const CHUNK: usize = 256;
+/// Largest number of constraints per chunk of a parallel pass over one colour (about 32
+/// chunks per colour, at least 32 constraints each).
+const CHUNK: usize = 512;
+/// A colour with fewer constraints than this is swept sequentially (same numbers).
+const PARALLEL_MIN: usize = 256;
 
 /// Raw position storage shared by the updates of one colour, which move disjoint spheres.
 #[derive(Clone, Copy)]
@@ -339,8 +342,8 @@ pub fn project_measured(
         let mut worst: f64 = 0.0;
         for k in 0..colouring.colours() {
             let part = &mut cons[colouring.starts[k]..colouring.starts[k + 1]];
-            let w = if part.len() >= 2 * CHUNK {
-                part.par_chunks_mut(CHUNK)
+            let w = if part.len() >= PARALLEL_MIN {
+                part.par_chunks_mut((part.len() / 32).clamp(PARALLEL_MIN / 8, CHUNK))
                     .map(|ch| ch.iter_mut().map(update).fold(0.0, f64::max))
                     .reduce(|| 0.0, f64::max)
             } else {

@@ -456,4 +456,65 @@ mod tests {
         // lifting both: ΔE_p = m g (0.005 + 0.015)
         assert!((s.work - 9.81 * 0.02).abs() < 1e-3, "{s:?}");
     }
+
+    /// A layer of side × side beads sunk 1–2 mm into the floor (1 mm apart) and a layer of
+    /// (side − 1)² beads in its hollows, sunk about 1 mm into their four neighbours below:
+    /// enough constraints per colour for the parallel path.
+    fn sunk_layers(side: usize) -> World {
+        let mut w = World::new();
+        w.obstacles.push(Obstacle::fixed(
+            "ground",
+            Shape::Plane {
+                point: Vec3::ZERO,
+                normal: Vec3::Z,
+            },
+        ));
+        let r = 0.05;
+        let s = 2.0 * r + 1e-3;
+        for i in 0..side * side {
+            let (x, y) = ((i % side) as f64, (i / side) as f64);
+            let sink = 1e-3 * (1.5 + 0.5 * (0.37 * i as f64).sin());
+            let mut b = Sphere::new(Vec3::new(s * x, s * y, r - sink), r, 1.0);
+            b.velocity = Vec3::new(0.0, 0.0, -0.1);
+            w.bodies.push(b);
+        }
+        let rise = (4.0 * r * r - 0.5 * s * s).sqrt();
+        for i in 0..(side - 1) * (side - 1) {
+            let (x, y) = ((i % (side - 1)) as f64, (i / (side - 1)) as f64);
+            let z = r + rise - 2e-3 - 1e-3 * (0.71 * i as f64).cos();
+            let b = Sphere::new(Vec3::new(s * (x + 0.5), s * (y + 0.5), z), r, 1.3);
+            w.bodies.push(b);
+        }
+        w
+    }
+
+    #[test]
+    fn coloured_projection_is_the_same_for_one_and_two_threads() {
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let mut w = sunk_layers(30);
+                let (s, pen) = project_measured(&mut w, 0.0, &Projection::default());
+                (w, s, pen)
+            })
+        };
+        let (w1, s1, p1) = run(1);
+        let (w2, s2, p2) = run(2);
+        assert_eq!(w1, w2);
+        assert_eq!(s1, s2);
+        assert_eq!(p1, p2);
+        // corrected: from ~2–3 mm (5 % R) down to the target 1e-4 R
+        assert!(s1.max_before > 1e-3 && s1.sweeps >= 2, "{s1:?}");
+        assert!(s1.max_after <= 1e-4 * 0.05 * 1.0001, "{s1:?}");
+        // the penetrations reported are those measured from scratch
+        assert_eq!(p1, penetrations(&w1, 0.0));
+        // below the trigger: nothing moves, the same penetrations
+        let mut w = w1.clone();
+        let (s, p) = project_measured(&mut w, 0.0, &Projection::default());
+        assert_eq!((s.sweeps, &w), (0, &w1));
+        assert_eq!(p, penetrations(&w1, 0.0));
+    }
 }

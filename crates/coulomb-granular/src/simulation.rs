@@ -34,7 +34,12 @@ pub struct Params {
     /// position correction after each step ([`crate::projection`]); `None`: the plain
     /// Moreau–Jean scheme (the paper's)
     pub projection: Option<Projection>,
-    /// which solver takes each step (`solver` is used by [`StepMethod::Library`] only)
+    /// which solver takes each step (`solver` is used by [`StepMethod::Library`] only).
+    /// Default [`StepMethod::Library`]: every caller that sets `solver` (`coulomb paper`, the
+    /// FCLIB corpus, Python's `solver=`) gets the steps solved by it, and rolling resistance
+    /// and per-step histories ([`Simulation::last_history`]) need it; for large heaps at
+    /// err ≤ 1e-4 use `StepMethod::Nsgs(NsgsSettings::default())`, as `coulomb simulate`
+    /// does (docs/scaling.md)
     pub method: StepMethod,
     /// rolling-friction coefficient μ_r ≥ 0 (dimensionless): rolling torque impulse
     /// ≤ μ_r R_e r_N ([`crate::rolling`]); 0 (default): no rolling resistance

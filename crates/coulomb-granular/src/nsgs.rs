@@ -323,8 +323,29 @@ impl StepProblem {
             let wi = contact_offset_one(world, c, data);
             ContactRow::new(world, c, wi, data.mu, &inv_mass)
         };
-        let rows: Option<Vec<ContactRow>> = contacts.par_iter().map(row).collect();
-        let Some(rows) = rows else {
+        // an indexed collect (each row written in place, in parallel); an invalid contact
+        // leaves a placeholder and raises `failed`
+        let failed = std::sync::atomic::AtomicBool::new(false);
+        let rows: Vec<ContactRow> = contacts
+            .par_iter()
+            .map(|c| {
+                row(c).unwrap_or_else(|| {
+                    failed.store(true, std::sync::atomic::Ordering::Relaxed);
+                    ContactRow {
+                        a: 0,
+                        b: None,
+                        frame: [[0.0; 3]; 3],
+                        arm_a: [0.0; 3],
+                        arm_b: [0.0; 3],
+                        w: [0.0; 3],
+                        mu: 0.0,
+                        w_ii: [0.0; 9],
+                        w_inv: [0.0; 9],
+                    }
+                })
+            })
+            .collect();
+        if failed.into_inner() {
             // the first invalid contact, found sequentially (deterministic)
             let i = contacts.iter().position(|c| row(c).is_none()).unwrap_or(0);
             let bad_body = contacts.get(i).is_none_or(|c| {
@@ -336,7 +357,7 @@ impl StepProblem {
             } else {
                 StepProblemError::Singular(i)
             });
-        };
+        }
         Ok(Self {
             rows,
             mass,
@@ -1275,6 +1296,35 @@ mod tests {
             dup.order[0] = dup.order[1];
             assert!(!dup.is_valid(&p.rows, world.bodies.len()));
         }
+    }
+
+    #[test]
+    fn colouring_past_64_colours_on_one_sphere() {
+        // sphere 0 touches spheres 1..=70 (70 colours), and a chain 71–72–73 on the side
+        let mut pairs: Vec<(usize, Option<usize>)> = (1..=70).map(|j| (0, Some(j))).collect();
+        pairs.extend([(71, Some(72)), (72, Some(73)), (0, None), (5, Some(6))]);
+        let c = Colouring::greedy_pairs(pairs.len(), 74, |i| pairs[i]);
+        assert_eq!(c.colours(), 71);
+        let mut order = c.order.clone();
+        order.sort_unstable();
+        assert_eq!(order, (0..pairs.len()).collect::<Vec<_>>());
+        for k in 0..c.colours() {
+            let mut seen = std::collections::HashSet::new();
+            for &i in &c.order[c.starts[k]..c.starts[k + 1]] {
+                let (a, b) = pairs[i];
+                assert!(seen.insert(a), "sphere {a} twice in colour {k}");
+                if let Some(b) = b {
+                    assert!(seen.insert(b), "sphere {b} twice in colour {k}");
+                }
+            }
+        }
+        // (0, None) comes after the 70 contacts of sphere 0: colour 70; the chain reuses 0, 1
+        let colour_of = |i: usize| {
+            (0..c.colours()).find(|&k| c.order[c.starts[k]..c.starts[k + 1]].contains(&i))
+        };
+        assert_eq!(colour_of(72), Some(70));
+        assert_eq!(colour_of(70), Some(0));
+        assert_eq!(colour_of(71), Some(1));
     }
 
     #[test]

@@ -117,18 +117,22 @@ pub fn impact_offset(restitution: f64, u_nk: f64) -> f64 {
 /// w: the obstacles' prescribed motion −tₖ·V_B(p, t_{k+1}) plus the impact law's
 /// [`impact_offset`] on the normal row.
 pub fn contact_offset(world: &World, contacts: &[Contact], data: &StepData) -> Vec<f64> {
-    let mut w = vec![0.0; 3 * contacts.len()];
-    for (i, c) in contacts.iter().enumerate() {
-        if let Partner::Obstacle(o) = c.partner {
-            if let Some(ob) = world.obstacles.get(o) {
-                let vb = ob.motion.velocity_at(c.point, data.t_end);
-                w[3 * i] = -c.normal.dot(vb);
-                w[3 * i + 1] = -c.t1.dot(vb);
-                w[3 * i + 2] = -c.t2.dot(vb);
-            }
+    contacts
+        .iter()
+        .flat_map(|c| contact_offset_one(world, c, data))
+        .collect()
+}
+
+/// w_i of one contact (the three entries of [`contact_offset`] for `c`).
+pub fn contact_offset_one(world: &World, c: &Contact, data: &StepData) -> [f64; 3] {
+    let mut w = [0.0; 3];
+    if let Partner::Obstacle(o) = c.partner {
+        if let Some(ob) = world.obstacles.get(o) {
+            let vb = ob.motion.velocity_at(c.point, data.t_end);
+            w = [-c.normal.dot(vb), -c.t1.dot(vb), -c.t2.dot(vb)];
         }
-        w[3 * i] += impact_offset(data.restitution, c.normal_velocity);
     }
+    w[0] += impact_offset(data.restitution, c.normal_velocity);
     w
 }
 

@@ -150,74 +150,144 @@ pub fn relative_velocity(world: &World, a: usize, partner: Partner, p: Vec3, t: 
     va - vb
 }
 
-/// Uniform grid broad phase: candidate sphere pairs (i < j) whose bounding boxes, enlarged by
-/// `margin`, may overlap. Cells have the size of the largest enlarged diameter, so each sphere
-/// is compared with the spheres of its 27 neighbouring cells only: O(N) for bounded density.
-pub fn candidate_pairs(world: &World, margin: f64) -> Vec<(usize, usize)> {
-    let rmax = world
-        .bodies
-        .iter()
-        .map(|b| b.radius)
-        .fold(0.0_f64, f64::max);
-    let cell = (2.0 * rmax + margin).max(1e-12);
-    let key = |x: Vec3| -> [i64; 3] {
-        let k = |c: f64| (c / cell).floor().clamp(-1e15, 1e15) as i64;
-        [k(x.x), k(x.y), k(x.z)]
-    };
-    let keys: Vec<[i64; 3]> = world.bodies.par_iter().map(|b| key(b.position)).collect();
-    let test = |i: usize, j: usize| -> bool {
-        let (Some(a), Some(b)) = (world.bodies.get(i), world.bodies.get(j)) else {
-            return false;
-        };
-        let reach = a.radius + b.radius + margin;
-        (a.position - b.position).norm_sq() <= reach * reach
-    };
-    let mut pairs: Vec<(usize, usize)> = match DenseGrid::new(&keys) {
-        // each sphere's neighbours in parallel (rayon), in sphere order
-        Some(grid) => (0..keys.len())
+/// Runs `f` over the chunks `[c·chunk, (c+1)·chunk) ∩ [0, n)` in parallel (rayon), each
+/// chunk pushing its items into its own buffer, and concatenates the buffers in chunk order
+/// (the copy in parallel too): the result does not depend on the number of threads.
+pub(crate) fn par_chunked<T: Send>(
+    n: usize,
+    chunk: usize,
+    f: impl Fn(std::ops::Range<usize>, &mut Vec<T>) + Sync,
+) -> Vec<T> {
+    let chunk = chunk.max(1);
+    let parts: Vec<Vec<T>> = (0..n.div_ceil(chunk))
+        .into_par_iter()
+        .map(|c| {
+            let mut out = Vec::new();
+            f(c * chunk..((c + 1) * chunk).min(n), &mut out);
+            out
+        })
+        .collect();
+    let total = parts.iter().map(Vec::len).sum();
+    let mut out: Vec<T> = Vec::with_capacity(total);
+    {
+        // disjoint destination slices, one per part, filled in parallel
+        let mut slots: Vec<&mut [std::mem::MaybeUninit<T>]> = Vec::with_capacity(parts.len());
+        let mut rest = &mut out.spare_capacity_mut()[..total];
+        for p in &parts {
+            let (head, tail) = rest.split_at_mut(p.len());
+            slots.push(head);
+            rest = tail;
+        }
+        parts
             .into_par_iter()
-            .flat_map_iter(|i| {
-                let mut out = Vec::new();
-                grid.neighbours(keys[i], |j| {
-                    if j > i && test(i, j) {
-                        out.push((i, j));
-                    }
-                });
-                out.sort_unstable();
-                out
-            })
-            .collect(),
-        None => {
-            let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::with_capacity(keys.len());
+            .zip(slots.into_par_iter())
+            .for_each(|(p, slot)| {
+                for (dst, x) in slot.iter_mut().zip(p) {
+                    dst.write(x);
+                }
+            });
+    }
+    // SAFETY: the `total` slots were all written above (the parts' lengths sum to `total`)
+    unsafe { out.set_len(total) };
+    out
+}
+
+/// Spheres per chunk of the parallel broad and narrow phases.
+pub(crate) const SPHERE_CHUNK: usize = 256;
+
+/// The uniform grid of the broad phase: cells of the size of the largest enlarged diameter
+/// 2 R_max + margin, so that each sphere is compared with the spheres of its 27
+/// neighbouring cells only (O(N) for bounded density).
+pub(crate) struct BroadPhase<'a> {
+    world: &'a World,
+    margin: f64,
+    keys: Vec<[i64; 3]>,
+    dense: Option<DenseGrid>,
+    hash: HashMap<[i64; 3], Vec<usize>>,
+}
+
+impl<'a> BroadPhase<'a> {
+    pub(crate) fn new(world: &'a World, margin: f64) -> Self {
+        let rmax = world
+            .bodies
+            .iter()
+            .map(|b| b.radius)
+            .fold(0.0_f64, f64::max);
+        let cell = (2.0 * rmax + margin).max(1e-12);
+        let key = |x: Vec3| -> [i64; 3] {
+            let k = |c: f64| (c / cell).floor().clamp(-1e15, 1e15) as i64;
+            [k(x.x), k(x.y), k(x.z)]
+        };
+        let keys: Vec<[i64; 3]> = world.bodies.par_iter().map(|b| key(b.position)).collect();
+        let dense = DenseGrid::new(&keys);
+        let mut hash: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+        if dense.is_none() {
+            hash.reserve(keys.len());
             for (i, k) in keys.iter().enumerate() {
-                grid.entry(*k).or_default().push(i);
+                hash.entry(*k).or_default().push(i);
             }
-            (0..keys.len())
-                .into_par_iter()
-                .flat_map_iter(|i| {
-                    let [cx, cy, cz] = keys[i];
-                    let mut out = Vec::new();
-                    for dx in -1..=1 {
-                        for dy in -1..=1 {
-                            for dz in -1..=1 {
-                                let cell = grid.get(&[cx + dx, cy + dy, cz + dz]);
-                                for &j in cell.into_iter().flatten() {
-                                    if j > i && test(i, j) {
-                                        out.push((i, j));
-                                    }
-                                }
+        }
+        Self {
+            world,
+            margin,
+            keys,
+            dense,
+            hash,
+        }
+    }
+
+    /// The spheres j > i whose enlarged bounding spheres meet sphere i's (|x_i − x_j| ≤
+    /// R_i + R_j + margin), in increasing order, into `out` (cleared first).
+    pub(crate) fn partners(&self, i: usize, out: &mut Vec<usize>) {
+        out.clear();
+        let bodies = &self.world.bodies;
+        let Some(a) = bodies.get(i) else {
+            return;
+        };
+        let mut test = |j: usize| {
+            if j > i {
+                if let Some(b) = bodies.get(j) {
+                    let reach = a.radius + b.radius + self.margin;
+                    if (a.position - b.position).norm_sq() <= reach * reach {
+                        out.push(j);
+                    }
+                }
+            }
+        };
+        let k = self.keys[i];
+        match &self.dense {
+            Some(grid) => grid.neighbours(k, test),
+            None => {
+                let [cx, cy, cz] = k;
+                for dx in -1..=1 {
+                    for dy in -1..=1 {
+                        for dz in -1..=1 {
+                            let cell = self.hash.get(&[cx + dx, cy + dy, cz + dz]);
+                            for &j in cell.into_iter().flatten() {
+                                test(j);
                             }
                         }
                     }
-                    out.sort_unstable();
-                    out
-                })
-                .collect()
+                }
+            }
         }
-    };
-    // already in (i, j) order; kept as a guarantee
-    pairs.par_sort_unstable();
-    pairs
+        out.sort_unstable();
+    }
+}
+
+/// Uniform grid broad phase: candidate sphere pairs (i < j) whose bounding boxes, enlarged by
+/// `margin`, may overlap. Cells have the size of the largest enlarged diameter, so each sphere
+/// is compared with the spheres of its 27 neighbouring cells only: O(N) for bounded density.
+/// Built in parallel, in (i, j) order.
+pub fn candidate_pairs(world: &World, margin: f64) -> Vec<(usize, usize)> {
+    let grid = BroadPhase::new(world, margin);
+    par_chunked(world.bodies.len(), SPHERE_CHUNK, |range, out| {
+        let mut js = Vec::new();
+        for i in range {
+            grid.partners(i, &mut js);
+            out.extend(js.iter().map(|&j| (i, j)));
+        }
+    })
 }
 
 /// Cells of the broad phase as a dense array over the spheres' bounding box (compressed
@@ -343,44 +413,36 @@ pub fn detect_with(
                 }
             })
     };
-    // narrow phase in parallel (rayon); the result is sorted, so independent of threads
-    let mut contacts: Vec<Contact> = candidate_pairs(world, margin)
-        .par_iter()
-        .filter_map(|&(i, j)| {
-            let (a, b) = (world.bodies.get(i)?, world.bodies.get(j)?);
-            let d = a.position - b.position;
-            let dist = d.norm();
-            let n = d.normalized_or(Vec3::Z);
-            let gap = dist - a.radius - b.radius;
-            // the point midway between the two surfaces
-            let point = b.position + n * (b.radius + 0.5 * gap);
-            make(i, Partner::Body(j), n, point, gap)
-        })
-        .collect();
-    let walls: Vec<Contact> = world
-        .bodies
-        .par_iter()
-        .enumerate()
-        .flat_map_iter(|(i, b)| {
-            world
-                .obstacles
-                .iter()
-                .enumerate()
-                .filter_map(move |(o, ob)| {
-                    let p = ob.proximity(b.position, b.radius, t);
-                    if p.gap <= margin {
-                        let point = p.point + p.normal * (0.5 * p.gap);
-                        make(i, Partner::Obstacle(o), p.normal, point, p.gap)
-                    } else {
-                        None
-                    }
-                })
-                .collect::<Vec<_>>()
-        })
-        .collect();
-    contacts.extend(walls);
-    contacts.par_sort_by_key(|c| c.key());
-    contacts
+    // broad and narrow phases in one parallel pass over chunks of spheres: sphere i's
+    // contacts with spheres j > i in increasing j, then with the obstacles in order, i.e.
+    // the contacts come out sorted by (body, partner), whatever the number of threads
+    let grid = BroadPhase::new(world, margin);
+    par_chunked(world.bodies.len(), SPHERE_CHUNK, |range, out| {
+        let mut js = Vec::new();
+        for i in range {
+            let Some(a) = world.bodies.get(i) else {
+                continue;
+            };
+            grid.partners(i, &mut js);
+            for &j in &js {
+                let b = &world.bodies[j];
+                let d = a.position - b.position;
+                let dist = d.norm();
+                let n = d.normalized_or(Vec3::Z);
+                let gap = dist - a.radius - b.radius;
+                // the point midway between the two surfaces
+                let point = b.position + n * (b.radius + 0.5 * gap);
+                out.extend(make(i, Partner::Body(j), n, point, gap));
+            }
+            for (o, ob) in world.obstacles.iter().enumerate() {
+                let p = ob.proximity(a.position, a.radius, t);
+                if p.gap <= margin {
+                    let point = p.point + p.normal * (0.5 * p.gap);
+                    out.extend(make(i, Partner::Obstacle(o), p.normal, point, p.gap));
+                }
+            }
+        }
+    })
 }
 
 #[cfg(test)]

@@ -46,7 +46,7 @@
 //! sweeps on the box heaps); the first sweep is plain, so that an isolated contact is solved
 //! exactly. The fixed points are those of plain Gauss–Seidel: solutions of (2.10).
 
-use crate::assembly::{contact_offset, free_momentum, mass_diagonal, StepData};
+use crate::assembly::{contact_offset_one, StepData};
 use crate::contact::{Contact, Partner};
 use crate::world::World;
 use coulomb::inner::pgs::{solve_contact, solve_contact_law, OneContact};
@@ -57,10 +57,23 @@ use rayon::prelude::*;
 use serde::Serialize;
 use std::time::{Duration, Instant};
 
-/// Contacts per chunk of a parallel pass (and of the fixed summation order).
+/// Largest number of contacts per chunk of a parallel pass (and of the fixed summation
+/// order); whole-problem passes (evaluations) use it as is.
 pub const CHUNK: usize = 256;
-/// A colour with fewer contacts than this is swept sequentially (same numbers).
-pub const PARALLEL_MIN: usize = 2 * CHUNK;
+/// Smallest chunk of a colour ([`colour_chunk`]).
+pub const MIN_CHUNK: usize = 16;
+/// A colour with fewer contacts than this is swept sequentially (same numbers: the chunks,
+/// hence the summation order, depend on the colour's size only).
+pub const PARALLEL_MIN: usize = 4 * MIN_CHUNK;
+
+/// Chunk length of a colour of `len` contacts: about 64 chunks per colour, between
+/// [`MIN_CHUNK`] and half a [`CHUNK`] (≈ 10 µs of work), so that every colour of a sweep,
+/// the small ones too, is shared evenly between the threads (rayon splits adaptively, so
+/// small chunks cost little). A function of `len` only, never of the number of threads: the
+/// sums of a sweep are bitwise the same for every pool size.
+pub fn colour_chunk(len: usize) -> usize {
+    (len / 64).clamp(MIN_CHUNK, CHUNK / 2)
+}
 
 /// One contact of the step problem: its column block H_i of H, split by body, w_i and μ,
 /// with the diagonal block W_ii of the Delassus operator and its inverse.
@@ -286,42 +299,67 @@ impl StepProblem {
         contacts: &[Contact],
         data: &StepData,
     ) -> Result<Self, StepProblemError> {
-        let diag = mass_diagonal(world);
-        let mass: Vec<[f64; 6]> = diag
-            .chunks_exact(6)
-            .map(|c| [c[0], c[1], c[2], c[3], c[4], c[5]])
-            .collect();
-        let inv_mass: Vec<[f64; 6]> = mass.iter().map(|m| m.map(|x| 1.0 / x)).collect();
-        let f: Vec<[f64; 6]> = free_momentum(world, data.h)
-            .chunks_exact(6)
-            .map(|c| [c[0], c[1], c[2], c[3], c[4], c[5]])
-            .collect();
-        let w = contact_offset(world, contacts, data);
-        let rows: Vec<Option<ContactRow>> = contacts
+        // per sphere and per contact in parallel (rayon), the same numbers as
+        // `mass_diagonal`, `free_momentum` and `contact_offset`
+        let (mass, f): (Vec<[f64; 6]>, Vec<[f64; 6]>) = world
+            .bodies
             .par_iter()
-            .enumerate()
-            .map(|(i, c)| {
-                let wi = [w[3 * i], w[3 * i + 1], w[3 * i + 2]];
-                ContactRow::new(world, c, wi, data.mu, &inv_mass)
+            .map(|b| {
+                let i = b.inertia();
+                let p = b.velocity * b.mass + world.gravity * (data.h * b.mass);
+                let l = if b.rotation_locked {
+                    crate::math::Vec3::ZERO
+                } else {
+                    b.angular_velocity * i
+                };
+                (
+                    [b.mass, b.mass, b.mass, i, i, i],
+                    [p.x, p.y, p.z, l.x, l.y, l.z],
+                )
+            })
+            .unzip();
+        let inv_mass: Vec<[f64; 6]> = mass.par_iter().map(|m| m.map(|x| 1.0 / x)).collect();
+        let row = |c: &Contact| {
+            let wi = contact_offset_one(world, c, data);
+            ContactRow::new(world, c, wi, data.mu, &inv_mass)
+        };
+        // an indexed collect (each row written in place, in parallel); an invalid contact
+        // leaves a placeholder and raises `failed`
+        let failed = std::sync::atomic::AtomicBool::new(false);
+        let rows: Vec<ContactRow> = contacts
+            .par_iter()
+            .map(|c| {
+                row(c).unwrap_or_else(|| {
+                    failed.store(true, std::sync::atomic::Ordering::Relaxed);
+                    ContactRow {
+                        a: 0,
+                        b: None,
+                        frame: [[0.0; 3]; 3],
+                        arm_a: [0.0; 3],
+                        arm_b: [0.0; 3],
+                        w: [0.0; 3],
+                        mu: 0.0,
+                        w_ii: [0.0; 9],
+                        w_inv: [0.0; 9],
+                    }
+                })
             })
             .collect();
-        let mut out = Vec::with_capacity(rows.len());
-        for (i, r) in rows.into_iter().enumerate() {
-            let Some(r) = r else {
-                let bad_body = contacts.get(i).is_none_or(|c| {
-                    c.body >= world.bodies.len()
-                        || matches!(c.partner, Partner::Body(j) if j >= world.bodies.len() || j == c.body)
-                });
-                return Err(if bad_body {
-                    StepProblemError::Body(i)
-                } else {
-                    StepProblemError::Singular(i)
-                });
-            };
-            out.push(r);
+        if failed.into_inner() {
+            // the first invalid contact, found sequentially (deterministic)
+            let i = contacts.iter().position(|c| row(c).is_none()).unwrap_or(0);
+            let bad_body = contacts.get(i).is_none_or(|c| {
+                c.body >= world.bodies.len()
+                    || matches!(c.partner, Partner::Body(j) if j >= world.bodies.len() || j == c.body)
+            });
+            return Err(if bad_body {
+                StepProblemError::Body(i)
+            } else {
+                StepProblemError::Singular(i)
+            });
         }
         Ok(Self {
-            rows: out,
+            rows,
             mass,
             inv_mass,
             f,
@@ -384,36 +422,47 @@ impl Colouring {
     /// an earlier contact on one of its spheres (at most 1 + the largest number of contacts
     /// on two spheres). Deterministic.
     pub fn greedy(rows: &[ContactRow], bodies: usize) -> Self {
-        // per sphere, the colours used so far (as a list: spheres carry few contacts)
-        let mut used: Vec<Vec<u32>> = vec![Vec::new(); bodies];
-        let mut colour = vec![0u32; rows.len()];
+        Self::greedy_pairs(rows.len(), bodies, |i| (rows[i].a, rows[i].b))
+    }
+
+    /// [`Colouring::greedy`] of `n` items, item i touching spheres `ends(i)` = (A, B): the
+    /// smallest colour not used by an earlier item on A or B. The colours used on each
+    /// sphere are kept as a 64-bit mask (no allocation per sphere); past 64 colours on one
+    /// sphere the search goes on through overflow lists (same result). Out-of-range
+    /// spheres are ignored (the colouring is checked by [`Colouring::is_valid`] anyway).
+    pub fn greedy_pairs(
+        n: usize,
+        bodies: usize,
+        ends: impl Fn(usize) -> (usize, Option<usize>),
+    ) -> Self {
+        let mut mask = vec![0u64; bodies];
+        // colours ≥ 64 per sphere (rare: a sphere with more than 64 coloured contacts)
+        let mut high: Vec<(usize, u32)> = Vec::new();
+        let mut colour = vec![0u32; n];
         let mut ncol = 0u32;
-        let mut taken: Vec<bool> = Vec::new();
-        for (i, c) in rows.iter().enumerate() {
-            taken.clear();
-            let mut mark = |list: &Vec<u32>| {
-                for &k in list {
-                    let k = k as usize;
-                    if taken.len() <= k {
-                        taken.resize(k + 1, false);
-                    }
-                    taken[k] = true;
-                }
+        for (i, slot) in colour.iter_mut().enumerate() {
+            let (a, b) = ends(i);
+            let b = b.filter(|&j| j < bodies);
+            let m = mask.get(a).copied().unwrap_or(0) | b.map_or(0, |j| mask[j]);
+            let k = if m != u64::MAX {
+                (!m).trailing_zeros()
+            } else {
+                let used = |k: u32| {
+                    high.iter()
+                        .any(|&(s, c)| c == k && (s == a || Some(s) == b))
+                };
+                (64..).find(|&k| !used(k)).unwrap_or(64)
             };
-            if let Some(l) = used.get(c.a) {
-                mark(l);
-            }
-            if let Some(l) = c.b.and_then(|b| used.get(b)) {
-                mark(l);
-            }
-            let k = taken.iter().position(|t| !t).unwrap_or(taken.len()) as u32;
-            colour[i] = k;
+            *slot = k;
             ncol = ncol.max(k + 1);
-            if let Some(l) = used.get_mut(c.a) {
-                l.push(k);
-            }
-            if let Some(l) = c.b.and_then(|b| used.get_mut(b)) {
-                l.push(k);
+            for s in std::iter::once(a).chain(b) {
+                if s < bodies {
+                    if k < 64 {
+                        mask[s] |= 1 << k;
+                    } else {
+                        high.push((s, k));
+                    }
+                }
             }
         }
         let mut starts = vec![0usize; ncol as usize + 1];
@@ -424,7 +473,7 @@ impl Colouring {
             starts[k + 1] += starts[k];
         }
         let mut next = starts.clone();
-        let mut order = vec![0usize; rows.len()];
+        let mut order = vec![0usize; n];
         for (i, &k) in colour.iter().enumerate() {
             order[next[k as usize]] = i;
             next[k as usize] += 1;
@@ -667,18 +716,19 @@ fn for_colour(
     parallel: bool,
     f: impl Fn(&[ContactRow], &mut [[f64; 3]]) -> UpdateSums + Sync,
 ) -> UpdateSums {
+    let chunk = colour_chunk(ids.len());
     if parallel && ids.len() >= PARALLEL_MIN {
         let parts: Vec<UpdateSums> = ids
-            .par_chunks(CHUNK)
-            .zip(rs.par_chunks_mut(CHUNK))
+            .par_chunks(chunk)
+            .zip(rs.par_chunks_mut(chunk))
             .map(|(i, r)| f(i, r))
             .collect();
         parts
             .into_iter()
             .fold(UpdateSums::default(), UpdateSums::add)
     } else {
-        ids.chunks(CHUNK)
-            .zip(rs.chunks_mut(CHUNK))
+        ids.chunks(chunk)
+            .zip(rs.chunks_mut(chunk))
             .map(|(i, r)| f(i, r))
             .fold(UpdateSums::default(), UpdateSums::add)
     }
@@ -759,22 +809,49 @@ impl State<'_> {
         }
         let inv = &p.inv_mass;
         let mass = &p.mass;
-        let res: Vec<f64> = self
+        // per chunk of spheres: Σ res², Σ f² and the largest |entry| (res = M v − (f + H r)),
+        // combined in chunk order
+        let parts: Vec<[f64; 3]> = self
             .v
-            .par_iter_mut()
-            .zip(mom.par_iter())
+            .par_chunks_mut(CHUNK)
+            .zip(mom.par_chunks(CHUNK))
             .enumerate()
-            .flat_map_iter(|(b, (v, m))| {
-                let mut out = [0.0; 6];
-                for d in 0..6 {
-                    v[d] = m[d] * inv[b][d];
-                    out[d] = mass[b][d] * v[d] - m[d];
+            .map(|(c, (vs, ms))| {
+                let mut acc = [0.0f64; 3];
+                for (k, (v, m)) in vs.iter_mut().zip(ms).enumerate() {
+                    let b = c * CHUNK + k;
+                    for d in 0..6 {
+                        v[d] = m[d] * inv[b][d];
+                        let res = mass[b][d] * v[d] - m[d];
+                        let f = p.f[b][d];
+                        acc[0] += res * res;
+                        acc[1] += f * f;
+                        acc[2] = acc[2].max(res.abs()).max(f.abs());
+                    }
                 }
-                out
+                acc
             })
             .collect();
-        let f: Vec<f64> = p.f.iter().flatten().copied().collect();
-        law::relative_norm(&res, &f)
+        let (mut res_sq, mut f_sq, mut max) = (0.0, 0.0, 0.0f64);
+        for a in parts {
+            res_sq += a[0];
+            f_sq += a[1];
+            max = max.max(a[2]);
+        }
+        if (1e-150..=1e150).contains(&max) && res_sq.is_finite() && f_sq.is_finite() {
+            // ‖res‖ / max(1, ‖f‖), the value of `law::relative_norm` without its scaling
+            res_sq.sqrt() / f_sq.sqrt().max(1.0)
+        } else {
+            let res: Vec<f64> = self
+                .v
+                .iter()
+                .zip(&mom)
+                .zip(mass)
+                .flat_map(|((v, m), ms)| std::array::from_fn::<f64, 6, _>(|d| ms[d] * v[d] - m[d]))
+                .collect();
+            let f: Vec<f64> = p.f.iter().flatten().copied().collect();
+            law::relative_norm(&res, &f)
+        }
     }
 
     /// The error of docs/error.md on the stored problem from the current r, with v
@@ -914,7 +991,7 @@ pub fn solve_coloured(
     };
     let mut r: Vec<[f64; 3]> = colouring
         .order
-        .iter()
+        .par_iter()
         .map(|&i| match r0.get(3 * i..3 * i + 3) {
             Some(x) if x.iter().all(|v| v.is_finite()) => {
                 let mut x = [x[0], x[1], x[2]];
@@ -1219,6 +1296,35 @@ mod tests {
             dup.order[0] = dup.order[1];
             assert!(!dup.is_valid(&p.rows, world.bodies.len()));
         }
+    }
+
+    #[test]
+    fn colouring_past_64_colours_on_one_sphere() {
+        // sphere 0 touches spheres 1..=70 (70 colours), and a chain 71–72–73 on the side
+        let mut pairs: Vec<(usize, Option<usize>)> = (1..=70).map(|j| (0, Some(j))).collect();
+        pairs.extend([(71, Some(72)), (72, Some(73)), (0, None), (5, Some(6))]);
+        let c = Colouring::greedy_pairs(pairs.len(), 74, |i| pairs[i]);
+        assert_eq!(c.colours(), 71);
+        let mut order = c.order.clone();
+        order.sort_unstable();
+        assert_eq!(order, (0..pairs.len()).collect::<Vec<_>>());
+        for k in 0..c.colours() {
+            let mut seen = std::collections::HashSet::new();
+            for &i in &c.order[c.starts[k]..c.starts[k + 1]] {
+                let (a, b) = pairs[i];
+                assert!(seen.insert(a), "sphere {a} twice in colour {k}");
+                if let Some(b) = b {
+                    assert!(seen.insert(b), "sphere {b} twice in colour {k}");
+                }
+            }
+        }
+        // (0, None) comes after the 70 contacts of sphere 0: colour 70; the chain reuses 0, 1
+        let colour_of = |i: usize| {
+            (0..c.colours()).find(|&k| c.order[c.starts[k]..c.starts[k + 1]].contains(&i))
+        };
+        assert_eq!(colour_of(72), Some(70));
+        assert_eq!(colour_of(70), Some(0));
+        assert_eq!(colour_of(71), Some(1));
     }
 
     #[test]

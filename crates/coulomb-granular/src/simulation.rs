@@ -5,10 +5,11 @@
 use crate::assembly::{assemble, free_momentum, mass_diagonal, StepData};
 use crate::contact::{detect_with, Activation, Contact, Partner};
 use crate::nsgs::{self, NsgsSettings, NsgsStatus, StepProblem, StepProblemError};
-use crate::projection::{penetrations, project, Projection};
+use crate::projection::{penetrations, project_measured, Projection};
 use crate::world::World;
 use coulomb::problem::{GlobalProblem, Problem, ProblemError};
 use coulomb::solver::{self, Guess, OuterRecord, Settings, SolveError, Status};
+use rayon::prelude::*;
 use serde::Serialize;
 use std::time::Instant;
 
@@ -33,7 +34,12 @@ pub struct Params {
     /// position correction after each step ([`crate::projection`]); `None`: the plain
     /// Moreau–Jean scheme (the paper's)
     pub projection: Option<Projection>,
-    /// which solver takes each step (`solver` is used by [`StepMethod::Library`] only)
+    /// which solver takes each step (`solver` is used by [`StepMethod::Library`] only).
+    /// Default [`StepMethod::Library`]: every caller that sets `solver` (`coulomb paper`, the
+    /// FCLIB corpus, Python's `solver=`) gets the steps solved by it, and rolling resistance
+    /// and per-step histories ([`Simulation::last_history`]) need it; for large heaps at
+    /// err ≤ 1e-4 use `StepMethod::Nsgs(NsgsSettings::default())`, as `coulomb simulate`
+    /// does (docs/scaling.md)
     pub method: StepMethod,
     /// rolling-friction coefficient μ_r ≥ 0 (dimensionless): rolling torque impulse
     /// ≤ μ_r R_e r_N ([`crate::rolling`]); 0 (default): no rolling resistance
@@ -271,7 +277,6 @@ impl Simulation {
             .iter()
             .map(|c| (-c.gap).max(0.0))
             .fold(0.0, f64::max);
-        let v_old = self.world.velocities();
         let mut stats = StepStats {
             step: k,
             time: self.time + h,
@@ -381,14 +386,7 @@ impl Simulation {
             };
             self.residual_velocity =
                 sol.error.max(self.params.solver.tol) * local_scale(&problem, &sol.r, &v);
-            self.previous.clear();
-            for (i, c) in contacts.iter_mut().enumerate() {
-                if let Some(r) = sol.r.get(3 * i..3 * i + 3) {
-                    c.impulse = [r[0], r[1], r[2]];
-                    self.previous.push((c.key(), c.impulse));
-                }
-            }
-            self.previous.sort_unstable_by_key(|x| x.0);
+            self.keep_impulses(&mut contacts, &sol.r);
             self.last_history = sol.history;
             self.last_problem = self.keep_problem.then_some(problem);
             v
@@ -397,17 +395,22 @@ impl Simulation {
             return Err(SimulationError::NonFinite(k));
         }
         let theta = self.params.theta;
-        for (i, b) in self.world.bodies.iter_mut().enumerate() {
-            let vn = crate::math::Vec3::from_slice(&v_new[6 * i..6 * i + 3]);
-            let vo = crate::math::Vec3::from_slice(&v_old[6 * i..6 * i + 3]);
-            b.position += (vo * (1.0 - theta) + vn * theta) * h;
-            b.velocity = vn;
-            b.angular_velocity = if b.rotation_locked {
-                crate::math::Vec3::ZERO
-            } else {
-                crate::math::Vec3::from_slice(&v_new[6 * i + 3..6 * i + 6])
-            };
-        }
+        // q_{k+1} = q_k + h((1 − θ) v_k + θ v_{k+1}), sphere by sphere (b.velocity is v_k)
+        self.world
+            .bodies
+            .par_iter_mut()
+            .zip(v_new.par_chunks(6))
+            .for_each(|(b, vn6)| {
+                let vn = crate::math::Vec3::from_slice(&vn6[..3]);
+                let vo = b.velocity;
+                b.position += (vo * (1.0 - theta) + vn * theta) * h;
+                b.velocity = vn;
+                b.angular_velocity = if b.rotation_locked {
+                    crate::math::Vec3::ZERO
+                } else {
+                    crate::math::Vec3::from_slice(&vn6[3..6])
+                };
+            });
         if contacts.is_empty() {
             self.previous.clear();
             self.residual_velocity = 0.0;
@@ -416,10 +419,10 @@ impl Simulation {
         self.time += h;
         let pen = match &self.params.projection {
             Some(pr) => {
-                let p = project(&mut self.world, self.time, pr);
+                let (p, pen) = project_measured(&mut self.world, self.time, pr);
                 stats.projection_work = p.work;
                 stats.projection_sweeps = p.sweeps;
-                penetrations(&self.world, self.time)
+                pen
             }
             None => penetrations(&self.world, self.time),
         };
@@ -433,25 +436,57 @@ impl Simulation {
 
     /// The warm start r₀ of the step: the previous impulse of each persisting contact (same
     /// (body, partner) key), 0 for new ones; counts the warm-started contacts into `stats`.
+    /// Both lists are sorted by key ([`detect_with`] sorts the contacts): each chunk of
+    /// contacts finds its first key by bisection and merges from there, in parallel.
     fn warm_start(&self, contacts: &[Contact], stats: &mut StepStats) -> Vec<f64> {
         let mut r0 = vec![0.0; 3 * contacts.len()];
         if self.params.warm_start {
-            // both lists are sorted by key ([`detect_with`] sorts the contacts): one merge
-            let mut k = 0;
-            for (i, c) in contacts.iter().enumerate() {
-                let key = c.key();
-                while k < self.previous.len() && self.previous[k].0 < key {
-                    k += 1;
-                }
-                if let Some((pk, prev)) = self.previous.get(k) {
-                    if *pk == key {
-                        r0[3 * i..3 * i + 3].copy_from_slice(prev);
-                        stats.warm_started += 1;
+            const CHUNK: usize = 512;
+            let prev = &self.previous;
+            let found: usize = r0
+                .par_chunks_mut(3 * CHUNK)
+                .zip(contacts.par_chunks(CHUNK))
+                .map(|(r, cs)| {
+                    let Some(first) = cs.first() else {
+                        return 0;
+                    };
+                    let mut k = prev.partition_point(|x| x.0 < first.key());
+                    let mut found = 0;
+                    for (i, c) in cs.iter().enumerate() {
+                        let key = c.key();
+                        while k < prev.len() && prev[k].0 < key {
+                            k += 1;
+                        }
+                        if let Some((pk, p)) = prev.get(k) {
+                            if *pk == key {
+                                r[3 * i..3 * i + 3].copy_from_slice(p);
+                                found += 1;
+                            }
+                        }
                     }
-                }
-            }
+                    found
+                })
+                .sum();
+            stats.warm_started += found;
         }
         r0
+    }
+
+    /// Stores the step's impulses `r` (3 per contact) into `contacts` and, by key, into the
+    /// warm-start list (sorted by key).
+    fn keep_impulses(&mut self, contacts: &mut [Contact], r: &[f64]) {
+        let n = contacts.len().min(r.len() / 3);
+        self.previous = contacts[..n]
+            .par_iter_mut()
+            .zip(r.par_chunks_exact(3))
+            .map(|(c, ri)| {
+                c.impulse = [ri[0], ri[1], ri[2]];
+                (c.key(), c.impulse)
+            })
+            .collect();
+        if !self.previous.is_sorted_by_key(|x| x.0) {
+            self.previous.sort_unstable_by_key(|x| x.0);
+        }
     }
 
     /// Steps 2–3 by body-level nonsmooth Gauss–Seidel ([`crate::nsgs`]): the step problem in
@@ -481,14 +516,7 @@ impl Simulation {
             .and_then(|v| v.as_str().map(str::to_string))
             .unwrap_or_else(|| format!("{:?}", sol.status));
         self.residual_velocity = sol.error.max(settings.tol) * sol.scale;
-        self.previous.clear();
-        for (i, c) in contacts.iter_mut().enumerate() {
-            if let Some(r) = sol.r.get(3 * i..3 * i + 3) {
-                c.impulse = [r[0], r[1], r[2]];
-                self.previous.push((c.key(), c.impulse));
-            }
-        }
-        self.previous.sort_unstable_by_key(|x| x.0);
+        self.keep_impulses(contacts, &sol.r);
         self.last_history.clear();
         self.last_problem = if self.keep_problem {
             Some(

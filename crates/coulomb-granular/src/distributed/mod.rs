@@ -171,6 +171,14 @@ impl DistributedSimulation {
     /// beads r N/P … (r+1) N/P − 1, then the slabs are placed at the quantiles and the beads
     /// migrate to their owners.
     pub fn new(comm: Comm, world: World, params: Params) -> Result<Self, SimulationError> {
+        if params.rolling_friction != 0.0 {
+            // the subdomain sweep solves the law (2.9) only; ignoring μ_r silently would
+            // change the physics (crate::rolling)
+            return Err(SimulationError::Parameter(format!(
+                "rolling friction μ_r = {} is not supported by the distributed step (use one process)",
+                params.rolling_friction
+            )));
+        }
         let sim = Simulation::new(world, params)?;
         let Simulation { world, params, .. } = sim;
         let (rank, size) = (comm.rank(), comm.size());

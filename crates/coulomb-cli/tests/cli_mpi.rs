@@ -114,3 +114,26 @@ fn distributed_two_ranks_match_one_process() {
     assert_eq!(points, 300);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The subdomain sweep solves the law (2.9) only: a distributed run with rolling resistance
+/// is refused with a message, not run without it.
+#[test]
+fn distributed_refuses_rolling_friction() {
+    let out = mpirun(
+        1,
+        &[
+            "simulate",
+            "box",
+            "--beads",
+            "20",
+            "--steps",
+            "1",
+            "--rolling-friction",
+            "0.1",
+            "--mpi",
+        ],
+    );
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("rolling friction"), "{err}");
+}

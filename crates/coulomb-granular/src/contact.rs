@@ -380,12 +380,27 @@ pub fn detect_with(
     activation: &Activation,
     delta: f64,
 ) -> Vec<Contact> {
-    let delta = delta.max(activation.delta);
     let vmax = world
         .bodies
         .iter()
         .map(|b| b.velocity.norm() + b.angular_velocity.norm() * b.radius)
         .fold(0.0_f64, f64::max);
+    detect_with_speed(world, t, h, activation, delta, vmax)
+}
+
+/// [`detect_with`] with the largest speed v_max = max |v| + R|ω| of the broad phase's margin
+/// δ + 2 v_max h γ given: a part of a larger system (a rank's subdomain in
+/// [`crate::distributed`]) passes the whole system's v_max, so that its margin, and with it
+/// the obstacle contacts it finds, are those of one process.
+pub fn detect_with_speed(
+    world: &World,
+    t: f64,
+    h: f64,
+    activation: &Activation,
+    delta: f64,
+    vmax: f64,
+) -> Vec<Contact> {
+    let delta = delta.max(activation.delta);
     let margin = delta + 2.0 * vmax * h * activation.gamma + 1e-12;
     let make = |a: usize, partner: Partner, normal: Vec3, point: Vec3, gap: f64| {
         let u = relative_velocity(world, a, partner, point, t);

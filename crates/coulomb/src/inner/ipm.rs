@@ -31,13 +31,14 @@
 //! # Warm start
 //! Clarabel is a primal-dual interior-point method started from its own central point; it
 //! offers no warm start, so the incoming r of [`InnerSolver::solve`] is ignored. What *is*
-//! reused is the setup: [`IpmSolver`] keeps the Clarabel solver of its last call and, when the
-//! next call has the same W and μ (as in the fixed-point iteration s ↦ F(s) of (3.19), where
-//! only b = q + E s changes), only overwrites the linear term through Clarabel's data-update
-//! API (`update_q`), skipping equilibration and the symbolic factorization of the KKT matrix.
+//! reused is the setup: an [`IpmSolver`] serves one (d, W, μ); it builds the Clarabel solver at
+//! its first call and, at every later call (as in the fixed-point iteration s ↦ F(s) of (3.19),
+//! where only b = q + E s changes), only overwrites the linear term through Clarabel's
+//! data-update API (`update_q`), skipping equilibration and the symbolic factorization of the
+//! KKT matrix.
 
 use super::clarabel::{clarabel_settings, report_of, to_clarabel};
-pub(crate) use super::clarabel::{solve_dual_qp, triplets_to_clarabel, QpCache};
+pub(crate) use super::clarabel::{solve_dual_qp, triplets_to_clarabel, QpSetup};
 use super::polish::past;
 use super::{InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus};
 use crate::deadline::Deadline;
@@ -57,8 +58,9 @@ pub struct IpmSolver {
     /// at most this many semismooth Newton steps polish Clarabel's r (0: none); see
     /// [`DEFAULT_POLISH_STEPS`]
     pub polish_steps: usize,
-    /// the Clarabel solver of the last call, reused while (d, μ, W) stay the same
-    cache: Option<QpCache>,
+    /// the Clarabel setup, built at the first solve and reused by the later ones (on the same
+    /// (d, W, μ): only b changes)
+    setup: Option<QpSetup>,
 }
 
 /// Default number of semismooth Newton polish steps after an interior-point solve.
@@ -77,7 +79,7 @@ impl Default for IpmSolver {
 }
 
 impl Clone for IpmSolver {
-    /// A clone starts without the cached Clarabel setup (it is rebuilt on first use).
+    /// A clone starts without the Clarabel setup (it is built at its first solve).
     fn clone(&self) -> Self {
         Self::with_polish(self.polish_steps)
     }
@@ -96,7 +98,7 @@ impl IpmSolver {
     pub fn with_polish(polish_steps: usize) -> Self {
         Self {
             polish_steps,
-            cache: None,
+            setup: None,
         }
     }
 }
@@ -125,7 +127,7 @@ impl InnerSolver for IpmSolver {
         r: &mut [f64],
     ) -> InnerReport {
         let polish = self.polish_steps;
-        solve_dual_qp(&mut self.cache, 0, polish, problem, limits, r, || {
+        solve_dual_qp(&mut self.setup, polish, problem, limits, r, || {
             let layout = ConeLayout::dual_exact(problem.dim, problem.mu);
             let a = layout.a_matrix(None);
             (a, layout.cones())
@@ -611,7 +613,7 @@ mod tests {
         for (x, y) in r.iter().zip([1.0, -0.1, 0.0]) {
             assert!((x - y).abs() < 1e-7, "{r:?}");
         }
-        assert!(s.cache.is_some());
+        assert!(s.setup.is_some());
     }
 
     #[test]

@@ -71,28 +71,6 @@ pub struct InnerLimits {
     pub deadline: Deadline,
 }
 
-/// Identity of a matrix for the caches of the inner solvers: address, size, nnz and a
-/// checksum of its values and row indices (so that another matrix at the same address is not
-/// mistaken for it).
-pub type MatrixKey = (usize, usize, usize, u64);
-
-/// The [`MatrixKey`] of W.
-pub fn matrix_key(w: &CscMatrix) -> MatrixKey {
-    let checksum = w
-        .values
-        .iter()
-        .zip(&w.row_idx)
-        .enumerate()
-        .map(|(k, (v, &i))| v * (1.0 + k as f64 * 1e-3) + i as f64)
-        .sum::<f64>();
-    (
-        w.values.as_ptr() as usize,
-        w.ncols,
-        w.nnz(),
-        checksum.to_bits(),
-    )
-}
-
 impl InnerLimits {
     /// Whether the deadline has passed, before iteration `iteration` of a loop whose
     /// iterations each touch about `work` nonzeros: the clock is read only every
@@ -105,12 +83,18 @@ impl InnerLimits {
     }
 }
 
-/// A solver of the dual inner problem (4.7). `r` holds the warm start on entry (zeros for a
-/// cold start) and the solution on exit; solvers that cannot use a warm start ignore it.
+/// A solver of the dual inner problem (4.7), set up for one (d, W, μ): its per-matrix data
+/// (diagonal blocks, Lipschitz estimate, Clarabel setup) are built once, by its constructor or
+/// at its first solve, and every later solve changes only b = q + E s. [`crate::Solver`] owns
+/// one per inner kind and makes a new one when W changes ([`crate::Solver::update_w`]).
+/// `r` holds the warm start on entry (zeros for a cold start) and the solution on exit;
+/// solvers that cannot use a warm start ignore it.
 pub trait InnerSolver {
     /// Short name for reports ("pgs", "apgd", "ipm", "faceted").
     fn name(&self) -> &'static str;
-    /// Solves (4.7) for `problem`, writing r.
+    /// Solves (4.7) for `problem`, writing r. `problem` must carry the (d, W, μ) the solver
+    /// was set up for (only b may change); sizes that disagree with the setup give
+    /// [`InnerStatus::NumericalError`] without an iteration.
     fn solve(
         &mut self,
         problem: &InnerProblem<'_>,

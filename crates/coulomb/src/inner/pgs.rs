@@ -45,36 +45,29 @@ use crate::cone;
 use crate::natural_map::dual_residual;
 use crate::sparse::CscMatrix;
 
-/// Projected block Gauss–Seidel on (4.7) with exact one-contact solves.
-#[derive(Debug, Clone, Default)]
+/// Projected block Gauss–Seidel on (4.7) with exact one-contact solves, set up for one
+/// (d, W): the diagonal blocks Wᵢᵢ and their inverses are extracted by [`PgsSolver::new`].
+#[derive(Debug, Clone)]
 pub struct PgsSolver {
-    blocks: Option<DiagonalBlocks>,
+    blocks: DiagonalBlocks,
     /// maintained u = W r + b
     u: Vec<f64>,
 }
 
 impl PgsSolver {
-    /// A solver; the diagonal blocks are extracted at the first solve and kept while W is
-    /// the same matrix.
-    pub fn new() -> Self {
-        Self::default()
-    }
-
-    fn blocks_for(&mut self, dim: usize, w: &CscMatrix) -> &DiagonalBlocks {
-        if !self.blocks.as_ref().is_some_and(|b| b.matches(dim, w)) {
-            self.blocks = Some(DiagonalBlocks::new(dim, w));
+    /// A solver for the d-dimensional problems on `w`: extracts and inverts its diagonal
+    /// blocks.
+    pub fn new(dim: usize, w: &CscMatrix) -> Self {
+        Self {
+            blocks: DiagonalBlocks::new(dim, w),
+            u: Vec::new(),
         }
-        self.blocks.as_ref().expect("set just above")
     }
 
-    /// The diagonal blocks of `w` (extracted if W changed) and the buffer of the maintained
-    /// u, for the fused iteration ([`crate::outer::fused`]).
-    pub(crate) fn parts(&mut self, dim: usize, w: &CscMatrix) -> (&DiagonalBlocks, &mut Vec<f64>) {
-        self.blocks_for(dim, w);
-        (
-            self.blocks.as_ref().expect("set by blocks_for"),
-            &mut self.u,
-        )
+    /// The diagonal blocks and the buffer of the maintained u, for the fused iteration
+    /// ([`crate::outer::fused`]).
+    pub(crate) fn parts(&mut self) -> (&DiagonalBlocks, &mut Vec<f64>) {
+        (&self.blocks, &mut self.u)
     }
 }
 
@@ -152,10 +145,18 @@ impl InnerSolver for PgsSolver {
         limits: &InnerLimits,
         r: &mut [f64],
     ) -> InnerReport {
-        let dim = problem.dim;
-        let w = problem.w;
-        self.blocks_for(dim, w);
-        let blocks = self.blocks.as_ref().expect("set by blocks_for");
+        let (dim, w) = (problem.dim, problem.w);
+        let blocks = &self.blocks;
+        if !blocks.fits(dim, problem.mu.len())
+            || w.ncols != r.len()
+            || w.ncols != dim * problem.mu.len()
+        {
+            return InnerReport {
+                status: InnerStatus::NumericalError,
+                iterations: 0,
+                residual: f64::INFINITY,
+            };
+        }
         // start from a point of L
         cone::project_product(dim, problem.mu, r);
         let b_norm = crate::law::norm(problem.b);

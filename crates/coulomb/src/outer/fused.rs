@@ -30,7 +30,14 @@ pub fn solve_fused(
     give_up: bool,
     r: &mut [f64],
 ) -> InnerReport {
-    let (blocks, u) = solver.parts(dim, w);
+    let (blocks, u) = solver.parts();
+    if !blocks.fits(dim, mu.len()) || w.ncols != dim * mu.len() || r.len() != w.ncols {
+        return InnerReport {
+            status: InnerStatus::NumericalError,
+            iterations: 0,
+            residual: f64::INFINITY,
+        };
+    }
     cone::project_product(dim, mu, r);
     let q_norm = crate::law::norm(q);
     u.clear();

@@ -20,6 +20,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 use std::path::PathBuf;
 use std::sync::Arc;
+use std::time::Duration;
 
 fn owned(what: &str, a: &PyReadonlyArray1<'_, f64>) -> PyResult<Vec<f64>> {
     Ok(convert::slice(what, a)?.to_vec())
@@ -234,7 +235,18 @@ fn check<'py>(
                 "tol" => s.tol = v.extract()?,
                 "certificate_tol" => s.certificate_tol = v.extract()?,
                 "max_iter" => s.max_iter = v.extract()?,
-                "time_limit" => s.time_limit = v.extract()?,
+                "time_limit" => {
+                    // seconds: NaN and t ≤ 0 give 0, which check() refuses; +∞ and
+                    // overflowing values mean no limit
+                    let t: f64 = v.extract()?;
+                    s.time_limit = if t.is_nan() || t <= 0.0 {
+                        Duration::ZERO
+                    } else {
+                        Duration::try_from_secs_f64(t)
+                            .unwrap_or(Duration::MAX)
+                            .max(Duration::from_nanos(1))
+                    };
+                }
                 other => {
                     return Err(PyTypeError::new_err(format!(
                         "check() got an unexpected keyword argument '{other}' \

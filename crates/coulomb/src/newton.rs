@@ -410,6 +410,20 @@ pub fn polish(
     max_steps: usize,
     deadline: Deadline,
 ) -> NewtonReport {
+    let params = crate::settings::Tuning::default().newton;
+    polish_with(p, r, target, max_steps, deadline, &params)
+}
+
+/// [`polish`] with the shift and slow-step constants of `params`
+/// ([`crate::settings::NewtonParams::lambda_factor`], `slow_steps`, `slow_ratio`).
+pub fn polish_with(
+    p: &LocalProblem,
+    r: &mut [f64],
+    target: f64,
+    max_steps: usize,
+    deadline: Deadline,
+    params: &crate::settings::NewtonParams,
+) -> NewtonReport {
     let (d, m) = (p.dim, r.len());
     let consistent = (d == 2 || d == 3)
         && m == p.mu.len() * d
@@ -460,13 +474,13 @@ pub fn polish(
         halvings: 10,
         sufficient_decrease: 1e-4,
         shift: Some(Shift {
-            factor: LAMBDA_FACTOR,
+            factor: params.lambda_factor,
             residual_scale: q_scale,
             diag_scale,
             tries: 4,
         }),
-        slow_steps: SLOW_STEPS,
-        slow_ratio: SLOW_RATIO,
+        slow_steps: params.slow_steps,
+        slow_ratio: params.slow_ratio,
         deadline,
     };
     drive(&mut map, r, &rule)

@@ -49,6 +49,8 @@ use crate::sparse::CscMatrix;
 /// (d, W): the diagonal blocks Wᵢᵢ and their inverses are extracted by [`PgsSolver::new`].
 #[derive(Debug, Clone)]
 pub struct PgsSolver {
+    /// sweeps between exact recomputations of u = W r + b ([`REFRESH`] by default; ≥ 1)
+    pub refresh: usize,
     blocks: DiagonalBlocks,
     /// maintained u = W r + b
     u: Vec<f64>,
@@ -59,6 +61,7 @@ impl PgsSolver {
     /// blocks.
     pub fn new(dim: usize, w: &CscMatrix) -> Self {
         Self {
+            refresh: REFRESH,
             blocks: DiagonalBlocks::new(dim, w),
             u: Vec::new(),
         }
@@ -131,8 +134,9 @@ pub(crate) fn sweep(
     max_change
 }
 
-/// Sweeps between exact recomputations of u = W r + b (against drift).
-pub(crate) const REFRESH: usize = 16;
+/// Sweeps between exact recomputations of u = W r + b (against drift): the default of
+/// [`PgsSolver::refresh`] and [`crate::settings::InnerParams::gs_refresh`].
+pub const REFRESH: usize = 16;
 
 impl InnerSolver for PgsSolver {
     fn name(&self) -> &'static str {
@@ -146,7 +150,7 @@ impl InnerSolver for PgsSolver {
         r: &mut [f64],
     ) -> InnerReport {
         let (dim, w) = (problem.dim, problem.w);
-        let blocks = &self.blocks;
+        let (blocks, refresh) = (&self.blocks, self.refresh.max(1));
         if !blocks.fits(dim, problem.mu.len())
             || w.ncols != r.len()
             || w.ncols != dim * problem.mu.len()
@@ -175,7 +179,7 @@ impl InnerSolver for PgsSolver {
             if residual <= limits.tol {
                 break InnerStatus::Solved;
             }
-            if iterations % REFRESH == 0 {
+            if iterations % refresh == 0 {
                 for ((x, a), b) in wr.iter_mut().zip(u.iter()).zip(problem.b) {
                     *x = a - b;
                 }
@@ -191,7 +195,7 @@ impl InnerSolver for PgsSolver {
             }
             sweep(blocks, w, problem.mu, r, u, false);
             iterations += 1;
-            if iterations % REFRESH == 0 {
+            if iterations % refresh == 0 {
                 u.copy_from_slice(problem.b);
                 w.gemv_acc(1.0, r, u);
             }

@@ -4,7 +4,7 @@
 //! [`crate::inner::pgs`]'s; this file is the stopping logic around it.
 
 use crate::cone;
-use crate::inner::pgs::{sweep, PgsSolver, REFRESH};
+use crate::inner::pgs::{sweep, PgsSolver};
 use crate::inner::{InnerLimits, InnerReport, InnerStatus};
 use crate::sparse::CscMatrix;
 
@@ -30,6 +30,7 @@ pub fn solve_fused(
     give_up: bool,
     r: &mut [f64],
 ) -> InnerReport {
+    let refresh = solver.refresh.max(1);
     let (blocks, u) = solver.parts();
     if !blocks.fits(dim, mu.len()) || w.ncols != dim * mu.len() || r.len() != w.ncols {
         return InnerReport {
@@ -70,7 +71,7 @@ pub fn solve_fused(
         sweep(blocks, w, mu, r, u, true);
         iterations += 1;
         exact = false;
-        if iterations % REFRESH == 0 {
+        if iterations % refresh == 0 {
             u.copy_from_slice(q);
             w.gemv_acc(1.0, r, u);
             exact = true;

@@ -30,7 +30,7 @@ use crate::inner::{
     apgd::ApgdSolver, faceted::FacetedSolver, ipm::IpmSolver, pgs::PgsSolver, InnerSolver,
 };
 use crate::problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
-use crate::settings::{InnerKind, OuterKind, Settings};
+use crate::settings::{InnerKind, InnerParams, OuterKind, Settings};
 use crate::solution::{Guess, Solution, SolveError, Status};
 use crate::sparse::CscMatrix;
 use form::{Form, Stored};
@@ -49,14 +49,16 @@ pub(crate) struct InnerSolvers {
     /// the Gauss–Seidel solver of the fused method, on the stored W
     fused: Option<PgsSolver>,
     facets: usize,
+    params: InnerParams,
 }
 
 impl InnerSolvers {
-    fn new(facets: usize) -> Self {
+    fn new(settings: &Settings) -> Self {
         Self {
             qp: [None, None, None, None],
             fused: None,
-            facets,
+            facets: settings.facets,
+            params: settings.tuning.inner,
         }
     }
 
@@ -66,7 +68,7 @@ impl InnerSolvers {
         kind: InnerKind,
         form: &Form<'_>,
     ) -> &mut (dyn InnerSolver + Send) {
-        let facets = self.facets;
+        let (facets, params) = (self.facets, self.params);
         let slot = InnerKind::ALL
             .iter()
             .position(|&k| k == kind)
@@ -75,9 +77,18 @@ impl InnerSolvers {
             .get_or_insert_with(|| {
                 let (dim, w) = (form.local().dim, form.qp_w());
                 match kind {
-                    InnerKind::Pgs => Box::new(PgsSolver::new(dim, w)),
-                    InnerKind::Apgd => Box::new(ApgdSolver::new(dim, w)),
-                    InnerKind::Ipm => Box::new(IpmSolver::new()),
+                    InnerKind::Pgs => {
+                        let mut s = PgsSolver::new(dim, w);
+                        s.refresh = params.gs_refresh;
+                        Box::new(s)
+                    }
+                    InnerKind::Apgd => {
+                        let power = params.apgd_power_iterations;
+                        let mut s = ApgdSolver::with_power_iterations(dim, w, power);
+                        s.barzilai_borwein = params.apgd_barzilai_borwein;
+                        Box::new(s)
+                    }
+                    InnerKind::Ipm => Box::new(IpmSolver::with_polish(params.ipm_polish_steps)),
                     InnerKind::Faceted => Box::new(FacetedSolver::new(facets)),
                 }
             })
@@ -86,9 +97,12 @@ impl InnerSolvers {
 
     /// The Gauss–Seidel solver of the fused method on the stored W of `form`.
     pub(crate) fn fused(&mut self, form: &Form<'_>) -> &mut PgsSolver {
+        let refresh = self.params.gs_refresh;
         self.fused.get_or_insert_with(|| {
             let local = form.local();
-            PgsSolver::new(local.dim, &local.w)
+            let mut s = PgsSolver::new(local.dim, &local.w);
+            s.refresh = refresh;
+            s
         })
     }
 }
@@ -128,7 +142,7 @@ impl<'a> Solver<'a> {
         settings.validate()?;
         Ok(Self {
             form: Form::new(stored, settings.tuning.unbounded_ratio),
-            solvers: InnerSolvers::new(settings.facets),
+            solvers: InnerSolvers::new(&settings),
             settings,
         })
     }
@@ -141,8 +155,10 @@ impl<'a> Solver<'a> {
     /// Replaces the settings (checked); the set-up data are kept.
     pub fn set_settings(&mut self, settings: Settings) -> Result<(), SolveError> {
         settings.validate()?;
-        if settings.facets != self.settings.facets {
-            self.solvers = InnerSolvers::new(settings.facets);
+        if settings.facets != self.settings.facets
+            || settings.tuning.inner != self.settings.tuning.inner
+        {
+            self.solvers = InnerSolvers::new(&settings);
         }
         self.form.unbounded_ratio = settings.tuning.unbounded_ratio;
         self.settings = settings;
@@ -203,7 +219,7 @@ impl<'a> Solver<'a> {
         let checked = LocalProblem::new(p.dim as i64, w, p.q.clone(), p.mu.clone())?;
         *p = Cow::Owned(checked);
         self.form.refresh();
-        self.solvers = InnerSolvers::new(self.settings.facets);
+        self.solvers = InnerSolvers::new(&self.settings);
         Ok(())
     }
 

@@ -140,17 +140,6 @@ fn main() -> ExitCode {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// clap's own consistency checks on the whole command tree, as `main` builds it.
-    #[test]
-    fn command_tree_is_consistent() {
-        allow_negative_numbers(Cli::command()).debug_assert();
-    }
-}
-
 /// `coulomb simulate`: the scene checked, then the run in this process or, under an MPI
 /// launcher or with `--mpi`, distributed over the ranks, on `--threads` worker threads.
 fn simulate(args: sim_args::Args) -> anyhow::Result<()> {
@@ -162,4 +151,15 @@ fn simulate(args: sim_args::Args) -> anyhow::Result<()> {
         }
         cmd::simulate::run(args.clone(), scene)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// clap's own consistency checks on the whole command tree, as `main` builds it.
+    #[test]
+    fn command_tree_is_consistent() {
+        allow_negative_numbers(Cli::command()).debug_assert();
+    }
 }

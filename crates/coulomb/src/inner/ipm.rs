@@ -512,7 +512,9 @@ impl SemismoothMap for PrimalMap<'_> {
         let (problem, jac) = (self.problem, &self.jac[0]);
         let (dim, n) = (problem.dim, problem.m.nrows);
         let (rows, cols, vals) = &mut self.triplets;
-        (rows.clear(), cols.clear(), vals.clear());
+        rows.clear();
+        cols.clear();
+        vals.clear();
         for (i, j, val) in problem.m.triplets() {
             rows.push(i);
             cols.push(j);

@@ -46,7 +46,9 @@ impl SemismoothMap for DualMap<'_, '_> {
         // J = I − D + D W
         let (dim, jac) = (self.problem.dim, &self.jac[0]);
         let (rows, cols, vals) = &mut self.triplets;
-        (rows.clear(), cols.clear(), vals.clear());
+        rows.clear();
+        cols.clear();
+        vals.clear();
         push_identity_minus_d(dim, jac, 0, rows, cols, vals);
         push_d_times(
             dim,

@@ -1,6 +1,6 @@
 //! Clarabel plumbing shared by the interior-point ([`super::ipm`]) and faceted
 //! ([`super::faceted`]) inner solvers: matrices in Clarabel's CSC type, settings from
-//! [`InnerLimits`], status mapping, and the cached dual QP (4.7) solve.
+//! [`InnerLimits`], status mapping, and the dual QP (4.7) solve on a setup built once.
 
 use super::polish::polish_dual;
 use super::{InnerLimits, InnerProblem, InnerReport, InnerStatus};

@@ -63,7 +63,16 @@ pub struct InnerReport {
 /// Limits and tolerance for one inner solve.
 #[derive(Debug, Clone, Copy)]
 pub struct InnerLimits {
-    /// stopping tolerance on the solver's own (relative) optimality measure
+    /// Stopping tolerance ε of the inner solve. Its meaning: a bound on the relative natural-map
+    /// residual of (4.7),
+    /// ρ(r) = ‖r − P_L(r − ũ)‖ / max(‖b‖, ‖r‖, ‖ũ‖), ũ = W r + b ((3.14) with b in the place
+    /// of q: the error of docs/error.md for the inner problem). Projected Gauss–Seidel and
+    /// APGD stop on ρ(r) ≤ ε exactly. The interior-point and faceted solvers convert it once,
+    /// into Clarabel's gap and feasibility tolerances (`tol_gap_abs = tol_gap_rel = tol_feas
+    /// = ε`, `clarabel_settings` in inner/clarabel.rs), whose stopping test is Clarabel's own; a
+    /// stalled interior-point solve is still accepted when its polished r has
+    /// ‖r − P_L(r − ũ)‖ / max(1, ‖b‖) ≤ ε. The fused method ([`crate::outer::fused`]) reads
+    /// it as a bound on the error of docs/error.md of the whole law (on q).
     pub tol: f64,
     /// iteration cap
     pub max_iterations: usize,

@@ -236,16 +236,15 @@ fn check<'py>(
                 "certificate_tol" => s.certificate_tol = v.extract()?,
                 "max_iter" => s.max_iter = v.extract()?,
                 "time_limit" => {
-                    // seconds: NaN and t ≤ 0 give 0, which check() refuses; +∞ and
-                    // overflowing values mean no limit
+                    // seconds; +∞ and overflowing values mean no limit
                     let t: f64 = v.extract()?;
-                    s.time_limit = if t.is_nan() || t <= 0.0 {
-                        Duration::ZERO
-                    } else {
-                        Duration::try_from_secs_f64(t)
-                            .unwrap_or(Duration::MAX)
-                            .max(Duration::from_nanos(1))
-                    };
+                    if t.is_nan() || t <= 0.0 {
+                        let message = format!("time_limit = {t} is not > 0");
+                        return Err(errors::settings_error(py, "time_limit", message));
+                    }
+                    s.time_limit = Duration::try_from_secs_f64(t)
+                        .unwrap_or(Duration::MAX)
+                        .max(Duration::from_nanos(1));
                 }
                 other => {
                     return Err(PyTypeError::new_err(format!(

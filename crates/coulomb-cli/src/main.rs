@@ -7,6 +7,7 @@ mod method;
 mod outputs;
 mod progress;
 mod read;
+mod sim_args;
 mod threads;
 mod values;
 
@@ -39,7 +40,7 @@ enum Command {
     /// Write one of the paper's examples as an FCLIB file
     Example(cmd::example::Args),
     /// Granular simulation (Moreau–Jean time stepping of rigid spheres)
-    Simulate(cmd::simulate::Args),
+    Simulate(sim_args::Args),
     /// Reproduce the paper's Table 1, Fig. 8 and Fig. 9
     Paper(cmd::paper::Args),
     /// Solvers side by side on FCLIB collections, with performance profiles
@@ -115,7 +116,7 @@ fn main() -> ExitCode {
         Command::Solve(a) => cmd::solve::run(a),
         Command::Check(a) => cmd::check::run(a),
         Command::Example(a) => cmd::example::run(a).map(|()| Outcome::Success),
-        Command::Simulate(a) => cmd::simulate::run(a).map(|()| Outcome::Success),
+        Command::Simulate(a) => simulate(a).map(|()| Outcome::Success),
         Command::Paper(a) => cmd::paper::run(a).map(|()| Outcome::Success),
         Command::Bench(a) => cmd::bench::run(a).map(|()| Outcome::Success),
         Command::Demo(a) => cmd::demo::run(a).map(|()| Outcome::Success),
@@ -137,6 +138,19 @@ fn main() -> ExitCode {
             ExitCode::from(status)
         }
     }
+}
+
+/// `coulomb simulate`: the scene checked, then the run in this process or, under an MPI
+/// launcher or with `--mpi`, distributed over the ranks, on `--threads` worker threads.
+fn simulate(args: sim_args::Args) -> anyhow::Result<()> {
+    threads::with_threads(args.threads, || {
+        let scene = sim_args::checked_scene(&args)?;
+        #[cfg(feature = "mpi")]
+        if args.mpi || sim_args::under_launcher() {
+            return cmd::simulate_mpi::run(args.clone(), scene);
+        }
+        cmd::simulate::run(args.clone(), scene)
+    })
 }
 
 #[cfg(test)]

@@ -20,6 +20,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 use std::path::PathBuf;
 use std::sync::Arc;
+use std::time::Duration;
 
 fn owned(what: &str, a: &PyReadonlyArray1<'_, f64>) -> PyResult<Vec<f64>> {
     Ok(convert::slice(what, a)?.to_vec())
@@ -234,7 +235,17 @@ fn check<'py>(
                 "tol" => s.tol = v.extract()?,
                 "certificate_tol" => s.certificate_tol = v.extract()?,
                 "max_iter" => s.max_iter = v.extract()?,
-                "time_limit" => s.time_limit = v.extract()?,
+                "time_limit" => {
+                    // seconds; +∞ and overflowing values mean no limit
+                    let t: f64 = v.extract()?;
+                    if t.is_nan() || t <= 0.0 {
+                        let message = format!("time_limit = {t} is not > 0");
+                        return Err(errors::settings_error(py, "time_limit", message));
+                    }
+                    s.time_limit = Duration::try_from_secs_f64(t)
+                        .unwrap_or(Duration::MAX)
+                        .max(Duration::from_nanos(1));
+                }
                 other => {
                     return Err(PyTypeError::new_err(format!(
                         "check() got an unexpected keyword argument '{other}' \

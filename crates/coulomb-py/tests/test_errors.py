@@ -198,3 +198,15 @@ def test_bad_input_never_crashes_the_interpreter():
     assert out.returncode == 0, out.stderr[-2000:]
     assert "did not raise" not in out.stdout, out.stdout
     assert "raised 26 of 26" in out.stdout, out.stdout + out.stderr[-2000:]
+
+
+def test_check_time_limit_is_positive_seconds():
+    # check()'s time_limit is seconds (a Duration in the library); ≤ 0 and NaN are refused
+    # with a SettingsError naming the field, +∞ means no limit
+    p = local(q=np.array([-1.0, 0.2, 0.1]))
+    assert coulomb.check(p, time_limit=float("inf")).conclusion == "exists"
+    assert coulomb.check(p, time_limit=0.5).conclusion == "exists"
+    for t in [0.0, -1.0, float("nan")]:
+        with pytest.raises(coulomb.SettingsError) as e:
+            coulomb.check(p, time_limit=t)
+        assert e.value.field == "time_limit"

@@ -169,7 +169,8 @@ pub const LAMBDA_FACTOR: f64 = 1e-2;
 /// A step with ‖G⁺‖ > `SLOW_RATIO` ‖G‖ counts as slow.
 pub const SLOW_RATIO: f64 = 0.9;
 
-/// Why [`polish`] stopped.
+/// Why a semismooth Newton run ([`polish`], and the polish steps of the interior-point inner
+/// solvers) stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum NewtonStatus {
     /// ‖G(r)‖ ≤ `target`
@@ -184,7 +185,7 @@ pub enum NewtonStatus {
     TimeLimit,
 }
 
-/// The outcome of [`polish`].
+/// The outcome of a semismooth Newton run.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NewtonReport {
     /// how it stopped
@@ -193,6 +194,149 @@ pub struct NewtonReport {
     pub steps: usize,
     /// ‖G(r)‖ at the returned r
     pub residual: f64,
+}
+
+/// A nonsmooth map G: ℝⁿ → ℝⁿ whose zero [`drive`] seeks, with its generalized Jacobian J.
+/// The map keeps two slots (current point, trial point) of G and of what J is built from.
+pub(crate) trait SemismoothMap {
+    /// Evaluates G at `x` into the trial slot; returns the merit ‖G(x)‖ (in the map's own,
+    /// possibly scaled, norm).
+    fn eval_trial(&mut self, x: &[f64]) -> f64;
+    /// Makes the trial slot the current one.
+    fn accept_trial(&mut self);
+    /// G at the current point.
+    fn current(&self) -> &[f64];
+    /// Builds J at the current point (once per step).
+    fn build_jacobian(&mut self);
+    /// Solves (J + λ I) δ = rhs in place (λ = 0: the plain Newton system); None if the
+    /// factorization fails or δ is not finite.
+    fn solve_shifted(&mut self, lambda: f64, rhs: &mut [f64]) -> Option<()>;
+}
+
+/// The regularization of the Newton system, J + λ I: the first λ of a step is
+/// `factor` · min(‖G‖ / `residual_scale`, 1e-2) · `diag_scale`, and it grows hundredfold
+/// (to at least 1e-10 · `diag_scale`) for each of at most `tries` directions that give no
+/// descent (a Levenberg–Marquardt-like direction where J is singular).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Shift {
+    pub(crate) factor: f64,
+    pub(crate) residual_scale: f64,
+    pub(crate) diag_scale: f64,
+    pub(crate) tries: usize,
+}
+
+/// Caps and rules of one [`drive`] run.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct NewtonRule {
+    /// stop once the merit is ≤ this
+    pub(crate) target: f64,
+    /// at most this many accepted steps
+    pub(crate) max_steps: usize,
+    /// line search: the full step t = 1, then up to this many halvings of t (0: full step only)
+    pub(crate) halvings: usize,
+    /// a trial is accepted when its merit is < ‖G‖ and ≤ (1 − c t) ‖G‖ (c = this; 0: any
+    /// decrease)
+    pub(crate) sufficient_decrease: f64,
+    /// None: λ = 0, one direction per step
+    pub(crate) shift: Option<Shift>,
+    /// stop (`Slow`) after this many consecutive steps with merit > `slow_ratio` · before
+    pub(crate) slow_steps: usize,
+    /// see `slow_steps`
+    pub(crate) slow_ratio: f64,
+    /// no step starts after it
+    pub(crate) deadline: Deadline,
+}
+
+/// The damped semismooth Newton driver shared by the end game ([`polish`]) and the
+/// interior-point polish steps (dual (4.7) and primal (3.15) natural maps): from `x`
+/// (overwritten by the best iterate), steps δ from (J + λ I) δ = −G(x), each followed by the
+/// line search of `rule`, until the merit is ≤ `rule.target`, the step cap, no descent, too
+/// many slow steps, or the deadline. Evaluates G at x first.
+pub(crate) fn drive<M: SemismoothMap>(
+    map: &mut M,
+    x: &mut [f64],
+    rule: &NewtonRule,
+) -> NewtonReport {
+    let n = x.len();
+    let mut norm = map.eval_trial(x);
+    map.accept_trial();
+    let mut trial = vec![0.0; n];
+    let mut steps = 0;
+    let mut slow_steps = 0;
+    let status = loop {
+        if !norm.is_finite() {
+            break NewtonStatus::NoDescent;
+        }
+        if norm <= rule.target {
+            break NewtonStatus::Reached;
+        }
+        if steps >= rule.max_steps {
+            break NewtonStatus::MaxSteps;
+        }
+        if rule.deadline.passed() {
+            break NewtonStatus::TimeLimit;
+        }
+        map.build_jacobian();
+        let before = norm;
+        let (mut lambda, tries) = match rule.shift {
+            Some(s) => (
+                s.factor * (norm / s.residual_scale).min(1e-2) * s.diag_scale,
+                s.tries,
+            ),
+            None => (0.0, 1),
+        };
+        let mut accepted = false;
+        for _ in 0..tries {
+            if rule.deadline.passed() {
+                break;
+            }
+            let mut delta: Vec<f64> = map.current().iter().map(|g| -g).collect();
+            if map.solve_shifted(lambda, &mut delta).is_some() {
+                let mut t = 1.0;
+                for _ in 0..=rule.halvings {
+                    for k in 0..n {
+                        trial[k] = x[k] + t * delta[k];
+                    }
+                    let n_trial = map.eval_trial(&trial);
+                    let c = rule.sufficient_decrease;
+                    if n_trial.is_finite() && n_trial < norm && n_trial <= (1.0 - c * t) * norm {
+                        x.copy_from_slice(&trial);
+                        map.accept_trial();
+                        norm = n_trial;
+                        accepted = true;
+                        break;
+                    }
+                    t *= 0.5;
+                }
+            }
+            if accepted {
+                break;
+            }
+            if let Some(s) = rule.shift {
+                lambda = (lambda * 100.0).max(1e-10 * s.diag_scale);
+            }
+        }
+        if !accepted {
+            if rule.deadline.passed() {
+                break NewtonStatus::TimeLimit;
+            }
+            break NewtonStatus::NoDescent;
+        }
+        steps += 1;
+        slow_steps = if norm > rule.slow_ratio * before {
+            slow_steps + 1
+        } else {
+            0
+        };
+        if slow_steps >= rule.slow_steps && norm > rule.target {
+            break NewtonStatus::Slow;
+        }
+    };
+    NewtonReport {
+        status,
+        steps,
+        residual: norm,
+    }
 }
 
 /// ‖G(r)‖ of the De Saxcé natural map of `p` at r ([`de_saxce_map`] with u = W r + q; G, D
@@ -210,18 +354,75 @@ fn de_saxce_map_norm(
     crate::law::norm(g)
 }
 
+/// The De Saxcé natural map G(r) = r − P_L(r − ũ(W r + q)) of a local problem, with the
+/// data of its Jacobian J = I − D + D A W on a fixed pattern.
+struct DeSaxceMap<'a> {
+    p: &'a LocalProblem,
+    pattern: JacobianPattern,
+    /// G, D blocks, B = D A blocks: current and trial
+    g: [Vec<f64>; 2],
+    dblocks: [Vec<f64>; 2],
+    blocks: [Vec<f64>; 2],
+    vals: Vec<f64>,
+    wcol: Vec<f64>,
+}
+
+impl SemismoothMap for DeSaxceMap<'_> {
+    fn eval_trial(&mut self, r: &[f64]) -> f64 {
+        let (g, dblocks, blocks) = (&mut self.g[1], &mut self.dblocks[1], &mut self.blocks[1]);
+        de_saxce_map_norm(self.p, r, g, dblocks, blocks)
+    }
+
+    fn accept_trial(&mut self) {
+        self.g.swap(0, 1);
+        self.dblocks.swap(0, 1);
+        self.blocks.swap(0, 1);
+    }
+
+    fn current(&self) -> &[f64] {
+        &self.g[0]
+    }
+
+    fn build_jacobian(&mut self) {
+        let (dblocks, blocks) = (&self.dblocks[0], &self.blocks[0]);
+        self.pattern
+            .fill(self.p, dblocks, blocks, &mut self.wcol, &mut self.vals);
+    }
+
+    fn solve_shifted(&mut self, lambda: f64, rhs: &mut [f64]) -> Option<()> {
+        let mut shifted = self.vals.clone();
+        self.pattern.shift_diagonal(&mut shifted, lambda);
+        self.pattern.solve(&shifted, rhs)
+    }
+}
+
 /// Semismooth Newton on G(r) = r − P_L(r − ũ(W r + q)) from `r` (overwritten by the best
-/// iterate): at most `max_steps` steps, each a direction from (J + λ I) δ = −G followed by a
-/// backtracking line search that accepts the first t ∈ {1, ½, ¼, …} (≥ 2⁻¹⁰) with
-/// ‖G(r + t δ)‖ ≤ (1 − 10⁻⁴ t) ‖G(r)‖. Stops once ‖G‖ ≤ `target`, when no step decreases ‖G‖,
-/// after [`SLOW_STEPS`] slow steps in a row, or at `deadline`. A problem whose sizes disagree
-/// (d, μ, q, W, r) takes no step (`NoDescent`, residual NaN).
+/// iterate), by [`drive`]: at most `max_steps` steps, each a direction from (J + λ I) δ = −G
+/// ([`LAMBDA_FACTOR`], up to 4 shifts) followed by a backtracking line search that accepts the
+/// first t ∈ {1, ½, ¼, …} (≥ 2⁻¹⁰) with ‖G(r + t δ)‖ ≤ (1 − 10⁻⁴ t) ‖G(r)‖. Stops once
+/// ‖G‖ ≤ `target`, when no step decreases ‖G‖, after [`SLOW_STEPS`] slow steps in a row, or
+/// at `deadline`. A problem whose sizes disagree (d, μ, q, W, r) takes no step (`NoDescent`,
+/// residual NaN).
 pub fn polish(
     p: &LocalProblem,
     r: &mut [f64],
     target: f64,
     max_steps: usize,
     deadline: Deadline,
+) -> NewtonReport {
+    let params = crate::settings::Tuning::default().newton;
+    polish_with(p, r, target, max_steps, deadline, &params)
+}
+
+/// [`polish`] with the shift and slow-step constants of `params`
+/// ([`crate::settings::NewtonParams::lambda_factor`], `slow_steps`, `slow_ratio`).
+pub fn polish_with(
+    p: &LocalProblem,
+    r: &mut [f64],
+    target: f64,
+    max_steps: usize,
+    deadline: Deadline,
+    params: &crate::settings::NewtonParams,
 ) -> NewtonReport {
     let (d, m) = (p.dim, r.len());
     let consistent = (d == 2 || d == 3)
@@ -238,14 +439,6 @@ pub fn polish(
             residual: f64::NAN,
         };
     }
-    let mut g = vec![0.0; m];
-    let mut blocks = vec![0.0; p.mu.len() * d * d];
-    let mut dblocks = blocks.clone();
-    let mut norm = de_saxce_map_norm(p, r, &mut g, &mut dblocks, &mut blocks);
-    let mut trial = vec![0.0; m];
-    let mut g_trial = vec![0.0; m];
-    let mut blocks_trial = vec![0.0; blocks.len()];
-    let mut dblocks_trial = blocks_trial.clone();
     let diag_scale = (0..m)
         .map(|j| {
             (p.w.col_ptr[j]..p.w.col_ptr[j + 1])
@@ -256,96 +449,41 @@ pub fn polish(
         .fold(0.0f64, f64::max)
         .max(1.0);
     let q_scale = crate::law::norm(&p.q).max(f64::MIN_POSITIVE);
+    let blocks = vec![0.0; p.mu.len() * d * d];
     let Some(pattern) = JacobianPattern::new(p) else {
+        let mut g = vec![0.0; m];
+        let (mut db, mut b) = (blocks.clone(), blocks);
         return NewtonReport {
             status: NewtonStatus::NoDescent,
             steps: 0,
-            residual: norm,
+            residual: de_saxce_map_norm(p, r, &mut g, &mut db, &mut b),
         };
     };
-    let mut vals = Vec::new();
-    let mut wcol = vec![0.0; m];
-    let mut steps = 0;
-    let mut slow_steps = 0;
-    let status = loop {
-        if !norm.is_finite() {
-            break NewtonStatus::NoDescent;
-        }
-        if norm <= target {
-            break NewtonStatus::Reached;
-        }
-        if steps >= max_steps {
-            break NewtonStatus::MaxSteps;
-        }
-        if deadline.passed() {
-            break NewtonStatus::TimeLimit;
-        }
-        // J + λ I with J = I − D + (D A) W; λ starts at a fraction of the relative residual (a regularized
-        // semismooth Newton step, exact in the limit) and grows a hundredfold whenever the
-        // direction gives no descent: a singular J (more contact unknowns than degrees of
-        // freedom) then still yields a Levenberg–Marquardt-like direction.
-        pattern.fill(p, &dblocks, &blocks, &mut wcol, &mut vals);
-        let before = norm;
-        let mut lambda = LAMBDA_FACTOR * (norm / q_scale).min(1e-2) * diag_scale;
-        let mut accepted = false;
-        for _ in 0..4 {
-            if deadline.passed() {
-                break;
-            }
-            let mut shifted = vals.clone();
-            pattern.shift_diagonal(&mut shifted, lambda);
-            let mut delta: Vec<f64> = g.iter().map(|x| -x).collect();
-            if pattern.solve(&shifted, &mut delta).is_some() {
-                let mut t = 1.0;
-                for _ in 0..=10 {
-                    for k in 0..m {
-                        trial[k] = r[k] + t * delta[k];
-                    }
-                    let n_trial = de_saxce_map_norm(
-                        p,
-                        &trial,
-                        &mut g_trial,
-                        &mut dblocks_trial,
-                        &mut blocks_trial,
-                    );
-                    if n_trial.is_finite() && n_trial <= (1.0 - 1e-4 * t) * norm {
-                        r.copy_from_slice(&trial);
-                        std::mem::swap(&mut g, &mut g_trial);
-                        std::mem::swap(&mut blocks, &mut blocks_trial);
-                        std::mem::swap(&mut dblocks, &mut dblocks_trial);
-                        norm = n_trial;
-                        accepted = true;
-                        break;
-                    }
-                    t *= 0.5;
-                }
-            }
-            if accepted {
-                break;
-            }
-            lambda = (lambda * 100.0).max(1e-10 * diag_scale);
-        }
-        if !accepted {
-            if deadline.passed() {
-                break NewtonStatus::TimeLimit;
-            }
-            break NewtonStatus::NoDescent;
-        }
-        steps += 1;
-        slow_steps = if norm > SLOW_RATIO * before {
-            slow_steps + 1
-        } else {
-            0
-        };
-        if slow_steps >= SLOW_STEPS && norm > target {
-            break NewtonStatus::Slow;
-        }
+    let mut map = DeSaxceMap {
+        p,
+        pattern,
+        g: [vec![0.0; m], vec![0.0; m]],
+        dblocks: [blocks.clone(), blocks.clone()],
+        blocks: [blocks.clone(), blocks],
+        vals: Vec::new(),
+        wcol: vec![0.0; m],
     };
-    NewtonReport {
-        status,
-        steps,
-        residual: norm,
-    }
+    let rule = NewtonRule {
+        target,
+        max_steps,
+        halvings: 10,
+        sufficient_decrease: 1e-4,
+        shift: Some(Shift {
+            factor: params.lambda_factor,
+            residual_scale: q_scale,
+            diag_scale,
+            tries: 4,
+        }),
+        slow_steps: params.slow_steps,
+        slow_ratio: params.slow_ratio,
+        deadline,
+    };
+    drive(&mut map, r, &rule)
 }
 
 #[cfg(test)]

@@ -222,6 +222,43 @@ pub struct NewtonParams {
     pub stagnation_gain: f64,
     /// the natural map is driven below this fraction of tol · ‖q‖
     pub target_fraction: f64,
+    /// first shift of a step: λ = `lambda_factor` · min(‖G‖/‖q‖, 1e-2) · max diag(W)
+    /// (see [`crate::newton::LAMBDA_FACTOR`])
+    pub lambda_factor: f64,
+    /// a try stops after this many consecutive slow steps (see [`crate::newton::SLOW_STEPS`]); ≥ 1
+    pub slow_steps: usize,
+    /// a step with ‖G⁺‖ > `slow_ratio` ‖G‖ is slow (see [`crate::newton::SLOW_RATIO`]); in (0, 1]
+    pub slow_ratio: f64,
+}
+
+/// Parameters of the inner solvers of (4.7): the constants each has always used, as
+/// defaults. A [`crate::Solver`] builds its inner solvers with them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct InnerParams {
+    /// APGD: power iterations of the initial estimate L of λ_max(W) (the step is 1/L, raised
+    /// by backtracking when too small); ≥ 1
+    pub apgd_power_iterations: usize,
+    /// APGD: a Barzilai–Borwein trial step ‖Δx‖²/(Δxᵀ W Δx) (backtracked) instead of the
+    /// running 1/L
+    pub apgd_barzilai_borwein: bool,
+    /// projected Gauss–Seidel (inner solver and fused method): sweeps between exact
+    /// recomputations of the maintained u = W r + b (against drift); ≥ 1
+    pub gs_refresh: usize,
+    /// interior point: semismooth Newton steps that polish Clarabel's r on the natural map
+    /// (0: none; see [`crate::inner::ipm::DEFAULT_POLISH_STEPS`])
+    pub ipm_polish_steps: usize,
+}
+
+impl Default for InnerParams {
+    fn default() -> Self {
+        Self {
+            apgd_power_iterations: crate::inner::apgd::POWER_ITERATIONS,
+            apgd_barzilai_borwein: false,
+            gs_refresh: crate::inner::pgs::REFRESH,
+            ipm_polish_steps: crate::inner::ipm::DEFAULT_POLISH_STEPS,
+        }
+    }
 }
 
 /// Every tuning constant of the outer loop, in one place. The defaults are those the solver
@@ -248,6 +285,8 @@ pub struct Tuning {
     pub anderson: AndersonParams,
     /// Newton end game
     pub newton: NewtonParams,
+    /// the inner solvers' parameters
+    pub inner: InnerParams,
 }
 
 impl Default for Tuning {
@@ -266,7 +305,11 @@ impl Default for Tuning {
                 stagnation: 3,
                 stagnation_gain: 0.5,
                 target_fraction: 0.5,
+                lambda_factor: crate::newton::LAMBDA_FACTOR,
+                slow_steps: crate::newton::SLOW_STEPS,
+                slow_ratio: crate::newton::SLOW_RATIO,
             },
+            inner: InnerParams::default(),
         }
     }
 }
@@ -295,6 +338,7 @@ impl Tuning {
             || !frac(self.newton.retry)
             || !frac(self.newton.stagnation_gain)
             || !frac(self.newton.target_fraction)
+            || !frac(self.newton.slow_ratio)
         {
             return Err("tuning fractions must be in (0, 1]".into());
         }
@@ -308,8 +352,14 @@ impl Tuning {
             || self.balance_stalls == 0
             || self.anderson.memory == 0
             || self.newton.try_steps == 0
+            || self.inner.apgd_power_iterations == 0
+            || self.inner.gs_refresh == 0
+            || self.newton.slow_steps == 0
         {
             return Err("tuning counts must be at least 1".into());
+        }
+        if !(self.newton.lambda_factor.is_finite() && self.newton.lambda_factor >= 0.0) {
+            return Err("tuning.newton.lambda_factor must be finite and ≥ 0".into());
         }
         Ok(())
     }

@@ -438,7 +438,7 @@ fn drive(bytes: Vec<u8>, method: usize, check: bool) -> Outcome {
     }
     if check && f.problem.contacts() <= 60 {
         let cs = CheckSettings {
-            time_limit: 0.5,
+            time_limit: Duration::from_millis(500),
             max_iter: 60,
             ..CheckSettings::default()
         };

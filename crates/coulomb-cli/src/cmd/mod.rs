@@ -8,7 +8,6 @@ pub mod error;
 pub mod example;
 pub mod info;
 pub mod paper;
-pub mod scaling;
 pub mod simulate;
 #[cfg(feature = "mpi")]
 pub mod simulate_mpi;

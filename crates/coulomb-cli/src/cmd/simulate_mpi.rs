@@ -6,28 +6,20 @@
 //! distributed.json (per step: sweeps, communication time, ghosts, interface contacts,
 //! migration, imbalance); every rank writes its VTK pieces, rank 0 the .pvtp/.pvd collections.
 
-use super::simulate::Args;
 use crate::progress::bar as progress;
+use crate::sim_args::{Args, Method};
 use anyhow::{bail, Context};
 use coulomb_granular::distributed::output::DistributedVtk;
 use coulomb_granular::distributed::{Comm, DistributedSimulation, DistributedStats};
 use coulomb_granular::output::write_stats;
 use coulomb_granular::{Scene, StepStats, Stop, Summary};
 
-/// Whether this process was started by an MPI launcher (Open MPI's mpirun, or a PMI/PMIx
-/// launcher such as srun or MPICH's mpiexec).
-pub fn under_launcher() -> bool {
-    ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"]
-        .iter()
-        .any(|v| std::env::var_os(v).is_some())
-}
-
 /// Runs `coulomb simulate` on the ranks of MPI_COMM_WORLD.
 pub fn run(args: Args, scene: Scene) -> anyhow::Result<()> {
     if args.dump_fclib.is_some() {
         bail!("--dump-fclib is not available in a distributed run");
     }
-    if args.method != super::simulate::Method::Nsgs {
+    if args.method != Method::Nsgs {
         bail!("a distributed run steps with the body-level Gauss–Seidel (--method nsgs) only");
     }
     let Some(universe) = coulomb_granular::distributed::mpi::initialize() else {
@@ -131,29 +123,14 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<()> {
         )?;
     }
     if args.json {
-        let obj = serde_json::json!({
-            "scene": summary.scene,
-            "beads": summary.beads,
-            "steps": summary.steps,
-            "mean_contacts": summary.mean_contacts,
-            "mean_subproblems": summary.mean_subproblems,
-            "mean_solve_ms": summary.mean_solve_ms,
-            "max_penetration": summary.max_penetration,
-            "end_mean_penetration": summary.end_mean_penetration,
-            "end_max_penetration": summary.end_max_penetration,
-            "projection_work": summary.projection_work,
-            "start_energy": start_energy,
-            "end_energy": end_energy,
-            "converged_steps": summary.converged_steps,
-            "not_converged_steps": summary.not_converged_steps,
-            "mean_error": summary.mean_error,
-            "max_error": summary.max_error,
-            "at_rest": summary.at_rest,
+        let extra = serde_json::json!({
             "ranks": ranks,
             "mean_sweeps": sweeps,
             "mean_step_ms": step_ms,
             "mean_comm_ms": comm_ms,
         });
+        let extra = extra.as_object().cloned().unwrap_or_default();
+        let obj = crate::sim_args::summary_json(&summary, start_energy, end_energy, extra);
         println!("{}", crate::outputs::json(&obj, false)?);
     } else {
         println!(

@@ -2,7 +2,6 @@
 //! settings of `coulomb simulate` — each check states the value expected from mechanics, the
 //! measured one and its tolerance; exit status 1 when a check fails.
 
-use crate::cmd::simulate;
 use anyhow::{bail, Context};
 use clap::Parser;
 use coulomb_granular::validation::{self, Check};
@@ -28,7 +27,7 @@ pub struct Args {
 #[derive(Parser)]
 struct Defaults {
     #[command(flatten)]
-    simulate: simulate::Args,
+    simulate: crate::sim_args::Args,
 }
 
 /// The parameters `coulomb simulate box` uses when given no option.

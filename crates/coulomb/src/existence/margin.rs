@@ -284,7 +284,7 @@ impl<'d, 'a> MarginProblem<'d, 'a> {
         let csettings = cs::DefaultSettingsBuilder::default()
             .verbose(false)
             .max_iter(settings.max_iter)
-            .time_limit(settings.time_limit)
+            .time_limit(settings.time_limit.as_secs_f64())
             .build();
         let Ok(csettings) = csettings else {
             return MarginSolve::failed("Clarabel settings rejected");

@@ -69,7 +69,7 @@ use clarabel::algebra as ca;
 use clarabel::solver::{self as cs, IPSolver};
 use criteria::run_all_with;
 use margin::KinematicData;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 use thiserror::Error;
 
 /// The five criteria of §4–§5.
@@ -269,8 +269,8 @@ pub struct CheckSettings {
     pub certificate_tol: f64,
     /// iteration cap of each conic solve
     pub max_iter: u32,
-    /// wall-clock cap (seconds) of each conic solve
-    pub time_limit: f64,
+    /// wall-clock cap of each conic solve (> 0)
+    pub time_limit: Duration,
 }
 
 impl Default for CheckSettings {
@@ -279,7 +279,7 @@ impl Default for CheckSettings {
             tol: 1e-7,
             certificate_tol: 1e-6,
             max_iter: 200,
-            time_limit: 30.0,
+            time_limit: Duration::from_secs(30),
         }
     }
 }
@@ -409,11 +409,8 @@ fn validate_settings(s: &CheckSettings) -> Result<(), CheckError> {
     if s.max_iter == 0 {
         return Err(CheckError::Settings("max_iter = 0".into()));
     }
-    if s.time_limit.is_nan() || s.time_limit <= 0.0 {
-        return Err(CheckError::Settings(format!(
-            "time_limit = {} is not > 0",
-            s.time_limit
-        )));
+    if s.time_limit.is_zero() {
+        return Err(CheckError::Settings("time_limit = 0 s is not > 0".into()));
     }
     Ok(())
 }

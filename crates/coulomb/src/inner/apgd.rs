@@ -22,9 +22,7 @@
 //! blocks are mostly nonzero) and for the matrix-free Delassus operator x ↦ Hᵀ M⁻¹ H x
 //! ([`DelassusOperator`]).
 
-use super::{
-    matrix_key, InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus, MatrixKey,
-};
+use super::{InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus};
 use crate::cone;
 use crate::delassus::DelassusOperator;
 use crate::law::norm;
@@ -99,32 +97,44 @@ pub fn lipschitz_estimate<A: LinearOperator + ?Sized>(op: &A, iterations: usize)
     lambda
 }
 
-/// FISTA with adaptive restart on (4.7).
+/// FISTA with adaptive restart on (4.7), set up for one (d, W) by [`ApgdSolver::new`]: the
+/// λ_max(W) estimate and W stored by d × d blocks are computed there, once.
 #[derive(Debug, Clone)]
 pub struct ApgdSolver {
     /// use a Barzilai–Borwein trial step (backtracked) instead of the running 1/L
     pub barzilai_borwein: bool,
-    /// power iterations for the initial Lipschitz estimate
-    pub power_iterations: usize,
-    /// for the last W seen (keyed by its identity and a checksum of its values): the
-    /// λ_max(W) estimate and W by d × d blocks (None where blocks would be mostly padding)
-    cache: Option<(MatrixKey, f64, Option<BlockCsr>)>,
+    /// the λ_max(W) estimate of [`lipschitz_estimate`]
+    lip: f64,
+    /// W by d × d blocks (None where blocks would be mostly padding: W is used as stored)
+    blocks: Option<BlockCsr>,
+    /// d
+    dim: usize,
 }
 
-impl Default for ApgdSolver {
-    fn default() -> Self {
-        Self {
-            barzilai_borwein: false,
-            power_iterations: 20,
-            cache: None,
-        }
-    }
-}
+/// Power iterations of the initial λ_max(W) estimate of [`ApgdSolver::new`].
+pub const POWER_ITERATIONS: usize = 20;
 
 impl ApgdSolver {
-    /// A solver with default parameters (plain FISTA steps, 20 power iterations).
-    pub fn new() -> Self {
-        Self::default()
+    /// A solver for the d-dimensional problems on `w` with plain FISTA steps: W by blocks
+    /// (when that does not more than double the stored entries) and λ_max(W) estimated by
+    /// [`POWER_ITERATIONS`] power iterations.
+    pub fn new(dim: usize, w: &CscMatrix) -> Self {
+        Self::with_power_iterations(dim, w, POWER_ITERATIONS)
+    }
+
+    /// [`ApgdSolver::new`] with `power_iterations` power iterations for λ_max(W).
+    pub fn with_power_iterations(dim: usize, w: &CscMatrix, power_iterations: usize) -> Self {
+        let blocks = BlockCsr::from_csc(w, dim).filter(|b| b.values.len() <= 2 * w.nnz().max(1));
+        let lip = match &blocks {
+            Some(b) => lipschitz_estimate(b, power_iterations),
+            None => lipschitz_estimate(w, power_iterations),
+        };
+        Self {
+            barzilai_borwein: false,
+            lip,
+            blocks,
+            dim,
+        }
     }
 }
 
@@ -140,18 +150,16 @@ impl InnerSolver for ApgdSolver {
         r: &mut [f64],
     ) -> InnerReport {
         let w = problem.w;
-        let key = matrix_key(w);
-        if self.cache.as_ref().is_none_or(|(k, _, _)| *k != key) {
-            let blocks =
-                BlockCsr::from_csc(w, problem.dim).filter(|b| b.values.len() <= 2 * w.nnz().max(1));
-            let lip = match &blocks {
-                Some(b) => lipschitz_estimate(b, self.power_iterations),
-                None => lipschitz_estimate(w, self.power_iterations),
+        let m = problem.dim * problem.mu.len();
+        let blocks_fit = self.blocks.as_ref().is_none_or(|b| b.blocks * b.dim == m);
+        if problem.dim != self.dim || w.ncols != m || r.len() != m || !blocks_fit {
+            return InnerReport {
+                status: InnerStatus::NumericalError,
+                iterations: 0,
+                residual: f64::INFINITY,
             };
-            self.cache = Some((key, lip, blocks));
         }
-        let (_, lip, blocks) = self.cache.as_ref().expect("set just above");
-        let op: &dyn LinearOperator = match blocks {
+        let op: &dyn LinearOperator = match &self.blocks {
             Some(b) => b,
             None => w,
         };
@@ -160,7 +168,7 @@ impl InnerSolver for ApgdSolver {
             problem.dim,
             problem.b,
             problem.mu,
-            *lip,
+            self.lip,
             self.barzilai_borwein,
             limits,
             r,

@@ -1,6 +1,6 @@
 //! Clarabel plumbing shared by the interior-point ([`super::ipm`]) and faceted
 //! ([`super::faceted`]) inner solvers: matrices in Clarabel's CSC type, settings from
-//! [`InnerLimits`], status mapping, and the cached dual QP (4.7) solve.
+//! [`InnerLimits`], status mapping, and the dual QP (4.7) solve on a setup built once.
 
 use super::polish::polish_dual;
 use super::{InnerLimits, InnerProblem, InnerReport, InnerStatus};
@@ -102,40 +102,19 @@ pub(crate) fn report_of(solver: &DefaultSolver<f64>) -> InnerReport {
     }
 }
 
-/// A Clarabel solver set up for min ½ rᵀ W r + bᵀ r s.t. A r + s = 0, s ∈ K, with the data
-/// that determine P, A and K: (d, μ, W) and a variant tag (e.g. the number of facets).
-/// Only b changes between the inner solves of one fixed-point run, so a cached solver needs
-/// just `update_q`.
-pub(crate) struct QpCache {
-    dim: usize,
-    variant: usize,
-    mu: Vec<f64>,
-    w: CscMatrix,
+/// A Clarabel solver set up for min ½ rᵀ W r + bᵀ r s.t. A r + s = 0, s ∈ K, built at the
+/// first solve of an inner solver (Clarabel's setup equilibrates with the first b, so it is
+/// built with it) and kept for all later ones: only b changes between the inner solves on
+/// one (d, W, μ), so a later solve needs just `update_q`.
+pub(crate) struct QpSetup {
+    /// the size of r it was built for
+    size: usize,
     solver: DefaultSolver<f64>,
 }
 
-impl std::fmt::Debug for QpCache {
+impl std::fmt::Debug for QpSetup {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("QpCache")
-            .field("dim", &self.dim)
-            .field("variant", &self.variant)
-            .field("contacts", &self.mu.len())
-            .field("w_nnz", &self.w.nnz())
-            .finish()
-    }
-}
-
-impl QpCache {
-    fn matches(&self, variant: usize, problem: &InnerProblem<'_>) -> bool {
-        self.dim == problem.dim
-            && self.variant == variant
-            && self.mu.len() == problem.mu.len()
-            && self
-                .mu
-                .iter()
-                .zip(problem.mu)
-                .all(|(a, b)| a.to_bits() == b.to_bits())
-            && self.w == *problem.w
+        f.debug_struct("QpSetup").field("size", &self.size).finish()
     }
 }
 
@@ -153,13 +132,12 @@ pub(crate) fn valid_inner(problem: &InnerProblem<'_>, r: &[f64]) -> bool {
         && problem.mu.iter().all(|x| *x >= 0.0)
 }
 
-/// Solves min ½ rᵀ W r + bᵀ r s.t. A r + s = 0, s ∈ K with Clarabel, where `constraints`
-/// builds (A, K) for a new setup. Reuses `cache` when (d, μ, W, variant) are unchanged.
-/// Writes Clarabel's x into `r` (left untouched when no solve took place).
-#[allow(clippy::too_many_arguments)]
+/// Solves min ½ rᵀ W r + bᵀ r s.t. A r + s = 0, s ∈ K with Clarabel: with the solver of
+/// `setup` (built by its first call, `constraints` building (A, K); the (d, W, μ) of every
+/// later call are those of the first). Writes Clarabel's x into `r` (left untouched when no
+/// solve took place).
 pub(crate) fn solve_dual_qp(
-    cache: &mut Option<QpCache>,
-    variant: usize,
+    setup: &mut Option<QpSetup>,
     polish: usize,
     problem: &InnerProblem<'_>,
     limits: &InnerLimits,
@@ -178,32 +156,30 @@ pub(crate) fn solve_dual_qp(
         Ok(s) => s,
         Err(status) => return fail(status),
     };
-    let reused = match cache.as_mut() {
-        Some(c) if c.matches(variant, problem) => {
+    let reused = match setup.as_mut() {
+        Some(c) if c.size == r.len() => {
             c.solver.update_q(&problem.b.to_vec()).is_ok()
                 && c.solver.update_settings(settings.clone()).is_ok()
         }
-        _ => false,
+        Some(_) => return fail(InnerStatus::NumericalError),
+        None => false,
     };
     if !reused {
-        *cache = None;
+        *setup = None;
         let (a, cones) = constraints();
         let p = to_clarabel(&problem.w.upper_triangle());
         let zeros = vec![0.0; a.m];
         match DefaultSolver::new(&p, problem.b, &a, &zeros, &cones, settings) {
             Ok(solver) => {
-                *cache = Some(QpCache {
-                    dim: problem.dim,
-                    variant,
-                    mu: problem.mu.to_vec(),
-                    w: problem.w.clone(),
+                *setup = Some(QpSetup {
+                    size: r.len(),
                     solver,
                 })
             }
             Err(_) => return fail(InnerStatus::NumericalError),
         }
     }
-    let Some(c) = cache.as_mut() else {
+    let Some(c) = setup.as_mut() else {
         return fail(InnerStatus::NumericalError);
     };
     c.solver.solve();

@@ -16,7 +16,6 @@
 //!
 //! μ = 0 (the half-line) and μ = ∞ (the half-space) have their own closed forms.
 
-use super::{matrix_key, MatrixKey};
 use crate::cone;
 use crate::sparse::CscMatrix;
 
@@ -28,8 +27,6 @@ pub struct DiagonalBlocks {
     pub(crate) blocks: Vec<[f64; 9]>,
     /// inverses of `blocks`
     pub(crate) inverses: Vec<[f64; 9]>,
-    /// identity of the matrix the blocks came from (pointer, nnz, size)
-    pub(crate) key: MatrixKey,
     /// estimate of ‖W‖ (largest block trace)
     pub w_scale: f64,
 }
@@ -121,13 +118,13 @@ impl DiagonalBlocks {
             dim,
             blocks,
             inverses,
-            key: matrix_key(w),
             w_scale: global_scale,
         }
     }
 
-    pub(crate) fn matches(&self, dim: usize, w: &CscMatrix) -> bool {
-        self.dim == dim && self.key == matrix_key(w)
+    /// Whether these are the blocks of a d-dimensional problem with `contacts` contacts.
+    pub(crate) fn fits(&self, dim: usize, contacts: usize) -> bool {
+        self.dim == dim && self.blocks.len() == contacts
     }
 }
 

@@ -28,9 +28,10 @@
 //! 1 − cos(π/k) ≈ π²/(2k²)), and the artificial anisotropy of the pyramid remains for any
 //! finite k. The outer loop reports the true error of docs/error.md, which therefore stalls at
 //! a level set by k for d = 3. As for [`super::ipm::IpmSolver`], Clarabel offers no warm
-//! start (the incoming r is ignored) and the setup is reused while W, μ and k are unchanged.
+//! start (the incoming r is ignored); a [`FacetedSolver`] serves one (d, W, μ) and k, its
+//! setup built at the first solve and reused by the later ones.
 
-use super::clarabel::{solve_dual_qp, triplets_to_clarabel, QpCache};
+use super::clarabel::{solve_dual_qp, triplets_to_clarabel, QpSetup};
 use super::{InnerLimits, InnerProblem, InnerReport, InnerSolver};
 use clarabel::algebra::CscMatrix as ClarabelCsc;
 use clarabel::solver::SupportedConeT;
@@ -43,13 +44,14 @@ pub const DEFAULT_FACETS: usize = 8;
 pub struct FacetedSolver {
     /// number of facets of each pyramid (d = 3; values below 3 are raised to 3;
     /// d = 2 is exact with 2 whatever this is)
-    pub facets: usize,
-    /// the Clarabel solver of the last call, reused while (d, μ, W, facets) stay the same
-    cache: Option<QpCache>,
+    facets: usize,
+    /// the Clarabel setup, built at the first solve and reused by the later ones (on the same
+    /// (d, W, μ): only b changes)
+    setup: Option<QpSetup>,
 }
 
 impl Clone for FacetedSolver {
-    /// A clone starts without the cached Clarabel setup (it is rebuilt on first use).
+    /// A clone starts without the Clarabel setup (it is built at its first solve).
     fn clone(&self) -> Self {
         Self::new(self.facets)
     }
@@ -67,7 +69,7 @@ impl FacetedSolver {
     pub fn new(facets: usize) -> Self {
         Self {
             facets,
-            cache: None,
+            setup: None,
         }
     }
 
@@ -91,7 +93,7 @@ impl InnerSolver for FacetedSolver {
         r: &mut [f64],
     ) -> InnerReport {
         let k = self.effective_facets();
-        solve_dual_qp(&mut self.cache, k, 0, problem, limits, r, || {
+        solve_dual_qp(&mut self.setup, 0, problem, limits, r, || {
             pyramid_constraints(problem.dim, problem.mu, k)
         })
     }

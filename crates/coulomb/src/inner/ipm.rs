@@ -31,18 +31,19 @@
 //! # Warm start
 //! Clarabel is a primal-dual interior-point method started from its own central point; it
 //! offers no warm start, so the incoming r of [`InnerSolver::solve`] is ignored. What *is*
-//! reused is the setup: [`IpmSolver`] keeps the Clarabel solver of its last call and, when the
-//! next call has the same W and μ (as in the fixed-point iteration s ↦ F(s) of (3.19), where
-//! only b = q + E s changes), only overwrites the linear term through Clarabel's data-update
-//! API (`update_q`), skipping equilibration and the symbolic factorization of the KKT matrix.
+//! reused is the setup: an [`IpmSolver`] serves one (d, W, μ); it builds the Clarabel solver at
+//! its first call and, at every later call (as in the fixed-point iteration s ↦ F(s) of (3.19),
+//! where only b = q + E s changes), only overwrites the linear term through Clarabel's
+//! data-update API (`update_q`), skipping equilibration and the symbolic factorization of the
+//! KKT matrix.
 
 use super::clarabel::{clarabel_settings, report_of, to_clarabel};
-pub(crate) use super::clarabel::{solve_dual_qp, triplets_to_clarabel, QpCache};
-use super::polish::past;
+pub(crate) use super::clarabel::{solve_dual_qp, triplets_to_clarabel, QpSetup};
+use super::polish::{polish_rule, shifted_lu_solve};
 use super::{InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus};
 use crate::deadline::Deadline;
 use crate::natural_map::{natural_map, push_d_times, push_identity_minus_d};
-use crate::newton::sparse_lu_solve;
+use crate::newton::{drive, SemismoothMap};
 use crate::problem::GlobalProblem;
 use crate::sparse::CscMatrix;
 use clarabel::algebra::CscMatrix as ClarabelCsc;
@@ -57,8 +58,9 @@ pub struct IpmSolver {
     /// at most this many semismooth Newton steps polish Clarabel's r (0: none); see
     /// [`DEFAULT_POLISH_STEPS`]
     pub polish_steps: usize,
-    /// the Clarabel solver of the last call, reused while (d, μ, W) stay the same
-    cache: Option<QpCache>,
+    /// the Clarabel setup, built at the first solve and reused by the later ones (on the same
+    /// (d, W, μ): only b changes)
+    setup: Option<QpSetup>,
 }
 
 /// Default number of semismooth Newton polish steps after an interior-point solve.
@@ -77,7 +79,7 @@ impl Default for IpmSolver {
 }
 
 impl Clone for IpmSolver {
-    /// A clone starts without the cached Clarabel setup (it is rebuilt on first use).
+    /// A clone starts without the Clarabel setup (it is built at its first solve).
     fn clone(&self) -> Self {
         Self::with_polish(self.polish_steps)
     }
@@ -96,7 +98,7 @@ impl IpmSolver {
     pub fn with_polish(polish_steps: usize) -> Self {
         Self {
             polish_steps,
-            cache: None,
+            setup: None,
         }
     }
 }
@@ -125,7 +127,7 @@ impl InnerSolver for IpmSolver {
         r: &mut [f64],
     ) -> InnerReport {
         let polish = self.polish_steps;
-        solve_dual_qp(&mut self.cache, 0, polish, problem, limits, r, || {
+        solve_dual_qp(&mut self.setup, polish, problem, limits, r, || {
             let layout = ConeLayout::dual_exact(problem.dim, problem.mu);
             let a = layout.a_matrix(None);
             (a, layout.cones())
@@ -475,30 +477,44 @@ fn primal_map(
     (crate::law::norm(f1) / s1).max(crate::law::norm(f2) / s2)
 }
 
-/// Polishes (v, r) of (3.15) by at most `steps` semismooth Newton steps on
-/// (F₁, F₂) of [`primal_map`], with Jacobian [[M, −H], [D Hᵀ, I − D]]; a step is kept only
-/// if it decreases the residual. Returns the final residual (see [`polish_dual`] for why).
-fn polish_primal(
-    problem: &GlobalProblem,
-    shift: &[f64],
-    v: &mut [f64],
-    r: &mut [f64],
-    steps: usize,
-    deadline: Deadline,
-) -> f64 {
-    let (dim, n, m) = (problem.dim, v.len(), r.len());
-    let mut x: Vec<f64> = v.iter().chain(r.iter()).copied().collect();
-    let mut f = vec![0.0; n + m];
-    let mut jac = vec![0.0; problem.mu.len() * dim * dim];
-    let mut res = primal_map(problem, shift, &x, &mut f, &mut jac);
-    let mut trial = vec![0.0; n + m];
-    let mut f_trial = vec![0.0; n + m];
-    let mut jac_trial = vec![0.0; jac.len()];
-    for _ in 0..steps {
-        if res.is_nan() || res <= 1e-15 || past(deadline) {
-            break;
-        }
-        let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+/// The map (F₁, F₂) of [`primal_map`] on x = (v, r), with Jacobian
+/// [[M, −H], [D Hᵀ, I − D]] assembled as triplets.
+struct PrimalMap<'a> {
+    problem: &'a GlobalProblem,
+    shift: &'a [f64],
+    /// (F₁, F₂) and the D blocks: current and trial
+    f: [Vec<f64>; 2],
+    jac: [Vec<f64>; 2],
+    triplets: (Vec<usize>, Vec<usize>, Vec<f64>),
+}
+
+impl SemismoothMap for PrimalMap<'_> {
+    fn eval_trial(&mut self, x: &[f64]) -> f64 {
+        primal_map(
+            self.problem,
+            self.shift,
+            x,
+            &mut self.f[1],
+            &mut self.jac[1],
+        )
+    }
+
+    fn accept_trial(&mut self) {
+        self.f.swap(0, 1);
+        self.jac.swap(0, 1);
+    }
+
+    fn current(&self) -> &[f64] {
+        &self.f[0]
+    }
+
+    fn build_jacobian(&mut self) {
+        let (problem, jac) = (self.problem, &self.jac[0]);
+        let (dim, n) = (problem.dim, problem.m.nrows);
+        let (rows, cols, vals) = &mut self.triplets;
+        rows.clear();
+        cols.clear();
+        vals.clear();
         for (i, j, val) in problem.m.triplets() {
             rows.push(i);
             cols.push(j);
@@ -512,34 +528,49 @@ fn polish_primal(
         // ∂F₂/∂v = D Hᵀ (y = r − Hᵀ v − shift): entry (k, j) of Hᵀ is H[j, k]
         push_d_times(
             dim,
-            &jac,
+            jac,
             1.0,
             problem.h.triplets().map(|(j, k, val)| (k, j, val)),
             n,
-            &mut rows,
-            &mut cols,
-            &mut vals,
+            rows,
+            cols,
+            vals,
         );
-        push_identity_minus_d(dim, &jac, n, &mut rows, &mut cols, &mut vals);
-        let mut delta: Vec<f64> = f.iter().map(|a| -a).collect();
-        if sparse_lu_solve(n + m, &rows, &cols, &vals, &mut delta).is_none() {
-            break;
-        }
-        for k in 0..n + m {
-            trial[k] = x[k] + delta[k];
-        }
-        let res_trial = primal_map(problem, shift, &trial, &mut f_trial, &mut jac_trial);
-        if res_trial.is_nan() || res_trial >= res {
-            break;
-        }
-        std::mem::swap(&mut x, &mut trial);
-        std::mem::swap(&mut f, &mut f_trial);
-        std::mem::swap(&mut jac, &mut jac_trial);
-        res = res_trial;
+        push_identity_minus_d(dim, jac, n, rows, cols, vals);
     }
+
+    fn solve_shifted(&mut self, lambda: f64, rhs: &mut [f64]) -> Option<()> {
+        let (rows, cols, vals) = &self.triplets;
+        shifted_lu_solve(rhs.len(), rows, cols, vals, lambda, rhs)
+    }
+}
+
+/// Polishes (v, r) of (3.15) by at most `steps` semismooth Newton steps on
+/// (F₁, F₂) of [`primal_map`], with Jacobian [[M, −H], [D Hᵀ, I − D]], by the driver of
+/// [`crate::newton::drive`] with [`polish_rule`] (target 1e-15; a step is kept only if it
+/// decreases the residual). Returns the final residual (see [`super::polish::polish_dual`] for why).
+fn polish_primal(
+    problem: &GlobalProblem,
+    shift: &[f64],
+    v: &mut [f64],
+    r: &mut [f64],
+    steps: usize,
+    deadline: Deadline,
+) -> f64 {
+    let (dim, n, m) = (problem.dim, v.len(), r.len());
+    let mut x: Vec<f64> = v.iter().chain(r.iter()).copied().collect();
+    let jac = vec![0.0; problem.mu.len() * dim * dim];
+    let mut map = PrimalMap {
+        problem,
+        shift,
+        f: [vec![0.0; n + m], vec![0.0; n + m]],
+        jac: [jac.clone(), jac],
+        triplets: (Vec::new(), Vec::new(), Vec::new()),
+    };
+    let report = drive(&mut map, &mut x, &polish_rule(1e-15, steps, deadline));
     v.copy_from_slice(&x[..n]);
     r.copy_from_slice(&x[n..]);
-    res
+    report.residual
 }
 
 #[cfg(test)]
@@ -611,7 +642,7 @@ mod tests {
         for (x, y) in r.iter().zip([1.0, -0.1, 0.0]) {
             assert!((x - y).abs() < 1e-7, "{r:?}");
         }
-        assert!(s.cache.is_some());
+        assert!(s.setup.is_some());
     }
 
     #[test]

@@ -63,34 +63,21 @@ pub struct InnerReport {
 /// Limits and tolerance for one inner solve.
 #[derive(Debug, Clone, Copy)]
 pub struct InnerLimits {
-    /// stopping tolerance on the solver's own (relative) optimality measure
+    /// Stopping tolerance ε of the inner solve. Its meaning: a bound on the relative natural-map
+    /// residual of (4.7),
+    /// ρ(r) = ‖r − P_L(r − ũ)‖ / max(‖b‖, ‖r‖, ‖ũ‖), ũ = W r + b ((3.14) with b in the place
+    /// of q: the error of docs/error.md for the inner problem). Projected Gauss–Seidel and
+    /// APGD stop on ρ(r) ≤ ε exactly. The interior-point and faceted solvers convert it once,
+    /// into Clarabel's gap and feasibility tolerances (`tol_gap_abs = tol_gap_rel = tol_feas
+    /// = ε`, `clarabel_settings` in inner/clarabel.rs), whose stopping test is Clarabel's own; a
+    /// stalled interior-point solve is still accepted when its polished r has
+    /// ‖r − P_L(r − ũ)‖ / max(1, ‖b‖) ≤ ε. The fused method ([`crate::outer::fused`]) reads
+    /// it as a bound on the error of docs/error.md of the whole law (on q).
     pub tol: f64,
     /// iteration cap
     pub max_iterations: usize,
     /// wall-clock deadline ([`Deadline::NEVER`] for none)
     pub deadline: Deadline,
-}
-
-/// Identity of a matrix for the caches of the inner solvers: address, size, nnz and a
-/// checksum of its values and row indices (so that another matrix at the same address is not
-/// mistaken for it).
-pub type MatrixKey = (usize, usize, usize, u64);
-
-/// The [`MatrixKey`] of W.
-pub fn matrix_key(w: &CscMatrix) -> MatrixKey {
-    let checksum = w
-        .values
-        .iter()
-        .zip(&w.row_idx)
-        .enumerate()
-        .map(|(k, (v, &i))| v * (1.0 + k as f64 * 1e-3) + i as f64)
-        .sum::<f64>();
-    (
-        w.values.as_ptr() as usize,
-        w.ncols,
-        w.nnz(),
-        checksum.to_bits(),
-    )
 }
 
 impl InnerLimits {
@@ -105,12 +92,18 @@ impl InnerLimits {
     }
 }
 
-/// A solver of the dual inner problem (4.7). `r` holds the warm start on entry (zeros for a
-/// cold start) and the solution on exit; solvers that cannot use a warm start ignore it.
+/// A solver of the dual inner problem (4.7), set up for one (d, W, μ): its per-matrix data
+/// (diagonal blocks, Lipschitz estimate, Clarabel setup) are built once, by its constructor or
+/// at its first solve, and every later solve changes only b = q + E s. [`crate::Solver`] owns
+/// one per inner kind and makes a new one when W changes ([`crate::Solver::update_w`]).
+/// `r` holds the warm start on entry (zeros for a cold start) and the solution on exit;
+/// solvers that cannot use a warm start ignore it.
 pub trait InnerSolver {
     /// Short name for reports ("pgs", "apgd", "ipm", "faceted").
     fn name(&self) -> &'static str;
-    /// Solves (4.7) for `problem`, writing r.
+    /// Solves (4.7) for `problem`, writing r. `problem` must carry the (d, W, μ) the solver
+    /// was set up for (only b may change); sizes that disagree with the setup give
+    /// [`InnerStatus::NumericalError`] without an iteration.
     fn solve(
         &mut self,
         problem: &InnerProblem<'_>,

@@ -45,36 +45,32 @@ use crate::cone;
 use crate::natural_map::dual_residual;
 use crate::sparse::CscMatrix;
 
-/// Projected block Gauss–Seidel on (4.7) with exact one-contact solves.
-#[derive(Debug, Clone, Default)]
+/// Projected block Gauss–Seidel on (4.7) with exact one-contact solves, set up for one
+/// (d, W): the diagonal blocks Wᵢᵢ and their inverses are extracted by [`PgsSolver::new`].
+#[derive(Debug, Clone)]
 pub struct PgsSolver {
-    blocks: Option<DiagonalBlocks>,
+    /// sweeps between exact recomputations of u = W r + b ([`REFRESH`] by default; ≥ 1)
+    pub refresh: usize,
+    blocks: DiagonalBlocks,
     /// maintained u = W r + b
     u: Vec<f64>,
 }
 
 impl PgsSolver {
-    /// A solver; the diagonal blocks are extracted at the first solve and kept while W is
-    /// the same matrix.
-    pub fn new() -> Self {
-        Self::default()
-    }
-
-    fn blocks_for(&mut self, dim: usize, w: &CscMatrix) -> &DiagonalBlocks {
-        if !self.blocks.as_ref().is_some_and(|b| b.matches(dim, w)) {
-            self.blocks = Some(DiagonalBlocks::new(dim, w));
+    /// A solver for the d-dimensional problems on `w`: extracts and inverts its diagonal
+    /// blocks.
+    pub fn new(dim: usize, w: &CscMatrix) -> Self {
+        Self {
+            refresh: REFRESH,
+            blocks: DiagonalBlocks::new(dim, w),
+            u: Vec::new(),
         }
-        self.blocks.as_ref().expect("set just above")
     }
 
-    /// The diagonal blocks of `w` (extracted if W changed) and the buffer of the maintained
-    /// u, for the fused iteration ([`crate::outer::fused`]).
-    pub(crate) fn parts(&mut self, dim: usize, w: &CscMatrix) -> (&DiagonalBlocks, &mut Vec<f64>) {
-        self.blocks_for(dim, w);
-        (
-            self.blocks.as_ref().expect("set by blocks_for"),
-            &mut self.u,
-        )
+    /// The diagonal blocks and the buffer of the maintained u, for the fused iteration
+    /// ([`crate::outer::fused`]).
+    pub(crate) fn parts(&mut self) -> (&DiagonalBlocks, &mut Vec<f64>) {
+        (&self.blocks, &mut self.u)
     }
 }
 
@@ -138,8 +134,9 @@ pub(crate) fn sweep(
     max_change
 }
 
-/// Sweeps between exact recomputations of u = W r + b (against drift).
-pub(crate) const REFRESH: usize = 16;
+/// Sweeps between exact recomputations of u = W r + b (against drift): the default of
+/// [`PgsSolver::refresh`] and [`crate::settings::InnerParams::gs_refresh`].
+pub const REFRESH: usize = 16;
 
 impl InnerSolver for PgsSolver {
     fn name(&self) -> &'static str {
@@ -152,10 +149,18 @@ impl InnerSolver for PgsSolver {
         limits: &InnerLimits,
         r: &mut [f64],
     ) -> InnerReport {
-        let dim = problem.dim;
-        let w = problem.w;
-        self.blocks_for(dim, w);
-        let blocks = self.blocks.as_ref().expect("set by blocks_for");
+        let (dim, w) = (problem.dim, problem.w);
+        let (blocks, refresh) = (&self.blocks, self.refresh.max(1));
+        if !blocks.fits(dim, problem.mu.len())
+            || w.ncols != r.len()
+            || w.ncols != dim * problem.mu.len()
+        {
+            return InnerReport {
+                status: InnerStatus::NumericalError,
+                iterations: 0,
+                residual: f64::INFINITY,
+            };
+        }
         // start from a point of L
         cone::project_product(dim, problem.mu, r);
         let b_norm = crate::law::norm(problem.b);
@@ -174,7 +179,7 @@ impl InnerSolver for PgsSolver {
             if residual <= limits.tol {
                 break InnerStatus::Solved;
             }
-            if iterations % REFRESH == 0 {
+            if iterations % refresh == 0 {
                 for ((x, a), b) in wr.iter_mut().zip(u.iter()).zip(problem.b) {
                     *x = a - b;
                 }
@@ -190,7 +195,7 @@ impl InnerSolver for PgsSolver {
             }
             sweep(blocks, w, problem.mu, r, u, false);
             iterations += 1;
-            if iterations % REFRESH == 0 {
+            if iterations % refresh == 0 {
                 u.copy_from_slice(problem.b);
                 w.gemv_acc(1.0, r, u);
             }

@@ -4,7 +4,7 @@
 //! [`crate::inner::pgs`]'s; this file is the stopping logic around it.
 
 use crate::cone;
-use crate::inner::pgs::{sweep, PgsSolver, REFRESH};
+use crate::inner::pgs::{sweep, PgsSolver};
 use crate::inner::{InnerLimits, InnerReport, InnerStatus};
 use crate::sparse::CscMatrix;
 
@@ -30,7 +30,15 @@ pub fn solve_fused(
     give_up: bool,
     r: &mut [f64],
 ) -> InnerReport {
-    let (blocks, u) = solver.parts(dim, w);
+    let refresh = solver.refresh.max(1);
+    let (blocks, u) = solver.parts();
+    if !blocks.fits(dim, mu.len()) || w.ncols != dim * mu.len() || r.len() != w.ncols {
+        return InnerReport {
+            status: InnerStatus::NumericalError,
+            iterations: 0,
+            residual: f64::INFINITY,
+        };
+    }
     cone::project_product(dim, mu, r);
     let q_norm = crate::law::norm(q);
     u.clear();
@@ -63,7 +71,7 @@ pub fn solve_fused(
         sweep(blocks, w, mu, r, u, true);
         iterations += 1;
         exact = false;
-        if iterations % REFRESH == 0 {
+        if iterations % refresh == 0 {
             u.copy_from_slice(q);
             w.gemv_acc(1.0, r, u);
             exact = true;

@@ -13,8 +13,8 @@
 //!
 //! The setup/solve split: [`Solver::new`] checks the settings and builds the Delassus form of
 //! a global problem (W = Hᵀ M⁻¹ H, q = Hᵀ M⁻¹ f + w, the factorization of M) once;
-//! [`Solver::solve`] can be called many times (the inner solvers keep their per-matrix data:
-//! Lipschitz estimate, diagonal blocks, Clarabel setup), and [`Solver::update_q`] /
+//! [`Solver::solve`] can be called many times (the inner solvers, owned by the solver, are set
+//! up once for W: Lipschitz estimate, diagonal blocks, Clarabel setup), and [`Solver::update_q`] /
 //! [`Solver::update_rhs`] / [`Solver::update_w`] change the data of a time step.
 
 pub mod anderson;
@@ -30,7 +30,7 @@ use crate::inner::{
     apgd::ApgdSolver, faceted::FacetedSolver, ipm::IpmSolver, pgs::PgsSolver, InnerSolver,
 };
 use crate::problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
-use crate::settings::{InnerKind, OuterKind, Settings};
+use crate::settings::{InnerKind, InnerParams, OuterKind, Settings};
 use crate::solution::{Guess, Solution, SolveError, Status};
 use crate::sparse::CscMatrix;
 use form::{Form, Stored};
@@ -38,40 +38,72 @@ use stage::Stage;
 use std::borrow::Cow;
 use std::time::Instant;
 
-/// The inner solvers of a [`Solver`], made at first use and kept (with their per-matrix data)
-/// across stages and solves.
+/// The inner solvers of a [`Solver`], each set up for the problem's (d, W, μ) when first
+/// needed (a fallback never reached costs nothing) and kept across stages and solves: the
+/// diagonal blocks of W (Gauss–Seidel), the λ_max(W) estimate and block form (APGD), the
+/// Clarabel setups (interior point, faceted). [`Solver::update_w`] drops them.
 pub(crate) struct InnerSolvers {
-    /// one per [`InnerKind`], in the order of [`InnerKind::ALL`]
+    /// one per [`InnerKind`], in the order of [`InnerKind::ALL`], on the QP matrix
+    /// ([`Form::qp_w`])
     qp: [Option<Box<dyn InnerSolver + Send>>; 4],
-    /// the Gauss–Seidel solver of the fused method (on the stored W)
-    pub(crate) fused: PgsSolver,
+    /// the Gauss–Seidel solver of the fused method, on the stored W
+    fused: Option<PgsSolver>,
     facets: usize,
+    params: InnerParams,
 }
 
 impl InnerSolvers {
-    fn new(facets: usize) -> Self {
+    fn new(settings: &Settings) -> Self {
         Self {
             qp: [None, None, None, None],
-            fused: PgsSolver::new(),
-            facets,
+            fused: None,
+            facets: settings.facets,
+            params: settings.tuning.inner,
         }
     }
 
-    /// The solver of `kind` for the QP (4.7).
-    pub(crate) fn get(&mut self, kind: InnerKind) -> &mut (dyn InnerSolver + Send) {
-        let facets = self.facets;
+    /// The solver of `kind` for the QP (4.7) of `form`.
+    pub(crate) fn get(
+        &mut self,
+        kind: InnerKind,
+        form: &Form<'_>,
+    ) -> &mut (dyn InnerSolver + Send) {
+        let (facets, params) = (self.facets, self.params);
         let slot = InnerKind::ALL
             .iter()
             .position(|&k| k == kind)
             .expect("every kind is in ALL");
         self.qp[slot]
-            .get_or_insert_with(|| match kind {
-                InnerKind::Pgs => Box::new(PgsSolver::new()),
-                InnerKind::Apgd => Box::new(ApgdSolver::new()),
-                InnerKind::Ipm => Box::new(IpmSolver::new()),
-                InnerKind::Faceted => Box::new(FacetedSolver::new(facets)),
+            .get_or_insert_with(|| {
+                let (dim, w) = (form.local().dim, form.qp_w());
+                match kind {
+                    InnerKind::Pgs => {
+                        let mut s = PgsSolver::new(dim, w);
+                        s.refresh = params.gs_refresh;
+                        Box::new(s)
+                    }
+                    InnerKind::Apgd => {
+                        let power = params.apgd_power_iterations;
+                        let mut s = ApgdSolver::with_power_iterations(dim, w, power);
+                        s.barzilai_borwein = params.apgd_barzilai_borwein;
+                        Box::new(s)
+                    }
+                    InnerKind::Ipm => Box::new(IpmSolver::with_polish(params.ipm_polish_steps)),
+                    InnerKind::Faceted => Box::new(FacetedSolver::new(facets)),
+                }
             })
             .as_mut()
+    }
+
+    /// The Gauss–Seidel solver of the fused method on the stored W of `form`.
+    pub(crate) fn fused(&mut self, form: &Form<'_>) -> &mut PgsSolver {
+        let refresh = self.params.gs_refresh;
+        self.fused.get_or_insert_with(|| {
+            let local = form.local();
+            let mut s = PgsSolver::new(local.dim, &local.w);
+            s.refresh = refresh;
+            s
+        })
     }
 }
 
@@ -110,7 +142,7 @@ impl<'a> Solver<'a> {
         settings.validate()?;
         Ok(Self {
             form: Form::new(stored, settings.tuning.unbounded_ratio),
-            solvers: InnerSolvers::new(settings.facets),
+            solvers: InnerSolvers::new(&settings),
             settings,
         })
     }
@@ -123,8 +155,10 @@ impl<'a> Solver<'a> {
     /// Replaces the settings (checked); the set-up data are kept.
     pub fn set_settings(&mut self, settings: Settings) -> Result<(), SolveError> {
         settings.validate()?;
-        if settings.facets != self.settings.facets {
-            self.solvers = InnerSolvers::new(settings.facets);
+        if settings.facets != self.settings.facets
+            || settings.tuning.inner != self.settings.tuning.inner
+        {
+            self.solvers = InnerSolvers::new(&settings);
         }
         self.form.unbounded_ratio = settings.tuning.unbounded_ratio;
         self.settings = settings;
@@ -172,8 +206,8 @@ impl<'a> Solver<'a> {
     }
 
     /// New Delassus matrix W of a local problem (same size; checked as
-    /// [`LocalProblem::new`] checks it). The inner solvers notice the new matrix and rebuild
-    /// their data for it.
+    /// [`LocalProblem::new`] checks it). The inner solvers' data are rebuilt for it at their
+    /// next use.
     pub fn update_w(&mut self, w: CscMatrix) -> Result<(), SolveError> {
         let Stored::Local(p) = &mut self.form.stored else {
             return Err(SolveError::Problem(ProblemError::Shape {
@@ -185,6 +219,7 @@ impl<'a> Solver<'a> {
         let checked = LocalProblem::new(p.dim as i64, w, p.q.clone(), p.mu.clone())?;
         *p = Cow::Owned(checked);
         self.form.refresh();
+        self.solvers = InnerSolvers::new(&self.settings);
         Ok(())
     }
 

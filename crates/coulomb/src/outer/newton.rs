@@ -106,12 +106,13 @@ impl EndGame {
                 None => (at.r, at.verdict.error, at.fs),
             };
             let mut trial = r.to_vec();
-            let nr = crate::newton::polish(
+            let nr = crate::newton::polish_with(
                 local,
                 &mut trial,
                 p.target_fraction * tol * form.q_norm,
                 p.try_steps.min(settings.newton_steps - self.used),
                 deadline,
+                &p,
             );
             self.used += nr.steps.max(1);
             let candidate = form.verdict(&trial);

@@ -147,7 +147,7 @@ impl<'f, 'a> Stage<'f, 'a> {
                     ..limits
                 };
                 let (w, q) = (&local.w, &local.q);
-                let pgs = &mut solvers.fused;
+                let pgs = solvers.fused(form);
                 super::fused::solve_fused(pgs, dim, w, q, mu, &limits, self.warmup, &mut self.r)
             }
             (Stored::Global(g, _), InnerKind::Ipm, _) => {
@@ -167,7 +167,7 @@ impl<'f, 'a> Stage<'f, 'a> {
                     mu,
                 };
                 solvers
-                    .get(settings.inner)
+                    .get(settings.inner, form)
                     .solve(&inner, &limits, &mut self.r)
             }
         };

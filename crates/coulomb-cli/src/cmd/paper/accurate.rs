@@ -4,16 +4,63 @@
 //! Table: time per step and per contact, sweeps, steps converged, peak memory; also whether
 //! the runs with different thread counts ended in bitwise the same state.
 
-use crate::cmd::paper::ScalingArgs;
 use crate::progress::bar as progress;
 use crate::threads::with_threads;
 use anyhow::{bail, Context};
+use coulomb::InnerKind;
 use coulomb_granular::scene::{BoxLayout, BEAD_RADIUS};
 use coulomb_granular::{NsgsSettings, Params, Scene, Simulation, StepMethod};
 use plotters::prelude::*;
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+/// Arguments of `coulomb paper scaling`.
+#[derive(clap::Args, Debug)]
+pub struct ScalingArgs {
+    /// bead counts
+    #[arg(long, value_delimiter = ',', default_values_t = vec![150usize, 300, 600, 1200, 2500, 5000, 10000], value_parser = crate::values::beads)]
+    pub beads: Vec<usize>,
+    /// untimed steps first (the beads land and the contacts form)
+    #[arg(long, default_value_t = 50, value_parser = crate::values::count0)]
+    pub settle: usize,
+    /// timed steps after the settling ones
+    #[arg(long, default_value_t = 50, value_parser = crate::values::count)]
+    pub window: usize,
+    /// inner solver (the paper's tolerance: (6.1) with ε = 0.01, ≤ 20 subproblems)
+    #[arg(long, default_value_t = InnerKind::Apgd, value_parser = crate::method::inner())]
+    pub inner: InnerKind,
+    /// seed
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// SVG file; the data go beside it as JSON (same name, .json)
+    #[arg(long, default_value = "scaling.svg")]
+    pub svg: PathBuf,
+    /// also write the table as Markdown into this file
+    #[arg(long)]
+    pub markdown: Option<PathBuf>,
+    /// accurate mode: every step solved to err ≤ --tol by body-level Gauss–Seidel (the
+    /// physics of `coulomb simulate`), once per --threads value; see docs/scaling.md
+    #[arg(long)]
+    pub accurate: bool,
+    /// accurate mode: tolerance on the error of docs/error.md at every step
+    #[arg(long, default_value_t = 1e-4, value_parser = crate::values::positive)]
+    pub tol: f64,
+    /// accurate mode: thread counts to run each size with (default: 1 and all cores)
+    #[arg(long, value_delimiter = ',', value_parser = crate::values::threads)]
+    pub threads: Vec<usize>,
+    /// accurate mode: cap on Gauss–Seidel sweeps per step
+    #[arg(long, default_value_t = 20_000, value_parser = crate::values::count)]
+    pub max_sweeps: usize,
+    /// accurate mode: box layout — `spread` (default: the calibrated floor, the partial top
+    /// layer spread over it at random) or `calibrated` (the partial top layer fills the
+    /// first rows, as in the paper runs); see docs/scaling.md, "Scene sizing"
+    #[arg(long, value_enum, default_value_t = Layout::Spread)]
+    pub layout: Layout,
+    /// accurate mode: over-relaxation ω ∈ [1, 2) of the Gauss–Seidel updates
+    #[arg(long, default_value_t = 1.5, value_parser = crate::values::relaxation)]
+    pub relaxation: f64,
+}
 
 /// The box layout of the accurate study.
 #[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -217,7 +264,7 @@ fn run_one(beads: usize, threads: usize, a: &ScalingArgs) -> anyhow::Result<Accu
 }
 
 /// Runs the accurate scaling study.
-pub fn accurate(a: &ScalingArgs) -> anyhow::Result<()> {
+pub fn run(a: &ScalingArgs) -> anyhow::Result<()> {
     if a.beads.is_empty() || a.beads.iter().any(|&b| b == 0 || b > 1_000_000) {
         bail!("--beads must list bead counts in 1..=1000000");
     }

@@ -1,0 +1,314 @@
+//! The arguments of `coulomb simulate` (shared by its single-process and MPI runs, and read
+//! by `coulomb validate` for their defaults), what they make (the simulation parameters, the
+//! box layout, the stop rule, the scene), and the JSON summary line of a run.
+
+use anyhow::bail;
+use coulomb::{InnerKind, OuterKind, Settings};
+use coulomb_granular::scene::BoxLayout;
+use coulomb_granular::{
+    Activation, NsgsSettings, Params, Projection, Scene, StepMethod, Stop, Summary,
+};
+use std::path::PathBuf;
+
+/// The solver of each step.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Method {
+    /// body-level nonsmooth Gauss–Seidel, matrix-free, parallel over a colouring of the
+    /// contacts (docs/scaling.md)
+    Nsgs,
+    /// the library's solver (`--inner`, `--outer`) on the assembled problem
+    Library,
+}
+
+/// Arguments of `coulomb simulate`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    /// scene: box, funnel, vibrating-plate, rotating-drum
+    pub scene: String,
+    /// number of beads
+    #[arg(long, default_value_t = 150, value_parser = crate::values::beads)]
+    pub beads: usize,
+    /// friction coefficient μ
+    #[arg(long, default_value_t = 0.3, value_parser = crate::values::nonnegative)]
+    pub mu: f64,
+    /// rolling-friction coefficient μ_r (dimensionless): rolling torque ≤ μ_r R_e r_N, R_e the
+    /// effective radius (docs/granular.md, "Rolling resistance"); 0 (default): none
+    #[arg(long, default_value_t = 0.0, value_parser = crate::values::nonnegative)]
+    pub rolling_friction: f64,
+    /// restitution coefficient e (Moreau's impact law)
+    #[arg(long, default_value_t = 0.2, value_parser = crate::values::unit_interval)]
+    pub restitution: f64,
+    /// time step h (s)
+    #[arg(long, default_value_t = 0.02, value_parser = crate::values::positive)]
+    pub dt: f64,
+    /// θ of the position update (2.7)
+    #[arg(long, default_value_t = 0.5, value_parser = crate::values::unit_interval)]
+    pub theta: f64,
+    /// number of steps (default 200 unless --until-rest)
+    #[arg(long, conflicts_with = "until_rest", value_parser = crate::values::count)]
+    pub steps: Option<usize>,
+    /// run until every bead moves slower than --rest-speed for 10 steps
+    #[arg(long)]
+    pub until_rest: bool,
+    /// rest speed threshold (m/s) of --until-rest
+    #[arg(long, default_value_t = 0.05, value_parser = crate::values::positive)]
+    pub rest_speed: f64,
+    /// step cap of --until-rest
+    #[arg(long, default_value_t = 2000, value_parser = crate::values::count)]
+    pub max_steps: usize,
+    /// step solver: body-level Gauss–Seidel (default) or the library's solver with
+    /// --inner/--outer
+    #[arg(long, value_enum, default_value_t = Method::Nsgs)]
+    pub method: Method,
+    /// cap on Gauss–Seidel sweeps per step (--method nsgs)
+    #[arg(long, default_value_t = 20_000, value_parser = crate::values::count)]
+    pub max_sweeps: usize,
+    /// over-relaxation ω ∈ [1, 2) of the Gauss–Seidel updates (--method nsgs; reduced
+    /// towards 1 automatically when it does not help)
+    #[arg(long, default_value_t = 1.5, value_parser = crate::values::relaxation)]
+    pub relaxation: f64,
+    /// worker threads (default: all cores); results do not depend on it
+    #[arg(long, value_parser = crate::values::threads)]
+    pub threads: Option<usize>,
+    /// inner solver of --method library (default: Gauss–Seidel, the fastest to 1e-4 on the
+    /// box scene, see docs/granular.md)
+    #[arg(long, default_value_t = InnerKind::Pgs, value_parser = crate::method::inner())]
+    pub inner: InnerKind,
+    /// outer iteration (default: Gauss–Seidel fused with the law; apgd + Anderson as fallback)
+    #[arg(long, default_value_t = OuterKind::Fused, value_parser = crate::method::outer())]
+    pub outer: OuterKind,
+    /// tolerance on the error of docs/error.md, reached at every step (steps that do not
+    /// reach it are counted and reported)
+    #[arg(long, default_value_t = 1e-4, value_parser = crate::values::positive)]
+    pub tol: f64,
+    /// ε of the paper's outer stopping rule (6.1); 0 (default) disables it, so that every
+    /// step is solved to --tol
+    #[arg(long, default_value_t = 0.0, value_parser = crate::values::nonnegative)]
+    pub fp_tol: f64,
+    /// cap on outer (fixed-point) iterations per step
+    #[arg(long, default_value_t = 20, value_parser = crate::values::count)]
+    pub max_outer: usize,
+    /// cap on inner iterations per subproblem (default: the solver's)
+    #[arg(long, value_parser = crate::values::count)]
+    pub max_inner: Option<usize>,
+    /// γ of the activation rule g + γ h min(u_N, 0) ≤ δ (docs/granular.md)
+    #[arg(long, default_value_t = 1.0, value_parser = crate::values::nonnegative)]
+    pub gamma: f64,
+    /// no position correction (the plain Moreau–Jean scheme: penetrations stay)
+    #[arg(long)]
+    pub no_projection: bool,
+    /// disable warm starts
+    #[arg(long)]
+    pub cold: bool,
+    /// seed of the initial arrangement
+    #[arg(long, default_value_t = 1, value_parser = crate::values::seed)]
+    pub seed: u64,
+    /// box scene: side of the square floor (m), instead of the calibrated one
+    #[arg(long, value_parser = crate::values::positive)]
+    pub box_side: Option<f64>,
+    /// box scene: vertical pitch of the initial lattice (m), instead of the calibrated one
+    #[arg(long, value_parser = crate::values::positive)]
+    pub layer_pitch: Option<f64>,
+    /// box scene: height of the lowest initial layer's centres (m), instead of the calibrated one
+    #[arg(long, value_parser = crate::values::positive)]
+    pub drop_base: Option<f64>,
+    /// box scene: spread the partial top layer over the whole floor at random sites (the
+    /// heap structure of `paper scaling --accurate`, docs/scaling.md)
+    #[arg(long)]
+    pub spread_top: bool,
+    /// output folder: stats.csv, stats.json, summary.json, beads.pvd, contacts.pvd, frames/
+    #[arg(long)]
+    pub output: Option<PathBuf>,
+    /// write a VTK frame every K steps (with --output)
+    #[arg(long, default_value_t = 10, value_parser = crate::values::count0)]
+    pub frames_every: usize,
+    /// write each step's problem as an FCLIB global file into this folder
+    #[arg(long)]
+    pub dump_fclib: Option<PathBuf>,
+    /// print one JSON summary object (no progress bar)
+    #[arg(long)]
+    pub json: bool,
+    /// run distributed over MPI (automatic when started by mpirun/srun; docs/distributed.md)
+    #[cfg(feature = "mpi")]
+    #[arg(long)]
+    pub mpi: bool,
+    /// distributed run: recompute the slab bounds every K steps (0: only at the start)
+    #[cfg(feature = "mpi")]
+    #[arg(long, default_value_t = 20, value_parser = crate::values::count0)]
+    pub rebalance_every: usize,
+}
+
+impl Args {
+    pub(crate) fn params(&self) -> Params {
+        Params {
+            h: self.dt,
+            theta: self.theta,
+            restitution: self.restitution,
+            mu: self.mu,
+            activation: Activation {
+                gamma: self.gamma,
+                ..Activation::accurate()
+            },
+            solver: Settings {
+                outer: self.outer,
+                // a step the first method does not bring to --tol gets a second one
+                fallback: Some(if self.outer == OuterKind::Fused {
+                    (InnerKind::Apgd, OuterKind::Anderson)
+                } else {
+                    (InnerKind::Pgs, OuterKind::Fused)
+                }),
+                ..crate::method::time_stepping_settings(
+                    self.inner,
+                    self.tol,
+                    self.fp_tol,
+                    self.max_outer,
+                    self.max_inner,
+                )
+            },
+            warm_start: !self.cold,
+            projection: (!self.no_projection).then(Projection::default),
+            method: match self.method {
+                Method::Nsgs => StepMethod::Nsgs(NsgsSettings {
+                    tol: self.tol,
+                    max_sweeps: self.max_sweeps,
+                    relaxation: self.relaxation,
+                    ..NsgsSettings::default()
+                }),
+                Method::Library => StepMethod::Library,
+            },
+            rolling_friction: self.rolling_friction,
+        }
+    }
+
+    /// Refuses time steps for which the activation rule cannot work and warns about risky
+    /// ones: in one step a bead at rest free-falls g h² (velocity g h, moved ½ g h² … g h²
+    /// by the θ-method); above R the linear gap prediction misses contacts entirely (beads
+    /// pass through each other and through walls); above R/10 penetrations before the
+    /// position correction reach tens of % of R.
+    pub(crate) fn check_step(&self) -> anyhow::Result<()> {
+        let h = self.dt;
+        if !(h.is_finite() && h > 0.0) {
+            bail!("--dt {h} must be a positive number of seconds");
+        }
+        let r = coulomb_granular::scene::BEAD_RADIUS;
+        let g = coulomb_granular::world::GRAVITY;
+        let fall = g * h * h;
+        if fall > r {
+            bail!(
+                "--dt {h} is too large: a bead falls g·h² = {fall:.3} m in one step, more than its radius {r} m, so contacts cannot be detected or activated; use --dt ≤ {:.4}",
+                (r / g).sqrt()
+            );
+        }
+        if fall > 0.1 * r {
+            eprintln!(
+                "warning: --dt {h}: a bead falls g·h² = {fall:.4} m in one step (> R/10); expect large transient penetrations; --dt ≤ {:.4} is advised",
+                (0.1 * r / g).sqrt()
+            );
+        }
+        if !(self.fp_tol.is_finite() && self.fp_tol >= 0.0) {
+            bail!("--fp-tol {} must be a finite number ≥ 0", self.fp_tol);
+        }
+        if self.outer == OuterKind::Fused && self.inner != InnerKind::Pgs {
+            bail!("--outer fused needs --inner pgs");
+        }
+        Ok(())
+    }
+    /// The box layout: the calibrated one for `--beads`, with the command line's overrides.
+    pub(crate) fn layout(&self) -> anyhow::Result<BoxLayout> {
+        let mut l = BoxLayout::for_beads(self.beads);
+        let r = coulomb_granular::scene::BEAD_RADIUS;
+        if let Some(x) = self.box_side {
+            if !(x.is_finite() && x >= 2.5 * r && x <= 1e4) {
+                bail!("--box-side {x} must be in [{}, 10000] m", 2.5 * r);
+            }
+            l.side_x = x;
+            l.side_y = x;
+        }
+        if let Some(x) = self.layer_pitch {
+            if !(x.is_finite() && x >= 2.5 * r && x <= 100.0) {
+                bail!("--layer-pitch {x} must be in [{}, 100] m", 2.5 * r);
+            }
+            l.layer_pitch = x;
+        }
+        if let Some(x) = self.drop_base {
+            if !(x.is_finite() && x >= 1.25 * r && x <= 1000.0) {
+                bail!("--drop-base {x} must be in [{}, 1000] m", 1.25 * r);
+            }
+            l.base = x;
+        }
+        Ok(l)
+    }
+    pub(crate) fn stop(&self) -> Stop {
+        if self.until_rest {
+            Stop::UntilRest {
+                speed: self.rest_speed,
+                window: 10,
+                max_steps: self.max_steps,
+            }
+        } else {
+            Stop::Steps(self.steps.unwrap_or(200))
+        }
+    }
+}
+
+/// The checked scene of `args`: a known name, 1 ≤ beads ≤ 10⁶, a usable time step.
+pub(crate) fn checked_scene(args: &Args) -> anyhow::Result<Scene> {
+    let Some(scene) = Scene::from_name(&args.scene) else {
+        let names: Vec<&str> = Scene::ALL.iter().map(|s| s.name()).collect();
+        bail!(
+            "unknown scene '{}': expected one of {}",
+            args.scene,
+            names.join(", ")
+        );
+    };
+    if args.beads == 0 {
+        bail!("--beads must be positive");
+    }
+    if args.beads > 1_000_000 {
+        bail!("--beads {} is above the limit of 1000000", args.beads);
+    }
+    args.check_step()?;
+    Ok(scene)
+}
+
+#[cfg(feature = "mpi")]
+/// Whether this process was started by an MPI launcher (Open MPI's mpirun, or a PMI/PMIx
+/// launcher such as srun or MPICH's mpiexec).
+pub fn under_launcher() -> bool {
+    ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"]
+        .iter()
+        .any(|v| std::env::var_os(v).is_some())
+}
+
+/// The JSON summary object of a run (`--json`): the run's [`Summary`], the energies at the
+/// start and the end, and `extra` fields (those of a distributed run) appended.
+pub(crate) fn summary_json(
+    summary: &Summary,
+    start_energy: f64,
+    end_energy: f64,
+    extra: serde_json::Map<String, serde_json::Value>,
+) -> serde_json::Value {
+    let mut obj = serde_json::json!({
+        "scene": summary.scene,
+        "beads": summary.beads,
+        "steps": summary.steps,
+        "mean_contacts": summary.mean_contacts,
+        "mean_subproblems": summary.mean_subproblems,
+        "mean_solve_ms": summary.mean_solve_ms,
+        "max_penetration": summary.max_penetration,
+        "end_mean_penetration": summary.end_mean_penetration,
+        "end_max_penetration": summary.end_max_penetration,
+        "projection_work": summary.projection_work,
+        "start_energy": start_energy,
+        "end_energy": end_energy,
+        "converged_steps": summary.converged_steps,
+        "not_converged_steps": summary.not_converged_steps,
+        "mean_error": summary.mean_error,
+        "max_error": summary.max_error,
+        "at_rest": summary.at_rest,
+    });
+    if let Some(map) = obj.as_object_mut() {
+        map.extend(extra);
+    }
+    obj
+}

@@ -381,7 +381,7 @@ fn solve6(a: &[[f64; 6]; 6], c: &[f64; 6]) -> Option<[f64; 6]> {
 /// ‖y‖ = ρ, found by Newton's method on 1/‖y(λ)‖ − 1/ρ (Moré & Sorensen 1983, monotone from
 /// λ = 0). None when S is not positive definite or the iteration fails.
 fn ball_qp(s: &[f64; 9], g: &[f64; 3], rho: f64) -> Option<[f64; 3]> {
-    if !(rho > 0.0) {
+    if rho.is_nan() || rho <= 0.0 {
         return Some([0.0; 3]);
     }
     let solve = |lambda: f64, b: &[f64; 3]| -> [f64; 3] {
@@ -409,7 +409,7 @@ fn ball_qp(s: &[f64; 9], g: &[f64; 3], rho: f64) -> Option<[f64; 3]> {
         }
         let z = solve(lambda, &y);
         let yz: f64 = (0..3).map(|i| y[i] * z[i]).sum();
-        if !(yz > 0.0) {
+        if yz.is_nan() || yz <= 0.0 {
             return None;
         }
         // φ(λ) = 1/‖y‖ − 1/ρ, φ' = yᵀ(S + λI)⁻¹y / ‖y‖³

@@ -55,12 +55,13 @@ fn main() {
             let n: usize = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(300);
             println!(
                 "{:?}",
-                validation::column_collapse(n, r0, 150, 600, &p).unwrap()
+                validation::column_collapse(n, r0, 500, 3000, &p).unwrap()
             )
         }
         "funnel" => {
             let n: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(300);
-            println!("{:?}", validation::funnel_heap(n, 600, &p).unwrap())
+            let cap: usize = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(600);
+            println!("{:?}", validation::funnel_heap(n, cap, &p).unwrap())
         }
         _ => eprintln!("drum | column R0 N | funnel N"),
     }

@@ -373,6 +373,10 @@ pub fn project_measured(
             let ke = b.kinetic_energy();
             if ke > 0.0 {
                 let f = (1.0 - gained / ke).max(0.0).sqrt();
+                if !f.is_finite() {
+                    // ke so small (a bead held at rest) that gained / ke overflows: no rescale
+                    continue;
+                }
                 work -= ke * (1.0 - f * f);
                 b.velocity = b.velocity * f;
                 b.angular_velocity = b.angular_velocity * f;

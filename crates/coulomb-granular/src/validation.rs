@@ -679,18 +679,18 @@ pub fn column_collapse(
     let mut out = ColumnResult::default();
     let rest = |sim: &mut Simulation, cap: usize, out: &mut ColumnResult| {
         let mut calm = 0;
-        for _ in 0..cap {
+        for k in 0..cap {
             if !sim.step()?.converged {
                 out.not_converged += 1;
             }
             calm = if sim.max_speed() < 0.02 { calm + 1 } else { 0 };
             if calm >= 10 {
-                return Ok(true);
+                return Ok((true, k + 1));
             }
         }
-        Ok::<bool, SimulationError>(false)
+        Ok::<(bool, usize), SimulationError>((false, cap))
     };
-    out.settled = rest(&mut sim, settle_steps, &mut out)?;
+    (out.settled, out.settle_steps) = rest(&mut sim, settle_steps, &mut out)?;
     let h0 = sim
         .world
         .bodies
@@ -699,7 +699,7 @@ pub fn column_collapse(
         .fold(0.0, f64::max);
     out.aspect = h0 / r0;
     sim.world.obstacles.truncate(1);
-    out.at_rest = rest(&mut sim, max_steps, &mut out)?;
+    (out.at_rest, out.spread_steps) = rest(&mut sim, max_steps, &mut out)?;
     let mut d: Vec<f64> = sim
         .world
         .bodies
@@ -722,8 +722,12 @@ pub fn column_collapse(
 pub struct ColumnResult {
     /// the column settled inside its cylinder
     pub settled: bool,
+    /// steps taken to settle in the cylinder (the cap when not settled)
+    pub settle_steps: usize,
     /// the heap came to rest after release
     pub at_rest: bool,
+    /// steps taken after the release (the cap when not at rest)
+    pub spread_steps: usize,
     /// a = H₀ / r₀
     pub aspect: f64,
     /// (R∞ − r₀) / r₀ measured

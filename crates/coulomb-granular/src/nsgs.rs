@@ -639,19 +639,27 @@ pub struct NsgsSettings {
     /// (ω ← 1 + (ω − 1)/2) whenever the sweep residual has not decreased over
     /// [`RELAX_WINDOW`] sweeps, so that a solve ends as plain Gauss–Seidel if needed
     pub relaxation: f64,
+    /// a time step of a scene with fewer spheres than this runs on one thread whatever the
+    /// pool (`Simulation::step`): below it the pool's dispatch costs more than the second core
+    /// saves (docs/scaling.md: 600 beads 1.65 ms on one thread, 2.08 ms on two; 1 000 beads
+    /// equal; 2 500 beads 1.29× faster on two). The numbers are the same either way (the
+    /// sweep is bitwise independent of the thread count), only the time differs.
+    pub serial_below: usize,
 }
 
 /// Sweeps over which the relaxation's progress is judged.
 pub const RELAX_WINDOW: usize = 10;
 
 impl Default for NsgsSettings {
-    /// tol 1e-4, at most 20 000 sweeps and 60 s, ω = 1.5 (docs/scaling.md).
+    /// tol 1e-4, at most 20 000 sweeps and 60 s, ω = 1.5, one thread below 1 500 spheres
+    /// (docs/scaling.md).
     fn default() -> Self {
         Self {
             tol: 1e-4,
             max_sweeps: 20_000,
             time_limit: Some(Duration::from_secs(60)),
             relaxation: 1.5,
+            serial_below: 1_500,
         }
     }
 }
@@ -1363,8 +1371,12 @@ mod tests {
                 .build()
                 .unwrap();
             pool.install(|| {
+                // serial_below 0: the 200-bead step really runs on the pool's threads
                 let params = Params {
-                    method: StepMethod::Nsgs(NsgsSettings::default()),
+                    method: StepMethod::Nsgs(NsgsSettings {
+                        serial_below: 0,
+                        ..NsgsSettings::default()
+                    }),
                     ..Params::default()
                 };
                 let mut sim = Simulation::new(Scene::Box.build(200, 5), params).unwrap();

@@ -158,6 +158,14 @@ pub struct StepStats {
     pub projection_sweeps: usize,
 }
 
+/// A one-thread rayon pool for small steps (built once; `None` if the system refuses a
+/// thread, and the step then runs on the current pool).
+fn serial_pool() -> Option<&'static rayon::ThreadPool> {
+    static POOL: std::sync::OnceLock<Option<rayon::ThreadPool>> = std::sync::OnceLock::new();
+    POOL.get_or_init(|| rayon::ThreadPoolBuilder::new().num_threads(1).build().ok())
+        .as_ref()
+}
+
 /// The time-stepping simulation: a [`World`] advanced by [`Simulation::step`].
 #[derive(Debug, Clone)]
 pub struct Simulation {
@@ -261,7 +269,23 @@ impl Simulation {
     /// 3. its solution (v_{k+1}, r_{k+1}) by `coulomb::solver::solve_with_guess`, warm
     ///    started from the previous impulses of persisting contacts;
     /// 4. q_{k+1} = q_k + h((1 − θ) v_k + θ v_{k+1}) (2.7).
+    ///
+    /// With [`StepMethod::Nsgs`] a scene of fewer spheres than
+    /// [`NsgsSettings::serial_below`](crate::nsgs::NsgsSettings::serial_below) is stepped on
+    /// one thread (same numbers, less dispatch).
     pub fn step(&mut self) -> Result<StepStats, SimulationError> {
+        if let StepMethod::Nsgs(s) = self.params.method {
+            if self.world.bodies.len() < s.serial_below && rayon::current_num_threads() > 1 {
+                if let Some(pool) = serial_pool() {
+                    return pool.install(|| self.step_on_current_pool());
+                }
+            }
+        }
+        self.step_on_current_pool()
+    }
+
+    /// [`Simulation::step`] on the current rayon pool.
+    fn step_on_current_pool(&mut self) -> Result<StepStats, SimulationError> {
         let k = self.steps_done;
         let h = self.params.h;
         let t0 = Instant::now();

@@ -433,39 +433,68 @@ pub fn settled_bed(
     let pen = penetrations(&sim.world, sim.time);
     out.mean_overlap = pen.mean / r;
     out.max_overlap = pen.max / r;
-    // packing fraction of a slab inside the bed (exact sphere–slab intersection volumes)
+    // packing fraction of a box inside the bed: 2 R from the walls, the floor and the top
     let top = sim
         .world
         .bodies
         .iter()
         .map(|b| b.position.z)
         .fold(0.0, f64::max);
-    let (z0, z1) = (2.0 * r, top - 2.0 * r);
-    let (x0, x1) = (2.0 * r, side - 2.0 * r);
-    if z1 > z0 && x1 > x0 {
-        let mut vol = 0.0;
-        for b in &sim.world.bodies {
-            let p = b.position;
-            if p.x < x0 || p.x > x1 || p.y < x0 || p.y > x1 {
-                continue;
-            }
-            vol += cap_volume(b.radius, p.z, z0, z1);
-        }
-        // beads whose centres are outside the horizontal window but overlap it are left out,
-        // those inside but overlapping the window's sides are counted whole: both ≈ balance
-        out.packing_fraction = vol / ((x1 - x0) * (x1 - x0) * (z1 - z0));
-    }
+    out.packing_fraction = solid_fraction(
+        &sim.world,
+        [2.0 * r, 2.0 * r, 2.0 * r],
+        [side - 2.0 * r, side - 2.0 * r, top - 2.0 * r],
+        r / 32.0,
+    );
     Ok(out)
 }
 
-/// Volume of the part of a sphere (radius r, centre height z) between heights z0 and z1.
-fn cap_volume(r: f64, z: f64, z0: f64, z1: f64) -> f64 {
-    // volume of the part below height a: π (r + t)² (2r − t) / 3 with t = clamp(a − z, −r, r)
-    let below = |a: f64| {
-        let t = (a - z).clamp(-r, r);
-        std::f64::consts::PI * (r + t) * (r + t) * (2.0 * r - t) / 3.0
-    };
-    below(z1) - below(z0)
+/// Fraction of the box [lo, hi] covered by the spheres of `world`, sampled at the centres of
+/// a regular grid of spacing ≈ `spacing` (cells of side ≤ `spacing`): the volume of the union of
+/// the spheres, cut exactly by the box's six faces up to the grid's resolution (the sampling
+/// error is 0.09 % for spacing = R/32 on a sphere and on a simple cubic lattice, 0.6 % for
+/// R/16: tests). 0 for an empty box.
+pub fn solid_fraction(world: &World, lo: [f64; 3], hi: [f64; 3], spacing: f64) -> f64 {
+    let n: Vec<usize> = (0..3)
+        .map(|k| (((hi[k] - lo[k]) / spacing).ceil().max(0.0) as usize).min(4096))
+        .collect();
+    if n.iter().any(|&m| m == 0) || spacing <= 0.0 {
+        return 0.0;
+    }
+    let step: Vec<f64> = (0..3).map(|k| (hi[k] - lo[k]) / n[k] as f64).collect();
+    // spheres by the grid column (i, j) their horizontal extent covers
+    let mut columns: Vec<Vec<usize>> = vec![Vec::new(); n[0] * n[1]];
+    for (b, body) in world.bodies.iter().enumerate() {
+        let (p, rad) = (body.position, body.radius);
+        let range = |c: f64, k: usize| {
+            let a = ((c - rad - lo[k]) / step[k]).floor().max(0.0) as usize;
+            let z = (((c + rad - lo[k]) / step[k]).ceil().max(0.0) as usize).min(n[k]);
+            a..z
+        };
+        for i in range(p.x, 0) {
+            for j in range(p.y, 1) {
+                columns[i * n[1] + j].push(b);
+            }
+        }
+    }
+    let mut inside = 0usize;
+    for i in 0..n[0] {
+        let x = lo[0] + (i as f64 + 0.5) * step[0];
+        for j in 0..n[1] {
+            let y = lo[1] + (j as f64 + 0.5) * step[1];
+            let col = &columns[i * n[1] + j];
+            for k in 0..n[2] {
+                let z = lo[2] + (k as f64 + 0.5) * step[2];
+                let hit = col.iter().any(|&b| {
+                    let body = &world.bodies[b];
+                    let d = body.position - crate::math::Vec3::new(x, y, z);
+                    d.dot(d) <= body.radius * body.radius
+                });
+                inside += usize::from(hit);
+            }
+        }
+    }
+    inside as f64 / (n[0] * n[1] * n[2]) as f64
 }
 
 /// Result of [`settled_bed`].
@@ -479,7 +508,7 @@ pub struct BedResult {
     pub mean_overlap: f64,
     /// largest overlap / R
     pub max_overlap: f64,
-    /// packing fraction of the inner slab
+    /// packing fraction of the inner box ([`solid_fraction`])
     pub packing_fraction: f64,
     /// steps not converged
     pub not_converged: usize,
@@ -743,9 +772,28 @@ mod tests {
     use super::*;
 
     #[test]
-    fn cap_volume_of_a_whole_and_a_half_sphere() {
-        let v = 4.0 / 3.0 * std::f64::consts::PI;
-        assert!((cap_volume(1.0, 0.0, -2.0, 2.0) - v).abs() < 1e-12);
-        assert!((cap_volume(1.0, 0.0, 0.0, 2.0) - v / 2.0).abs() < 1e-12);
+    fn solid_fraction_of_known_arrangements() {
+        use std::f64::consts::PI;
+        let ball = |x: f64, y: f64, z: f64| Sphere::new(Vec3::new(x, y, z), 1.0, 1.0);
+        // one whole sphere, and one cut in half by a face of the box
+        let mut w = World::new();
+        w.bodies.push(ball(0.0, 0.0, 0.0));
+        let f = solid_fraction(&w, [-2.0; 3], [2.0; 3], 1.0 / 32.0);
+        assert!((f * 64.0 / (4.0 / 3.0 * PI) - 1.0).abs() < 2e-3, "{f}");
+        let f = solid_fraction(&w, [-2.0, -2.0, 0.0], [2.0, 2.0, 2.0], 1.0 / 32.0);
+        assert!((f * 32.0 / (2.0 / 3.0 * PI) - 1.0).abs() < 2e-3, "{f}");
+        // a simple cubic lattice of touching spheres: π/6 in any box of whole cells
+        let mut w = World::new();
+        for i in -1..6 {
+            for j in -1..6 {
+                for k in -1..6 {
+                    w.bodies
+                        .push(ball(2.0 * i as f64, 2.0 * j as f64, 2.0 * k as f64));
+                }
+            }
+        }
+        let f = solid_fraction(&w, [1.0; 3], [5.0; 3], 1.0 / 32.0);
+        assert!((f / (PI / 6.0) - 1.0).abs() < 2e-3, "{f}");
+        assert_eq!(solid_fraction(&w, [1.0; 3], [1.0; 3], 0.1), 0.0);
     }
 }

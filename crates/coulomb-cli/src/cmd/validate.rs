@@ -179,7 +179,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         section(
             "Settled bed",
             mk(
-                "packing fraction of the inner slab",
+                "packing fraction of the inner box (grid-sampled)",
                 0.6,
                 bed.packing_fraction,
                 0.04,

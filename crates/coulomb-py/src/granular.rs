@@ -30,11 +30,12 @@ fn set_param(p: &mut Params, name: &str, v: &Bound<'_, PyAny>) -> PyResult<()> {
         "theta" => p.theta = real()?,
         "restitution" => p.restitution = real()?,
         "mu" => p.mu = real()?,
+        "rolling_friction" => p.rolling_friction = real()?,
         "warm_start" => p.warm_start = v.extract()?,
         other => {
             return Err(PyTypeError::new_err(format!(
                 "unexpected simulation parameter '{other}' \
-                 (parameters: h, theta, restitution, mu, warm_start; solver settings go in solver=)"
+                 (parameters: h, theta, restitution, mu, rolling_friction, warm_start; solver settings go in solver=)"
             )))
         }
     }
@@ -213,6 +214,7 @@ impl PySimulation {
         d.set_item("theta", p.theta)?;
         d.set_item("restitution", p.restitution)?;
         d.set_item("mu", p.mu)?;
+        d.set_item("rolling_friction", p.rolling_friction)?;
         d.set_item("warm_start", p.warm_start)?;
         d.set_item("solver", convert::settings_to_dict(py, &p.solver)?)?;
         Ok(d)

@@ -455,10 +455,13 @@ pub fn settled_bed(
 /// error is 0.09 % for spacing = R/32 on a sphere and on a simple cubic lattice, 0.6 % for
 /// R/16: tests). 0 for an empty box.
 pub fn solid_fraction(world: &World, lo: [f64; 3], hi: [f64; 3], spacing: f64) -> f64 {
+    if !(spacing > 0.0 && spacing.is_finite()) {
+        return 0.0;
+    }
     let n: Vec<usize> = (0..3)
         .map(|k| (((hi[k] - lo[k]) / spacing).ceil().max(0.0) as usize).min(4096))
         .collect();
-    if n.iter().any(|&m| m == 0) || spacing <= 0.0 {
+    if n.contains(&0) {
         return 0.0;
     }
     let step: Vec<f64> = (0..3).map(|k| (hi[k] - lo[k]) / n[k] as f64).collect();

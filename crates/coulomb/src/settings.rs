@@ -465,18 +465,18 @@ impl Tuning {
         }
         let positive = |x: f64| x.is_finite() && x > 0.0;
         let n = &self.newton;
-        if !(positive(n.shift_ratio_cap) && positive(n.shift_floor))
-            || !(n.shift_growth.is_finite() && n.shift_growth > 1.0)
-        {
+        let above_one = |x: f64| x.is_finite() && x > 1.0;
+        if !(positive(n.shift_ratio_cap) && positive(n.shift_floor) && above_one(n.shift_growth)) {
             return Err("tuning.newton shift parameters: cap, floor > 0, growth > 1".into());
         }
         if !(n.sufficient_decrease.is_finite() && (0.0..1.0).contains(&n.sufficient_decrease)) {
             return Err("tuning.newton.sufficient_decrease must be in [0, 1)".into());
         }
         let a = &self.inner.apgd;
-        if !(a.backtrack_growth.is_finite() && a.backtrack_growth > 1.0)
-            || !(a.backtrack_margin.is_finite() && a.backtrack_margin >= 1.0)
-            || !(a.backtrack_slack.is_finite() && a.backtrack_slack >= 0.0)
+        let at_least = |x: f64, lo: f64| x.is_finite() && x >= lo;
+        if !(above_one(a.backtrack_growth)
+            && at_least(a.backtrack_margin, 1.0)
+            && at_least(a.backtrack_slack, 0.0))
         {
             return Err("tuning.inner.apgd: backtrack growth > 1, margin ≥ 1, slack ≥ 0".into());
         }

@@ -693,6 +693,19 @@ mod tests {
         let mut s = Settings::default();
         s.tuning.anderson.memory = 0;
         assert!(s.validate().is_err());
+        let refused: [fn(&mut Tuning); 6] = [
+            |t| t.newton.shift_tries = 0,
+            |t| t.newton.shift_growth = 1.0,
+            |t| t.newton.sufficient_decrease = 1.0,
+            |t| t.inner.apgd.backtrack_margin = 0.5,
+            |t| t.inner.apgd.ray_period = 0,
+            |t| t.inner.infeasible_ray.descent = f64::NAN,
+        ];
+        for spoil in refused {
+            let mut s = Settings::default();
+            spoil(&mut s.tuning);
+            assert!(s.validate().is_err());
+        }
         assert!(Settings::method(InnerKind::Apgd, OuterKind::Fused)
             .validate()
             .is_err());

@@ -214,15 +214,19 @@ pub(crate) trait SemismoothMap {
 }
 
 /// The regularization of the Newton system, J + λ I: the first λ of a step is
-/// `factor` · min(‖G‖ / `residual_scale`, 1e-2) · `diag_scale`, and it grows hundredfold
-/// (to at least 1e-10 · `diag_scale`) for each of at most `tries` directions that give no
-/// descent (a Levenberg–Marquardt-like direction where J is singular).
+/// `factor` · min(‖G‖ / `residual_scale`, `ratio_cap`) · `diag_scale`, and it becomes
+/// max(`growth` · λ, `floor` · `diag_scale`) for each of at most `tries` directions that give
+/// no descent (a Levenberg–Marquardt-like direction where J is singular); the defaults
+/// (cap 1e-2, growth 100, floor 1e-10, 4 tries) are in [`crate::settings::NewtonParams`].
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Shift {
     pub(crate) factor: f64,
     pub(crate) residual_scale: f64,
     pub(crate) diag_scale: f64,
     pub(crate) tries: usize,
+    pub(crate) ratio_cap: f64,
+    pub(crate) growth: f64,
+    pub(crate) floor: f64,
 }
 
 /// Caps and rules of one [`drive`] run.
@@ -280,7 +284,7 @@ pub(crate) fn drive<M: SemismoothMap>(
         let before = norm;
         let (mut lambda, tries) = match rule.shift {
             Some(s) => (
-                s.factor * (norm / s.residual_scale).min(1e-2) * s.diag_scale,
+                s.factor * (norm / s.residual_scale).min(s.ratio_cap) * s.diag_scale,
                 s.tries,
             ),
             None => (0.0, 1),
@@ -313,7 +317,7 @@ pub(crate) fn drive<M: SemismoothMap>(
                 break;
             }
             if let Some(s) = rule.shift {
-                lambda = (lambda * 100.0).max(1e-10 * s.diag_scale);
+                lambda = (lambda * s.growth).max(s.floor * s.diag_scale);
             }
         }
         if !accepted {
@@ -414,8 +418,10 @@ pub fn polish(
     polish_with(p, r, target, max_steps, deadline, &params)
 }
 
-/// [`polish`] with the shift and slow-step constants of `params`
-/// ([`crate::settings::NewtonParams::lambda_factor`], `slow_steps`, `slow_ratio`).
+/// [`polish`] with the shift, line-search and slow-step constants of `params`
+/// ([`crate::settings::NewtonParams`]: `lambda_factor`, `shift_ratio_cap`, `shift_tries`,
+/// `shift_growth`, `shift_floor`, `halvings`, `sufficient_decrease`, `slow_steps`,
+/// `slow_ratio`).
 pub fn polish_with(
     p: &LocalProblem,
     r: &mut [f64],
@@ -471,13 +477,16 @@ pub fn polish_with(
     let rule = NewtonRule {
         target,
         max_steps,
-        halvings: 10,
-        sufficient_decrease: 1e-4,
+        halvings: params.halvings,
+        sufficient_decrease: params.sufficient_decrease,
         shift: Some(Shift {
             factor: params.lambda_factor,
             residual_scale: q_scale,
             diag_scale,
-            tries: 4,
+            tries: params.shift_tries,
+            ratio_cap: params.shift_ratio_cap,
+            growth: params.shift_growth,
+            floor: params.shift_floor,
         }),
         slow_steps: params.slow_steps,
         slow_ratio: params.slow_ratio,

@@ -229,10 +229,95 @@ pub struct NewtonParams {
     pub slow_steps: usize,
     /// a step with ‖G⁺‖ > `slow_ratio` ‖G‖ is slow (see [`crate::newton::SLOW_RATIO`]); in (0, 1]
     pub slow_ratio: f64,
+    /// the first shift λ uses min(‖G‖/‖q‖, `shift_ratio_cap`) (see `lambda_factor`); > 0
+    pub shift_ratio_cap: f64,
+    /// directions (shifts λ) tried per step before the step counts as giving no descent; ≥ 1
+    pub shift_tries: usize,
+    /// after a direction without descent λ ← max(`shift_growth` · λ, `shift_floor` · max diag(W));
+    /// > 1
+    pub shift_growth: f64,
+    /// see `shift_growth`; > 0
+    pub shift_floor: f64,
+    /// line search on the step δ: t = 1, then up to this many halvings of t
+    pub halvings: usize,
+    /// a trial point r + t δ is accepted when ‖G(r + t δ)‖ < ‖G(r)‖ and
+    /// ‖G(r + t δ)‖ ≤ (1 − `sufficient_decrease` · t) ‖G(r)‖ (Armijo); in [0, 1)
+    pub sufficient_decrease: f64,
+}
+
+/// Thresholds of the test that an iterate r of (4.7) is a ray certifying that (4.7) is
+/// unbounded below, so that the primal (3.15) is infeasible (C̄(s) = ∅): with d = r/‖r‖,
+/// ‖W d‖ ≤ `residual` · ‖W‖ and bᵀd ≤ −`descent` · ‖b‖ (see [`crate::inner::unbounded_ray`]).
+/// Used by the outer stage after each inner solve, by projected Gauss–Seidel and by APGD.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct RayParams {
+    /// bound on ‖W d‖ / ‖W‖ (d in the recession directions: W d ≈ 0); > 0
+    pub residual: f64,
+    /// bound on −bᵀd / ‖b‖ (d a descent direction of the objective ½ rᵀW r + bᵀr); > 0
+    pub descent: f64,
+}
+
+impl Default for RayParams {
+    fn default() -> Self {
+        Self {
+            residual: 1e-7,
+            descent: 1e-3,
+        }
+    }
+}
+
+/// Parameters of APGD's step-size control on (4.7) ([`crate::inner::apgd`]): L estimates
+/// λ_max(W), the step is 1/L.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct ApgdParams {
+    /// L is kept ≥ `lip_floor` · L₀ (L₀ the power-iteration estimate); in (0, 1]
+    pub lip_floor: f64,
+    /// after each accepted step L ← max(`lip_decay` · L, floor); in (0, 1]
+    pub lip_decay: f64,
+    /// backtracking: while (x⁺ − y)ᵀW(x⁺ − y) > ‖x⁺ − y‖²/step (+ rounding slack),
+    /// L ← max(`backtrack_growth` · L, `backtrack_margin` · (x⁺ − y)ᵀW(x⁺ − y)/‖x⁺ − y‖²); > 1
+    pub backtrack_growth: f64,
+    /// see `backtrack_growth`; ≥ 1
+    pub backtrack_margin: f64,
+    /// the backtracking test allows `backtrack_slack` · ‖x⁺ − y‖ ‖W x⁺‖ of rounding; ≥ 0
+    pub backtrack_slack: f64,
+    /// at most this many trial steps per iteration (the last is taken); ≥ 1
+    pub backtrack_tries: usize,
+    /// the infeasible-ray test ([`RayParams`]) runs every `ray_period` iterations; ≥ 1
+    pub ray_period: usize,
+}
+
+impl Default for ApgdParams {
+    fn default() -> Self {
+        Self {
+            lip_floor: 1e-3,
+            lip_decay: 0.97,
+            backtrack_growth: 2.0,
+            backtrack_margin: 1.1,
+            backtrack_slack: 1e-12,
+            backtrack_tries: 60,
+            ray_period: 64,
+        }
+    }
 }
 
 /// Parameters of the inner solvers of (4.7): the constants each has always used, as
 /// defaults. A [`crate::Solver`] builds its inner solvers with them.
+///
+/// The one-contact solves of projected Gauss–Seidel and of the fused method
+/// ([`crate::inner::contact`]) run once per contact and sweep, so their tolerances stay
+/// `const`s there (each documented where it is defined): `PIVOT` (a d × d block counts as
+/// singular when its pivots fall below `PIVOT` · scale), `SINGULAR_TRACE` and
+/// `REGULARIZATION` (a block of trace ≤ `SINGULAR_TRACE` · ‖W‖ gets
+/// `REGULARIZATION` · trace added to its diagonal), `ANGLE_STEP` and `SLIP_STEP` (Newton on
+/// the boundary angle of the SOC-QP and on the slip angle of (2.9) has converged at a step
+/// below these), `ANGLE_NEWTON_STEPS`, `MAX_ANGLE_STEP`, `ANGLE_GRADIENT_STEP`,
+/// `ANGLE_SAMPLES` and `ANGLE_SEEDS` (the boundary-angle search), `MULTIPLIER` (the KKT
+/// multiplier may be −`MULTIPLIER` · ‖c‖ by rounding), `LAW_RESIDUAL` (a sliding solution
+/// of (2.9) is kept when its residual is ≤ `LAW_RESIDUAL` (‖A r‖ + ‖c‖)) and
+/// `FALLBACK_STEPS` (projected-gradient steps of the last resort).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct InnerParams {
@@ -248,6 +333,10 @@ pub struct InnerParams {
     /// interior point: semismooth Newton steps that polish Clarabel's r on the natural map
     /// (0: none; see [`crate::inner::ipm::DEFAULT_POLISH_STEPS`])
     pub ipm_polish_steps: usize,
+    /// APGD's step-size control
+    pub apgd: ApgdParams,
+    /// the infeasible-ray test of (4.7) (stage, Gauss–Seidel, APGD)
+    pub infeasible_ray: RayParams,
 }
 
 impl Default for InnerParams {
@@ -257,6 +346,8 @@ impl Default for InnerParams {
             apgd_barzilai_borwein: false,
             gs_refresh: crate::inner::pgs::REFRESH,
             ipm_polish_steps: crate::inner::ipm::DEFAULT_POLISH_STEPS,
+            apgd: ApgdParams::default(),
+            infeasible_ray: RayParams::default(),
         }
     }
 }
@@ -308,6 +399,12 @@ impl Default for Tuning {
                 lambda_factor: crate::newton::LAMBDA_FACTOR,
                 slow_steps: crate::newton::SLOW_STEPS,
                 slow_ratio: crate::newton::SLOW_RATIO,
+                shift_ratio_cap: 1e-2,
+                shift_tries: 4,
+                shift_growth: 100.0,
+                shift_floor: 1e-10,
+                halvings: 10,
+                sufficient_decrease: 1e-4,
             },
             inner: InnerParams::default(),
         }
@@ -339,6 +436,8 @@ impl Tuning {
             || !frac(self.newton.stagnation_gain)
             || !frac(self.newton.target_fraction)
             || !frac(self.newton.slow_ratio)
+            || !frac(self.inner.apgd.lip_floor)
+            || !frac(self.inner.apgd.lip_decay)
         {
             return Err("tuning fractions must be in (0, 1]".into());
         }
@@ -355,11 +454,35 @@ impl Tuning {
             || self.inner.apgd_power_iterations == 0
             || self.inner.gs_refresh == 0
             || self.newton.slow_steps == 0
+            || self.newton.shift_tries == 0
+            || self.inner.apgd.backtrack_tries == 0
+            || self.inner.apgd.ray_period == 0
         {
             return Err("tuning counts must be at least 1".into());
         }
         if !(self.newton.lambda_factor.is_finite() && self.newton.lambda_factor >= 0.0) {
             return Err("tuning.newton.lambda_factor must be finite and ≥ 0".into());
+        }
+        let positive = |x: f64| x.is_finite() && x > 0.0;
+        let n = &self.newton;
+        let above_one = |x: f64| x.is_finite() && x > 1.0;
+        if !(positive(n.shift_ratio_cap) && positive(n.shift_floor) && above_one(n.shift_growth)) {
+            return Err("tuning.newton shift parameters: cap, floor > 0, growth > 1".into());
+        }
+        if !(n.sufficient_decrease.is_finite() && (0.0..1.0).contains(&n.sufficient_decrease)) {
+            return Err("tuning.newton.sufficient_decrease must be in [0, 1)".into());
+        }
+        let a = &self.inner.apgd;
+        let at_least = |x: f64, lo: f64| x.is_finite() && x >= lo;
+        if !(above_one(a.backtrack_growth)
+            && at_least(a.backtrack_margin, 1.0)
+            && at_least(a.backtrack_slack, 0.0))
+        {
+            return Err("tuning.inner.apgd: backtrack growth > 1, margin ≥ 1, slack ≥ 0".into());
+        }
+        let ray = &self.inner.infeasible_ray;
+        if !(positive(ray.residual) && positive(ray.descent)) {
+            return Err("tuning.inner.infeasible_ray thresholds must be positive".into());
         }
         Ok(())
     }
@@ -570,6 +693,19 @@ mod tests {
         let mut s = Settings::default();
         s.tuning.anderson.memory = 0;
         assert!(s.validate().is_err());
+        let refused: [fn(&mut Tuning); 6] = [
+            |t| t.newton.shift_tries = 0,
+            |t| t.newton.shift_growth = 1.0,
+            |t| t.newton.sufficient_decrease = 1.0,
+            |t| t.inner.apgd.backtrack_margin = 0.5,
+            |t| t.inner.apgd.ray_period = 0,
+            |t| t.inner.infeasible_ray.descent = f64::NAN,
+        ];
+        for spoil in refused {
+            let mut s = Settings::default();
+            spoil(&mut s.tuning);
+            assert!(s.validate().is_err());
+        }
         assert!(Settings::method(InnerKind::Apgd, OuterKind::Fused)
             .validate()
             .is_err());

@@ -250,13 +250,30 @@ fn apgd_runs_matrix_free() {
         deadline: coulomb::deadline::Deadline::NEVER,
     };
     let b = d.local.q.clone();
+    let (ap, ray) = (
+        coulomb::settings::ApgdParams::default(),
+        coulomb::settings::RayParams::default(),
+    );
     let mut r_free = vec![0.0; m];
     let lip = lipschitz_estimate(&op, 20);
-    let rep = solve_operator(&op, dim, &b, &mu, lip, false, &limits, &mut r_free);
+    let rep = solve_operator(
+        &op,
+        dim,
+        &b,
+        &mu,
+        lip,
+        false,
+        &ap,
+        &ray,
+        &limits,
+        &mut r_free,
+    );
     assert_eq!(rep.status, InnerStatus::Solved);
     let mut r_csc = vec![0.0; m];
     let lip = lipschitz_estimate(&d.local.w, 20);
-    let rep = solve_operator(&d.local.w, dim, &b, &mu, lip, true, &limits, &mut r_csc);
+    let rep = solve_operator(
+        &d.local.w, dim, &b, &mu, lip, true, &ap, &ray, &limits, &mut r_csc,
+    );
     assert_eq!(rep.status, InnerStatus::Solved);
     assert!(kkt_4_7(dim, &d.local.w, &b, &mu, &r_free) < 1e-9);
     let diff: f64 = r_free

@@ -27,6 +27,7 @@ use crate::cone;
 use crate::delassus::DelassusOperator;
 use crate::law::norm;
 use crate::natural_map::dual_residual_shifted;
+use crate::settings::{ApgdParams, RayParams};
 use crate::sparse::{BlockCsr, CscMatrix};
 
 /// A symmetric positive semi-definite operator x ↦ W x.
@@ -103,6 +104,10 @@ pub fn lipschitz_estimate<A: LinearOperator + ?Sized>(op: &A, iterations: usize)
 pub struct ApgdSolver {
     /// use a Barzilai–Borwein trial step (backtracked) instead of the running 1/L
     pub barzilai_borwein: bool,
+    /// step-size control ([`crate::settings::InnerParams::apgd`])
+    pub params: ApgdParams,
+    /// thresholds of the infeasible-ray test ([`crate::settings::InnerParams::infeasible_ray`])
+    pub ray: RayParams,
     /// the λ_max(W) estimate of [`lipschitz_estimate`]
     lip: f64,
     /// W by d × d blocks (None where blocks would be mostly padding: W is used as stored)
@@ -131,6 +136,8 @@ impl ApgdSolver {
         };
         Self {
             barzilai_borwein: false,
+            params: ApgdParams::default(),
+            ray: RayParams::default(),
             lip,
             blocks,
             dim,
@@ -170,6 +177,8 @@ impl InnerSolver for ApgdSolver {
             problem.mu,
             self.lip,
             self.barzilai_borwein,
+            &self.params,
+            &self.ray,
             limits,
             r,
         )
@@ -177,7 +186,9 @@ impl InnerSolver for ApgdSolver {
 }
 
 /// FISTA with restart on (4.7) for any operator W; `lip` is an estimate of λ_max(W) (it is
-/// increased by backtracking when too small). `r` holds the warm start on entry.
+/// increased by backtracking when too small, under the rules of `params`); every
+/// `params.ray_period` iterations the iterate is tested for an infeasible ray with the
+/// thresholds of `ray`. `r` holds the warm start on entry.
 #[allow(clippy::too_many_arguments)]
 pub fn solve_operator<A: LinearOperator + ?Sized>(
     op: &A,
@@ -186,6 +197,8 @@ pub fn solve_operator<A: LinearOperator + ?Sized>(
     mu: &[f64],
     lip: f64,
     barzilai_borwein: bool,
+    params: &ApgdParams,
+    ray: &RayParams,
     limits: &InnerLimits,
     r: &mut [f64],
 ) -> InnerReport {
@@ -206,7 +219,10 @@ pub fn solve_operator<A: LinearOperator + ?Sized>(
     } else {
         1.0
     };
-    let l_floor = 1e-3 * l;
+    let l_floor = params.lip_floor * l;
+    // the ‖W‖ of the ray test: the starting L, as l_floor · (1 / floor) (for the default
+    // floor 1e-3, 1 / floor is exactly 1e3: the product the test has always used)
+    let ray_scale = 1.0 / params.lip_floor;
     let mut t = 1.0f64;
     let mut fx = objective(&x, &wx, b);
     let mut bb_step: Option<f64> = None;
@@ -226,7 +242,9 @@ pub fn solve_operator<A: LinearOperator + ?Sized>(
         if limits.deadline.passed() {
             break InnerStatus::TimeLimit;
         }
-        if iterations % 64 == 63 && super::unbounded_ray(&x, &wx, b, l_floor * 1e3) {
+        if iterations % params.ray_period == params.ray_period - 1
+            && super::unbounded_ray(&x, &wx, b, l_floor * ray_scale, ray)
+        {
             break InnerStatus::Infeasible;
         }
         iterations += 1;
@@ -252,11 +270,11 @@ pub fn solve_operator<A: LinearOperator + ?Sized>(
                 wn += wxn[i] * wxn[i];
             }
             tries += 1;
-            let slack = 1e-12 * (dd * wn).sqrt();
-            if dwd * step <= dd + slack * step || tries > 60 {
+            let slack = params.backtrack_slack * (dd * wn).sqrt();
+            if dwd * step <= dd + slack * step || tries > params.backtrack_tries {
                 break;
             }
-            l = (2.0 * l).max(1.1 * dwd / dd);
+            l = (params.backtrack_growth * l).max(params.backtrack_margin * dwd / dd);
             step = 1.0 / l;
         }
         let fxn = objective(&xn, &wxn, b);
@@ -291,7 +309,7 @@ pub fn solve_operator<A: LinearOperator + ?Sized>(
         std::mem::swap(&mut wx, &mut wxn);
         t = t_next;
         fx = fxn;
-        l = (0.97 * l).max(l_floor);
+        l = (params.lip_decay * l).max(l_floor);
         residual = residual_of(&x, &wx);
     };
     r.copy_from_slice(&x);

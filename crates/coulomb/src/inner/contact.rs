@@ -19,6 +19,42 @@
 use crate::cone;
 use crate::sparse::CscMatrix;
 
+// Tolerances of the one-contact solves. They run once per contact and sweep (projected
+// Gauss–Seidel, the fused method), so they stay `const`s here rather than fields of
+// [`crate::settings::InnerParams`] (whose doc lists them).
+
+/// A d × d block counts as singular when a pivot (1 × 1: the entry; 2 × 2 and 3 × 3: the
+/// determinant) is ≤ `PIVOT` · scaleᵈ (scale: the block's trace, or its regularized value).
+pub(crate) const PIVOT: f64 = 1e-13;
+/// A diagonal block Wᵢᵢ with trace ≤ `SINGULAR_TRACE` · ‖W‖ (‖W‖: the largest block trace)
+/// counts as singular; its inversion scale is kept at least this.
+pub(crate) const SINGULAR_TRACE: f64 = 1e-12;
+/// A singular diagonal block gets `REGULARIZATION` · scale added to its diagonal.
+pub(crate) const REGULARIZATION: f64 = 1e-8;
+/// Newton on ψ'(α) (boundary case of the SOC-QP) has converged at a step below this angle
+/// (the error left is its square).
+pub(crate) const ANGLE_STEP: f64 = 1e-7;
+/// Newton steps of one boundary-angle (ψ'(α) = 0) and one slip-angle (g(θ) = 0) run.
+pub(crate) const ANGLE_NEWTON_STEPS: usize = 30;
+/// Largest angle step (radians) of those Newton runs.
+pub(crate) const MAX_ANGLE_STEP: f64 = 0.5;
+/// Gradient step on ψ' (radians, times sign ψ') where ψ is not locally concave.
+pub(crate) const ANGLE_GRADIENT_STEP: f64 = 0.1;
+/// The KKT multiplier of the boundary point, y_N of y = A x + c, may be as low as
+/// −`MULTIPLIER` (|c_N| + |c_T1| + |c_T2|) (rounding).
+pub(crate) const MULTIPLIER: f64 = 1e-10;
+/// Sampled angles of the boundary search when the three seeds fail …
+pub(crate) const ANGLE_SAMPLES: usize = 32;
+/// … of which the best (largest ψ) `ANGLE_SEEDS` start a Newton run.
+pub(crate) const ANGLE_SEEDS: usize = 4;
+/// Projected-gradient steps (step 1/‖A‖∞) of the last resort of the boundary case.
+pub(crate) const FALLBACK_STEPS: usize = 500;
+/// Newton on the slip equation g(θ) = 0 (2.9) has converged at a step below this angle.
+pub(crate) const SLIP_STEP: f64 = 1e-8;
+/// A sliding solution of (2.9) is kept when the law's residual is ≤ `LAW_RESIDUAL` ·
+/// (‖A r‖ + ‖c‖).
+pub(crate) const LAW_RESIDUAL: f64 = 1e-9;
+
 /// The diagonal blocks of W, with what the one-contact solve needs.
 #[derive(Debug, Clone)]
 pub struct DiagonalBlocks {
@@ -38,14 +74,14 @@ pub(crate) fn invert(a: &[f64; 9], d: usize, scale: f64) -> Option<[f64; 9]> {
     let mut inv = [0.0; 9];
     match d {
         1 => {
-            if a[0].abs() <= 1e-13 * scale {
+            if a[0].abs() <= PIVOT * scale {
                 return None;
             }
             inv[0] = 1.0 / a[0];
         }
         2 => {
             let det = a[0] * a[3] - a[1] * a[2];
-            if det.is_nan() || det <= 1e-13 * scale * scale {
+            if det.is_nan() || det <= PIVOT * scale * scale {
                 return None;
             }
             inv[0] = a[3] / det;
@@ -58,7 +94,7 @@ pub(crate) fn invert(a: &[f64; 9], d: usize, scale: f64) -> Option<[f64; 9]> {
             let c01 = a[5] * a[6] - a[3] * a[8];
             let c02 = a[3] * a[7] - a[4] * a[6];
             let det = a[0] * c00 + a[1] * c01 + a[2] * c02;
-            if det.is_nan() || det <= 1e-13 * scale * scale * scale {
+            if det.is_nan() || det <= PIVOT * scale * scale * scale {
                 return None;
             }
             inv[0] = c00 / det;
@@ -99,13 +135,13 @@ impl DiagonalBlocks {
         let mut inverses = Vec::with_capacity(nc);
         for blk in blocks.iter_mut() {
             let trace: f64 = (0..dim).map(|k| blk[k * dim + k]).sum();
-            let scale = trace.max(1e-12 * global_scale);
+            let scale = trace.max(SINGULAR_TRACE * global_scale);
             match invert(blk, dim, scale) {
-                Some(inv) if trace > 1e-12 * global_scale => {
+                Some(inv) if trace > SINGULAR_TRACE * global_scale => {
                     inverses.push(inv);
                 }
                 _ => {
-                    let eps = 1e-8 * scale;
+                    let eps = REGULARIZATION * scale;
                     for k in 0..dim {
                         blk[k * dim + k] += eps;
                     }
@@ -203,11 +239,9 @@ fn unit(x: f64, y: f64) -> Option<(f64, f64)> {
 /// returns the boundary point if the iteration reaches a stationary point with cᵀd < 0 and a
 /// nonnegative multiplier.
 fn boundary_newton(a: &[f64; 9], c: &[f64; 3], mu: f64, e0: (f64, f64)) -> Option<[f64; 3]> {
-    // a Newton step below this angle leaves an error of its square: the iteration has converged
-    const CONVERGED_STEP: f64 = 1e-7;
     let mut e = e0;
     let mut converged = false;
-    for _ in 0..30 {
+    for _ in 0..ANGLE_NEWTON_STEPS {
         let (n, p1, p2, _) = psi(a, c, mu, e);
         if n.is_nan() || n >= 0.0 {
             return None;
@@ -216,11 +250,11 @@ fn boundary_newton(a: &[f64; 9], c: &[f64; 3], mu: f64, e0: (f64, f64)) -> Optio
         let step = if p2 < 0.0 {
             -p1 / p2
         } else {
-            0.1 * p1.signum()
+            ANGLE_GRADIENT_STEP * p1.signum()
         };
-        let step = step.clamp(-0.5, 0.5);
+        let step = step.clamp(-MAX_ANGLE_STEP, MAX_ANGLE_STEP);
         e = rotate(e, step);
-        if p2 < 0.0 && step.abs() <= CONVERGED_STEP {
+        if p2 < 0.0 && step.abs() <= ANGLE_STEP {
             converged = true;
             break;
         }
@@ -242,7 +276,7 @@ fn boundary_newton(a: &[f64; 9], c: &[f64; 3], mu: f64, e0: (f64, f64)) -> Optio
     let y = matvec(a, 3, &x);
     let yn = y[0] + c[0];
     let scale = c[0].abs() + c[1].abs() + c[2].abs();
-    if yn < -1e-10 * scale {
+    if yn < -MULTIPLIER * scale {
         return None;
     }
     Some(x)
@@ -329,17 +363,16 @@ pub fn solve_contact(contact: &OneContact<'_>, warm: &[f64; 3]) -> [f64; 3] {
             return x;
         }
     }
-    const SAMPLES: usize = 32;
-    let mut cands: Vec<(f64, (f64, f64))> = (0..SAMPLES)
+    let mut cands: Vec<(f64, (f64, f64))> = (0..ANGLE_SAMPLES)
         .filter_map(|k| {
-            let e = (2.0 * std::f64::consts::PI * k as f64 / SAMPLES as f64).sin_cos();
+            let e = (2.0 * std::f64::consts::PI * k as f64 / ANGLE_SAMPLES as f64).sin_cos();
             let e = (e.1, e.0);
             let (n, _, _, den) = psi(a, c, mu, e);
             (n < 0.0 && den > 0.0).then_some((n * n / den, e))
         })
         .collect();
     cands.sort_by(|p, q| q.0.total_cmp(&p.0));
-    for &(_, e) in cands.iter().take(4) {
+    for &(_, e) in cands.iter().take(ANGLE_SEEDS) {
         if let Some(x) = boundary_newton(a, c, mu, e) {
             return x;
         }
@@ -349,7 +382,7 @@ pub fn solve_contact(contact: &OneContact<'_>, warm: &[f64; 3]) -> [f64; 3] {
         .map(|i| (0..3).map(|j| a[i * 3 + j].abs()).sum::<f64>())
         .fold(0.0f64, f64::max);
     let mut x = *warm;
-    for _ in 0..500 {
+    for _ in 0..FALLBACK_STEPS {
         let g = matvec(a, 3, &x);
         for k in 0..3 {
             x[k] -= (g[k] + c[k]) / lip;
@@ -386,17 +419,16 @@ fn slip_equation(a: &[f64; 9], c: &[f64; 3], mu: f64, tau: (f64, f64)) -> (f64, 
 /// solution r = r_N (1, −μτ) if the iteration converges to a root with r_N > 0 and u_T = βτ,
 /// β ≥ 0.
 fn slide_newton(a: &[f64; 9], c: &[f64; 3], mu: f64, tau0: (f64, f64)) -> Option<[f64; 3]> {
-    const CONVERGED_STEP: f64 = 1e-8;
     let mut tau = tau0;
-    for _ in 0..30 {
+    for _ in 0..ANGLE_NEWTON_STEPS {
         let (g, dg, rn, beta) = slip_equation(a, c, mu, tau);
         // away from a root with β > 0 the derivative g' ≈ β is positive
         if dg.is_nan() || rn.is_nan() || dg <= 0.0 || rn <= 0.0 {
             return None;
         }
-        let step = (-g / dg).clamp(-0.5, 0.5);
+        let step = (-g / dg).clamp(-MAX_ANGLE_STEP, MAX_ANGLE_STEP);
         tau = rotate(tau, step);
-        if step.abs() <= CONVERGED_STEP && beta >= 0.0 {
+        if step.abs() <= SLIP_STEP && beta >= 0.0 {
             let (_, _, rn, beta) = slip_equation(a, c, mu, tau);
             if !(rn > 0.0 && rn.is_finite()) || beta < 0.0 {
                 return None;
@@ -462,7 +494,7 @@ pub fn solve_contact_law(
         let ar = matvec(a, 3, r);
         let u = [ar[0] + c[0], ar[1] + c[1], ar[2] + c[2]];
         let scale = dot3(&ar, &ar, 3).sqrt() + dot3(c, c, 3).sqrt();
-        crate::law::contact_residual_sq(mu, &u, r) <= (1e-9 * scale).powi(2)
+        crate::law::contact_residual_sq(mu, &u, r) <= (LAW_RESIDUAL * scale).powi(2)
     })
 }
 

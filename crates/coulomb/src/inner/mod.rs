@@ -17,6 +17,7 @@ pub mod pgs;
 pub(crate) mod polish;
 
 pub use crate::deadline::Deadline;
+use crate::settings::RayParams;
 use crate::sparse::CscMatrix;
 
 /// The dual inner problem (4.7): min over r ∈ L = ∏ K_{μⁱ} of ½ rᵀ W r + bᵀ r.
@@ -115,15 +116,16 @@ pub trait InnerSolver {
 /// Whether r certifies that (4.7) is unbounded below (so that the primal (3.15) is
 /// infeasible, C̄(s) = ∅): with d = r/‖r‖ ∈ L, W d ≈ 0 and bᵀd < 0 (Farkas: for feasible v,
 /// (Hᵀv + w + E s)ᵀd ≥ 0, while H d = 0 makes it (w + E s)ᵀd = bᵀd). `wr` is W r and
-/// `w_scale` an estimate of ‖W‖. Thresholds: ‖W d‖ ≤ 1e-7 ‖W‖ and bᵀd ≤ −1e-3 ‖b‖.
-pub fn unbounded_ray(r: &[f64], wr: &[f64], b: &[f64], w_scale: f64) -> bool {
+/// `w_scale` an estimate of ‖W‖. Thresholds ([`RayParams`], defaults 1e-7 and 1e-3):
+/// ‖W d‖ ≤ `ray.residual` ‖W‖ and bᵀd ≤ −`ray.descent` ‖b‖.
+pub fn unbounded_ray(r: &[f64], wr: &[f64], b: &[f64], w_scale: f64, ray: &RayParams) -> bool {
     let rn = crate::law::norm(r);
     if rn.is_nan() || rn <= 0.0 || !rn.is_finite() {
         return false;
     }
     let wd = crate::law::norm(wr) / rn;
     let bd = r.iter().zip(b).map(|(x, y)| x * y).sum::<f64>() / rn;
-    wd <= 1e-7 * w_scale && bd <= -1e-3 * crate::law::norm(b)
+    wd <= ray.residual * w_scale && bd <= -ray.descent * crate::law::norm(b)
 }
 
 /// An estimate of ‖W‖: the largest trace of a diagonal d × d block (≥ λ_max of each block).

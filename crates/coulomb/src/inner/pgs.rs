@@ -51,6 +51,9 @@ use crate::sparse::CscMatrix;
 pub struct PgsSolver {
     /// sweeps between exact recomputations of u = W r + b ([`REFRESH`] by default; ≥ 1)
     pub refresh: usize,
+    /// thresholds of the infeasible-ray test, run at each refresh
+    /// ([`crate::settings::InnerParams::infeasible_ray`])
+    pub ray: crate::settings::RayParams,
     blocks: DiagonalBlocks,
     /// maintained u = W r + b
     u: Vec<f64>,
@@ -62,6 +65,7 @@ impl PgsSolver {
     pub fn new(dim: usize, w: &CscMatrix) -> Self {
         Self {
             refresh: REFRESH,
+            ray: crate::settings::RayParams::default(),
             blocks: DiagonalBlocks::new(dim, w),
             u: Vec::new(),
         }
@@ -150,7 +154,7 @@ impl InnerSolver for PgsSolver {
         r: &mut [f64],
     ) -> InnerReport {
         let (dim, w) = (problem.dim, problem.w);
-        let (blocks, refresh) = (&self.blocks, self.refresh.max(1));
+        let (blocks, refresh, ray) = (&self.blocks, self.refresh.max(1), self.ray);
         if !blocks.fits(dim, problem.mu.len())
             || w.ncols != r.len()
             || w.ncols != dim * problem.mu.len()
@@ -183,7 +187,7 @@ impl InnerSolver for PgsSolver {
                 for ((x, a), b) in wr.iter_mut().zip(u.iter()).zip(problem.b) {
                     *x = a - b;
                 }
-                if super::unbounded_ray(r, &wr, problem.b, w_scale) {
+                if super::unbounded_ray(r, &wr, problem.b, w_scale, &ray) {
                     break InnerStatus::Infeasible;
                 }
             }

@@ -80,12 +80,15 @@ impl InnerSolvers {
                     InnerKind::Pgs => {
                         let mut s = PgsSolver::new(dim, w);
                         s.refresh = params.gs_refresh;
+                        s.ray = params.infeasible_ray;
                         Box::new(s)
                     }
                     InnerKind::Apgd => {
                         let power = params.apgd_power_iterations;
                         let mut s = ApgdSolver::with_power_iterations(dim, w, power);
                         s.barzilai_borwein = params.apgd_barzilai_borwein;
+                        s.params = params.apgd;
+                        s.ray = params.infeasible_ray;
                         Box::new(s)
                     }
                     InnerKind::Ipm => Box::new(IpmSolver::with_polish(params.ipm_polish_steps)),
@@ -97,11 +100,12 @@ impl InnerSolvers {
 
     /// The Gauss–Seidel solver of the fused method on the stored W of `form`.
     pub(crate) fn fused(&mut self, form: &Form<'_>) -> &mut PgsSolver {
-        let refresh = self.params.gs_refresh;
+        let (refresh, ray) = (self.params.gs_refresh, self.params.infeasible_ray);
         self.fused.get_or_insert_with(|| {
             let local = form.local();
             let mut s = PgsSolver::new(local.dim, &local.w);
             s.refresh = refresh;
+            s.ray = ray;
             s
         })
     }

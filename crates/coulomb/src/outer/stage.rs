@@ -186,7 +186,13 @@ impl<'f, 'a> Stage<'f, 'a> {
             fixed_point::shifted(local.dim, &local.q, &local.mu, &fs, &mut self.b);
         }
         let wr: Vec<f64> = u.iter().zip(&local.q).map(|(a, c)| a - c).collect();
-        if crate::inner::unbounded_ray(&self.r, &wr, &self.b, self.form.w_scale) {
+        if crate::inner::unbounded_ray(
+            &self.r,
+            &wr,
+            &self.b,
+            self.form.w_scale,
+            &self.settings.tuning.inner.infeasible_ray,
+        ) {
             report.status = InnerStatus::Infeasible;
         }
         self.verdict = self.form.verdict(&self.r);

@@ -243,6 +243,10 @@ pub struct NewtonParams {
     /// a trial point r + t δ is accepted when ‖G(r + t δ)‖ < ‖G(r)‖ and
     /// ‖G(r + t δ)‖ ≤ (1 − `sufficient_decrease` · t) ‖G(r)‖ (Armijo); in [0, 1)
     pub sufficient_decrease: f64,
+    /// on a non-symmetric W, a try whose error fell to at most this fraction of the error it
+    /// started from is followed by another try from its point (above it the end game stops
+    /// and the fixed point goes on); in (0, 1]
+    pub continue_gain: f64,
 }
 
 /// Thresholds of the test that an iterate r of (4.7) is a ray certifying that (4.7) is
@@ -405,6 +409,7 @@ impl Default for Tuning {
                 shift_floor: 1e-10,
                 halvings: 10,
                 sufficient_decrease: 1e-4,
+                continue_gain: 0.5,
             },
             inner: InnerParams::default(),
         }
@@ -435,6 +440,7 @@ impl Tuning {
             || !frac(self.newton.retry)
             || !frac(self.newton.stagnation_gain)
             || !frac(self.newton.target_fraction)
+            || !frac(self.newton.continue_gain)
             || !frac(self.newton.slow_ratio)
             || !frac(self.inner.apgd.lip_floor)
             || !frac(self.inner.apgd.lip_decay)

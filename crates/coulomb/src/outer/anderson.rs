@@ -66,6 +66,14 @@ impl Anderson {
     }
 }
 
+/// Ridge added to the normal equations of [`least_squares`], relative to their trace (a
+/// numerical safeguard of a k × k solve, k ≤ memory, not a tuning parameter).
+const RIDGE: f64 = 1e-10;
+
+/// A pivot of at most this fraction of the trace makes [`least_squares`] give up (the
+/// differences are numerically dependent; the step is then the plain fixed point).
+const PIVOT: f64 = 1e-14;
+
 /// γ = argmin ‖g − Σ γⱼ aⱼ‖ by the normal equations with a small ridge (k ≤ 10 columns);
 /// None if the system is singular or the coefficients are huge.
 fn least_squares(a: &[Vec<f64>], g: &[f64]) -> Option<Vec<f64>> {
@@ -89,12 +97,12 @@ fn least_squares(a: &[Vec<f64>], g: &[f64]) -> Option<Vec<f64>> {
         return None;
     }
     for i in 0..k {
-        n[i * k + i] += 1e-10 * trace;
+        n[i * k + i] += RIDGE * trace;
     }
     // Gaussian elimination with partial pivoting
     for c in 0..k {
         let p = (c..k).max_by(|&x, &y| n[x * k + c].abs().total_cmp(&n[y * k + c].abs()))?;
-        if n[p * k + c].abs() <= 1e-14 * trace {
+        if n[p * k + c].abs() <= PIVOT * trace {
             return None;
         }
         if p != c {

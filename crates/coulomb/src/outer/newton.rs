@@ -131,8 +131,10 @@ impl EndGame {
             };
             let mut records = best.map_or_else(Vec::new, |b| b.records);
             records.push(record);
-            let done =
-                candidate.converged(tol) || form.symmetric || gain > 0.5 || deadline.passed();
+            let done = candidate.converged(tol)
+                || form.symmetric
+                || gain > p.continue_gain
+                || deadline.passed();
             best = Some(Improved {
                 r: trial,
                 verdict: candidate,

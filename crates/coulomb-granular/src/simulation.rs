@@ -590,7 +590,7 @@ impl Simulation {
         r0: &[f64],
         settings: &NsgsSettings,
         stats: &mut StepStats,
-    ) -> Result<Option<(Vec<f64>, Vec<f64>, f64)>, SimulationError> {
+    ) -> Result<Option<Finish>, SimulationError> {
         let k = self.steps_done;
         let global = problem
             .to_global()
@@ -674,6 +674,9 @@ impl Simulation {
             .fold(0.0, f64::max)
     }
 }
+
+/// A step finished by the library's solver: (r, v, scale max(‖q‖, ‖r‖, ‖u‖)).
+type Finish = (Vec<f64>, Vec<f64>, f64);
 
 /// The scale max(‖q‖, ‖r‖, ‖u‖) of docs/error.md for a global problem (M diagonal):
 /// q = Hᵀ M⁻¹ f + w, u = Hᵀ v + w.

@@ -538,31 +538,17 @@ impl Simulation {
             .ok()
             .and_then(|v| v.as_str().map(str::to_string))
             .unwrap_or_else(|| format!("{:?}", sol.status));
-        if !stats.converged {
-            // Gauss–Seidel stalled (it can cycle on a frictional step): finish with the
-            // library's solver on the same problem (2.10), from Gauss–Seidel's iterate
-            if let Some((r, v, scale)) =
-                self.finish_with_library(&problem, &sol, &r0, settings, stats)?
-            {
-                stats.solve_ms = t1.elapsed().as_secs_f64() * 1e3;
-                self.residual_velocity = stats.error.max(settings.tol) * scale;
-                self.keep_impulses(contacts, &r);
-                self.last_history.clear();
-                self.last_problem = if self.keep_problem {
-                    Some(
-                        problem
-                            .to_global()
-                            .map_err(|source| SimulationError::Assembly { step: k, source })?,
-                    )
-                } else {
-                    None
-                };
-                return Ok(v);
-            }
-        }
+        // Gauss–Seidel can stall (cycle) on a frictional step: then the library's solver
+        // finishes the same problem (2.10) from Gauss–Seidel's iterate
+        let finish = if stats.converged {
+            None
+        } else {
+            self.finish_with_library(&problem, &sol, &r0, settings, stats)?
+        };
+        let (r, v, scale) = finish.unwrap_or((sol.r, sol.v, sol.scale));
         stats.solve_ms = t1.elapsed().as_secs_f64() * 1e3;
-        self.residual_velocity = sol.error.max(settings.tol) * sol.scale;
-        self.keep_impulses(contacts, &sol.r);
+        self.residual_velocity = stats.error.max(settings.tol) * scale;
+        self.keep_impulses(contacts, &r);
         self.last_history.clear();
         self.last_problem = if self.keep_problem {
             Some(
@@ -573,7 +559,7 @@ impl Simulation {
         } else {
             None
         };
-        Ok(sol.v)
+        Ok(v)
     }
 
     /// The finish of a step that Gauss–Seidel left above its tolerance: the library's solver

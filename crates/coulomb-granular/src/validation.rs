@@ -798,5 +798,7 @@ mod tests {
         let f = solid_fraction(&w, [1.0; 3], [5.0; 3], 1.0 / 32.0);
         assert!((f / (PI / 6.0) - 1.0).abs() < 2e-3, "{f}");
         assert_eq!(solid_fraction(&w, [1.0; 3], [1.0; 3], 0.1), 0.0);
+        assert_eq!(solid_fraction(&w, [1.0; 3], [5.0; 3], 0.0), 0.0);
+        assert_eq!(solid_fraction(&w, [1.0; 3], [5.0; 3], f64::NAN), 0.0);
     }
 }

@@ -97,6 +97,10 @@ pub struct Args {
     /// no position correction (the plain Moreau–Jean scheme: penetrations stay)
     #[arg(long)]
     pub no_projection: bool,
+    /// no gap closure: a sphere at rest may stay up to h² g above an obstacle, held by the
+    /// activation rule's look-ahead (docs/granular.md, "Resting on an obstacle")
+    #[arg(long)]
+    pub no_gap_closure: bool,
     /// disable warm starts
     #[arg(long)]
     pub cold: bool,
@@ -147,6 +151,7 @@ impl Args {
             mu: self.mu,
             activation: Activation {
                 gamma: self.gamma,
+                close_gaps: !self.no_gap_closure,
                 ..Activation::accurate()
             },
             solver: Settings {

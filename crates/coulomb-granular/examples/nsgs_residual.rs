@@ -46,6 +46,7 @@ fn main() {
         t_end: sim.time + params.h,
         restitution: params.restitution,
         mu: params.mu,
+        close_gaps: params.activation.close_gaps,
     };
     let p = StepProblem::new(&sim.world, &contacts, &data).unwrap();
     let mut r0 = vec![0.0; 3 * contacts.len()];

@@ -33,6 +33,9 @@ pub struct StepData {
     pub restitution: f64,
     /// friction coefficient μ (all contacts)
     pub mu: f64,
+    /// close the gap of a contact held by gravity's look-ahead ([`gap_closure`];
+    /// [`crate::contact::Activation::close_gaps`])
+    pub close_gaps: bool,
 }
 
 /// Diagonal of M: (m, m, m, I, I, I) per sphere.
@@ -133,7 +136,36 @@ pub fn contact_offset_one(world: &World, c: &Contact, data: &StepData) -> [f64; 
         }
     }
     w[0] += impact_offset(data.restitution, c.normal_velocity);
+    if data.close_gaps {
+        w[0] += gap_closure(world, c, data);
+    }
     w
+}
+
+/// The term (1 − e) g_k / h added to the normal row of a sphere–obstacle contact held by
+/// gravity's look-ahead: one with a positive gap g_k that approaches no faster than gravity
+/// accelerates it in one step (u_{N,k} ≥ h γ_g·n, γ_g·n < 0 the gravity's normal
+/// component). The activation rule ([`crate::contact::Activation`]) makes such a contact
+/// active up to h² |γ_g·n| above the obstacle; without this term U_N ≥ 0 would hold the
+/// sphere at that gap for good (a sphere at rest "hovers"). With it the law reads
+/// U_N = u_{N,k+1} + ê u_{N,k} + (1 − e) g_k / h ≥ 0: for e = 0 the sphere may close the gap
+/// in the step, for e = 1 nothing changes (an elastic sphere micro-bounces forever: holding
+/// it conserves energy). Energy: the normal work ½ r_N (u_{N,k+1} + u_{N,k}) gains the term
+/// −½ r_N (1 − e) g_k / h ≤ 0, so the step still never creates energy (docs/granular.md,
+/// "Energy" and "Resting on an obstacle"). Fast impacts (u_{N,k} < h γ_g·n) are left to
+/// Moreau's law alone: their rebound ratio stays exactly e. 0 for sphere–sphere contacts
+/// (gravity cancels in their look-ahead).
+pub fn gap_closure(world: &World, c: &Contact, data: &StepData) -> f64 {
+    let Partner::Obstacle(_) = c.partner else {
+        return 0.0;
+    };
+    let gn = world.gravity.dot(c.normal);
+    let held = gn < 0.0 && c.gap > 0.0 && c.normal_velocity >= data.h * gn;
+    if held && data.h > 0.0 {
+        (1.0 - data.restitution).clamp(0.0, 1.0) * c.gap / data.h
+    } else {
+        0.0
+    }
 }
 
 /// Builds the global problem (2.10) of the step: (M, H, f, w, μ) in FCLIB convention.
@@ -215,6 +247,7 @@ mod tests {
             t_end: 0.0,
             restitution: 0.0,
             mu: 0.3,
+            close_gaps: true,
         };
         let p = assemble(&w, &contacts, &data).unwrap();
         let u = p.velocity(&w.velocities());
@@ -251,6 +284,7 @@ mod tests {
             t_end: 0.0,
             restitution: 0.2,
             mu: 0.3,
+            close_gaps: true,
         };
         let p0 = assemble(
             &w,

@@ -87,6 +87,10 @@ pub struct Activation {
     /// raise δ each step to the lift the solver's residual allows
     /// ([`crate::Simulation::activation_threshold`]); otherwise δ = `delta`
     pub delta_from_tolerance: bool,
+    /// let a sphere–obstacle contact that the look-ahead by gravity holds at a positive gap
+    /// close it ([`crate::assembly::gap_closure`]): a sphere at rest settles onto the
+    /// obstacle instead of hovering up to h² |g·n| above it
+    pub close_gaps: bool,
 }
 
 impl Default for Activation {
@@ -96,6 +100,7 @@ impl Default for Activation {
             delta: 1e-8,
             keep_separating: false,
             delta_from_tolerance: false,
+            close_gaps: false,
         }
     }
 }
@@ -110,6 +115,7 @@ impl Activation {
             delta: 1e-8,
             keep_separating: true,
             delta_from_tolerance: true,
+            close_gaps: true,
         }
     }
 
@@ -389,7 +395,7 @@ pub fn detect_with(
 }
 
 /// [`detect_with`] with the largest speed v_max = max |v| + R|ω| of the broad phase's margin
-/// δ + 2 v_max h γ given: a part of a larger system (a rank's subdomain in
+/// δ + 2 v_max h γ (sphere–obstacle pairs: + γ h² |g|, the look-ahead by gravity) given: a part of a larger system (a rank's subdomain in
 /// [`crate::distributed`]) passes the whole system's v_max, so that its margin, and with it
 /// the obstacle contacts it finds, are those of one process.
 pub fn detect_with_speed(
@@ -431,6 +437,8 @@ pub fn detect_with_speed(
     // broad and narrow phases in one parallel pass over chunks of spheres: sphere i's
     // contacts with spheres j > i in increasing j, then with the obstacles in order, i.e.
     // the contacts come out sorted by (body, partner), whatever the number of threads
+    // an obstacle contact's look-ahead also sees gravity: h u_{N,free} reaches h² |g| further
+    let obstacle_margin = margin + activation.gamma * h * h * world.gravity.norm();
     let grid = BroadPhase::new(world, margin);
     par_chunked(world.bodies.len(), SPHERE_CHUNK, |range, out| {
         let mut js = Vec::new();
@@ -451,7 +459,7 @@ pub fn detect_with_speed(
             }
             for (o, ob) in world.obstacles.iter().enumerate() {
                 let p = ob.proximity(a.position, a.radius, t);
-                if p.gap <= margin {
+                if p.gap <= obstacle_margin {
                     let point = p.point + p.normal * (0.5 * p.gap);
                     out.extend(make(i, Partner::Obstacle(o), p.normal, point, p.gap));
                 }
@@ -544,6 +552,7 @@ mod tests {
                 delta: 0.0,
                 keep_separating: false,
                 delta_from_tolerance: false,
+                close_gaps: false,
             },
         );
         assert_eq!(c.len(), 1);

@@ -1171,6 +1171,7 @@ mod tests {
             t_end: sim.time + params.h,
             restitution: params.restitution,
             mu: params.mu,
+            close_gaps: params.activation.close_gaps,
         };
         (sim.world, contacts, data)
     }
@@ -1200,6 +1201,7 @@ mod tests {
             t_end: 0.02,
             restitution: 0.2,
             mu: 0.3,
+            close_gaps: true,
         };
         (w, contacts, data)
     }
@@ -1430,11 +1432,12 @@ mod tests {
         let s = NsgsSettings {
             tol: 1e-14,
             max_sweeps: usize::MAX,
-            time_limit: Some(Duration::from_millis(20)),
+            time_limit: Some(Duration::from_micros(1)),
             ..NsgsSettings::default()
         };
         let sol = solve(&p, &r0, &s, true);
         assert_eq!(sol.status, NsgsStatus::TimeLimit);
+        assert!(sol.error > 1e-14, "{}", sol.error);
         // a non-finite warm start is replaced by 0, not propagated
         let mut bad = r0.clone();
         bad[0] = f64::NAN;

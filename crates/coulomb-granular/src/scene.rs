@@ -396,6 +396,7 @@ mod tests {
                     delta: 0.0,
                     keep_separating: false,
                     delta_from_tolerance: false,
+                    close_gaps: false,
                 },
             );
             assert!(

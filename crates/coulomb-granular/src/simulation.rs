@@ -296,6 +296,7 @@ impl Simulation {
             t_end: self.time + h,
             restitution: self.params.restitution,
             mu: self.params.mu,
+            close_gaps: self.params.activation.close_gaps,
         };
         let max_penetration = contacts
             .iter()

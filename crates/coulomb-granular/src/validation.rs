@@ -440,6 +440,7 @@ pub fn settled_bed(
         .iter()
         .map(|b| b.position.z)
         .fold(0.0, f64::max);
+    out.max_floor_gap = resting_gap(&sim.world, sim.time, 0.1 * r) / r;
     out.packing_fraction = solid_fraction(
         &sim.world,
         [2.0 * r, 2.0 * r, 2.0 * r],
@@ -447,6 +448,25 @@ pub fn settled_bed(
         r / 32.0,
     );
     Ok(out)
+}
+
+/// The largest gap g between a sphere and an obstacle that faces up (normal within 25° of −g)
+/// over the pairs with 0 < g < `within`: a sphere that rests on the floor should touch it
+/// (g ≤ the activation threshold), one that hovers at a small positive gap is held by the
+/// activation rule's look-ahead (docs/granular.md, "Resting on an obstacle"). 0 when no
+/// such pair.
+pub fn resting_gap(world: &World, t: f64, within: f64) -> f64 {
+    let down = world.gravity.normalized_or(Vec3::new(0.0, 0.0, -1.0));
+    let mut worst = 0.0f64;
+    for b in &world.bodies {
+        for o in &world.obstacles {
+            let p = o.proximity(b.position, b.radius, t);
+            if p.normal.dot(down) < -0.9 && p.gap > 0.0 && p.gap < within {
+                worst = worst.max(p.gap);
+            }
+        }
+    }
+    worst
 }
 
 /// Fraction of the box [lo, hi] covered by the spheres of `world`, sampled at the centres of
@@ -511,6 +531,8 @@ pub struct BedResult {
     pub mean_overlap: f64,
     /// largest overlap / R
     pub max_overlap: f64,
+    /// largest gap / R of a sphere within 10 % R above the floor ([`resting_gap`])
+    pub max_floor_gap: f64,
     /// packing fraction of the inner box ([`solid_fraction`])
     pub packing_fraction: f64,
     /// steps not converged

@@ -662,6 +662,7 @@ impl DistributedSimulation {
             t_end: self.time + h,
             restitution: self.params.restitution,
             mu: self.params.mu,
+            close_gaps: self.params.activation.close_gaps,
         };
         // the body-level problem (2.10) of the subdomain: rows of the owned contacts over the
         // owned and ghost beads (crate::nsgs)

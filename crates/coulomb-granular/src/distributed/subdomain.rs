@@ -137,6 +137,7 @@ mod tests {
             t_end: sim.time + h,
             restitution: 0.2,
             mu: 0.3,
+            close_gaps: true,
         };
         let p = StepProblem::new(world, &contacts, &data).unwrap();
         let v_free: Vec<[f64; 6]> =

@@ -395,7 +395,8 @@ pub fn detect_with(
 }
 
 /// [`detect_with`] with the largest speed v_max = max |v| + R|ω| of the broad phase's margin
-/// δ + 2 v_max h γ (sphere–obstacle pairs: + γ h² |g|, the look-ahead by gravity) given: a part of a larger system (a rank's subdomain in
+/// δ + 2 v_max h γ (sphere–obstacle pairs: + γ h (h |g| + V_B), the look-ahead by gravity
+/// and the obstacle's largest normal speed) given: a part of a larger system (a rank's subdomain in
 /// [`crate::distributed`]) passes the whole system's v_max, so that its margin, and with it
 /// the obstacle contacts it finds, are those of one process.
 pub fn detect_with_speed(
@@ -437,8 +438,15 @@ pub fn detect_with_speed(
     // broad and narrow phases in one parallel pass over chunks of spheres: sphere i's
     // contacts with spheres j > i in increasing j, then with the obstacles in order, i.e.
     // the contacts come out sorted by (body, partner), whatever the number of threads
-    // an obstacle contact's look-ahead also sees gravity: h u_{N,free} reaches h² |g| further
-    let obstacle_margin = margin + activation.gamma * h * h * world.gravity.norm();
+    // an obstacle contact's look-ahead also sees gravity (h u_{N,free} reaches h² |g|
+    // further) and the obstacle's own normal speed
+    let obstacle_margin: Vec<f64> = world
+        .obstacles
+        .iter()
+        .map(|o| {
+            margin + activation.gamma * h * (h * world.gravity.norm() + o.motion.max_normal_speed())
+        })
+        .collect();
     let grid = BroadPhase::new(world, margin);
     par_chunked(world.bodies.len(), SPHERE_CHUNK, |range, out| {
         let mut js = Vec::new();
@@ -459,7 +467,7 @@ pub fn detect_with_speed(
             }
             for (o, ob) in world.obstacles.iter().enumerate() {
                 let p = ob.proximity(a.position, a.radius, t);
-                if p.gap <= obstacle_margin {
+                if p.gap <= obstacle_margin[o] {
                     let point = p.point + p.normal * (0.5 * p.gap);
                     out.extend(make(i, Partner::Obstacle(o), p.normal, point, p.gap));
                 }
@@ -471,7 +479,7 @@ pub fn detect_with_speed(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::world::{Obstacle, Shape, Sphere};
+    use crate::world::{Motion, Obstacle, Shape, Sphere};
     use rand::{Rng, SeedableRng};
 
     #[test]
@@ -507,6 +515,50 @@ mod tests {
             .push(Sphere::new(Vec3::new(1e6, -1e6, 3e5), 0.02, 1.0));
         assert!(DenseGrid::new(&[[0, 0, 0], [1_000_000, 0, 0]]).is_none());
         assert_eq!(candidate_pairs(&world, margin), brute);
+    }
+
+    #[test]
+    fn resting_spheres_find_floor_contacts_that_only_gravity_or_the_floor_closes() {
+        // everything at rest (v_max = 0): the sphere–sphere margin is δ alone, but a sphere
+        // 2 mm above a fixed floor is active by gravity's look-ahead (2 mm < h² g = 3.9 mm),
+        // and one 5 mm above a plate rising at 0.5 m/s by the plate's motion (5 mm < h·0.5 + h² g)
+        let h = 0.02;
+        let mut world = World::new();
+        world.gravity = Vec3::new(0.0, 0.0, -9.81);
+        world.obstacles.push(Obstacle::fixed(
+            "ground",
+            Shape::Plane {
+                point: Vec3::ZERO,
+                normal: Vec3::Z,
+            },
+        ));
+        world
+            .bodies
+            .push(Sphere::new(Vec3::new(0.0, 0.0, 0.1 + 2e-3), 0.1, 1.0));
+        let c = detect(&world, 0.0, h, &Activation::accurate());
+        assert_eq!(c.len(), 1, "{c:?}");
+        assert!((c[0].gap - 2e-3).abs() < 1e-12);
+        let mut plate = Obstacle::fixed(
+            "plate",
+            Shape::Plane {
+                point: Vec3::ZERO,
+                normal: Vec3::Z,
+            },
+        );
+        let speed = 0.5;
+        plate.motion = Motion::Oscillate {
+            direction: Vec3::Z,
+            amplitude: 0.01,
+            frequency: speed / (2.0 * std::f64::consts::PI * 0.01),
+        };
+        world.obstacles[0] = plate;
+        world.bodies[0].position.z = 0.1 + 5e-3;
+        let c = detect(&world, 0.0, h, &Activation::accurate());
+        assert_eq!(c.len(), 1, "{c:?}");
+        assert!((c[0].normal_velocity + speed).abs() < 1e-12, "{c:?}");
+        // out of reach: 2 cm above the rising plate
+        world.bodies[0].position.z = 0.1 + 2e-2;
+        assert!(detect(&world, 0.0, h, &Activation::accurate()).is_empty());
     }
 
     #[test]

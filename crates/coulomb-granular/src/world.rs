@@ -126,6 +126,18 @@ impl Motion {
             _ => Vec3::ZERO,
         }
     }
+    /// A bound on the normal speed of the obstacle's surface, max_t |n·V_B|: A·2πf for an
+    /// oscillation, 0 for a fixed obstacle and for a rotation (its surface moves in itself).
+    pub fn max_normal_speed(&self) -> f64 {
+        match self {
+            Motion::Oscillate {
+                amplitude,
+                frequency,
+                ..
+            } => (amplitude * 2.0 * std::f64::consts::PI * frequency).abs(),
+            Motion::Fixed | Motion::Rotate { .. } => 0.0,
+        }
+    }
     /// Velocity of the obstacle's material point at position p and time t.
     pub fn velocity_at(&self, p: Vec3, t: f64) -> Vec3 {
         match self {

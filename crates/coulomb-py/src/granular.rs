@@ -32,10 +32,15 @@ fn set_param(p: &mut Params, name: &str, v: &Bound<'_, PyAny>) -> PyResult<()> {
         "mu" => p.mu = real()?,
         "rolling_friction" => p.rolling_friction = real()?,
         "warm_start" => p.warm_start = v.extract()?,
+        "gap_closure" => {
+            p.activation.close_gaps = v
+                .extract()
+                .map_err(|_| PyTypeError::new_err("gap_closure must be a bool"))?
+        }
         other => {
             return Err(PyTypeError::new_err(format!(
                 "unexpected simulation parameter '{other}' \
-                 (parameters: h, theta, restitution, mu, rolling_friction, warm_start; solver settings go in solver=)"
+                 (parameters: h, theta, restitution, mu, rolling_friction, warm_start, gap_closure; solver settings go in solver=)"
             )))
         }
     }
@@ -216,6 +221,7 @@ impl PySimulation {
         d.set_item("mu", p.mu)?;
         d.set_item("rolling_friction", p.rolling_friction)?;
         d.set_item("warm_start", p.warm_start)?;
+        d.set_item("gap_closure", p.activation.close_gaps)?;
         d.set_item("solver", convert::settings_to_dict(py, &p.solver)?)?;
         Ok(d)
     }

@@ -98,3 +98,22 @@ def test_rolling_friction_brings_a_heap_to_rest():
         sim.set_params(rolling_friction=-0.1)
     with pytest.raises(ValueError):
         coulomb.granular.Simulation("box", beads=10, rolling_friction=float("nan"))
+
+
+def test_beads_at_rest_touch_the_floor_unless_the_gap_closure_is_off():
+    # the activation rule looks ahead by gravity (h² g = 3.9 mm at h = 0.02 s); without the
+    # gap closure a bead at rest can stay held at that distance above the floor
+    r = 0.05
+    top = {}
+    for closure in (True, False):
+        sim = coulomb.granular.Simulation("box", beads=150, seed=1, gap_closure=closure,
+                                          solver={"tol": 1e-4})
+        assert sim.params["gap_closure"] is closure
+        assert all(s["converged"] for s in sim.run(300))
+        gaps = sim.positions[:, 2] - sim.radii  # the floor is z = 0
+        near = gaps[(gaps > 0) & (gaps < 0.1 * r)]
+        top[closure] = near.max() if near.size else 0.0
+    assert top[True] <= 0.01 * r, top
+    assert top[False] > 0.02 * r, top
+    with pytest.raises(TypeError):
+        coulomb.granular.Simulation("box", beads=10, gap_closure="yes")

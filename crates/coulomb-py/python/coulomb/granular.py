@@ -35,7 +35,9 @@ class Simulation:
     Parameters (``coulomb_granular::Params``): ``h`` (time step, 0.02 s), ``theta`` (θ of
     (2.7), 0.5), ``restitution`` (Newton's e, 0.2), ``mu`` (friction, 0.3),
     ``rolling_friction`` (μ_r: resisting torque ≤ μ_r R r_N, 0 = off; docs/granular.md,
-    "Rolling resistance"), ``warm_start`` (True). ``solver`` holds keyword settings of :func:`coulomb.solve`. Unknown names raise
+    "Rolling resistance"), ``warm_start`` (True), ``gap_closure`` (True: a sphere at rest
+    settles onto an obstacle instead of hovering at the activation rule's look-ahead distance;
+    docs/granular.md, "Resting on an obstacle"). ``solver`` holds keyword settings of :func:`coulomb.solve`. Unknown names raise
     :class:`TypeError`, values out of range :class:`ValueError`.
     """
 
@@ -103,7 +105,7 @@ class Simulation:
         self._sim.set_positions(np.ascontiguousarray(x, dtype=np.float64).ravel())
 
     def set_params(self, **params: Any) -> None:
-        """Changes h, theta, restitution, mu, rolling_friction, warm_start for the following
+        """Changes h, theta, restitution, mu, rolling_friction, warm_start, gap_closure for the following
         steps."""
         self._sim.set_params(**params)
 

@@ -561,6 +561,8 @@ mod tests {
             max_outer: 60,
             ..Settings::method(InnerKind::Apgd, OuterKind::FixedPoint)
         };
+        let mut crawl = crawl;
+        crawl.tuning.lm.start = 1.0;
         let mut off = crawl.clone();
         off.tuning.lm.max_steps = 0;
         let p = problem(6, 2811, 0.0, 0.0);

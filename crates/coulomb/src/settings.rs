@@ -253,14 +253,17 @@ pub struct NewtonParams {
 /// ([`crate::levenberg`]), the finish for rigid, rank-deficient problems on which the
 /// semismooth Newton end game stops at a stationary point (docs/rigid.md). A stage runs it
 /// from its best iterate once the Newton end game has spent its whole budget
-/// ([`Settings::newton_steps`]) without converging and the error is ≤
-/// [`Settings::newton_start`], and again whenever the error has dropped below `retry` times
+/// ([`Settings::newton_steps`]) without converging, the fixed point stagnates (see
+/// [`NewtonParams::stagnation`]) and the error is ≤ `start`, and again whenever the error has dropped below `retry` times
 /// the lowest error of the previous run; `max_steps = 0` turns it off.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct LmParams {
     /// cap on LM steps (factorizations of JᵀJ + λI) of all runs of a stage; 0: no LM end game
     pub max_steps: usize,
+    /// the end game starts only from an error (docs/error.md) ≤ this: from higher errors it
+    /// stalled on every corpus file where it was tried (docs/rigid.md); ≥ 0
+    pub start: f64,
     /// a run stops (stalled) when its lowest error has not dropped below `stall_gain` times
     /// its value `stall_segments` segments earlier; ≥ 1
     pub stall_segments: usize,
@@ -271,6 +274,9 @@ pub struct LmParams {
     /// the end game runs again once the error is below `retry` times the lowest error of its
     /// previous run; in (0, 1]
     pub retry: f64,
+    /// a run that does not converge replaces the stage's iterate only if it lowered the error
+    /// to at most `keep_gain` times its starting value; in (0, 1]
+    pub keep_gain: f64,
     /// LM steps per segment; a segment that does not lower the error to `segment_gain` times
     /// its starting value is followed by an escape; ≥ 1
     pub segment_steps: usize,
@@ -303,10 +309,12 @@ impl Default for LmParams {
     fn default() -> Self {
         Self {
             max_steps: 400,
+            start: 2e-5,
             stall_segments: 6,
             stall_gain: 0.5,
             time_share: 0.5,
             retry: 0.1,
+            keep_gain: 0.5,
             segment_steps: 8,
             segment_gain: 0.7,
             watchdog_steps: 2,
@@ -336,12 +344,13 @@ impl LmParams {
             self.stall_gain,
             self.time_share,
             self.retry,
+            self.keep_gain,
         ]
         .into_iter()
         .all(fraction)
         {
             return Err(
-                "tuning.lm: segment_gain, stall_gain, time_share and retry must be in (0, 1]"
+                "tuning.lm: segment_gain, stall_gain, time_share, retry, keep_gain must be in (0, 1]"
                     .into(),
             );
         }
@@ -351,6 +360,9 @@ impl LmParams {
             && positive(self.escape_damping))
         {
             return Err("tuning.lm: rho factors and damping factors must be positive".into());
+        }
+        if !(self.start.is_finite() && self.start >= 0.0) {
+            return Err("tuning.lm.start must be finite and ≥ 0".into());
         }
         if !(self.accept_ratio.is_finite() && (0.0..1.0).contains(&self.accept_ratio)) {
             return Err("tuning.lm.accept_ratio must be in [0, 1)".into());

@@ -176,8 +176,9 @@ impl EndGame {
     }
 
     /// The Levenberg–Marquardt end game ([`crate::levenberg`]) from the best point so far
-    /// (`best`, or the outer iterate): None when turned off
-    /// ([`crate::settings::LmParams::max_steps`] = 0); otherwise its steps and, if it lowered
+    /// (`best`, or the outer iterate): None when its step budget
+    /// ([`crate::settings::LmParams::max_steps`]) is spent or the error is above
+    /// [`crate::settings::LmParams::start`]; otherwise its steps and, if it lowered
     /// the error (of the problem as stored), the new iterate with one history record.
     fn levenberg(
         &mut self,
@@ -201,6 +202,9 @@ impl EndGame {
             Some(b) => (&b.r[..], b.verdict.error, &b.fs[..]),
             None => (at.r, at.verdict.error, at.fs),
         };
+        if error > lm.start {
+            return None;
+        }
         let local = form.local();
         let mut trial = r.to_vec();
         let target = settings.tuning.newton.target_fraction * tol;
@@ -208,7 +212,10 @@ impl EndGame {
         self.lm_used += report.steps.max(1);
         self.lm_gate = lm.retry * report.error.min(error);
         let candidate = form.verdict(&trial);
-        if report.steps == 0 || candidate.error >= error {
+        // a run that did not converge is kept only if it cut the error by `keep_gain`: a small
+        // gain is lost again once the fixed point goes on from an unrelated point
+        let kept = candidate.converged(tol) || candidate.error <= lm.keep_gain * error;
+        if report.steps == 0 || !kept {
             return Some((report.steps, None));
         }
         let fs_new = fixed_point::evaluate_f(local.dim, &local.velocity(&trial));

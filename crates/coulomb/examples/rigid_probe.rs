@@ -2,6 +2,7 @@
 //! rank-deficient problems, started from the default solver's iterate.
 //!
 //! `cargo run --release --example rigid_probe -- FILE METHOD [WARM_SECONDS] [LIMIT_SECONDS]`
+//! (or `-- search`)
 //!
 //! The start point is `coulomb::solve` with the default settings (tol `WARM_TOL`, default
 //! 1e-8) stopped after WARM_SECONDS; then METHOD runs for at most LIMIT_SECONDS:
@@ -16,6 +17,14 @@
 //!   NSN-AC globalization);
 //! - `ppa` / `ppalm`: proximal point: r_{k+1} solves the law for (W + σI, q − σ r_k) by `nsn`
 //!   (`ppa`) or `lm` (`ppalm`), σ = SIG · err^NU · max diag W (Siconos: σ = 5 err);
+//! - `lib`: the library's end game [`coulomb::levenberg::solve`] (LM + watchdog + ρ switching;
+//!   env LIB_WATCH, LIB_PER, LIB_SEG override its watchdog steps, watchdogs per switch and
+//!   segment length);
+//! - `cmp`: from r = 0, the Newton end game's `polish` against `levenberg::solve` and the
+//!   probe's plain `lm` (no start solve);
+//! - `search` (no FILE): random rank-deficient problems (W = AᵀA, A with m/2 rows) on which
+//!   `polish` from r = 0 stalls and `levenberg::solve` reaches 1e-8 (the test problem of
+//!   `levenberg`'s tests was found this way);
 //! - `diag`: the contacts that carry the residual at the start point;
 //! - `base`: the start point only.
 //!
@@ -506,8 +515,62 @@ fn newton(
     (it, best.0)
 }
 
+fn search() {
+    let mut found = 0;
+    for seed in 0..3000u64 {
+        let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(1);
+        let mut next = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        let contacts = 3 + (seed % 6) as usize;
+        let m = 3 * contacts;
+        let k = m / 2;
+        let a: Vec<f64> = (0..k * m).map(|_| next()).collect();
+        let mut w = vec![0.0; m * m];
+        for i in 0..m {
+            for j in 0..m {
+                w[i * m + j] = (0..k).map(|l| a[l * m + i] * a[l * m + j]).sum::<f64>();
+            }
+        }
+        let p = LocalProblem {
+            dim: 3,
+            w: CscMatrix::from_dense(m, m, &w),
+            q: (0..m).map(|_| next()).collect(),
+            mu: (0..contacts).map(|_| 0.3 + 0.7 * next().abs()).collect(),
+        };
+        let qn = coulomb::law::norm(&p.q);
+        let mut r0 = vec![0.0; m];
+        let nr = coulomb::newton::polish(
+            &p,
+            &mut r0,
+            0.5e-8 * qn,
+            200,
+            coulomb::deadline::Deadline::NEVER,
+        );
+        let mut r1 = vec![0.0; m];
+        let lp = coulomb::settings::LmParams {
+            max_steps: 2000,
+            ..Default::default()
+        };
+        let lr =
+            coulomb::levenberg::solve(&p, &mut r1, 0.5e-8, &lp, coulomb::deadline::Deadline::NEVER);
+        if err(&p, &r0) > 1e-8 && err(&p, &r1) <= 1e-8 {
+            found += 1;
+            println!("seed {seed} contacts {contacts}: newton {:?} {} err {:.2e} | lm {:?} {} ({} wd {} sw) err {:.2e}", nr.status, nr.steps, err(&p, &r0), lr.status, lr.steps, lr.watchdogs, lr.switches, err(&p, &r1));
+        }
+    }
+    println!("found {found}");
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
+    if args[1] == "search" {
+        search();
+        return;
+    }
     let path = std::path::Path::new(&args[1]);
     let method = args.get(2).map(String::as_str).unwrap_or("lm");
     let warm: f64 = args.get(3).map(|s| s.parse().unwrap()).unwrap_or(2.0);
@@ -523,6 +586,53 @@ fn main() {
         }
     };
     let name = path.file_stem().unwrap().to_string_lossy();
+    if method == "cmp" {
+        // from r = 0: the Newton end game's polish vs the library's LM end game
+        let m = p.q.len();
+        let qn = coulomb::law::norm(&p.q);
+        let mut r0 = vec![0.0; m];
+        let t = Instant::now();
+        let nr = coulomb::newton::polish(
+            &p,
+            &mut r0,
+            0.5e-8 * qn,
+            200,
+            coulomb::deadline::Deadline::NEVER,
+        );
+        let tn = t.elapsed().as_secs_f64();
+        let mut r1 = vec![0.0; m];
+        let t = Instant::now();
+        let lp = coulomb::settings::LmParams {
+            max_steps: 2000,
+            ..Default::default()
+        };
+        let lr =
+            coulomb::levenberg::solve(&p, &mut r1, 0.5e-8, &lp, coulomb::deadline::Deadline::NEVER);
+        let map = Map {
+            p: &p,
+            rho: rho_of(&p),
+            sigma: 0.0,
+            center: vec![0.0; m],
+        };
+        let mut r2 = vec![0.0; m];
+        let mut mu_k = 1e-2;
+        let far = Instant::now() + Duration::from_secs(5);
+        let n2 = lm(
+            &map,
+            &mut r2,
+            far,
+            200,
+            0.0,
+            std::env::var("LOG").is_ok(),
+            &mut mu_k,
+        );
+        println!("probe lm {n2} steps err {:.2e}", err(&p, &r2));
+        println!(
+            "{name} m {m}: newton {:?} {} steps err {:.2e} {tn:.2}s | lm {:?} {} steps ({} wd, {} sw) err {:.2e} {:.2}s",
+            nr.status, nr.steps, err(&p, &r0), lr.status, lr.steps, lr.watchdogs, lr.switches, err(&p, &r1), t.elapsed().as_secs_f64()
+        );
+        return;
+    }
     let t0 = Instant::now();
     let s = coulomb::Settings {
         tol: envf("WARM_TOL", 1e-8),
@@ -546,6 +656,30 @@ fn main() {
     let t1 = Instant::now();
     let tol = 1e-8;
     match method {
+        "lib" => {
+            // the library's end game, its parameters overridable by env
+            let mut lp = coulomb::settings::LmParams {
+                max_steps: 100_000,
+                ..Default::default()
+            };
+            lp.watchdog_steps = envf("LIB_WATCH", lp.watchdog_steps as f64) as usize;
+            lp.watchdogs_per_switch = envf("LIB_PER", lp.watchdogs_per_switch as f64) as usize;
+            lp.segment_steps = envf("LIB_SEG", lp.segment_steps as f64) as usize;
+            let rep = coulomb::levenberg::solve(
+                &p,
+                &mut r,
+                tol,
+                &lp,
+                Instant::now()
+                    .checked_add(Duration::from_secs_f64(limit))
+                    .into(),
+            );
+            println!(
+                "{name} lib: warm err {e0:.2e} ({tw:.2}s) -> err {:.2e} in {:.2}s, {rep:?}",
+                err(&p, &r),
+                t1.elapsed().as_secs_f64()
+            );
+        }
         "lm" => {
             let map = Map {
                 p: &p,

@@ -19,6 +19,8 @@
 //!   ([`outer::fixed_point`]), Anderson mixing, the fused Gauss–Seidel, the Newton end game —
 //!   the policy around it (warm-up, fallback) and the set-up/solve split [`Solver`];
 //! - [`newton`]: semismooth Newton on the natural map of the whole law (the end game's steps);
+//! - [`levenberg`]: Levenberg–Marquardt on the Alart–Curnier map, the end game for rigid,
+//!   rank-deficient problems after the Newton end game has spent its budget;
 //! - [`solver`]: where [`solve`] and the settings and results have always been re-exported;
 //! - [`deadline`]: the one [`deadline::Deadline`] type of every time limit;
 //! - [`existence`]: the criteria (4.1), (4.4), (4.5), (4.6), (5.1) with certificates;
@@ -42,6 +44,7 @@ pub mod existence;
 pub mod fclib;
 pub mod inner;
 pub mod law;
+pub mod levenberg;
 pub mod mass;
 pub mod natural_map;
 pub mod newton;

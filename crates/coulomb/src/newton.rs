@@ -54,20 +54,36 @@ pub(crate) fn sparse_lu_solve(
 
 /// The sparsity pattern of J + λ I: every d × d block (i, j) with i = j or with a nonzero of
 /// W in block (i, j), and its symbolic LU factorization, computed once per [`polish`] call
-/// (the values change at every step, the pattern does not).
-struct JacobianPattern {
+/// (the values change at every step, the pattern does not). Also the pattern of the
+/// Alart–Curnier Jacobian of [`crate::levenberg`] (same blocks), which needs no LU.
+pub(crate) struct JacobianPattern {
     dim: usize,
-    col_ptr: Vec<usize>,
-    row_idx: Vec<usize>,
+    pub(crate) col_ptr: Vec<usize>,
+    pub(crate) row_idx: Vec<usize>,
     /// for each contact (block column), the contacts of its block rows, ascending
-    neighbors: Vec<Vec<usize>>,
+    pub(crate) neighbors: Vec<Vec<usize>>,
     /// position of each diagonal entry in `row_idx`
     diagonal: Vec<usize>,
-    symbolic: SymbolicLu<usize>,
+    /// None when built by [`JacobianPattern::without_lu`]
+    symbolic: Option<SymbolicLu<usize>>,
 }
 
 impl JacobianPattern {
     fn new(p: &LocalProblem) -> Option<Self> {
+        let mut pattern = Self::without_lu(p);
+        let sym = SymbolicSparseColMatRef::new_checked(
+            pattern.col_ptr.len() - 1,
+            pattern.col_ptr.len() - 1,
+            &pattern.col_ptr,
+            None,
+            &pattern.row_idx,
+        );
+        pattern.symbolic = Some(SymbolicLu::try_new(sym).ok()?);
+        Some(pattern)
+    }
+
+    /// The pattern alone (no symbolic LU; [`JacobianPattern::solve`] then fails).
+    pub(crate) fn without_lu(p: &LocalProblem) -> Self {
         let d = p.dim;
         let contacts = p.mu.len();
         let mut neighbors: Vec<Vec<usize>> = (0..contacts).map(|c| vec![c]).collect();
@@ -94,20 +110,18 @@ impl JacobianPattern {
             }
             col_ptr.push(row_idx.len());
         }
-        let sym = SymbolicSparseColMatRef::new_checked(m, m, &col_ptr, None, &row_idx);
-        let symbolic = SymbolicLu::try_new(sym).ok()?;
-        Some(Self {
+        Self {
             dim: d,
             col_ptr,
             row_idx,
             neighbors,
             diagonal,
-            symbolic,
-        })
+            symbolic: None,
+        }
     }
 
     /// The values of J = I − D + B W on the pattern (B = D A), column by column.
-    fn fill(
+    pub(crate) fn fill(
         &self,
         p: &LocalProblem,
         dblocks: &[f64],
@@ -151,7 +165,7 @@ impl JacobianPattern {
         let n = rhs.len();
         let sym = SymbolicSparseColMatRef::new_checked(n, n, &self.col_ptr, None, &self.row_idx);
         let mat = SparseColMatRef::new(sym, vals);
-        let lu = Lu::try_new_with_symbolic(self.symbolic.clone(), mat).ok()?;
+        let lu = Lu::try_new_with_symbolic(self.symbolic.clone()?, mat).ok()?;
         lu.solve_in_place(faer::MatMut::from_column_major_slice_mut(rhs, n, 1));
         rhs.iter().all(|x| x.is_finite()).then_some(())
     }

@@ -249,6 +249,128 @@ pub struct NewtonParams {
     pub continue_gain: f64,
 }
 
+/// Parameters of the Levenberg–Marquardt end game on the Alart–Curnier map
+/// ([`crate::levenberg`]), the finish for rigid, rank-deficient problems on which the
+/// semismooth Newton end game stops at a stationary point (docs/rigid.md). A stage runs it
+/// from its best iterate once the Newton end game has spent its whole budget
+/// ([`Settings::newton_steps`]) without converging, the fixed point stagnates (see
+/// [`NewtonParams::stagnation`]) and the error is ≤ `start`, and again whenever the error has dropped below `retry` times
+/// the lowest error of the previous run; `max_steps = 0` turns it off.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct LmParams {
+    /// cap on LM steps (factorizations of JᵀJ + λI) of all runs of a stage; 0: no LM end game
+    pub max_steps: usize,
+    /// the end game starts only from an error (docs/error.md) ≤ this: from higher errors it
+    /// stalled on every corpus file where it was tried (docs/rigid.md); ≥ 0
+    pub start: f64,
+    /// a run stops (stalled) when its lowest error has not dropped below `stall_gain` times
+    /// its value `stall_segments` segments earlier; ≥ 1
+    pub stall_segments: usize,
+    /// see `stall_segments`; in (0, 1]
+    pub stall_gain: f64,
+    /// a run may use at most this share of the time left before the deadline; in (0, 1]
+    pub time_share: f64,
+    /// the end game runs again once the error is below `retry` times the lowest error of its
+    /// previous run; in (0, 1]
+    pub retry: f64,
+    /// a run that does not converge replaces the stage's iterate only if it lowered the error
+    /// to at most `keep_gain` times its starting value; in (0, 1]
+    pub keep_gain: f64,
+    /// LM steps per segment; a segment that does not lower the error to `segment_gain` times
+    /// its starting value is followed by an escape; ≥ 1
+    pub segment_steps: usize,
+    /// see `segment_steps`; in (0, 1]
+    pub segment_gain: f64,
+    /// a watchdog escape takes this many LM steps whatever the merit says (non-monotone;
+    /// the best r is kept); 0: no watchdog, every escape switches ρ
+    pub watchdog_steps: usize,
+    /// watchdog escapes between two switches of ρ (the escapes cycle: this many watchdogs,
+    /// then one switch)
+    pub watchdogs_per_switch: usize,
+    /// ρᵢ = factor / ‖Wᵢᵢ‖_F, the factor taken in turn from this list at each switch; each
+    /// factor > 0 (the first one is used first)
+    pub rho_factors: [f64; 7],
+    /// first damping factor c: λ = c · min(‖Φ‖ / ‖r‖, 1); > 0
+    pub damping: f64,
+    /// the damping factor is never lowered below this; > 0
+    pub damping_floor: f64,
+    /// damping factor after a watchdog escape; > 0
+    pub escape_damping: f64,
+    /// a step is accepted when ‖Φ‖ decreases and (actual / predicted decrease of ‖Φ‖²) is
+    /// above this; in [0, 1)
+    pub accept_ratio: f64,
+    /// skip the end game when JᵀJ has more stored entries than this (memory and time of its
+    /// Cholesky factorization); ≥ 1
+    pub max_normal_nonzeros: usize,
+}
+
+impl Default for LmParams {
+    fn default() -> Self {
+        Self {
+            max_steps: 400,
+            start: 2e-5,
+            stall_segments: 6,
+            stall_gain: 0.5,
+            time_share: 0.5,
+            retry: 0.1,
+            keep_gain: 0.5,
+            segment_steps: 8,
+            segment_gain: 0.7,
+            watchdog_steps: 2,
+            watchdogs_per_switch: 1,
+            rho_factors: [1.0, 0.1, 10.0, 0.3, 3.0, 0.03, 30.0],
+            damping: 1e-2,
+            damping_floor: 1e-8,
+            escape_damping: 1e-6,
+            accept_ratio: 1e-4,
+            max_normal_nonzeros: 40_000_000,
+        }
+    }
+}
+
+impl LmParams {
+    fn validate(&self) -> Result<(), String> {
+        let positive = |x: f64| x.is_finite() && x > 0.0;
+        if self.segment_steps == 0 || self.stall_segments == 0 || self.max_normal_nonzeros == 0 {
+            return Err(
+                "tuning.lm: segment_steps, stall_segments and max_normal_nonzeros must be ≥ 1"
+                    .into(),
+            );
+        }
+        let fraction = |x: f64| positive(x) && x <= 1.0;
+        if ![
+            self.segment_gain,
+            self.stall_gain,
+            self.time_share,
+            self.retry,
+            self.keep_gain,
+        ]
+        .into_iter()
+        .all(fraction)
+        {
+            return Err(
+                "tuning.lm: segment_gain, stall_gain, time_share, retry, keep_gain must be in (0, 1]"
+                    .into(),
+            );
+        }
+        if !(self.rho_factors.iter().all(|&f| positive(f))
+            && positive(self.damping)
+            && positive(self.damping_floor)
+            && positive(self.escape_damping))
+        {
+            return Err("tuning.lm: rho factors and damping factors must be positive".into());
+        }
+        if !(self.start.is_finite() && self.start >= 0.0) {
+            return Err("tuning.lm.start must be finite and ≥ 0".into());
+        }
+        if !(self.accept_ratio.is_finite() && (0.0..1.0).contains(&self.accept_ratio)) {
+            return Err("tuning.lm.accept_ratio must be in [0, 1)".into());
+        }
+        Ok(())
+    }
+}
+
 /// Thresholds of the test that an iterate r of (4.7) is a ray certifying that (4.7) is
 /// unbounded below, so that the primal (3.15) is infeasible (C̄(s) = ∅): with d = r/‖r‖,
 /// ‖W d‖ ≤ `residual` · ‖W‖ and bᵀd ≤ −`descent` · ‖b‖ (see [`crate::inner::unbounded_ray`]).
@@ -380,6 +502,8 @@ pub struct Tuning {
     pub anderson: AndersonParams,
     /// Newton end game
     pub newton: NewtonParams,
+    /// Levenberg–Marquardt end game after the Newton end game's budget is spent
+    pub lm: LmParams,
     /// the inner solvers' parameters
     pub inner: InnerParams,
 }
@@ -411,6 +535,7 @@ impl Default for Tuning {
                 sufficient_decrease: 1e-4,
                 continue_gain: 0.5,
             },
+            lm: LmParams::default(),
             inner: InnerParams::default(),
         }
     }
@@ -490,7 +615,7 @@ impl Tuning {
         if !(positive(ray.residual) && positive(ray.descent)) {
             return Err("tuning.inner.infeasible_ray thresholds must be positive".into());
         }
-        Ok(())
+        self.lm.validate()
     }
 }
 
@@ -699,7 +824,12 @@ mod tests {
         let mut s = Settings::default();
         s.tuning.anderson.memory = 0;
         assert!(s.validate().is_err());
-        let refused: [fn(&mut Tuning); 6] = [
+        let refused: [fn(&mut Tuning); 11] = [
+            |t| t.lm.segment_steps = 0,
+            |t| t.lm.stall_gain = 0.0,
+            |t| t.lm.time_share = 1.5,
+            |t| t.lm.rho_factors[3] = -1.0,
+            |t| t.lm.accept_ratio = 1.0,
             |t| t.newton.shift_tries = 0,
             |t| t.newton.shift_growth = 1.0,
             |t| t.newton.sufficient_decrease = 1.0,

@@ -24,6 +24,11 @@ pub(super) struct EndGame {
     gate: f64,
     /// Newton steps spent by this stage
     used: usize,
+    /// the Levenberg–Marquardt end game ([`crate::levenberg`]) runs again only once the
+    /// error is below this
+    lm_gate: f64,
+    /// LM steps spent by this stage
+    lm_used: usize,
 }
 
 impl EndGame {
@@ -31,6 +36,8 @@ impl EndGame {
         Self {
             gate: f64::INFINITY,
             used: 0,
+            lm_gate: f64::INFINITY,
+            lm_used: 0,
         }
     }
 }
@@ -91,10 +98,18 @@ impl EndGame {
             || stagnating(at.history, &p);
         if settings.newton_steps == 0
             || at.verdict.error > settings.newton_start
-            || !gate_open
             || at.verdict.converged(tol)
-            || self.used >= settings.newton_steps
         {
+            return None;
+        }
+        if self.used >= settings.newton_steps {
+            // the Newton budget is spent: only the Levenberg–Marquardt end game, behind its gate
+            if at.verdict.error > self.lm_gate || !stagnating(at.history, &p) {
+                return None;
+            }
+            return self.levenberg(form, settings, deadline, &at, &None);
+        }
+        if !gate_open {
             return None;
         }
         let local = form.local();
@@ -150,6 +165,76 @@ impl EndGame {
             Some(_) => {}
             None => self.gate = p.retry * at.verdict.error,
         }
+        let converged = best.as_ref().is_some_and(|b| b.verdict.converged(tol));
+        if self.used >= settings.newton_steps && !converged && stagnating(at.history, &p) {
+            if let Some((steps, improved)) = self.levenberg(form, settings, deadline, &at, &best) {
+                spent += steps;
+                best = improved.or(best);
+            }
+        }
         Some((spent, best))
+    }
+
+    /// The Levenberg–Marquardt end game ([`crate::levenberg`]) from the best point so far
+    /// (`best`, or the outer iterate): None when its step budget
+    /// ([`crate::settings::LmParams::max_steps`]) is spent or the error is above
+    /// [`crate::settings::LmParams::start`]; otherwise its steps and, if it lowered
+    /// the error (of the problem as stored), the new iterate with one history record.
+    fn levenberg(
+        &mut self,
+        form: &Form<'_>,
+        settings: &Settings,
+        deadline: Deadline,
+        at: &Iterate<'_>,
+        best: &Option<Improved>,
+    ) -> Option<(usize, Option<Improved>)> {
+        let (tol, mut lm) = (settings.tol, settings.tuning.lm);
+        if self.lm_used >= lm.max_steps || deadline.passed() {
+            return None;
+        }
+        lm.max_steps -= self.lm_used;
+        // at most a share of the time left, so that the stage (and its fallback) goes on
+        let share = deadline.instant().map(|t| {
+            let now = std::time::Instant::now();
+            now + t.saturating_duration_since(now).mul_f64(lm.time_share)
+        });
+        let (r, error, fs) = match best {
+            Some(b) => (&b.r[..], b.verdict.error, &b.fs[..]),
+            None => (at.r, at.verdict.error, at.fs),
+        };
+        if error > lm.start {
+            return None;
+        }
+        let local = form.local();
+        let mut trial = r.to_vec();
+        let target = settings.tuning.newton.target_fraction * tol;
+        let report = crate::levenberg::solve(local, &mut trial, target, &lm, share.into());
+        self.lm_used += report.steps.max(1);
+        self.lm_gate = lm.retry * report.error.min(error);
+        let candidate = form.verdict(&trial);
+        // a run that did not converge is kept only if it cut the error by `keep_gain`: a small
+        // gain is lost again once the fixed point goes on from an unrelated point
+        let kept = candidate.converged(tol) || candidate.error <= lm.keep_gain * error;
+        if report.steps == 0 || !kept {
+            return Some((report.steps, None));
+        }
+        let fs_new = fixed_point::evaluate_f(local.dim, &local.velocity(&trial));
+        let (fixed_point_residual, rule_6_1) = fixed_point::residuals(fs, &fs_new);
+        let mut records = best.as_ref().map_or_else(Vec::new, |b| b.records.clone());
+        records.push(OuterRecord {
+            error: candidate.error,
+            fixed_point_residual,
+            rule_6_1,
+            inner_iterations: report.steps,
+        });
+        Some((
+            report.steps,
+            Some(Improved {
+                r: trial,
+                verdict: candidate,
+                records,
+                fs: fs_new,
+            }),
+        ))
     }
 }

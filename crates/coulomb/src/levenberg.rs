@@ -1,0 +1,592 @@
+//! Levenberg–Marquardt on the Alart–Curnier map: the end game for rigid, rank-deficient
+//! problems (issue #11 item 4; measurements in docs/rigid.md).
+//!
+//! With a factor ρᵢ > 0 per contact, Coulomb's law (2.9) at contact i holds exactly when the
+//! Alart–Curnier map (the paper's reference [3]) vanishes:
+//!
+//! ```text
+//!     Φⁱ_ρ(r) = rⁱ − P_μ(yⁱ),     yⁱ = rⁱ − ρᵢ uⁱ,     u = W r + q,
+//!     P_μ(y) = (max(0, y_N), projection of y_T onto the disc of radius μ max(0, y_N)).
+//! ```
+//!
+//! Every ρ > 0 has the same zeros (the solutions of (2.10) in local form), but not the same
+//! merit ½‖Φ_ρ‖²: its generalized Jacobian is
+//!
+//! ```text
+//!     J = I − D + ρ D W,     D = blockdiag ∂P_μ(yⁱ),
+//! ```
+//!
+//! singular where contacts stick when W is (more contact unknowns than degrees of freedom:
+//! rigid piles and walls), so a monotone method (the semismooth Newton end game of
+//! [`crate::newton`], Levenberg–Marquardt) can stop at a point where JᵀΦ ≈ 0 but Φ ≠ 0. This
+//! end game takes Levenberg–Marquardt steps (JᵀJ + λI) δ = −JᵀΦ, λ = c min(‖Φ‖/‖r‖, 1), with
+//! the trust-region update of c, in segments of [`LmParams::segment_steps`]; a segment that
+//! does not lower the error of docs/error.md enough is followed by an escape from the
+//! stationary point: a watchdog (the next [`LmParams::watchdog_steps`] LM steps are taken
+//! whatever the merit says, as Siconos' NSN takes the full step when its line search fails)
+//! or a switch of every ρᵢ to the next factor of [`LmParams::rho_factors`] (the pieces of Φ_ρ
+//! and the stationary points of its merit move, r and the zeros stay). The best r (lowest
+//! error on the problem given, W as stored) is returned.
+
+use crate::deadline::Deadline;
+use crate::newton::JacobianPattern;
+use crate::problem::LocalProblem;
+use crate::settings::LmParams;
+use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::Side;
+
+/// Why [`solve`] stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LmStatus {
+    /// the error of docs/error.md is ≤ the target
+    Reached,
+    /// [`LmParams::max_steps`] steps were taken above the target
+    MaxSteps,
+    /// the deadline passed
+    TimeLimit,
+    /// the lowest error did not drop below [`LmParams::stall_gain`] times its value
+    /// [`LmParams::stall_segments`] segments earlier
+    Stalled,
+    /// JᵀJ would have more than [`LmParams::max_normal_nonzeros`] entries, or its symbolic
+    /// factorization failed: no step taken
+    TooLarge,
+    /// the sizes of the problem and r disagree, or r is not finite: no step taken
+    Inconsistent,
+}
+
+/// The outcome of [`solve`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LmReport {
+    /// how it stopped
+    pub status: LmStatus,
+    /// LM steps (factorizations of JᵀJ + λI), accepted or not
+    pub steps: usize,
+    /// watchdog escapes
+    pub watchdogs: usize,
+    /// switches of ρ
+    pub switches: usize,
+    /// the error of docs/error.md at the returned r (W r + q recomputed)
+    pub error: f64,
+}
+
+/// Φ_ρ(r) into `g` and the blocks of D = ∂P_μ(y) (row-major d × d per contact) into
+/// `dblocks`, for u = W r + q given; returns ‖Φ_ρ‖.
+fn alart_curnier(
+    dim: usize,
+    mu: &[f64],
+    rho: &[f64],
+    r: &[f64],
+    u: &[f64],
+    g: &mut [f64],
+    dblocks: &mut [f64],
+) -> f64 {
+    let d = dim;
+    for (i, &mu) in mu.iter().enumerate() {
+        let at = i * d;
+        let dj = &mut dblocks[i * d * d..(i + 1) * d * d];
+        dj.iter_mut().for_each(|x| *x = 0.0);
+        let mut y = [0.0; 3];
+        for k in 0..d {
+            y[k] = r[at + k] - rho[i] * u[at + k];
+        }
+        let pn = y[0].max(0.0);
+        if y[0] > 0.0 {
+            dj[0] = 1.0;
+        }
+        let t = y[1..d].iter().map(|x| x * x).sum::<f64>().sqrt();
+        let radius = mu * pn;
+        let mut pt = [0.0; 2];
+        if t <= radius {
+            for k in 1..d {
+                pt[k - 1] = y[k];
+                dj[k * d + k] = 1.0;
+            }
+        } else if t > 0.0 {
+            // P_T = radius ŷ, ŷ = y_T / t: ∂/∂y_T = (radius / t)(I − ŷŷᵀ), ∂/∂y_N = μ ŷ
+            let s = radius / t;
+            for a in 1..d {
+                pt[a - 1] = s * y[a];
+                for b in 1..d {
+                    let e = if a == b { 1.0 } else { 0.0 };
+                    dj[a * d + b] = s * (e - y[a] * y[b] / (t * t));
+                }
+                if y[0] > 0.0 {
+                    dj[a * d] = mu * y[a] / t;
+                }
+            }
+        }
+        g[at] = r[at] - pn;
+        for k in 1..d {
+            g[at + k] = r[at + k] - pt[k - 1];
+        }
+    }
+    crate::law::norm(g)
+}
+
+/// The pattern of JᵀJ (every d × d block (a, b) such that block columns a and b of J share a
+/// block row) and its symbolic Cholesky factorization, computed once per run.
+struct NormalPattern {
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    symbolic: SymbolicLlt<usize>,
+}
+
+impl NormalPattern {
+    fn new(jac: &JacobianPattern, dim: usize, max_nonzeros: usize) -> Option<Self> {
+        let contacts = jac.neighbors.len();
+        // rows[k]: the block columns of J with a block in block row k
+        let mut rows: Vec<Vec<usize>> = vec![Vec::new(); contacts];
+        for (b, nb) in jac.neighbors.iter().enumerate() {
+            for &k in nb {
+                rows[k].push(b);
+            }
+        }
+        let mut blocks: Vec<Vec<usize>> = Vec::with_capacity(contacts);
+        let mut total = 0usize;
+        let mut mark = vec![usize::MAX; contacts];
+        for (b, nb) in jac.neighbors.iter().enumerate() {
+            let mut list = Vec::new();
+            for &k in nb {
+                for &a in &rows[k] {
+                    if mark[a] != b {
+                        mark[a] = b;
+                        list.push(a);
+                    }
+                }
+            }
+            list.sort_unstable();
+            total = total.saturating_add(list.len() * dim * dim);
+            if total > max_nonzeros {
+                return None;
+            }
+            blocks.push(list);
+        }
+        let m = contacts * dim;
+        let mut col_ptr = Vec::with_capacity(m + 1);
+        let mut row_idx = Vec::with_capacity(total);
+        col_ptr.push(0);
+        for j in 0..m {
+            for &a in &blocks[j / dim] {
+                row_idx.extend(a * dim..(a + 1) * dim);
+            }
+            col_ptr.push(row_idx.len());
+        }
+        let sym = SymbolicSparseColMatRef::new_checked(m, m, &col_ptr, None, &row_idx);
+        let symbolic = SymbolicLlt::try_new(sym, Side::Lower).ok()?;
+        Some(Self {
+            col_ptr,
+            row_idx,
+            symbolic,
+        })
+    }
+}
+
+/// J (values on `jac`'s pattern, column-major) with its row-major copy, and JᵀJ + λI.
+struct Normal<'p> {
+    jac: &'p JacobianPattern,
+    pattern: NormalPattern,
+    /// J by rows: for each row, (column, value)
+    row_ptr: Vec<usize>,
+    row_entries: Vec<(usize, f64)>,
+    acc: Vec<f64>,
+    values: Vec<f64>,
+}
+
+impl<'p> Normal<'p> {
+    fn new(jac: &'p JacobianPattern, pattern: NormalPattern, m: usize) -> Self {
+        Self {
+            jac,
+            pattern,
+            row_ptr: vec![0; m + 1],
+            row_entries: Vec::new(),
+            acc: vec![0.0; m],
+            values: Vec::new(),
+        }
+    }
+
+    /// Solves (JᵀJ + λI) δ = −JᵀΦ for J given by its values `jv` on the pattern; None if the
+    /// Cholesky factorization fails or δ is not finite.
+    fn direction(&mut self, jv: &[f64], lambda: f64, phi: &[f64]) -> Option<Vec<f64>> {
+        let m = phi.len();
+        let (cp, ri) = (&self.jac.col_ptr, &self.jac.row_idx);
+        // J by rows
+        self.row_ptr.iter_mut().for_each(|x| *x = 0);
+        for &i in ri.iter() {
+            self.row_ptr[i + 1] += 1;
+        }
+        for i in 0..m {
+            self.row_ptr[i + 1] += self.row_ptr[i];
+        }
+        self.row_entries.clear();
+        self.row_entries.resize(ri.len(), (0, 0.0));
+        let mut next = self.row_ptr.clone();
+        for c in 0..m {
+            for k in cp[c]..cp[c + 1] {
+                let i = ri[k];
+                self.row_entries[next[i]] = (c, jv[k]);
+                next[i] += 1;
+            }
+        }
+        // JᵀJ + λI on its pattern, column by column
+        self.values.clear();
+        for c in 0..m {
+            for k in cp[c]..cp[c + 1] {
+                let (row, v) = (ri[k], jv[k]);
+                for &(i, w) in &self.row_entries[self.row_ptr[row]..self.row_ptr[row + 1]] {
+                    self.acc[i] += v * w;
+                }
+            }
+            self.acc[c] += lambda;
+            let (np, nr) = (&self.pattern.col_ptr, &self.pattern.row_idx);
+            for &i in &nr[np[c]..np[c + 1]] {
+                self.values.push(self.acc[i]);
+                self.acc[i] = 0.0;
+            }
+        }
+        // −JᵀΦ
+        let mut delta: Vec<f64> = (0..m)
+            .map(|c| -(cp[c]..cp[c + 1]).map(|k| jv[k] * phi[ri[k]]).sum::<f64>())
+            .collect();
+        let (np, nr) = (&self.pattern.col_ptr, &self.pattern.row_idx);
+        let sym = SymbolicSparseColMatRef::new_checked(m, m, np, None, nr);
+        let mat = SparseColMatRef::new(sym, &self.values);
+        let llt =
+            Llt::try_new_with_symbolic(self.pattern.symbolic.clone(), mat, Side::Lower).ok()?;
+        llt.solve_in_place(faer::MatMut::from_column_major_slice_mut(&mut delta, m, 1));
+        delta.iter().all(|x| x.is_finite()).then_some(delta)
+    }
+}
+
+/// ρᵢ = 1 / ‖Wᵢᵢ‖_F (1 where the diagonal block is zero or not finite).
+fn base_rho(p: &LocalProblem) -> Vec<f64> {
+    let d = p.dim;
+    let mut sq = vec![0.0; p.mu.len()];
+    for (i, j, v) in p.w.triplets() {
+        if i / d == j / d {
+            sq[i / d] += v * v;
+        }
+    }
+    sq.iter()
+        .map(|&s| {
+            if s > 0.0 && s.is_finite() {
+                1.0 / s.sqrt()
+            } else {
+                1.0
+            }
+        })
+        .collect()
+}
+
+/// Levenberg–Marquardt with watchdog and ρ switching (module docs) on the local problem `p`
+/// from `r` (overwritten by the iterate of lowest error), until the error of docs/error.md
+/// (W r + q recomputed from the W given, exactly as stored) is ≤ `target`, at most
+/// [`LmParams::max_steps`] steps, or the deadline (checked before each step).
+pub fn solve(
+    p: &LocalProblem,
+    r: &mut [f64],
+    target: f64,
+    params: &LmParams,
+    deadline: Deadline,
+) -> LmReport {
+    let (d, m) = (p.dim, r.len());
+    let consistent = (d == 2 || d == 3)
+        && m == p.mu.len() * d
+        && p.q.len() == m
+        && p.w.nrows == m
+        && p.w.ncols == m
+        && p.w.check().is_ok()
+        && r.iter().all(|x| x.is_finite());
+    let mut report = LmReport {
+        status: LmStatus::Inconsistent,
+        steps: 0,
+        watchdogs: 0,
+        switches: 0,
+        error: f64::NAN,
+    };
+    if !consistent {
+        return report;
+    }
+    let error_of = |r: &[f64]| p.error(r).error;
+    let mut best_err = error_of(r);
+    report.error = best_err;
+    if best_err <= target {
+        report.status = LmStatus::Reached;
+        return report;
+    }
+    let jac = JacobianPattern::without_lu(p);
+    let Some(normal) = NormalPattern::new(&jac, d, params.max_normal_nonzeros) else {
+        report.status = LmStatus::TooLarge;
+        return report;
+    };
+    let mut normal = Normal::new(&jac, normal, m);
+    let base = base_rho(p);
+    let nb = p.mu.len() * d * d;
+    let (mut g, mut dbl) = (vec![0.0; m], vec![0.0; nb]);
+    let (mut g2, mut dbl2) = (vec![0.0; m], vec![0.0; nb]);
+    let mut blocks = vec![0.0; nb];
+    let (mut jv, mut wcol) = (Vec::new(), vec![0.0; m]);
+    let mut x = r.to_vec();
+    let mut factor = 0;
+    let mut rho: Vec<f64> = base.iter().map(|b| b * params.rho_factors[0]).collect();
+    let mut damping = params.damping;
+    let mut forced: usize = 0;
+    let mut u = p.velocity(&x);
+    let mut phi = alart_curnier(d, &p.mu, &rho, &x, &u, &mut g, &mut dbl);
+    let mut segment_start = best_err;
+    let mut in_segment = 0;
+    let mut escapes = 0;
+    // the lowest error at the end of each segment
+    let mut segment_best = vec![best_err];
+    report.status = loop {
+        if best_err <= target {
+            break LmStatus::Reached;
+        }
+        if report.steps >= params.max_steps {
+            break LmStatus::MaxSteps;
+        }
+        if deadline.passed() {
+            break LmStatus::TimeLimit;
+        }
+        report.steps += 1;
+        in_segment += 1;
+        // J = I − D + (ρ D) W
+        for (i, &ri) in rho.iter().enumerate() {
+            for k in i * d * d..(i + 1) * d * d {
+                blocks[k] = ri * dbl[k];
+            }
+        }
+        jac.fill(p, &dbl, &blocks, &mut wcol, &mut jv);
+        let xn = crate::law::norm(&x).max(f64::MIN_POSITIVE);
+        let lambda = damping * (phi / xn).min(1.0);
+        match normal.direction(&jv, lambda, &g) {
+            None => damping *= 10.0,
+            Some(delta) => {
+                // predicted ‖Φ‖² decrease: ‖Φ‖² − ‖Φ + J δ‖²
+                let mut jd = g.clone();
+                for (c, &dc) in delta.iter().enumerate() {
+                    for k in jac.col_ptr[c]..jac.col_ptr[c + 1] {
+                        jd[jac.row_idx[k]] += jv[k] * dc;
+                    }
+                }
+                let pred = phi * phi - jd.iter().map(|v| v * v).sum::<f64>();
+                let trial: Vec<f64> = x.iter().zip(&delta).map(|(a, b)| a + b).collect();
+                let u_trial = p.velocity(&trial);
+                let phi2 = alart_curnier(d, &p.mu, &rho, &trial, &u_trial, &mut g2, &mut dbl2);
+                let ratio = (phi * phi - phi2 * phi2) / pred.max(f64::MIN_POSITIVE);
+                let take =
+                    phi2.is_finite() && (forced > 0 || (ratio > params.accept_ratio && phi2 < phi));
+                forced = forced.saturating_sub(1);
+                if take {
+                    x = trial;
+                    u = u_trial;
+                    std::mem::swap(&mut g, &mut g2);
+                    std::mem::swap(&mut dbl, &mut dbl2);
+                    phi = phi2;
+                    if ratio > 0.75 {
+                        damping = (damping / 4.0).max(params.damping_floor);
+                    }
+                    let e =
+                        crate::law::error_measure(d, &p.mu, &x, &u, crate::law::norm(&p.q)).error;
+                    if e < best_err {
+                        best_err = e;
+                        r.copy_from_slice(&x);
+                    }
+                } else {
+                    damping *= 4.0;
+                }
+            }
+        }
+        if in_segment < params.segment_steps {
+            continue;
+        }
+        // end of a segment: escape from a stall
+        let now = error_of(&x);
+        if now > params.segment_gain * segment_start {
+            let period = params.watchdogs_per_switch + 1;
+            let watchdog =
+                params.watchdog_steps > 0 && escapes % period < params.watchdogs_per_switch;
+            escapes += 1;
+            if watchdog {
+                forced = params.watchdog_steps;
+                damping = params.escape_damping;
+                report.watchdogs += 1;
+            } else {
+                factor = (factor + 1) % params.rho_factors.len();
+                rho = base
+                    .iter()
+                    .map(|b| b * params.rho_factors[factor])
+                    .collect();
+                damping = params.damping;
+                phi = alart_curnier(d, &p.mu, &rho, &x, &u, &mut g, &mut dbl);
+                report.switches += 1;
+            }
+        }
+        segment_start = now;
+        in_segment = 0;
+        segment_best.push(best_err);
+        let n = segment_best.len();
+        if n > params.stall_segments
+            && best_err > params.stall_gain * segment_best[n - 1 - params.stall_segments]
+        {
+            break LmStatus::Stalled;
+        }
+    };
+    report.error = best_err;
+    report
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sparse::CscMatrix;
+
+    /// A deterministic pseudo-random local problem: W = AᵀA (+ `delta` I), A with m/2 rows
+    /// (rank-deficient when δ = 0), μ in [0.3, 1]; `skew` adds a small antisymmetric part to W
+    /// (as stored in real files).
+    pub(super) fn problem(contacts: usize, seed: u64, delta: f64, skew: f64) -> LocalProblem {
+        let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(1);
+        let mut next = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        let m = 3 * contacts;
+        let k = m / 2;
+        let a: Vec<f64> = (0..k * m).map(|_| next()).collect();
+        let mut w = vec![0.0; m * m];
+        for i in 0..m {
+            for j in 0..m {
+                w[i * m + j] = (0..k).map(|l| a[l * m + i] * a[l * m + j]).sum::<f64>()
+                    + if i == j { delta } else { 0.0 }
+                    + skew * (i as f64 - j as f64) / m as f64;
+            }
+        }
+        LocalProblem {
+            dim: 3,
+            w: CscMatrix::from_dense(m, m, &w),
+            q: (0..m).map(|_| next()).collect(),
+            mu: (0..contacts).map(|_| 0.3 + 0.7 * next().abs()).collect(),
+        }
+    }
+
+    #[test]
+    fn levenberg_marquardt_solves_a_regular_problem_from_zero() {
+        let p = problem(5, 3, 0.5, 0.0);
+        let mut r = vec![0.0; 15];
+        let out = solve(&p, &mut r, 1e-12, &LmParams::default(), Deadline::NEVER);
+        let err = p.error(&r).error;
+        assert!(err <= 1e-12, "error {err:.3e} after {out:?}");
+        assert_eq!((out.status, out.error), (LmStatus::Reached, err));
+    }
+
+    /// Six contacts, W of rank 9 < 18: the Newton end game on the natural map stops (slow
+    /// steps) far from the solution, Levenberg–Marquardt on the Alart–Curnier map needs its
+    /// escapes (watchdog and ρ switch) and reaches 1e-8; the reported error is the one
+    /// recomputed from the returned r on the W given, also when W is not symmetric.
+    #[test]
+    fn the_escapes_solve_a_rank_deficient_problem_where_newton_stalls() {
+        for skew in [0.0, 1e-3] {
+            let p = problem(6, 2811, 0.0, skew);
+            let q_norm = crate::law::norm(&p.q);
+            let mut r = vec![0.0; 18];
+            let newton = crate::newton::polish(&p, &mut r, 0.5e-8 * q_norm, 200, Deadline::NEVER);
+            let stalled = p.error(&r).error;
+            assert!(
+                stalled > 1e-4,
+                "skew {skew}: Newton reached {stalled:.2e} ({newton:?})"
+            );
+            let mut r = vec![0.0; 18];
+            let out = solve(&p, &mut r, 1e-8, &LmParams::default(), Deadline::NEVER);
+            let u = p.velocity(&r);
+            let err = crate::law::error_measure(3, &p.mu, &r, &u, crate::law::norm(&p.q)).error;
+            assert!(err <= 1e-8, "skew {skew}: error {err:.3e} after {out:?}");
+            assert_eq!((out.status, out.error), (LmStatus::Reached, err));
+            assert!(out.watchdogs + out.switches >= 1, "{out:?}");
+            // without escapes the same LM stops at a stationary point of ‖Φ‖²
+            let plain = LmParams {
+                watchdog_steps: 0,
+                rho_factors: [1.0; 7],
+                ..LmParams::default()
+            };
+            let mut r = vec![0.0; 18];
+            let out = solve(&p, &mut r, 1e-8, &plain, Deadline::NEVER);
+            assert!(
+                out.error > 1e-8 && out.status != LmStatus::Reached,
+                "{out:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn bad_sizes_and_caps_give_typed_statuses() {
+        let p = problem(3, 5, 0.0, 0.0);
+        let mut short = vec![0.0; 8];
+        let out = solve(&p, &mut short, 1e-8, &LmParams::default(), Deadline::NEVER);
+        assert_eq!((out.status, out.steps), (LmStatus::Inconsistent, 0));
+        let mut r = vec![f64::NAN; 9];
+        let out = solve(&p, &mut r, 1e-8, &LmParams::default(), Deadline::NEVER);
+        assert_eq!(out.status, LmStatus::Inconsistent);
+        let tiny = LmParams {
+            max_normal_nonzeros: 10,
+            ..LmParams::default()
+        };
+        let mut r = vec![0.0; 9];
+        let out = solve(&p, &mut r, 1e-8, &tiny, Deadline::NEVER);
+        assert_eq!((out.status, out.steps), (LmStatus::TooLarge, 0));
+        let one = LmParams {
+            max_steps: 1,
+            ..LmParams::default()
+        };
+        let out = solve(&p, &mut r, 0.0, &one, Deadline::NEVER);
+        assert_eq!((out.status, out.steps), (LmStatus::MaxSteps, 1));
+        let past = Deadline::from(std::time::Instant::now());
+        let out = solve(&p, &mut r, 0.0, &LmParams::default(), past);
+        assert_eq!((out.status, out.steps), (LmStatus::TimeLimit, 0));
+    }
+
+    /// A stage whose fixed point crawls (one APGD iteration per inner solve) and whose Newton
+    /// budget is one step: without the LM end game it ends at its iteration cap; with it, it
+    /// converges, and the reported error is the one recomputed from r on the stored W. A run
+    /// that converges without spending its Newton budget is unchanged.
+    #[test]
+    fn a_stage_hands_its_stall_to_the_lm_end_game() {
+        use crate::settings::{InnerKind, OuterKind, Settings};
+        let crawl = Settings {
+            max_inner: 1,
+            newton_steps: 1,
+            newton_start: 1.0,
+            max_outer: 60,
+            ..Settings::method(InnerKind::Apgd, OuterKind::FixedPoint)
+        };
+        let mut crawl = crawl;
+        crawl.tuning.lm.start = 1.0;
+        let mut off = crawl.clone();
+        off.tuning.lm.max_steps = 0;
+        let p = problem(6, 2811, 0.0, 0.0);
+        let prob = crate::Problem::Local(p.clone());
+        let without = crate::solve(&prob, &off).unwrap();
+        assert_eq!(without.status, crate::Status::MaxIterations);
+        let with = crate::solve(&prob, &crawl).unwrap();
+        let err = p.error(&with.r).error;
+        assert_eq!(with.status, crate::Status::Converged);
+        assert!(
+            err <= crawl.tol && with.error == err,
+            "{err:.3e} vs {:.3e}",
+            with.error
+        );
+        let p = problem(6, 2902, 0.0, 0.0);
+        let prob = crate::Problem::Local(p);
+        let (a, b) = (
+            crate::solve(&prob, &off).unwrap(),
+            crate::solve(&prob, &crawl).unwrap(),
+        );
+        assert_eq!(a.status, crate::Status::Converged);
+        assert_eq!(
+            (a.status, a.outer_iterations, a.inner_iterations, &a.r),
+            (b.status, b.outer_iterations, b.inner_iterations, &b.r)
+        );
+    }
+}

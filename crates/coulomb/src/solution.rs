@@ -91,7 +91,11 @@ pub struct Guess {
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Solution {
-    /// impulses r
+    /// impulses r. A solve that stops without converging on a cap (iterations, time), a
+    /// stall or an inner failure returns the iterate of lowest error (docs/error.md; for
+    /// global problems the larger of error and balance residual) that any of its stages
+    /// visited, not merely the last one; `u`, `v`, `s`, `error` and `balance_residual` are
+    /// those of that iterate, `status` and `history` those of the solve
     pub r: Vec<f64>,
     /// relative velocities u, recomputed from the problem data (W r + q or Hᵀ v + w)
     pub u: Vec<f64>,

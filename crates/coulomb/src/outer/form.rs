@@ -136,6 +136,7 @@ impl<'a> Form<'a> {
 }
 
 /// The checked outcome for impulses r: (u, v, error, balance residual, divergence).
+#[derive(Clone)]
 pub(crate) struct Verdict {
     pub(crate) u: Vec<f64>,
     pub(crate) v: Option<Vec<f64>>,
@@ -149,6 +150,16 @@ impl Verdict {
     /// error ≤ tol, balance residual ≤ tol, r bounded.
     pub(crate) fn converged(&self, tol: f64) -> bool {
         self.error <= tol && self.balance.is_none_or(|b| b <= tol) && !self.unbounded
+    }
+
+    /// The measure by which the lowest-error iterate of a solve is chosen: the error of
+    /// docs/error.md, or the balance residual of a global problem when that is larger;
+    /// infinite for a diverging r.
+    pub(crate) fn merit(&self) -> f64 {
+        if self.unbounded || !self.error.is_finite() {
+            return f64::INFINITY;
+        }
+        self.error.max(self.balance.unwrap_or(0.0))
     }
 
     /// The error is ≤ tol only because r diverges.

@@ -46,6 +46,51 @@ pub(super) struct Stage<'f, 'a> {
     verdict: Verdict,
     balance_stalls: usize,
     end_game: EndGame,
+    /// the iterate of lowest [`Verdict::merit`] so far (None: the current one, or none yet)
+    best: Option<Best>,
+}
+
+/// An iterate kept because its error was the lowest of the stage so far.
+pub(super) struct Best {
+    r: Vec<f64>,
+    s: Vec<f64>,
+    verdict: Verdict,
+}
+
+impl Best {
+    /// The last iterate of a stage's solution (a diverging one has an infinite merit).
+    pub(super) fn of(solution: Solution) -> Self {
+        Self {
+            r: solution.r,
+            s: solution.s,
+            verdict: Verdict {
+                u: solution.u,
+                v: solution.v,
+                error: solution.error,
+                balance: solution.balance_residual,
+                unbounded: solution.status == Status::Unbounded,
+            },
+        }
+    }
+
+    /// The merit ([`Verdict::merit`]) of this iterate.
+    pub(super) fn merit(&self) -> f64 {
+        self.verdict.merit()
+    }
+
+    /// `solution` with its iterate (r, u, v, s, error, balance residual) replaced by this one;
+    /// status, counts and history are kept.
+    pub(super) fn into_solution(self, solution: Solution) -> Solution {
+        Solution {
+            r: self.r,
+            u: self.verdict.u,
+            v: self.verdict.v,
+            s: self.s,
+            error: self.verdict.error,
+            balance_residual: self.verdict.balance,
+            ..solution
+        }
+    }
 }
 
 impl<'f, 'a> Stage<'f, 'a> {
@@ -66,7 +111,7 @@ impl<'f, 'a> Stage<'f, 'a> {
             vec![0.0; local.mu.len()]
         };
         let verdict = form.verdict(&r);
-        Ok(Self {
+        let mut stage = Self {
             form,
             settings,
             deadline,
@@ -82,11 +127,15 @@ impl<'f, 'a> Stage<'f, 'a> {
             verdict,
             balance_stalls: 0,
             end_game: EndGame::new(),
-        })
+            best: None,
+        };
+        stage.remember_best();
+        Ok(stage)
     }
 
-    /// The outer loop of §3.3 until a status.
-    pub(super) fn run(mut self, solvers: &mut InnerSolvers) -> Solution {
+    /// The outer loop of §3.3 until a status: the last iterate's solution, and the iterate of
+    /// lowest error visited before it when that one is lower.
+    pub(super) fn run(mut self, solvers: &mut InnerSolvers) -> (Solution, Option<Best>) {
         let status = loop {
             if let Some(status) = self.check_start() {
                 break status;
@@ -196,6 +245,7 @@ impl<'f, 'a> Stage<'f, 'a> {
             report.status = InnerStatus::Infeasible;
         }
         self.verdict = self.form.verdict(&self.r);
+        self.remember_best();
         let (fixed_point_residual, rule_6_1) = fixed_point::residuals(&self.s, &fs);
         self.push_record(fixed_point_residual, rule_6_1, report.iterations);
         (report, fs)
@@ -278,6 +328,7 @@ impl<'f, 'a> Stage<'f, 'a> {
         self.verdict = better.verdict;
         self.history.extend(better.records);
         self.s = better.fs;
+        self.remember_best();
         self.update = OuterUpdate::with_params(self.settings.outer, &self.settings.tuning.anderson);
         true
     }
@@ -287,8 +338,22 @@ impl<'f, 'a> Stage<'f, 'a> {
         self.s = self.update.next(&self.s, fs);
     }
 
-    fn finish(self, status: Status) -> Solution {
-        Solution {
+    /// Keeps the current iterate if its merit is the lowest so far.
+    fn remember_best(&mut self) {
+        let merit = self.verdict.merit();
+        if merit < self.best.as_ref().map_or(f64::INFINITY, Best::merit) {
+            self.best = Some(Best {
+                r: self.r.clone(),
+                s: self.s.clone(),
+                verdict: self.verdict.clone(),
+            });
+        }
+    }
+
+    fn finish(self, status: Status) -> (Solution, Option<Best>) {
+        let current = self.verdict.merit();
+        let best = self.best.filter(|b| b.merit() < current);
+        let last = Solution {
             r: self.r,
             u: self.verdict.u,
             v: self.verdict.v,
@@ -301,7 +366,8 @@ impl<'f, 'a> Stage<'f, 'a> {
             history: self.history,
             // the policy ([`super::Solver::solve`]) sets the time of the whole solve
             solve_time: Duration::ZERO,
-        }
+        };
+        (last, best)
     }
 }
 

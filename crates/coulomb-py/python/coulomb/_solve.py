@@ -66,7 +66,10 @@ class Solution:
     """The result of :func:`solve` (``coulomb::solver::Solution``).
 
     ``err`` is the error of docs/error.md computed by the library on the problem as stored,
-    from the returned r (u = W r + q, or v = M⁻¹(H r + f) and u = Hᵀ v + w).
+    from the returned r (u = W r + q, or v = M⁻¹(H r + f) and u = Hᵀ v + w). A solve that
+    stops without converging (time limit, iteration cap, stall, inner failure) returns the
+    iterate of lowest error it visited (r, u, v, s, err of that iterate; ``status`` and
+    ``history`` of the solve).
     """
 
     #: impulses r (length m = d · contacts), blocks (r_N, r_T)

@@ -25,6 +25,17 @@
 //! - `search` (no FILE): random rank-deficient problems (W = AᵀA, A with m/2 rows) on which
 //!   `polish` from r = 0 stalls and `levenberg::solve` reaches 1e-8 (the test problem of
 //!   `levenberg`'s tests was found this way);
+//! - `nsf`: Newton's method on the paper's fixed point s = F(s) (§6: "a sophisticated
+//!   alternative is Newton's method, possibly coupled with a stabilizing device based on
+//!   minimizing ‖F(s) − s‖²"): F(s) from an interior-point solve of (4.7) with b = q + E s
+//!   (u(s) is unique even where r is not), its Jacobian from the linearized natural map of
+//!   (4.7), r − P_L(r − ρũ), solved in the least-squares sense (J + εI), a backtracking search
+//!   on ‖F(s) − s‖; ε adapted (÷10 after a full step, ×10 when no step lowers ‖F(s) − s‖;
+//!   env NSF_EPS first ε, default 1e-4; NSF_FIXED: fixed ε, stop at the first failed search);
+//!   NSF_DELTA: the interior point solves (4.7) with W + δ max(W_ii) I (bounded r(s) where
+//!   L ∩ Ker W ≠ {0}: without it Clarabel may return r(s) 10⁶–10⁷ times the start's norm,
+//!   whose small err is spurious; the end line prints ‖r‖ / ‖r_start‖); NSF_FD: a
+//!   finite-difference check of the Newton direction at every step;
 //! - `diag`: the contacts that carry the residual at the start point;
 //! - `base`: the start point only.
 //!
@@ -680,6 +691,9 @@ fn main() {
                 t1.elapsed().as_secs_f64()
             );
         }
+        "nsf" => {
+            newton_on_s(&p, &r, deadline, log);
+        }
         "lm" => {
             let map = Map {
                 p: &p,
@@ -950,4 +964,281 @@ fn main() {
         }
         _ => panic!("method"),
     }
+}
+
+/// F(s) of (3.19) and r(s): the inner problem (4.7) with b = q + E s by the interior point.
+fn eval_f(
+    p: &LocalProblem,
+    ipm: &mut (coulomb::inner::ipm::IpmSolver, CscMatrix),
+    s: &[f64],
+    r: &mut [f64],
+) -> (Vec<f64>, Vec<f64>) {
+    use coulomb::inner::{InnerLimits, InnerProblem, InnerSolver};
+    let d = p.dim;
+    let mut b = p.q.clone();
+    for (i, &si) in s.iter().enumerate() {
+        b[i * d] += si;
+    }
+    r.iter_mut().for_each(|x| *x = 0.0);
+    let limits = InnerLimits {
+        tol: 1e-12,
+        max_iterations: 300,
+        deadline: coulomb::deadline::Deadline::NEVER,
+    };
+    let _ = ipm.0.solve(
+        &InnerProblem {
+            dim: d,
+            w: &ipm.1,
+            b: &b,
+            mu: &p.mu,
+        },
+        &limits,
+        r,
+    );
+    let u = p.velocity(r);
+    let f: Vec<f64> =
+        p.mu.iter()
+            .enumerate()
+            .map(|(i, &mu)| {
+                mu * u[i * d + 1..(i + 1) * d]
+                    .iter()
+                    .map(|x| x * x)
+                    .sum::<f64>()
+                    .sqrt()
+            })
+            .collect();
+    (f, b)
+}
+
+/// Newton's method on G(s) = s − F(s) (see the `nsf` mode).
+fn newton_on_s(p: &LocalProblem, r0: &[f64], deadline: Instant, log: bool) {
+    let t0 = Instant::now();
+    let d = p.dim;
+    let n = p.mu.len();
+    let m = n * d;
+    let rho = rho_of(p);
+    let wt = p.w.transpose();
+    let delta = envf("NSF_DELTA", 0.0);
+    let maxdiag =
+        p.w.triplets()
+            .filter(|t| t.0 == t.1)
+            .map(|t| t.2)
+            .fold(0.0f64, f64::max);
+    let wreg =
+        p.w.add_scaled(1.0, &CscMatrix::identity(m, delta * maxdiag));
+    let mut ipm = (coulomb::inner::ipm::IpmSolver::new(), wreg);
+    let r0norm = coulomb::law::norm(r0);
+    // s₀ = F at the start point
+    let u0 = p.velocity(r0);
+    let mut s: Vec<f64> = (0..n)
+        .map(|i| {
+            p.mu[i]
+                * u0[i * d + 1..(i + 1) * d]
+                    .iter()
+                    .map(|x| x * x)
+                    .sum::<f64>()
+                    .sqrt()
+        })
+        .collect();
+    let mut r = vec![0.0; m];
+    let (mut f, mut b) = eval_f(p, &mut ipm, &s, &mut r);
+    let gnorm = |s: &[f64], f: &[f64]| {
+        s.iter()
+            .zip(f)
+            .map(|(a, c)| (a - c) * (a - c))
+            .sum::<f64>()
+            .sqrt()
+    };
+    let mut g = gnorm(&s, &f);
+    let mut best = (err(p, &r), r.clone());
+    println!(
+        "nsf start: |G| {g:.3e} err(r(s)) {:.3e} ({:.2}s)",
+        best.0,
+        t0.elapsed().as_secs_f64()
+    );
+    let mut eps_rel = envf("NSF_EPS", 1e-4);
+    let adaptive = std::env::var("NSF_FIXED").is_err();
+    for k in 0..500 {
+        if Instant::now() > deadline || best.0 <= 1e-8 {
+            break;
+        }
+        // linearized natural map of (4.7) at r(s): J = I − D + ρ D W, ũ = W r + b
+        let mut ut = b.clone();
+        p.w.gemv_acc(1.0, &r, &mut ut);
+        let mut dbl = vec![0.0; n * d * d];
+        let mut proj = vec![0.0; d];
+        for i in 0..n {
+            let y: Vec<f64> = (0..d)
+                .map(|k| r[i * d + k] - rho[i] * ut[i * d + k])
+                .collect();
+            coulomb::natural_map::projection_jacobian(
+                p.mu[i],
+                &y,
+                &mut proj,
+                &mut dbl[i * d * d..(i + 1) * d * d],
+            );
+        }
+        let eps = eps_rel;
+        if k == 0 {
+            let (mut inside, mut zero) = (0, 0);
+            for i in 0..n {
+                let db = &dbl[i * d * d..(i + 1) * d * d];
+                if (0..d).all(|a| (db[a * d + a] - 1.0).abs() < 1e-12) {
+                    inside += 1;
+                } else if db.iter().all(|&x| x == 0.0) {
+                    zero += 1;
+                }
+            }
+            println!(
+                "  pieces at r(s): {inside} sticking (D = I: {} equations W dr = −E ds), {zero} open, {} sliding; {n} contacts, m = {m}",
+                d * inside,
+                n - inside - zero
+            );
+        }
+        let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+        for i in 0..n {
+            let db = &dbl[i * d * d..(i + 1) * d * d];
+            for a in 0..d {
+                for c in 0..d {
+                    let id = if a == c { 1.0 + eps } else { 0.0 };
+                    rows.push(i * d + a);
+                    cols.push(i * d + c);
+                    vals.push(id - db[a * d + c]);
+                }
+                for bb in 0..d {
+                    let dab = db[a * d + bb];
+                    if dab == 0.0 {
+                        continue;
+                    }
+                    let row = i * d + bb;
+                    for q in wt.col_ptr[row]..wt.col_ptr[row + 1] {
+                        rows.push(i * d + a);
+                        cols.push(wt.row_idx[q]);
+                        vals.push(rho[i] * dab * wt.values[q]);
+                    }
+                }
+            }
+        }
+        let jm = CscMatrix::from_triplets(m, m, &rows, &cols, &vals).unwrap();
+        let Ok(lu) = to_faer(&jm).sp_lu() else {
+            println!("nsf: LU failed");
+            break;
+        };
+        // dr/ds: J X = −ρ D E (column i: −ρᵢ Dᵢ e_N in the rows of contact i)
+        let mut x = vec![0.0; m * n];
+        for i in 0..n {
+            for a in 0..d {
+                x[i * m + i * d + a] = -rho[i] * dbl[i * d * d + a * d];
+            }
+        }
+        lu.solve_in_place(faer::MatMut::from_column_major_slice_mut(&mut x, m, n));
+        // J_F[i, j] = μᵢ t̂ᵢᵀ (W X + E)_{T,i} e_j
+        let mut jf = vec![0.0; n * n]; // row-major
+        let mut col = vec![0.0; m];
+        let uu = p.velocity(&r);
+        for j in 0..n {
+            col.iter_mut().for_each(|c| *c = 0.0);
+            p.w.gemv_acc(1.0, &x[j * m..(j + 1) * m], &mut col);
+            for i in 0..n {
+                let ut_i = &uu[i * d + 1..(i + 1) * d];
+                let t = ut_i.iter().map(|v| v * v).sum::<f64>().sqrt();
+                if t <= 1e-14 || p.mu[i] == 0.0 {
+                    continue;
+                }
+                let dot: f64 = (1..d).map(|k| ut_i[k - 1] / t * col[i * d + k]).sum();
+                jf[i * n + j] = p.mu[i] * dot;
+            }
+        }
+        // (I − J_F) ds = −(s − F)
+        let mut a = faer::Mat::<f64>::zeros(n, n);
+        for i in 0..n {
+            for j in 0..n {
+                a[(i, j)] = if i == j { 1.0 } else { 0.0 } - jf[i * n + j];
+            }
+        }
+        let mut rhs = faer::Mat::<f64>::zeros(n, 1);
+        for i in 0..n {
+            rhs[(i, 0)] = f[i] - s[i];
+        }
+        let ds = a.partial_piv_lu().solve(&rhs);
+        if std::env::var("NSF_FD").is_ok() {
+            // finite-difference check of (I − J_F) ds
+            let sn = s.iter().map(|x| x * x).sum::<f64>().sqrt().max(1e-3);
+            let dn = (0..n).map(|i| ds[(i, 0)] * ds[(i, 0)]).sum::<f64>().sqrt();
+            for h in [1e-3, 1e-5] {
+                let hh = h * sn / dn;
+                let st: Vec<f64> = (0..n).map(|i| s[i] + hh * ds[(i, 0)]).collect();
+                let mut rt = vec![0.0; m];
+                let (ft, _) = eval_f(p, &mut ipm, &st, &mut rt);
+                let (mut num, mut den, mut dif) = (0.0, 0.0, 0.0);
+                for i in 0..n {
+                    let fd = ((st[i] - ft[i]) - (s[i] - f[i])) / hh;
+                    let pred = f[i] - s[i]; // (I − J_F) ds = −G
+                    num += fd * pred;
+                    den += pred * pred;
+                    dif += (fd - pred) * (fd - pred);
+                }
+                println!(
+                    "  FD h {h:.0e}: <fd,pred>/|pred|² {:.3} |fd − pred|/|pred| {:.3}",
+                    num / den,
+                    (dif / den).sqrt()
+                );
+            }
+        }
+        // backtracking on |G|
+        let mut alpha = 1.0;
+        let mut accepted = false;
+        for _ in 0..(if adaptive { 5 } else { 8 }) {
+            let st: Vec<f64> = (0..n)
+                .map(|i| (s[i] + alpha * ds[(i, 0)]).max(0.0))
+                .collect();
+            let mut rt = vec![0.0; m];
+            let (ft, bt) = eval_f(p, &mut ipm, &st, &mut rt);
+            let gt = gnorm(&st, &ft);
+            let et = err(p, &rt);
+            if log {
+                println!("  try α {alpha:.3} |G| {gt:.3e} err {et:.3e}");
+            }
+            if et < best.0 {
+                best = (et, rt.clone());
+            }
+            if gt < (1.0 - 1e-4 * alpha) * g {
+                s = st;
+                f = ft;
+                b = bt;
+                r = rt;
+                g = gt;
+                accepted = true;
+                break;
+            }
+            alpha *= 0.5;
+        }
+        println!(
+            "nsf {k}: |G| {g:.3e} err(r(s)) {:.3e} best {:.3e} α {alpha:.3} ε {eps_rel:.0e} ({:.2}s){}",
+            err(p, &r),
+            best.0,
+            t0.elapsed().as_secs_f64(),
+            if accepted { "" } else { " no decrease" }
+        );
+        if !adaptive {
+            if !accepted {
+                break;
+            }
+        } else if accepted {
+            if alpha == 1.0 {
+                eps_rel = (eps_rel * 0.1).max(1e-10);
+            }
+        } else {
+            eps_rel *= 10.0;
+            if eps_rel > 10.0 {
+                break;
+            }
+        }
+    }
+    println!(
+        "nsf end: best err {:.3e} in {:.2}s, |r_best| / |r_start| = {:.2e}",
+        best.0,
+        t0.elapsed().as_secs_f64(),
+        coulomb::law::norm(&best.1) / r0norm
+    );
 }

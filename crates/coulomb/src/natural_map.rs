@@ -53,7 +53,7 @@ pub fn contact_residual_sq(mu: f64, u: &[f64], r: &[f64]) -> f64 {
 /// ```
 ///
 /// Inside K_μ it is I, inside −K_μ* it is 0 (a B-subdifferential element on the kinks).
-pub(crate) fn projection_jacobian(mu: f64, y: &[f64], p: &mut [f64], jac: &mut [f64]) {
+pub fn projection_jacobian(mu: f64, y: &[f64], p: &mut [f64], jac: &mut [f64]) {
     let d = y.len();
     p.copy_from_slice(y);
     crate::cone::project(mu, p);

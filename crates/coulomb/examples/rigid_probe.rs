@@ -966,6 +966,14 @@ fn main() {
     }
 }
 
+/// sⁱ = μⁱ ‖u_Tⁱ‖ for every contact (F of (3.19), scaled by μ).
+fn f_of(p: &LocalProblem, u: &[f64]) -> Vec<f64> {
+    let d = p.dim;
+    (0..p.mu.len())
+        .map(|i| p.mu[i] * coulomb::cone::tangent_norm(&u[i * d..(i + 1) * d]))
+        .collect()
+}
+
 /// F(s) of (3.19) and r(s): the inner problem (4.7) with b = q + E s by the interior point.
 fn eval_f(
     p: &LocalProblem,
@@ -995,18 +1003,7 @@ fn eval_f(
         &limits,
         r,
     );
-    let u = p.velocity(r);
-    let f: Vec<f64> =
-        p.mu.iter()
-            .enumerate()
-            .map(|(i, &mu)| {
-                mu * u[i * d + 1..(i + 1) * d]
-                    .iter()
-                    .map(|x| x * x)
-                    .sum::<f64>()
-                    .sqrt()
-            })
-            .collect();
+    let f = f_of(p, &p.velocity(r));
     (f, b)
 }
 
@@ -1029,17 +1026,7 @@ fn newton_on_s(p: &LocalProblem, r0: &[f64], deadline: Instant, log: bool) {
     let mut ipm = (coulomb::inner::ipm::IpmSolver::new(), wreg);
     let r0norm = coulomb::law::norm(r0);
     // s₀ = F at the start point
-    let u0 = p.velocity(r0);
-    let mut s: Vec<f64> = (0..n)
-        .map(|i| {
-            p.mu[i]
-                * u0[i * d + 1..(i + 1) * d]
-                    .iter()
-                    .map(|x| x * x)
-                    .sum::<f64>()
-                    .sqrt()
-        })
-        .collect();
+    let mut s = f_of(p, &p.velocity(r0));
     let mut r = vec![0.0; m];
     let (mut f, mut b) = eval_f(p, &mut ipm, &s, &mut r);
     let gnorm = |s: &[f64], f: &[f64]| {

@@ -438,14 +438,14 @@ pub fn solve(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::sparse::CscMatrix;
 
     /// A deterministic pseudo-random local problem: W = AᵀA (+ `delta` I), A with m/2 rows
     /// (rank-deficient when δ = 0), μ in [0.3, 1]; `skew` adds a small antisymmetric part to W
     /// (as stored in real files).
-    pub(super) fn problem(contacts: usize, seed: u64, delta: f64, skew: f64) -> LocalProblem {
+    pub(crate) fn problem(contacts: usize, seed: u64, delta: f64, skew: f64) -> LocalProblem {
         let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(1);
         let mut next = move || {
             state = state

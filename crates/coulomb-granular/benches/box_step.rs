@@ -21,6 +21,7 @@ fn paper_params(inner: InnerKind) -> Params {
             inner_tol_factor: 1e-6,
             fallback: None,
             warmup_sweeps: 0,
+            barrier_steps: 0,
             ..Settings::default()
         },
         // the paper's time stepping (Siconos' activation, no position correction)

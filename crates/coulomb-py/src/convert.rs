@@ -159,6 +159,7 @@ pub const SETTINGS_NAMES: &[&str] = &[
     "outer",
     "fallback",
     "warmup_sweeps",
+    "barrier_steps",
     "max_outer",
     "max_inner",
     "time_limit",
@@ -180,6 +181,7 @@ pub fn settings_to_dict<'py>(py: Python<'py>, s: &Settings) -> PyResult<Bound<'p
         s.fallback.map(|(i, o)| (inner_name(i), outer_name(o))),
     )?;
     d.set_item("warmup_sweeps", s.warmup_sweeps)?;
+    d.set_item("barrier_steps", s.barrier_steps)?;
     d.set_item("max_outer", s.max_outer)?;
     d.set_item("max_inner", s.max_inner)?;
     d.set_item("time_limit", s.time_limit.map(|t| t.as_secs_f64()))?;
@@ -260,6 +262,7 @@ pub fn settings_from_kwargs(
                 }
             }
             "warmup_sweeps" => s.warmup_sweeps = count(py, "warmup_sweeps", &v)?,
+            "barrier_steps" => s.barrier_steps = count(py, "barrier_steps", &v)?,
             "max_outer" => s.max_outer = count(py, "max_outer", &v)?,
             "max_inner" => s.max_inner = count(py, "max_inner", &v)?,
             "time_limit" => {

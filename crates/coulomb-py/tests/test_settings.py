@@ -18,6 +18,9 @@ def test_keywords_and_method():
     assert (s["tol"], s["max_outer"], s["time_limit"], s["fixed_point_tol"]) == (1e-6, 7, None, 0.01)
     m = _coulomb.resolve_settings(method="pgs+fused")
     assert (m["inner"], m["outer"], m["fallback"], m["warmup_sweeps"]) == ("pgs", "fused", None, 0)
+    # a method alone has no interior-point try; the default has one, and it can be turned off
+    assert m["barrier_steps"] == 0 and coulomb.default_settings()["barrier_steps"] > 0
+    assert _coulomb.resolve_settings(barrier_steps=0)["barrier_steps"] == 0
     m = _coulomb.resolve_settings(method=("ipm", "fixed-point"), fallback=("pgs", "fused"))
     assert m["outer"] == "fixed_point" and m["fallback"] == ("pgs", "fused")
 

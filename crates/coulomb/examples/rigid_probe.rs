@@ -36,6 +36,12 @@
 //!   L ∩ Ker W ≠ {0}: without it Clarabel may return r(s) 10⁶–10⁷ times the start's norm,
 //!   whose small err is spurious; the end line prints ‖r‖ / ‖r_start‖); NSF_FD: a
 //!   finite-difference check of the Newton direction at every step;
+//! - `barrier`: the interior-point method on the law ([`coulomb::barrier::solve`]) from its
+//!   cold start (WARM_SECONDS ignored; a global file uses its Schur path unless NO_SCHUR is
+//!   set), then LM from its best point; env BARRIER_STEPS, BARRIER_STALL, BARRIER_SMOOTH,
+//!   BARRIER_RECENTRE, BARRIER_MARGIN, BARRIER_TOL override its parameters;
+//! - `trace`: the default solver's history on the local form (an interior-point try would
+//!   show no ‖F(s) − s‖; the policy runs it on rigid global problems only);
 //! - `diag`: the contacts that carry the residual at the start point;
 //! - `base`: the start point only.
 //!
@@ -588,6 +594,10 @@ fn main() {
     let limit: f64 = args.get(4).map(|s| s.parse().unwrap()).unwrap_or(10.0);
     let log = std::env::var("LOG").is_ok();
     let file = coulomb::fclib::read(path).unwrap();
+    let global = match &file.problem {
+        Problem::Global(g) if std::env::var_os("NO_SCHUR").is_none() => Some(g.clone()),
+        _ => None,
+    };
     let p = match file.problem {
         Problem::Local(p) => p,
         Problem::Global(g) => {
@@ -597,6 +607,77 @@ fn main() {
         }
     };
     let name = path.file_stem().unwrap().to_string_lossy();
+    if method == "trace" {
+        // the default solver's history on the local form (an interior-point try would show a
+        // NaN ‖F(s) − s‖)
+        let settings = coulomb::Settings {
+            time_limit: Some(Duration::from_secs_f64(limit)),
+            ..Default::default()
+        };
+        let sol = coulomb::solver::solve(&Problem::Local(p.clone()), &settings).unwrap();
+        for (k, h) in sol.history.iter().enumerate() {
+            println!(
+                "{k:4} err {:.3e} |F(s)-s| {:.3e} inner {}",
+                h.error, h.fixed_point_residual, h.inner_iterations
+            );
+        }
+        println!(
+            "{name} trace: {:?} err {:.2e} in {:.2} s",
+            sol.status,
+            sol.error,
+            sol.solve_time.as_secs_f64()
+        );
+        return;
+    }
+    if method == "barrier" {
+        // the interior-point method on the law itself (coulomb::barrier), cold start
+        // (WARM_SECONDS ignored), then LM from its best point
+        let t = Instant::now();
+        let d = coulomb::settings::BarrierParams::default();
+        let params = coulomb::settings::BarrierParams {
+            stall_steps: envf("BARRIER_STALL", d.stall_steps as f64) as usize,
+            start_margin: envf("BARRIER_MARGIN", d.start_margin),
+            ..d
+        };
+        let path = coulomb::barrier::PathParams {
+            smoothing: envf("BARRIER_SMOOTH", d.paths[0].smoothing),
+            recentre: envf("BARRIER_RECENTRE", d.paths[0].recentre),
+        };
+        let steps = envf("BARRIER_STEPS", 150.0) as usize;
+        let dl = coulomb::deadline::Deadline::after(t, Some(Duration::from_secs_f64(limit)));
+        let tol = envf("BARRIER_TOL", 1e-8);
+        let (r, rep) = coulomb::barrier::solve(&p, global.as_ref(), tol, steps, &params, path, dl);
+        println!(
+            "{name} barrier {:?} steps {} err {:.2e} gap {:.2e} in {:.2} s, ‖r‖ {:.3e}",
+            rep.status,
+            rep.steps,
+            err(&p, &r),
+            rep.gap,
+            t.elapsed().as_secs_f64(),
+            coulomb::law::norm(&r)
+        );
+        if rep.error > 1e-8 {
+            let mut r1 = r.clone();
+            let t1 = Instant::now();
+            let dl = coulomb::deadline::Deadline::after(t, Some(Duration::from_secs_f64(limit)));
+            let lr = coulomb::levenberg::solve(
+                &p,
+                &mut r1,
+                1e-8,
+                &coulomb::settings::LmParams::default(),
+                dl,
+            );
+            println!(
+                "  then LM: {:?} steps {} err {:.2e} in {:.2} s (total {:.2} s)",
+                lr.status,
+                lr.steps,
+                err(&p, &r1),
+                t1.elapsed().as_secs_f64(),
+                t.elapsed().as_secs_f64()
+            );
+        }
+        return;
+    }
     if method == "cmp" {
         // from r = 0: the Newton end game's polish vs the library's LM end game
         let m = p.q.len();
@@ -656,8 +737,10 @@ fn main() {
     let tw = t0.elapsed().as_secs_f64();
     if method == "base" || e0 <= 1e-8 {
         println!(
-            "{name} {method}: warm {:?} err {e0:.2e} t {tw:.2}",
-            sol.status
+            "{name} {method}: warm {:?} err {e0:.2e} t {tw:.2} ‖r‖ {:.3e} ‖q‖ {:.3e}",
+            sol.status,
+            coulomb::law::norm(&r),
+            coulomb::law::norm(&p.q)
         );
         return;
     }

@@ -35,6 +35,7 @@
 #![warn(missing_docs)]
 
 pub mod atomic;
+pub mod barrier;
 pub mod cone;
 pub mod deadline;
 pub mod delassus;

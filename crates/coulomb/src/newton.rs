@@ -69,7 +69,7 @@ pub(crate) struct JacobianPattern {
 }
 
 impl JacobianPattern {
-    fn new(p: &LocalProblem) -> Option<Self> {
+    pub(crate) fn new(p: &LocalProblem) -> Option<Self> {
         let mut pattern = Self::without_lu(p);
         let sym = SymbolicSparseColMatRef::new_checked(
             pattern.col_ptr.len() - 1,
@@ -153,7 +153,7 @@ impl JacobianPattern {
         }
     }
 
-    fn shift_diagonal(&self, vals: &mut [f64], lambda: f64) {
+    pub(crate) fn shift_diagonal(&self, vals: &mut [f64], lambda: f64) {
         for &k in &self.diagonal {
             vals[k] += lambda;
         }
@@ -161,7 +161,7 @@ impl JacobianPattern {
 
     /// Solves (J + λ I) x = rhs in place by LU with the cached symbolic factorization; None
     /// if the factorization fails or x is not finite.
-    fn solve(&self, vals: &[f64], rhs: &mut [f64]) -> Option<()> {
+    pub(crate) fn solve(&self, vals: &[f64], rhs: &mut [f64]) -> Option<()> {
         let n = rhs.len();
         let sym = SymbolicSparseColMatRef::new_checked(n, n, &self.col_ptr, None, &self.row_idx);
         let mat = SparseColMatRef::new(sym, vals);

@@ -249,6 +249,98 @@ pub struct NewtonParams {
     pub continue_gain: f64,
 }
 
+/// Parameters of the interior-point method on Coulomb's law ([`crate::barrier`]) and of its
+/// try in the default policy ([`crate::Solver::solve`]): after the warm-up of a cold solve
+/// (no guess) of a global problem with every μ > 0 and at most half as many degrees of
+/// freedom as contact unknowns (at most `max_schur_dofs`: rigid bodies touching at several
+/// points per face, where W is rank-deficient and the Newton systems are of the size of M),
+/// before the main method. A try runs the method along each path of `paths` in turn (at most
+/// [`Settings::barrier_steps`] Newton steps each), finishes a run with the
+/// Levenberg–Marquardt end game when its error is ≤ [`LmParams::start`], keeps the best point
+/// and stops once it converges or has used `time_share` of the time left.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct BarrierParams {
+    /// a run stops when its lowest error has not improved for this many steps; ≥ 1
+    pub stall_steps: usize,
+    /// fraction of the step to the boundary of the cones that is taken; in (0, 1)
+    pub boundary_fraction: f64,
+    /// (smoothing, recentring) of the runs of a try, in order: on hard rigid problems the
+    /// method is sensitive to them and different runs end at different points
+    pub paths: [crate::barrier::PathParams; 4],
+    /// the start b = T ũ(r₀) is moved into the interior of L with this margin, relative to
+    /// its largest entry; > 0
+    pub start_margin: f64,
+    /// … and by at least this multiple of ‖q‖/√contacts; > 0
+    pub start_floor: f64,
+    /// a try (with its LM finishes) may use at most this share of the time left; in (0, 1]
+    pub time_share: f64,
+    /// a global problem with at most this many degrees of freedom (and fewer than contact
+    /// unknowns) has its Newton systems solved on M + H G⁻¹ Hᵀ (dense LU) instead of W + G;
+    /// the policy's try needs it; ≥ 1
+    pub max_schur_dofs: usize,
+}
+
+impl Default for BarrierParams {
+    fn default() -> Self {
+        use crate::barrier::PathParams;
+        Self {
+            stall_steps: 30,
+            boundary_fraction: 0.99,
+            paths: [
+                PathParams {
+                    smoothing: 0.1,
+                    recentre: 0.05,
+                },
+                PathParams {
+                    smoothing: 0.1,
+                    recentre: 0.0,
+                },
+                PathParams {
+                    smoothing: 0.3,
+                    recentre: 0.0,
+                },
+                PathParams {
+                    smoothing: 0.03,
+                    recentre: 0.0,
+                },
+            ],
+            start_margin: 1e-2,
+            start_floor: 1e-3,
+            time_share: 0.5,
+            max_schur_dofs: 1500,
+        }
+    }
+}
+
+impl BarrierParams {
+    fn validate(&self) -> Result<(), String> {
+        let fraction = |x: f64| x.is_finite() && x > 0.0 && x < 1.0;
+        let positive = |x: f64| x.is_finite() && x > 0.0;
+        if self.stall_steps == 0 || self.max_schur_dofs == 0 {
+            return Err("tuning.barrier: stall_steps and max_schur_dofs must be ≥ 1".into());
+        }
+        let paths_ok = self.paths.iter().all(|p| {
+            p.smoothing.is_finite()
+                && p.smoothing >= 0.0
+                && p.recentre.is_finite()
+                && (0.0..1.0).contains(&p.recentre)
+        });
+        let ok = fraction(self.boundary_fraction)
+            && paths_ok
+            && positive(self.start_margin)
+            && positive(self.start_floor)
+            && positive(self.time_share)
+            && self.time_share <= 1.0;
+        if !ok {
+            return Err(format!(
+                "tuning.barrier: a parameter is out of range: {self:?}"
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// Parameters of the Levenberg–Marquardt end game on the Alart–Curnier map
 /// ([`crate::levenberg`]), the finish for rigid, rank-deficient problems on which the
 /// semismooth Newton end game stops at a stationary point (docs/rigid.md). A stage runs it
@@ -504,6 +596,8 @@ pub struct Tuning {
     pub newton: NewtonParams,
     /// Levenberg–Marquardt end game after the Newton end game's budget is spent
     pub lm: LmParams,
+    /// the interior-point try on Coulomb's law
+    pub barrier: BarrierParams,
     /// the inner solvers' parameters
     pub inner: InnerParams,
 }
@@ -536,6 +630,7 @@ impl Default for Tuning {
                 continue_gain: 0.5,
             },
             lm: LmParams::default(),
+            barrier: BarrierParams::default(),
             inner: InnerParams::default(),
         }
     }
@@ -615,6 +710,7 @@ impl Tuning {
         if !(positive(ray.residual) && positive(ray.descent)) {
             return Err("tuning.inner.infeasible_ray thresholds must be positive".into());
         }
+        self.barrier.validate()?;
         self.lm.validate()
     }
 }
@@ -651,6 +747,10 @@ pub struct Settings {
     /// before the main method (0: none); small problems are solved there, and otherwise the
     /// main method starts from the caller's point as if the try had not happened
     pub warmup_sweeps: usize,
+    /// the interior-point try on Coulomb's law ([`crate::barrier`]) before the main method of
+    /// a cold solve of a rigid global problem (policy and parameters: [`Tuning::barrier`]): at
+    /// most this many Newton steps per run; 0 turns it off
+    pub barrier_steps: usize,
     /// cap on outer iterations (subproblems)
     pub max_outer: usize,
     /// cap on iterations of each inner solve
@@ -685,6 +785,7 @@ impl Default for Settings {
             outer: OuterKind::Anderson,
             fallback: Some((InnerKind::Pgs, OuterKind::Fused)),
             warmup_sweeps: 50,
+            barrier_steps: 150,
             max_outer: 200,
             max_inner: 10_000,
             time_limit: Some(Duration::from_secs(60)),
@@ -702,14 +803,15 @@ impl Default for Settings {
 pub const PAPER_MAX_INNER: usize = 250;
 
 impl Settings {
-    /// The default settings with (`inner`, `outer`) as the only method: no warm-up try and
-    /// no fallback, so that the result describes that method.
+    /// The default settings with (`inner`, `outer`) as the only method: no warm-up try, no
+    /// interior-point try and no fallback, so that the result describes that method.
     pub fn method(inner: InnerKind, outer: OuterKind) -> Self {
         Self {
             inner,
             outer,
             fallback: None,
             warmup_sweeps: 0,
+            barrier_steps: 0,
             ..Self::default()
         }
     }

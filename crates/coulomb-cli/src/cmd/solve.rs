@@ -26,6 +26,10 @@ pub struct Args {
     /// Cap on outer iterations
     #[arg(long, value_name = "N", value_parser = crate::values::count)]
     pub max_outer: Option<usize>,
+    /// Newton steps of the interior-point try on Coulomb's law (coulomb::barrier) before
+    /// the main method of a cold solve; 0 turns it off (default: the library's)
+    #[arg(long, value_name = "N", value_parser = crate::values::count0)]
+    pub barrier_steps: Option<usize>,
     /// Wall-clock limit in seconds (at most one week)
     #[arg(long, value_name = "SECONDS", value_parser = crate::values::time_limit)]
     pub time_limit: Option<f64>,
@@ -81,9 +85,13 @@ pub fn settings(args: &Args) -> anyhow::Result<Settings> {
         // an explicit method runs alone
         s.fallback = None;
         s.warmup_sweeps = 0;
+        s.barrier_steps = 0;
     }
     if let Some(n) = args.max_outer {
         s.max_outer = n;
+    }
+    if let Some(n) = args.barrier_steps {
+        s.barrier_steps = n;
     }
     if let Some(t) = args.time_limit {
         let checked = crate::values::time_limit(&t.to_string())

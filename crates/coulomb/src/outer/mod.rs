@@ -31,7 +31,7 @@ use crate::inner::{
 };
 use crate::problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
 use crate::settings::{InnerKind, InnerParams, OuterKind, Settings};
-use crate::solution::{Guess, Solution, SolveError, Status};
+use crate::solution::{Guess, OuterRecord, Solution, SolveError, Status};
 use crate::sparse::CscMatrix;
 use form::{Form, Stored};
 use stage::{Best, Stage};
@@ -228,30 +228,35 @@ impl<'a> Solver<'a> {
     }
 
     /// Solves the problem from `guess` (a cold start when None) under the settings' policy:
-    /// warm-up sweeps, the main method, the fallback. The time limit covers all of them.
+    /// warm-up sweeps, the interior-point try on Coulomb's law ([`Solver::barrier_try`]) on a
+    /// cold solve of a rigid global problem ([`Solver::barrier_applies`]), the main method,
+    /// the fallback. The time limit covers all of them.
     pub fn solve(&mut self, guess: Option<&Guess>) -> Result<Solution, SolveError> {
         let start = Instant::now();
         let deadline = Deadline::after(start, self.settings.time_limit);
-        let settings = &self.settings;
-        let mut run = |s: &Settings, guess: Option<&Guess>, stop_on_stall: bool, warmup: bool| {
-            let stage = Stage::new(&self.form, s, guess, deadline, stop_on_stall, warmup)?;
-            Ok::<_, SolveError>(stage.run(&mut self.solvers))
-        };
+        let settings = &self.settings.clone();
         let mut stages: Vec<Ran> = Vec::new();
         if settings.warmup_sweeps > 0 {
-            let warm = run(&warmup_settings(settings), guess, false, true)?;
+            let warm = self.run(&warmup_settings(settings), guess, deadline, false, true)?;
             if warm.0.converged() || deadline.passed() {
                 return Ok(merge(Vec::new(), warm, start));
             }
             stages.push(warm);
         }
+        if guess.is_none() && self.barrier_applies() {
+            let tried = self.barrier_try(deadline)?;
+            if tried.0.converged() || deadline.passed() {
+                return Ok(merge(stages, tried, start));
+            }
+            stages.push(tried);
+        }
         // the main method starts from the caller's point, not from the warm-up's r: on hard
         // problems Gauss–Seidel's r leads the fixed point of the main method astray
         let Some((inner, outer)) = settings.fallback else {
-            let main = run(settings, guess, false, false)?;
+            let main = self.run(settings, guess, deadline, false, false)?;
             return Ok(merge(stages, main, start));
         };
-        let first = run(settings, guess, true, false)?;
+        let first = self.run(settings, guess, deadline, true, false)?;
         let handover = matches!(
             first.0.status,
             Status::MaxIterations | Status::Stalled | Status::InnerFailure | Status::NumericalError
@@ -276,9 +281,116 @@ impl<'a> Solver<'a> {
         } else {
             guess
         };
-        let second = run(&second_settings, warm, false, false)?;
         stages.push(first);
+        let second = self.run(&second_settings, warm, deadline, false, false)?;
         Ok(merge(stages, second, start))
+    }
+}
+
+impl Solver<'_> {
+    /// One stage of `settings`' method from `guess`.
+    fn run(
+        &mut self,
+        settings: &Settings,
+        guess: Option<&Guess>,
+        deadline: Deadline,
+        stop_on_stall: bool,
+        warmup: bool,
+    ) -> Result<Ran, SolveError> {
+        let stage = Stage::new(&self.form, settings, guess, deadline, stop_on_stall, warmup)?;
+        Ok(stage.run(&mut self.solvers))
+    }
+
+    /// Whether the interior-point try runs first: [`Settings::barrier_steps`] > 0, every
+    /// μ > 0, and a global problem with at most half as many degrees of freedom as contact
+    /// unknowns and at most [`crate::settings::BarrierParams::max_schur_dofs`] (rigid bodies
+    /// touching at several points per face: W is rank-deficient, and the Newton systems are of
+    /// the size of M).
+    fn barrier_applies(&self) -> bool {
+        let (settings, local) = (&self.settings, self.form.local());
+        let bp = &settings.tuning.barrier;
+        let small = match &self.form.stored {
+            Stored::Global(g, _) => {
+                g.m.nrows <= bp.max_schur_dofs && 2 * g.m.nrows <= local.q.len()
+            }
+            Stored::Local(_) => false,
+        };
+        small
+            && settings.barrier_steps > 0
+            && !local.mu.is_empty()
+            && local.mu.iter().all(|&mu| mu > 0.0 && mu.is_finite())
+    }
+
+    /// The interior-point try on Coulomb's law ([`crate::barrier`], policy and parameters
+    /// [`crate::settings::BarrierParams`]): cold-started runs along each path of
+    /// `paths` in turn, each finished by the Levenberg–Marquardt end game when its error is
+    /// ≤ [`crate::settings::LmParams::start`], until one reaches the tolerance or the try's
+    /// share of the time is spent. Its best point is judged on the problem as stored like
+    /// every iterate (status `converged`, `unbounded` or `max_iterations`; one outer record
+    /// whose inner iterations are all its Newton and LM steps).
+    fn barrier_try(&mut self, deadline: Deadline) -> Result<Ran, SolveError> {
+        let settings = &self.settings;
+        let (bp, lm) = (settings.tuning.barrier, settings.tuning.lm);
+        let local = self.form.local();
+        let now = Instant::now();
+        let share: Deadline = deadline
+            .instant()
+            .map(|t| now + t.saturating_duration_since(now).mul_f64(bp.time_share))
+            .into();
+        let target = settings.tuning.newton.target_fraction * settings.tol;
+        let global = match &self.form.stored {
+            Stored::Global(g, _) => Some(&**g),
+            Stored::Local(_) => None,
+        };
+        let mut best: Option<(Vec<f64>, f64)> = None;
+        let mut steps = 0;
+        for path in bp.paths {
+            if share.passed() {
+                break;
+            }
+            let (mut r, report) = crate::barrier::solve(
+                local,
+                global,
+                target,
+                settings.barrier_steps,
+                &bp,
+                path,
+                share,
+            );
+            steps += report.steps;
+            let mut error = report.error;
+            if error > target && error <= lm.start && lm.max_steps > 0 && !share.passed() {
+                let mut trial = r.clone();
+                let lr = crate::levenberg::solve(local, &mut trial, target, &lm, share);
+                steps += lr.steps;
+                if lr.error < error {
+                    (r, error) = (trial, lr.error);
+                }
+            }
+            if best.as_ref().is_none_or(|(_, e)| error < *e) {
+                best = Some((r, error));
+            }
+            if error <= target {
+                break;
+            }
+        }
+        let r = best.map_or_else(|| vec![0.0; local.q.len()], |(r, _)| r);
+        let judge = Settings {
+            max_outer: 0,
+            fallback: None,
+            ..settings.clone()
+        };
+        let guess = Guess { r, v: None };
+        let (mut solution, best) = self.run(&judge, Some(&guess), deadline, false, false)?;
+        solution.history.push(OuterRecord {
+            error: solution.error,
+            fixed_point_residual: f64::NAN,
+            rule_6_1: f64::NAN,
+            inner_iterations: steps,
+        });
+        solution.outer_iterations += 1;
+        solution.inner_iterations += steps;
+        Ok((solution, best))
     }
 }
 
@@ -452,6 +564,91 @@ mod tests {
         p.q.iter_mut().step_by(3).for_each(|x| *x -= 0.5);
         p.mu = vec![2.0; n];
         p
+    }
+
+    #[test]
+    fn a_local_problem_never_tries_the_interior_point_method() {
+        // rank-deficient local problems, main method capped (a handover to the fallback): the
+        // default policy tries the interior point only on rigid global problems
+        for seed in 0..3 {
+            let p = crate::levenberg::tests::problem(8, seed, 0.0, 0.0);
+            let settings = Settings {
+                max_outer: 2,
+                warmup_sweeps: 0,
+                time_limit: None,
+                ..Settings::default()
+            };
+            let sol = solve(&Problem::Local(p), &settings).unwrap();
+            assert_eq!(barrier_records(&sol), 0, "seed {seed}");
+        }
+    }
+
+    /// History records of interior-point tries (they have no fixed-point residual).
+    fn barrier_records(sol: &Solution) -> usize {
+        sol.history
+            .iter()
+            .filter(|h| h.fixed_point_residual.is_nan())
+            .count()
+    }
+
+    #[test]
+    fn a_rigid_global_problem_tries_the_interior_point_method_first() {
+        // M = I with n = m/4 degrees of freedom, H random (n × m): W = Hᵀ H has rank m/4 (the
+        // rigid multi-contact case): a cold solve runs the try first (its record comes first,
+        // no warm-up), a solve from a guess does not; the verdict is the global one, err and
+        // balance residual recomputed from (v, r)
+        let mut solved = 0;
+        for seed in 0..8u64 {
+            let lp = crate::levenberg::tests::problem(8, seed, 0.0, 0.0);
+            let (m, n) = (24, 6);
+            let mut state = seed + 7;
+            let mut next = move || {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+            };
+            let h: Vec<f64> = (0..n * m).map(|_| next()).collect();
+            let g = GlobalProblem::new(
+                3,
+                CscMatrix::identity(n, 1.0),
+                CscMatrix::from_dense(n, m, &h),
+                (0..n).map(|_| next()).collect(),
+                lp.q.clone(),
+                lp.mu.clone(),
+            )
+            .unwrap();
+            let problem = Problem::Global(g.clone());
+            let settings = Settings {
+                warmup_sweeps: 0,
+                time_limit: None,
+                ..Settings::default()
+            };
+            let sol = solve(&problem, &settings).unwrap();
+            assert!(sol.history[0].fixed_point_residual.is_nan(), "seed {seed}");
+            assert_eq!(barrier_records(&sol), 1, "seed {seed}");
+            solved += usize::from(sol.converged() && sol.history.len() == 1);
+            let off = Settings {
+                barrier_steps: 0,
+                ..settings.clone()
+            };
+            assert_eq!(barrier_records(&solve(&problem, &off).unwrap()), 0);
+            let v = sol.v.clone().unwrap();
+            // ‖q‖ of the Delassus form q = Hᵀ M⁻¹ f + w (M = I), as docs/error.md scales it
+            let mut q = g.w.clone();
+            g.h.gemv_t_acc(1.0, &g.f, &mut q);
+            let (_, ev) = crate::evaluation::global(&g, &v, &sol.r, crate::law::norm(&q));
+            assert_eq!(sol.converged(), ev.converged(settings.tol), "seed {seed}");
+            let guess = Guess {
+                r: vec![0.0; m],
+                v: None,
+            };
+            let warm = crate::solver::solve_with_guess(&problem, &settings, Some(&guess)).unwrap();
+            assert_eq!(barrier_records(&warm), 0, "seed {seed}");
+        }
+        // the try itself converged (no later stage) on half of them at least
+        eprintln!("the try alone converged on {solved} of 8");
+        assert!(solved >= 4, "the try alone converged on {solved} of 8");
     }
 
     #[test]

@@ -87,6 +87,11 @@ impl SolverSpec {
             } else {
                 0
             },
+            barrier_steps: if self.fallback {
+                Settings::default().barrier_steps
+            } else {
+                0
+            },
             ..Default::default()
         }
     }

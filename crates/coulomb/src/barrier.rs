@@ -1,0 +1,848 @@
+//! A primal–dual interior-point method on Coulomb's law (2.9) itself (issue #11 item 4:
+//! rigid, rank-deficient problems; measurements in docs/rigid.md).
+//!
+//! With ũ = u + μ‖u_T‖e (§3) the law at contact i is the complementarity
+//! K_μ ∋ rⁱ ⊥ ũⁱ ∈ K_μ*, which in the scaled coordinates
+//!
+//! ```text
+//!     aⁱ = (μ r_N, r_T),     bⁱ = (ũ_N / μ, u_T),     u = W r + q,
+//! ```
+//!
+//! reads L ∋ aⁱ ⊥ bⁱ ∈ L on the Lorentz (ice-cream) cone L = {x : ‖x̄‖ ≤ x₀} (aᵀb = rᵀũ).
+//! The method follows the central path aⁱ ∘ bⁱ = κ e (Jordan product, e = (1, 0, 0)) from an
+//! interior point to κ → 0, with b kept as an unknown (b − T ũ(r) = 0 is one of the Newton
+//! equations, T = diag(1/μ, 1, 1)). A Newton step with Nesterov–Todd scaling Θ (Θ b = Θ⁻¹ a = λ)
+//! solves
+//!
+//! ```text
+//!     (W + blockdiag((T C)⁻¹ Θ⁻² S)) δr = (T C)⁻¹ (Θ⁻¹ ξ + f),
+//!     S = diag(μ, 1, 1),  C = ∂ũ/∂u = I + μ e t̂ᵀ (t̂ = u_T / ‖u_T‖),  f = b − T ũ(r),
+//! ```
+//!
+//! with W as stored. Where contacts stick and W is singular (more contact unknowns than
+//! degrees of freedom), the semismooth Jacobians of the Newton and Levenberg–Marquardt end
+//! games are singular; here the barrier term Θ⁻² is positive definite at every interior point,
+//! so the matrix stays regular along the path (in the frictionless case W + SΘ⁻²S is
+//! positive definite). Steps are Mehrotra predictor–corrector steps, cut to stay in the
+//! interior. The matrix is factored by a sparse LU on the block pattern of W, or, for a global
+//! problem with few degrees of freedom (rigid bodies), through its Schur complement on M. The
+//! iterate of lowest error (docs/error.md, W as stored) is returned.
+
+use crate::deadline::Deadline;
+use crate::newton::JacobianPattern;
+use crate::problem::{GlobalProblem, LocalProblem};
+use crate::settings::BarrierParams;
+use faer::linalg::solvers::Solve;
+
+/// The two constants that shape the path of one run of [`solve`] (the policy tries several:
+/// [`BarrierParams::paths`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct PathParams {
+    /// ‖u_T‖ is smoothed to √(‖u_T‖² + δᵢ²) with δᵢ = `smoothing` · κ / aᵢ₀ (κ = aᵀb /
+    /// contacts, so δ → 0 along the path); ≥ 0
+    pub smoothing: f64,
+    /// after a step cut below this fraction of the Newton step, the next one is a pure
+    /// centring step (σ = 1); in [0, 1)
+    pub recentre: f64,
+}
+
+/// Why [`solve`] stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BarrierStatus {
+    /// the error of docs/error.md is ≤ the target
+    Reached,
+    /// `max_steps` steps were taken above the target
+    MaxSteps,
+    /// the deadline passed
+    TimeLimit,
+    /// the lowest error did not improve for [`BarrierParams::stall_steps`] steps
+    Stalled,
+    /// the LU factorization of the Newton matrix failed (also with a diagonal shift up to
+    /// 1e-6 max Wᵢᵢ) or gave a non-finite direction, or no step along it stays inside the
+    /// cones
+    LinearSolve,
+    /// a contact has μ = 0 (the scaled coordinates need μ > 0), there is no contact, the
+    /// sizes disagree, or the symbolic LU of the pattern of W failed: no step taken
+    NotApplicable,
+}
+
+/// The outcome of [`solve`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BarrierReport {
+    /// how it stopped
+    pub status: BarrierStatus,
+    /// Newton steps (LU factorizations)
+    pub steps: usize,
+    /// the error of docs/error.md at the returned r (W r + q recomputed)
+    pub error: f64,
+    /// the complementarity aᵀb / contacts at the last iterate
+    pub gap: f64,
+}
+
+/// x₀² − ‖x̄‖² (positive in the interior of L).
+fn det(x: &[f64]) -> f64 {
+    // (x₀ − ‖x̄‖)(x₀ + ‖x̄‖): no cancellation of the squares near the boundary
+    let t = crate::law::norm(&x[1..]);
+    (x[0] - t) * (x[0] + t)
+}
+
+/// Jordan product x ∘ y = (xᵀy, x₀ȳ + y₀x̄).
+fn jordan(x: &[f64], y: &[f64], out: &mut [f64]) {
+    out[0] = x.iter().zip(y).map(|(a, b)| a * b).sum();
+    for k in 1..x.len() {
+        out[k] = x[0] * y[k] + y[0] * x[k];
+    }
+}
+
+/// The z with λ ∘ z = v (λ in the interior of L).
+fn jordan_div(l: &[f64], v: &[f64], out: &mut [f64]) {
+    let dot: f64 = l[1..].iter().zip(&v[1..]).map(|(a, b)| a * b).sum();
+    let z0 = (l[0] * v[0] - dot) / det(l);
+    out[0] = z0;
+    for k in 1..l.len() {
+        out[k] = (v[k] - z0 * l[k]) / l[0];
+    }
+}
+
+/// The Nesterov–Todd scaling of an interior pair (a, b) of L: Θ = η B_w̄, B_w̄ the Lorentz
+/// boost [w̄₀, w̄ᵀ; w̄, I + w̄w̄ᵀ/(1 + w̄₀)] (B_w̄ e = w̄, B_w̄² = 2w̄w̄ᵀ − J, J = diag(1, −1, …)),
+/// w̄ = (ā + J b̄)/(2γ) with ā = a/√det a, b̄ = b/√det b, γ = √((1 + āᵀb̄)/2), and
+/// η = (det a / det b)^¼: symmetric positive definite with Θ b = Θ⁻¹ a. Returns (η, w̄).
+fn nt_scaling(a: &[f64], b: &[f64]) -> (f64, [f64; 3]) {
+    let (da, db) = (det(a).sqrt(), det(b).sqrt());
+    let d = a.len();
+    let mut abar = [0.0; 3];
+    let mut bbar = [0.0; 3];
+    for k in 0..d {
+        abar[k] = a[k] / da;
+        bbar[k] = b[k] / db;
+    }
+    let dot: f64 = (0..d).map(|k| abar[k] * bbar[k]).sum();
+    let gamma = ((1.0 + dot) / 2.0).sqrt();
+    let mut w = [0.0; 3];
+    w[0] = (abar[0] + bbar[0]) / (2.0 * gamma);
+    for k in 1..d {
+        w[k] = (abar[k] - bbar[k]) / (2.0 * gamma);
+    }
+    ((da / db).sqrt(), w)
+}
+
+/// Θ x, or Θ⁻¹ x = (1/η) J B_w̄ J x when `inverse`.
+fn nt_apply(eta: f64, w: &[f64; 3], inverse: bool, x: &[f64], out: &mut [f64]) {
+    let d = x.len();
+    let sign = if inverse { -1.0 } else { 1.0 };
+    let wx: f64 = (1..d).map(|k| w[k] * x[k]).sum();
+    let scale = if inverse { 1.0 / eta } else { eta };
+    out[0] = scale * (w[0] * x[0] + sign * wx);
+    let c = sign * x[0] + wx / (1.0 + w[0]);
+    for k in 1..d {
+        out[k] = scale * (x[k] + c * w[k]);
+    }
+}
+
+/// The largest α ∈ (0, 1] with x + α δx in L (not cut by a fraction).
+fn max_step(x: &[f64], dx: &[f64]) -> f64 {
+    // det(x + α δx) = det x + 2α xᵀJδx + α² det δx, and x₀ + α δx₀ ≥ 0
+    let c = det(x);
+    let b = x[0] * dx[0] - x[1..].iter().zip(&dx[1..]).map(|(a, b)| a * b).sum::<f64>();
+    let a = det(dx);
+    let mut alpha = 1.0f64;
+    if dx[0] < 0.0 {
+        alpha = alpha.min(-x[0] / dx[0]);
+    }
+    // smallest positive root of a α² + 2b α + c
+    if a.abs() < 1e-300 {
+        if b < 0.0 {
+            alpha = alpha.min(-c / (2.0 * b));
+        }
+    } else {
+        let disc = b * b - a * c;
+        if disc >= 0.0 {
+            let sq = disc.sqrt();
+            for root in [(-b - sq) / a, (-b + sq) / a] {
+                if root > 0.0 {
+                    alpha = alpha.min(root);
+                }
+            }
+        }
+    }
+    alpha.max(0.0)
+}
+
+/// At r: the target T ũ(r) of b (with ‖u_T‖ smoothed to √(‖u_T‖² + δᵢ²)) and t̂ = ∂‖u_T‖/∂u_T
+/// per contact (u = W r + q, W as stored).
+struct Point {
+    target: Vec<f64>,
+    that: Vec<f64>,
+}
+
+fn point(p: &LocalProblem, r: &[f64], smooth: &[f64]) -> Point {
+    let d = p.dim;
+    let u = p.velocity(r);
+    let mut target = vec![0.0; u.len()];
+    let mut that = vec![0.0; u.len()];
+    for (i, &mu) in p.mu.iter().enumerate() {
+        let at = i * d;
+        let ut = crate::law::norm(&u[at + 1..at + d]).hypot(smooth[i]);
+        target[at] = (u[at] + mu * ut) / mu;
+        for k in 1..d {
+            target[at + k] = u[at + k];
+            if ut > 0.0 {
+                that[at + k] = u[at + k] / ut;
+            }
+        }
+    }
+    Point { target, that }
+}
+
+/// The state of the method: r, its scaled form a = S r, and b (both in the interior of L).
+struct State {
+    r: Vec<f64>,
+    a: Vec<f64>,
+    b: Vec<f64>,
+}
+
+impl State {
+    /// The cold start: r_N = ‖q‖/(√n max Wᵢᵢ μᵢ), r_T = 0 (a = e · ‖q‖/(√n max Wᵢᵢ)), and
+    /// b = T ũ(r₀) moved into the interior of L by a common multiple of e.
+    fn cold(p: &LocalProblem, params: &BarrierParams) -> Self {
+        let (d, n) = (p.dim, p.mu.len());
+        let m = n * d;
+        let diag_max = p.w.diagonal().iter().fold(0.0f64, |x, &y| x.max(y.abs()));
+        let q_scale = crate::law::norm(&p.q) / (n as f64).sqrt();
+        let unit = if q_scale > 0.0 { q_scale } else { 1.0 };
+        let an = if diag_max > 0.0 { unit / diag_max } else { 1.0 };
+        let mut r = vec![0.0; m];
+        let mut a = vec![0.0; m];
+        for i in 0..n {
+            a[i * d] = an;
+            r[i * d] = an / p.mu[i];
+        }
+        let mut b = point(p, &r, &vec![0.0; n]).target;
+        // b ends as far inside L as the farthest block of T ũ(r₀) was outside (plus margins)
+        let shift = 2.0 * push_interior(d, &mut b, params.start_margin);
+        let shift = shift.max(params.start_floor * unit);
+        for blk in b.chunks_mut(d) {
+            blk[0] += shift;
+        }
+        Self { r, a, b }
+    }
+
+    /// aᵀb / contacts.
+    fn gap(&self, n: usize) -> f64 {
+        self.a.iter().zip(&self.b).map(|(x, y)| x * y).sum::<f64>() / n as f64
+    }
+}
+
+/// Runs the interior-point method on the local problem `p` from a cold start along the path
+/// shaped by `path`, until the error of docs/error.md is ≤ `tol`, for at most `max_steps`
+/// Newton steps. Returns the r of lowest error visited (W as stored) and the report. When
+/// `global` is given (`p` must be its Delassus form: W = Hᵀ M⁻¹ H, q = Hᵀ M⁻¹ f + w) and has
+/// fewer degrees of freedom than contact unknowns, at most [`BarrierParams::max_schur_dofs`],
+/// each Newton system (W + G) δr = ρ, G = blockdiag((T C)⁻¹ Θ⁻² S), is solved through its Schur
+/// complement M + H G⁻¹ Hᵀ (dense LU of the size of M) instead of a sparse LU of W + G.
+pub fn solve(
+    p: &LocalProblem,
+    global: Option<&GlobalProblem>,
+    tol: f64,
+    max_steps: usize,
+    params: &BarrierParams,
+    path: PathParams,
+    deadline: Deadline,
+) -> (Vec<f64>, BarrierReport) {
+    let d = p.dim;
+    let n = p.mu.len();
+    let m = n * d;
+    let report = |status, steps, error, gap| BarrierReport {
+        status,
+        steps,
+        error,
+        gap,
+    };
+    if n == 0 || p.q.len() != m || p.mu.iter().any(|&mu| !(mu > 0.0 && mu.is_finite())) {
+        let r = vec![0.0; m];
+        let e = p.error(&r).error;
+        return (r, report(BarrierStatus::NotApplicable, 0, e, f64::NAN));
+    }
+    let schur = global.filter(|g| {
+        let n_dofs = g.m.nrows;
+        n_dofs <= params.max_schur_dofs && n_dofs < m && g.h.ncols == m && g.h.nrows == n_dofs
+    });
+    let linear = match schur {
+        Some(g) => Linear::Schur(g),
+        None => match JacobianPattern::new(p) {
+            Some(pattern) => Linear::Pattern(pattern),
+            None => {
+                let r = vec![0.0; m];
+                let e = p.error(&r).error;
+                return (r, report(BarrierStatus::NotApplicable, 0, e, f64::NAN));
+            }
+        },
+    };
+    let mut x = State::cold(p, params);
+    let mut best_r = x.r.clone();
+    let mut best = f64::INFINITY;
+    let mut best_step = 0;
+    let mut steps = 0;
+    let mut alpha = 1.0;
+    let mut smooth = vec![0.0; n];
+    let mut newton = NewtonSystem::new(p);
+    let status = loop {
+        // smoothing of ‖u_T‖ tied to the path: δᵢ = c κ / aᵢ₀
+        let gap = x.gap(n);
+        for (delta, a) in smooth.iter_mut().zip(x.a.chunks(d)) {
+            *delta = path.smoothing * gap / a[0];
+        }
+        let pt = point(p, &x.r, &smooth);
+        let e = p.error(&x.r).error;
+        if e < best {
+            best = e;
+            best_r.copy_from_slice(&x.r);
+            best_step = steps;
+        }
+        if best <= tol {
+            break BarrierStatus::Reached;
+        }
+        if steps >= max_steps {
+            break BarrierStatus::MaxSteps;
+        }
+        if deadline.passed() {
+            break BarrierStatus::TimeLimit;
+        }
+        if steps - best_step >= params.stall_steps {
+            break BarrierStatus::Stalled;
+        }
+        steps += 1;
+        let f: Vec<f64> = (0..m).map(|k| x.b[k] - pt.target[k]).collect();
+        newton.assemble(p, &linear, &x, &pt);
+        // predictor: σ = 0
+        let affine = |_: usize, l: &[f64], out: &mut [f64]| {
+            jordan(l, l, out);
+            out.iter_mut().for_each(|v| *v = -*v);
+        };
+        let Some((_, da, db)) = newton.direction(p, &linear, &pt, &f, &affine) else {
+            break BarrierStatus::LinearSolve;
+        };
+        let alpha_aff = step_length(d, &x.a, &da, &x.b, &db);
+        let gap_aff = (0..m)
+            .map(|k| (x.a[k] + alpha_aff * da[k]) * (x.b[k] + alpha_aff * db[k]))
+            .sum::<f64>()
+            / n as f64;
+        // corrector: σκe − λ∘λ − (Θ⁻¹δa) ∘ (Θδb); a pure centring step (σ = 1, no
+        // second-order term) after a step cut below `recentre`
+        let recentre = alpha < path.recentre && steps > 1;
+        let sigma = if recentre {
+            1.0
+        } else {
+            (gap_aff / gap).clamp(0.0, 1.0).powi(3)
+        };
+        let mut corr = vec![0.0; m];
+        if !recentre {
+            newton.second_order(&da, &db, &mut corr);
+        }
+        let target_gap = sigma * gap;
+        let combined = |i: usize, l: &[f64], out: &mut [f64]| {
+            jordan(l, l, out);
+            for k in 0..out.len() {
+                out[k] = -out[k] - corr[i * d + k];
+            }
+            out[0] += target_gap;
+        };
+        let Some((dr, da, db)) = newton.direction(p, &linear, &pt, &f, &combined) else {
+            break BarrierStatus::LinearSolve;
+        };
+        alpha = (params.boundary_fraction * step_length(d, &x.a, &da, &x.b, &db)).min(1.0);
+        // the roots of det(x + α δx) are computed with rounding: halve α until every block
+        // is strictly inside as det() evaluates it (the scalings need det > 0)
+        let inside = |alpha: f64| {
+            let moved = |v: &[f64], dv: &[f64]| -> bool {
+                let mut y = [0.0; 3];
+                v.chunks(d).zip(dv.chunks(d)).all(|(v, dv)| {
+                    for k in 0..d {
+                        y[k] = v[k] + alpha * dv[k];
+                    }
+                    y[0] > 0.0 && det(&y[..d]) > 0.0
+                })
+            };
+            moved(&x.a, &da) && moved(&x.b, &db)
+        };
+        let mut halvings = 0;
+        while !inside(alpha) {
+            alpha *= 0.5;
+            halvings += 1;
+            if halvings > 60 {
+                break;
+            }
+        }
+        if halvings > 60 {
+            break BarrierStatus::LinearSolve;
+        }
+        for k in 0..m {
+            x.r[k] += alpha * dr[k];
+            x.a[k] += alpha * da[k];
+            x.b[k] += alpha * db[k];
+        }
+    };
+    let gap = x.gap(n);
+    let error = p.error(&best_r).error;
+    (best_r, report(status, steps, error, gap))
+}
+
+/// The Newton matrix W + blockdiag((T C)⁻¹ Θ⁻² S) on the pattern of W (values), the
+/// Nesterov–Todd scalings and λ = Θ b of the current iterate.
+struct NewtonSystem {
+    d: usize,
+    scal: Vec<(f64, [f64; 3])>,
+    lam: Vec<f64>,
+    vals: Vec<f64>,
+    wcol: Vec<f64>,
+    /// I − (T C)⁻¹ Θ⁻² S per contact (the form [`JacobianPattern::fill`] takes: J = I − D + B W)
+    dblocks: Vec<f64>,
+    /// G = (T C)⁻¹ Θ⁻² S per contact (row-major d × d)
+    gblocks: Vec<f64>,
+    /// identity blocks (B = I)
+    blocks: Vec<f64>,
+    /// max |Wᵢᵢ| (the scale of the diagonal shift of a failed factorization)
+    diag_max: f64,
+}
+
+impl NewtonSystem {
+    fn new(p: &LocalProblem) -> Self {
+        let (n, d) = (p.mu.len(), p.dim);
+        let mut blocks = vec![0.0; n * d * d];
+        for i in 0..n {
+            for k in 0..d {
+                blocks[i * d * d + k * d + k] = 1.0;
+            }
+        }
+        Self {
+            d,
+            scal: vec![(1.0, [1.0, 0.0, 0.0]); n],
+            lam: vec![0.0; n * d],
+            vals: Vec::new(),
+            wcol: vec![0.0; n * d],
+            dblocks: vec![0.0; n * d * d],
+            gblocks: vec![0.0; n * d * d],
+            blocks,
+            diag_max: p.w.diagonal().iter().fold(0.0f64, |x, &y| x.max(y.abs())),
+        }
+    }
+
+    fn assemble(&mut self, p: &LocalProblem, linear: &Linear<'_>, x: &State, pt: &Point) {
+        let d = self.d;
+        for (i, &mu) in p.mu.iter().enumerate() {
+            let at = i * d;
+            let (ai, bi) = (&x.a[at..at + d], &x.b[at..at + d]);
+            self.scal[i] = nt_scaling(ai, bi);
+            let (eta, w) = self.scal[i];
+            nt_apply(eta, &w, false, bi, &mut self.lam[at..at + d]);
+            let th = &pt.that[at..at + d];
+            let dj = &mut self.dblocks[i * d * d..(i + 1) * d * d];
+            let gj = &mut self.gblocks[i * d * d..(i + 1) * d * d];
+            for c in 0..d {
+                // column c of (T C)⁻¹ Θ⁻² S
+                let mut col = [0.0; 3];
+                let mut tmp = [0.0; 3];
+                col[c] = if c == 0 { mu } else { 1.0 };
+                nt_apply(eta, &w, true, &col[..d], &mut tmp[..d]);
+                nt_apply(eta, &w, true, &tmp[..d], &mut col[..d]);
+                tc_inverse(mu, th, &mut col[..d]);
+                for rr in 0..d {
+                    let id = if rr == c { 1.0 } else { 0.0 };
+                    dj[rr * d + c] = id - col[rr];
+                    gj[rr * d + c] = col[rr];
+                }
+            }
+        }
+        if let Linear::Pattern(pattern) = linear {
+            pattern.fill(
+                p,
+                &self.dblocks,
+                &self.blocks,
+                &mut self.wcol,
+                &mut self.vals,
+            );
+        }
+    }
+
+    /// (δr, δa, δb) for the complementarity right-hand side `rc` (per contact, from λ):
+    /// λ ∘ (Θ⁻¹δa + Θδb) = rc, δb = T C W δr − f, δa = S δr. None if the LU fails.
+    #[allow(clippy::type_complexity)]
+    fn direction(
+        &self,
+        p: &LocalProblem,
+        linear: &Linear<'_>,
+        pt: &Point,
+        f: &[f64],
+        rc: &dyn Fn(usize, &[f64], &mut [f64]),
+    ) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+        let d = self.d;
+        let m = f.len();
+        let mut dr = vec![0.0; m];
+        let mut c = [0.0; 3];
+        let mut xi = [0.0; 3];
+        for (i, &mu) in p.mu.iter().enumerate() {
+            let at = i * d;
+            let l = &self.lam[at..at + d];
+            rc(i, l, &mut c[..d]);
+            jordan_div(l, &c[..d], &mut xi[..d]);
+            let (eta, w) = self.scal[i];
+            nt_apply(eta, &w, true, &xi[..d], &mut dr[at..at + d]);
+            for k in 0..d {
+                dr[at + k] += f[at + k];
+            }
+            tc_inverse(mu, &pt.that[at..at + d], &mut dr[at..at + d]);
+        }
+        match linear {
+            Linear::Pattern(pattern) => {
+                // near the end of the path W + blockdiag(…) can be singular to working
+                // precision: then the diagonal is shifted (static regularization, a slightly
+                // damped step)
+                let rhs = dr.clone();
+                let mut shift = 0.0;
+                while pattern
+                    .solve(&self.vals_shifted(pattern, shift), &mut dr)
+                    .is_none()
+                {
+                    shift = if shift == 0.0 {
+                        1e-12 * self.diag_max
+                    } else {
+                        100.0 * shift
+                    };
+                    if shift > 1e-6 * self.diag_max || !shift.is_finite() || shift == 0.0 {
+                        return None;
+                    }
+                    dr.copy_from_slice(&rhs);
+                }
+            }
+            Linear::Schur(g) => self.schur_solve(g, &mut dr)?,
+        }
+        let mut wd = vec![0.0; m];
+        p.w.gemv_acc(1.0, &dr, &mut wd);
+        let mut da = vec![0.0; m];
+        let mut db = vec![0.0; m];
+        for (i, &mu) in p.mu.iter().enumerate() {
+            let at = i * d;
+            da[at] = mu * dr[at];
+            let tdot: f64 = (1..d).map(|k| pt.that[at + k] * wd[at + k]).sum();
+            db[at] = (wd[at] + mu * tdot) / mu - f[at];
+            for k in 1..d {
+                da[at + k] = dr[at + k];
+                db[at + k] = wd[at + k] - f[at + k];
+            }
+        }
+        Some((dr, da, db))
+    }
+
+    /// Solves (W + G) x = rhs in place for W = Hᵀ M⁻¹ H: x = G⁻¹ (rhs − Hᵀ y) with
+    /// (M + H G⁻¹ Hᵀ) y = H G⁻¹ rhs (dense LU of the size of M). None if a block of G or the
+    /// Schur complement is singular, or x is not finite.
+    fn schur_solve(&self, g: &GlobalProblem, rhs: &mut [f64]) -> Option<()> {
+        let d = self.d;
+        let n = g.m.nrows;
+        let contacts = rhs.len() / d;
+        let mut ginv = vec![0.0; contacts * d * d];
+        for (blk, inv) in self.gblocks.chunks(d * d).zip(ginv.chunks_mut(d * d)) {
+            invert_small(d, blk, inv)?;
+        }
+        let mut k = faer::Mat::<f64>::zeros(n, n);
+        for (i, j, v) in g.m.triplets() {
+            k[(i, j)] += v;
+        }
+        // H G⁻¹ Hᵀ, contact by contact (the columns of H of contact i times its block)
+        let col = |c: usize| {
+            (g.h.col_ptr[c]..g.h.col_ptr[c + 1]).map(move |t| (g.h.row_idx[t], g.h.values[t]))
+        };
+        for i in 0..contacts {
+            let inv = &ginv[i * d * d..(i + 1) * d * d];
+            for c1 in 0..d {
+                for c2 in 0..d {
+                    let gv = inv[c1 * d + c2];
+                    if gv == 0.0 {
+                        continue;
+                    }
+                    for (ra, va) in col(i * d + c1) {
+                        for (rb, vb) in col(i * d + c2) {
+                            k[(ra, rb)] += va * gv * vb;
+                        }
+                    }
+                }
+            }
+        }
+        let mut z = vec![0.0; rhs.len()];
+        apply_blocks(d, &ginv, rhs, &mut z);
+        let t = g.h.mul_vec(&z);
+        let lu = k.partial_piv_lu();
+        let y = lu.solve(faer::Mat::<f64>::from_fn(n, 1, |i, _| t[i]));
+        let yv: Vec<f64> = (0..n).map(|i| y[(i, 0)]).collect();
+        let mut res = rhs.to_vec();
+        g.h.gemv_t_acc(-1.0, &yv, &mut res);
+        apply_blocks(d, &ginv, &res, rhs);
+        rhs.iter().all(|x| x.is_finite()).then_some(())
+    }
+
+    /// The matrix values with λ added to the diagonal (borrowed unchanged when λ = 0).
+    fn vals_shifted(&self, pattern: &JacobianPattern, lambda: f64) -> std::borrow::Cow<'_, [f64]> {
+        if lambda == 0.0 {
+            return std::borrow::Cow::Borrowed(&self.vals);
+        }
+        let mut v = self.vals.clone();
+        pattern.shift_diagonal(&mut v, lambda);
+        std::borrow::Cow::Owned(v)
+    }
+
+    /// (Θ⁻¹δa) ∘ (Θδb) per contact, Mehrotra's second-order term.
+    fn second_order(&self, da: &[f64], db: &[f64], out: &mut [f64]) {
+        let d = self.d;
+        for (i, &(eta, w)) in self.scal.iter().enumerate() {
+            let at = i * d;
+            let mut x = [0.0; 3];
+            let mut y = [0.0; 3];
+            nt_apply(eta, &w, true, &da[at..at + d], &mut x[..d]);
+            nt_apply(eta, &w, false, &db[at..at + d], &mut y[..d]);
+            jordan(&x[..d], &y[..d], &mut out[at..at + d]);
+        }
+    }
+}
+
+/// How the Newton systems are solved: sparse LU of W + G on the block pattern of W, or the
+/// Schur complement on M of a global problem.
+enum Linear<'g> {
+    Pattern(JacobianPattern),
+    Schur(&'g GlobalProblem),
+}
+
+/// out = blockdiag(blocks) x (row-major d × d blocks).
+fn apply_blocks(d: usize, blocks: &[f64], x: &[f64], out: &mut [f64]) {
+    for ((blk, xi), oi) in blocks.chunks(d * d).zip(x.chunks(d)).zip(out.chunks_mut(d)) {
+        for a in 0..d {
+            oi[a] = (0..d).map(|b| blk[a * d + b] * xi[b]).sum();
+        }
+    }
+}
+
+/// The inverse of a 2 × 2 or 3 × 3 row-major matrix by cofactors; None if its determinant
+/// vanishes (or underflows) or is not finite.
+fn invert_small(d: usize, a: &[f64], inv: &mut [f64]) -> Option<()> {
+    let scale = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    if d == 2 {
+        let det = a[0] * a[3] - a[1] * a[2];
+        if det.is_nan() || det.abs() <= f64::MIN_POSITIVE * scale * scale || !det.is_finite() {
+            return None;
+        }
+        inv.copy_from_slice(&[a[3] / det, -a[1] / det, -a[2] / det, a[0] / det]);
+        return Some(());
+    }
+    let c = |r: usize, k: usize| a[r * 3 + k];
+    let cof = [
+        c(1, 1) * c(2, 2) - c(1, 2) * c(2, 1),
+        c(1, 2) * c(2, 0) - c(1, 0) * c(2, 2),
+        c(1, 0) * c(2, 1) - c(1, 1) * c(2, 0),
+    ];
+    let det = c(0, 0) * cof[0] + c(0, 1) * cof[1] + c(0, 2) * cof[2];
+    if det.is_nan() || det.abs() <= f64::MIN_POSITIVE * scale * scale * scale || !det.is_finite() {
+        return None;
+    }
+    let adj = [
+        cof[0],
+        c(0, 2) * c(2, 1) - c(0, 1) * c(2, 2),
+        c(0, 1) * c(1, 2) - c(0, 2) * c(1, 1),
+        cof[1],
+        c(0, 0) * c(2, 2) - c(0, 2) * c(2, 0),
+        c(0, 2) * c(1, 0) - c(0, 0) * c(1, 2),
+        cof[2],
+        c(0, 1) * c(2, 0) - c(0, 0) * c(2, 1),
+        c(0, 0) * c(1, 1) - c(0, 1) * c(1, 0),
+    ];
+    for k in 0..9 {
+        inv[k] = adj[k] / det;
+    }
+    Some(())
+}
+
+/// x ← (T C)⁻¹ x = (μ (x₀ − t̂ᵀx̄), x̄) for one contact.
+fn tc_inverse(mu: f64, that: &[f64], x: &mut [f64]) {
+    let dot: f64 = (1..x.len()).map(|k| that[k] * x[k]).sum();
+    x[0] = mu * (x[0] - dot);
+}
+
+/// The largest α ≤ 1 keeping every a + α δa and b + α δb in L.
+fn step_length(d: usize, a: &[f64], da: &[f64], b: &[f64], db: &[f64]) -> f64 {
+    let mut alpha = 1.0f64;
+    for (((a, da), b), db) in a
+        .chunks(d)
+        .zip(da.chunks(d))
+        .zip(b.chunks(d))
+        .zip(db.chunks(d))
+    {
+        alpha = alpha.min(max_step(a, da)).min(max_step(b, db));
+    }
+    alpha
+}
+
+/// The shift t ≥ 0 such that every block of x + t e is in the interior of L with a margin
+/// of `margin` times the largest entry (0 when all are already inside).
+fn push_interior(d: usize, x: &mut [f64], margin: f64) -> f64 {
+    let mut worst = 0.0f64;
+    let mut size = 0.0f64;
+    for blk in x.chunks(d) {
+        let t = crate::law::norm(&blk[1..]);
+        worst = worst.max(t - blk[0]);
+        size = size.max(blk[0].abs()).max(t);
+    }
+    if worst >= 0.0 {
+        worst + margin * size
+    } else {
+        0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nt_scaling_maps_b_and_a_to_the_same_point() {
+        let pairs = [
+            ([2.0, 0.5, -0.3], [1.5, -0.2, 0.9]),
+            ([1.0, 0.0, 0.0], [3.0, 1.0, 1.0]),
+            ([5.0, 4.0, 2.9], [0.7, 0.1, -0.6]),
+        ];
+        for (a, b) in pairs {
+            let (eta, w) = nt_scaling(&a, &b);
+            let mut tb = [0.0; 3];
+            let mut ta = [0.0; 3];
+            nt_apply(eta, &w, false, &b, &mut tb);
+            nt_apply(eta, &w, true, &a, &mut ta);
+            for k in 0..3 {
+                assert!(
+                    (tb[k] - ta[k]).abs() < 1e-12 * (1.0 + ta[k].abs()),
+                    "{tb:?} {ta:?}"
+                );
+            }
+            // Θ Θ⁻¹ = I
+            let x = [0.3, -1.2, 0.4];
+            let mut y = [0.0; 3];
+            let mut z = [0.0; 3];
+            nt_apply(eta, &w, true, &x, &mut y);
+            nt_apply(eta, &w, false, &y, &mut z);
+            for k in 0..3 {
+                assert!((z[k] - x[k]).abs() < 1e-12, "{z:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn solves_rank_deficient_problems_and_reports_the_stored_error() {
+        // W = AᵀA + skew with A of m/2 rows: more contact unknowns than the rank of W (the
+        // rigid case), μ ∈ [0.3, 1], W symmetric or not; the returned r's error is the one
+        // recomputed on the problem given
+        let mut reached = 0;
+        let mut runs = 0;
+        for seed in 0..12 {
+            for skew in [0.0, 1e-3] {
+                let p = crate::levenberg::tests::problem(8, seed, 0.0, skew);
+                let (r, rep) = solve(
+                    &p,
+                    None,
+                    1e-8,
+                    150,
+                    &BarrierParams::default(),
+                    BarrierParams::default().paths[0],
+                    Deadline::NEVER,
+                );
+                runs += 1;
+                let recomputed = p.error(&r).error;
+                assert_eq!(recomputed, rep.error, "seed {seed} skew {skew}");
+                assert!(rep.steps <= 150);
+                if rep.status == BarrierStatus::Reached {
+                    assert!(recomputed <= 1e-8, "seed {seed}: {recomputed}");
+                    reached += 1;
+                }
+            }
+        }
+        assert!(reached >= runs - 2, "reached 1e-8 on {reached} of {runs}");
+    }
+
+    #[test]
+    fn the_schur_complement_gives_the_steps_of_the_sparse_lu() {
+        // a global problem (M = 2I, n = m/4) and its Delassus form: the same iterates whether
+        // the Newton systems are solved on M + H G⁻¹ Hᵀ or on W + G
+        let (m, n) = (24, 6);
+        let lp = crate::levenberg::tests::problem(8, 5, 0.0, 0.0);
+        let h: Vec<f64> = (0..n * m)
+            .map(|k| ((k * 7919) % 23) as f64 / 11.0 - 1.0)
+            .collect();
+        let g = GlobalProblem::new(
+            3,
+            crate::sparse::CscMatrix::identity(n, 2.0),
+            crate::sparse::CscMatrix::from_dense(n, m, &h),
+            vec![0.3; n],
+            lp.q.clone(),
+            lp.mu.clone(),
+        )
+        .unwrap();
+        let local = crate::delassus::Delassus::new(&g).unwrap().local;
+        let params = BarrierParams::default();
+        for steps in [3, 8] {
+            let run = |global| {
+                solve(
+                    &local,
+                    global,
+                    0.0,
+                    steps,
+                    &params,
+                    params.paths[0],
+                    Deadline::NEVER,
+                )
+            };
+            let ((r1, a), (r2, b)) = (run(None), run(Some(&g)));
+            assert_eq!((a.steps, b.steps), (steps, steps));
+            let diff = r1
+                .iter()
+                .zip(&r2)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max);
+            let size = r1.iter().fold(0.0f64, |s, x| s.max(x.abs()));
+            // equal up to rounding (amplified as the iterates near the boundary of the cones);
+            // a wrong elimination would differ at the first step
+            assert!(
+                diff <= 1e-6 * size,
+                "{steps} steps: differ by {diff} (size {size})"
+            );
+        }
+    }
+
+    #[test]
+    fn a_frictionless_contact_or_an_empty_problem_takes_no_step() {
+        let mut p = crate::levenberg::tests::problem(3, 1, 0.1, 0.0);
+        p.mu[1] = 0.0;
+        let (r, rep) = solve(
+            &p,
+            None,
+            1e-8,
+            150,
+            &BarrierParams::default(),
+            BarrierParams::default().paths[0],
+            Deadline::NEVER,
+        );
+        assert_eq!(rep.status, BarrierStatus::NotApplicable);
+        assert_eq!(rep.steps, 0);
+        assert_eq!(rep.error, p.error(&r).error);
+    }
+
+    #[test]
+    fn max_step_stops_at_the_boundary() {
+        let x = [1.0, 0.0, 0.0];
+        let dx = [0.0, 2.0, 0.0];
+        let a = max_step(&x, &dx);
+        assert!((a - 0.5).abs() < 1e-14);
+        let mut y = [0.0; 3];
+        for k in 0..3 {
+            y[k] = x[k] + a * dx[k];
+        }
+        assert!(det(&y).abs() < 1e-12);
+        assert_eq!(max_step(&x, &[1.0, 0.5, 0.0]), 1.0);
+    }
+}

@@ -815,6 +815,53 @@ mod tests {
     }
 
     #[test]
+    fn solves_two_dimensional_problems() {
+        // d = 2 (the Lorentz cone of R²): W = AᵀA + I/10 with A of m/2 rows, 6 contacts
+        let mut reached = 0;
+        for seed in 0..8u64 {
+            let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(3);
+            let mut next = move || {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+            };
+            let (contacts, m) = (6, 12);
+            let a: Vec<f64> = (0..m / 2 * m).map(|_| next()).collect();
+            let w: Vec<f64> = (0..m * m)
+                .map(|k| {
+                    let (i, j) = (k / m, k % m);
+                    let aa: f64 = (0..m / 2).map(|l| a[l * m + i] * a[l * m + j]).sum();
+                    aa + if i == j { 0.1 } else { 0.0 }
+                })
+                .collect();
+            let p = LocalProblem::new(
+                2,
+                crate::sparse::CscMatrix::from_dense(m, m, &w),
+                (0..m).map(|_| next()).collect(),
+                (0..contacts).map(|_| 0.2 + 0.8 * next().abs()).collect(),
+            )
+            .unwrap();
+            let params = BarrierParams::default();
+            let (r, rep) = solve(
+                &p,
+                None,
+                1e-8,
+                150,
+                &params,
+                params.paths[0],
+                Deadline::NEVER,
+            );
+            assert_eq!(p.error(&r).error, rep.error, "seed {seed}");
+            if rep.status == BarrierStatus::Reached {
+                assert!(rep.error <= 1e-8);
+                reached += 1;
+            }
+        }
+        assert!(reached >= 6, "reached 1e-8 on {reached} of 8");
+    }
+
+    #[test]
     fn a_frictionless_contact_or_an_empty_problem_takes_no_step() {
         let mut p = crate::levenberg::tests::problem(3, 1, 0.1, 0.0);
         p.mu[1] = 0.0;

@@ -170,9 +170,10 @@ fn max_step(x: &[f64], dx: &[f64]) -> f64 {
     alpha.max(0.0)
 }
 
-/// At r: the target T ũ(r) of b (with ‖u_T‖ smoothed to √(‖u_T‖² + δᵢ²)) and t̂ = ∂‖u_T‖/∂u_T
+/// At r: u = W r + q, the target T ũ(r) of b (with ‖u_T‖ smoothed to √(‖u_T‖² + δᵢ²)) and t̂ = ∂‖u_T‖/∂u_T
 /// per contact (u = W r + q, W as stored).
 struct Point {
+    u: Vec<f64>,
     target: Vec<f64>,
     that: Vec<f64>,
 }
@@ -193,7 +194,7 @@ fn point(p: &LocalProblem, r: &[f64], smooth: &[f64]) -> Point {
             }
         }
     }
-    Point { target, that }
+    Point { u, target, that }
 }
 
 /// The state of the method: r, its scaled form a = S r, and b (both in the interior of L).
@@ -288,6 +289,7 @@ pub fn solve(
     let mut alpha = 1.0;
     let mut smooth = vec![0.0; n];
     let mut newton = NewtonSystem::new(p);
+    let q_norm = crate::law::norm(&p.q);
     let status = loop {
         // smoothing of ‖u_T‖ tied to the path: δᵢ = c κ / aᵢ₀
         let gap = x.gap(n);
@@ -295,7 +297,8 @@ pub fn solve(
             *delta = path.smoothing * gap / a[0];
         }
         let pt = point(p, &x.r, &smooth);
-        let e = p.error(&x.r).error;
+        // the error of docs/error.md, u = W r + q with W as stored (= p.error(r))
+        let e = crate::law::error_measure(d, &p.mu, &x.r, &pt.u, q_norm).error;
         if e < best {
             best = e;
             best_r.copy_from_slice(&x.r);
@@ -702,6 +705,20 @@ fn push_interior(d: usize, x: &mut [f64], margin: f64) -> f64 {
 mod tests {
     use super::*;
 
+    /// One run with the default parameters and first path, to 1e-8, at most 150 steps.
+    fn run_default(p: &LocalProblem) -> (Vec<f64>, BarrierReport) {
+        let params = BarrierParams::default();
+        solve(
+            p,
+            None,
+            1e-8,
+            150,
+            &params,
+            params.paths[0],
+            Deadline::NEVER,
+        )
+    }
+
     #[test]
     fn nt_scaling_maps_b_and_a_to_the_same_point() {
         let pairs = [
@@ -743,15 +760,7 @@ mod tests {
         for seed in 0..12 {
             for skew in [0.0, 1e-3] {
                 let p = crate::levenberg::tests::problem(8, seed, 0.0, skew);
-                let (r, rep) = solve(
-                    &p,
-                    None,
-                    1e-8,
-                    150,
-                    &BarrierParams::default(),
-                    BarrierParams::default().paths[0],
-                    Deadline::NEVER,
-                );
+                let (r, rep) = run_default(&p);
                 runs += 1;
                 let recomputed = p.error(&r).error;
                 assert_eq!(recomputed, rep.error, "seed {seed} skew {skew}");
@@ -819,13 +828,7 @@ mod tests {
         // d = 2 (the Lorentz cone of R²): W = AᵀA + I/10 with A of m/2 rows, 6 contacts
         let mut reached = 0;
         for seed in 0..8u64 {
-            let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(3);
-            let mut next = move || {
-                state = state
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-            };
+            let mut next = crate::levenberg::tests::uniform(seed, 3);
             let (contacts, m) = (6, 12);
             let a: Vec<f64> = (0..m / 2 * m).map(|_| next()).collect();
             let w: Vec<f64> = (0..m * m)
@@ -842,16 +845,7 @@ mod tests {
                 (0..contacts).map(|_| 0.2 + 0.8 * next().abs()).collect(),
             )
             .unwrap();
-            let params = BarrierParams::default();
-            let (r, rep) = solve(
-                &p,
-                None,
-                1e-8,
-                150,
-                &params,
-                params.paths[0],
-                Deadline::NEVER,
-            );
+            let (r, rep) = run_default(&p);
             assert_eq!(p.error(&r).error, rep.error, "seed {seed}");
             if rep.status == BarrierStatus::Reached {
                 assert!(rep.error <= 1e-8);
@@ -865,15 +859,7 @@ mod tests {
     fn a_frictionless_contact_or_an_empty_problem_takes_no_step() {
         let mut p = crate::levenberg::tests::problem(3, 1, 0.1, 0.0);
         p.mu[1] = 0.0;
-        let (r, rep) = solve(
-            &p,
-            None,
-            1e-8,
-            150,
-            &BarrierParams::default(),
-            BarrierParams::default().paths[0],
-            Deadline::NEVER,
-        );
+        let (r, rep) = run_default(&p);
         assert_eq!(rep.status, BarrierStatus::NotApplicable);
         assert_eq!(rep.steps, 0);
         assert_eq!(rep.error, p.error(&r).error);

@@ -601,13 +601,7 @@ mod tests {
         for seed in 0..8u64 {
             let lp = crate::levenberg::tests::problem(8, seed, 0.0, 0.0);
             let (m, n) = (24, 6);
-            let mut state = seed + 7;
-            let mut next = move || {
-                state = state
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-            };
+            let mut next = crate::levenberg::tests::uniform(seed, 7);
             let h: Vec<f64> = (0..n * m).map(|_| next()).collect();
             let g = GlobalProblem::new(
                 3,

@@ -38,7 +38,9 @@
 //!   finite-difference check of the Newton direction at every step;
 //! - `barrier`: the interior-point method on the law ([`coulomb::barrier::solve`]) from its
 //!   cold start (WARM_SECONDS ignored; a global file uses its Schur path unless NO_SCHUR is
-//!   set), then LM from its best point; env BARRIER_STEPS, BARRIER_STALL, BARRIER_SMOOTH,
+//!   set; a local one its skeleton when it has one, SKELETON_MAX=0 turns it off, RANK_TOL,
+//!   REFINE, REFINE_TOL override its rank tolerance, refinement steps and tolerance), then LM from its best point;
+//!   env BARRIER_STEPS, BARRIER_STALL, BARRIER_SMOOTH,
 //!   BARRIER_RECENTRE, BARRIER_MARGIN, BARRIER_TOL override its parameters;
 //! - `trace`: the default solver's history on the local form (an interior-point try would
 //!   show no ‖F(s) − s‖; the policy runs it on rigid global problems only);
@@ -584,6 +586,9 @@ fn search() {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
+    if std::env::var_os("FAER_SEQ").is_some() {
+        faer::set_global_parallelism(faer::Par::Seq);
+    }
     if args[1] == "search" {
         search();
         return;
@@ -646,11 +651,29 @@ fn main() {
         let steps = envf("BARRIER_STEPS", 150.0) as usize;
         let dl = coulomb::deadline::Deadline::after(t, Some(Duration::from_secs_f64(limit)));
         let tol = envf("BARRIER_TOL", 1e-8);
-        let (r, rep) = coulomb::barrier::solve(&p, global.as_ref(), tol, steps, &params, path, dl);
+        let params = coulomb::settings::BarrierParams {
+            max_skeleton_unknowns: envf("SKELETON_MAX", params.max_skeleton_unknowns as f64)
+                as usize,
+            rank_tol: envf("RANK_TOL", params.rank_tol),
+            refine_steps: envf("REFINE", params.refine_steps as f64) as usize,
+            refine_tol: envf("REFINE_TOL", params.refine_tol),
+            ..params
+        };
+        let Some(setup) = coulomb::barrier::Setup::new(&p, global.as_ref(), &params, dl) else {
+            println!("{name} barrier: no setup");
+            return;
+        };
         println!(
-            "{name} barrier {:?} steps {} err {:.2e} gap {:.2e} in {:.2} s, ‖r‖ {:.3e}",
+            "{name} setup {:?} in {:.3} s",
+            setup.kind(),
+            t.elapsed().as_secs_f64()
+        );
+        let (r, rep) = coulomb::barrier::solve_with(&p, &setup, tol, steps, &params, path, dl);
+        println!(
+            "{name} barrier {:?} steps {} ({} exact) err {:.2e} gap {:.2e} in {:.2} s, ‖r‖ {:.3e}",
             rep.status,
             rep.steps,
+            rep.exact_steps,
             err(&p, &r),
             rep.gap,
             t.elapsed().as_secs_f64(),

@@ -52,6 +52,7 @@ pub mod newton;
 pub mod outer;
 pub mod problem;
 pub mod settings;
+pub mod skeleton;
 pub mod solution;
 pub mod solver;
 pub mod sparse;

@@ -159,13 +159,20 @@ impl JacobianPattern {
         }
     }
 
+    /// The LU of the matrix with these values on the pattern, from the cached symbolic
+    /// factorization; None if it fails.
+    pub(crate) fn factor(&self, vals: &[f64]) -> Option<Lu<usize, f64>> {
+        let n = self.col_ptr.len() - 1;
+        let sym = SymbolicSparseColMatRef::new_checked(n, n, &self.col_ptr, None, &self.row_idx);
+        let mat = SparseColMatRef::new(sym, vals);
+        Lu::try_new_with_symbolic(self.symbolic.clone()?, mat).ok()
+    }
+
     /// Solves (J + λ I) x = rhs in place by LU with the cached symbolic factorization; None
     /// if the factorization fails or x is not finite.
     pub(crate) fn solve(&self, vals: &[f64], rhs: &mut [f64]) -> Option<()> {
         let n = rhs.len();
-        let sym = SymbolicSparseColMatRef::new_checked(n, n, &self.col_ptr, None, &self.row_idx);
-        let mat = SparseColMatRef::new(sym, vals);
-        let lu = Lu::try_new_with_symbolic(self.symbolic.clone()?, mat).ok()?;
+        let lu = self.factor(vals)?;
         lu.solve_in_place(faer::MatMut::from_column_major_slice_mut(rhs, n, 1));
         rhs.iter().all(|x| x.is_finite()).then_some(())
     }

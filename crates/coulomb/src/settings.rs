@@ -251,10 +251,12 @@ pub struct NewtonParams {
 
 /// Parameters of the interior-point method on Coulomb's law ([`crate::barrier`]) and of its
 /// try in the default policy ([`crate::Solver::solve`]): after the warm-up of a cold solve
-/// (no guess) of a global problem with every μ > 0 and at most half as many degrees of
+/// (no guess) with every μ > 0 of a global problem with at most half as many degrees of
 /// freedom as contact unknowns (at most `max_schur_dofs`: rigid bodies touching at several
 /// points per face, where W is rank-deficient and the Newton systems are of the size of M),
-/// before the main method. A try runs the method along each path of `paths` in turn (at most
+/// or of a local problem with at most `max_skeleton_unknowns` contact unknowns whose W has a
+/// skeleton of rank ≤ min(`max_schur_dofs`, m/2) ([`crate::skeleton`]), before the main
+/// method. A try runs the method along each path of `paths` in turn (at most
 /// [`Settings::barrier_steps`] Newton steps each), finishes a run with the
 /// Levenberg–Marquardt end game when its error is ≤ [`LmParams::start`], keeps the best point
 /// and stops once it converges or has used `time_share` of the time left.
@@ -277,8 +279,21 @@ pub struct BarrierParams {
     pub time_share: f64,
     /// a global problem with at most this many degrees of freedom (and fewer than contact
     /// unknowns) has its Newton systems solved on M + H G⁻¹ Hᵀ (dense LU) instead of W + G;
-    /// the policy's try needs it; ≥ 1
+    /// the policy's try needs it; ≥ 1. Also the largest rank of the skeleton of a local W
     pub max_schur_dofs: usize,
+    /// a local problem with at most this many contact unknowns is probed for a skeleton
+    /// W ≈ W[:, P] W[P, P]⁻¹ W[P, :] of rank ≤ min(`max_schur_dofs`, m/2)
+    /// ([`crate::skeleton`]; cost ≤ m · rank² flops); if it has one, its Newton systems are
+    /// solved through it (dense LU of the size of the rank) and the policy's try runs on it
+    pub max_skeleton_unknowns: usize,
+    /// the pivoting of the skeleton stops when every remaining diagonal entry of
+    /// ½(W + Wᵀ) is ≤ this multiple of max Wᵢᵢ (its numerical rank); in (0, 1)
+    pub rank_tol: f64,
+    /// a solve through the skeleton is refined on W as stored at most this many times …
+    pub refine_steps: usize,
+    /// … until its residual (max norm) is ≤ this multiple of the right-hand side's; else the
+    /// step is solved by the sparse LU of W + G; > 0
+    pub refine_tol: f64,
 }
 
 impl Default for BarrierParams {
@@ -309,6 +324,10 @@ impl Default for BarrierParams {
             start_floor: 1e-3,
             time_share: 0.5,
             max_schur_dofs: 1500,
+            max_skeleton_unknowns: 4000,
+            rank_tol: 1e-10,
+            refine_steps: 4,
+            refine_tol: 1e-10,
         }
     }
 }
@@ -331,7 +350,9 @@ impl BarrierParams {
             && positive(self.start_margin)
             && positive(self.start_floor)
             && positive(self.time_share)
-            && self.time_share <= 1.0;
+            && self.time_share <= 1.0
+            && fraction(self.rank_tol)
+            && positive(self.refine_tol);
         if !ok {
             return Err(format!(
                 "tuning.barrier: a parameter is out of range: {self:?}"
@@ -748,7 +769,7 @@ pub struct Settings {
     /// main method starts from the caller's point as if the try had not happened
     pub warmup_sweeps: usize,
     /// the interior-point try on Coulomb's law ([`crate::barrier`]) before the main method of
-    /// a cold solve of a rigid global problem (policy and parameters: [`Tuning::barrier`]): at
+    /// a cold solve of a rigid problem (policy and parameters: [`Tuning::barrier`]): at
     /// most this many Newton steps per run; 0 turns it off
     pub barrier_steps: usize,
     /// cap on outer iterations (subproblems)

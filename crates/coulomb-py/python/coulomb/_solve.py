@@ -133,7 +133,8 @@ def solve(problem: Problem, r0: Optional[ArrayLike] = None, v0: Optional[ArrayLi
         (see :func:`default_settings`): ``tol`` (1e-8), ``inner`` ('apgd' | 'ipm' | 'pgs' |
         'faceted'), ``outer`` ('anderson' | 'fixed_point' | 'fused'), ``fallback``
         (('pgs', 'fused') or None), ``warmup_sweeps``, ``barrier_steps`` (the interior-point
-        try on Coulomb's law when the main method stalls; 0 turns it off), ``max_outer``, ``max_inner``,
+        try on Coulomb's law before the main method of a cold solve of a rigid problem; 0 turns
+        it off), ``max_outer``, ``max_inner``,
         ``time_limit`` (seconds or None), ``fixed_point_tol`` (ε of (6.1) or None),
         ``facets``, ``inner_tol_factor``, ``newton_steps``, ``newton_start``; and
         ``method='inner+outer'`` for that method alone (no warm-up, no interior-point try, no

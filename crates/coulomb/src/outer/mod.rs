@@ -229,7 +229,7 @@ impl<'a> Solver<'a> {
 
     /// Solves the problem from `guess` (a cold start when None) under the settings' policy:
     /// warm-up sweeps, the interior-point try on Coulomb's law ([`Solver::barrier_try`]) on a
-    /// cold solve of a rigid global problem ([`Solver::barrier_applies`]), the main method,
+    /// cold solve of a rigid problem ([`Solver::barrier_applies`]), the main method,
     /// the fallback. The time limit covers all of them.
     pub fn solve(&mut self, guess: Option<&Guess>) -> Result<Solution, SolveError> {
         let start = Instant::now();
@@ -244,11 +244,12 @@ impl<'a> Solver<'a> {
             stages.push(warm);
         }
         if guess.is_none() && self.barrier_applies() {
-            let tried = self.barrier_try(deadline)?;
-            if tried.0.converged() || deadline.passed() {
-                return Ok(merge(stages, tried, start));
+            if let Some(tried) = self.barrier_try(deadline)? {
+                if tried.0.converged() || deadline.passed() {
+                    return Ok(merge(stages, tried, start));
+                }
+                stages.push(tried);
             }
-            stages.push(tried);
         }
         // the main method starts from the caller's point, not from the warm-up's r: on hard
         // problems Gauss–Seidel's r leads the fixed point of the main method astray
@@ -301,11 +302,13 @@ impl Solver<'_> {
         Ok(stage.run(&mut self.solvers))
     }
 
-    /// Whether the interior-point try runs first: [`Settings::barrier_steps`] > 0, every
+    /// Whether the interior-point try may run first: [`Settings::barrier_steps`] > 0, every
     /// μ > 0, and a global problem with at most half as many degrees of freedom as contact
     /// unknowns and at most [`crate::settings::BarrierParams::max_schur_dofs`] (rigid bodies
     /// touching at several points per face: W is rank-deficient, and the Newton systems are of
-    /// the size of M).
+    /// the size of M), or a local problem with at most
+    /// [`crate::settings::BarrierParams::max_skeleton_unknowns`] contact unknowns (the try
+    /// then runs only if W has a skeleton of rank ≤ m/2: [`crate::barrier::Setup::structured`]).
     fn barrier_applies(&self) -> bool {
         let (settings, local) = (&self.settings, self.form.local());
         let bp = &settings.tuning.barrier;
@@ -313,7 +316,7 @@ impl Solver<'_> {
             Stored::Global(g, _) => {
                 g.m.nrows <= bp.max_schur_dofs && 2 * g.m.nrows <= local.q.len()
             }
-            Stored::Local(_) => false,
+            Stored::Local(_) => local.q.len() <= bp.max_skeleton_unknowns,
         };
         small
             && settings.barrier_steps > 0
@@ -327,8 +330,10 @@ impl Solver<'_> {
     /// ≤ [`crate::settings::LmParams::start`], until one reaches the tolerance or the try's
     /// share of the time is spent. Its best point is judged on the problem as stored like
     /// every iterate (status `converged`, `unbounded` or `max_iterations`; one outer record
-    /// whose inner iterations are all its Newton and LM steps).
-    fn barrier_try(&mut self, deadline: Deadline) -> Result<Ran, SolveError> {
+    /// whose inner iterations are all its Newton and LM steps). None (nothing run) when the
+    /// Newton systems have neither a Schur complement nor a skeleton
+    /// ([`crate::barrier::Setup::structured`]).
+    fn barrier_try(&mut self, deadline: Deadline) -> Result<Option<Ran>, SolveError> {
         let settings = &self.settings;
         let (bp, lm) = (settings.tuning.barrier, settings.tuning.lm);
         let local = self.form.local();
@@ -342,15 +347,18 @@ impl Solver<'_> {
             Stored::Global(g, _) => Some(&**g),
             Stored::Local(_) => None,
         };
+        let Some(setup) = crate::barrier::Setup::structured(local, global, &bp, share) else {
+            return Ok(None);
+        };
         let mut best: Option<(Vec<f64>, f64)> = None;
         let mut steps = 0;
         for path in bp.paths {
             if share.passed() {
                 break;
             }
-            let (mut r, report) = crate::barrier::solve(
+            let (mut r, report) = crate::barrier::solve_with(
                 local,
-                global,
+                &setup,
                 target,
                 settings.barrier_steps,
                 &bp,
@@ -390,7 +398,7 @@ impl Solver<'_> {
         });
         solution.outer_iterations += 1;
         solution.inner_iterations += steps;
-        Ok((solution, best))
+        Ok(Some((solution, best)))
     }
 }
 
@@ -567,19 +575,37 @@ mod tests {
     }
 
     #[test]
-    fn a_local_problem_never_tries_the_interior_point_method() {
-        // rank-deficient local problems, main method capped (a handover to the fallback): the
-        // default policy tries the interior point only on rigid global problems
+    fn a_rank_deficient_local_problem_tries_the_interior_point_method_first() {
+        // W = AᵀA (rank m/2, the rigid multi-contact case), symmetric or with an antisymmetric
+        // part as stored in real files: a cold solve tries the interior point on the skeleton
+        // of W first (its record comes first, no warm-up); the verdict is on W as stored. With
+        // W = AᵀA + 0.05 I (full rank) there is no skeleton and no try.
         for seed in 0..3 {
-            let p = crate::levenberg::tests::problem(8, seed, 0.0, 0.0);
-            let settings = Settings {
-                max_outer: 2,
-                warmup_sweeps: 0,
-                time_limit: None,
-                ..Settings::default()
-            };
-            let sol = solve(&Problem::Local(p), &settings).unwrap();
-            assert_eq!(barrier_records(&sol), 0, "seed {seed}");
+            for skew in [0.0, 1e-3] {
+                let p = crate::levenberg::tests::problem(8, seed, 0.0, skew);
+                let settings = Settings {
+                    warmup_sweeps: 0,
+                    time_limit: None,
+                    ..Settings::default()
+                };
+                let sol = solve(&Problem::Local(p.clone()), &settings).unwrap();
+                assert!(sol.history[0].fixed_point_residual.is_nan(), "seed {seed}");
+                assert_eq!(barrier_records(&sol), 1, "seed {seed} skew {skew}");
+                let recomputed = p.error(&sol.r).error;
+                assert!(
+                    (recomputed - sol.error).abs() <= 1e-12 * recomputed.max(1e-300),
+                    "seed {seed} skew {skew}: reported {} recomputed {recomputed}",
+                    sol.error
+                );
+                assert_eq!(sol.converged(), recomputed <= settings.tol);
+                let full = crate::levenberg::tests::problem(8, seed, 0.05, skew);
+                let capped = Settings {
+                    max_outer: 2,
+                    ..settings.clone()
+                };
+                let sol = solve(&Problem::Local(full), &capped).unwrap();
+                assert_eq!(barrier_records(&sol), 0, "seed {seed} skew {skew}");
+            }
         }
     }
 

@@ -108,6 +108,21 @@ pub fn settings(args: &Args) -> anyhow::Result<Settings> {
     Ok(s)
 }
 
+/// `f()` run on its own thread, or None if it has not returned within `budget`. The existence
+/// check's conic solves have a time cap each, but not their setup (an LDL of a large KKT matrix
+/// can take minutes): a check that overruns is abandoned, and the thread ends with the process.
+fn within<T: Send + 'static>(
+    budget: Duration,
+    f: impl FnOnce() -> T + Send + 'static,
+) -> Option<T> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        // the receiver may be gone (time is up): nothing to report then
+        let _ = tx.send(f());
+    });
+    rx.recv_timeout(budget).ok()
+}
+
 /// Runs `coulomb solve`: exit status 0 when converged, 1 otherwise (see `crate::exit`).
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let settings = settings(&args)?;
@@ -128,14 +143,29 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         });
         crate::outputs::write_fclib(out, &written)?;
     }
-    // a solve that did not converge: say whether a solution can exist at all (§4–5)
+    // a solve that did not converge: say whether a solution can exist at all (§4–5), within
+    // the solve's time limit again (30 s without one)
     let existence = if sol.converged() {
         None
     } else {
-        match coulomb::existence::check(&file.problem, &Default::default()) {
-            Ok(ex) => Some(crate::existence_json::to_json(&args.file, &ex, false)),
-            Err(e) => Some(serde_json::json!({ "error": e.to_string() })),
-        }
+        let budget = settings.time_limit.unwrap_or(Duration::from_secs(30));
+        let check = coulomb::existence::CheckSettings {
+            time_limit: budget,
+            ..Default::default()
+        };
+        let problem = file.problem.clone();
+        let checked = within(budget, move || coulomb::existence::check(&problem, &check));
+        Some(match checked {
+            Some(Ok(ex)) => crate::existence_json::to_json(&args.file, &ex, false),
+            Some(Err(e)) => serde_json::json!({ "error": e.to_string() }),
+            None => serde_json::json!({
+                "conclusion": "unknown",
+                "skipped": format!(
+                    "the existence check did not finish within {:.3} s (the solve's time limit)",
+                    budget.as_secs_f64()
+                ),
+            }),
+        })
     };
     let report = Report {
         file: args.file.display().to_string(),
@@ -182,7 +212,10 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
                 "exists" => "a solution exists: the solver missed it",
                 _ => "the existence criteria are inconclusive",
             };
-            println!("existence         {conclusion} ({verdict})");
+            match ex.get("skipped").and_then(|m| m.as_str()) {
+                Some(why) => println!("existence         not checked: {why}"),
+                None => println!("existence         {conclusion} ({verdict})"),
+            }
             if let Some(by) = ex.get("by").and_then(|b| b.as_str()) {
                 println!("                  by criterion ({by})");
             }
@@ -193,4 +226,22 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     } else {
         Outcome::No
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::within;
+    use std::time::{Duration, Instant};
+
+    #[test]
+    fn a_task_past_its_budget_is_abandoned() {
+        let start = Instant::now();
+        let late = within(Duration::from_millis(50), || {
+            std::thread::sleep(Duration::from_secs(5));
+            1
+        });
+        assert_eq!(late, None);
+        assert!(start.elapsed() < Duration::from_secs(4));
+        assert_eq!(within(Duration::from_secs(5), || 2), Some(2));
+    }
 }

@@ -67,7 +67,8 @@ pub enum BarrierStatus {
     /// cones
     LinearSolve,
     /// a contact has μ = 0 (the scaled coordinates need μ > 0), there is no contact, the
-    /// sizes disagree, or the symbolic LU of the pattern of W failed: no step taken
+    /// sizes disagree (also with the [`Setup`]'s problem), or the symbolic LU of the pattern
+    /// of W failed: no step taken
     NotApplicable,
 }
 
@@ -247,6 +248,8 @@ impl State {
 /// solved; chosen once per problem (the runs of the policy's try share it).
 pub struct Setup<'g> {
     linear: Linear<'g>,
+    /// m, the number of contact unknowns of the problem it was set up for
+    unknowns: usize,
 }
 
 /// The factorization a [`Setup`] uses.
@@ -291,6 +294,7 @@ impl<'g> Setup<'g> {
         if let Some(g) = schur {
             return Some(Self {
                 linear: Linear::Schur(g),
+                unknowns: m,
             });
         }
         if m > params.max_skeleton_unknowns || p.w.nrows != m {
@@ -299,6 +303,7 @@ impl<'g> Setup<'g> {
         let max_rank = params.max_schur_dofs.min(m / 2);
         Skeleton::new(&p.w, p.dim, max_rank, params.rank_tol, deadline).map(|s| Self {
             linear: Linear::Skeleton(Box::new(s), std::cell::OnceCell::new()),
+            unknowns: m,
         })
     }
 
@@ -313,6 +318,7 @@ impl<'g> Setup<'g> {
         Self::structured(p, global, params, deadline).or_else(|| {
             JacobianPattern::new(p).map(|pattern| Self {
                 linear: Linear::Pattern(pattern),
+                unknowns: p.q.len(),
             })
         })
     }
@@ -380,7 +386,13 @@ pub fn solve_with(
         gap,
         exact_steps,
     };
-    if n == 0 || p.q.len() != m || p.mu.iter().any(|&mu| !(mu > 0.0 && mu.is_finite())) {
+    if n == 0
+        || p.q.len() != m
+        || setup.unknowns != m
+        || p.w.nrows != m
+        || p.w.ncols != m
+        || p.mu.iter().any(|&mu| !(mu > 0.0 && mu.is_finite()))
+    {
         return not_applicable(p);
     }
     let linear = &setup.linear;
@@ -670,7 +682,7 @@ impl NewtonSystem {
                 }
                 if let Some(Factor::Skeleton(f)) = &self.factor {
                     let b = rhs.to_vec();
-                    if self.refined(p, sk, f, rhs).is_some() {
+                    if self.refined(p, sk, f, &b, rhs).is_some() {
                         return Some(());
                     }
                     rhs.copy_from_slice(&b);
@@ -697,18 +709,19 @@ impl NewtonSystem {
     /// None unless the residual (max norm) reaches [`BarrierParams::refine_tol`] times the
     /// right-hand side's. (Near the end of the path G has tiny blocks and the Woodbury
     /// formula cancels large terms: there the refinement stalls, see docs/rigid.md.)
+    /// (`rhs` holds b on entry, x on return.)
     fn refined(
         &self,
         p: &LocalProblem,
         sk: &Skeleton,
         f: &crate::skeleton::SkeletonLu,
+        b: &[f64],
         rhs: &mut [f64],
     ) -> Option<()> {
         let max_abs = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-        let b = rhs.to_vec();
-        let goal = self.refine_tol * max_abs(&b);
+        let goal = self.refine_tol * max_abs(b);
         sk.solve(f, rhs)?;
-        let mut res = self.residual(p, &b, rhs);
+        let mut res = self.residual(p, b, rhs);
         for _ in 0..self.refine_steps {
             if max_abs(&res) <= goal {
                 break;
@@ -717,7 +730,7 @@ impl NewtonSystem {
             for (x, dx) in rhs.iter_mut().zip(&res) {
                 *x += dx;
             }
-            res = self.residual(p, &b, rhs);
+            res = self.residual(p, b, rhs);
         }
         (max_abs(&res) <= goal && rhs.iter().all(|x| x.is_finite())).then_some(())
     }
@@ -1097,21 +1110,19 @@ mod tests {
             let sparse = Setup::new(&p, None, &no_skeleton, deadline).unwrap();
             assert_eq!(sparse.kind(), LinearKind::SparseLu);
             assert!(Setup::structured(&p, None, &no_skeleton, deadline).is_none());
+            // a setup used on another problem takes no step
+            let other = crate::levenberg::tests::problem(5, 5, 0.0, skew);
+            for setup in [&skeleton, &sparse] {
+                let (_, rep) =
+                    solve_with(&other, setup, 0.0, 3, &params, params.paths[0], deadline);
+                assert_eq!(rep.status, BarrierStatus::NotApplicable);
+            }
             for steps in [3, 8] {
                 let run =
                     |setup| solve_with(&p, setup, 0.0, steps, &params, params.paths[0], deadline);
                 let ((r1, a), (r2, b)) = (run(&sparse), run(&skeleton));
                 assert_eq!((a.steps, b.steps), (steps, steps));
-                let diff = r1
-                    .iter()
-                    .zip(&r2)
-                    .map(|(x, y)| (x - y).abs())
-                    .fold(0.0, f64::max);
-                let size = r1.iter().fold(0.0f64, |s, x| s.max(x.abs()));
-                assert!(
-                    diff <= 1e-6 * size,
-                    "skew {skew}, {steps} steps: differ by {diff} (size {size})"
-                );
+                assert_same_iterates(&r1, &r2, &format!("skew {skew}, {steps} steps"));
             }
         }
     }
@@ -1150,19 +1161,23 @@ mod tests {
             };
             let ((r1, a), (r2, b)) = (run(None), run(Some(&g)));
             assert_eq!((a.steps, b.steps), (steps, steps));
-            let diff = r1
-                .iter()
-                .zip(&r2)
-                .map(|(x, y)| (x - y).abs())
-                .fold(0.0, f64::max);
-            let size = r1.iter().fold(0.0f64, |s, x| s.max(x.abs()));
-            // equal up to rounding (amplified as the iterates near the boundary of the cones);
-            // a wrong elimination would differ at the first step
-            assert!(
-                diff <= 1e-6 * size,
-                "{steps} steps: differ by {diff} (size {size})"
-            );
+            assert_same_iterates(&r1, &r2, &format!("{steps} steps"));
         }
+    }
+
+    /// Two runs' iterates are equal up to rounding (amplified as the iterates near the
+    /// boundary of the cones); a wrong elimination would differ at the first step.
+    fn assert_same_iterates(r1: &[f64], r2: &[f64], what: &str) {
+        let diff = r1
+            .iter()
+            .zip(r2)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
+        let size = r1.iter().fold(0.0f64, |s, x| s.max(x.abs()));
+        assert!(
+            diff <= 1e-6 * size,
+            "{what}: differ by {diff} (size {size})"
+        );
     }
 
     #[test]

@@ -40,7 +40,8 @@
 //!   cold start (WARM_SECONDS ignored; a global file uses its Schur path unless NO_SCHUR is
 //!   set; a local one its skeleton when it has one, SKELETON_MAX=0 turns it off, RANK_TOL,
 //!   REFINE, REFINE_TOL override its rank tolerance, refinement steps and tolerance), then LM from its best point;
-//!   env BARRIER_STEPS, BARRIER_STALL, BARRIER_SMOOTH,
+//!   env BARRIER_STEPS, BARRIER_STALL, BARRIER_SETTLE, BARRIER_SETTLE_BELOW,
+//!   BARRIER_SETTLE_ALPHA, BARRIER_SMOOTH,
 //!   BARRIER_RECENTRE, BARRIER_MARGIN, BARRIER_TOL override its parameters;
 //! - `trace`: the default solver's history on the local form (an interior-point try would
 //!   show no ‖F(s) − s‖; the policy runs it on rigid global problems only);
@@ -641,6 +642,9 @@ fn main() {
         let d = coulomb::settings::BarrierParams::default();
         let params = coulomb::settings::BarrierParams {
             stall_steps: envf("BARRIER_STALL", d.stall_steps as f64) as usize,
+            settle_steps: envf("BARRIER_SETTLE", d.settle_steps as f64) as usize,
+            settle_below: envf("BARRIER_SETTLE_BELOW", d.settle_below),
+            settle_alpha: envf("BARRIER_SETTLE_ALPHA", d.settle_alpha),
             start_margin: envf("BARRIER_MARGIN", d.start_margin),
             ..d
         };

@@ -265,6 +265,15 @@ pub struct NewtonParams {
 pub struct BarrierParams {
     /// a run stops when its lowest error has not improved for this many steps; ≥ 1
     pub stall_steps: usize,
+    /// once its lowest error is ≤ `settle_below`, a run stops after this many steps in a row
+    /// cut below `settle_alpha` of the Newton step (jammed near the end of the path, where
+    /// the try's Levenberg–Marquardt finish, [`LmParams::start`], usually ends it in a few
+    /// steps; docs/rigid.md); ≥ 1
+    pub settle_steps: usize,
+    /// see `settle_steps`; ≥ 0 (0: never)
+    pub settle_below: f64,
+    /// see `settle_steps`; in (0, 1)
+    pub settle_alpha: f64,
     /// fraction of the step to the boundary of the cones that is taken; in (0, 1)
     pub boundary_fraction: f64,
     /// (smoothing, recentring) of the runs of a try, in order: on hard rigid problems the
@@ -301,6 +310,9 @@ impl Default for BarrierParams {
         use crate::barrier::PathParams;
         Self {
             stall_steps: 30,
+            settle_steps: 5,
+            settle_below: 1e-6,
+            settle_alpha: 0.1,
             boundary_fraction: 0.99,
             paths: [
                 PathParams {
@@ -336,8 +348,10 @@ impl BarrierParams {
     fn validate(&self) -> Result<(), String> {
         let fraction = |x: f64| x.is_finite() && x > 0.0 && x < 1.0;
         let positive = |x: f64| x.is_finite() && x > 0.0;
-        if self.stall_steps == 0 || self.max_schur_dofs == 0 {
-            return Err("tuning.barrier: stall_steps and max_schur_dofs must be ≥ 1".into());
+        if self.stall_steps == 0 || self.settle_steps == 0 || self.max_schur_dofs == 0 {
+            return Err(
+                "tuning.barrier: stall_steps, settle_steps and max_schur_dofs must be ≥ 1".into(),
+            );
         }
         let paths_ok = self.paths.iter().all(|p| {
             p.smoothing.is_finite()
@@ -347,6 +361,9 @@ impl BarrierParams {
         });
         let ok = fraction(self.boundary_fraction)
             && paths_ok
+            && self.settle_below.is_finite()
+            && self.settle_below >= 0.0
+            && fraction(self.settle_alpha)
             && positive(self.start_margin)
             && positive(self.start_floor)
             && positive(self.time_share)

@@ -5,7 +5,7 @@
 //! | 0 | success: `solve` converged, `error` says "yes", `check` proved that a solution exists, other commands finished |
 //! | 1 | the command ran and the answer is negative: `solve` did not converge (any status other than converged), `error` says "no", `check` proved that no solution exists |
 //! | 2 | bad input or usage: unknown option, invalid value, unreadable or invalid file, output path refused (same as an input, folder missing, not writable) |
-//! | 3 | inconclusive: `check` could neither prove nor disprove existence |
+//! | 3 | inconclusive: `check` could neither prove nor disprove existence, or did not finish within its `--time-limit` |
 //! | 4 | an output could not be written (disk full, permissions): the destination is left as it was |
 //!
 //! Clap's own usage errors exit with 2 too; `--help` and `--version` exit with 0. A closed
@@ -28,7 +28,7 @@ pub enum Outcome {
     Success,
     /// status 1: not converged, "no", no solution exists
     No,
-    /// status 3: the existence criteria are inconclusive
+    /// status 3: the existence criteria are inconclusive (or `check` ran out of time)
     Inconclusive,
     /// status 2, after the command reported its own failures (e.g. `info` on several files,
     /// some unreadable: the table or JSON array names them)

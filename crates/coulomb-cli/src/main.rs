@@ -1,5 +1,6 @@
 //! `coulomb`: solve, check, simulate and benchmark discrete Coulomb frictional contact problems.
 
+mod budget;
 mod cmd;
 mod existence_json;
 mod exit;

@@ -163,3 +163,44 @@ fn bad_input_is_an_error_not_a_panic() {
         assert!(!String::from_utf8_lossy(&out.stderr).contains("panicked"));
     }
 }
+
+#[test]
+fn a_check_past_its_time_limit_is_inconclusive() {
+    // the whole check runs under --time-limit: past it the conclusion is "unknown" (exit
+    // status 3) and says why; within it the same file gets its verdict
+    let file = tmp("painleve-time-limit.hdf5");
+    let out = coulomb(&[
+        "example",
+        "painleve",
+        "--theta",
+        "30",
+        "--mu",
+        "0.3",
+        "--u0",
+        "1",
+        "--output",
+        file.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let f = file.to_str().unwrap();
+    let out = coulomb(&["check", f, "--json", "--time-limit", "0.000001"]);
+    assert_eq!(out.status.code(), Some(3));
+    let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(j["conclusion"], "unknown");
+    assert!(
+        j["skipped"].as_str().unwrap().contains("did not finish"),
+        "{j}"
+    );
+    let out = coulomb(&["check", f, "--time-limit", "0.000001"]);
+    assert_eq!(out.status.code(), Some(3));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("UNKNOWN"));
+    assert_eq!(check_json(&file)["conclusion"], "exists");
+    for bad in ["0", "-1", "nan"] {
+        let out = coulomb(&["check", f, "--time-limit", bad]);
+        assert_eq!(out.status.code(), Some(2), "--time-limit {bad}");
+    }
+}

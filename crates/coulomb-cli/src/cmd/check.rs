@@ -8,6 +8,7 @@ use coulomb::Problem;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 /// Arguments of `coulomb check`.
 #[derive(clap::Args, Debug)]
@@ -26,17 +27,25 @@ pub struct Args {
     /// print the certificate vectors too (table: first entries; JSON: in full)
     #[arg(long)]
     pub certificates: bool,
+    /// wall-clock limit of the whole check in seconds (each conic solve is also capped at
+    /// 30 s); past it the conclusion is "unknown" (exit status 3)
+    #[arg(long, value_name = "SECONDS", default_value_t = 300.0,
+          value_parser = crate::values::time_limit)]
+    pub time_limit: f64,
 }
 
 /// Runs `coulomb check`: exit status 0 when a solution exists, 1 when none can exist, 3 when
-/// the criteria are inconclusive. A spinner on stderr (terminal only, not with --json) names
-/// the criterion being evaluated.
+/// the criteria are inconclusive or the check did not finish within `--time-limit`. A spinner
+/// on stderr (terminal only, not with --json) names the criterion being evaluated.
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let problem = read_problem(&args.file)?;
+    let budget = Duration::from_secs_f64(args.time_limit);
+    let defaults = CheckSettings::default();
     let settings = CheckSettings {
         tol: args.tol,
         certificate_tol: args.certificate_tol,
-        ..CheckSettings::default()
+        time_limit: defaults.time_limit.min(budget),
+        ..defaults
     };
     let spinner = if args.json || !std::io::stderr().is_terminal() {
         ProgressBar::hidden()
@@ -50,10 +59,33 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         pb
     };
     let contacts = problem.contacts();
-    let report = existence::check_with_progress(&problem, &settings, &mut |c| {
-        spinner.set_message(format!("criterion ({}) on {contacts} contacts", c.label()));
-    })?;
+    let shown = spinner.clone();
+    // the check runs on its own thread, abandoned past the budget (a conic solve's setup is
+    // not interruptible)
+    let checked = crate::budget::within(budget, move || {
+        existence::check_with_progress(&problem, &settings, &mut |c| {
+            shown.set_message(format!("criterion ({}) on {contacts} contacts", c.label()));
+        })
+    });
     spinner.finish_and_clear();
+    let Some(report) = checked else {
+        let why = format!(
+            "the check did not finish within {} s (--time-limit)",
+            args.time_limit
+        );
+        if args.json {
+            let j = serde_json::json!({
+                "file": args.file.display().to_string(),
+                "conclusion": "unknown",
+                "skipped": why,
+            });
+            println!("{}", crate::outputs::json(&j, true)?);
+        } else {
+            println!("{}: conclusion: UNKNOWN: {why}", args.file.display());
+        }
+        return Ok(Outcome::Inconclusive);
+    };
+    let report = report?;
     if args.json {
         println!(
             "{}",

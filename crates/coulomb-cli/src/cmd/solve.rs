@@ -108,21 +108,6 @@ pub fn settings(args: &Args) -> anyhow::Result<Settings> {
     Ok(s)
 }
 
-/// `f()` run on its own thread, or None if it has not returned within `budget`. The existence
-/// check's conic solves have a time cap each, but not their setup (an LDL of a large KKT matrix
-/// can take minutes): a check that overruns is abandoned, and the thread ends with the process.
-fn within<T: Send + 'static>(
-    budget: Duration,
-    f: impl FnOnce() -> T + Send + 'static,
-) -> Option<T> {
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        // the receiver may be gone (time is up): nothing to report then
-        let _ = tx.send(f());
-    });
-    rx.recv_timeout(budget).ok()
-}
-
 /// Runs `coulomb solve`: exit status 0 when converged, 1 otherwise (see `crate::exit`).
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let settings = settings(&args)?;
@@ -154,7 +139,8 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             ..Default::default()
         };
         let problem = file.problem.clone();
-        let checked = within(budget, move || coulomb::existence::check(&problem, &check));
+        let checked =
+            crate::budget::within(budget, move || coulomb::existence::check(&problem, &check));
         Some(match checked {
             Some(Ok(ex)) => crate::existence_json::to_json(&args.file, &ex, false),
             Some(Err(e)) => serde_json::json!({ "error": e.to_string() }),
@@ -226,22 +212,4 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     } else {
         Outcome::No
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::within;
-    use std::time::{Duration, Instant};
-
-    #[test]
-    fn a_task_past_its_budget_is_abandoned() {
-        let start = Instant::now();
-        let late = within(Duration::from_millis(50), || {
-            std::thread::sleep(Duration::from_secs(5));
-            1
-        });
-        assert_eq!(late, None);
-        assert!(start.elapsed() < Duration::from_secs(4));
-        assert_eq!(within(Duration::from_secs(5), || 2), Some(2));
-    }
 }

@@ -39,7 +39,8 @@
 //! - `barrier`: the interior-point method on the law ([`coulomb::barrier::solve`]) from its
 //!   cold start (WARM_SECONDS ignored; a global file uses its Schur path unless NO_SCHUR is
 //!   set; a local one its skeleton when it has one, SKELETON_MAX=0 turns it off, RANK_TOL,
-//!   REFINE, REFINE_TOL override its rank tolerance, refinement steps and tolerance), then LM from its best point;
+//!   REFINE, REFINE_TOL, STRIKES override its rank tolerance, refinement steps, tolerance and
+//!   strikes), then LM from its best point;
 //!   env BARRIER_STEPS, BARRIER_STALL, BARRIER_SETTLE, BARRIER_SETTLE_BELOW,
 //!   BARRIER_SETTLE_ALPHA, BARRIER_SMOOTH,
 //!   BARRIER_RECENTRE, BARRIER_MARGIN, BARRIER_TOL override its parameters;
@@ -661,6 +662,7 @@ fn main() {
             rank_tol: envf("RANK_TOL", params.rank_tol),
             refine_steps: envf("REFINE", params.refine_steps as f64) as usize,
             refine_tol: envf("REFINE_TOL", params.refine_tol),
+            skeleton_strikes: envf("STRIKES", params.skeleton_strikes as f64) as usize,
             ..params
         };
         let Some(setup) = coulomb::barrier::Setup::new(&p, global.as_ref(), &params, dl) else {

@@ -545,6 +545,12 @@ struct NewtonSystem {
     refine_tol: f64,
     /// steps solved by the sparse LU although a skeleton was set up
     exact_steps: usize,
+    /// [`BarrierParams::skeleton_strikes`]
+    skeleton_strikes: usize,
+    /// the exact steps in a row up to this one (the current step counts once it falls back)
+    exact_run: usize,
+    /// whether the current step fell back to the sparse LU
+    step_exact: bool,
 }
 
 impl NewtonSystem {
@@ -571,6 +577,9 @@ impl NewtonSystem {
             refine_steps: params.refine_steps,
             refine_tol: params.refine_tol,
             exact_steps: 0,
+            skeleton_strikes: params.skeleton_strikes,
+            exact_run: 0,
+            step_exact: false,
         }
     }
 
@@ -578,6 +587,12 @@ impl NewtonSystem {
         let d = self.d;
         self.factor = None;
         self.shift = 0.0;
+        self.exact_run = if self.step_exact {
+            self.exact_run + 1
+        } else {
+            0
+        };
+        self.step_exact = false;
         for (i, &mu) in p.mu.iter().enumerate() {
             let at = i * d;
             let (ai, bi) = (&x.a[at..at + d], &x.b[at..at + d]);
@@ -665,7 +680,8 @@ impl NewtonSystem {
     /// Through a skeleton, a solve whose refinement on W does not reach
     /// [`BarrierParams::refine_tol`] is redone, for the rest of the step, by a sparse LU of
     /// W + G (the skeleton only approximates a W with an antisymmetric part, and near the end
-    /// of the path G is small).
+    /// of the path G is small); after [`BarrierParams::skeleton_strikes`] such steps in a row,
+    /// every later step of the run goes to the sparse LU directly.
     fn linear_solve(
         &mut self,
         p: &LocalProblem,
@@ -684,7 +700,10 @@ impl NewtonSystem {
                 schur_apply(self.d, g, ginv, lu, rhs)
             }
             Linear::Skeleton(sk, exact) => {
-                if self.factor.is_none() {
+                // after `skeleton_strikes` steps in a row that fell back, the run keeps to the
+                // sparse LU (W far from symmetric, or the end of the path)
+                let skip = self.exact_run >= self.skeleton_strikes;
+                if self.factor.is_none() && !skip {
                     self.factor = self
                         .inverse_blocks()
                         .and_then(|ginv| sk.factor(&ginv))
@@ -701,6 +720,7 @@ impl NewtonSystem {
                 let pattern = exact.get_or_init(|| JacobianPattern::new(p)).as_ref()?;
                 if self.factor.is_none() {
                     self.exact_steps += 1;
+                    self.step_exact = true;
                     pattern.fill(
                         p,
                         &self.dblocks,
@@ -1164,6 +1184,40 @@ mod tests {
                 let ((r1, a), (r2, b)) = (run(&sparse), run(&skeleton));
                 assert_eq!((a.steps, b.steps), (steps, steps));
                 assert_same_iterates(&r1, &r2, &format!("skew {skew}, {steps} steps"));
+            }
+        }
+    }
+
+    #[test]
+    fn a_run_gives_up_the_skeleton_after_its_strikes() {
+        // W with a large antisymmetric part: the refined skeleton solves fall short and those
+        // steps are solved by the sparse LU; after `skeleton_strikes` such steps in a row the
+        // run goes to the sparse LU directly. Where every step falls back (skew 0.3) the same
+        // sparse LU solves every step either way: the same iterates; where some would not
+        // (skew 0.1) the run has more exact steps and the same iterates to rounding
+        let deadline = Deadline::NEVER;
+        let base = BarrierParams::default();
+        let never = BarrierParams {
+            skeleton_strikes: usize::MAX,
+            ..base
+        };
+        for skew in [0.3, 0.1] {
+            let p = crate::levenberg::tests::problem(8, 2, 0.0, skew);
+            let setup = Setup::new(&p, None, &base, deadline).unwrap();
+            assert!(matches!(setup.kind(), LinearKind::Skeleton { .. }));
+            let run =
+                |bp: &BarrierParams| solve_with(&p, &setup, 0.0, 12, bp, bp.paths[0], deadline);
+            let ((r1, a), (r2, b)) = (run(&never), run(&base));
+            assert_eq!((a.steps, b.steps), (12, 12));
+            if skew == 0.3 {
+                assert_eq!((a.exact_steps, b.exact_steps), (12, 12), "{a:?} {b:?}");
+                assert_eq!(r1, r2);
+            } else {
+                assert!(
+                    a.exact_steps < 12 && b.exact_steps > a.exact_steps,
+                    "{a:?} {b:?}"
+                );
+                assert_same_iterates(&r1, &r2, "skew 0.1");
             }
         }
     }

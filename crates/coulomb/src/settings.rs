@@ -266,7 +266,7 @@ pub struct BarrierParams {
     /// a run stops when its lowest error has not improved for this many steps; ≥ 1
     pub stall_steps: usize,
     /// once its lowest error is ≤ `settle_below`, a run stops after this many steps in a row
-    /// cut below `settle_alpha` of the Newton step (jammed near the end of the path, where
+    /// cut below `settle_alpha` of the Newton step (jammed near the end of its path, where
     /// the try's Levenberg–Marquardt finish, [`LmParams::start`], usually ends it in a few
     /// steps; docs/rigid.md); ≥ 1
     pub settle_steps: usize,
@@ -303,6 +303,9 @@ pub struct BarrierParams {
     /// … until its residual (max norm) is ≤ this multiple of the right-hand side's; else the
     /// step is solved by the sparse LU of W + G; > 0
     pub refine_tol: f64,
+    /// after this many steps in a row solved by the sparse LU that way, a run no longer tries
+    /// the skeleton (every solve of a W with a large antisymmetric part falls back); ≥ 1
+    pub skeleton_strikes: usize,
 }
 
 impl Default for BarrierParams {
@@ -340,6 +343,7 @@ impl Default for BarrierParams {
             rank_tol: 1e-10,
             refine_steps: 4,
             refine_tol: 1e-10,
+            skeleton_strikes: 3,
         }
     }
 }
@@ -348,9 +352,15 @@ impl BarrierParams {
     fn validate(&self) -> Result<(), String> {
         let fraction = |x: f64| x.is_finite() && x > 0.0 && x < 1.0;
         let positive = |x: f64| x.is_finite() && x > 0.0;
-        if self.stall_steps == 0 || self.settle_steps == 0 || self.max_schur_dofs == 0 {
+        if self.stall_steps == 0
+            || self.settle_steps == 0
+            || self.max_schur_dofs == 0
+            || self.skeleton_strikes == 0
+        {
             return Err(
-                "tuning.barrier: stall_steps, settle_steps and max_schur_dofs must be ≥ 1".into(),
+                "tuning.barrier: stall_steps, settle_steps, max_schur_dofs and \
+                 skeleton_strikes must be ≥ 1"
+                    .into(),
             );
         }
         let paths_ok = self.paths.iter().all(|p| {

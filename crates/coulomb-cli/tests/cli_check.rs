@@ -35,23 +35,7 @@ fn painleve_round_trip_matches_2_13() {
         ("20", "0.6", "0", true),
     ] {
         let out_file = tmp(&format!("painleve-{theta}-{mu}-{u0}.hdf5"));
-        let out = coulomb(&[
-            "example",
-            "painleve",
-            "--theta",
-            theta,
-            "--mu",
-            mu,
-            "--u0",
-            u0,
-            "--output",
-            out_file.to_str().unwrap(),
-        ]);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        painleve(&out_file, theta, mu, u0);
         let j = check_json(&out_file);
         assert_eq!(j["file"], out_file.to_str().unwrap());
         let want = if holds { "holds" } else { "fails" };
@@ -169,23 +153,7 @@ fn a_check_past_its_time_limit_is_inconclusive() {
     // the whole check runs under --time-limit: past it the conclusion is "unknown" (exit
     // status 3) and says why; within it the same file gets its verdict
     let file = tmp("painleve-time-limit.hdf5");
-    let out = coulomb(&[
-        "example",
-        "painleve",
-        "--theta",
-        "30",
-        "--mu",
-        "0.3",
-        "--u0",
-        "1",
-        "--output",
-        file.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    painleve(&file, "30", "0.3", "1");
     let f = file.to_str().unwrap();
     let out = coulomb(&["check", f, "--json", "--time-limit", "0.000001"]);
     assert_eq!(out.status.code(), Some(3));

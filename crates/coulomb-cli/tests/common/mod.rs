@@ -64,3 +64,21 @@ pub fn ok(out: &Output) -> String {
 pub fn stdout_json(out: &Output) -> Value {
     serde_json::from_str(&ok(out)).expect("valid JSON on stdout")
 }
+
+/// Writes the Painlevé example (θ in degrees, μ, u₀) to `path` with `coulomb example
+/// painleve`, asserting that it succeeded.
+pub fn painleve(path: &Path, theta: &str, mu: &str, u0: &str) {
+    let out = coulomb(&[
+        "example",
+        "painleve",
+        "--theta",
+        theta,
+        "--mu",
+        mu,
+        "--u0",
+        u0,
+        "--output",
+        path.to_str().expect("a UTF-8 path"),
+    ]);
+    ok(&out);
+}

@@ -43,7 +43,14 @@
 //!   strikes), then LM from its best point;
 //!   env BARRIER_STEPS, BARRIER_STALL, BARRIER_SETTLE, BARRIER_SETTLE_BELOW,
 //!   BARRIER_SETTLE_ALPHA, BARRIER_SMOOTH,
-//!   BARRIER_RECENTRE, BARRIER_MARGIN, BARRIER_TOL override its parameters;
+//!   BARRIER_RECENTRE, BARRIER_MARGIN, BARRIER_TOL override its parameters; LMPROBE: the
+//!   probe's own `lm` (100 steps, logged) from the barrier's point as well;
+//! - `admm`: ADMM on the SOC-QP of (4.7) with s = μ‖u_T‖ updated at every iteration (the
+//!   de Saxcé term lagged), one dense LU of W + ρI per ρ (W as stored), over-relaxation RELAX
+//!   (default 1.6), ρ = RHO0 · mean Wᵢᵢ (default 1), adapted ×/÷ TAU (3) when the primal and
+//!   dual residuals differ by more than ADAPT (10; 0: fixed ρ), at most MAXFACT (20)
+//!   factorizations, error checked every EVERY (20) iterations; then the library's LM from its
+//!   best point for LMT (10) seconds;
 //! - `trace`: the default solver's history on the local form (an interior-point try would
 //!   show no ‖F(s) − s‖; the policy runs it on rigid global problems only);
 //! - `diag`: the contacts that carry the residual at the start point;
@@ -636,6 +643,129 @@ fn main() {
         );
         return;
     }
+    if method == "admm" {
+        // ADMM on the SOC-QP with s = μ‖u_T‖ lagged (de Saxcé), dense LU of W + ρI
+        let t = Instant::now();
+        let d = p.dim;
+        let n = p.mu.len();
+        let m = n * d;
+        let wd = p.w.to_dense();
+        let diag_mean = (0..m).map(|k| wd[k * m + k]).sum::<f64>() / m as f64;
+        let mut rho = envf("RHO0", 1.0) * diag_mean;
+        let relax = envf("RELAX", 1.6);
+        let adapt = envf("ADAPT", 10.0);
+        let tau = envf("TAU", 3.0);
+        let every = envf("EVERY", 20.0) as usize;
+        let max_fact = envf("MAXFACT", 20.0) as usize;
+        let factor = |rho: f64| {
+            let mut a = faer::Mat::<f64>::zeros(m, m);
+            for j in 0..m {
+                for i in 0..m {
+                    a[(i, j)] = wd[j * m + i];
+                }
+                a[(j, j)] += rho;
+            }
+            a.partial_piv_lu()
+        };
+        let mut lu = factor(rho);
+        let mut facts = 1;
+        let mut r = vec![0.0; m];
+        let mut z = vec![0.0; m];
+        let mut y = vec![0.0; m];
+        let mut s = vec![0.0; m];
+        let mut u = p.q.clone();
+        let mut best = f64::INFINITY;
+        let mut best_z = z.clone();
+        let mut it = 0;
+        let deadline = t + Duration::from_secs_f64(limit);
+        loop {
+            // s = μ‖u_T‖ e (u at z)
+            for i in 0..n {
+                let ut = (1..d).map(|k| u[i * d + k].powi(2)).sum::<f64>().sqrt();
+                s[i * d] = p.mu[i] * ut;
+            }
+            // (W + ρI) r = ρ z − y − (q + s)
+            let mut rhs: Vec<f64> = (0..m).map(|k| rho * z[k] - y[k] - p.q[k] - s[k]).collect();
+            lu.solve_in_place(faer::MatMut::from_column_major_slice_mut(&mut rhs, m, 1));
+            r.copy_from_slice(&rhs);
+            let zold = z.clone();
+            let mut rh = vec![0.0; m];
+            for k in 0..m {
+                rh[k] = relax * r[k] + (1.0 - relax) * zold[k];
+                z[k] = rh[k] + y[k] / rho;
+            }
+            for i in 0..n {
+                coulomb::cone::project(p.mu[i], &mut z[i * d..(i + 1) * d]);
+            }
+            for k in 0..m {
+                y[k] += rho * (rh[k] - z[k]);
+            }
+            u.copy_from_slice(&p.q);
+            p.w.gemv_acc(1.0, &z, &mut u);
+            it += 1;
+            if it % every == 0 {
+                let e = err(&p, &z);
+                if e < best {
+                    best = e;
+                    best_z.copy_from_slice(&z);
+                }
+                let prim =
+                    coulomb::law::norm(&r.iter().zip(&z).map(|(a, b)| a - b).collect::<Vec<_>>());
+                let dual = rho
+                    * coulomb::law::norm(
+                        &z.iter().zip(&zold).map(|(a, b)| a - b).collect::<Vec<_>>(),
+                    );
+                if log {
+                    println!(
+                        "it {it} err {e:.3e} prim {prim:.2e} dual {dual:.2e} rho {rho:.2e} t {:.2}",
+                        t.elapsed().as_secs_f64()
+                    );
+                }
+                if e <= 1e-8 || Instant::now() > deadline {
+                    break;
+                }
+                if facts < max_fact && adapt > 0.0 {
+                    let new = if prim > adapt * dual {
+                        rho * tau
+                    } else if dual > adapt * prim {
+                        rho / tau
+                    } else {
+                        rho
+                    };
+                    if new != rho {
+                        // y is unscaled: keep it
+                        rho = new;
+                        lu = factor(rho);
+                        facts += 1;
+                    }
+                }
+            }
+        }
+        println!("{name} admm: {it} its, {facts} factorizations, best err {best:.2e} in {:.2} s, rho {rho:.2e}", t.elapsed().as_secs_f64());
+        if best > 1e-8 {
+            let mut r1 = best_z.clone();
+            let t1 = Instant::now();
+            let dl = coulomb::deadline::Deadline::after(
+                t1,
+                Some(Duration::from_secs_f64(envf("LMT", 10.0))),
+            );
+            let lr = coulomb::levenberg::solve(
+                &p,
+                &mut r1,
+                1e-8,
+                &coulomb::settings::LmParams::default(),
+                dl,
+            );
+            println!(
+                "  then LM: {:?} steps {} err {:.2e} in {:.2} s",
+                lr.status,
+                lr.steps,
+                err(&p, &r1),
+                t1.elapsed().as_secs_f64()
+            );
+        }
+        return;
+    }
     if method == "barrier" {
         // the interior-point method on the law itself (coulomb::barrier), cold start
         // (WARM_SECONDS ignored), then LM from its best point
@@ -685,6 +815,19 @@ fn main() {
             t.elapsed().as_secs_f64(),
             coulomb::law::norm(&r)
         );
+        if std::env::var("LMPROBE").is_ok() {
+            let map = Map {
+                p: &p,
+                rho: rho_of(&p),
+                sigma: 0.0,
+                center: vec![0.0; r.len()],
+            };
+            let mut r2 = r.clone();
+            let mut mu_k = 1e-2;
+            let far = Instant::now() + Duration::from_secs(5);
+            let n2 = lm(&map, &mut r2, far, 100, 0.0, true, &mut mu_k);
+            println!("probe lm {n2} steps err {:.2e}", err(&p, &r2));
+        }
         if rep.error > 1e-8 {
             let mut r1 = r.clone();
             let t1 = Instant::now();

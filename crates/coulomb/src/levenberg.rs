@@ -20,13 +20,17 @@
 //! rigid piles and walls), so a monotone method (the semismooth Newton end game of
 //! [`crate::newton`], Levenberg–Marquardt) can stop at a point where JᵀΦ ≈ 0 but Φ ≠ 0. This
 //! end game takes Levenberg–Marquardt steps (JᵀJ + λI) δ = −JᵀΦ, λ = c min(‖Φ‖/‖r‖, 1), with
-//! the trust-region update of c, in segments of [`LmParams::segment_steps`]; a segment that
+//! the trust-region update of c, in segments of [`LmParams::segment_steps`] steps counted from
+//! the segment's first taken step (the rejections that open a segment only raise c; at most
+//! [`LmParams::max_rejections`] in a row); a segment that
 //! does not lower the error of docs/error.md enough is followed by an escape from the
 //! stationary point: a watchdog (the next [`LmParams::watchdog_steps`] LM steps are taken
 //! whatever the merit says, as Siconos' NSN takes the full step when its line search fails)
 //! or a switch of every ρᵢ to the next factor of [`LmParams::rho_factors`] (the pieces of Φ_ρ
-//! and the stationary points of its merit move, r and the zeros stay). The best r (lowest
-//! error on the problem given, W as stored) is returned.
+//! and the stationary points of its merit move, r and the zeros stay). The iterates need not
+//! lie in the cones: each is judged as its projection onto L = Π K_μᵢ, and the projection of
+//! lowest error (on the problem given, W as stored) is returned — the point a caller's verdict
+//! on the stored problem sees.
 
 use crate::deadline::Deadline;
 use crate::newton::JacobianPattern;
@@ -279,8 +283,49 @@ fn base_rho(p: &LocalProblem) -> Vec<f64> {
         .collect()
 }
 
+/// Where the segments of [`solve`] end: after [`LmParams::segment_steps`] steps counted from
+/// the segment's first taken step (the rejected steps that open a segment only raise the
+/// damping: the trust region's search for the radius of a useful step), or after
+/// [`LmParams::max_rejections`] rejected steps in a row.
+struct SegmentClock {
+    counted: usize,
+    rejections: usize,
+    steps: usize,
+    max_rejections: usize,
+}
+
+impl SegmentClock {
+    fn new(params: &LmParams) -> Self {
+        Self {
+            counted: 0,
+            rejections: 0,
+            steps: params.segment_steps,
+            max_rejections: params.max_rejections,
+        }
+    }
+
+    /// Records one step, taken or rejected; true when the segment ends with it.
+    fn tick(&mut self, taken: bool) -> bool {
+        if taken {
+            self.rejections = 0;
+            self.counted += 1;
+        } else {
+            self.rejections += 1;
+            if self.counted > 0 {
+                self.counted += 1;
+            }
+        }
+        let end = self.counted >= self.steps || self.rejections >= self.max_rejections;
+        if end {
+            (self.counted, self.rejections) = (0, 0);
+        }
+        end
+    }
+}
+
 /// Levenberg–Marquardt with watchdog and ρ switching (module docs) on the local problem `p`
-/// from `r` (overwritten by the iterate of lowest error), until the error of docs/error.md
+/// from `r` (overwritten by the projection onto L = Π K_μᵢ of the iterate whose projection has
+/// the lowest error), until the error of docs/error.md at that projection
 /// (W r + q recomputed from the W given, exactly as stored) is ≤ `target`, at most
 /// [`LmParams::max_steps`] steps, or the deadline (checked before each step).
 pub fn solve(
@@ -308,7 +353,15 @@ pub fn solve(
     if !consistent {
         return report;
     }
-    let error_of = |r: &[f64]| p.error(r).error;
+    // the iterates of LM need not lie in the cones: each is judged, and returned, as its
+    // projection onto L (what a solver's verdict on the stored problem sees)
+    let projected = |x: &[f64]| {
+        let mut y = x.to_vec();
+        crate::cone::project_product(d, &p.mu, &mut y);
+        y
+    };
+    let error_of = |x: &[f64]| p.error(&projected(x)).error;
+    crate::cone::project_product(d, &p.mu, r);
     let mut best_err = error_of(r);
     report.error = best_err;
     if best_err <= target {
@@ -335,7 +388,7 @@ pub fn solve(
     let mut u = p.velocity(&x);
     let mut phi = alart_curnier(d, &p.mu, &rho, &x, &u, &mut g, &mut dbl);
     let mut segment_start = best_err;
-    let mut in_segment = 0;
+    let mut clock = SegmentClock::new(params);
     let mut escapes = 0;
     // the lowest error at the end of each segment
     let mut segment_best = vec![best_err];
@@ -350,7 +403,7 @@ pub fn solve(
             break LmStatus::TimeLimit;
         }
         report.steps += 1;
-        in_segment += 1;
+        let mut accepted = false;
         // J = I − D + (ρ D) W
         for (i, &ri) in rho.iter().enumerate() {
             for k in i * d * d..(i + 1) * d * d {
@@ -379,6 +432,7 @@ pub fn solve(
                     phi2.is_finite() && (forced > 0 || (ratio > params.accept_ratio && phi2 < phi));
                 forced = forced.saturating_sub(1);
                 if take {
+                    accepted = true;
                     x = trial;
                     u = u_trial;
                     std::mem::swap(&mut g, &mut g2);
@@ -387,18 +441,22 @@ pub fn solve(
                     if ratio > 0.75 {
                         damping = (damping / 4.0).max(params.damping_floor);
                     }
-                    let e =
-                        crate::law::error_measure(d, &p.mu, &x, &u, crate::law::norm(&p.q)).error;
+                    let xp = projected(&x);
+                    let e = if xp == x {
+                        crate::law::error_measure(d, &p.mu, &x, &u, crate::law::norm(&p.q)).error
+                    } else {
+                        p.error(&xp).error
+                    };
                     if e < best_err {
                         best_err = e;
-                        r.copy_from_slice(&x);
+                        r.copy_from_slice(&xp);
                     }
                 } else {
                     damping *= 4.0;
                 }
             }
         }
-        if in_segment < params.segment_steps {
+        if !clock.tick(accepted) {
             continue;
         }
         // end of a segment: escape from a stall
@@ -424,7 +482,6 @@ pub fn solve(
             }
         }
         segment_start = now;
-        in_segment = 0;
         segment_best.push(best_err);
         let n = segment_best.len();
         if n > params.stall_segments
@@ -524,6 +581,61 @@ pub(crate) mod tests {
                 "{out:?}"
             );
         }
+    }
+
+    /// LM's iterates need not lie in the cones; what it returns, and the error it reports, is
+    /// the projection onto L = Π K_μᵢ, so that a caller's verdict on the stored problem (which
+    /// projects a guess) agrees with it.
+    #[test]
+    fn a_point_outside_the_cones_is_judged_and_returned_as_its_projection() {
+        let p = problem(6, 2811, 0.0, 1e-3);
+        let mut r = vec![0.0; 18];
+        let out = solve(&p, &mut r, 1e-8, &LmParams::default(), Deadline::NEVER);
+        assert_eq!(out.status, LmStatus::Reached, "{out:?}");
+        // every returned block is in its cone, and the error is the one recomputed there
+        for (ri, &mu) in r.chunks(3).zip(&p.mu) {
+            let tol = 1e-12 * (1.0 + crate::law::norm(ri));
+            assert!(crate::cone::contains(mu, ri, tol), "{ri:?} outside K_{mu}");
+        }
+        assert_eq!(out.error, p.error(&r).error);
+        // the solution pushed outward: tangential impulses beyond μ r_N
+        let mut outside = r.clone();
+        for (ri, &mu) in outside.chunks_mut(3).zip(&p.mu) {
+            (ri[1], ri[2]) = (1.1 * mu * ri[0] + 1e-3, 0.0);
+        }
+        let mut projected = outside.clone();
+        crate::cone::project_product(3, &p.mu, &mut projected);
+        assert_ne!(projected, outside);
+        // a target met at the start: no step, the start is returned projected, with its error
+        let mut start = outside.clone();
+        let out = solve(&p, &mut start, 1.0, &LmParams::default(), Deadline::NEVER);
+        assert_eq!((out.status, out.steps), (LmStatus::Reached, 0));
+        assert_eq!(start, projected);
+        assert_eq!(out.error, p.error(&projected).error);
+    }
+
+    /// A segment counts from its first taken step: the rejections that open it (the damping
+    /// still growing) do not count, up to `max_rejections` in a row; once a step is taken,
+    /// taken and rejected steps count alike.
+    #[test]
+    fn a_segment_counts_from_its_first_taken_step() {
+        let params = LmParams {
+            segment_steps: 3,
+            max_rejections: 5,
+            ..LmParams::default()
+        };
+        let ends = |steps: &[bool]| -> Vec<usize> {
+            let mut clock = SegmentClock::new(&params);
+            (0..steps.len()).filter(|&k| clock.tick(steps[k])).collect()
+        };
+        let (t, f) = (true, false);
+        assert_eq!(ends(&[t, t, t, t, t, t]), [2, 5]);
+        // four rejections open the segment, then three taken steps end it
+        assert_eq!(ends(&[f, f, f, f, t, t, t]), [6]);
+        // after a taken step, rejections count
+        assert_eq!(ends(&[t, f, f, t, t, t]), [2, 5]);
+        // five rejections in a row end a segment on their own, wherever they fall
+        assert_eq!(ends(&[f, f, f, f, f, f, t, t, t]), [4, 8]);
     }
 
     #[test]

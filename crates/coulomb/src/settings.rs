@@ -422,6 +422,10 @@ pub struct LmParams {
     pub segment_steps: usize,
     /// see `segment_steps`; in (0, 1]
     pub segment_gain: f64,
+    /// a segment's `segment_steps` count from its first taken step (the rejected steps that
+    /// open it only raise the damping factor, ×4 each); this many rejected steps in a row end
+    /// a segment on their own; ≥ 1
+    pub max_rejections: usize,
     /// a watchdog escape takes this many LM steps whatever the merit says (non-monotone;
     /// the best r is kept); 0: no watchdog, every escape switches ρ
     pub watchdog_steps: usize,
@@ -457,6 +461,7 @@ impl Default for LmParams {
             keep_gain: 0.5,
             segment_steps: 8,
             segment_gain: 0.7,
+            max_rejections: 12,
             watchdog_steps: 2,
             watchdogs_per_switch: 1,
             rho_factors: [1.0, 0.1, 10.0, 0.3, 3.0, 0.03, 30.0],
@@ -472,9 +477,13 @@ impl Default for LmParams {
 impl LmParams {
     fn validate(&self) -> Result<(), String> {
         let positive = |x: f64| x.is_finite() && x > 0.0;
-        if self.segment_steps == 0 || self.stall_segments == 0 || self.max_normal_nonzeros == 0 {
+        if self.segment_steps == 0
+            || self.stall_segments == 0
+            || self.max_rejections == 0
+            || self.max_normal_nonzeros == 0
+        {
             return Err(
-                "tuning.lm: segment_steps, stall_segments and max_normal_nonzeros must be ≥ 1"
+                "tuning.lm: segment_steps, stall_segments, max_rejections and max_normal_nonzeros must be ≥ 1"
                     .into(),
             );
         }
@@ -974,8 +983,9 @@ mod tests {
         let mut s = Settings::default();
         s.tuning.anderson.memory = 0;
         assert!(s.validate().is_err());
-        let refused: [fn(&mut Tuning); 11] = [
+        let refused: [fn(&mut Tuning); 12] = [
             |t| t.lm.segment_steps = 0,
+            |t| t.lm.max_rejections = 0,
             |t| t.lm.stall_gain = 0.0,
             |t| t.lm.time_share = 1.5,
             |t| t.lm.rho_factors[3] = -1.0,

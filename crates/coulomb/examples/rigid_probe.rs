@@ -73,6 +73,30 @@ fn err(p: &LocalProblem, r: &[f64]) -> f64 {
     p.error(r).error
 }
 
+/// The library's LM end game from `r` until `deadline`, reported on one line ("total" since
+/// `start` when given).
+fn lm_finish(
+    p: &LocalProblem,
+    r: &[f64],
+    deadline: coulomb::deadline::Deadline,
+    start: Option<Instant>,
+) {
+    let mut r1 = r.to_vec();
+    let t1 = Instant::now();
+    let lp = coulomb::settings::LmParams::default();
+    let lr = coulomb::levenberg::solve(p, &mut r1, 1e-8, &lp, deadline);
+    let total = start.map_or(String::new(), |t| {
+        format!(" (total {:.2} s)", t.elapsed().as_secs_f64())
+    });
+    println!(
+        "  then LM: {:?} steps {} err {:.2e} in {:.2} s{total}",
+        lr.status,
+        lr.steps,
+        err(p, &r1),
+        t1.elapsed().as_secs_f64()
+    );
+}
+
 fn envf(name: &str, default: f64) -> f64 {
     std::env::var(name)
         .ok()
@@ -743,25 +767,13 @@ fn main() {
         }
         println!("{name} admm: {it} its, {facts} factorizations, best err {best:.2e} in {:.2} s, rho {rho:.2e}", t.elapsed().as_secs_f64());
         if best > 1e-8 {
-            let mut r1 = best_z.clone();
             let t1 = Instant::now();
-            let dl = coulomb::deadline::Deadline::after(
-                t1,
-                Some(Duration::from_secs_f64(envf("LMT", 10.0))),
-            );
-            let lr = coulomb::levenberg::solve(
+            let limit = Some(Duration::from_secs_f64(envf("LMT", 10.0)));
+            lm_finish(
                 &p,
-                &mut r1,
-                1e-8,
-                &coulomb::settings::LmParams::default(),
-                dl,
-            );
-            println!(
-                "  then LM: {:?} steps {} err {:.2e} in {:.2} s",
-                lr.status,
-                lr.steps,
-                err(&p, &r1),
-                t1.elapsed().as_secs_f64()
+                &best_z,
+                coulomb::deadline::Deadline::after(t1, limit),
+                None,
             );
         }
         return;
@@ -829,24 +841,8 @@ fn main() {
             println!("probe lm {n2} steps err {:.2e}", err(&p, &r2));
         }
         if rep.error > 1e-8 {
-            let mut r1 = r.clone();
-            let t1 = Instant::now();
             let dl = coulomb::deadline::Deadline::after(t, Some(Duration::from_secs_f64(limit)));
-            let lr = coulomb::levenberg::solve(
-                &p,
-                &mut r1,
-                1e-8,
-                &coulomb::settings::LmParams::default(),
-                dl,
-            );
-            println!(
-                "  then LM: {:?} steps {} err {:.2e} in {:.2} s (total {:.2} s)",
-                lr.status,
-                lr.steps,
-                err(&p, &r1),
-                t1.elapsed().as_secs_f64(),
-                t.elapsed().as_secs_f64()
-            );
+            lm_finish(&p, &r, dl, Some(t));
         }
         return;
     }

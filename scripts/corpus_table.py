@@ -3,7 +3,12 @@
 markdown table by class of docs/corpus.md (issue #11, item 3).
 
     scripts/corpus_table.py OUT.json CORPUS/manifest.json [--preset P] [--time-limit S] \
-        [--started ISO] > docs/corpus.md
+        [--started ISO] [--existence CHECKS.json] > docs/corpus.md
+
+CHECKS.json (scripts/corpus_existence.py) adds to the table of files not solved what
+`coulomb check` concluded on each: "exists" (a solver failure), or "unknown" because W is not
+symmetric (the paper's criteria may hold but prove nothing then), because no sufficient
+criterion holds (there may be no solution), or because the check ran out of time.
 
 The class of a file is its name's prefix before `--` (the manifest's `class`). A file counts
 as solved when its bench record is `converged` (status converged, err <= tol and, for global
@@ -55,6 +60,24 @@ def from_log(path):
             "unix_time": int(os.path.getmtime(path)), "cpu": "from the progress log"}}
 
 
+def existence(c):
+    """(kind, cell) of one `coulomb check` record of scripts/corpus_existence.py: kind is
+    "exists", "asym" (W not symmetric: what holds proves nothing), "unknown", or the
+    conclusion itself ("none", "error"); "not checked" without a record."""
+    if c is None:
+        return "not checked", "not checked"
+    holds = ", ".join(f"({k})" for k in c.get("holds") or [] if k != "4.5")
+    if c["conclusion"] == "exists":
+        return "exists", f"exists ({c['by']})" if c.get("by") else "exists"
+    if c["conclusion"] == "unknown":
+        if c.get("skipped"):
+            return "timeout", "unknown: the check did not finish within its time limit"
+        if "not symmetric" in (c.get("note") or ""):
+            return "asym", f"unknown: W not symmetric ({holds or 'no criterion'} hold for it)"
+        return "unknown", "unknown: no sufficient criterion holds"
+    return c["conclusion"], c["conclusion"]
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("bench")
@@ -62,7 +85,9 @@ def main():
     ap.add_argument("--preset", default="full")
     ap.add_argument("--time-limit", default="10")
     ap.add_argument("--started", default=None)
+    ap.add_argument("--existence", default=None)
     a = ap.parse_args()
+    checks = json.load(open(a.existence)) if a.existence else None
     if a.bench.endswith(".log"):
         bench = from_log(a.bench)
     else:
@@ -100,8 +125,13 @@ def main():
     p(f"coulomb corpus --output corpus-{a.preset} --preset {a.preset} --seed 1 --json")
     p(f"coulomb bench corpus-{a.preset} --solvers default --tol 1e-8 --time-limit {a.time_limit} "
       f"--json corpus-{a.preset}.bench.json")
+    ex = ""
+    if a.existence:
+        p(f"scripts/corpus_existence.py corpus-{a.preset}.bench.json "
+          f"corpus-{a.preset}.existence.json")
+        ex = f" --existence corpus-{a.preset}.existence.json"
     p(f"scripts/corpus_table.py corpus-{a.preset}.bench.json corpus-{a.preset}/manifest.json "
-      f"--preset {a.preset} --time-limit {a.time_limit} > docs/corpus.md")
+      f"--preset {a.preset} --time-limit {a.time_limit}{ex} > docs/corpus.md")
     p("```")
     p()
     p(f"Measured: {now} (started {a.started or '?'}), machine: "
@@ -255,13 +285,37 @@ def main():
     if not fails:
         p("None.")
     else:
-        p("| file | kind | contacts | rank(W) < m | status | err | time |")
-        p("|---|---|---|---|---|---|---|")
+        if checks is not None:
+            found = [existence(checks.get(strip_ext(r["problem"].split("/")[-1])))
+                     for _, r, _ in fails]
+            count = collections.Counter(k for k, _ in found)
+            names = {"timeout": "the check did not finish within its time limit"}
+            p("Existence (`coulomb check`, the paper's criteria (4.1), (4.4), (4.6), (5.1), "
+              "`scripts/corpus_existence.py`): of these "
+              f"{len(fails)} files, a solution exists for {count.get('exists', 0)} (solver "
+              f"failures); for {count.get('asym', 0)} W is not symmetric, where criteria that "
+              "hold prove nothing (Theorem 4.6 assumes a symmetric W); for "
+              f"{count.get('unknown', 0)} no sufficient criterion holds (there may be no "
+              "solution: the criteria are sufficient, not necessary)"
+              + "".join(f"; {names.get(k, k)}: {v}" for k, v in sorted(count.items())
+                        if k not in ("exists", "asym", "unknown"))
+              + ".")
+            p()
+        head = "| file | kind | contacts | rank(W) < m | status | err | time |"
+        rule = "|---|---|---|---|---|---|---|"
+        if checks is not None:
+            head += " existence |"
+            rule += "---|"
+        p(head)
+        p(rule)
         for cls, r, e in fails:
             err = f"{r['error']:.1e}" if r.get("error") is not None else "-"
             rd = "-" if not e or e.get("rank_deficient") is None else ("yes" if e["rank_deficient"] else "no")
-            p(f"| {r['problem']} | {r.get('kind')} | {e['contacts'] if e else r.get('contacts')} | {rd} | {r['status']} | "
-              f"{err} | {fmt_time(r.get('time_s'))} |")
+            row = (f"| {r['problem']} | {r.get('kind')} | {e['contacts'] if e else r.get('contacts')} | {rd} | {r['status']} | "
+                   f"{err} | {fmt_time(r.get('time_s'))} |")
+            if checks is not None:
+                row += f" {existence(checks.get(strip_ext(r['problem'].split('/')[-1])))[1]} |"
+            p(row)
     p()
 
 

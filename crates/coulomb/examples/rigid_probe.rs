@@ -51,6 +51,9 @@
 //!   dual residuals differ by more than ADAPT (10; 0: fixed ρ), at most MAXFACT (20)
 //!   factorizations, error checked every EVERY (20) iterations; then the library's LM from its
 //!   best point for LMT (10) seconds;
+//! - `mucont`: continuation in μ (ALPHAS, default 0.3,0.5,0.7,0.85,1): the default solver
+//!   on the law with μ scaled by the first α, then LM from the previous stage's r at each
+//!   next α, the default solver warm-started there when LM fails (COLD: from r = 0);
 //! - `trace`: the default solver's history on the local form (an interior-point try would
 //!   show no ‖F(s) − s‖; the policy runs it on rigid global problems only);
 //! - `diag`: the contacts that carry the residual at the start point;
@@ -664,6 +667,73 @@ fn main() {
             sol.status,
             sol.error,
             sol.solve_time.as_secs_f64()
+        );
+        return;
+    }
+    if method == "mucont" {
+        // continuation in μ: the law with every μᵢ scaled by α₀ solved by the default
+        // solver, then α raised stage by stage (ALPHAS, comma-separated, last 1), each stage
+        // LM (the library's end game) from the previous stage's r; a stage LM does not
+        // finish within LIMIT_SECONDS falls back to the default solver warm-started there
+        let t = Instant::now();
+        let alphas: Vec<f64> = std::env::var("ALPHAS")
+            .ok()
+            .map(|s| s.split(',').map(|x| x.parse().unwrap()).collect())
+            .unwrap_or_else(|| vec![0.3, 0.5, 0.7, 0.85, 1.0]);
+        let stage_limit = Duration::from_secs_f64(limit);
+        let mut r = vec![0.0; p.q.len()];
+        for (k, &a) in alphas.iter().enumerate() {
+            let mut pk = p.clone();
+            for x in pk.mu.iter_mut() {
+                *x *= a;
+            }
+            let t1 = Instant::now();
+            let mut how = "lm";
+            let mut done = false;
+            if k > 0 {
+                let lp = coulomb::settings::LmParams::default();
+                let lr = coulomb::levenberg::solve(
+                    &pk,
+                    &mut r,
+                    1e-8,
+                    &lp,
+                    Instant::now().checked_add(stage_limit).into(),
+                );
+                done = lr.error <= 1e-8;
+                if !done {
+                    println!(
+                        "    stage {k} α {a}: LM {:?} {} steps err {:.2e}",
+                        lr.status, lr.steps, lr.error
+                    );
+                }
+            }
+            if !done {
+                how = "default";
+                let settings = coulomb::Settings {
+                    time_limit: Some(stage_limit),
+                    ..Default::default()
+                };
+                let guess = coulomb::Guess {
+                    r: r.clone(),
+                    v: None,
+                };
+                let g = (k > 0 && std::env::var_os("COLD").is_none()).then_some(&guess);
+                let sol =
+                    coulomb::solve_with_guess(&Problem::Local(pk.clone()), &settings, g).unwrap();
+                r = sol.r;
+            }
+            println!(
+                "  stage {k} α {a}: {how} err {:.2e} in {:.2} s (err at μ: {:.2e}, total {:.2} s)",
+                err(&pk, &r),
+                t1.elapsed().as_secs_f64(),
+                err(&p, &r),
+                t.elapsed().as_secs_f64()
+            );
+        }
+        println!(
+            "{name} mucont: err {:.2e} in {:.2} s",
+            err(&p, &r),
+            t.elapsed().as_secs_f64()
         );
         return;
     }

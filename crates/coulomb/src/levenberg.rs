@@ -77,7 +77,7 @@ pub struct LmReport {
 
 /// Φ_ρ(r) into `g` and the blocks of D = ∂P_μ(y) (row-major d × d per contact) into
 /// `dblocks`, for u = W r + q given; returns ‖Φ_ρ‖.
-fn alart_curnier(
+pub(crate) fn alart_curnier(
     dim: usize,
     mu: &[f64],
     rho: &[f64],
@@ -264,7 +264,7 @@ impl<'p> Normal<'p> {
 }
 
 /// ρᵢ = 1 / ‖Wᵢᵢ‖_F (1 where the diagonal block is zero or not finite).
-fn base_rho(p: &LocalProblem) -> Vec<f64> {
+pub(crate) fn base_rho(p: &LocalProblem) -> Vec<f64> {
     let d = p.dim;
     let mut sq = vec![0.0; p.mu.len()];
     for (i, j, v) in p.w.triplets() {

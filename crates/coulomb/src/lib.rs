@@ -51,6 +51,7 @@ pub mod natural_map;
 pub mod newton;
 pub mod outer;
 pub mod problem;
+pub mod proximal;
 pub mod settings;
 pub mod skeleton;
 pub mod solution;

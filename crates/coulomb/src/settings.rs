@@ -474,6 +474,58 @@ impl Default for LmParams {
     }
 }
 
+/// The proximal-point end game ([`crate::proximal`]) after a Levenberg–Marquardt run of a
+/// stage that stalled: it starts from LM's best point when that error is ≤ `start`, and
+/// shares LM's time (what LM left of [`LmParams::time_share`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct ProxParams {
+    /// cap on proximal steps per run; 0: no proximal end game
+    pub max_outer: usize,
+    /// semismooth Newton steps (sparse LU of J) per proximal step; ≥ 1
+    pub inner_steps: usize,
+    /// halvings of the Armijo search before the full Newton step is taken; ≥ 1
+    pub line_search_steps: usize,
+    /// σ = `sigma_factor` · err · max Wᵢᵢ (Siconos' PROX rule: 5); > 0
+    pub sigma_factor: f64,
+    /// a run stops after this many proximal steps in a row without a lower error; ≥ 1
+    pub stall_steps: usize,
+    /// the end game starts only from an error ≤ this (LM's best point); ≥ 0. From 1e-4 it
+    /// also ran, in vain, where LM stalls at 1e-5 … 1e-4 (boxes--wall-10x5-mu1-rest of the
+    /// corpus), and took the time the main method needed to converge there (docs/rigid.md)
+    pub start: f64,
+}
+
+impl Default for ProxParams {
+    fn default() -> Self {
+        Self {
+            max_outer: 100,
+            inner_steps: 50,
+            line_search_steps: 30,
+            sigma_factor: 5.0,
+            stall_steps: 5,
+            start: 1e-6,
+        }
+    }
+}
+
+impl ProxParams {
+    fn validate(&self) -> Result<(), String> {
+        if self.inner_steps == 0 || self.line_search_steps == 0 || self.stall_steps == 0 {
+            return Err(
+                "tuning.prox: inner_steps, line_search_steps and stall_steps must be ≥ 1".into(),
+            );
+        }
+        if !(self.sigma_factor.is_finite() && self.sigma_factor > 0.0) {
+            return Err("tuning.prox.sigma_factor must be positive".into());
+        }
+        if !(self.start.is_finite() && self.start >= 0.0) {
+            return Err("tuning.prox.start must be finite and ≥ 0".into());
+        }
+        Ok(())
+    }
+}
+
 impl LmParams {
     fn validate(&self) -> Result<(), String> {
         let positive = |x: f64| x.is_finite() && x > 0.0;
@@ -653,6 +705,8 @@ pub struct Tuning {
     pub newton: NewtonParams,
     /// Levenberg–Marquardt end game after the Newton end game's budget is spent
     pub lm: LmParams,
+    /// proximal-point end game after a stalled Levenberg–Marquardt run
+    pub prox: ProxParams,
     /// the interior-point try on Coulomb's law
     pub barrier: BarrierParams,
     /// the inner solvers' parameters
@@ -687,6 +741,7 @@ impl Default for Tuning {
                 continue_gain: 0.5,
             },
             lm: LmParams::default(),
+            prox: ProxParams::default(),
             barrier: BarrierParams::default(),
             inner: InnerParams::default(),
         }
@@ -768,6 +823,7 @@ impl Tuning {
             return Err("tuning.inner.infeasible_ray thresholds must be positive".into());
         }
         self.barrier.validate()?;
+        self.prox.validate()?;
         self.lm.validate()
     }
 }
@@ -983,7 +1039,12 @@ mod tests {
         let mut s = Settings::default();
         s.tuning.anderson.memory = 0;
         assert!(s.validate().is_err());
-        let refused: [fn(&mut Tuning); 12] = [
+        let refused: [fn(&mut Tuning); 17] = [
+            |t| t.prox.inner_steps = 0,
+            |t| t.prox.line_search_steps = 0,
+            |t| t.prox.stall_steps = 0,
+            |t| t.prox.sigma_factor = 0.0,
+            |t| t.prox.start = f64::NAN,
             |t| t.lm.segment_steps = 0,
             |t| t.lm.max_rejections = 0,
             |t| t.lm.stall_gain = 0.0,

@@ -208,8 +208,32 @@ impl EndGame {
         let local = form.local();
         let mut trial = r.to_vec();
         let target = settings.tuning.newton.target_fraction * tol;
-        let report = crate::levenberg::solve(local, &mut trial, target, &lm, share.into());
-        self.lm_used += report.steps.max(1);
+        let mut report = crate::levenberg::solve(local, &mut trial, target, &lm, share.into());
+        let lm_steps = report.steps;
+        // a stalled LM hands its best point to the proximal point, in what is left of the share
+        let prox = &settings.tuning.prox;
+        let share: Deadline = share.into();
+        let stalled = matches!(
+            report.status,
+            crate::levenberg::LmStatus::Stalled | crate::levenberg::LmStatus::MaxSteps
+        );
+        if stalled
+            && report.error > target
+            && report.error <= prox.start
+            && prox.max_outer > 0
+            && !share.passed()
+        {
+            let mut point = trial.clone();
+            let pr = crate::proximal::solve(local, &mut point, target, prox, share);
+            report.steps += pr.steps;
+            // a proximal point that followed a ray of diverging r (no solution: the
+            // relative error falls only because ‖r‖ grows) is not kept
+            if pr.error < report.error && !form.verdict(&point).unbounded {
+                trial = point;
+                report.error = pr.error;
+            }
+        }
+        self.lm_used += lm_steps.max(1);
         self.lm_gate = lm.retry * report.error.min(error);
         let candidate = form.verdict(&trial);
         // a run that did not converge is kept only if it cut the error by `keep_gain`: a small

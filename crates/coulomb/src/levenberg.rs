@@ -263,6 +263,13 @@ impl<'p> Normal<'p> {
     }
 }
 
+/// x projected onto L = Π K_μᵢ.
+pub(crate) fn projected(p: &LocalProblem, x: &[f64]) -> Vec<f64> {
+    let mut y = x.to_vec();
+    crate::cone::project_product(p.dim, &p.mu, &mut y);
+    y
+}
+
 /// ρᵢ = 1 / ‖Wᵢᵢ‖_F (1 where the diagonal block is zero or not finite).
 pub(crate) fn base_rho(p: &LocalProblem) -> Vec<f64> {
     let d = p.dim;
@@ -336,13 +343,7 @@ pub fn solve(
     deadline: Deadline,
 ) -> LmReport {
     let (d, m) = (p.dim, r.len());
-    let consistent = (d == 2 || d == 3)
-        && m == p.mu.len() * d
-        && p.q.len() == m
-        && p.w.nrows == m
-        && p.w.ncols == m
-        && p.w.check().is_ok()
-        && r.iter().all(|x| x.is_finite());
+    let consistent = p.fits(r) && r.iter().all(|x| x.is_finite());
     let mut report = LmReport {
         status: LmStatus::Inconsistent,
         steps: 0,
@@ -355,12 +356,7 @@ pub fn solve(
     }
     // the iterates of LM need not lie in the cones: each is judged, and returned, as its
     // projection onto L (what a solver's verdict on the stored problem sees)
-    let projected = |x: &[f64]| {
-        let mut y = x.to_vec();
-        crate::cone::project_product(d, &p.mu, &mut y);
-        y
-    };
-    let error_of = |x: &[f64]| p.error(&projected(x)).error;
+    let error_of = |x: &[f64]| p.error(&projected(p, x)).error;
     crate::cone::project_product(d, &p.mu, r);
     let mut best_err = error_of(r);
     report.error = best_err;
@@ -441,7 +437,7 @@ pub fn solve(
                     if ratio > 0.75 {
                         damping = (damping / 4.0).max(params.damping_floor);
                     }
-                    let xp = projected(&x);
+                    let xp = projected(p, &x);
                     let e = if xp == x {
                         crate::law::error_measure(d, &p.mu, &x, &u, crate::law::norm(&p.q)).error
                     } else {

@@ -452,13 +452,7 @@ pub fn polish_with(
     params: &crate::settings::NewtonParams,
 ) -> NewtonReport {
     let (d, m) = (p.dim, r.len());
-    let consistent = (d == 2 || d == 3)
-        && m == p.mu.len() * d
-        && p.q.len() == m
-        && p.w.nrows == m
-        && p.w.ncols == m
-        && p.w.check().is_ok();
-    if !consistent {
+    if !p.fits(r) {
         // inconsistent sizes (a hand-built problem that skipped validation): no step is taken
         return NewtonReport {
             status: NewtonStatus::NoDescent,

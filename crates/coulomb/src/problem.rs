@@ -369,6 +369,19 @@ impl LocalProblem {
         self.mu.len()
     }
 
+    /// Whether the sizes agree (d ∈ {2, 3}, m = d · contacts, q of length m, W m × m with
+    /// valid storage) and r has length m: what the end games check before any step on a
+    /// problem that may have been built by hand without [`LocalProblem::new`].
+    pub fn fits(&self, r: &[f64]) -> bool {
+        let (d, m) = (self.dim, r.len());
+        (d == 2 || d == 3)
+            && m == self.mu.len() * d
+            && self.q.len() == m
+            && self.w.nrows == m
+            && self.w.ncols == m
+            && self.w.check().is_ok()
+    }
+
     /// u = W r + q.
     pub fn velocity(&self, r: &[f64]) -> Vec<f64> {
         let mut u = self.q.clone();

@@ -58,13 +58,7 @@ pub fn solve(
     deadline: Deadline,
 ) -> ProxReport {
     let (d, m) = (p.dim, r.len());
-    let consistent = (d == 2 || d == 3)
-        && m == p.mu.len() * d
-        && p.q.len() == m
-        && p.w.nrows == m
-        && p.w.ncols == m
-        && p.w.check().is_ok()
-        && r.iter().all(|x| x.is_finite());
+    let consistent = p.fits(r) && r.iter().all(|x| x.is_finite());
     let mut report = ProxReport {
         status: ProxStatus::Inconsistent,
         outer: 0,
@@ -74,11 +68,6 @@ pub fn solve(
     if !consistent {
         return report;
     }
-    let projected = |x: &[f64]| {
-        let mut y = x.to_vec();
-        crate::cone::project_product(d, &p.mu, &mut y);
-        y
-    };
     crate::cone::project_product(d, &p.mu, r);
     let mut best_err = p.error(r).error;
     report.error = best_err;
@@ -174,7 +163,7 @@ pub fn solve(
         if !x.iter().all(|v| v.is_finite()) {
             x.copy_from_slice(r);
         }
-        let y = projected(&x);
+        let y = crate::levenberg::projected(p, &x);
         error = p.error(&y).error;
         if error < best_err {
             best_err = error;

@@ -3,13 +3,19 @@
 //! semismooth Newton method on the Alart–Curnier map
 //! Φ_ρ(r) = r − P_μ(r − ρ u) (P_μ: projection onto the cone K_μᵢ of each contact, (2.9)),
 //! J = I − D + ρ D (W + σ I) with D = ∂P_μ, solved by a sparse LU of J (W as stored: J is
-//! not symmetric anyway). σ_k = `sigma_factor` · err(r_k) · max Wᵢᵢ with err of
-//! docs/error.md on the stored problem, so σ → 0 as the iterates converge (the rule of
-//! Siconos' PROX solver). A zero of the regularized map at r_{k+1} = r_k is a solution of the
-//! law itself. It is the end game after a stalled Levenberg–Marquardt run
-//! ([`crate::levenberg`]) on problems where the law is far from monotone (granular heaps at
-//! μ = 1, docs/rigid.md): the regularization moves the kinks where LM's merit ½‖Φ_ρ‖² has
-//! stationary points that are not zeros.
+//! not symmetric anyway). A regularized problem counts as solved once ‖Φ_ρ‖ is
+//! [`ProxParams::inner_ratio`] times below its value at the centre r_k. σ follows the rule of
+//! Siconos' PROX solver: σ_k = `sigma_factor` · err(r_k) · max Wᵢᵢ (err of docs/error.md on
+//! the stored problem, so σ → 0 as the iterates converge) after a solved step; after one not
+//! solved within [`ProxParams::inner_steps`] Newton steps, the centre stays and σ grows by
+//! [`ProxParams::sigma_growth`]. A zero of the regularized map at r_{k+1} = r_k is a solution
+//! of the law itself.
+//!
+//! It is an end game of the outer method ([`crate::outer::newton`]) on problems where the law
+//! is far from monotone (granular heaps and drums, docs/rigid.md): after a Newton try that
+//! did not converge, and after a stalled Levenberg–Marquardt run ([`crate::levenberg`]); the
+//! regularization moves the kinks where LM's merit ½‖Φ_ρ‖² has stationary points that are
+//! not zeros.
 //!
 //! Every iterate is judged as its projection onto L = Π K_μᵢ, and the best one is returned.
 
@@ -43,6 +49,9 @@ pub struct ProxReport {
     pub outer: usize,
     /// Newton steps (sparse LU factorizations of J) of all proximal steps
     pub steps: usize,
+    /// proximal steps whose regularized problem was not solved within
+    /// [`ProxParams::inner_steps`] (the centre stayed, σ grew)
+    pub rejected: usize,
     /// the error of docs/error.md at the returned r (W r + q recomputed)
     pub error: f64,
 }
@@ -63,6 +72,7 @@ pub fn solve(
         status: ProxStatus::Inconsistent,
         outer: 0,
         steps: 0,
+        rejected: 0,
         error: f64::NAN,
     };
     if !consistent {
@@ -88,6 +98,7 @@ pub fn solve(
     let mut x = r.to_vec();
     let mut error = best_err;
     let mut since_best = 0;
+    let mut sigma = params.sigma_factor * error * w_max;
     report.status = loop {
         if best_err <= target {
             break ProxStatus::Reached;
@@ -102,8 +113,8 @@ pub fn solve(
             break ProxStatus::Stalled;
         }
         report.outer += 1;
-        let sigma = params.sigma_factor * error * w_max;
         let center = x.clone();
+        let center_error = error;
         // Φ of the regularized problem at y: u = W y + q + σ (y − center)
         let eval = |y: &[f64], g: &mut [f64], dbl: &mut [f64]| {
             let mut u = p.velocity(y);
@@ -113,8 +124,16 @@ pub fn solve(
             crate::levenberg::alart_curnier(d, &p.mu, &rho, y, &u, g, dbl)
         };
         let mut phi = eval(&x, &mut g, &mut dbl);
+        // the regularized problem is solved once ‖Φ‖ ≤ ‖Φ(centre)‖ / inner_ratio (at the
+        // centre Φ of the regularized problem is that of the law itself)
+        let inner_target = phi / params.inner_ratio;
+        let mut solved = false;
         for _ in 0..params.inner_steps {
-            if deadline.passed() || phi.is_nan() || phi <= 0.0 {
+            if phi <= inner_target {
+                solved = true;
+                break;
+            }
+            if deadline.passed() || phi.is_nan() {
                 break;
             }
             report.steps += 1;
@@ -163,6 +182,7 @@ pub fn solve(
         if !x.iter().all(|v| v.is_finite()) {
             x.copy_from_slice(r);
         }
+        solved = solved || phi <= inner_target;
         let y = crate::levenberg::projected(p, &x);
         error = p.error(&y).error;
         if error < best_err {
@@ -175,7 +195,22 @@ pub fn solve(
         if !error.is_finite() {
             x.copy_from_slice(r);
             error = best_err;
+            solved = false;
+        } else if !solved {
+            // a regularized problem that was not solved does not move the centre: its
+            // Newton iterate can be far off (the full steps that escape a stationary point
+            // of the merit), and the next try, with a larger σ, starts from the centre again
+            x.copy_from_slice(&center);
+            error = center_error;
+            report.rejected += 1;
         }
+        // σ follows the error after a solved regularized problem and grows after one that
+        // was not solved (Siconos' PROX rule)
+        sigma = if solved {
+            params.sigma_factor * error * w_max
+        } else {
+            sigma * params.sigma_growth
+        };
     };
     report.error = best_err;
     report
@@ -210,6 +245,39 @@ mod tests {
             }
         }
         assert!(solved >= 4, "solved {solved} of 6");
+    }
+
+    #[test]
+    fn a_regularized_problem_not_solved_leaves_the_centre_and_is_counted() {
+        // one Newton step per proximal step and an unreachable inner ratio: no regularized
+        // problem counts as solved, so every step is rejected (σ grows, the centre stays);
+        // the run still returns its lowest-error point, in the cones, with its stored error
+        let strict = ProxParams {
+            inner_steps: 1,
+            inner_ratio: 1e300,
+            max_outer: 12,
+            stall_steps: 12,
+            ..ProxParams::default()
+        };
+        for seed in 0..4 {
+            let p = problem(10, seed, 0.0, 0.0);
+            let mut r = vec![0.0; p.q.len()];
+            crate::cone::project_product(3, &p.mu, &mut r);
+            let start = p.error(&r).error;
+            let rep = solve(&p, &mut r, 1e-12, &strict, Deadline::NEVER);
+            if rep.status == ProxStatus::Reached {
+                continue;
+            }
+            assert!(rep.outer > 0);
+            assert_eq!(rep.rejected, rep.outer, "{rep:?}");
+            assert_eq!(rep.error, p.error(&r).error);
+            assert!(rep.error <= start);
+        }
+        // with the defaults the same problems are solved with few or no rejections
+        let p = problem(10, 0, 0.0, 0.0);
+        let mut r = vec![0.0; p.q.len()];
+        let rep = solve(&p, &mut r, 1e-10, &ProxParams::default(), Deadline::NEVER);
+        assert!(rep.rejected < rep.outer.max(1), "{rep:?}");
     }
 
     #[test]

@@ -474,9 +474,11 @@ impl Default for LmParams {
     }
 }
 
-/// The proximal-point end game ([`crate::proximal`]) after a Levenberg–Marquardt run of a
-/// stage that stalled: it starts from LM's best point when that error is ≤ `start`, and
-/// shares LM's time (what LM left of [`LmParams::time_share`]).
+/// The proximal-point end game ([`crate::proximal`]) of a stage. It runs (a) after a Newton
+/// try of the end game that did not converge, from an error ≤ `try_start`, with a share of
+/// the time of its own, and again only once the error is below `retry` times the end of its
+/// last such run; (b) after a Levenberg–Marquardt run of the stage that stalled, from LM's
+/// best point when that error is ≤ `start`, in what LM left of [`LmParams::time_share`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct ProxParams {
@@ -486,25 +488,50 @@ pub struct ProxParams {
     pub inner_steps: usize,
     /// halvings of the Armijo search before the full Newton step is taken; ≥ 1
     pub line_search_steps: usize,
-    /// σ = `sigma_factor` · err · max Wᵢᵢ (Siconos' PROX rule: 5); > 0
+    /// σ = `sigma_factor` · err · max Wᵢᵢ after a regularized problem that was solved
+    /// (Siconos' PROX rule: 5); > 0
     pub sigma_factor: f64,
+    /// σ is multiplied by this after a regularized problem that was not solved within
+    /// `inner_steps` (Siconos' PROX rule: 10); ≥ 1
+    pub sigma_growth: f64,
+    /// a regularized problem is solved once ‖Φ_ρ‖ is ≤ its value at the centre r_k divided
+    /// by this (Siconos: the inner tolerance is the outer error / 10); > 1
+    pub inner_ratio: f64,
     /// a run stops after this many proximal steps in a row without a lower error; ≥ 1
     pub stall_steps: usize,
-    /// the end game starts only from an error ≤ this (LM's best point); ≥ 0. From 1e-4 it
-    /// also ran, in vain, where LM stalls at 1e-5 … 1e-4 (boxes--wall-10x5-mu1-rest of the
-    /// corpus), and took the time the main method needed to converge there (docs/rigid.md)
+    /// (b) starts only from an error ≤ this (LM's best point); ≥ 0. From 1e-4 it also ran,
+    /// in vain, where LM stalls at 1e-5 … 1e-4 (boxes--wall-10x5-mu1-rest of the corpus), and
+    /// took the time the main method needed to converge there (docs/rigid.md)
     pub start: f64,
+    /// (a) starts only from an error ≤ this (LM's own start, [`LmParams::start`]); ≥ 0
+    pub try_start: f64,
+    /// a run of (a) may use at most this share of the time left before the deadline; in
+    /// (0, 1]. With 0.5 it took 4 s of a granular box (n5000, μ = 0.1) that the fixed point
+    /// solves in 3 s, and the file was lost (docs/rigid.md)
+    pub time_share: f64,
+    /// the share of (a) after an inner solve that hit its iteration cap (the fixed point does
+    /// not solve its subproblems: the granular drums of the corpus); in (0, 1]
+    pub capped_time_share: f64,
+    /// (a) runs again once the error is below `retry` times the lowest error of its previous
+    /// run; in (0, 1]
+    pub retry: f64,
 }
 
 impl Default for ProxParams {
     fn default() -> Self {
         Self {
             max_outer: 100,
-            inner_steps: 50,
+            inner_steps: 20,
             line_search_steps: 30,
             sigma_factor: 5.0,
+            sigma_growth: 10.0,
+            inner_ratio: 10.0,
             stall_steps: 5,
             start: 1e-6,
+            try_start: 2e-5,
+            time_share: 0.1,
+            capped_time_share: 0.5,
+            retry: 0.1,
         }
     }
 }
@@ -519,8 +546,22 @@ impl ProxParams {
         if !(self.sigma_factor.is_finite() && self.sigma_factor > 0.0) {
             return Err("tuning.prox.sigma_factor must be positive".into());
         }
-        if !(self.start.is_finite() && self.start >= 0.0) {
-            return Err("tuning.prox.start must be finite and ≥ 0".into());
+        if !(self.sigma_growth.is_finite() && self.sigma_growth >= 1.0) {
+            return Err("tuning.prox.sigma_growth must be finite and ≥ 1".into());
+        }
+        if !(self.inner_ratio.is_finite() && self.inner_ratio > 1.0) {
+            return Err("tuning.prox.inner_ratio must be finite and > 1".into());
+        }
+        let level = |x: f64| x.is_finite() && x >= 0.0;
+        if !level(self.start) || !level(self.try_start) {
+            return Err("tuning.prox: start and try_start must be finite and ≥ 0".into());
+        }
+        let share = |x: f64| x > 0.0 && x <= 1.0;
+        if !share(self.time_share) || !share(self.capped_time_share) {
+            return Err("tuning.prox: time_share and capped_time_share must be in (0, 1]".into());
+        }
+        if !(self.retry > 0.0 && self.retry <= 1.0) {
+            return Err("tuning.prox.retry must be in (0, 1]".into());
         }
         Ok(())
     }
@@ -1039,12 +1080,18 @@ mod tests {
         let mut s = Settings::default();
         s.tuning.anderson.memory = 0;
         assert!(s.validate().is_err());
-        let refused: [fn(&mut Tuning); 17] = [
+        let refused: [fn(&mut Tuning); 23] = [
             |t| t.prox.inner_steps = 0,
             |t| t.prox.line_search_steps = 0,
             |t| t.prox.stall_steps = 0,
             |t| t.prox.sigma_factor = 0.0,
             |t| t.prox.start = f64::NAN,
+            |t| t.prox.try_start = -1.0,
+            |t| t.prox.time_share = 0.0,
+            |t| t.prox.capped_time_share = f64::NAN,
+            |t| t.prox.retry = 1.5,
+            |t| t.prox.sigma_growth = 0.5,
+            |t| t.prox.inner_ratio = 1.0,
             |t| t.lm.segment_steps = 0,
             |t| t.lm.max_rejections = 0,
             |t| t.lm.stall_gain = 0.0,

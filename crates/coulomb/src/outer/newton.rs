@@ -9,6 +9,11 @@
 //! ([`crate::settings::NewtonParams::stagnation`] iterations without a new lowest error); a
 //! try takes at most [`crate::settings::NewtonParams::try_steps`] steps and all tries of a
 //! stage at most [`crate::Settings::newton_steps`], so that the iteration is deterministic.
+//!
+//! A try that did not converge at err ≤ [`crate::settings::ProxParams::try_start`] hands its
+//! best point to the proximal point ([`crate::proximal`]) with a share of the time of its own;
+//! once the Newton budget is spent on a stagnating iterate, Levenberg–Marquardt
+//! ([`crate::levenberg`]) runs, and the proximal point again after an LM run that stalled.
 
 use super::fixed_point;
 use super::form::{Form, Verdict};
@@ -29,6 +34,8 @@ pub(super) struct EndGame {
     lm_gate: f64,
     /// LM steps spent by this stage
     lm_used: usize,
+    /// the proximal point after a Newton try runs again only once the error is below this
+    prox_gate: f64,
 }
 
 impl EndGame {
@@ -38,6 +45,7 @@ impl EndGame {
             used: 0,
             lm_gate: f64::INFINITY,
             lm_used: 0,
+            prox_gate: f64::INFINITY,
         }
     }
 }
@@ -165,7 +173,15 @@ impl EndGame {
             Some(_) => {}
             None => self.gate = p.retry * at.verdict.error,
         }
-        let converged = best.as_ref().is_some_and(|b| b.verdict.converged(tol));
+        let mut converged = best.as_ref().is_some_and(|b| b.verdict.converged(tol));
+        if !converged {
+            let run = self.proximal(form, settings, deadline, &at, &best, report);
+            if let Some((steps, improved)) = run {
+                spent += steps;
+                best = improved.or(best);
+                converged = best.as_ref().is_some_and(|b| b.verdict.converged(tol));
+            }
+        }
         if self.used >= settings.newton_steps && !converged && stagnating(at.history, &p) {
             if let Some((steps, improved)) = self.levenberg(form, settings, deadline, &at, &best) {
                 spent += steps;
@@ -242,23 +258,112 @@ impl EndGame {
         if report.steps == 0 || !kept {
             return Some((report.steps, None));
         }
-        let fs_new = fixed_point::evaluate_f(local.dim, &local.velocity(&trial));
+        Some((
+            report.steps,
+            Some(Improved::after(
+                form,
+                trial,
+                candidate,
+                fs,
+                best,
+                report.steps,
+            )),
+        ))
+    }
+
+    /// The proximal point ([`crate::proximal`]) after a Newton try that did not converge,
+    /// from the best point so far: None when the error is above
+    /// [`crate::settings::ProxParams::try_start`] or its gate is closed; otherwise its Newton
+    /// steps and, if it lowered the error (of the problem as stored) to at most
+    /// [`crate::settings::LmParams::keep_gain`] times its start (or converged), the new
+    /// iterate with one history record. A run takes at most
+    /// [`crate::settings::ProxParams::time_share`] of the time left, or
+    /// [`crate::settings::ProxParams::capped_time_share`] after an inner solve (`inner`) that
+    /// hit its iteration cap.
+    fn proximal(
+        &mut self,
+        form: &Form<'_>,
+        settings: &Settings,
+        deadline: Deadline,
+        at: &Iterate<'_>,
+        best: &Option<Improved>,
+        inner: &InnerReport,
+    ) -> Option<(usize, Option<Improved>)> {
+        let (tol, prox) = (settings.tol, &settings.tuning.prox);
+        let (r, error, fs) = match best {
+            Some(b) => (&b.r[..], b.verdict.error, &b.fs[..]),
+            None => (at.r, at.verdict.error, at.fs),
+        };
+        if prox.max_outer == 0
+            || error > prox.try_start
+            || error > self.prox_gate
+            || deadline.passed()
+        {
+            return None;
+        }
+        // an inner solve at its iteration cap: the fixed point does not solve its subproblems
+        // (the granular drums of the corpus), and the proximal point gets the larger share
+        let part = if inner.status == InnerStatus::MaxIterations {
+            prox.capped_time_share
+        } else {
+            prox.time_share
+        };
+        let share = deadline.instant().map(|t| {
+            let now = std::time::Instant::now();
+            now + t.saturating_duration_since(now).mul_f64(part)
+        });
+        let mut trial = r.to_vec();
+        let target = settings.tuning.newton.target_fraction * tol;
+        let report = crate::proximal::solve(form.local(), &mut trial, target, prox, share.into());
+        self.prox_gate = prox.retry * report.error.min(error);
+        let candidate = form.verdict(&trial);
+        // as for LM: a small gain is lost again once the fixed point goes on; a result on a
+        // ray of diverging r is not kept
+        let kept = candidate.converged(tol)
+            || (candidate.error <= settings.tuning.lm.keep_gain * error && !candidate.unbounded);
+        if report.steps == 0 || !kept {
+            return Some((report.steps, None));
+        }
+        Some((
+            report.steps,
+            Some(Improved::after(
+                form,
+                trial,
+                candidate,
+                fs,
+                best,
+                report.steps,
+            )),
+        ))
+    }
+}
+
+impl Improved {
+    /// What an end game that moved r to `r` (with its verdict) leaves: the records of `best`
+    /// plus one for this run (`steps` inner iterations), and F at the new r.
+    fn after(
+        form: &Form<'_>,
+        r: Vec<f64>,
+        verdict: Verdict,
+        fs: &[f64],
+        best: &Option<Improved>,
+        steps: usize,
+    ) -> Self {
+        let local = form.local();
+        let fs_new = fixed_point::evaluate_f(local.dim, &local.velocity(&r));
         let (fixed_point_residual, rule_6_1) = fixed_point::residuals(fs, &fs_new);
         let mut records = best.as_ref().map_or_else(Vec::new, |b| b.records.clone());
         records.push(OuterRecord {
-            error: candidate.error,
+            error: verdict.error,
             fixed_point_residual,
             rule_6_1,
-            inner_iterations: report.steps,
+            inner_iterations: steps,
         });
-        Some((
-            report.steps,
-            Some(Improved {
-                r: trial,
-                verdict: candidate,
-                records,
-                fs: fs_new,
-            }),
-        ))
+        Self {
+            r,
+            verdict,
+            records,
+            fs: fs_new,
+        }
     }
 }

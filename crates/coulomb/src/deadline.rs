@@ -22,6 +22,21 @@ impl Deadline {
         self.0.is_some_and(|t| Instant::now() >= t)
     }
 
+    /// The deadline of a part of the work that may use `fraction` of the time left now
+    /// (clamped to [0, 1]; NaN counts as 0): never stays never.
+    pub fn share(&self, fraction: f64) -> Self {
+        let fraction = if fraction > 0.0 {
+            fraction.min(1.0)
+        } else {
+            0.0
+        };
+        let now = Instant::now();
+        Self(
+            self.0
+                .map(|t| now + t.saturating_duration_since(now).mul_f64(fraction)),
+        )
+    }
+
     /// The instant, None for no deadline (for the time left, e.g. Clarabel's time limit).
     pub fn instant(&self) -> Option<Instant> {
         self.0
@@ -66,5 +81,19 @@ mod tests {
         }
         let d = deadline(now, Some(Duration::from_millis(5))).unwrap();
         assert_eq!(d - now, Duration::from_millis(5));
+    }
+
+    #[test]
+    fn a_share_lies_between_now_and_the_deadline_and_never_stays_never() {
+        assert_eq!(Deadline::NEVER.share(0.5), Deadline::NEVER);
+        let d = Deadline::after(Instant::now(), Some(Duration::from_secs(100)));
+        let t = d.instant().unwrap();
+        for f in [0.0, 0.25, 1.0, 7.0, -1.0, f64::NAN] {
+            let s = d.share(f).instant().unwrap();
+            assert!(s <= t, "{f}");
+        }
+        let half = d.share(0.5).instant().unwrap();
+        assert!(half + Duration::from_secs(45) < t && half + Duration::from_secs(55) > t);
+        assert!(!d.share(1.0).passed());
     }
 }

@@ -337,11 +337,7 @@ impl Solver<'_> {
         let settings = &self.settings;
         let (bp, lm) = (settings.tuning.barrier, settings.tuning.lm);
         let local = self.form.local();
-        let now = Instant::now();
-        let share: Deadline = deadline
-            .instant()
-            .map(|t| now + t.saturating_duration_since(now).mul_f64(bp.time_share))
-            .into();
+        let share = deadline.share(bp.time_share);
         let target = settings.tuning.newton.target_fraction * settings.tol;
         let global = match &self.form.stored {
             Stored::Global(g, _) => Some(&**g),

@@ -84,6 +84,17 @@ pub(super) struct Iterate<'x> {
     pub(super) fs: &'x [f64],
 }
 
+impl Iterate<'_> {
+    /// The point an end game starts from: r, its error and F(s) of `best` when there is one,
+    /// else of the outer iterate.
+    fn or_best<'a>(&'a self, best: &'a Option<Improved>) -> (&'a [f64], f64, &'a [f64]) {
+        match best {
+            Some(b) => (&b.r, b.verdict.error, &b.fs),
+            None => (self.r, self.verdict.error, self.fs),
+        }
+    }
+}
+
 impl EndGame {
     /// Tries the end game from `at` after an outer iteration whose inner solve ended with
     /// `report`: None if the gate is closed, otherwise the Newton steps spent and, if the
@@ -124,10 +135,7 @@ impl EndGame {
         let mut spent = 0;
         let mut best: Option<Improved> = None;
         while self.used < settings.newton_steps {
-            let (r, error, fs) = match &best {
-                Some(b) => (&b.r[..], b.verdict.error, &b.fs[..]),
-                None => (at.r, at.verdict.error, at.fs),
-            };
+            let (r, error, fs) = at.or_best(&best);
             let mut trial = r.to_vec();
             let nr = crate::newton::polish_with(
                 local,
@@ -210,25 +218,18 @@ impl EndGame {
         }
         lm.max_steps -= self.lm_used;
         // at most a share of the time left, so that the stage (and its fallback) goes on
-        let share = deadline.instant().map(|t| {
-            let now = std::time::Instant::now();
-            now + t.saturating_duration_since(now).mul_f64(lm.time_share)
-        });
-        let (r, error, fs) = match best {
-            Some(b) => (&b.r[..], b.verdict.error, &b.fs[..]),
-            None => (at.r, at.verdict.error, at.fs),
-        };
+        let share = deadline.share(lm.time_share);
+        let (r, error, fs) = at.or_best(best);
         if error > lm.start {
             return None;
         }
         let local = form.local();
         let mut trial = r.to_vec();
         let target = settings.tuning.newton.target_fraction * tol;
-        let mut report = crate::levenberg::solve(local, &mut trial, target, &lm, share.into());
+        let mut report = crate::levenberg::solve(local, &mut trial, target, &lm, share);
         let lm_steps = report.steps;
         // a stalled LM hands its best point to the proximal point, in what is left of the share
         let prox = &settings.tuning.prox;
-        let share: Deadline = share.into();
         let stalled = matches!(
             report.status,
             crate::levenberg::LmStatus::Stalled | crate::levenberg::LmStatus::MaxSteps
@@ -255,20 +256,10 @@ impl EndGame {
         // a run that did not converge is kept only if it cut the error by `keep_gain`: a small
         // gain is lost again once the fixed point goes on from an unrelated point
         let kept = candidate.converged(tol) || candidate.error <= lm.keep_gain * error;
-        if report.steps == 0 || !kept {
-            return Some((report.steps, None));
-        }
-        Some((
-            report.steps,
-            Some(Improved::after(
-                form,
-                trial,
-                candidate,
-                fs,
-                best,
-                report.steps,
-            )),
-        ))
+        let moved = report.steps > 0 && kept;
+        let improved =
+            moved.then(|| Improved::after(form, trial, candidate, fs, best, report.steps));
+        Some((report.steps, improved))
     }
 
     /// The proximal point ([`crate::proximal`]) after a Newton try that did not converge,
@@ -290,10 +281,7 @@ impl EndGame {
         inner: &InnerReport,
     ) -> Option<(usize, Option<Improved>)> {
         let (tol, prox) = (settings.tol, &settings.tuning.prox);
-        let (r, error, fs) = match best {
-            Some(b) => (&b.r[..], b.verdict.error, &b.fs[..]),
-            None => (at.r, at.verdict.error, at.fs),
-        };
+        let (r, error, fs) = at.or_best(best);
         if prox.max_outer == 0
             || error > prox.try_start
             || error > self.prox_gate
@@ -308,33 +296,20 @@ impl EndGame {
         } else {
             prox.time_share
         };
-        let share = deadline.instant().map(|t| {
-            let now = std::time::Instant::now();
-            now + t.saturating_duration_since(now).mul_f64(part)
-        });
         let mut trial = r.to_vec();
         let target = settings.tuning.newton.target_fraction * tol;
-        let report = crate::proximal::solve(form.local(), &mut trial, target, prox, share.into());
+        let share = deadline.share(part);
+        let report = crate::proximal::solve(form.local(), &mut trial, target, prox, share);
         self.prox_gate = prox.retry * report.error.min(error);
         let candidate = form.verdict(&trial);
         // as for LM: a small gain is lost again once the fixed point goes on; a result on a
         // ray of diverging r is not kept
         let kept = candidate.converged(tol)
             || (candidate.error <= settings.tuning.lm.keep_gain * error && !candidate.unbounded);
-        if report.steps == 0 || !kept {
-            return Some((report.steps, None));
-        }
-        Some((
-            report.steps,
-            Some(Improved::after(
-                form,
-                trial,
-                candidate,
-                fs,
-                best,
-                report.steps,
-            )),
-        ))
+        let moved = report.steps > 0 && kept;
+        let improved =
+            moved.then(|| Improved::after(form, trial, candidate, fs, best, report.steps));
+        Some((report.steps, improved))
     }
 }
 

@@ -645,6 +645,12 @@ pub struct NsgsSettings {
     /// equal; 2 500 beads 1.29× faster on two). The numbers are the same either way (the
     /// sweep is bitwise independent of the thread count), only the time differs.
     pub serial_below: usize,
+    /// a step that Gauss–Seidel leaves above `tol` is finished by the library's solver
+    /// (`Params::solver`, `Simulation::step`); false: Gauss–Seidel's result stands, so that
+    /// the step depends on this crate's sweep and the one-contact law solve only, not on the
+    /// library's solver pipeline (`coulomb corpus` generates its granular class this way, so
+    /// that its files do not change when the solver under test does)
+    pub library_finish: bool,
 }
 
 /// Sweeps over which the relaxation's progress is judged.
@@ -652,7 +658,7 @@ pub const RELAX_WINDOW: usize = 10;
 
 impl Default for NsgsSettings {
     /// tol 1e-4, at most 20 000 sweeps and 60 s, ω = 1.5, one thread below 1 500 spheres
-    /// (docs/scaling.md).
+    /// (docs/scaling.md), the library's finish on.
     fn default() -> Self {
         Self {
             tol: 1e-4,
@@ -660,6 +666,7 @@ impl Default for NsgsSettings {
             time_limit: Some(Duration::from_secs(60)),
             relaxation: 1.5,
             serial_below: 1_500,
+            library_finish: true,
         }
     }
 }
@@ -1413,6 +1420,42 @@ mod tests {
             }
         }
         assert!(finished > 0);
+    }
+
+    #[test]
+    fn without_the_library_finish_a_step_depends_on_gauss_seidel_alone() {
+        // two sweeps leave steps above 1e-4; without the finish those steps stand as
+        // Gauss–Seidel left them, whatever the library's settings say
+        let run = |solver: coulomb::Settings| {
+            let params = Params {
+                method: StepMethod::Nsgs(NsgsSettings {
+                    max_sweeps: 2,
+                    library_finish: false,
+                    ..NsgsSettings::default()
+                }),
+                solver,
+                ..Params::default()
+            };
+            let mut sim = Simulation::new(Scene::Box.build(60, 2), params).unwrap();
+            let mut unconverged = 0;
+            for _ in 0..30 {
+                let s = sim.step().unwrap();
+                assert_eq!(s.subproblems, 1, "step {} {}", s.step, s.status);
+                assert!(s.inner_iterations <= 2);
+                if !s.converged {
+                    unconverged += 1;
+                    assert!(s.error > 1e-4 && s.error.is_finite(), "err {}", s.error);
+                }
+            }
+            assert!(unconverged > 0);
+            sim.world
+        };
+        let loose = coulomb::Settings {
+            max_outer: 1,
+            tol: 1e-2,
+            ..coulomb::Settings::default()
+        };
+        assert_eq!(run(coulomb::Settings::default()), run(loose));
     }
 
     #[test]

@@ -540,8 +540,8 @@ impl Simulation {
             .and_then(|v| v.as_str().map(str::to_string))
             .unwrap_or_else(|| format!("{:?}", sol.status));
         // Gauss–Seidel can stall (cycle) on a frictional step: then the library's solver
-        // finishes the same problem (2.10) from Gauss–Seidel's iterate
-        let finish = if stats.converged {
+        // finishes the same problem (2.10) from Gauss–Seidel's iterate (unless turned off)
+        let finish = if stats.converged || !settings.library_finish {
             None
         } else {
             self.finish_with_library(&problem, &sol, &r0, settings, stats)?

@@ -293,7 +293,11 @@ pub fn box_energy(
     for _ in 0..n {
         let s = sim.step()?;
         let en = s.kinetic_energy + s.potential_energy;
-        out.worst_increase = out.worst_increase.max(en - prev - s.projection_work);
+        let increase = en - prev - s.projection_work;
+        out.worst_increase = out.worst_increase.max(increase);
+        if increase > GAIN_THRESHOLD * e0 {
+            out.gaining_steps += 1;
+        }
         out.projection_work += s.projection_work;
         if !s.converged {
             out.not_converged += 1;
@@ -317,7 +321,13 @@ pub struct EnergyBudget {
     pub projection_work: f64,
     /// steps not converged
     pub not_converged: usize,
+    /// steps with E_{k+1} − E_k − W_p,k > [`GAIN_THRESHOLD`] · E₀
+    pub gaining_steps: usize,
 }
+
+/// A step of [`box_energy`] counts as gaining energy above this fraction of E₀ (round-off of
+/// the energy sums is ~1e-12 E₀).
+pub const GAIN_THRESHOLD: f64 = 1e-7;
 
 /// A ball (R = 0.05 m) rolling inside a fixed cylinder of radius 1 m (horizontal axis),
 /// released at rest at `deg` degrees from the bottom, simulated for `duration` s. Returns the

@@ -168,17 +168,22 @@ fn the_velocity_step_never_creates_energy() {
     for e in [1.0, 0.5, 0.2] {
         let b = box_energy(150, e, 0.0, 120, &accurate(1e-8)).unwrap();
         assert!(b.worst_increase <= 1e-7 * b.e0, "e = {e}, μ = 0: {b:?}");
+        assert_eq!(b.gaining_steps, 0, "e = {e}, μ = 0: {b:?}");
         if e < 1.0 {
             assert!(b.end < 0.9 * b.e0, "e = {e}: no dissipation {b:?}");
         }
     }
     // μ > 0: the midpoint rule's friction term ½ r_T·(u_T⁻ − u_T⁺) has no sign; a bead
     // wedged between walls at μ = 0.8 can gain energy in one step (measured over 30 seeds:
-    // docs/granular.md, "Energy"); the runs dissipate and no step gains more than 1 % E₀
+    // docs/granular.md, "Energy"), by an amount that depends on which solution of that
+    // step's problem the solver returns (0.5 % … 4.7 % of E₀ with the builds measured); the
+    // runs dissipate, a gain is an isolated step (at most 2 of 120), never a drift
     for (e, mu) in [(0.2, 0.3), (0.5, 0.8)] {
         let b = box_energy(150, e, mu, 120, &accurate(1e-8)).unwrap();
-        assert!(b.worst_increase <= 1e-2 * b.e0, "e = {e}, μ = {mu}: {b:?}");
+        assert!(b.gaining_steps <= 2, "e = {e}, μ = {mu}: {b:?}");
+        assert!(b.worst_increase <= 0.1 * b.e0, "e = {e}, μ = {mu}: {b:?}");
         assert!(b.end < 0.9 * b.e0, "e = {e}: no dissipation {b:?}");
+        assert_eq!(b.not_converged, 0, "e = {e}, μ = {mu}: {b:?}");
     }
 }
 

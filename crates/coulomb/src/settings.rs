@@ -698,6 +698,11 @@ pub struct InnerParams {
     /// projected Gauss–Seidel (inner solver and fused method): sweeps between exact
     /// recomputations of the maintained u = W r + b (against drift); ≥ 1
     pub gs_refresh: usize,
+    /// fused method: sweeps between two Anderson steps of its Gauss–Seidel iteration, each kept
+    /// only where it lowers the error ([`crate::outer::fused`]); 0: no mixing
+    pub gs_anderson_period: usize,
+    /// fused method: memory of that Anderson mixing; ≥ 1
+    pub gs_anderson_memory: usize,
     /// interior point: semismooth Newton steps that polish Clarabel's r on the natural map
     /// (0: none; see [`crate::inner::ipm::DEFAULT_POLISH_STEPS`])
     pub ipm_polish_steps: usize,
@@ -713,6 +718,8 @@ impl Default for InnerParams {
             apgd_power_iterations: crate::inner::apgd::POWER_ITERATIONS,
             apgd_barzilai_borwein: false,
             gs_refresh: crate::inner::pgs::REFRESH,
+            gs_anderson_period: crate::outer::fused::ANDERSON_PERIOD,
+            gs_anderson_memory: crate::outer::fused::ANDERSON_MEMORY,
             ipm_polish_steps: crate::inner::ipm::DEFAULT_POLISH_STEPS,
             apgd: ApgdParams::default(),
             infeasible_ray: RayParams::default(),
@@ -832,6 +839,7 @@ impl Tuning {
             || self.newton.try_steps == 0
             || self.inner.apgd_power_iterations == 0
             || self.inner.gs_refresh == 0
+            || self.inner.gs_anderson_memory == 0
             || self.newton.slow_steps == 0
             || self.newton.shift_tries == 0
             || self.inner.apgd.backtrack_tries == 0
@@ -1080,7 +1088,8 @@ mod tests {
         let mut s = Settings::default();
         s.tuning.anderson.memory = 0;
         assert!(s.validate().is_err());
-        let refused: [fn(&mut Tuning); 23] = [
+        let refused: [fn(&mut Tuning); 24] = [
+            |t| t.inner.gs_anderson_memory = 0,
             |t| t.prox.inner_steps = 0,
             |t| t.prox.line_search_steps = 0,
             |t| t.prox.stall_steps = 0,

@@ -3,7 +3,8 @@
 //!
 //! Classes (see [`Class`]):
 //! - `granular`: steps of coulomb's own Moreau–Jean simulations (box, funnel, rotating drum,
-//!   vibrating plate), in the global form (M, H, f, w) and the local form (W, q) of (2.10);
+//!   vibrating plate; each step solved by body-level Gauss–Seidel, not by the solver under
+//!   test), in the global form (M, H, f, w) and the local form (W, q) of (2.10);
 //! - `boxes`: rigid cuboids stacked on a floor, four contact points per face contact, so that
 //!   there are more contact unknowns than degrees of freedom and W = Hᵀ M⁻¹ H is rank-deficient;
 //! - `nonsym`: local problems of the two classes above with W perturbed to be slightly
@@ -12,7 +13,9 @@
 //! - `painleve`: the rod of (2.12) for several θ, μ, u₀, with the existence verdict of (2.13);
 //! - `random`: random sparse H, block-diagonal SPD M, random f, w and μ, in d = 2 and 3.
 //!
-//! The corpus is deterministic for a seed. Files are written to a temporary name and renamed.
+//! The corpus is deterministic for a seed, and independent of the library's solver pipeline
+//! (the granular simulations use their own Gauss–Seidel: `granular::STEP_SOLVER`). Files are
+//! written to a temporary name and renamed.
 
 mod boxes;
 mod granular;

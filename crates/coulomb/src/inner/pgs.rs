@@ -54,6 +54,12 @@ pub struct PgsSolver {
     /// thresholds of the infeasible-ray test, run at each refresh
     /// ([`crate::settings::InnerParams::infeasible_ray`])
     pub ray: crate::settings::RayParams,
+    /// fused iteration ([`crate::outer::fused`]) only: sweeps between two Anderson steps
+    /// (0: none; default [`crate::outer::fused::ANDERSON_PERIOD`])
+    pub anderson_period: usize,
+    /// fused iteration only: memory of its Anderson mixing (≥ 1; default
+    /// [`crate::outer::fused::ANDERSON_MEMORY`])
+    pub anderson_memory: usize,
     blocks: DiagonalBlocks,
     /// maintained u = W r + b
     u: Vec<f64>,
@@ -66,6 +72,8 @@ impl PgsSolver {
         Self {
             refresh: REFRESH,
             ray: crate::settings::RayParams::default(),
+            anderson_period: crate::outer::fused::ANDERSON_PERIOD,
+            anderson_memory: crate::outer::fused::ANDERSON_MEMORY,
             blocks: DiagonalBlocks::new(dim, w),
             u: Vec::new(),
         }

@@ -100,12 +100,14 @@ impl InnerSolvers {
 
     /// The Gauss–Seidel solver of the fused method on the stored W of `form`.
     pub(crate) fn fused(&mut self, form: &Form<'_>) -> &mut PgsSolver {
-        let (refresh, ray) = (self.params.gs_refresh, self.params.infeasible_ray);
+        let p = self.params;
         self.fused.get_or_insert_with(|| {
             let local = form.local();
             let mut s = PgsSolver::new(local.dim, &local.w);
-            s.refresh = refresh;
-            s.ray = ray;
+            s.refresh = p.gs_refresh;
+            s.ray = p.infeasible_ray;
+            s.anderson_period = p.gs_anderson_period;
+            s.anderson_memory = p.gs_anderson_memory;
             s
         })
     }

@@ -27,7 +27,7 @@ pub const ANDERSON_MEMORY: usize = 5;
 /// its piece of the law (take-off, stick, slide) the sweeps are an affine map and the mixing
 /// is a secant method on it: the slow linear phase of Gauss–Seidel on rank-deficient W (a
 /// factor 0.6 per 10 000 sweeps on the walls of docs/rigid.md) is what it shortens. Memory:
-/// 2 (`memory` + 2) vectors of the size of r.
+/// about 2 `memory` + 5 vectors of the size of r.
 struct SweepMixing {
     period: usize,
     anderson: Anderson,
@@ -89,8 +89,8 @@ impl SweepMixing {
 /// each contact given a solution of its one-contact law (take-off, stick or slide, see
 /// [`solve_contact_law`]) — or, where the slip equation fails, a step of the one-contact
 /// SOC-QP with De Saxcé's s = μ‖u_T‖ taken from the current u — every
-/// [`PgsSolver::anderson_period`] sweeps followed by an Anderson step ([`SweepMixing`]) kept
-/// only where it lowers the error. Stops when the error of docs/error.md, computed from the maintained
+/// [`PgsSolver::anderson_period`] sweeps followed by an Anderson step kept only where it
+/// lowers the error. Stops when the error of docs/error.md, computed from the maintained
 /// u (recomputed exactly every few sweeps and before stopping), is ≤ `limits.tol`. With
 /// `give_up`, it also stops (status `MaxIterations`) as soon as the rate of the last
 /// [`GIVE_UP_WINDOW`] sweeps, extrapolated over the sweeps left, cannot reach `limits.tol`.

@@ -21,6 +21,8 @@
 //! - [`newton`]: semismooth Newton on the natural map of the whole law (the end game's steps);
 //! - [`levenberg`]: Levenberg–Marquardt on the Alart–Curnier map, the end game for rigid,
 //!   rank-deficient problems after the Newton end game has spent its budget;
+//! - [`multiplier`]: the proximal point on r solved in the velocities (method of
+//!   multipliers), a stage of the default for rigid problems whose W is rank-deficient;
 //! - [`solver`]: where [`solve`] and the settings and results have always been re-exported;
 //! - [`deadline`]: the one [`deadline::Deadline`] type of every time limit;
 //! - [`existence`]: the criteria (4.1), (4.4), (4.5), (4.6), (5.1) with certificates;
@@ -47,6 +49,7 @@ pub mod inner;
 pub mod law;
 pub mod levenberg;
 pub mod mass;
+pub mod multiplier;
 pub mod natural_map;
 pub mod newton;
 pub mod outer;

@@ -536,6 +536,98 @@ impl Default for ProxParams {
     }
 }
 
+/// Parameters of the method of multipliers in the velocities ([`crate::multiplier`]): a
+/// stage of the default for global problems of rigid bodies (at most
+/// [`BarrierParams::max_schur_dofs`] degrees of freedom, at most half as many as contact
+/// unknowns), run after a first stage that hands over to the fallback, from that stage's
+/// lowest-error point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+pub struct MultiplierParams {
+    /// cap on outer (multiplier) steps per run; 0: no such stage
+    pub max_steps: usize,
+    /// ρᵢ = `rho_factor` / w̄, w̄ the mean of trace(Wᵢᵢ)/d; > 0. Measured on the box files of
+    /// corpus seeds 1 and 2 from the default's point after 3 s (docs/rigid.md): 100 converges
+    /// on 4 of 7 unsolved files, 300 on 5, 1000 on none (Newton on G fails)
+    pub rho_factor: f64,
+    /// Newton steps per outer step; ≥ 1
+    pub newton_steps: usize,
+    /// halvings of the backtracking search on ‖G‖ before a Newton run gives up; ≥ 1
+    pub halvings: usize,
+    /// Armijo's constant of that search; in (0, 1)
+    pub sufficient_decrease: f64,
+    /// Newton on G stops at ‖G‖ ≤ `inner_ratio` · err · max(1, ‖f‖), err the error at the
+    /// outer step's start; > 0
+    pub inner_ratio: f64,
+    /// an outer step whose Newton run did not reach its target and whose r has an error above
+    /// `reject_growth` times the current one is taken again from the same multipliers with
+    /// every ρᵢ multiplied by `penalty_cut`; ≥ 1
+    pub reject_growth: f64,
+    /// see `reject_growth`; in (0, 1)
+    pub penalty_cut: f64,
+    /// after an outer step whose Newton run reached its target, ρᵢ grows by this factor, up
+    /// to its first value; ≥ 1
+    pub penalty_regrowth: f64,
+    /// a run stops after this many outer steps without the lowest merit falling to
+    /// `stall_gain` times its value at the last such fall; ≥ 1
+    pub stall_steps: usize,
+    /// see `stall_steps`; in (0, 1)
+    pub stall_gain: f64,
+    /// a run may use at most this share of the time left; in (0, 1]
+    pub time_share: f64,
+}
+
+impl Default for MultiplierParams {
+    fn default() -> Self {
+        Self {
+            max_steps: 20_000,
+            rho_factor: 300.0,
+            newton_steps: 50,
+            halvings: 30,
+            sufficient_decrease: 1e-4,
+            inner_ratio: 1e-2,
+            reject_growth: 10.0,
+            penalty_cut: 0.5,
+            penalty_regrowth: 1.2,
+            stall_steps: 1000,
+            stall_gain: 0.5,
+            time_share: 0.6,
+        }
+    }
+}
+
+impl MultiplierParams {
+    fn validate(&self) -> Result<(), String> {
+        if self.newton_steps == 0 || self.halvings == 0 || self.stall_steps == 0 {
+            return Err(
+                "tuning.multiplier: newton_steps, halvings and stall_steps must be ≥ 1".into(),
+            );
+        }
+        let positive = |x: f64| x.is_finite() && x > 0.0;
+        if !positive(self.rho_factor) || !positive(self.inner_ratio) {
+            return Err("tuning.multiplier: rho_factor and inner_ratio must be positive".into());
+        }
+        let open = |x: f64| x > 0.0 && x < 1.0;
+        if !open(self.sufficient_decrease) || !open(self.stall_gain) || !open(self.penalty_cut) {
+            return Err(
+                "tuning.multiplier: sufficient_decrease, stall_gain and penalty_cut must be in (0, 1)"
+                    .into(),
+            );
+        }
+        let at_least_one = |x: f64| x.is_finite() && x >= 1.0;
+        if !at_least_one(self.reject_growth) || !at_least_one(self.penalty_regrowth) {
+            return Err(
+                "tuning.multiplier: reject_growth and penalty_regrowth must be finite and ≥ 1"
+                    .into(),
+            );
+        }
+        if !(self.time_share > 0.0 && self.time_share <= 1.0) {
+            return Err("tuning.multiplier.time_share must be in (0, 1]".into());
+        }
+        Ok(())
+    }
+}
+
 impl ProxParams {
     fn validate(&self) -> Result<(), String> {
         if self.inner_steps == 0 || self.line_search_steps == 0 || self.stall_steps == 0 {
@@ -755,6 +847,8 @@ pub struct Tuning {
     pub lm: LmParams,
     /// proximal-point end game after a stalled Levenberg–Marquardt run
     pub prox: ProxParams,
+    /// the method of multipliers in the velocities (global rigid problems)
+    pub multiplier: MultiplierParams,
     /// the interior-point try on Coulomb's law
     pub barrier: BarrierParams,
     /// the inner solvers' parameters
@@ -790,6 +884,7 @@ impl Default for Tuning {
             },
             lm: LmParams::default(),
             prox: ProxParams::default(),
+            multiplier: MultiplierParams::default(),
             barrier: BarrierParams::default(),
             inner: InnerParams::default(),
         }
@@ -873,6 +968,7 @@ impl Tuning {
         }
         self.barrier.validate()?;
         self.prox.validate()?;
+        self.multiplier.validate()?;
         self.lm.validate()
     }
 }
@@ -1088,7 +1184,12 @@ mod tests {
         let mut s = Settings::default();
         s.tuning.anderson.memory = 0;
         assert!(s.validate().is_err());
-        let refused: [fn(&mut Tuning); 24] = [
+        let refused: [fn(&mut Tuning); 29] = [
+            |t| t.multiplier.newton_steps = 0,
+            |t| t.multiplier.rho_factor = 0.0,
+            |t| t.multiplier.inner_ratio = f64::NAN,
+            |t| t.multiplier.stall_gain = 1.0,
+            |t| t.multiplier.time_share = 0.0,
             |t| t.inner.gs_anderson_memory = 0,
             |t| t.prox.inner_steps = 0,
             |t| t.prox.line_search_steps = 0,

@@ -180,6 +180,34 @@ impl Skeleton {
         self.r_ptr.len() - 1
     }
 
+    /// W ≈ C A⁻¹ R as the velocity form of a global problem with k degrees of freedom:
+    /// M v = R r (M = A, H = R, k × m) and u = (Cᵀ)ᵀ v + q, so that u = W r + q on the
+    /// skeleton, also for a W that is not symmetric. Returns (A, ½(A + Aᵀ), R, Cᵀ).
+    pub fn velocity_form(&self) -> (CscMatrix, CscMatrix, CscMatrix, CscMatrix) {
+        let k = self.rank();
+        let mut a = vec![0.0; k * k];
+        let mut a_sym = vec![0.0; k * k];
+        for i in 0..k {
+            for j in 0..k {
+                a[i * k + j] = self.a[(i, j)];
+                a_sym[i * k + j] = 0.5 * (self.a[(i, j)] + self.a[(j, i)]);
+            }
+        }
+        let m = self.unknowns();
+        // R by columns and C by rows (= Cᵀ by columns); their indices (positions in P) need
+        // not be sorted: compress them
+        let compress = |ptr: &[usize], idx: &[usize], val: &[f64]| {
+            CscMatrix::from_csc_arrays(k, m, ptr, idx, val)
+                .unwrap_or_else(|_| CscMatrix::zeros(k, m))
+        };
+        (
+            CscMatrix::from_dense(k, k, &a),
+            CscMatrix::from_dense(k, k, &a_sym),
+            compress(&self.r_ptr, &self.r_idx, &self.r_val),
+            compress(&self.c_ptr, &self.c_idx, &self.c_val),
+        )
+    }
+
     /// The factored G + C A⁻¹ R for the block-diagonal regular G given by the row-major
     /// d × d blocks of G⁻¹; None if A + R G⁻¹ C has a non-finite entry.
     pub fn factor(&self, ginv: &[f64]) -> Option<SkeletonLu> {

@@ -250,6 +250,14 @@ impl<'a> Solver<'a> {
                 if tried.0.converged() || deadline.passed() {
                     return Ok(merge(stages, tried, start));
                 }
+                // the main method below starts from the caller's point, not from these
+                if let Some(m) = self.multiplier_try(&tried, deadline)? {
+                    if m.0.converged() || deadline.passed() {
+                        stages.push(tried);
+                        return Ok(merge(stages, m, start));
+                    }
+                    stages.push(m);
+                }
                 stages.push(tried);
             }
         }
@@ -381,6 +389,113 @@ impl Solver<'_> {
             }
         }
         let r = best.map_or_else(|| vec![0.0; local.q.len()], |(r, _)| r);
+        let judge = Settings {
+            max_outer: 0,
+            fallback: None,
+            ..settings.clone()
+        };
+        let guess = Guess { r, v: None };
+        let (mut solution, best) = self.run(&judge, Some(&guess), deadline, false, false)?;
+        solution.history.push(OuterRecord {
+            error: solution.error,
+            fixed_point_residual: f64::NAN,
+            rule_6_1: f64::NAN,
+            inner_iterations: steps,
+        });
+        solution.outer_iterations += 1;
+        solution.inner_iterations += steps;
+        Ok(Some((solution, best)))
+    }
+}
+
+impl Solver<'_> {
+    /// The method of multipliers in the velocities ([`crate::multiplier`], parameters
+    /// [`crate::settings::MultiplierParams`]) from the best point of the interior-point try
+    /// `tried`, in its share of the time left. It applies where the try did: a global
+    /// problem with at most [`crate::settings::BarrierParams::max_schur_dofs`] degrees of
+    /// freedom and at most half as many as contact unknowns (rigid bodies touching at several
+    /// points per face), or a local one whose W has a skeleton W ≈ Rᵀ A⁻¹ R of rank at most
+    /// that and m/2 ([`crate::skeleton`]; the method then runs on the velocity form
+    /// A v = R r, u = C v + q of W ≈ C A⁻¹ R; not where W's relative asymmetry exceeds tol;
+    /// the error is still that of the stored W). Its point is judged on the
+    /// problem as stored like every iterate (one outer record whose inner iterations are its
+    /// Newton steps). None when it does not apply.
+    fn multiplier_try(
+        &mut self,
+        tried: &Ran,
+        deadline: Deadline,
+    ) -> Result<Option<Ran>, SolveError> {
+        let settings = &self.settings;
+        let mp = settings.tuning.multiplier;
+        let bp = settings.tuning.barrier;
+        let local = self.form.local();
+        if mp.max_steps == 0 || !local.mu.iter().all(|mu| mu.is_finite()) {
+            return Ok(None);
+        }
+        let share = deadline.share(mp.time_share);
+        let m = local.q.len();
+        let skeleton_form;
+        let (g, hu, mass): (&GlobalProblem, Option<&CscMatrix>, &crate::mass::MassFactor) =
+            match &self.form.stored {
+                Stored::Global(g, delassus) => {
+                    let n = g.m.nrows;
+                    if n > bp.max_schur_dofs || 2 * n > m {
+                        return Ok(None);
+                    }
+                    (g, None, &delassus.factor)
+                }
+                Stored::Local(p) => {
+                    // a W whose antisymmetric part exceeds tol differs from the skeleton of
+                    // its symmetric part by more than the tolerance: the stage would solve
+                    // another law (measured: no file of the corpus' nonsym class gained,
+                    // one took twice as long)
+                    if m > bp.max_skeleton_unknowns || p.w.asymmetry() > settings.tol {
+                        return Ok(None);
+                    }
+                    let max_rank = bp.max_schur_dofs.min(m / 2);
+                    let Some(skeleton) =
+                        crate::skeleton::Skeleton::new(&p.w, p.dim, max_rank, bp.rank_tol, share)
+                    else {
+                        return Ok(None);
+                    };
+                    let (a, a_sym, h, hu) = skeleton.velocity_form();
+                    let Ok(mass) = crate::mass::MassFactor::new(&a_sym) else {
+                        return Ok(None);
+                    };
+                    let Ok(g) = GlobalProblem::new_unfactored(
+                        p.dim as i64,
+                        a,
+                        h,
+                        vec![0.0; skeleton.rank()],
+                        p.q.clone(),
+                        p.mu.clone(),
+                    ) else {
+                        return Ok(None);
+                    };
+                    skeleton_form = (g, hu, mass);
+                    (&skeleton_form.0, Some(&skeleton_form.1), &skeleton_form.2)
+                }
+            };
+        let mut r = match &tried.1 {
+            Some(best)
+                if best.merit() < tried.0.error.max(tried.0.balance_residual.unwrap_or(0.0)) =>
+            {
+                best.r().to_vec()
+            }
+            _ => tried.0.r.clone(),
+        };
+        if r.len() != m || !r.iter().all(|x| x.is_finite()) {
+            return Ok(None);
+        }
+        let diag = local.w.diagonal();
+        let w_mean = diag.iter().sum::<f64>() / diag.len().max(1) as f64;
+        let form = &self.form;
+        let report =
+            crate::multiplier::solve(g, hu, mass, w_mean, &mut r, settings.tol, &mp, share, |r| {
+                let v = form.verdict(r);
+                (v.error, v.balance.unwrap_or(0.0))
+            });
+        let steps = report.newton_steps;
         let judge = Settings {
             max_outer: 0,
             fallback: None,
@@ -607,7 +722,8 @@ mod tests {
         }
     }
 
-    /// History records of interior-point tries (they have no fixed-point residual).
+    /// History records of interior-point tries and of the method of multipliers that follows
+    /// them (they have no fixed-point residual).
     fn barrier_records(sol: &Solution) -> usize {
         sol.history
             .iter()
@@ -644,7 +760,14 @@ mod tests {
             };
             let sol = solve(&problem, &settings).unwrap();
             assert!(sol.history[0].fixed_point_residual.is_nan(), "seed {seed}");
-            assert_eq!(barrier_records(&sol), 1, "seed {seed}");
+            // the try's record, and the method of multipliers' (also without a fixed-point
+            // residual) right after it when the try did not converge
+            let records = barrier_records(&sol);
+            let tried_on = sol.history.len() > 1;
+            assert_eq!(records, 1 + usize::from(tried_on), "seed {seed}");
+            if tried_on {
+                assert!(sol.history[1].fixed_point_residual.is_nan(), "seed {seed}");
+            }
             solved += usize::from(sol.converged() && sol.history.len() == 1);
             let off = Settings {
                 barrier_steps: 0,

@@ -73,6 +73,11 @@ impl Best {
         }
     }
 
+    /// The impulses of this iterate.
+    pub(super) fn r(&self) -> &[f64] {
+        &self.r
+    }
+
     /// The merit ([`Verdict::merit`]) of this iterate.
     pub(super) fn merit(&self) -> f64 {
         self.verdict.merit()

@@ -1,0 +1,519 @@
+//! The proximal point on r solved in the velocities of a global problem: a method of
+//! multipliers for the incremental problem (2.10) of rigid bodies whose W = Hᵀ M⁻¹ H (4.7) is
+//! rank-deficient.
+//!
+//! With multipliers λ = r_k and a penalty ρᵢ > 0 per contact, step k solves for v
+//!
+//! ```text
+//!     G(v) = M v − f − H P_L(λ − ρ ũ(Hᵀ v + w)) = 0,    ũ = u + μ‖u_T‖ e  (3.7),
+//! ```
+//!
+//! and sets r_{k+1} = P_L(λ − ρ ũ). A fixed point r = P_L(r − ρ ũ) is Coulomb's law (2.9) in
+//! De Saxcé's form (3.8) with M v = H r + f: a solution of (2.10). Step k is the proximal
+//! point of Siconos' PROX, r_{k+1} solving the law for (W + I/ρ, q − r_k/ρ) (with ũ of the
+//! unregularized u), but its unknowns are the n velocities, which are unique where the m ≫ n
+//! impulses are not (the convex problem (3.15) is strongly convex in v). Each step is a
+//! semismooth Newton method on G with
+//!
+//! ```text
+//!     J = M + H B Hᵀ,    Bᵢ = ρᵢ ∂P_{K_μ}(yᵢ) (I + μ e t̂ᵀ),    t̂ = u_T / ‖u_T‖ (0 at u_T = 0),
+//! ```
+//!
+//! a dense LU of size n (the problems it applies to have n ≤
+//! [`crate::settings::BarrierParams::max_schur_dofs`]) and a backtracking search on ‖G‖.
+//! ρᵢ = ρ_f / w̄ with w̄ the mean of trace(Wᵢᵢ)/d: a penalty of the order of 1/‖W‖ keeps the
+//! Newton systems regular and the outer iteration moving; the end game's σ = 5 err rule
+//! ([`crate::proximal`]) makes ρ so large there that Newton on G fails (docs/rigid.md).
+//!
+//! Every iterate is judged like the solver's iterates: v = M⁻¹(H r + f) recomputed from r,
+//! u = Hᵀ v + w, the error of docs/error.md and the balance residual on the stored data.
+
+use crate::deadline::Deadline;
+use crate::mass::MassFactor;
+use crate::problem::GlobalProblem;
+use crate::settings::MultiplierParams;
+use crate::sparse::CscMatrix;
+use faer::linalg::solvers::Solve;
+
+/// How a run of [`solve`] ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MultiplierStatus {
+    /// error and balance residual ≤ tol at the returned r
+    Converged,
+    /// [`MultiplierParams::max_steps`] outer steps
+    MaxSteps,
+    /// [`MultiplierParams::stall_steps`] outer steps without halving the lowest merit
+    Stalled,
+    /// the deadline passed
+    TimeLimit,
+    /// a non-finite G or a singular Newton matrix
+    NumericalError,
+}
+
+/// The outcome of [`solve`]: r holds the lowest-merit iterate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MultiplierReport {
+    /// how it ended
+    pub status: MultiplierStatus,
+    /// outer (multiplier) steps
+    pub steps: usize,
+    /// Newton steps, summed over the outer steps
+    pub newton_steps: usize,
+    /// the error of docs/error.md at the returned r
+    pub error: f64,
+    /// the balance residual ‖M v − H r − f‖ / max(1, ‖f‖) at the returned r, v = M⁻¹(H r + f)
+    pub balance: f64,
+}
+
+/// Runs the method of multipliers (module docs) on `p` from `r` (replaced by the iterate of
+/// lowest merit max(error, balance residual)) until both are ≤ `tol`, a cap, a stall or the
+/// deadline. `mass` is the factor of p's M; `w_mean` the mean of the diagonal of the W
+/// whose law is solved (ρ = [`MultiplierParams::rho_factor`] / `w_mean`); `judge` returns
+/// (error, balance residual) of an r on the problem as stored (it may be another form of the
+/// same law: a local problem whose W has the skeleton p, [`crate::skeleton`]). With `hu`,
+/// u = `hu`ᵀ v + w instead of Hᵀ v + w (a skeleton W ≈ C A⁻¹ R of a W that is not
+/// symmetric: H = R, `hu` = Cᵀ); `mass` is then a factor of the symmetric part of M, used
+/// for the start v only.
+#[allow(clippy::too_many_arguments)]
+pub fn solve(
+    p: &GlobalProblem,
+    hu: Option<&CscMatrix>,
+    mass: &MassFactor,
+    w_mean: f64,
+    r: &mut [f64],
+    tol: f64,
+    params: &MultiplierParams,
+    deadline: Deadline,
+    mut judge: impl FnMut(&[f64]) -> (f64, f64),
+) -> MultiplierReport {
+    let d = p.dim;
+    let n = p.dofs();
+    let rho_i = if w_mean > 0.0 && w_mean.is_finite() {
+        params.rho_factor / w_mean
+    } else {
+        1.0
+    };
+    let mut rho = vec![rho_i; p.contacts()];
+    let (e0, b0) = judge(r);
+    let mut report = MultiplierReport {
+        status: MultiplierStatus::MaxSteps,
+        steps: 0,
+        newton_steps: 0,
+        error: e0,
+        balance: b0,
+    };
+    let hu = hu.unwrap_or(&p.h);
+    let shapes = hu.nrows == n && hu.ncols == p.w.len() && mass.dim() == n;
+    if !(e0.is_finite() && b0.is_finite()) || r.len() != p.w.len() || !shapes {
+        report.status = MultiplierStatus::NumericalError;
+        return report;
+    }
+    if e0 <= tol && b0 <= tol {
+        report.status = MultiplierStatus::Converged;
+        return report;
+    }
+    // v = M⁻¹(H r + f)
+    let mut v = p.h.mul_vec(r);
+    for (x, f) in v.iter_mut().zip(&p.f) {
+        *x += f;
+    }
+    mass.solve_in_place(&mut v);
+    let f_norm = crate::law::norm(&p.f);
+    let mut best_merit = e0.max(b0);
+    let mut stall_reference = best_merit;
+    let mut since_gain = 0;
+    let mut current_error = e0;
+    let mut lambda = r.to_vec();
+    let mut best_r = r.to_vec();
+    let mut blocks = vec![0.0; p.contacts() * d * d];
+    let mut jm = faer::Mat::<f64>::zeros(n, n);
+    let mut rhs = faer::Mat::<f64>::zeros(n, 1);
+    let mut g = Residual::new(n, p.w.len());
+    let mut trial = Residual::new(n, p.w.len());
+    let mut vt = vec![0.0; n];
+    let mut v_start = vec![0.0; n];
+    while report.steps < params.max_steps {
+        if deadline.passed() {
+            report.status = MultiplierStatus::TimeLimit;
+            break;
+        }
+        report.steps += 1;
+        // Newton on G(v) = 0 for the multipliers λ = r_k
+        // relative to the size of the balance's terms, max(‖f‖, ‖M v‖)
+        let mv = crate::law::norm(&p.m.mul_vec(&v));
+        let target = params.inner_ratio * current_error * f_norm.max(mv);
+        g.evaluate(p, hu, &lambda, &rho, &v, None);
+        v_start.copy_from_slice(&v);
+        let mut newton = 0;
+        while g.norm > target && newton < params.newton_steps && !deadline.passed() {
+            newton += 1;
+            g.evaluate(p, hu, &lambda, &rho, &v, Some(&mut blocks));
+            assemble(p, hu, &blocks, &mut jm);
+            for j in 0..n {
+                rhs[(j, 0)] = -g.g[j];
+            }
+            let dv = jm.partial_piv_lu().solve(&rhs);
+            if (0..n).any(|j| !dv[(j, 0)].is_finite()) {
+                break;
+            }
+            let mut t = 1.0;
+            let mut accepted = false;
+            for _ in 0..params.halvings {
+                for j in 0..n {
+                    vt[j] = v[j] + t * dv[(j, 0)];
+                }
+                trial.evaluate(p, hu, &lambda, &rho, &vt, None);
+                let sufficient = (1.0 - params.sufficient_decrease * t) * g.norm * g.norm;
+                if trial.norm.is_finite() && trial.norm * trial.norm <= sufficient {
+                    std::mem::swap(&mut v, &mut vt);
+                    std::mem::swap(&mut g, &mut trial);
+                    accepted = true;
+                    break;
+                }
+                t *= 0.5;
+            }
+            if !accepted {
+                break;
+            }
+        }
+        report.newton_steps += newton;
+        if !g.norm.is_finite() {
+            report.status = MultiplierStatus::NumericalError;
+            break;
+        }
+        // r_{k+1} = P_L(λ − ρ ũ), judged on the stored data
+        let (e, b) = judge(&g.r);
+        if !(e.is_finite() && b.is_finite()) {
+            report.status = MultiplierStatus::NumericalError;
+            break;
+        }
+        let merit = e.max(b);
+        if merit < best_merit {
+            best_merit = merit;
+            best_r.copy_from_slice(&g.r);
+            (report.error, report.balance) = (e, b);
+        }
+        let solved = g.norm <= target;
+        let acceptable = e <= params.reject_growth * current_error;
+        if !solved && !acceptable {
+            // Newton did not solve step k and r_{k+1} is far worse: step k again from λ with
+            // a smaller penalty (a better conditioned subproblem)
+            v.copy_from_slice(&v_start);
+            rho.iter_mut().for_each(|x| *x *= params.penalty_cut);
+        } else {
+            lambda.copy_from_slice(&g.r);
+            current_error = e;
+            if solved {
+                rho.iter_mut()
+                    .for_each(|x| *x = (*x * params.penalty_regrowth).min(rho_i));
+            }
+        }
+        if e <= tol && b <= tol {
+            report.status = MultiplierStatus::Converged;
+            break;
+        }
+        if best_merit <= params.stall_gain * stall_reference {
+            stall_reference = best_merit;
+            since_gain = 0;
+        } else {
+            since_gain += 1;
+            if since_gain >= params.stall_steps {
+                report.status = MultiplierStatus::Stalled;
+                break;
+            }
+        }
+    }
+    r.copy_from_slice(&best_r);
+    report
+}
+
+/// G(v) = M v − f − H r, r = P_L(λ − ρ ũ(H_uᵀ v + w)), and ‖G‖.
+struct Residual {
+    g: Vec<f64>,
+    r: Vec<f64>,
+    u: Vec<f64>,
+    norm: f64,
+}
+
+impl Residual {
+    fn new(n: usize, m: usize) -> Self {
+        Self {
+            g: vec![0.0; n],
+            r: vec![0.0; m],
+            u: vec![0.0; m],
+            norm: f64::INFINITY,
+        }
+    }
+
+    /// Evaluates at v; with `blocks`, also Bᵢ = ρᵢ ∂P(yᵢ) (I + μ e t̂ᵀ) (row-major d × d).
+    fn evaluate(
+        &mut self,
+        p: &GlobalProblem,
+        hu: &CscMatrix,
+        lambda: &[f64],
+        rho: &[f64],
+        v: &[f64],
+        mut blocks: Option<&mut Vec<f64>>,
+    ) {
+        let d = p.dim;
+        self.u.copy_from_slice(&p.w);
+        hu.gemv_t_acc(1.0, v, &mut self.u);
+        let mut jac = [0.0; 9];
+        let mut y = [0.0; 3];
+        for i in 0..p.contacts() {
+            let mu = p.mu[i];
+            let ui = &self.u[i * d..(i + 1) * d];
+            let t = crate::cone::tangent_norm(ui);
+            for k in 0..d {
+                let ut = if k == 0 && mu > 0.0 && mu.is_finite() {
+                    ui[0] + mu * t
+                } else {
+                    ui[k]
+                };
+                y[k] = lambda[i * d + k] - rho[i] * ut;
+            }
+            let ri = &mut self.r[i * d..(i + 1) * d];
+            crate::natural_map::projection_jacobian(mu, &y[..d], ri, &mut jac[..d * d]);
+            if let Some(b) = blocks.as_deref_mut() {
+                // Bᵢ = ρ ∂P (I + μ e t̂ᵀ): column z of the product adds μ t̂_z ∂P[:, 0]
+                let bi = &mut b[i * d * d..(i + 1) * d * d];
+                for x in 0..d {
+                    for z in 0..d {
+                        let mut s = jac[x * d + z];
+                        if z > 0 && t > 0.0 && mu > 0.0 && mu.is_finite() {
+                            s += jac[x * d] * mu * ui[z] / t;
+                        }
+                        bi[x * d + z] = rho[i] * s;
+                    }
+                }
+            }
+        }
+        self.g.iter_mut().for_each(|x| *x = 0.0);
+        p.m.gemv_acc(1.0, v, &mut self.g);
+        for (gi, fi) in self.g.iter_mut().zip(&p.f) {
+            *gi -= fi;
+        }
+        p.h.gemv_acc(-1.0, &self.r, &mut self.g);
+        self.norm = crate::law::norm(&self.g);
+    }
+}
+
+/// J = M + Σᵢ Hᵢ Bᵢ H_{u,i}ᵀ (dense), Hᵢ and H_{u,i} the d columns of contact i.
+fn assemble(p: &GlobalProblem, hu: &CscMatrix, blocks: &[f64], jm: &mut faer::Mat<f64>) {
+    let d = p.dim;
+    let h = &p.h;
+    jm.fill(0.0);
+    for j in 0..p.m.ncols {
+        for e in p.m.col_ptr[j]..p.m.col_ptr[j + 1] {
+            jm[(p.m.row_idx[e], j)] += p.m.values[e];
+        }
+    }
+    for i in 0..p.contacts() {
+        let b = &blocks[i * d * d..(i + 1) * d * d];
+        for x in 0..d {
+            let cx = i * d + x;
+            for z in 0..d {
+                let bxz = b[x * d + z];
+                if bxz == 0.0 {
+                    continue;
+                }
+                let cz = i * d + z;
+                for e1 in h.col_ptr[cx]..h.col_ptr[cx + 1] {
+                    let row = h.row_idx[e1];
+                    let hb = h.values[e1] * bxz;
+                    for e2 in hu.col_ptr[cz]..hu.col_ptr[cz + 1] {
+                        jm[(row, hu.row_idx[e2])] += hb * hu.values[e2];
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A box (mass 1, half sizes a, b, c) on the plane z = 0 touching it at its four lower
+    /// corners (12 contact unknowns, 6 degrees of freedom: W has rank ≤ 6), moving with
+    /// `v0` (linear, angular) and pulled down by gravity over a step of 0.01 s; μ at every
+    /// corner. FCLIB convention: M v = H r + f, u = Hᵀ v + w; column (i, k) of H is
+    /// (t_k, p_i × t_k) for the contact frame t_0 = e_z (normal), t_1 = e_x, t_2 = e_y.
+    fn box_on_plane(mu: f64, v0: [f64; 6]) -> GlobalProblem {
+        let (a, b, c) = (0.5, 0.3, 0.2);
+        let inertia = [
+            (b * b + c * c) / 3.0,
+            (a * a + c * c) / 3.0,
+            (a * a + b * b) / 3.0,
+        ];
+        let mass_diag = [1.0, 1.0, 1.0, inertia[0], inertia[1], inertia[2]];
+        let m = CscMatrix::from_dense(6, 6, &{
+            let mut d = vec![0.0; 36];
+            (0..6).for_each(|i| d[i * 7] = mass_diag[i]);
+            d
+        });
+        let corners = [[a, b, -c], [-a, b, -c], [-a, -b, -c], [a, -b, -c]];
+        let frame = [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let mut h = vec![0.0; 6 * 12];
+        for (i, p) in corners.iter().enumerate() {
+            for (k, t) in frame.iter().enumerate() {
+                let cross = [
+                    p[1] * t[2] - p[2] * t[1],
+                    p[2] * t[0] - p[0] * t[2],
+                    p[0] * t[1] - p[1] * t[0],
+                ];
+                let col = 3 * i + k;
+                for x in 0..3 {
+                    h[x * 12 + col] = t[x];
+                    h[(x + 3) * 12 + col] = cross[x];
+                }
+            }
+        }
+        let step = 0.01;
+        let mut f: Vec<f64> = (0..6).map(|i| mass_diag[i] * v0[i]).collect();
+        f[2] -= step * 9.81;
+        GlobalProblem::new(
+            3,
+            m,
+            CscMatrix::from_dense(6, 12, &h),
+            f,
+            vec![0.0; 12],
+            vec![mu; 4],
+        )
+        .unwrap()
+    }
+
+    fn judged(p: &GlobalProblem, mass: &MassFactor, r: &[f64]) -> (f64, f64) {
+        // v = M⁻¹(H r + f), u = Hᵀ v + w, the error of docs/error.md with ‖q‖ of the
+        // Delassus vector, and the balance residual: independent of the method's own G
+        let mut v = p.h.mul_vec(r);
+        v.iter_mut().zip(&p.f).for_each(|(x, f)| *x += f);
+        mass.solve_in_place(&mut v);
+        let mut free = p.f.clone();
+        mass.solve_in_place(&mut free);
+        let q_norm = crate::law::norm(&p.velocity(&free));
+        let (_, e) = crate::evaluation::global(p, &v, r, q_norm);
+        (e.measure.error, e.balance_residual.unwrap())
+    }
+
+    fn w_mean(p: &GlobalProblem, mass: &MassFactor) -> f64 {
+        let dense = p.h.to_dense();
+        let (n, m) = (p.dofs(), p.w.len());
+        (0..m)
+            .map(|j| {
+                let col: Vec<f64> = (0..n).map(|i| dense[i * m + j]).collect();
+                let mut x = col.clone();
+                mass.solve_in_place(&mut x);
+                col.iter().zip(&x).map(|(a, b)| a * b).sum::<f64>()
+            })
+            .sum::<f64>()
+            / m as f64
+    }
+
+    #[test]
+    fn the_method_of_multipliers_solves_a_sliding_box_on_four_corners() {
+        // μ = 1 and 0.3, sliding, spinning and tilting: 12 impulses on 6 degrees of freedom,
+        // from r = 0; the reported error is the one recomputed from the returned r
+        for (mu, v0) in [
+            (1.0, [1.0, 0.3, -0.5, 0.2, -0.1, 0.7]),
+            (0.3, [0.5, -0.2, -0.1, 0.0, 0.4, -1.0]),
+            (1.0, [0.0, 0.0, -1.0, 0.0, 0.0, 0.0]),
+        ] {
+            let p = box_on_plane(mu, v0);
+            let mass = MassFactor::new(&p.m).unwrap();
+            let wm = w_mean(&p, &mass);
+            let mut r = vec![0.0; 12];
+            let params = MultiplierParams::default();
+            let rep = solve(
+                &p,
+                None,
+                &mass,
+                wm,
+                &mut r,
+                1e-10,
+                &params,
+                Deadline::NEVER,
+                |r| judged(&p, &mass, r),
+            );
+            let (e, b) = judged(&p, &mass, &r);
+            assert_eq!(rep.status, MultiplierStatus::Converged, "{rep:?}");
+            assert!(e <= 1e-10 && b <= 1e-10, "{e:.2e} {b:.2e}");
+            assert_eq!((rep.error, rep.balance), (e, b));
+            for (c, mu) in r.chunks(3).zip(&p.mu) {
+                let t = (c[1] * c[1] + c[2] * c[2]).sqrt();
+                assert!(
+                    t <= mu * c[0] * (1.0 + 1e-12) + 1e-300,
+                    "{c:?} outside K_{mu}"
+                );
+            }
+            // the box is pressed down: the normal impulses carry its weight and its fall
+            let normal: f64 = r.chunks(3).map(|c| c[0]).sum();
+            assert!(normal > 0.0);
+        }
+    }
+
+    #[test]
+    fn bad_input_and_caps_give_typed_statuses() {
+        let p = box_on_plane(1.0, [1.0, 0.3, -0.5, 0.2, -0.1, 0.7]);
+        let mass = MassFactor::new(&p.m).unwrap();
+        let wm = w_mean(&p, &mass);
+        let params = MultiplierParams::default();
+        let judge = |r: &[f64]| judged(&p, &mass, r);
+        // a non-finite start
+        let mut r = vec![f64::NAN; 12];
+        let rep = solve(
+            &p,
+            None,
+            &mass,
+            wm,
+            &mut r,
+            1e-10,
+            &params,
+            Deadline::NEVER,
+            judge,
+        );
+        assert_eq!(rep.status, MultiplierStatus::NumericalError);
+        // a past deadline: nothing run, r kept
+        let mut r = vec![0.0; 12];
+        let past = Deadline::after(std::time::Instant::now(), Some(std::time::Duration::ZERO));
+        let rep = solve(&p, None, &mass, wm, &mut r, 1e-10, &params, past, judge);
+        assert_eq!((rep.status, rep.steps), (MultiplierStatus::TimeLimit, 0));
+        assert!(r.iter().all(|&x| x == 0.0));
+        // one outer step only: the cap, and the lowest-merit point returned
+        let one = MultiplierParams {
+            max_steps: 1,
+            ..params
+        };
+        let mut r = vec![0.0; 12];
+        let start = judged(&p, &mass, &r);
+        let rep = solve(
+            &p,
+            None,
+            &mass,
+            wm,
+            &mut r,
+            1e-14,
+            &one,
+            Deadline::NEVER,
+            judge,
+        );
+        assert_eq!((rep.status, rep.steps), (MultiplierStatus::MaxSteps, 1));
+        let (e, b) = judged(&p, &mass, &r);
+        assert_eq!((rep.error, rep.balance), (e, b));
+        assert!(e.max(b) <= start.0.max(start.1));
+        // a W of no positive diagonal gives ρ = 1, still a typed outcome
+        let mut r = vec![0.0; 12];
+        let rep = solve(
+            &p,
+            None,
+            &mass,
+            0.0,
+            &mut r,
+            1e-10,
+            &params,
+            Deadline::NEVER,
+            judge,
+        );
+        assert!(rep.error.is_finite());
+    }
+}

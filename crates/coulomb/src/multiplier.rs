@@ -35,6 +35,11 @@ use crate::settings::MultiplierParams;
 use crate::sparse::CscMatrix;
 use faer::linalg::solvers::Solve;
 
+/// The largest n [`solve`] takes: its Newton systems are dense n × n (8 n² bytes, O(n³)
+/// flops per step; the default's stage stays at or below
+/// [`crate::settings::BarrierParams::max_schur_dofs`]).
+pub const MAX_DENSE_DOFS: usize = 5_000;
+
 /// How a run of [`solve`] ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MultiplierStatus {
@@ -46,8 +51,10 @@ pub enum MultiplierStatus {
     Stalled,
     /// the deadline passed
     TimeLimit,
-    /// a non-finite G or a singular Newton matrix
+    /// a non-finite start, G or error, or sizes that disagree
     NumericalError,
+    /// more than [`MAX_DENSE_DOFS`] degrees of freedom: nothing run
+    TooLarge,
 }
 
 /// The outcome of [`solve`]: r holds the lowest-merit iterate.
@@ -110,6 +117,10 @@ pub fn solve(
     }
     if e0 <= tol && b0 <= tol {
         report.status = MultiplierStatus::Converged;
+        return report;
+    }
+    if n > MAX_DENSE_DOFS {
+        report.status = MultiplierStatus::TooLarge;
         return report;
     }
     // v = M⁻¹(H r + f)
@@ -501,6 +512,34 @@ mod tests {
         let (e, b) = judged(&p, &mass, &r);
         assert_eq!((rep.error, rep.balance), (e, b));
         assert!(e.max(b) <= start.0.max(start.1));
+        // more degrees of freedom than the dense Newton systems take: nothing run
+        let n = MAX_DENSE_DOFS + 1;
+        let big = GlobalProblem::new(
+            3,
+            CscMatrix::identity(n, 1.0),
+            CscMatrix::zeros(n, 3),
+            vec![1.0; n],
+            vec![-1.0, 0.0, 0.0],
+            vec![0.5],
+        )
+        .unwrap();
+        let big_mass = MassFactor::new(&big.m).unwrap();
+        let mut r = vec![0.0; 3];
+        let rep = solve(
+            &big,
+            None,
+            &big_mass,
+            1.0,
+            &mut r,
+            1e-10,
+            &params,
+            Deadline::NEVER,
+            |r| {
+                let u = big.w.iter().zip(r).map(|(w, _)| *w).collect::<Vec<_>>();
+                (crate::law::error_measure(3, &big.mu, r, &u, 1.0).error, 0.0)
+            },
+        );
+        assert_eq!((rep.status, rep.steps), (MultiplierStatus::TooLarge, 0));
         // a W of no positive diagonal gives ρ = 1, still a typed outcome
         let mut r = vec![0.0; 12];
         let rep = solve(

@@ -389,10 +389,17 @@ impl Solver<'_> {
             }
         }
         let r = best.map_or_else(|| vec![0.0; local.q.len()], |(r, _)| r);
+        self.judged(r, steps, deadline).map(Some)
+    }
+
+    /// The point `r` that a method outside the stage loop reached in `steps` inner steps,
+    /// judged on the problem as stored like every iterate (a stage of no outer iteration),
+    /// with one outer record (no fixed-point residual) counting those steps.
+    fn judged(&mut self, r: Vec<f64>, steps: usize, deadline: Deadline) -> Result<Ran, SolveError> {
         let judge = Settings {
             max_outer: 0,
             fallback: None,
-            ..settings.clone()
+            ..self.settings.clone()
         };
         let guess = Guess { r, v: None };
         let (mut solution, best) = self.run(&judge, Some(&guess), deadline, false, false)?;
@@ -404,7 +411,7 @@ impl Solver<'_> {
         });
         solution.outer_iterations += 1;
         solution.inner_iterations += steps;
-        Ok(Some((solution, best)))
+        Ok((solution, best))
     }
 }
 
@@ -495,23 +502,7 @@ impl Solver<'_> {
                 let v = form.verdict(r);
                 (v.error, v.balance.unwrap_or(0.0))
             });
-        let steps = report.newton_steps;
-        let judge = Settings {
-            max_outer: 0,
-            fallback: None,
-            ..settings.clone()
-        };
-        let guess = Guess { r, v: None };
-        let (mut solution, best) = self.run(&judge, Some(&guess), deadline, false, false)?;
-        solution.history.push(OuterRecord {
-            error: solution.error,
-            fixed_point_residual: f64::NAN,
-            rule_6_1: f64::NAN,
-            inner_iterations: steps,
-        });
-        solution.outer_iterations += 1;
-        solution.inner_iterations += steps;
-        Ok(Some((solution, best)))
+        self.judged(r, report.newton_steps, deadline).map(Some)
     }
 }
 

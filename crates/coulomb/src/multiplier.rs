@@ -21,9 +21,12 @@
 //!
 //! a dense LU of size n (the problems it applies to have n ≤
 //! [`crate::settings::BarrierParams::max_schur_dofs`]) and a backtracking search on ‖G‖.
-//! ρᵢ = ρ_f / w̄ with w̄ the mean of trace(Wᵢᵢ)/d: a penalty of the order of 1/‖W‖ keeps the
-//! Newton systems regular and the outer iteration moving; the end game's σ = 5 err rule
-//! ([`crate::proximal`]) makes ρ so large there that Newton on G fails (docs/rigid.md).
+//! ρᵢ starts at ρ_f / w̄ with w̄ the mean of trace(Wᵢᵢ)/d: a penalty of the order of 1/‖W‖
+//! keeps the Newton systems regular and the outer iteration moving; the end game's σ = 5 err
+//! rule ([`crate::proximal`]) makes ρ so large there that Newton on G fails (docs/rigid.md).
+//! ρ then follows the subproblems: it grows after a step whose Newton run was easy (the
+//! proximal point converges faster as ρ grows), up to a cap, and is halved after a step whose
+//! Newton run failed and whose r is far worse.
 //!
 //! Every iterate is judged like the solver's iterates: v = M⁻¹(H r + f) recomputed from r,
 //! u = Hᵀ v + w, the error of docs/error.md and the balance residual on the stored data.
@@ -214,9 +217,14 @@ pub fn solve(
         } else {
             lambda.copy_from_slice(&g.r);
             current_error = e;
-            if solved {
+            if solved && newton <= params.easy_newton_steps {
+                // an easy subproblem: a larger penalty, a faster proximal point
+                let cap = params.penalty_cap * rho_i;
                 rho.iter_mut()
-                    .for_each(|x| *x = (*x * params.penalty_regrowth).min(rho_i));
+                    .for_each(|x| *x = (*x * params.penalty_growth).min(cap));
+            } else if solved {
+                rho.iter_mut()
+                    .for_each(|x| *x = (*x * params.penalty_regrowth).min(rho_i.max(*x)));
             }
         }
         if e <= tol && b <= tol {
@@ -460,6 +468,25 @@ mod tests {
             // the box is pressed down: the normal impulses carry its weight and its fall
             let normal: f64 = r.chunks(3).map(|c| c[0]).sum();
             assert!(normal > 0.0);
+            // a fixed penalty (no growth after easy steps) converges too, in no fewer steps
+            let fixed = MultiplierParams {
+                penalty_growth: 1.0,
+                ..params
+            };
+            let mut r_fixed = vec![0.0; 12];
+            let rep_fixed = solve(
+                &p,
+                None,
+                &mass,
+                wm,
+                &mut r_fixed,
+                1e-10,
+                &fixed,
+                Deadline::NEVER,
+                |r| judged(&p, &mass, r),
+            );
+            assert_eq!(rep_fixed.status, MultiplierStatus::Converged);
+            assert!(rep.steps <= rep_fixed.steps, "{rep:?} {rep_fixed:?}");
         }
     }
 

@@ -429,6 +429,28 @@ mod tests {
             / m as f64
     }
 
+    /// [`solve`] from r = 0 to 1e-10, judged by [`judged`], with no deadline.
+    fn from_zero(
+        p: &GlobalProblem,
+        mass: &MassFactor,
+        wm: f64,
+        params: &MultiplierParams,
+    ) -> (Vec<f64>, MultiplierReport) {
+        let mut r = vec![0.0; p.w.len()];
+        let rep = solve(
+            p,
+            None,
+            mass,
+            wm,
+            &mut r,
+            1e-10,
+            params,
+            Deadline::NEVER,
+            |r| judged(p, mass, r),
+        );
+        (r, rep)
+    }
+
     #[test]
     fn the_method_of_multipliers_solves_a_sliding_box_on_four_corners() {
         // μ = 1 and 0.3, sliding, spinning and tilting: 12 impulses on 6 degrees of freedom,
@@ -441,19 +463,8 @@ mod tests {
             let p = box_on_plane(mu, v0);
             let mass = MassFactor::new(&p.m).unwrap();
             let wm = w_mean(&p, &mass);
-            let mut r = vec![0.0; 12];
             let params = MultiplierParams::default();
-            let rep = solve(
-                &p,
-                None,
-                &mass,
-                wm,
-                &mut r,
-                1e-10,
-                &params,
-                Deadline::NEVER,
-                |r| judged(&p, &mass, r),
-            );
+            let (r, rep) = from_zero(&p, &mass, wm, &params);
             let (e, b) = judged(&p, &mass, &r);
             assert_eq!(rep.status, MultiplierStatus::Converged, "{rep:?}");
             assert!(e <= 1e-10 && b <= 1e-10, "{e:.2e} {b:.2e}");
@@ -473,18 +484,7 @@ mod tests {
                 penalty_growth: 1.0,
                 ..params
             };
-            let mut r_fixed = vec![0.0; 12];
-            let rep_fixed = solve(
-                &p,
-                None,
-                &mass,
-                wm,
-                &mut r_fixed,
-                1e-10,
-                &fixed,
-                Deadline::NEVER,
-                |r| judged(&p, &mass, r),
-            );
+            let (_, rep_fixed) = from_zero(&p, &mass, wm, &fixed);
             assert_eq!(rep_fixed.status, MultiplierStatus::Converged);
             assert!(rep.steps <= rep_fixed.steps, "{rep:?} {rep_fixed:?}");
         }

@@ -223,6 +223,7 @@ pub fn solve(
                 rho.iter_mut()
                     .for_each(|x| *x = (*x * params.penalty_growth).min(cap));
             } else if solved {
+                // a ρᵢ cut below its first value regrows towards it; one above it stays
                 rho.iter_mut()
                     .for_each(|x| *x = (*x * params.penalty_regrowth).min(rho_i.max(*x)));
             }

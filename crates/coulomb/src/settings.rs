@@ -573,8 +573,8 @@ pub struct MultiplierParams {
     /// every ρᵢ grows by `penalty_growth`, up to `penalty_cap` times its first value (the
     /// proximal point converges faster as ρ grows: Rockafellar 1976). Measured on 16 box
     /// files that the fixed ρ left unsolved in 10 s (corpus seeds 1–3; docs/rigid.md): 3, 4
-    /// and 6 solve 9, 10 and 9 of them in single runs, the same number in full corpus runs;
-    /// the fixed ρ none
+    /// and 6 solve 9, 10 and 9 of them in single runs (4's extra file was not solved in its
+    /// full corpus run); the fixed ρ none
     pub easy_newton_steps: usize,
     /// see `easy_newton_steps`; ≥ 1 (1: ρ never grows above its first value). 1.5 (cap 100)
     /// and 2 (cap 1000) measured: 10 and 8 of those 16 solved (easy ≤ 4)

@@ -160,3 +160,56 @@ fn cli_error_with_solution_file() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("no /solution"));
     let _ = std::fs::remove_dir_all(dir);
 }
+
+#[test]
+fn cli_error_worst_lists_the_contacts_that_carry_the_error() {
+    // W = I, q = (1, 0, 0, −1, 0, 0), μ = 0.5; r = (0, 0, 0, 0.5, 0, 0): contact 0 takes off
+    // exactly (u = q), contact 1 is pushed too little: u = (−0.5, 0, 0), ũ = u, r − ũ =
+    // (1, 0, 0) ∈ K, e₁ = r − (1, 0, 0) = (−0.5, 0, 0); scale = max(‖q‖, ‖r‖, ‖u‖) = √2.
+    let dir = std::env::temp_dir().join(format!("coulomb-cli-worst-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let problem = Problem::Local(
+        LocalProblem::new(
+            3,
+            CscMatrix::identity(6, 1.0),
+            vec![1.0, 0.0, 0.0, -1.0, 0.0, 0.0],
+            vec![0.5, 0.5],
+        )
+        .unwrap(),
+    );
+    let mut file = FclibFile::new(problem);
+    file.solution = Some(StoredSolution {
+        r: vec![0.0, 0.0, 0.0, 0.5, 0.0, 0.0],
+        ..Default::default()
+    });
+    let path = dir.join("p.hdf5");
+    fclib::write(&path, &file).unwrap();
+    let p = path.display().to_string();
+    // not a solution: exit status 1, the report on stdout all the same
+    let json = |args: &[&str]| -> Value {
+        let out = coulomb(args);
+        assert_eq!(out.status.code(), Some(1), "not a solution at 1e-8");
+        serde_json::from_slice(&out.stdout).expect("valid JSON on stdout")
+    };
+    let v = json(&["error", "--json", "--worst", "5", &p]);
+    let expected = 0.5 / 2f64.sqrt();
+    assert!((v["error"].as_f64().unwrap() - expected).abs() < 1e-15);
+    let worst = v["worst_contacts"].as_array().expect("worst_contacts");
+    assert_eq!(worst.len(), 2, "only two contacts exist");
+    assert_eq!(worst[0]["contact"], 1);
+    assert!((worst[0]["error"].as_f64().unwrap() - expected).abs() < 1e-15);
+    assert_eq!(worst[0]["share"].as_f64().unwrap(), 1.0);
+    assert_eq!(worst[0]["r_n"].as_f64().unwrap(), 0.5);
+    assert_eq!(worst[0]["u_n"].as_f64().unwrap(), -0.5);
+    assert_eq!(worst[1]["contact"], 0);
+    assert_eq!(worst[1]["error"].as_f64().unwrap(), 0.0);
+    assert_eq!(worst[1]["u_n"].as_f64().unwrap(), 1.0);
+    // without --worst the list is absent; the text form names the worst contact
+    let plain = json(&["error", "--json", &p]);
+    assert!(plain.get("worst_contacts").is_none());
+    let out = coulomb(&["error", "--worst", "1", &p]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("worst contacts"), "{text}");
+    assert_eq!(out.status.code(), Some(1), "not a solution at 1e-8");
+    let _ = std::fs::remove_dir_all(dir);
+}

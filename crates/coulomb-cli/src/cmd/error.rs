@@ -18,9 +18,76 @@ pub struct Args {
     /// problem, balance residual ≤ tol)
     #[arg(long, default_value_t = 1e-8, value_parser = crate::values::positive)]
     pub tol: f64,
+    /// Also list the K contacts with the largest natural-map residual ‖eᵢ‖ (where the error
+    /// lives), with their r and recomputed u
+    #[arg(long, value_name = "K", default_value_t = 0)]
+    pub worst: usize,
     /// Print one JSON object
     #[arg(long)]
     pub json: bool,
+}
+
+/// One contact of `coulomb error --worst K`.
+#[derive(Debug, Serialize)]
+pub struct ContactReport {
+    /// the contact's index i (its unknowns are d i … d i + d − 1)
+    pub contact: usize,
+    /// ‖eᵢ‖ / scale: its part of the error (error² = Σ of their squares)
+    pub error: f64,
+    /// ‖eᵢ‖² / Σⱼ‖eⱼ‖²
+    pub share: f64,
+    /// μᵢ
+    pub mu: f64,
+    /// r_N
+    pub r_n: f64,
+    /// ‖r_T‖
+    pub r_t: f64,
+    /// u_N (recomputed from the problem data)
+    pub u_n: f64,
+    /// ‖u_T‖ (recomputed)
+    pub u_t: f64,
+}
+
+/// The `k` contacts of largest ‖eᵢ‖ = ‖rᵢ − P_{K_μ}(rᵢ − ũᵢ)‖ (docs/error.md), largest first.
+fn worst_contacts(
+    problem: &coulomb::Problem,
+    r: &[f64],
+    u: &[f64],
+    scale: f64,
+    k: usize,
+) -> Vec<ContactReport> {
+    let d = problem.dim();
+    let mu = problem.mu();
+    let sq: Vec<f64> = (0..problem.contacts())
+        .map(|i| {
+            coulomb::law::contact_residual_sq(mu[i], &u[d * i..d * (i + 1)], &r[d * i..d * (i + 1)])
+        })
+        .collect();
+    let total: f64 = sq.iter().sum();
+    let mut order: Vec<usize> = (0..sq.len()).collect();
+    order.sort_by(|&a, &b| sq[b].total_cmp(&sq[a]));
+    let tangent = |x: &[f64]| x[1..].iter().map(|t| t * t).sum::<f64>().sqrt();
+    order
+        .into_iter()
+        .take(k)
+        .map(|i| {
+            let (ri, ui) = (&r[d * i..d * (i + 1)], &u[d * i..d * (i + 1)]);
+            ContactReport {
+                contact: i,
+                error: if scale > f64::EPSILON {
+                    sq[i].sqrt() / scale
+                } else {
+                    sq[i].sqrt()
+                },
+                share: if total > 0.0 { sq[i] / total } else { 0.0 },
+                mu: mu[i],
+                r_n: ri[0],
+                r_t: tangent(ri),
+                u_n: ui[0],
+                u_t: tangent(ui),
+            }
+        })
+        .collect()
 }
 
 /// What `coulomb error --json` prints.
@@ -47,6 +114,9 @@ pub struct Report {
     /// relative asymmetry of W (local) or M (global) as stored (the error is always that of
     /// the stored problem)
     pub asymmetry: f64,
+    /// with `--worst K`: the K contacts of largest residual, largest first
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub worst_contacts: Vec<ContactReport>,
 }
 
 /// Runs `coulomb error`: exit status 0 when the solution is one at `--tol` ("yes"), 1 when
@@ -87,7 +157,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             (s, args.file.display().to_string())
         }
     };
-    let eval = fclib::evaluate(&file.problem, &solution).with_context(|| {
+    let (u, eval) = fclib::evaluate_with_velocity(&file.problem, &solution).with_context(|| {
         format!(
             "solution from {source} does not fit {}",
             args.file.display()
@@ -104,6 +174,13 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         tol: args.tol,
         converged: eval.converged(args.tol),
         asymmetry: file.problem.asymmetry(),
+        worst_contacts: worst_contacts(
+            &file.problem,
+            &solution.r,
+            &u,
+            eval.measure.scale,
+            args.worst,
+        ),
     };
     if args.json {
         println!("{}", crate::outputs::json(&report, true)?);
@@ -122,6 +199,22 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             report.tol,
             if report.converged { "yes" } else { "no" }
         );
+        if !report.worst_contacts.is_empty() {
+            println!("worst contacts    ‖eᵢ‖/scale  share    μ      r_N         ‖r_T‖       u_N         ‖u_T‖");
+            for c in &report.worst_contacts {
+                println!(
+                    "  {:>6}          {:.3e}   {:>5.1}%  {:<5}  {:>10.3e}  {:>10.3e}  {:>10.3e}  {:>10.3e}",
+                    c.contact,
+                    c.error,
+                    100.0 * c.share,
+                    c.mu,
+                    c.r_n,
+                    c.r_t,
+                    c.u_n,
+                    c.u_t
+                );
+            }
+        }
     }
     Ok(if report.converged {
         Outcome::Success

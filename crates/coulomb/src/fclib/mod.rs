@@ -46,7 +46,7 @@ pub use error::{FclibError, FclibErrorKind};
 
 use crate::delassus::Delassus;
 use crate::law::norm;
-use crate::problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
+use crate::problem::{Problem, ProblemError};
 use std::path::Path;
 
 /// `/fclib_*/info`: free text describing the problem. Absent strings read as empty.
@@ -274,24 +274,30 @@ pub use crate::evaluation::Evaluation;
 /// the scale uses the Delassus vector q = Hᵀ M⁻¹ f + w, and the balance residual
 /// ‖M v − H r − f‖ / max(1, ‖f‖) is reported. A stored u is never used.
 pub fn evaluate(problem: &Problem, solution: &StoredSolution) -> Result<Evaluation, EvaluateError> {
+    evaluate_with_velocity(problem, solution).map(|(_, e)| e)
+}
+
+/// [`evaluate`], with the relative velocity u it recomputed (u = W r + q, or u = Hᵀ v + w
+/// from the stored v): the (uⁱ, rⁱ) whose natural-map residuals eᵢ make up the error.
+pub fn evaluate_with_velocity(
+    problem: &Problem,
+    solution: &StoredSolution,
+) -> Result<(Vec<f64>, Evaluation), EvaluateError> {
     solution.check_lengths(problem)?;
     match problem {
-        Problem::Local(p) => Ok(evaluate_local(p, &solution.r)),
+        Problem::Local(p) => Ok(crate::evaluation::local(p, &solution.r, norm(&p.q))),
         Problem::Global(p) => {
             let v = solution
                 .v
                 .as_deref()
                 .ok_or(EvaluateError::MissingVelocity)?;
-            evaluate_global(p, v, &solution.r)
+            let delassus = Delassus::new(p)?;
+            Ok(crate::evaluation::global(
+                p,
+                v,
+                &solution.r,
+                norm(&delassus.local.q),
+            ))
         }
     }
-}
-
-fn evaluate_local(p: &LocalProblem, r: &[f64]) -> Evaluation {
-    crate::evaluation::local(p, r, norm(&p.q)).1
-}
-
-fn evaluate_global(p: &GlobalProblem, v: &[f64], r: &[f64]) -> Result<Evaluation, EvaluateError> {
-    let delassus = Delassus::new(p)?;
-    Ok(crate::evaluation::global(p, v, r, norm(&delassus.local.q)).1)
 }

@@ -24,8 +24,8 @@
 //! unsorted or duplicated entries, and HDF5 datasets that were created but never written
 //! (HDF5 returns their fill value, zero: `/solution/r` of Capsules-i125-1213 is such a
 //! dataset). They are strict about everything else: sizes that disagree, indices out of
-//! range, decreasing pointers, and the validation of [`LocalProblem::new`] /
-//! [`GlobalProblem::new`] (½(W + Wᵀ) positive semidefinite, the symmetric part of M positive
+//! range, decreasing pointers, and the validation of [`crate::LocalProblem::new`] /
+//! [`crate::GlobalProblem::new`] (½(W + Wᵀ) positive semidefinite, the symmetric part of M positive
 //! definite, finite data, μ ≥ 0; W and M are kept exactly as stored, symmetric or not). FCLIB's
 //! optional equality constraints (`/fclib_local/{V, R}`) and bilateral constraints
 //! (`/fclib_global/G`) are refused with [`FclibErrorKind::Unsupported`] rather than dropped.

@@ -125,20 +125,18 @@ fn cli_error_missing_solution_and_bad_file() {
     let _ = std::fs::remove_file(tmp);
 }
 
+/// The local problem (W = I, q, μ) in 3-D.
+fn unit_delassus(q: Vec<f64>, mu: Vec<f64>) -> Problem {
+    let m = q.len();
+    Problem::Local(LocalProblem::new(3, CscMatrix::identity(m, 1.0), q, mu).unwrap())
+}
+
 #[test]
 fn cli_error_with_solution_file() {
     // W = I, q = (1, 0, 0): take-off, r = 0, u = q is the exact solution.
     let dir = std::env::temp_dir().join(format!("coulomb-cli-sol-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let problem = Problem::Local(
-        LocalProblem::new(
-            3,
-            CscMatrix::identity(3, 1.0),
-            vec![1.0, 0.0, 0.0],
-            vec![0.5],
-        )
-        .unwrap(),
-    );
+    let problem = unit_delassus(vec![1.0, 0.0, 0.0], vec![0.5]);
     let prob_path = dir.join("p.hdf5");
     fclib::write(&prob_path, &FclibFile::new(problem.clone())).unwrap();
     let mut with_sol = FclibFile::new(problem);
@@ -168,15 +166,7 @@ fn cli_error_worst_lists_the_contacts_that_carry_the_error() {
     // (1, 0, 0) ∈ K, e₁ = r − (1, 0, 0) = (−0.5, 0, 0); scale = max(‖q‖, ‖r‖, ‖u‖) = √2.
     let dir = std::env::temp_dir().join(format!("coulomb-cli-worst-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let problem = Problem::Local(
-        LocalProblem::new(
-            3,
-            CscMatrix::identity(6, 1.0),
-            vec![1.0, 0.0, 0.0, -1.0, 0.0, 0.0],
-            vec![0.5, 0.5],
-        )
-        .unwrap(),
-    );
+    let problem = unit_delassus(vec![1.0, 0.0, 0.0, -1.0, 0.0, 0.0], vec![0.5, 0.5]);
     let mut file = FclibFile::new(problem);
     file.solution = Some(StoredSolution {
         r: vec![0.0, 0.0, 0.0, 0.5, 0.0, 0.0],

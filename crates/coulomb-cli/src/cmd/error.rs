@@ -34,7 +34,7 @@ pub struct ContactReport {
     pub contact: usize,
     /// ‖eᵢ‖ / scale: its part of the error (error² = Σ of their squares)
     pub error: f64,
-    /// ‖eᵢ‖² / Σⱼ‖eⱼ‖²
+    /// ‖eᵢ‖² / Σⱼ‖eⱼ‖² (0 when the sum is 0, NaN when it is not finite)
     pub share: f64,
     /// μᵢ
     pub mu: f64,
@@ -79,7 +79,7 @@ fn worst_contacts(
                 } else {
                     sq[i].sqrt()
                 },
-                share: if total > 0.0 { sq[i] / total } else { 0.0 },
+                share: if total == 0.0 { 0.0 } else { sq[i] / total },
                 mu: mu[i],
                 r_n: ri[0],
                 r_t: tangent(ri),

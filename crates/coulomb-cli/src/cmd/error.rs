@@ -56,6 +56,9 @@ fn worst_contacts(
     scale: f64,
     k: usize,
 ) -> Vec<ContactReport> {
+    if k == 0 {
+        return Vec::new();
+    }
     let d = problem.dim();
     let mu = problem.mu();
     let sq: Vec<f64> = (0..problem.contacts())

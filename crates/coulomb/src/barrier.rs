@@ -36,7 +36,6 @@ use crate::newton::JacobianPattern;
 use crate::problem::{GlobalProblem, LocalProblem};
 use crate::settings::BarrierParams;
 use crate::skeleton::Skeleton;
-use faer::linalg::solvers::Solve;
 
 /// The two constants that shape the path of one run of [`solve`] (the policy tries several:
 /// [`BarrierParams::paths`]).
@@ -547,6 +546,8 @@ struct NewtonSystem {
     exact_steps: usize,
     /// [`BarrierParams::skeleton_strikes`]
     skeleton_strikes: usize,
+    /// [`BarrierParams::dense_parallel_dim`]
+    dense_parallel_dim: usize,
     /// the exact steps in a row up to this one (the current step counts once it falls back)
     exact_run: usize,
     /// whether the current step fell back to the sparse LU
@@ -578,6 +579,7 @@ impl NewtonSystem {
             refine_tol: params.refine_tol,
             exact_steps: 0,
             skeleton_strikes: params.skeleton_strikes,
+            dense_parallel_dim: params.dense_parallel_dim,
             exact_run: 0,
             step_exact: false,
         }
@@ -706,7 +708,7 @@ impl NewtonSystem {
                 if self.factor.is_none() && !skip {
                     self.factor = self
                         .inverse_blocks()
-                        .and_then(|ginv| sk.factor(&ginv))
+                        .and_then(|ginv| sk.factor(&ginv, self.dense_parallel_dim))
                         .map(Factor::Skeleton);
                 }
                 if let Some(Factor::Skeleton(f)) = &self.factor {
@@ -779,15 +781,13 @@ impl NewtonSystem {
     /// end of the path W + G can be singular to working precision: then the diagonal is
     /// shifted (static regularization, a slightly damped step).
     fn sparse_solve(&mut self, pattern: &JacobianPattern, rhs: &mut [f64]) -> Option<()> {
-        let n = rhs.len();
         let b = rhs.to_vec();
         loop {
             if self.factor.is_none() {
-                self.factor = Some(Factor::Sparse(self.sparse_factor(pattern)?));
+                self.factor = Some(Factor::Sparse(Box::new(self.sparse_factor(pattern)?)));
             }
             if let Some(Factor::Sparse(lu)) = &self.factor {
-                lu.solve_in_place(faer::MatMut::from_column_major_slice_mut(rhs, n, 1));
-                if rhs.iter().all(|x| x.is_finite()) {
+                if lu.solve_in_place(rhs) && rhs.iter().all(|x| x.is_finite()) {
                     return Some(());
                 }
             }
@@ -807,10 +807,7 @@ impl NewtonSystem {
     }
 
     /// The sparse LU of W + G + shift · I on the pattern, the shift raised until it succeeds.
-    fn sparse_factor(
-        &mut self,
-        pattern: &JacobianPattern,
-    ) -> Option<faer::sparse::linalg::solvers::Lu<usize, f64>> {
+    fn sparse_factor(&mut self, pattern: &JacobianPattern) -> Option<crate::newton::PatternLu> {
         loop {
             if let Some(lu) = pattern.factor(&self.vals_shifted(pattern, self.shift)) {
                 return Some(lu);
@@ -859,7 +856,7 @@ impl NewtonSystem {
                 }
             }
         }
-        let lu = k.partial_piv_lu();
+        let lu = crate::dense::Lu::new(k, crate::dense::parallelism(n, self.dense_parallel_dim))?;
         Some(Factor::Schur(ginv, lu))
     }
 
@@ -903,15 +900,15 @@ fn schur_apply(
     d: usize,
     g: &GlobalProblem,
     ginv: &[f64],
-    lu: &faer::linalg::solvers::PartialPivLu<f64>,
+    lu: &crate::dense::Lu,
     rhs: &mut [f64],
 ) -> Option<()> {
-    let n = g.m.nrows;
     let mut z = vec![0.0; rhs.len()];
     apply_blocks(d, ginv, rhs, &mut z);
-    let t = g.h.mul_vec(&z);
-    let y = lu.solve(faer::Mat::<f64>::from_fn(n, 1, |i, _| t[i]));
-    let yv: Vec<f64> = (0..n).map(|i| y[(i, 0)]).collect();
+    let mut yv = g.h.mul_vec(&z);
+    if !lu.solve_in_place(&mut yv) {
+        return None;
+    }
     let mut res = rhs.to_vec();
     g.h.gemv_t_acc(-1.0, &yv, &mut res);
     apply_blocks(d, ginv, &res, rhs);
@@ -921,9 +918,9 @@ fn schur_apply(
 /// The factorization of one step's Newton matrix W + G.
 enum Factor {
     /// sparse LU of W + G (+ shift) on the block pattern of W
-    Sparse(faer::sparse::linalg::solvers::Lu<usize, f64>),
+    Sparse(Box<crate::newton::PatternLu>),
     /// G⁻¹ and the dense LU of M + H G⁻¹ Hᵀ
-    Schur(Vec<f64>, faer::linalg::solvers::PartialPivLu<f64>),
+    Schur(Vec<f64>, crate::dense::Lu),
     /// G⁻¹ and the dense LU of A + R G⁻¹ C ([`crate::skeleton`])
     Skeleton(crate::skeleton::SkeletonLu),
 }

@@ -36,8 +36,8 @@ use crate::deadline::Deadline;
 use crate::newton::JacobianPattern;
 use crate::problem::LocalProblem;
 use crate::settings::LmParams;
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, SymbolicCholesky};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::Side;
 
@@ -134,7 +134,9 @@ pub(crate) fn alart_curnier(
 struct NormalPattern {
     col_ptr: Vec<usize>,
     row_idx: Vec<usize>,
-    symbolic: SymbolicLlt<usize>,
+    symbolic: SymbolicCholesky<usize>,
+    /// the numeric factorizations' parallelism ([`crate::newton::SPARSE_PARALLEL_DIM`])
+    par: faer::Par,
 }
 
 impl NormalPattern {
@@ -178,11 +180,14 @@ impl NormalPattern {
             col_ptr.push(row_idx.len());
         }
         let sym = SymbolicSparseColMatRef::new_checked(m, m, &col_ptr, None, &row_idx);
-        let symbolic = SymbolicLlt::try_new(sym, Side::Lower).ok()?;
+        let symbolic =
+            factorize_symbolic_cholesky(sym, Side::Lower, Default::default(), Default::default())
+                .ok()?;
         Some(Self {
             col_ptr,
             row_idx,
             symbolic,
+            par: crate::newton::sparse_parallelism(m),
         })
     }
 }
@@ -256,9 +261,30 @@ impl<'p> Normal<'p> {
         let (np, nr) = (&self.pattern.col_ptr, &self.pattern.row_idx);
         let sym = SymbolicSparseColMatRef::new_checked(m, m, np, None, nr);
         let mat = SparseColMatRef::new(sym, &self.values);
-        let llt =
-            Llt::try_new_with_symbolic(self.pattern.symbolic.clone(), mat, Side::Lower).ok()?;
-        llt.solve_in_place(faer::MatMut::from_column_major_slice_mut(&mut delta, m, 1));
+        let (symbolic, par) = (&self.pattern.symbolic, self.pattern.par);
+        let mut l_values = vec![0.0; symbolic.len_val()];
+        let scratch = StackReq::any_of(&[
+            symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+            symbolic.solve_in_place_scratch::<f64>(1, par),
+        ]);
+        let mut mem = MemBuffer::try_new(scratch).ok()?;
+        let llt = symbolic
+            .factorize_numeric_llt(
+                &mut l_values,
+                mat,
+                Side::Lower,
+                Default::default(),
+                par,
+                MemStack::new(&mut mem),
+                Default::default(),
+            )
+            .ok()?;
+        llt.solve_in_place_with_conj(
+            faer::Conj::No,
+            faer::MatMut::from_column_major_slice_mut(&mut delta, m, 1),
+            par,
+            MemStack::new(&mut mem),
+        );
         delta.iter().all(|x| x.is_finite()).then_some(delta)
     }
 }

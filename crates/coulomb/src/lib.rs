@@ -41,6 +41,7 @@ pub mod barrier;
 pub mod cone;
 pub mod deadline;
 pub mod delassus;
+pub mod dense;
 pub mod evaluation;
 pub mod examples;
 pub mod existence;

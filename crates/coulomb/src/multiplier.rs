@@ -36,7 +36,6 @@ use crate::mass::MassFactor;
 use crate::problem::GlobalProblem;
 use crate::settings::MultiplierParams;
 use crate::sparse::CscMatrix;
-use faer::linalg::solvers::Solve;
 
 /// The largest n [`solve`] takes: its Newton systems are dense n × n (8 n² bytes, O(n³)
 /// flops per step; the default's stage stays at or below
@@ -83,7 +82,8 @@ pub struct MultiplierReport {
 /// same law: a local problem whose W has the skeleton p, [`crate::skeleton`]). With `hu`,
 /// u = `hu`ᵀ v + w instead of Hᵀ v + w (a skeleton W ≈ C A⁻¹ R of a W that is not
 /// symmetric: H = R, `hu` = Cᵀ); `mass` is then a factor of the symmetric part of M, used
-/// for the start v only.
+/// for the start v only. `par`: the parallelism of the dense LU of each Newton step
+/// ([`crate::dense::parallelism`]).
 #[allow(clippy::too_many_arguments)]
 pub fn solve(
     p: &GlobalProblem,
@@ -93,6 +93,7 @@ pub fn solve(
     r: &mut [f64],
     tol: f64,
     params: &MultiplierParams,
+    par: faer::Par,
     deadline: Deadline,
     mut judge: impl FnMut(&[f64]) -> (f64, f64),
 ) -> MultiplierReport {
@@ -141,7 +142,7 @@ pub fn solve(
     let mut best_r = r.to_vec();
     let mut blocks = vec![0.0; p.contacts() * d * d];
     let mut jm = faer::Mat::<f64>::zeros(n, n);
-    let mut rhs = faer::Mat::<f64>::zeros(n, 1);
+    let mut dv = vec![0.0; n];
     let mut g = Residual::new(n, p.w.len());
     let mut trial = Residual::new(n, p.w.len());
     let mut vt = vec![0.0; n];
@@ -163,18 +164,19 @@ pub fn solve(
             newton += 1;
             g.evaluate(p, hu, &lambda, &rho, &v, Some(&mut blocks));
             assemble(p, hu, &blocks, &mut jm);
-            for j in 0..n {
-                rhs[(j, 0)] = -g.g[j];
-            }
-            let dv = jm.partial_piv_lu().solve(&rhs);
-            if (0..n).any(|j| !dv[(j, 0)].is_finite()) {
+            let Some(lu) = crate::dense::Lu::new(jm.clone(), par) else {
+                break;
+            };
+            dv.copy_from_slice(&g.g);
+            dv.iter_mut().for_each(|x| *x = -*x);
+            if !lu.solve_in_place(&mut dv) || dv.iter().any(|x| !x.is_finite()) {
                 break;
             }
             let mut t = 1.0;
             let mut accepted = false;
             for _ in 0..params.halvings {
                 for j in 0..n {
-                    vt[j] = v[j] + t * dv[(j, 0)];
+                    vt[j] = v[j] + t * dv[j];
                 }
                 trial.evaluate(p, hu, &lambda, &rho, &vt, None);
                 let sufficient = (1.0 - params.sufficient_decrease * t) * g.norm * g.norm;
@@ -446,6 +448,7 @@ mod tests {
             &mut r,
             1e-10,
             params,
+            faer::Par::Seq,
             Deadline::NEVER,
             |r| judged(p, mass, r),
         );
@@ -508,6 +511,7 @@ mod tests {
             &mut r,
             1e-10,
             &params,
+            faer::Par::Seq,
             Deadline::NEVER,
             judge,
         );
@@ -515,7 +519,18 @@ mod tests {
         // a past deadline: nothing run, r kept
         let mut r = vec![0.0; 12];
         let past = Deadline::after(std::time::Instant::now(), Some(std::time::Duration::ZERO));
-        let rep = solve(&p, None, &mass, wm, &mut r, 1e-10, &params, past, judge);
+        let rep = solve(
+            &p,
+            None,
+            &mass,
+            wm,
+            &mut r,
+            1e-10,
+            &params,
+            faer::Par::Seq,
+            past,
+            judge,
+        );
         assert_eq!((rep.status, rep.steps), (MultiplierStatus::TimeLimit, 0));
         assert!(r.iter().all(|&x| x == 0.0));
         // one outer step only: the cap, and the lowest-merit point returned
@@ -533,6 +548,7 @@ mod tests {
             &mut r,
             1e-14,
             &one,
+            faer::Par::Seq,
             Deadline::NEVER,
             judge,
         );
@@ -561,6 +577,7 @@ mod tests {
             &mut r,
             1e-10,
             &params,
+            faer::Par::Seq,
             Deadline::NEVER,
             |r| {
                 let u = big.w.iter().zip(r).map(|(w, _)| *w).collect::<Vec<_>>();
@@ -578,6 +595,7 @@ mod tests {
             &mut r,
             1e-10,
             &params,
+            faer::Par::Seq,
             Deadline::NEVER,
             judge,
         );

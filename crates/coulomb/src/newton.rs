@@ -28,8 +28,9 @@ use crate::deadline::Deadline;
 use crate::natural_map::de_saxce_map;
 use crate::problem::LocalProblem;
 use crate::sparse::CscMatrix;
+use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
+use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 
 /// Solves J x = rhs for a square sparse J given as summed triplets, by faer's sparse LU.
@@ -65,7 +66,47 @@ pub(crate) struct JacobianPattern {
     /// position of each diagonal entry in `row_idx`
     diagonal: Vec<usize>,
     /// None when built by [`JacobianPattern::without_lu`]
-    symbolic: Option<SymbolicLu<usize>>,
+    symbolic: Option<std::sync::Arc<SymbolicLu<usize>>>,
+    /// the numeric factorizations' parallelism ([`SPARSE_PARALLEL_DIM`])
+    par: faer::Par,
+}
+
+/// The sparse factorizations of the Newton and Levenberg–Marquardt systems (LU of J on
+/// the block pattern of J, Cholesky of JᵀJ + λI) run on all threads from this many unknowns on,
+/// on one thread below: faer's supernodal factorizations spend more on synchronising their
+/// threads than they gain on the small supernodes of such problems. Measured on 2 cores
+/// (docs/bench.md, "Threads"): the box files of the corpus (m ≤ 2 000) take 0.75× the time
+/// with this and the dense LU on one thread; a 5 000-bead granular file (m = 21 183) the
+/// same time either way.
+pub const SPARSE_PARALLEL_DIM: usize = 20_000;
+/// The parallelism of a sparse factorization of n unknowns ([`SPARSE_PARALLEL_DIM`]).
+pub(crate) fn sparse_parallelism(n: usize) -> faer::Par {
+    crate::dense::parallelism(n, SPARSE_PARALLEL_DIM)
+}
+
+/// A numeric LU of J on a [`JacobianPattern`] (its symbolic factorization shared).
+pub(crate) struct PatternLu {
+    symbolic: std::sync::Arc<SymbolicLu<usize>>,
+    numeric: NumericLu<usize, f64>,
+    par: faer::Par,
+}
+
+impl PatternLu {
+    /// x = J⁻¹ rhs in place; false (nothing changed) if the length of `rhs` is not J's size.
+    pub(crate) fn solve_in_place(&self, rhs: &mut [f64]) -> bool {
+        let n = self.symbolic.nrows();
+        if rhs.len() != n {
+            return false;
+        }
+        let scratch = self.symbolic.solve_in_place_scratch::<f64>(1, self.par);
+        LuRef::new_unchecked(&self.symbolic, &self.numeric).solve_in_place_with_conj(
+            faer::Conj::No,
+            faer::MatMut::from_column_major_slice_mut(rhs, n, 1),
+            self.par,
+            MemStack::new(&mut MemBuffer::new(scratch)),
+        );
+        true
+    }
 }
 
 impl JacobianPattern {
@@ -78,7 +119,9 @@ impl JacobianPattern {
             None,
             &pattern.row_idx,
         );
-        pattern.symbolic = Some(SymbolicLu::try_new(sym).ok()?);
+        pattern.symbolic = Some(std::sync::Arc::new(
+            factorize_symbolic_lu(sym, Default::default()).ok()?,
+        ));
         Some(pattern)
     }
 
@@ -117,6 +160,7 @@ impl JacobianPattern {
             neighbors,
             diagonal,
             symbolic: None,
+            par: sparse_parallelism(p.q.len()),
         }
     }
 
@@ -161,20 +205,37 @@ impl JacobianPattern {
 
     /// The LU of the matrix with these values on the pattern, from the cached symbolic
     /// factorization; None if it fails.
-    pub(crate) fn factor(&self, vals: &[f64]) -> Option<Lu<usize, f64>> {
+    pub(crate) fn factor(&self, vals: &[f64]) -> Option<PatternLu> {
         let n = self.col_ptr.len() - 1;
+        let symbolic = self.symbolic.clone()?;
+        if vals.len() != self.row_idx.len() {
+            return None;
+        }
         let sym = SymbolicSparseColMatRef::new_checked(n, n, &self.col_ptr, None, &self.row_idx);
         let mat = SparseColMatRef::new(sym, vals);
-        Lu::try_new_with_symbolic(self.symbolic.clone()?, mat).ok()
+        let mut numeric = NumericLu::new();
+        let scratch = symbolic.factorize_numeric_lu_scratch::<f64>(self.par, Default::default());
+        symbolic
+            .factorize_numeric_lu(
+                &mut numeric,
+                mat,
+                self.par,
+                MemStack::new(&mut MemBuffer::try_new(scratch).ok()?),
+                Default::default(),
+            )
+            .ok()?;
+        Some(PatternLu {
+            symbolic,
+            numeric,
+            par: self.par,
+        })
     }
 
     /// Solves (J + λ I) x = rhs in place by LU with the cached symbolic factorization; None
     /// if the factorization fails or x is not finite.
     pub(crate) fn solve(&self, vals: &[f64], rhs: &mut [f64]) -> Option<()> {
-        let n = rhs.len();
         let lu = self.factor(vals)?;
-        lu.solve_in_place(faer::MatMut::from_column_major_slice_mut(rhs, n, 1));
-        rhs.iter().all(|x| x.is_finite()).then_some(())
+        (lu.solve_in_place(rhs) && rhs.iter().all(|x| x.is_finite())).then_some(())
     }
 }
 

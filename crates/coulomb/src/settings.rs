@@ -290,6 +290,12 @@ pub struct BarrierParams {
     /// unknowns) has its Newton systems solved on M + H G⁻¹ Hᵀ (dense LU) instead of W + G;
     /// the policy's try needs it; ≥ 1. Also the largest rank of the skeleton of a local W
     pub max_schur_dofs: usize,
+    /// the dense LU factorizations of these Newton systems (Schur complement, skeleton, and
+    /// the method of multipliers' J, [`crate::dense`]) run on all threads from this size on,
+    /// on one thread below it; ≥ 1. Measured (`cargo bench -p coulomb --bench dense_lu`, 2
+    /// cores), all threads / one: 4.8× the time at n = 100, 2.3× at 384, 1.13× at 1 000,
+    /// 0.93× at 1 500, 0.78× at 3 000
+    pub dense_parallel_dim: usize,
     /// a local problem with at most this many contact unknowns is probed for a skeleton
     /// W ≈ W[:, P] W[P, P]⁻¹ W[P, :] of rank ≤ min(`max_schur_dofs`, m/2)
     /// ([`crate::skeleton`]; cost ≤ m · rank² flops); if it has one, its Newton systems are
@@ -339,6 +345,7 @@ impl Default for BarrierParams {
             start_floor: 1e-3,
             time_share: 0.5,
             max_schur_dofs: 1500,
+            dense_parallel_dim: 1500,
             max_skeleton_unknowns: 4000,
             rank_tol: 1e-10,
             refine_steps: 4,
@@ -355,11 +362,12 @@ impl BarrierParams {
         if self.stall_steps == 0
             || self.settle_steps == 0
             || self.max_schur_dofs == 0
+            || self.dense_parallel_dim == 0
             || self.skeleton_strikes == 0
         {
             return Err(
-                "tuning.barrier: stall_steps, settle_steps, max_schur_dofs and \
-                 skeleton_strikes must be ≥ 1"
+                "tuning.barrier: stall_steps, settle_steps, max_schur_dofs, \
+                 dense_parallel_dim and skeleton_strikes must be ≥ 1"
                     .into(),
             );
         }

@@ -26,7 +26,6 @@
 
 use crate::deadline::Deadline;
 use crate::sparse::CscMatrix;
-use faer::linalg::solvers::Solve;
 
 /// The skeleton C A⁻¹ R of W on the pivots P (module docs).
 pub struct Skeleton {
@@ -50,7 +49,7 @@ pub struct SkeletonLu {
     rank: usize,
     /// G⁻¹ by blocks (row-major d × d)
     ginv: Vec<f64>,
-    lu: faer::linalg::solvers::PartialPivLu<f64>,
+    lu: crate::dense::Lu,
 }
 
 impl Skeleton {
@@ -209,8 +208,9 @@ impl Skeleton {
     }
 
     /// The factored G + C A⁻¹ R for the block-diagonal regular G given by the row-major
-    /// d × d blocks of G⁻¹; None if A + R G⁻¹ C has a non-finite entry.
-    pub fn factor(&self, ginv: &[f64]) -> Option<SkeletonLu> {
+    /// d × d blocks of G⁻¹; None if A + R G⁻¹ C has a non-finite entry. Its dense LU runs
+    /// on all threads when the rank is ≥ `parallel_dim`, else on one ([`crate::dense`]).
+    pub fn factor(&self, ginv: &[f64], parallel_dim: usize) -> Option<SkeletonLu> {
         let d = self.dim;
         if ginv.len() != self.unknowns() * d {
             return None;
@@ -240,10 +240,11 @@ impl Skeleton {
         if (0..k.ncols()).any(|j| k.col(j).iter().any(|v| !v.is_finite())) {
             return None;
         }
+        let rank = self.rank();
         Some(SkeletonLu {
-            rank: self.rank(),
+            rank,
             ginv,
-            lu: k.partial_piv_lu(),
+            lu: crate::dense::Lu::new(k, crate::dense::parallelism(rank, parallel_dim))?,
         })
     }
 }
@@ -260,17 +261,19 @@ impl Skeleton {
         }
         let mut z = vec![0.0; rhs.len()];
         crate::barrier::apply_blocks(d, &f.ginv, rhs, &mut z);
-        let mut t = faer::Mat::<f64>::zeros(k, 1);
+        let mut y = vec![0.0; k];
         for (j, &zj) in z.iter().enumerate() {
             for u in s.r_ptr[j]..s.r_ptr[j + 1] {
-                t[(s.r_idx[u], 0)] += s.r_val[u] * zj;
+                y[s.r_idx[u]] += s.r_val[u] * zj;
             }
         }
-        let y = f.lu.solve(t);
+        if !f.lu.solve_in_place(&mut y) {
+            return None;
+        }
         let cy: Vec<f64> = (0..rhs.len())
             .map(|l| {
                 (s.c_ptr[l]..s.c_ptr[l + 1])
-                    .map(|u| s.c_val[u] * y[(s.c_idx[u], 0)])
+                    .map(|u| s.c_val[u] * y[s.c_idx[u]])
                     .sum()
             })
             .collect();
@@ -358,14 +361,14 @@ mod tests {
             let g = block_diag(m, d, 5);
             let b: Vec<f64> = (0..m).map(|i| (i as f64 * 0.7).sin()).collect();
             let mut x = b.clone();
-            s.solve(&s.factor(&inverse(d, &g)).expect("regular"), &mut x)
+            s.solve(&s.factor(&inverse(d, &g), 1500).expect("regular"), &mut x)
                 .expect("finite");
             let res = residual(&w, d, &g, &x, &b);
             let bmax = b.iter().fold(0.0f64, |a, v| a.max(v.abs()));
             assert!(res < bound * bmax, "asym {asym}: residual {res:e}");
             // sizes that disagree are refused, not indexed
-            assert!(s.factor(&g[..g.len() - 9]).is_none());
-            let f = s.factor(&inverse(d, &g)).expect("regular");
+            assert!(s.factor(&g[..g.len() - 9], 1500).is_none());
+            let f = s.factor(&inverse(d, &g), 1500).expect("regular");
             assert!(s.solve(&f, &mut vec![1.0; m + 3]).is_none());
         }
     }

@@ -494,14 +494,25 @@ impl Solver<'_> {
         if r.len() != m || !r.iter().all(|x| x.is_finite()) {
             return Ok(None);
         }
+        let par = crate::dense::parallelism(g.m.nrows, bp.dense_parallel_dim);
         let diag = local.w.diagonal();
         let w_mean = diag.iter().sum::<f64>() / diag.len().max(1) as f64;
         let form = &self.form;
-        let report =
-            crate::multiplier::solve(g, hu, mass, w_mean, &mut r, settings.tol, &mp, share, |r| {
+        let report = crate::multiplier::solve(
+            g,
+            hu,
+            mass,
+            w_mean,
+            &mut r,
+            settings.tol,
+            &mp,
+            par,
+            share,
+            |r| {
                 let v = form.verdict(r);
                 (v.error, v.balance.unwrap_or(0.0))
-            });
+            },
+        );
         self.judged(r, report.newton_steps, deadline).map(Some)
     }
 }

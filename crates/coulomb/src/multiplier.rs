@@ -30,6 +30,10 @@
 //!
 //! Every iterate is judged like the solver's iterates: v = M⁻¹(H r + f) recomputed from r,
 //! u = Hᵀ v + w, the error of docs/error.md and the balance residual on the stored data.
+//!
+//! Where the iteration goes depends on where it starts (the law with μ = 1 is not monotone):
+//! [`solve_from`] runs it from several starts at once and keeps the first run that
+//! converges.
 
 use crate::deadline::Deadline;
 use crate::mass::MassFactor;
@@ -74,6 +78,18 @@ pub struct MultiplierReport {
     pub balance: f64,
 }
 
+/// The data every run of the method shares: the problem in its velocity form, the
+/// parameters, ρ's first value and the parallelism of the dense LUs.
+struct Shared<'a> {
+    p: &'a GlobalProblem,
+    hu: &'a CscMatrix,
+    params: &'a MultiplierParams,
+    rho_i: f64,
+    f_norm: f64,
+    tol: f64,
+    par: faer::Par,
+}
+
 /// Runs the method of multipliers (module docs) on `p` from `r` (replaced by the iterate of
 /// lowest merit max(error, balance residual)) until both are ≤ `tol`, a cap, a stall or the
 /// deadline. `mass` is the factor of p's M; `w_mean` the mean of the diagonal of the W
@@ -95,94 +111,273 @@ pub fn solve(
     params: &MultiplierParams,
     par: faer::Par,
     deadline: Deadline,
+    judge: impl FnMut(&[f64]) -> (f64, f64),
+) -> MultiplierReport {
+    let mut starts = [r.to_vec()];
+    let report = solve_from(
+        p,
+        hu,
+        mass,
+        w_mean,
+        &mut starts,
+        tol,
+        params,
+        par,
+        deadline,
+        judge,
+    );
+    r.copy_from_slice(&starts[0]);
+    report
+}
+
+/// [`solve`] from each point of `starts` at once (at least one): one run per start, the
+/// runs taking their outer steps in rounds, every run one step per round, the Newton runs
+/// of a round on rayon's threads (each on one thread when `par` is [`faer::Par::Seq`]).
+/// The method of multipliers on a rigid problem goes where its start sends it: on the box
+/// piles of the corpus a start from which it circulates without converging and another
+/// from which it converges in 100 steps lie side by side (docs/rigid.md). It stops when a
+/// run has converged, every run has stopped, or at the deadline. `starts[0]` is replaced by
+/// the point returned: the first converged run's, else the lowest-merit iterate of all
+/// runs. The report is that run's, with `steps` and `newton_steps` summed over all runs.
+#[allow(clippy::too_many_arguments)]
+pub fn solve_from(
+    p: &GlobalProblem,
+    hu: Option<&CscMatrix>,
+    mass: &MassFactor,
+    w_mean: f64,
+    starts: &mut [Vec<f64>],
+    tol: f64,
+    params: &MultiplierParams,
+    par: faer::Par,
+    deadline: Deadline,
     mut judge: impl FnMut(&[f64]) -> (f64, f64),
 ) -> MultiplierReport {
-    let d = p.dim;
     let n = p.dofs();
     let rho_i = if w_mean > 0.0 && w_mean.is_finite() {
         params.rho_factor / w_mean
     } else {
         1.0
     };
-    let mut rho = vec![rho_i; p.contacts()];
-    let (e0, b0) = judge(r);
-    let mut report = MultiplierReport {
-        status: MultiplierStatus::MaxSteps,
-        steps: 0,
-        newton_steps: 0,
-        error: e0,
-        balance: b0,
-    };
     let hu = hu.unwrap_or(&p.h);
     let shapes = hu.nrows == n && hu.ncols == p.w.len() && mass.dim() == n;
-    if !(e0.is_finite() && b0.is_finite()) || r.len() != p.w.len() || !shapes {
-        report.status = MultiplierStatus::NumericalError;
+    let shared = Shared {
+        p,
+        hu,
+        params,
+        rho_i,
+        f_norm: crate::law::norm(&p.f),
+        tol,
+        par,
+    };
+    let mut report = MultiplierReport {
+        status: MultiplierStatus::NumericalError,
+        steps: 0,
+        newton_steps: 0,
+        error: f64::NAN,
+        balance: f64::NAN,
+    };
+    let mut runs = Vec::with_capacity(starts.len());
+    for r in starts.iter() {
+        if r.len() != p.w.len() || !shapes {
+            runs.push(Run::stopped(r, report, MultiplierStatus::NumericalError));
+            continue;
+        }
+        let (e0, b0) = judge(r);
+        let start = MultiplierReport {
+            error: e0,
+            balance: b0,
+            ..report
+        };
+        if !(e0.is_finite() && b0.is_finite()) {
+            runs.push(Run::stopped(r, start, MultiplierStatus::NumericalError));
+        } else if e0 <= tol && b0 <= tol {
+            runs.push(Run::stopped(r, start, MultiplierStatus::Converged));
+        } else if n > MAX_DENSE_DOFS {
+            runs.push(Run::stopped(r, start, MultiplierStatus::TooLarge));
+        } else {
+            runs.push(Run::new(&shared, mass, r, start));
+        }
+    }
+    if runs.is_empty() {
         return report;
     }
-    if e0 <= tol && b0 <= tol {
-        report.status = MultiplierStatus::Converged;
-        return report;
-    }
-    if n > MAX_DENSE_DOFS {
-        report.status = MultiplierStatus::TooLarge;
-        return report;
-    }
-    // v = M⁻¹(H r + f)
-    let mut v = p.h.mul_vec(r);
-    for (x, f) in v.iter_mut().zip(&p.f) {
-        *x += f;
-    }
-    mass.solve_in_place(&mut v);
-    let f_norm = crate::law::norm(&p.f);
-    let mut best_merit = e0.max(b0);
-    let mut stall_reference = best_merit;
-    let mut since_gain = 0;
-    let mut current_error = e0;
-    let mut lambda = r.to_vec();
-    let mut best_r = r.to_vec();
-    let mut blocks = vec![0.0; p.contacts() * d * d];
-    let mut jm = faer::Mat::<f64>::zeros(n, n);
-    let mut dv = vec![0.0; n];
-    let mut g = Residual::new(n, p.w.len());
-    let mut trial = Residual::new(n, p.w.len());
-    let mut vt = vec![0.0; n];
-    let mut v_start = vec![0.0; n];
-    while report.steps < params.max_steps {
+    use rayon::prelude::*;
+    while !runs
+        .iter()
+        .any(|run| run.done == Some(MultiplierStatus::Converged))
+        && runs.iter().any(|run| run.done.is_none())
+    {
         if deadline.passed() {
-            report.status = MultiplierStatus::TimeLimit;
+            for run in runs.iter_mut().filter(|run| run.done.is_none()) {
+                run.done = Some(MultiplierStatus::TimeLimit);
+            }
             break;
         }
-        report.steps += 1;
-        // Newton on G(v) = 0 for the multipliers λ = r_k
+        if runs.iter().filter(|run| run.done.is_none()).count() > 1 {
+            runs.par_iter_mut()
+                .filter(|run| run.done.is_none())
+                .for_each(|run| run.newton(&shared, deadline));
+        } else if let Some(run) = runs.iter_mut().find(|run| run.done.is_none()) {
+            run.newton(&shared, deadline);
+        }
+        for run in runs.iter_mut().filter(|run| run.done.is_none()) {
+            run.conclude(&shared, &mut judge);
+        }
+    }
+    let chosen = runs
+        .iter()
+        .position(|run| run.done == Some(MultiplierStatus::Converged))
+        .or_else(|| {
+            (0..runs.len()).min_by(|&a, &b| runs[a].best_merit.total_cmp(&runs[b].best_merit))
+        })
+        .unwrap_or(0);
+    let run = &runs[chosen];
+    report = MultiplierReport {
+        status: run.done.unwrap_or(MultiplierStatus::MaxSteps),
+        steps: runs.iter().map(|run| run.report.steps).sum(),
+        newton_steps: runs.iter().map(|run| run.report.newton_steps).sum(),
+        ..run.report
+    };
+    let best = run.best_r.clone();
+    if let Some(r0) = starts.first_mut() {
+        *r0 = best;
+    }
+    report
+}
+
+/// One run of the method of multipliers: its multipliers λ, penalties ρ, velocity v, the
+/// lowest-merit iterate, the stall bookkeeping and the work space of its Newton steps.
+struct Run {
+    /// Some once it has stopped, with why
+    done: Option<MultiplierStatus>,
+    report: MultiplierReport,
+    rho: Vec<f64>,
+    lambda: Vec<f64>,
+    v: Vec<f64>,
+    best_r: Vec<f64>,
+    best_merit: f64,
+    stall_reference: f64,
+    since_gain: usize,
+    current_error: f64,
+    /// the Newton run of the current outer step: its ‖G‖ target, steps, and v at its start
+    target: f64,
+    newton: usize,
+    v_start: Vec<f64>,
+    blocks: Vec<f64>,
+    jm: faer::Mat<f64>,
+    dv: Vec<f64>,
+    g: Residual,
+    trial: Residual,
+    vt: Vec<f64>,
+}
+
+impl Run {
+    /// A run that does not start, ending with `status` at `r` (judged as `report`).
+    fn stopped(r: &[f64], report: MultiplierReport, status: MultiplierStatus) -> Self {
+        let merit = report.error.max(report.balance);
+        Self {
+            done: Some(status),
+            report: MultiplierReport { status, ..report },
+            rho: Vec::new(),
+            lambda: Vec::new(),
+            v: Vec::new(),
+            best_r: r.to_vec(),
+            best_merit: if merit.is_nan() { f64::INFINITY } else { merit },
+            stall_reference: merit,
+            since_gain: 0,
+            current_error: report.error,
+            target: 0.0,
+            newton: 0,
+            v_start: Vec::new(),
+            blocks: Vec::new(),
+            jm: faer::Mat::zeros(0, 0),
+            dv: Vec::new(),
+            g: Residual::new(0, 0),
+            trial: Residual::new(0, 0),
+            vt: Vec::new(),
+        }
+    }
+
+    /// A run from `r` (finite, judged as `report`), v = M⁻¹(H r + f).
+    fn new(s: &Shared<'_>, mass: &MassFactor, r: &[f64], report: MultiplierReport) -> Self {
+        let p = s.p;
+        let (n, m, d) = (p.dofs(), p.w.len(), p.dim);
+        let mut v = p.h.mul_vec(r);
+        for (x, f) in v.iter_mut().zip(&p.f) {
+            *x += f;
+        }
+        mass.solve_in_place(&mut v);
+        let merit = report.error.max(report.balance);
+        Self {
+            done: None,
+            report,
+            rho: vec![s.rho_i; p.contacts()],
+            lambda: r.to_vec(),
+            v,
+            best_r: r.to_vec(),
+            best_merit: merit,
+            stall_reference: merit,
+            since_gain: 0,
+            current_error: report.error,
+            target: 0.0,
+            newton: 0,
+            v_start: vec![0.0; n],
+            blocks: vec![0.0; p.contacts() * d * d],
+            jm: faer::Mat::zeros(n, n),
+            dv: vec![0.0; n],
+            g: Residual::new(n, m),
+            trial: Residual::new(n, m),
+            vt: vec![0.0; n],
+        }
+    }
+
+    /// The Newton run of the next outer step: G(v) = 0 for the multipliers λ = r_k, from the
+    /// current v, to ‖G‖ ≤ [`MultiplierParams::inner_ratio`] · error · max(‖f‖, ‖M v‖).
+    fn newton(&mut self, s: &Shared<'_>, deadline: Deadline) {
+        let (p, hu, params) = (s.p, s.hu, s.params);
+        if self.report.steps >= params.max_steps {
+            self.done = Some(MultiplierStatus::MaxSteps);
+            return;
+        }
+        self.report.steps += 1;
         // relative to the size of the balance's terms, max(‖f‖, ‖M v‖)
-        let mv = crate::law::norm(&p.m.mul_vec(&v));
-        let target = params.inner_ratio * current_error * f_norm.max(mv);
-        g.evaluate(p, hu, &lambda, &rho, &v, None);
-        v_start.copy_from_slice(&v);
-        let mut newton = 0;
-        while g.norm > target && newton < params.newton_steps && !deadline.passed() {
-            newton += 1;
-            g.evaluate(p, hu, &lambda, &rho, &v, Some(&mut blocks));
-            assemble(p, hu, &blocks, &mut jm);
-            let Some(lu) = crate::dense::Lu::new(jm.clone(), par) else {
+        let mv = crate::law::norm(&p.m.mul_vec(&self.v));
+        self.target = params.inner_ratio * self.current_error * s.f_norm.max(mv);
+        self.g
+            .evaluate(p, hu, &self.lambda, &self.rho, &self.v, None);
+        self.v_start.copy_from_slice(&self.v);
+        self.newton = 0;
+        while self.g.norm > self.target && self.newton < params.newton_steps && !deadline.passed() {
+            self.newton += 1;
+            let g = &mut self.g;
+            g.evaluate(
+                p,
+                hu,
+                &self.lambda,
+                &self.rho,
+                &self.v,
+                Some(&mut self.blocks),
+            );
+            assemble(p, hu, &self.blocks, &mut self.jm);
+            let Some(lu) = crate::dense::Lu::new(self.jm.clone(), s.par) else {
                 break;
             };
-            dv.copy_from_slice(&g.g);
-            dv.iter_mut().for_each(|x| *x = -*x);
-            if !lu.solve_in_place(&mut dv) || dv.iter().any(|x| !x.is_finite()) {
+            self.dv.iter_mut().zip(&g.g).for_each(|(x, gi)| *x = -gi);
+            if !lu.solve_in_place(&mut self.dv) || self.dv.iter().any(|x| !x.is_finite()) {
                 break;
             }
             let mut t = 1.0;
             let mut accepted = false;
             for _ in 0..params.halvings {
-                for j in 0..n {
-                    vt[j] = v[j] + t * dv[j];
+                for ((vt, v), dv) in self.vt.iter_mut().zip(&self.v).zip(&self.dv) {
+                    *vt = v + t * dv;
                 }
-                trial.evaluate(p, hu, &lambda, &rho, &vt, None);
+                self.trial
+                    .evaluate(p, hu, &self.lambda, &self.rho, &self.vt, None);
                 let sufficient = (1.0 - params.sufficient_decrease * t) * g.norm * g.norm;
-                if trial.norm.is_finite() && trial.norm * trial.norm <= sufficient {
-                    std::mem::swap(&mut v, &mut vt);
-                    std::mem::swap(&mut g, &mut trial);
+                if self.trial.norm.is_finite() && self.trial.norm * self.trial.norm <= sufficient {
+                    std::mem::swap(&mut self.v, &mut self.vt);
+                    std::mem::swap(g, &mut self.trial);
                     accepted = true;
                     break;
                 }
@@ -192,61 +387,69 @@ pub fn solve(
                 break;
             }
         }
-        report.newton_steps += newton;
-        if !g.norm.is_finite() {
-            report.status = MultiplierStatus::NumericalError;
-            break;
+        self.report.newton_steps += self.newton;
+    }
+
+    /// The rest of the outer step after [`Run::newton`]: r_{k+1} = P_L(λ − ρ ũ) judged on
+    /// the stored data, the lowest-merit iterate, the new λ and ρ, and the stopping tests.
+    fn conclude(&mut self, s: &Shared<'_>, judge: &mut impl FnMut(&[f64]) -> (f64, f64)) {
+        let params = s.params;
+        if self.done.is_some() {
+            return;
         }
-        // r_{k+1} = P_L(λ − ρ ũ), judged on the stored data
-        let (e, b) = judge(&g.r);
+        if !self.g.norm.is_finite() {
+            self.done = Some(MultiplierStatus::NumericalError);
+            return;
+        }
+        let (e, b) = judge(&self.g.r);
         if !(e.is_finite() && b.is_finite()) {
-            report.status = MultiplierStatus::NumericalError;
-            break;
+            self.done = Some(MultiplierStatus::NumericalError);
+            return;
         }
         let merit = e.max(b);
-        if merit < best_merit {
-            best_merit = merit;
-            best_r.copy_from_slice(&g.r);
-            (report.error, report.balance) = (e, b);
+        if merit < self.best_merit {
+            self.best_merit = merit;
+            self.best_r.copy_from_slice(&self.g.r);
+            (self.report.error, self.report.balance) = (e, b);
         }
-        let solved = g.norm <= target;
-        let acceptable = e <= params.reject_growth * current_error;
+        let solved = self.g.norm <= self.target;
+        let acceptable = e <= params.reject_growth * self.current_error;
         if !solved && !acceptable {
             // Newton did not solve step k and r_{k+1} is far worse: step k again from λ with
             // a smaller penalty (a better conditioned subproblem)
-            v.copy_from_slice(&v_start);
-            rho.iter_mut().for_each(|x| *x *= params.penalty_cut);
+            self.v.copy_from_slice(&self.v_start);
+            self.rho.iter_mut().for_each(|x| *x *= params.penalty_cut);
         } else {
-            lambda.copy_from_slice(&g.r);
-            current_error = e;
-            if solved && newton <= params.easy_newton_steps {
+            self.lambda.copy_from_slice(&self.g.r);
+            self.current_error = e;
+            if solved && self.newton <= params.easy_newton_steps {
                 // an easy subproblem: a larger penalty, a faster proximal point
-                let cap = params.penalty_cap * rho_i;
-                rho.iter_mut()
+                let cap = params.penalty_cap * s.rho_i;
+                self.rho
+                    .iter_mut()
                     .for_each(|x| *x = (*x * params.penalty_growth).min(cap));
             } else if solved {
                 // a ρᵢ cut below its first value regrows towards it; one above it stays
-                rho.iter_mut()
+                let rho_i = s.rho_i;
+                self.rho
+                    .iter_mut()
                     .for_each(|x| *x = (*x * params.penalty_regrowth).min(rho_i.max(*x)));
             }
         }
-        if e <= tol && b <= tol {
-            report.status = MultiplierStatus::Converged;
-            break;
+        if e <= s.tol && b <= s.tol {
+            self.done = Some(MultiplierStatus::Converged);
+            return;
         }
-        if best_merit <= params.stall_gain * stall_reference {
-            stall_reference = best_merit;
-            since_gain = 0;
+        if self.best_merit <= params.stall_gain * self.stall_reference {
+            self.stall_reference = self.best_merit;
+            self.since_gain = 0;
         } else {
-            since_gain += 1;
-            if since_gain >= params.stall_steps {
-                report.status = MultiplierStatus::Stalled;
-                break;
+            self.since_gain += 1;
+            if self.since_gain >= params.stall_steps {
+                self.done = Some(MultiplierStatus::Stalled);
             }
         }
     }
-    r.copy_from_slice(&best_r);
-    report
 }
 
 /// G(v) = M v − f − H r, r = P_L(λ − ρ ũ(H_uᵀ v + w)), and ‖G‖.
@@ -492,6 +695,60 @@ mod tests {
             assert_eq!(rep_fixed.status, MultiplierStatus::Converged);
             assert!(rep.steps <= rep_fixed.steps, "{rep:?} {rep_fixed:?}");
         }
+    }
+
+    #[test]
+    fn several_starts_run_at_once_and_the_converged_run_is_returned() {
+        let p = box_on_plane(1.0, [1.0, 0.3, -0.5, 0.2, -0.1, 0.7]);
+        let mass = MassFactor::new(&p.m).unwrap();
+        let wm = w_mean(&p, &mass);
+        let params = MultiplierParams::default();
+        let (_, alone) = from_zero(&p, &mass, wm, &params);
+        let solve_all = |starts: &mut [Vec<f64>]| {
+            solve_from(
+                &p,
+                None,
+                &mass,
+                wm,
+                starts,
+                1e-10,
+                &params,
+                faer::Par::Seq,
+                Deadline::NEVER,
+                |r| judged(&p, &mass, r),
+            )
+        };
+        // a start that cannot run (not finite) beside one that converges: the converged
+        // point is returned in starts[0], judged on the problem, with both runs' work summed
+        let mut starts = vec![vec![f64::NAN; 12], vec![0.0; 12]];
+        let rep = solve_all(&mut starts);
+        assert_eq!(rep.status, MultiplierStatus::Converged, "{rep:?}");
+        let (e, b) = judged(&p, &mass, &starts[0]);
+        assert!(e <= 1e-10 && b <= 1e-10, "{e:.2e} {b:.2e}");
+        assert_eq!((rep.error, rep.balance), (e, b));
+        assert_eq!(
+            (rep.steps, rep.newton_steps),
+            (alone.steps, alone.newton_steps)
+        );
+        // two equal starts take their steps in rounds: both converge in the same round, the
+        // first is returned, and the work is twice one run's
+        let mut starts = vec![vec![0.0; 12], vec![0.0; 12]];
+        let rep = solve_all(&mut starts);
+        assert_eq!(rep.status, MultiplierStatus::Converged);
+        assert_eq!(
+            (rep.steps, rep.newton_steps),
+            (2 * alone.steps, 2 * alone.newton_steps)
+        );
+        // no start: nothing run, a typed status
+        let rep = solve_all(&mut []);
+        assert_eq!(rep.status, MultiplierStatus::NumericalError);
+        // only starts that cannot run: the status of the first
+        let mut starts = vec![vec![f64::INFINITY; 12], vec![0.0; 5]];
+        let rep = solve_all(&mut starts);
+        assert_eq!(
+            (rep.status, rep.steps),
+            (MultiplierStatus::NumericalError, 0)
+        );
     }
 
     #[test]

@@ -246,12 +246,12 @@ impl<'a> Solver<'a> {
             stages.push(warm);
         }
         if guess.is_none() && self.barrier_applies() {
-            if let Some(tried) = self.barrier_try(deadline)? {
+            if let Some((tried, ends)) = self.barrier_try(deadline)? {
                 if tried.0.converged() || deadline.passed() {
                     return Ok(merge(stages, tried, start));
                 }
                 // the main method below starts from the caller's point, not from these
-                if let Some(m) = self.multiplier_try(&tried, deadline)? {
+                if let Some(m) = self.multiplier_try(&tried, ends, deadline)? {
                     if m.0.converged() || deadline.passed() {
                         stages.push(tried);
                         return Ok(merge(stages, m, start));
@@ -340,10 +340,11 @@ impl Solver<'_> {
     /// ≤ [`crate::settings::LmParams::start`], until one reaches the tolerance or the try's
     /// share of the time is spent. Its best point is judged on the problem as stored like
     /// every iterate (status `converged`, `unbounded` or `max_iterations`; one outer record
-    /// whose inner iterations are all its Newton and LM steps). None (nothing run) when the
-    /// Newton systems have neither a Schur complement nor a skeleton
+    /// whose inner iterations are all its Newton and LM steps); with it, the end points of
+    /// all its runs, lowest error first (the starts of [`Solver::multiplier_try`]). None
+    /// (nothing run) when the Newton systems have neither a Schur complement nor a skeleton
     /// ([`crate::barrier::Setup::structured`]).
-    fn barrier_try(&mut self, deadline: Deadline) -> Result<Option<Ran>, SolveError> {
+    fn barrier_try(&mut self, deadline: Deadline) -> Result<Option<(Ran, Ends)>, SolveError> {
         let settings = &self.settings;
         let (bp, lm) = (settings.tuning.barrier, settings.tuning.lm);
         let local = self.form.local();
@@ -356,7 +357,7 @@ impl Solver<'_> {
         let Some(setup) = crate::barrier::Setup::structured(local, global, &bp, share) else {
             return Ok(None);
         };
-        let mut best: Option<(Vec<f64>, f64)> = None;
+        let mut ends: Vec<(Vec<f64>, f64)> = Vec::new();
         let mut steps = 0;
         for path in bp.paths {
             if share.passed() {
@@ -381,15 +382,23 @@ impl Solver<'_> {
                     (r, error) = (trial, lr.error);
                 }
             }
-            if best.as_ref().is_none_or(|(_, e)| error < *e) {
-                best = Some((r, error));
-            }
+            ends.push((r, error));
             if error <= target {
                 break;
             }
         }
-        let r = best.map_or_else(|| vec![0.0; local.q.len()], |(r, _)| r);
-        self.judged(r, steps, deadline).map(Some)
+        // lowest error first (a NaN last); the sort is stable: equal errors keep path order
+        ends.sort_by(|a, b| match (a.1.is_nan(), b.1.is_nan()) {
+            (false, false) => a.1.total_cmp(&b.1),
+            (x, y) => x.cmp(&y),
+        });
+        let ends: Vec<Vec<f64>> = ends.into_iter().map(|(r, _)| r).collect();
+        let r = ends
+            .first()
+            .cloned()
+            .unwrap_or_else(|| vec![0.0; local.q.len()]);
+        let ran = self.judged(r, steps, deadline)?;
+        Ok(Some((ran, ends)))
     }
 
     /// The point `r` that a method outside the stage loop reached in `steps` inner steps,
@@ -418,7 +427,9 @@ impl Solver<'_> {
 impl Solver<'_> {
     /// The method of multipliers in the velocities ([`crate::multiplier`], parameters
     /// [`crate::settings::MultiplierParams`]) from the best point of the interior-point try
-    /// `tried`, in its share of the time left. It applies where the try did: a global
+    /// `tried` and, at once, from the end points `ends` of its other runs (at most
+    /// [`crate::settings::MultiplierParams::starts`] runs in all, [`crate::multiplier::solve_from`]),
+    /// in its share of the time left. It applies where the try did: a global
     /// problem with at most [`crate::settings::BarrierParams::max_schur_dofs`] degrees of
     /// freedom and at most half as many as contact unknowns (rigid bodies touching at several
     /// points per face), or a local one whose W has a skeleton W ≈ Rᵀ A⁻¹ R of rank at most
@@ -430,6 +441,7 @@ impl Solver<'_> {
     fn multiplier_try(
         &mut self,
         tried: &Ran,
+        ends: Vec<Vec<f64>>,
         deadline: Deadline,
     ) -> Result<Option<Ran>, SolveError> {
         let settings = &self.settings;
@@ -483,7 +495,7 @@ impl Solver<'_> {
                     (&skeleton_form.0, Some(&skeleton_form.1), &skeleton_form.2)
                 }
             };
-        let mut r = match &tried.1 {
+        let r = match &tried.1 {
             Some(best)
                 if best.merit() < tried.0.error.max(tried.0.balance_residual.unwrap_or(0.0)) =>
             {
@@ -494,16 +506,26 @@ impl Solver<'_> {
         if r.len() != m || !r.iter().all(|x| x.is_finite()) {
             return Ok(None);
         }
+        // the try's best point, then the end points of its other runs (distinct, finite)
+        let mut starts = vec![r];
+        for end in ends {
+            if starts.len() >= mp.starts {
+                break;
+            }
+            if end.len() == m && end.iter().all(|x| x.is_finite()) && !starts.contains(&end) {
+                starts.push(end);
+            }
+        }
         let par = crate::dense::parallelism(g.m.nrows, bp.dense_parallel_dim);
         let diag = local.w.diagonal();
         let w_mean = diag.iter().sum::<f64>() / diag.len().max(1) as f64;
         let form = &self.form;
-        let report = crate::multiplier::solve(
+        let report = crate::multiplier::solve_from(
             g,
             hu,
             mass,
             w_mean,
-            &mut r,
+            &mut starts,
             settings.tol,
             &mp,
             par,
@@ -513,6 +535,7 @@ impl Solver<'_> {
                 (v.error, v.balance.unwrap_or(0.0))
             },
         );
+        let r = starts.swap_remove(0);
         self.judged(r, report.newton_steps, deadline).map(Some)
     }
 }
@@ -520,6 +543,9 @@ impl Solver<'_> {
 /// What a stage returns: its last iterate's solution, and its lowest-error iterate when
 /// that one is lower.
 type Ran = (Solution, Option<Best>);
+
+/// The end points of the interior-point try's runs, lowest error first.
+type Ends = Vec<Vec<f64>>;
 
 /// The warm-up try: at most `warmup_sweeps` fused Gauss–Seidel sweeps, one outer iteration,
 /// no end game.

@@ -1227,8 +1227,10 @@ mod tests {
         let mut s = Settings::default();
         s.tuning.anderson.memory = 0;
         assert!(s.validate().is_err());
-        let refused: [fn(&mut Tuning); 31] = [
+        let refused: [fn(&mut Tuning); 33] = [
             |t| t.multiplier.newton_steps = 0,
+            |t| t.multiplier.starts = 0,
+            |t| t.barrier.dense_parallel_dim = 0,
             |t| t.multiplier.rho_factor = 0.0,
             |t| t.multiplier.inner_ratio = f64::NAN,
             |t| t.multiplier.stall_gain = 1.0,

@@ -757,37 +757,30 @@ mod tests {
         let mass = MassFactor::new(&p.m).unwrap();
         let wm = w_mean(&p, &mass);
         let params = MultiplierParams::default();
-        let judge = |r: &[f64]| judged(&p, &mass, r);
+        // `solve` on p with w̄ = `wm` (0: no positive diagonal), tol, params and deadline
+        let run = |r: &mut [f64], wm: f64, tol: f64, params: &MultiplierParams, deadline| {
+            let judge = |r: &[f64]| judged(&p, &mass, r);
+            solve(
+                &p,
+                None,
+                &mass,
+                wm,
+                r,
+                tol,
+                params,
+                faer::Par::Seq,
+                deadline,
+                judge,
+            )
+        };
         // a non-finite start
         let mut r = vec![f64::NAN; 12];
-        let rep = solve(
-            &p,
-            None,
-            &mass,
-            wm,
-            &mut r,
-            1e-10,
-            &params,
-            faer::Par::Seq,
-            Deadline::NEVER,
-            judge,
-        );
+        let rep = run(&mut r, wm, 1e-10, &params, Deadline::NEVER);
         assert_eq!(rep.status, MultiplierStatus::NumericalError);
         // a past deadline: nothing run, r kept
         let mut r = vec![0.0; 12];
         let past = Deadline::after(std::time::Instant::now(), Some(std::time::Duration::ZERO));
-        let rep = solve(
-            &p,
-            None,
-            &mass,
-            wm,
-            &mut r,
-            1e-10,
-            &params,
-            faer::Par::Seq,
-            past,
-            judge,
-        );
+        let rep = run(&mut r, wm, 1e-10, &params, past);
         assert_eq!((rep.status, rep.steps), (MultiplierStatus::TimeLimit, 0));
         assert!(r.iter().all(|&x| x == 0.0));
         // one outer step only: the cap, and the lowest-merit point returned
@@ -797,18 +790,7 @@ mod tests {
         };
         let mut r = vec![0.0; 12];
         let start = judged(&p, &mass, &r);
-        let rep = solve(
-            &p,
-            None,
-            &mass,
-            wm,
-            &mut r,
-            1e-14,
-            &one,
-            faer::Par::Seq,
-            Deadline::NEVER,
-            judge,
-        );
+        let rep = run(&mut r, wm, 1e-14, &one, Deadline::NEVER);
         assert_eq!((rep.status, rep.steps), (MultiplierStatus::MaxSteps, 1));
         let (e, b) = judged(&p, &mass, &r);
         assert_eq!((rep.error, rep.balance), (e, b));
@@ -844,18 +826,7 @@ mod tests {
         assert_eq!((rep.status, rep.steps), (MultiplierStatus::TooLarge, 0));
         // a W of no positive diagonal gives ρ = 1, still a typed outcome
         let mut r = vec![0.0; 12];
-        let rep = solve(
-            &p,
-            None,
-            &mass,
-            0.0,
-            &mut r,
-            1e-10,
-            &params,
-            faer::Par::Seq,
-            Deadline::NEVER,
-            judge,
-        );
+        let rep = run(&mut r, 0.0, 1e-10, &params, Deadline::NEVER);
         assert!(rep.error.is_finite());
     }
 }

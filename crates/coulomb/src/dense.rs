@@ -67,6 +67,12 @@ impl Lu {
         })
     }
 
+    /// The storage of the factors, to be filled with the next matrix of the same size and
+    /// factored by [`Lu::new`] without a new allocation.
+    pub fn into_matrix(self) -> Mat<f64> {
+        self.lu
+    }
+
     /// The size n.
     pub fn dim(&self) -> usize {
         self.lu.nrows()

@@ -20,7 +20,9 @@
 //! ```
 //!
 //! a dense LU of size n (the problems it applies to have n ≤
-//! [`crate::settings::BarrierParams::max_schur_dofs`]) and a backtracking search on ‖G‖.
+//! [`crate::settings::BarrierParams::max_schur_dofs`]) and a backtracking search on ‖G‖,
+//! stopped at its target, at a cap, or after a few steps in a row that barely lower ‖G‖
+//! ([`MultiplierParams::slow_steps`]: a damped crawl rarely reaches the target).
 //! ρᵢ starts at ρ_f / w̄ with w̄ the mean of trace(Wᵢᵢ)/d: a penalty of the order of 1/‖W‖
 //! keeps the Newton systems regular and the outer iteration moving; the end game's σ = 5 err
 //! rule ([`crate::proximal`]) makes ρ so large there that Newton on G fails (docs/rigid.md).
@@ -347,7 +349,14 @@ impl Run {
             .evaluate(p, hu, &self.lambda, &self.rho, &self.v, None);
         self.v_start.copy_from_slice(&self.v);
         self.newton = 0;
-        while self.g.norm > self.target && self.newton < params.newton_steps && !deadline.passed() {
+        // consecutive steps that lowered ‖G‖ by less than the factor `slow_ratio`
+        let mut slow = 0;
+        while self.g.norm > self.target
+            && self.newton < params.newton_steps
+            && slow < params.slow_steps
+            && !deadline.passed()
+        {
+            let before = self.g.norm;
             self.newton += 1;
             let g = &mut self.g;
             g.evaluate(
@@ -358,12 +367,19 @@ impl Run {
                 &self.v,
                 Some(&mut self.blocks),
             );
-            assemble(p, hu, &self.blocks, &mut self.jm);
-            let Some(lu) = crate::dense::Lu::new(self.jm.clone(), s.par) else {
+            // J is assembled in the storage of the previous step's factors
+            let mut jm = std::mem::replace(&mut self.jm, faer::Mat::zeros(0, 0));
+            if jm.nrows() != p.dofs() || jm.ncols() != p.dofs() {
+                jm = faer::Mat::zeros(p.dofs(), p.dofs());
+            }
+            assemble(p, hu, &self.blocks, &mut jm);
+            let Some(lu) = crate::dense::Lu::new(jm, s.par) else {
                 break;
             };
             self.dv.iter_mut().zip(&g.g).for_each(|(x, gi)| *x = -gi);
-            if !lu.solve_in_place(&mut self.dv) || self.dv.iter().any(|x| !x.is_finite()) {
+            let solved = lu.solve_in_place(&mut self.dv);
+            self.jm = lu.into_matrix();
+            if !solved || self.dv.iter().any(|x| !x.is_finite()) {
                 break;
             }
             let mut t = 1.0;
@@ -385,6 +401,11 @@ impl Run {
             }
             if !accepted {
                 break;
+            }
+            if self.g.norm > params.slow_ratio * before {
+                slow += 1;
+            } else {
+                slow = 0;
             }
         }
         self.report.newton_steps += self.newton;
@@ -795,6 +816,31 @@ mod tests {
         let (e, b) = judged(&p, &mass, &r);
         assert_eq!((rep.error, rep.balance), (e, b));
         assert!(e.max(b) <= start.0.max(start.1));
+        // every Newton step counted slow (slow_ratio ~ 0) and one allowed: each outer step's
+        // Newton run stops after one step, where the default takes several
+        let crawl = MultiplierParams {
+            max_steps: 20,
+            slow_steps: 1,
+            slow_ratio: 1e-300,
+            ..params
+        };
+        let mut r = vec![0.0; 12];
+        let rep = run(&mut r, wm, 1e-14, &crawl, Deadline::NEVER);
+        assert!(rep.steps >= 1 && rep.newton_steps <= rep.steps, "{rep:?}");
+        let (e, b) = judged(&p, &mass, &r);
+        assert_eq!((rep.error, rep.balance), (e, b));
+        let mut r = vec![0.0; 12];
+        let full = run(
+            &mut r,
+            wm,
+            1e-14,
+            &MultiplierParams {
+                max_steps: 20,
+                ..params
+            },
+            Deadline::NEVER,
+        );
+        assert!(full.newton_steps > full.steps, "{full:?}");
         // more degrees of freedom than the dense Newton systems take: nothing run
         let n = MAX_DENSE_DOFS + 1;
         let big = GlobalProblem::new(

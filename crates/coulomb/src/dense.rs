@@ -166,6 +166,34 @@ mod tests {
     }
 
     #[test]
+    fn the_storage_of_factors_takes_the_next_matrix() {
+        // factor A, take the storage back, fill it with 2 A + I and factor again: the solve
+        // is that of the new matrix
+        let n = 7;
+        let a = matrix(n);
+        let lu = Lu::new(a.clone(), Par::Seq).expect("square");
+        let mut storage = lu.into_matrix();
+        assert_eq!((storage.nrows(), storage.ncols()), (n, n));
+        for j in 0..n {
+            for i in 0..n {
+                storage[(i, j)] = 2.0 * a[(i, j)] + if i == j { 1.0 } else { 0.0 };
+            }
+        }
+        let x: Vec<f64> = (0..n).map(|i| 0.5 - i as f64).collect();
+        let mut y: Vec<f64> = (0..n)
+            .map(|i| (0..n).map(|j| 2.0 * a[(i, j)] * x[j]).sum::<f64>() + x[i])
+            .collect();
+        let lu = Lu::new(storage, Par::Seq).expect("square");
+        assert!(lu.solve_in_place(&mut y));
+        let err = y
+            .iter()
+            .zip(&x)
+            .map(|(p, q)| (p - q).abs())
+            .fold(0.0, f64::max);
+        assert!(err < 1e-12, "error {err}");
+    }
+
+    #[test]
     fn the_parallelism_follows_the_size() {
         assert_eq!(parallelism(100, 1500), Par::Seq);
         assert_eq!(parallelism(1500, 1500), Par::rayon(0));

@@ -37,6 +37,8 @@
 //! [`solve_from`] runs it from several starts at once and keeps the first run that
 //! converges.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use crate::deadline::Deadline;
 use crate::mass::MassFactor;
 use crate::problem::GlobalProblem;
@@ -113,7 +115,7 @@ pub fn solve(
     params: &MultiplierParams,
     par: faer::Par,
     deadline: Deadline,
-    judge: impl FnMut(&[f64]) -> (f64, f64),
+    judge: impl Fn(&[f64]) -> (f64, f64) + Sync,
 ) -> MultiplierReport {
     let mut starts = [r.to_vec()];
     let report = solve_from(
@@ -133,8 +135,8 @@ pub fn solve(
 }
 
 /// [`solve`] from each point of `starts` at once (at least one): one run per start, the
-/// runs taking their outer steps in rounds, every run one step per round, the Newton runs
-/// of a round on rayon's threads (each on one thread when `par` is [`faer::Par::Seq`]).
+/// runs taking their outer steps in turn on rayon's threads, none waiting for another (each
+/// Newton run on one thread when `par` is [`faer::Par::Seq`]).
 /// The method of multipliers on a rigid problem goes where its start sends it: on the box
 /// piles of the corpus a start from which it circulates without converging and another
 /// from which it converges in 100 steps lie side by side (docs/rigid.md). It stops when a
@@ -152,7 +154,7 @@ pub fn solve_from(
     params: &MultiplierParams,
     par: faer::Par,
     deadline: Deadline,
-    mut judge: impl FnMut(&[f64]) -> (f64, f64),
+    judge: impl Fn(&[f64]) -> (f64, f64) + Sync,
 ) -> MultiplierReport {
     let n = p.dofs();
     let rho_i = if w_mean > 0.0 && w_mean.is_finite() {
@@ -203,29 +205,23 @@ pub fn solve_from(
     if runs.is_empty() {
         return report;
     }
-    use rayon::prelude::*;
-    while !runs
-        .iter()
-        .any(|run| run.done == Some(MultiplierStatus::Converged))
-        && runs.iter().any(|run| run.done.is_none())
-    {
-        if deadline.passed() {
-            for run in runs.iter_mut().filter(|run| run.done.is_none()) {
-                run.done = Some(MultiplierStatus::TimeLimit);
-            }
-            break;
-        }
-        if runs.iter().filter(|run| run.done.is_none()).count() > 1 {
-            runs.par_iter_mut()
-                .filter(|run| run.done.is_none())
-                .for_each(|run| run.newton(&shared, deadline));
-        } else if let Some(run) = runs.iter_mut().find(|run| run.done.is_none()) {
-            run.newton(&shared, deadline);
-        }
+    // Every live run is a chain of tasks on rayon's pool, one outer step (Newton run, then
+    // its conclusion) per task, each task queueing the run's next one: FIFO order takes the
+    // runs in turn, and a thread that finishes a step takes the next queued one instead of
+    // waiting for the slowest run of a round. Each run's iterates are those it would take
+    // alone; only which converged run is seen first depends on the timing.
+    let stop = AtomicBool::new(false);
+    let work = Work {
+        shared: &shared,
+        judge: &judge,
+        stop: &stop,
+        deadline,
+    };
+    rayon::scope_fifo(|scope| {
         for run in runs.iter_mut().filter(|run| run.done.is_none()) {
-            run.conclude(&shared, &mut judge);
+            scope.spawn_fifo(|scope| work.step(run, scope));
         }
-    }
+    });
     let chosen = runs
         .iter()
         .position(|run| run.done == Some(MultiplierStatus::Converged))
@@ -245,6 +241,36 @@ pub fn solve_from(
         *r0 = best;
     }
     report
+}
+
+/// What every outer step of [`solve_from`]'s runs reads: the problem and parameters, the
+/// judge, the flag raised by the first run that converges, and the deadline.
+struct Work<'w, 'a, J> {
+    shared: &'w Shared<'a>,
+    judge: &'w J,
+    stop: &'w AtomicBool,
+    deadline: Deadline,
+}
+
+impl<'w, J: Fn(&[f64]) -> (f64, f64) + Sync> Work<'w, '_, J> {
+    /// One outer step of `run` (unless a run has converged), then its next one queued on
+    /// `scope` while it has not stopped; the deadline stops it with `TimeLimit`.
+    fn step(&'w self, run: &'w mut Run, scope: &rayon::ScopeFifo<'w>) {
+        if self.stop.load(Ordering::Relaxed) {
+            return;
+        }
+        if self.deadline.passed() {
+            run.done = Some(MultiplierStatus::TimeLimit);
+            return;
+        }
+        run.newton(self.shared, self.deadline);
+        run.conclude(self.shared, self.judge);
+        match run.done {
+            Some(MultiplierStatus::Converged) => self.stop.store(true, Ordering::Relaxed),
+            Some(_) => {}
+            None => scope.spawn_fifo(move |scope| self.step(run, scope)),
+        }
+    }
 }
 
 /// One run of the method of multipliers: its multipliers λ, penalties ρ, velocity v, the
@@ -413,7 +439,7 @@ impl Run {
 
     /// The rest of the outer step after [`Run::newton`]: r_{k+1} = P_L(λ − ρ ũ) judged on
     /// the stored data, the lowest-merit iterate, the new λ and ρ, and the stopping tests.
-    fn conclude(&mut self, s: &Shared<'_>, judge: &mut impl FnMut(&[f64]) -> (f64, f64)) {
+    fn conclude(&mut self, s: &Shared<'_>, judge: &impl Fn(&[f64]) -> (f64, f64)) {
         let params = s.params;
         if self.done.is_some() {
             return;
@@ -724,7 +750,7 @@ mod tests {
         let mass = MassFactor::new(&p.m).unwrap();
         let wm = w_mean(&p, &mass);
         let params = MultiplierParams::default();
-        let (_, alone) = from_zero(&p, &mass, wm, &params);
+        let (r_alone, alone) = from_zero(&p, &mass, wm, &params);
         let solve_all = |starts: &mut [Vec<f64>]| {
             solve_from(
                 &p,
@@ -751,15 +777,47 @@ mod tests {
             (rep.steps, rep.newton_steps),
             (alone.steps, alone.newton_steps)
         );
-        // two equal starts take their steps in rounds: both converge in the same round, the
-        // first is returned, and the work is twice one run's
+        // two equal starts: each run takes the iterates it takes alone, so the point returned
+        // is the one run alone returns; the other run stops once one has converged (its
+        // steps so far are counted)
         let mut starts = vec![vec![0.0; 12], vec![0.0; 12]];
         let rep = solve_all(&mut starts);
         assert_eq!(rep.status, MultiplierStatus::Converged);
-        assert_eq!(
-            (rep.steps, rep.newton_steps),
-            (2 * alone.steps, 2 * alone.newton_steps)
+        assert_eq!(starts[0], r_alone);
+        assert!(
+            (alone.steps..=2 * alone.steps).contains(&rep.steps)
+                && (alone.newton_steps..=2 * alone.newton_steps).contains(&rep.newton_steps),
+            "{rep:?} {alone:?}"
         );
+        // two different starts: the point returned is the one that one of them reaches alone
+        let other: Vec<f64> = (0..12).map(|k| 0.5 + 0.1 * k as f64).collect();
+        let mut r_other = other.clone();
+        let rep_other = solve(
+            &p,
+            None,
+            &mass,
+            wm,
+            &mut r_other,
+            1e-10,
+            &params,
+            faer::Par::Seq,
+            Deadline::NEVER,
+            |r| judged(&p, &mass, r),
+        );
+        assert_eq!(rep_other.status, MultiplierStatus::Converged);
+        for order in [
+            [vec![0.0; 12], other.clone()],
+            [other.clone(), vec![0.0; 12]],
+        ] {
+            let mut starts = order.to_vec();
+            let rep = solve_all(&mut starts);
+            assert_eq!(rep.status, MultiplierStatus::Converged);
+            assert!(
+                starts[0] == r_alone || starts[0] == r_other,
+                "{:?}",
+                starts[0]
+            );
+        }
         // no start: nothing run, a typed status
         let rep = solve_all(&mut []);
         assert_eq!(rep.status, MultiplierStatus::NumericalError);

@@ -21,7 +21,7 @@ use crate::law;
 use crate::problem::{GlobalProblem, LocalProblem};
 use crate::sparse::CscMatrix;
 use std::borrow::Cow;
-use std::cell::OnceCell;
+use std::sync::OnceLock;
 
 /// The problem as stored: borrowed from the caller, or owned once updated for a new step.
 pub(crate) enum Stored<'a> {
@@ -36,7 +36,7 @@ pub(crate) struct Form<'a> {
     pub(crate) stored: Stored<'a>,
     /// ½(W + Wᵀ), formed at the first use of a QP inner solver when W is not exactly
     /// symmetric (a fused Gauss–Seidel or Newton run never needs it)
-    surrogate: OnceCell<CscMatrix>,
+    surrogate: OnceLock<CscMatrix>,
     /// whether W is exactly symmetric
     pub(crate) symmetric: bool,
     /// ‖W‖ estimated by the largest trace of a diagonal block
@@ -51,7 +51,7 @@ impl<'a> Form<'a> {
     pub(crate) fn new(stored: Stored<'a>, unbounded_ratio: f64) -> Self {
         let mut form = Self {
             stored,
-            surrogate: OnceCell::new(),
+            surrogate: OnceLock::new(),
             symmetric: true,
             w_scale: 0.0,
             q_norm: 0.0,
@@ -63,7 +63,7 @@ impl<'a> Form<'a> {
 
     /// Recomputes what is derived from W and q (after an update).
     pub(crate) fn refresh(&mut self) {
-        self.surrogate = OnceCell::new();
+        self.surrogate = OnceLock::new();
         let local = self.local();
         let (w_scale, symmetric, q_norm) = (
             crate::inner::w_scale(local.dim, &local.w),

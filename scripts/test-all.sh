@@ -5,9 +5,11 @@
 #   bash scripts/test-all.sh
 #
 # Environment: COULOMB_PY_VENV (default target/py-venv), PYTHON (default python3).
-# The Python extension is built in cargo's dev profile with opt-level 2, which is exactly the
-# test profile of Cargo.toml, so it reuses the artifacts `cargo test --workspace` just built
-# (only the binding crate compiles, ~20 s) instead of a release build of faer/Clarabel.
+# The Python extension is built in cargo's dev profile with opt-level 2 (the settings of the test
+# profile of Cargo.toml), not a release build of faer/Clarabel (over 6 min). It does not reuse
+# what `cargo test --workspace` built: cargo resolves the features of a build of the binding crate
+# alone (`-p`) without the other members' dev-dependencies (serde's `alloc`, zerocopy's `derive`),
+# so faer, Clarabel and coulomb compile again (measured: about 2 min).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 

@@ -5,11 +5,6 @@
 #   bash scripts/test-all.sh
 #
 # Environment: COULOMB_PY_VENV (default target/py-venv), PYTHON (default python3).
-# The Python extension is built in cargo's dev profile with opt-level 2 (the settings of the test
-# profile of Cargo.toml), not a release build of faer/Clarabel (over 6 min). It does not reuse
-# what `cargo test --workspace` built: cargo resolves the features of a build of the binding crate
-# alone (`-p`) without the other members' dev-dependencies (serde's `alloc`, zerocopy's `derive`),
-# so faer, Clarabel and coulomb compile again (measured: about 2 min).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -20,19 +15,29 @@ PYTHON=${PYTHON:-python3}
 if [ ! -x "$VENV/bin/python" ]; then
   "$PYTHON" -m venv "$VENV"
 fi
-"$VENV/bin/python" -m pip install --quiet --disable-pip-version-check \
-  "maturin>=1.7,<2" numpy scipy pytest h5py
-(
-  cd crates/coulomb-py
-  VIRTUAL_ENV="$PWD/../../$VENV" PATH="$PWD/../../$VENV/bin:$PATH" \
-    CARGO_PROFILE_DEV_OPT_LEVEL=2 maturin develop --quiet
-)
+PY="$(cd "$VENV" && pwd)/bin/python"
+"$PY" -m pip install --quiet --disable-pip-version-check numpy scipy pytest h5py
+
+# The extension: the binding crate built by cargo within the workspace, in the test profile,
+# so that it reuses every artifact `cargo test --workspace` just built (only pyo3 and the
+# binding crate compile, ~15 s). `maturin develop` builds the crate alone, for which cargo
+# resolves other features (the other members' dev-dependencies turn on serde's `alloc` and
+# zerocopy's `derive`), and so compiled faer, Clarabel and coulomb a second time (~2 min of CI).
+# The library then goes where `maturin develop` puts it in this mixed Rust/Python layout: next
+# to the package's Python sources (python/coulomb/_coulomb.abi3.so, git-ignored), which a .pth
+# file in the venv puts on Python's path.
+PYO3_PYTHON="$PY" cargo build --workspace --lib --tests --profile test
+lib=target/debug/lib_coulomb.so
+[ -f "$lib" ] || lib=target/debug/lib_coulomb.dylib
+cp "$lib" crates/coulomb-py/python/coulomb/_coulomb.abi3.so
+site=$("$PY" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
+echo "$PWD/crates/coulomb-py/python" > "$site/coulomb-dev.pth"
 
 # the CLI binary `cargo test` built, for the CLI-equality tests
 export COULOMB_CLI="$PWD/target/debug/coulomb"
 # pytest's exit code fails the script: 1 for failures, 5 when no test was collected
 # (set -e makes both fail the run; nothing is masked)
-"$VENV/bin/python" -m pytest crates/coulomb-py/tests -q -rs
+"$PY" -m pytest crates/coulomb-py/tests -q -rs
 
 # the distributed feature (docs/distributed.md): its unit tests and `coulomb simulate` under
 # `mpirun -np 2`, when an MPI implementation is installed (.ci/run installs one); last, because

@@ -20,7 +20,9 @@
 //! ```
 //!
 //! a dense LU of size n (the problems it applies to have n ≤
-//! [`crate::settings::BarrierParams::max_schur_dofs`]) and a backtracking search on ‖G‖,
+//! [`crate::settings::BarrierParams::max_schur_dofs`]; J and the products with H and H_u are
+//! formed contact by contact from the d columns of each contact, gathered once per solve
+//! into one dense block) and a backtracking search on ‖G‖,
 //! stopped at its target, at a cap, or after a few steps in a row that barely lower ‖G‖
 //! ([`MultiplierParams::slow_steps`]: a damped crawl rarely reaches the target).
 //! ρᵢ starts at ρ_f / w̄ with w̄ the mean of trace(Wᵢᵢ)/d: a penalty of the order of 1/‖W‖
@@ -82,11 +84,13 @@ pub struct MultiplierReport {
     pub balance: f64,
 }
 
-/// The data every run of the method shares: the problem in its velocity form, the
-/// parameters, ρ's first value and the parallelism of the dense LUs.
+/// The data every run of the method shares: the problem in its velocity form (with the
+/// columns of H and H_u gathered by contact), the parameters, ρ's first value and the
+/// parallelism of the dense LUs.
 struct Shared<'a> {
     p: &'a GlobalProblem,
-    hu: &'a CscMatrix,
+    h_cols: ContactColumns,
+    hu_cols: ContactColumns,
     params: &'a MultiplierParams,
     rho_i: f64,
     f_norm: f64,
@@ -166,7 +170,8 @@ pub fn solve_from(
     let shapes = hu.nrows == n && hu.ncols == p.w.len() && mass.dim() == n;
     let shared = Shared {
         p,
-        hu,
+        h_cols: ContactColumns::new(&p.h, p.dim, p.contacts()),
+        hu_cols: ContactColumns::new(hu, p.dim, p.contacts()),
         params,
         rho_i,
         f_norm: crate::law::norm(&p.f),
@@ -293,6 +298,8 @@ struct Run {
     v_start: Vec<f64>,
     blocks: Vec<f64>,
     jm: faer::Mat<f64>,
+    /// Hᵢ Bᵢ of one contact (the assembly's work space)
+    hb: Vec<f64>,
     dv: Vec<f64>,
     g: Residual,
     trial: Residual,
@@ -319,6 +326,7 @@ impl Run {
             v_start: Vec::new(),
             blocks: Vec::new(),
             jm: faer::Mat::zeros(0, 0),
+            hb: Vec::new(),
             dv: Vec::new(),
             g: Residual::new(0, 0),
             trial: Residual::new(0, 0),
@@ -352,6 +360,7 @@ impl Run {
             v_start: vec![0.0; n],
             blocks: vec![0.0; p.contacts() * d * d],
             jm: faer::Mat::zeros(n, n),
+            hb: Vec::new(),
             dv: vec![0.0; n],
             g: Residual::new(n, m),
             trial: Residual::new(n, m),
@@ -362,7 +371,7 @@ impl Run {
     /// The Newton run of the next outer step: G(v) = 0 for the multipliers λ = r_k, from the
     /// current v, to ‖G‖ ≤ [`MultiplierParams::inner_ratio`] · error · max(‖f‖, ‖M v‖).
     fn newton(&mut self, s: &Shared<'_>, deadline: Deadline) {
-        let (p, hu, params) = (s.p, s.hu, s.params);
+        let (p, params) = (s.p, s.params);
         if self.report.steps >= params.max_steps {
             self.done = Some(MultiplierStatus::MaxSteps);
             return;
@@ -371,8 +380,7 @@ impl Run {
         // relative to the size of the balance's terms, max(‖f‖, ‖M v‖)
         let mv = crate::law::norm(&p.m.mul_vec(&self.v));
         self.target = params.inner_ratio * self.current_error * s.f_norm.max(mv);
-        self.g
-            .evaluate(p, hu, &self.lambda, &self.rho, &self.v, None);
+        self.g.evaluate(s, &self.lambda, &self.rho, &self.v);
         self.v_start.copy_from_slice(&self.v);
         self.newton = 0;
         // consecutive steps that lowered ‖G‖ by less than the factor `slow_ratio`
@@ -384,21 +392,15 @@ impl Run {
         {
             let before = self.g.norm;
             self.newton += 1;
+            // `g` is G at the current v (evaluated before the loop or as the accepted trial)
             let g = &mut self.g;
-            g.evaluate(
-                p,
-                hu,
-                &self.lambda,
-                &self.rho,
-                &self.v,
-                Some(&mut self.blocks),
-            );
+            g.blocks(p, &self.lambda, &self.rho, &mut self.blocks);
             // J is assembled in the storage of the previous step's factors
             let mut jm = std::mem::replace(&mut self.jm, faer::Mat::zeros(0, 0));
             if jm.nrows() != p.dofs() || jm.ncols() != p.dofs() {
                 jm = faer::Mat::zeros(p.dofs(), p.dofs());
             }
-            assemble(p, hu, &self.blocks, &mut jm);
+            assemble(p, s, &self.blocks, &mut jm, &mut self.hb);
             let Some(lu) = crate::dense::Lu::new(jm, s.par) else {
                 break;
             };
@@ -414,8 +416,7 @@ impl Run {
                 for ((vt, v), dv) in self.vt.iter_mut().zip(&self.v).zip(&self.dv) {
                     *vt = v + t * dv;
                 }
-                self.trial
-                    .evaluate(p, hu, &self.lambda, &self.rho, &self.vt, None);
+                self.trial.evaluate(s, &self.lambda, &self.rho, &self.vt);
                 let sufficient = (1.0 - params.sufficient_decrease * t) * g.norm * g.norm;
                 if self.trial.norm.is_finite() && self.trial.norm * self.trial.norm <= sufficient {
                     std::mem::swap(&mut self.v, &mut self.vt);
@@ -517,63 +518,180 @@ impl Residual {
         }
     }
 
-    /// Evaluates at v; with `blocks`, also Bᵢ = ρᵢ ∂P(yᵢ) (I + μ e t̂ᵀ) (row-major d × d).
-    fn evaluate(
-        &mut self,
-        p: &GlobalProblem,
-        hu: &CscMatrix,
-        lambda: &[f64],
-        rho: &[f64],
-        v: &[f64],
-        mut blocks: Option<&mut Vec<f64>>,
-    ) {
+    /// Evaluates G, r and ‖G‖ at v (u = H_uᵀ v + w kept for [`Residual::blocks`]).
+    fn evaluate(&mut self, s: &Shared<'_>, lambda: &[f64], rho: &[f64], v: &[f64]) {
+        let p = s.p;
         let d = p.dim;
         self.u.copy_from_slice(&p.w);
-        hu.gemv_t_acc(1.0, v, &mut self.u);
-        let mut jac = [0.0; 9];
-        let mut y = [0.0; 3];
+        s.hu_cols.gemv_t_acc(v, &mut self.u);
         for i in 0..p.contacts() {
-            let mu = p.mu[i];
             let ui = &self.u[i * d..(i + 1) * d];
-            let t = crate::cone::tangent_norm(ui);
-            for k in 0..d {
-                let ut = if k == 0 && mu > 0.0 && mu.is_finite() {
-                    ui[0] + mu * t
-                } else {
-                    ui[k]
-                };
-                y[k] = lambda[i * d + k] - rho[i] * ut;
-            }
             let ri = &mut self.r[i * d..(i + 1) * d];
-            crate::natural_map::projection_jacobian(mu, &y[..d], ri, &mut jac[..d * d]);
-            if let Some(b) = blocks.as_deref_mut() {
-                // Bᵢ = ρ ∂P (I + μ e t̂ᵀ): column z of the product adds μ t̂_z ∂P[:, 0]
-                let bi = &mut b[i * d * d..(i + 1) * d * d];
-                for x in 0..d {
-                    for z in 0..d {
-                        let mut s = jac[x * d + z];
-                        if z > 0 && t > 0.0 && mu > 0.0 && mu.is_finite() {
-                            s += jac[x * d] * mu * ui[z] / t;
-                        }
-                        bi[x * d + z] = rho[i] * s;
-                    }
-                }
-            }
+            prox_argument(p.mu[i], ui, &lambda[i * d..(i + 1) * d], rho[i], ri);
+            crate::cone::project(p.mu[i], ri);
         }
         self.g.iter_mut().for_each(|x| *x = 0.0);
         p.m.gemv_acc(1.0, v, &mut self.g);
         for (gi, fi) in self.g.iter_mut().zip(&p.f) {
             *gi -= fi;
         }
-        p.h.gemv_acc(-1.0, &self.r, &mut self.g);
+        s.h_cols.gemv_sub(&self.r, &mut self.g);
         self.norm = crate::law::norm(&self.g);
+    }
+
+    /// Bᵢ = ρᵢ ∂P(yᵢ) (I + μ e t̂ᵀ) (row-major d × d) at the u of the last
+    /// [`Residual::evaluate`], yᵢ = λᵢ − ρᵢ ũᵢ.
+    fn blocks(&self, p: &GlobalProblem, lambda: &[f64], rho: &[f64], blocks: &mut [f64]) {
+        let d = p.dim;
+        let mut jac = [0.0; 9];
+        let mut y = [0.0; 3];
+        let mut proj = [0.0; 3];
+        for i in 0..p.contacts() {
+            let mu = p.mu[i];
+            let ui = &self.u[i * d..(i + 1) * d];
+            let t = crate::cone::tangent_norm(ui);
+            prox_argument(mu, ui, &lambda[i * d..(i + 1) * d], rho[i], &mut y[..d]);
+            crate::natural_map::projection_jacobian(mu, &y[..d], &mut proj[..d], &mut jac[..d * d]);
+            // Bᵢ = ρ ∂P (I + μ e t̂ᵀ): column z of the product adds μ t̂_z ∂P[:, 0]
+            let bi = &mut blocks[i * d * d..(i + 1) * d * d];
+            for x in 0..d {
+                for z in 0..d {
+                    let mut s = jac[x * d + z];
+                    if z > 0 && t > 0.0 && mu > 0.0 && mu.is_finite() {
+                        s += jac[x * d] * mu * ui[z] / t;
+                    }
+                    bi[x * d + z] = rho[i] * s;
+                }
+            }
+        }
     }
 }
 
-/// J = M + Σᵢ Hᵢ Bᵢ H_{u,i}ᵀ (dense), Hᵢ and H_{u,i} the d columns of contact i.
-fn assemble(p: &GlobalProblem, hu: &CscMatrix, blocks: &[f64], jm: &mut faer::Mat<f64>) {
+/// y = λ − ρ ũ(u) of one contact, ũ = u + μ‖u_T‖ e (3.7) (ũ = u where μ is 0 or infinite).
+#[inline]
+fn prox_argument(mu: f64, u: &[f64], lambda: &[f64], rho: f64, y: &mut [f64]) {
+    let t = crate::cone::tangent_norm(u);
+    for k in 0..u.len() {
+        let ut = if k == 0 && mu > 0.0 && mu.is_finite() {
+            u[0] + mu * t
+        } else {
+            u[k]
+        };
+        y[k] = lambda[k] - rho * ut;
+    }
+}
+
+/// The d columns of a matrix (H or H_u) that belong to each contact, as one dense block per
+/// contact: the union of their rows and the values on those rows (row-major, d per row).
+struct ContactColumns {
+    dim: usize,
+    /// contact i's rows are `rows[ptr[i]..ptr[i + 1]]`
+    ptr: Vec<usize>,
+    rows: Vec<usize>,
+    vals: Vec<f64>,
+}
+
+impl ContactColumns {
+    fn new(a: &CscMatrix, dim: usize, contacts: usize) -> Self {
+        let mut ptr = Vec::with_capacity(contacts + 1);
+        let mut rows = Vec::new();
+        let mut vals = Vec::new();
+        ptr.push(0);
+        for i in 0..contacts {
+            let first = rows.len();
+            let cols = (i * dim)..((i + 1) * dim).min(a.ncols);
+            let mut mine: Vec<usize> = cols
+                .clone()
+                .flat_map(|j| a.row_idx[a.col_ptr[j]..a.col_ptr[j + 1]].iter().copied())
+                .collect();
+            mine.sort_unstable();
+            mine.dedup();
+            rows.extend_from_slice(&mine);
+            vals.resize(rows.len() * dim, 0.0);
+            for j in cols {
+                for e in a.col_ptr[j]..a.col_ptr[j + 1] {
+                    if let Ok(k) = rows[first..].binary_search(&a.row_idx[e]) {
+                        vals[(first + k) * dim + j - i * dim] += a.values[e];
+                    }
+                }
+            }
+            ptr.push(rows.len());
+        }
+        Self {
+            dim,
+            ptr,
+            rows,
+            vals,
+        }
+    }
+
+    /// y ← y + Aᵀ x (y of length d · contacts).
+    fn gemv_t_acc(&self, x: &[f64], y: &mut [f64]) {
+        if self.dim == 2 {
+            self.gemv_t_acc_d::<2>(x, y);
+        } else {
+            self.gemv_t_acc_d::<3>(x, y);
+        }
+    }
+
+    fn gemv_t_acc_d<const D: usize>(&self, x: &[f64], y: &mut [f64]) {
+        for (i, yi) in y.chunks_exact_mut(D).enumerate() {
+            let (rows, vals) = self.contact(i);
+            let mut acc = [0.0; D];
+            for (&row, a) in rows.iter().zip(vals.chunks_exact(D)) {
+                let xr = x[row];
+                for z in 0..D {
+                    acc[z] += a[z] * xr;
+                }
+            }
+            for z in 0..D {
+                yi[z] += acc[z];
+            }
+        }
+    }
+
+    /// y ← y − A x (x of length d · contacts).
+    fn gemv_sub(&self, x: &[f64], y: &mut [f64]) {
+        if self.dim == 2 {
+            self.gemv_sub_d::<2>(x, y);
+        } else {
+            self.gemv_sub_d::<3>(x, y);
+        }
+    }
+
+    fn gemv_sub_d<const D: usize>(&self, x: &[f64], y: &mut [f64]) {
+        for (i, xi) in x.chunks_exact(D).enumerate() {
+            if xi.iter().all(|v| *v == 0.0) {
+                continue;
+            }
+            let (rows, vals) = self.contact(i);
+            for (&row, a) in rows.iter().zip(vals.chunks_exact(D)) {
+                y[row] -= (0..D).map(|z| a[z] * xi[z]).sum::<f64>();
+            }
+        }
+    }
+
+    /// Contact i's rows and their values (row-major, `dim` per row).
+    fn contact(&self, i: usize) -> (&[usize], &[f64]) {
+        let range = self.ptr[i]..self.ptr[i + 1];
+        let d = self.dim;
+        (
+            &self.rows[range.clone()],
+            &self.vals[range.start * d..range.end * d],
+        )
+    }
+}
+
+/// J = M + Σᵢ Hᵢ Bᵢ H_{u,i}ᵀ (dense), Hᵢ and H_{u,i} the d columns of contact i
+/// (gathered in `s`); `hb` is work space for Hᵢ Bᵢ.
+fn assemble(
+    p: &GlobalProblem,
+    s: &Shared<'_>,
+    blocks: &[f64],
+    jm: &mut faer::Mat<f64>,
+    hb: &mut Vec<f64>,
+) {
     let d = p.dim;
-    let h = &p.h;
     jm.fill(0.0);
     for j in 0..p.m.ncols {
         for e in p.m.col_ptr[j]..p.m.col_ptr[j + 1] {
@@ -582,22 +700,41 @@ fn assemble(p: &GlobalProblem, hu: &CscMatrix, blocks: &[f64], jm: &mut faer::Ma
     }
     for i in 0..p.contacts() {
         let b = &blocks[i * d * d..(i + 1) * d * d];
-        for x in 0..d {
-            let cx = i * d + x;
-            for z in 0..d {
-                let bxz = b[x * d + z];
-                if bxz == 0.0 {
-                    continue;
-                }
-                let cz = i * d + z;
-                for e1 in h.col_ptr[cx]..h.col_ptr[cx + 1] {
-                    let row = h.row_idx[e1];
-                    let hb = h.values[e1] * bxz;
-                    for e2 in hu.col_ptr[cz]..hu.col_ptr[cz + 1] {
-                        jm[(row, hu.row_idx[e2])] += hb * hu.values[e2];
-                    }
-                }
-            }
+        if b.iter().all(|x| *x == 0.0) {
+            continue;
+        }
+        let (h_rows, h_vals) = s.h_cols.contact(i);
+        let (u_rows, u_vals) = s.hu_cols.contact(i);
+        // d is 2 or 3 (checked by the problem's constructors)
+        if d == 2 {
+            add_contact::<2>(h_rows, h_vals, u_rows, u_vals, b, jm, hb);
+        } else {
+            add_contact::<3>(h_rows, h_vals, u_rows, u_vals, b, jm, hb);
+        }
+    }
+}
+
+/// J[rows of Hᵢ, rows of H_{u,i}] += Hᵢ Bᵢ H_{u,i}ᵀ for one contact of dimension D
+/// ([`ContactColumns::contact`]'s layout); `hb` is work space for Hᵢ Bᵢ.
+fn add_contact<const D: usize>(
+    h_rows: &[usize],
+    h_vals: &[f64],
+    u_rows: &[usize],
+    u_vals: &[f64],
+    b: &[f64],
+    jm: &mut faer::Mat<f64>,
+    hb: &mut Vec<f64>,
+) {
+    hb.clear();
+    for hr in h_vals.chunks_exact(D) {
+        for z in 0..D {
+            hb.push((0..D).map(|x| hr[x] * b[x * D + z]).sum());
+        }
+    }
+    for (&col, ur) in u_rows.iter().zip(u_vals.chunks_exact(D)) {
+        let column = jm.col_as_slice_mut(col);
+        for (&row, hbr) in h_rows.iter().zip(hb.chunks_exact(D)) {
+            column[row] += (0..D).map(|z| hbr[z] * ur[z]).sum::<f64>();
         }
     }
 }
@@ -828,6 +965,101 @@ mod tests {
             (rep.status, rep.steps),
             (MultiplierStatus::NumericalError, 0)
         );
+    }
+
+    /// A sparse n × (d · contacts) matrix with duplicate entries, an empty column and a
+    /// contact whose columns have different rows (values from a fixed recurrence).
+    fn scattered(n: usize, d: usize, contacts: usize) -> CscMatrix {
+        let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+        let mut x = 0.37_f64;
+        for j in 0..d * contacts {
+            if j == 1 {
+                continue;
+            }
+            for k in 0..3 {
+                x = (x * 7.3 + 0.11).fract();
+                rows.push((j * 5 + k * 3 + (x * 4.0) as usize) % n);
+                cols.push(j);
+                vals.push(x - 0.5);
+            }
+        }
+        rows.push(0);
+        cols.push(d * contacts - 1);
+        vals.push(0.25);
+        CscMatrix::from_triplets(n, d * contacts, &rows, &cols, &vals).unwrap()
+    }
+
+    #[test]
+    fn gathered_columns_give_the_products_of_the_sparse_matrix() {
+        for d in [2, 3] {
+            let (n, contacts) = (7, 5);
+            let a = scattered(n, d, contacts);
+            let cols = ContactColumns::new(&a, d, contacts);
+            let x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).sin()).collect();
+            let mut want = vec![0.5; d * contacts];
+            a.gemv_t_acc(1.0, &x, &mut want);
+            let mut got = vec![0.5; d * contacts];
+            cols.gemv_t_acc(&x, &mut got);
+            for (g, w) in got.iter().zip(&want) {
+                assert!((g - w).abs() <= 1e-14, "d = {d}: Aᵀx {g} against {w}");
+            }
+            let mut r: Vec<f64> = (0..d * contacts).map(|i| (i as f64 * 1.3).cos()).collect();
+            r[..d].iter_mut().for_each(|x| *x = 0.0);
+            let mut want = vec![1.0; n];
+            a.gemv_acc(-1.0, &r, &mut want);
+            let mut got = vec![1.0; n];
+            cols.gemv_sub(&r, &mut got);
+            for (g, w) in got.iter().zip(&want) {
+                assert!((g - w).abs() <= 1e-14, "d = {d}: y − Ax {g} against {w}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_assembled_jacobian_is_m_plus_h_b_hu_transposed() {
+        let p = box_on_plane(0.5, [0.0; 6]);
+        let (n, m, d) = (p.dofs(), p.w.len(), p.dim);
+        let hu = scattered(n, d, p.contacts());
+        let params = MultiplierParams::default();
+        let s = Shared {
+            p: &p,
+            h_cols: ContactColumns::new(&p.h, d, p.contacts()),
+            hu_cols: ContactColumns::new(&hu, d, p.contacts()),
+            params: &params,
+            rho_i: 1.0,
+            f_norm: 1.0,
+            tol: 1e-8,
+            par: faer::Par::Seq,
+        };
+        // contact 2 separated (Bᵢ = 0), the others full blocks
+        let mut blocks: Vec<f64> = (0..p.contacts() * d * d)
+            .map(|i| (i as f64 * 0.9).sin())
+            .collect();
+        blocks[2 * d * d..3 * d * d]
+            .iter_mut()
+            .for_each(|x| *x = 0.0);
+        let mut jm = faer::Mat::zeros(n, n);
+        assemble(&p, &s, &blocks, &mut jm, &mut Vec::new());
+        // the same product densely: M + H B Huᵀ (row-major copies)
+        let (md, hd, ud) = (p.m.to_dense(), p.h.to_dense(), hu.to_dense());
+        for a in 0..n {
+            for b in 0..n {
+                let mut want = md[a * n + b];
+                for i in 0..p.contacts() {
+                    for x in 0..d {
+                        for z in 0..d {
+                            let bxz = blocks[i * d * d + x * d + z];
+                            want += hd[a * m + i * d + x] * bxz * ud[b * m + i * d + z];
+                        }
+                    }
+                }
+                assert!(
+                    (jm[(a, b)] - want).abs() <= 1e-13,
+                    "J[{a}, {b}] = {} against {want}",
+                    jm[(a, b)]
+                );
+            }
+        }
     }
 
     #[test]

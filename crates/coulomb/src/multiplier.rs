@@ -24,7 +24,10 @@
 //! formed contact by contact from the d columns of each contact, gathered once per solve
 //! into one dense block) and a backtracking search on ‖G‖,
 //! stopped at its target, at a cap, or after a few steps in a row that barely lower ‖G‖
-//! ([`MultiplierParams::slow_steps`]: a damped crawl rarely reaches the target).
+//! ([`MultiplierParams::slow_steps`]: a damped crawl rarely reaches the target). A step first
+//! tries the factors of the run's last J (a chord step, v ← v − J_old⁻¹ G(v)), kept when it
+//! lowers ‖G‖ by the factor [`MultiplierParams::chord_ratio`]: near the solution of a
+//! subproblem J changes little from step to step and the LU costs O(n³) against O(n²).
 //! ρᵢ starts at ρ_f / w̄ with w̄ the mean of trace(Wᵢᵢ)/d: a penalty of the order of 1/‖W‖
 //! keeps the Newton systems regular and the outer iteration moving; the end game's σ = 5 err
 //! rule ([`crate::proximal`]) makes ρ so large there that Newton on G fails (docs/rigid.md).
@@ -76,8 +79,10 @@ pub struct MultiplierReport {
     pub status: MultiplierStatus,
     /// outer (multiplier) steps
     pub steps: usize,
-    /// Newton steps, summed over the outer steps
+    /// Newton steps (chord steps included), summed over the outer steps
     pub newton_steps: usize,
+    /// of those, the chord steps ([`MultiplierParams::chord_ratio`]): J not factored
+    pub chord_steps: usize,
     /// the error of docs/error.md at the returned r
     pub error: f64,
     /// the balance residual ‖M v − H r − f‖ / max(1, ‖f‖) at the returned r, v = M⁻¹(H r + f)
@@ -182,6 +187,7 @@ pub fn solve_from(
         status: MultiplierStatus::NumericalError,
         steps: 0,
         newton_steps: 0,
+        chord_steps: 0,
         error: f64::NAN,
         balance: f64::NAN,
     };
@@ -239,6 +245,7 @@ pub fn solve_from(
         status: run.done.unwrap_or(MultiplierStatus::MaxSteps),
         steps: runs.iter().map(|run| run.report.steps).sum(),
         newton_steps: runs.iter().map(|run| run.report.newton_steps).sum(),
+        chord_steps: runs.iter().map(|run| run.report.chord_steps).sum(),
         ..run.report
     };
     let best = run.best_r.clone();
@@ -298,6 +305,9 @@ struct Run {
     v_start: Vec<f64>,
     blocks: Vec<f64>,
     jm: faer::Mat<f64>,
+    /// the LU of J at an earlier point of the current Newton run (its chord steps,
+    /// [`MultiplierParams::chord_ratio`])
+    lu: Option<crate::dense::Lu>,
     /// Hᵢ Bᵢ of one contact (the assembly's work space)
     hb: Vec<f64>,
     dv: Vec<f64>,
@@ -326,6 +336,7 @@ impl Run {
             v_start: Vec::new(),
             blocks: Vec::new(),
             jm: faer::Mat::zeros(0, 0),
+            lu: None,
             hb: Vec::new(),
             dv: Vec::new(),
             g: Residual::new(0, 0),
@@ -360,6 +371,7 @@ impl Run {
             v_start: vec![0.0; n],
             blocks: vec![0.0; p.contacts() * d * d],
             jm: faer::Mat::zeros(n, n),
+            lu: None,
             hb: Vec::new(),
             dv: vec![0.0; n],
             g: Residual::new(n, m),
@@ -383,6 +395,11 @@ impl Run {
         self.g.evaluate(s, &self.lambda, &self.rho, &self.v);
         self.v_start.copy_from_slice(&self.v);
         self.newton = 0;
+        if let Some(lu) = self.lu.take() {
+            self.jm = lu.into_matrix();
+        }
+        // steps taken with the factors of an earlier step of this Newton run
+        let mut chords = 0;
         // consecutive steps that lowered ‖G‖ by less than the factor `slow_ratio`
         let mut slow = 0;
         while self.g.norm > self.target
@@ -391,12 +408,35 @@ impl Run {
             && !deadline.passed()
         {
             let before = self.g.norm;
+            // a chord step: the factors of an earlier J, kept if ‖G‖ falls by `chord_ratio`
+            if let Some(lu) = self.lu.as_ref().filter(|_| chords < params.newton_steps) {
+                self.dv
+                    .iter_mut()
+                    .zip(&self.g.g)
+                    .for_each(|(x, gi)| *x = -gi);
+                if lu.solve_in_place(&mut self.dv) && self.dv.iter().all(|x| x.is_finite()) {
+                    for ((vt, v), dv) in self.vt.iter_mut().zip(&self.v).zip(&self.dv) {
+                        *vt = v + dv;
+                    }
+                    self.trial.evaluate(s, &self.lambda, &self.rho, &self.vt);
+                    if self.trial.norm <= params.chord_ratio * before {
+                        chords += 1;
+                        slow = 0;
+                        std::mem::swap(&mut self.v, &mut self.vt);
+                        std::mem::swap(&mut self.g, &mut self.trial);
+                        continue;
+                    }
+                }
+            }
             self.newton += 1;
             // `g` is G at the current v (evaluated before the loop or as the accepted trial)
             let g = &mut self.g;
             g.blocks(p, &self.lambda, &self.rho, &mut self.blocks);
             // J is assembled in the storage of the previous step's factors
-            let mut jm = std::mem::replace(&mut self.jm, faer::Mat::zeros(0, 0));
+            let mut jm = match self.lu.take() {
+                Some(lu) => lu.into_matrix(),
+                None => std::mem::replace(&mut self.jm, faer::Mat::zeros(0, 0)),
+            };
             if jm.nrows() != p.dofs() || jm.ncols() != p.dofs() {
                 jm = faer::Mat::zeros(p.dofs(), p.dofs());
             }
@@ -406,7 +446,11 @@ impl Run {
             };
             self.dv.iter_mut().zip(&g.g).for_each(|(x, gi)| *x = -gi);
             let solved = lu.solve_in_place(&mut self.dv);
-            self.jm = lu.into_matrix();
+            if params.chord_ratio > 0.0 {
+                self.lu = Some(lu);
+            } else {
+                self.jm = lu.into_matrix();
+            }
             if !solved || self.dv.iter().any(|x| !x.is_finite()) {
                 break;
             }
@@ -435,7 +479,8 @@ impl Run {
                 slow = 0;
             }
         }
-        self.report.newton_steps += self.newton;
+        self.report.newton_steps += self.newton + chords;
+        self.report.chord_steps += chords;
     }
 
     /// The rest of the outer step after [`Run::newton`]: r_{k+1} = P_L(λ − ρ ũ) judged on
@@ -846,6 +891,7 @@ mod tests {
     fn the_method_of_multipliers_solves_a_sliding_box_on_four_corners() {
         // μ = 1 and 0.3, sliding, spinning and tilting: 12 impulses on 6 degrees of freedom,
         // from r = 0; the reported error is the one recomputed from the returned r
+        let mut chords = 0;
         for (mu, v0) in [
             (1.0, [1.0, 0.3, -0.5, 0.2, -0.1, 0.7]),
             (0.3, [0.5, -0.2, -0.1, 0.0, 0.4, -1.0]),
@@ -878,7 +924,21 @@ mod tests {
             let (_, rep_fixed) = from_zero(&p, &mass, wm, &fixed);
             assert_eq!(rep_fixed.status, MultiplierStatus::Converged);
             assert!(rep.steps <= rep_fixed.steps, "{rep:?} {rep_fixed:?}");
+            // every step with its own factors (no chord step) converges too
+            let factored = MultiplierParams {
+                chord_ratio: 0.0,
+                ..params
+            };
+            let (r_f, rep_f) = from_zero(&p, &mass, wm, &factored);
+            assert_eq!(rep_f.status, MultiplierStatus::Converged, "{rep_f:?}");
+            assert_eq!(rep_f.chord_steps, 0);
+            let (e, b) = judged(&p, &mass, &r_f);
+            assert!(e <= 1e-10 && b <= 1e-10, "{e:.2e} {b:.2e}");
+            assert!(rep.chord_steps <= rep.newton_steps);
+            chords += rep.chord_steps;
         }
+        // the default takes steps with earlier factors on these problems
+        assert!(chords > 0);
     }
 
     #[test]

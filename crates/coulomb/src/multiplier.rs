@@ -299,7 +299,8 @@ struct Run {
     stall_reference: f64,
     since_gain: usize,
     current_error: f64,
-    /// the Newton run of the current outer step: its ‖G‖ target, steps, and v at its start
+    /// the Newton run of the current outer step: its ‖G‖ target, steps that factored J (its
+    /// chord steps not counted), and v at its start
     target: f64,
     newton: usize,
     v_start: Vec<f64>,

@@ -594,8 +594,9 @@ pub struct MultiplierParams {
     /// `easy_newton_steps`, a ρᵢ below its first value grows by this factor, up to that
     /// value; ≥ 1
     pub penalty_regrowth: f64,
-    /// after an outer step whose Newton run reached its target in at most this many steps,
-    /// every ρᵢ grows by `penalty_growth`, up to `penalty_cap` times its first value (the
+    /// after an outer step whose Newton run reached its target in at most this many steps
+    /// that factored J (its chord steps not counted, `chord_ratio`), every ρᵢ grows by
+    /// `penalty_growth`, up to `penalty_cap` times its first value (the
     /// proximal point converges faster as ρ grows: Rockafellar 1976). Measured on 16 box
     /// files that the fixed ρ left unsolved in 10 s (corpus seeds 1–3; docs/rigid.md): 3, 4
     /// and 6 solve 9, 10 and 9 of them in single runs (4's extra file was not solved in its

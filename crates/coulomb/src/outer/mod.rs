@@ -337,8 +337,11 @@ impl Solver<'_> {
     /// The interior-point try on Coulomb's law ([`crate::barrier`], policy and parameters
     /// [`crate::settings::BarrierParams`]): cold-started runs along each path of
     /// `paths` in turn, each finished by the Levenberg–Marquardt end game when its error is
-    /// ≤ [`crate::settings::LmParams::start`], until one reaches the tolerance or the try's
-    /// share of the time is spent. Its best point is judged on the problem as stored like
+    /// ≤ [`crate::settings::LmParams::start`] (its stall rule
+    /// [`crate::settings::BarrierParams::lm_stall_segments`]), until one reaches the
+    /// tolerance — or [`crate::settings::BarrierParams::handover`] · tol where the method of
+    /// multipliers follows ([`Solver::multipliers_apply`]) — or the try's share of the time
+    /// is spent. Its best point is judged on the problem as stored like
     /// every iterate (status `converged`, `unbounded` or `max_iterations`; one outer record
     /// whose inner iterations are all its Newton and LM steps); with it, the end points of
     /// all its runs, lowest error first (the starts of [`Solver::multiplier_try`]). None
@@ -356,6 +359,16 @@ impl Solver<'_> {
         };
         let Some(setup) = crate::barrier::Setup::structured(local, global, &bp, share) else {
             return Ok(None);
+        };
+        let try_lm = crate::settings::LmParams {
+            stall_segments: bp.lm_stall_segments,
+            ..lm
+        };
+        // the try hands over to the method of multipliers from an end point this close
+        let handover = if self.multipliers_apply() {
+            target.max(bp.handover * settings.tol)
+        } else {
+            target
         };
         let mut ends: Vec<(Vec<f64>, f64)> = Vec::new();
         let mut steps = 0;
@@ -376,14 +389,14 @@ impl Solver<'_> {
             let mut error = report.error;
             if error > target && error <= lm.start && lm.max_steps > 0 && !share.passed() {
                 let mut trial = r.clone();
-                let lr = crate::levenberg::solve(local, &mut trial, target, &lm, share);
+                let lr = crate::levenberg::solve(local, &mut trial, target, &try_lm, share);
                 steps += lr.steps;
                 if lr.error < error {
                     (r, error) = (trial, lr.error);
                 }
             }
             ends.push((r, error));
-            if error <= target {
+            if error <= handover {
                 break;
             }
         }
@@ -425,6 +438,32 @@ impl Solver<'_> {
 }
 
 impl Solver<'_> {
+    /// Whether [`Solver::multiplier_try`] applies, short of the skeleton of a local W: the
+    /// stage is on, every μ is finite, and the problem is a global one with at most
+    /// [`crate::settings::BarrierParams::max_schur_dofs`] degrees of freedom and at most half
+    /// as many as contact unknowns, or a local one with at most
+    /// [`crate::settings::BarrierParams::max_skeleton_unknowns`] contact unknowns whose W has
+    /// a relative asymmetry ≤ tol (a W whose antisymmetric part exceeds tol differs from the
+    /// skeleton of its symmetric part by more than the tolerance: the stage would solve
+    /// another law; measured: no file of the corpus' nonsym class gained, one took twice as
+    /// long).
+    fn multipliers_apply(&self) -> bool {
+        let settings = &self.settings;
+        let (mp, bp) = (settings.tuning.multiplier, settings.tuning.barrier);
+        let local = self.form.local();
+        let m = local.q.len();
+        if mp.max_steps == 0 || !local.mu.iter().all(|mu| mu.is_finite()) {
+            return false;
+        }
+        match &self.form.stored {
+            Stored::Global(g, _) => {
+                let n = g.m.nrows;
+                n <= bp.max_schur_dofs && 2 * n <= m
+            }
+            Stored::Local(p) => m <= bp.max_skeleton_unknowns && p.w.asymmetry() <= settings.tol,
+        }
+    }
+
     /// The method of multipliers in the velocities ([`crate::multiplier`], parameters
     /// [`crate::settings::MultiplierParams`]) from the best point of the interior-point try
     /// `tried` and, at once, from the end points `ends` of its other runs (at most
@@ -444,33 +483,20 @@ impl Solver<'_> {
         ends: Vec<Vec<f64>>,
         deadline: Deadline,
     ) -> Result<Option<Ran>, SolveError> {
+        if !self.multipliers_apply() {
+            return Ok(None);
+        }
         let settings = &self.settings;
         let mp = settings.tuning.multiplier;
         let bp = settings.tuning.barrier;
         let local = self.form.local();
-        if mp.max_steps == 0 || !local.mu.iter().all(|mu| mu.is_finite()) {
-            return Ok(None);
-        }
         let share = deadline.share(mp.time_share);
         let m = local.q.len();
         let skeleton_form;
         let (g, hu, mass): (&GlobalProblem, Option<&CscMatrix>, &crate::mass::MassFactor) =
             match &self.form.stored {
-                Stored::Global(g, delassus) => {
-                    let n = g.m.nrows;
-                    if n > bp.max_schur_dofs || 2 * n > m {
-                        return Ok(None);
-                    }
-                    (g, None, &delassus.factor)
-                }
+                Stored::Global(g, delassus) => (g, None, &delassus.factor),
                 Stored::Local(p) => {
-                    // a W whose antisymmetric part exceeds tol differs from the skeleton of
-                    // its symmetric part by more than the tolerance: the stage would solve
-                    // another law (measured: no file of the corpus' nonsym class gained,
-                    // one took twice as long)
-                    if m > bp.max_skeleton_unknowns || p.w.asymmetry() > settings.tol {
-                        return Ok(None);
-                    }
                     let max_rank = bp.max_schur_dofs.min(m / 2);
                     let Some(skeleton) =
                         crate::skeleton::Skeleton::new(&p.w, p.dim, max_rank, bp.rank_tol, share)
@@ -818,6 +844,57 @@ mod tests {
         // the try itself converged (no later stage) on half of them at least
         eprintln!("the try alone converged on {solved} of 8");
         assert!(solved >= 4, "the try alone converged on {solved} of 8");
+    }
+
+    #[test]
+    fn the_multipliers_apply_to_rigid_problems_with_a_symmetric_w_only() {
+        // global: n = 6 degrees of freedom for m = 24 contact unknowns (n ≤ m/2) applies,
+        // n = 18 (> m/2) does not; local W = AᵀA (rank m/2) applies, with an antisymmetric
+        // part above tol it does not; the stage turned off applies nowhere
+        let lp = crate::levenberg::tests::problem(8, 1, 0.0, 0.0);
+        let global = |n: usize| {
+            let mut next = crate::levenberg::tests::uniform(1, 7);
+            let h: Vec<f64> = (0..n * 24).map(|_| next()).collect();
+            Problem::Global(
+                GlobalProblem::new(
+                    3,
+                    CscMatrix::identity(n, 1.0),
+                    CscMatrix::from_dense(n, 24, &h),
+                    (0..n).map(|_| next()).collect(),
+                    lp.q.clone(),
+                    lp.mu.clone(),
+                )
+                .unwrap(),
+            )
+        };
+        let skewed = crate::levenberg::tests::problem(8, 1, 0.0, 1e-3);
+        let on = Settings::default();
+        let off = Settings {
+            tuning: crate::settings::Tuning {
+                multiplier: crate::settings::MultiplierParams {
+                    max_steps: 0,
+                    ..Default::default()
+                },
+                ..Default::default()
+            },
+            ..Settings::default()
+        };
+        for (problem, applies) in [
+            (global(6), true),
+            (global(18), false),
+            (Problem::Local(lp.clone()), true),
+            (Problem::Local(skewed), false),
+        ] {
+            let solver = Solver::new(&problem, on.clone()).unwrap();
+            assert_eq!(
+                solver.multipliers_apply(),
+                applies,
+                "{}",
+                problem.contacts()
+            );
+            let solver = Solver::new(&problem, off.clone()).unwrap();
+            assert!(!solver.multipliers_apply());
+        }
     }
 
     #[test]

@@ -275,7 +275,8 @@ impl<'g> Setup<'g> {
     /// with fewer degrees of freedom than contact unknowns, at most
     /// [`BarrierParams::max_schur_dofs`]: the Schur complement on M. Else, for at most
     /// [`BarrierParams::max_skeleton_unknowns`] contact unknowns, the skeleton of W when its
-    /// symmetric part has rank ≤ min(`max_schur_dofs`, m/2). None if neither applies (or the
+    /// symmetric part has rank ≤ min(`max_schur_dofs`, [`BarrierParams::skeleton_rank_ratio`]
+    /// · m). None if neither applies (or the
     /// deadline passes while probing the rank).
     pub fn structured(
         p: &LocalProblem,
@@ -301,7 +302,9 @@ impl<'g> Setup<'g> {
         if m > params.max_skeleton_unknowns || p.w.nrows != m {
             return None;
         }
-        let max_rank = params.max_schur_dofs.min(m / 2);
+        let max_rank = params
+            .max_schur_dofs
+            .min((params.skeleton_rank_ratio * m as f64) as usize);
         Skeleton::new(&p.w, p.dim, max_rank, params.rank_tol, deadline).map(|s| Self {
             linear: Linear::Skeleton(Box::new(s), std::cell::OnceCell::new()),
             unknowns: m,

@@ -255,7 +255,8 @@ pub struct NewtonParams {
 /// freedom as contact unknowns (at most `max_schur_dofs`: rigid bodies touching at several
 /// points per face, where W is rank-deficient and the Newton systems are of the size of M),
 /// or of a local problem with at most `max_skeleton_unknowns` contact unknowns whose W has a
-/// skeleton of rank ≤ min(`max_schur_dofs`, m/2) ([`crate::skeleton`]), before the main
+/// skeleton of rank ≤ min(`max_schur_dofs`, `skeleton_rank_ratio` · m) ([`crate::skeleton`]),
+/// before the main
 /// method. A try runs the method along each path of `paths` in turn (at most
 /// [`Settings::barrier_steps`] Newton steps each), finishes a run with the
 /// Levenberg–Marquardt end game when its error is ≤ [`LmParams::start`], keeps the best point
@@ -310,10 +311,15 @@ pub struct BarrierParams {
     /// 0.93× at 1 500, 0.78× at 3 000
     pub dense_parallel_dim: usize,
     /// a local problem with at most this many contact unknowns is probed for a skeleton
-    /// W ≈ W[:, P] W[P, P]⁻¹ W[P, :] of rank ≤ min(`max_schur_dofs`, m/2)
+    /// W ≈ W[:, P] W[P, P]⁻¹ W[P, :] of rank ≤ min(`max_schur_dofs`, `skeleton_rank_ratio` · m)
     /// ([`crate::skeleton`]; cost ≤ m · rank² flops); if it has one, its Newton systems are
     /// solved through it (dense LU of the size of the rank) and the policy's try runs on it
     pub max_skeleton_unknowns: usize,
+    /// see `max_skeleton_unknowns`; in (0, 1]. A pile of rigid bodies has rank W ≤ 6 per body;
+    /// Siconos' RockPile_tob1 (463 contacts, m = 1 389) has rank 743 = 0.535 m: with 0.5 its
+    /// local form had no skeleton and was not solved in 60 s, with 0.6 the method of
+    /// multipliers solves it in 18 s (docs/rigid.md)
+    pub skeleton_rank_ratio: f64,
     /// the pivoting of the skeleton stops when every remaining diagonal entry of
     /// ½(W + Wᵀ) is ≤ this multiple of max Wᵢᵢ (its numerical rank); in (0, 1)
     pub rank_tol: f64,
@@ -362,6 +368,7 @@ impl Default for BarrierParams {
             max_schur_dofs: 1500,
             dense_parallel_dim: 1500,
             max_skeleton_unknowns: 4000,
+            skeleton_rank_ratio: 0.6,
             rank_tol: 1e-10,
             refine_steps: 4,
             refine_tol: 1e-10,
@@ -405,6 +412,8 @@ impl BarrierParams {
             && self.handover.is_finite()
             && self.handover >= 0.0
             && fraction(self.rank_tol)
+            && positive(self.skeleton_rank_ratio)
+            && self.skeleton_rank_ratio <= 1.0
             && positive(self.refine_tol);
         if !ok {
             return Err(format!(
@@ -563,10 +572,11 @@ impl Default for ProxParams {
 }
 
 /// Parameters of the method of multipliers in the velocities ([`crate::multiplier`]): a
-/// stage of the default for global problems of rigid bodies (at most
-/// [`BarrierParams::max_schur_dofs`] degrees of freedom, at most half as many as contact
-/// unknowns), run after a first stage that hands over to the fallback, from that stage's
-/// lowest-error point.
+/// stage of the default for problems of rigid bodies — global ones with at most
+/// [`BarrierParams::max_schur_dofs`] degrees of freedom and at most half as many as contact
+/// unknowns, local ones whose W has a skeleton ([`BarrierParams::skeleton_rank_ratio`]) that
+/// reproduces it (`skeleton_residual`) — run after the interior-point try, from its
+/// lowest-error point and the end points of its other runs.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct MultiplierParams {
@@ -643,6 +653,12 @@ pub struct MultiplierParams {
     /// point alone: from each end point in turn, 4 of them converge from another start
     /// (docs/rigid.md)
     pub starts: usize,
+    /// on a local problem the stage runs on the velocity form of W's skeleton C A⁻¹ R
+    /// ([`crate::skeleton`]), symmetric or not, and only where
+    /// [`crate::skeleton::Skeleton::residual`] ≤ `skeleton_residual` · tol (W = C A⁻¹ R holds
+    /// to rounding when rank W equals the skeleton's rank: the stage then solves the stored
+    /// W's law; else it could not reach tol on it); ≥ 0
+    pub skeleton_residual: f64,
 }
 
 impl Default for MultiplierParams {
@@ -667,6 +683,7 @@ impl Default for MultiplierParams {
             stall_gain: 0.5,
             time_share: 0.85,
             starts: 4,
+            skeleton_residual: 0.01,
         }
     }
 }
@@ -720,6 +737,9 @@ impl MultiplierParams {
         }
         if !(self.time_share > 0.0 && self.time_share <= 1.0) {
             return Err("tuning.multiplier.time_share must be in (0, 1]".into());
+        }
+        if !(self.skeleton_residual.is_finite() && self.skeleton_residual >= 0.0) {
+            return Err("tuning.multiplier.skeleton_residual must be finite and ≥ 0".into());
         }
         Ok(())
     }
@@ -1281,7 +1301,7 @@ mod tests {
         let mut s = Settings::default();
         s.tuning.anderson.memory = 0;
         assert!(s.validate().is_err());
-        let refused: [fn(&mut Tuning); 41] = [
+        let refused: [fn(&mut Tuning); 45] = [
             |t| t.multiplier.newton_steps = 0,
             |t| t.multiplier.chord_ratio = 1.0,
             |t| t.multiplier.chord_ratio = f64::NAN,
@@ -1289,6 +1309,10 @@ mod tests {
             |t| t.multiplier.slow_ratio = 0.0,
             |t| t.multiplier.slow_ratio = f64::NAN,
             |t| t.multiplier.starts = 0,
+            |t| t.multiplier.skeleton_residual = f64::NAN,
+            |t| t.multiplier.skeleton_residual = -1.0,
+            |t| t.barrier.skeleton_rank_ratio = 0.0,
+            |t| t.barrier.skeleton_rank_ratio = 1.5,
             |t| t.barrier.dense_parallel_dim = 0,
             |t| t.barrier.lm_stall_segments = 0,
             |t| t.barrier.handover = -1.0,

@@ -318,7 +318,9 @@ impl Solver<'_> {
     /// touching at several points per face: W is rank-deficient, and the Newton systems are of
     /// the size of M), or a local problem with at most
     /// [`crate::settings::BarrierParams::max_skeleton_unknowns`] contact unknowns (the try
-    /// then runs only if W has a skeleton of rank ≤ m/2: [`crate::barrier::Setup::structured`]).
+    /// then runs only if W has a skeleton of rank ≤
+    /// [`crate::settings::BarrierParams::skeleton_rank_ratio`] · m:
+    /// [`crate::barrier::Setup::structured`]).
     fn barrier_applies(&self) -> bool {
         let (settings, local) = (&self.settings, self.form.local());
         let bp = &settings.tuning.barrier;
@@ -442,11 +444,9 @@ impl Solver<'_> {
     /// stage is on, every μ is finite, and the problem is a global one with at most
     /// [`crate::settings::BarrierParams::max_schur_dofs`] degrees of freedom and at most half
     /// as many as contact unknowns, or a local one with at most
-    /// [`crate::settings::BarrierParams::max_skeleton_unknowns`] contact unknowns whose W has
-    /// a relative asymmetry ≤ tol (a W whose antisymmetric part exceeds tol differs from the
-    /// skeleton of its symmetric part by more than the tolerance: the stage would solve
-    /// another law; measured: no file of the corpus' nonsym class gained, one took twice as
-    /// long).
+    /// [`crate::settings::BarrierParams::max_skeleton_unknowns`] contact unknowns (whose
+    /// skeleton [`Solver::multiplier_try`] then checks: it must reproduce W, symmetric or
+    /// not).
     fn multipliers_apply(&self) -> bool {
         let settings = &self.settings;
         let (mp, bp) = (settings.tuning.multiplier, settings.tuning.barrier);
@@ -460,8 +460,32 @@ impl Solver<'_> {
                 let n = g.m.nrows;
                 n <= bp.max_schur_dofs && 2 * n <= m
             }
-            Stored::Local(p) => m <= bp.max_skeleton_unknowns && p.w.asymmetry() <= settings.tol,
+            Stored::Local(_) => m <= bp.max_skeleton_unknowns,
         }
+    }
+
+    /// The skeleton W ≈ C A⁻¹ R of the local problem `p` ([`crate::skeleton`]) of rank at
+    /// most min([`crate::settings::BarrierParams::max_schur_dofs`],
+    /// [`crate::settings::BarrierParams::skeleton_rank_ratio`] · m), when it reproduces W
+    /// (symmetric or not) within [`crate::settings::MultiplierParams::skeleton_residual`] · tol
+    /// ([`crate::skeleton::Skeleton::residual`]); None otherwise or when `deadline` passes.
+    fn exact_skeleton(
+        &self,
+        p: &LocalProblem,
+        deadline: Deadline,
+    ) -> Option<crate::skeleton::Skeleton> {
+        let (mp, bp) = (
+            &self.settings.tuning.multiplier,
+            &self.settings.tuning.barrier,
+        );
+        let m = p.q.len();
+        let max_rank = bp
+            .max_schur_dofs
+            .min((bp.skeleton_rank_ratio * m as f64) as usize);
+        let skeleton =
+            crate::skeleton::Skeleton::new(&p.w, p.dim, max_rank, bp.rank_tol, deadline)?;
+        let residual = skeleton.residual(&p.w, bp.dense_parallel_dim)?;
+        (residual <= mp.skeleton_residual * self.settings.tol).then_some(skeleton)
     }
 
     /// The method of multipliers in the velocities ([`crate::multiplier`], parameters
@@ -471,10 +495,13 @@ impl Solver<'_> {
     /// in its share of the time left. It applies where the try did: a global
     /// problem with at most [`crate::settings::BarrierParams::max_schur_dofs`] degrees of
     /// freedom and at most half as many as contact unknowns (rigid bodies touching at several
-    /// points per face), or a local one whose W has a skeleton W ≈ Rᵀ A⁻¹ R of rank at most
-    /// that and m/2 ([`crate::skeleton`]; the method then runs on the velocity form
-    /// A v = R r, u = C v + q of W ≈ C A⁻¹ R; not where W's relative asymmetry exceeds tol;
-    /// the error is still that of the stored W). Its point is judged on the
+    /// points per face), or a local one whose W has a skeleton W ≈ C A⁻¹ R of rank at most
+    /// that and [`crate::settings::BarrierParams::skeleton_rank_ratio`] · m
+    /// ([`crate::skeleton`]) equal to W within
+    /// [`crate::settings::MultiplierParams::skeleton_residual`] · tol (W symmetric or not:
+    /// the method then runs on the velocity form A v = R r, u = C v + q; a W whose
+    /// antisymmetric part is not of W's rank, as the corpus' nonsym class, has no such
+    /// skeleton). Its point is judged on the
     /// problem as stored like every iterate (one outer record whose inner iterations are its
     /// Newton steps). None when it does not apply.
     fn multiplier_try(
@@ -497,10 +524,7 @@ impl Solver<'_> {
             match &self.form.stored {
                 Stored::Global(g, delassus) => (g, None, &delassus.factor),
                 Stored::Local(p) => {
-                    let max_rank = bp.max_schur_dofs.min(m / 2);
-                    let Some(skeleton) =
-                        crate::skeleton::Skeleton::new(&p.w, p.dim, max_rank, bp.rank_tol, share)
-                    else {
+                    let Some(skeleton) = self.exact_skeleton(p, share) else {
                         return Ok(None);
                     };
                     let (a, a_sym, h, hu) = skeleton.velocity_form();
@@ -847,10 +871,13 @@ mod tests {
     }
 
     #[test]
-    fn the_multipliers_apply_to_rigid_problems_with_a_symmetric_w_only() {
+    fn the_multipliers_apply_to_rigid_problems_whose_skeleton_reproduces_w() {
         // global: n = 6 degrees of freedom for m = 24 contact unknowns (n ≤ m/2) applies,
-        // n = 18 (> m/2) does not; local W = AᵀA (rank m/2) applies, with an antisymmetric
-        // part above tol it does not; the stage turned off applies nowhere
+        // n = 18 (> m/2) does not; local W = AᵀA (rank m/2) applies and has an exact
+        // skeleton; W = Aᵀ N A with N not symmetric (rank m/2, as a W = Hᵀ M⁻¹ H with a
+        // non-symmetric M) too; W = AᵀA plus an antisymmetric part outside W's range
+        // passes the first test but has no exact skeleton; the stage turned off applies
+        // nowhere
         let lp = crate::levenberg::tests::problem(8, 1, 0.0, 0.0);
         let global = |n: usize| {
             let mut next = crate::levenberg::tests::uniform(1, 7);
@@ -868,6 +895,33 @@ mod tests {
             )
         };
         let skewed = crate::levenberg::tests::problem(8, 1, 0.0, 1e-3);
+        let nonsym = {
+            // W = Aᵀ N A, A = the rows of lp's W's factor: take N = I + 0.1 K (K antisymmetric)
+            let (m, k) = (24, 12);
+            let mut next = crate::levenberg::tests::uniform(5, 3);
+            let a: Vec<f64> = (0..k * m).map(|_| next()).collect();
+            let n: Vec<f64> = (0..k * k)
+                .map(|t| {
+                    let (s, u) = (t / k, t % k);
+                    (if s == u { 1.0 } else { 0.0 }) + 0.1 * (s as f64 - u as f64) / k as f64
+                })
+                .collect();
+            let mut w = vec![0.0; m * m];
+            for i in 0..m {
+                for j in 0..m {
+                    for s in 0..k {
+                        for u in 0..k {
+                            w[i * m + j] += a[s * m + i] * n[s * k + u] * a[u * m + j];
+                        }
+                    }
+                }
+            }
+            LocalProblem {
+                w: CscMatrix::from_dense(m, m, &w),
+                ..lp.clone()
+            }
+        };
+        assert!(nonsym.w.asymmetry() > 1e-3);
         let on = Settings::default();
         let off = Settings {
             tuning: crate::settings::Tuning {
@@ -879,11 +933,12 @@ mod tests {
             },
             ..Settings::default()
         };
-        for (problem, applies) in [
-            (global(6), true),
-            (global(18), false),
-            (Problem::Local(lp.clone()), true),
-            (Problem::Local(skewed), false),
+        for (problem, applies, exact) in [
+            (global(6), true, false),
+            (global(18), false, false),
+            (Problem::Local(lp.clone()), true, true),
+            (Problem::Local(nonsym), true, true),
+            (Problem::Local(skewed), true, false),
         ] {
             let solver = Solver::new(&problem, on.clone()).unwrap();
             assert_eq!(
@@ -892,6 +947,10 @@ mod tests {
                 "{}",
                 problem.contacts()
             );
+            if let Problem::Local(p) = &problem {
+                let found = solver.exact_skeleton(p, Deadline::NEVER);
+                assert_eq!(found.is_some(), exact, "asymmetry {:e}", p.w.asymmetry());
+            }
             let solver = Solver::new(&problem, off.clone()).unwrap();
             assert!(!solver.multipliers_apply());
         }

@@ -96,7 +96,7 @@ def main():
     entries = {strip_ext(e["file"]): e for e in manifest["files"]}
     recs = [r for r in bench["records"] if r["solver"] == "default"]
     by_class = collections.OrderedDict()
-    order = ["granular", "boxes", "nonsym", "painleve", "random"]
+    order = ["granular", "boxes", "gyro", "nonsym", "painleve", "random"]
     for c in order:
         by_class[c] = []
     for r in recs:
@@ -140,7 +140,7 @@ def main():
       f"limit {a.time_limit} s per file, one run per file (times are single cold-start solves).")
     p()
     p("The corpus (`crates/coulomb-cli/src/cmd/corpus*`; files `CLASS--NAME.hdf5` plus "
-      "`manifest.json`, generated deterministically, never committed) has five classes:")
+      "`manifest.json`, generated deterministically, never committed) has six classes:")
     p()
     p("- **granular**: steps of coulomb's own Moreau–Jean simulations (`box`, `funnel`, "
       "`rotating-drum`, `vibrating-plate`; 100 to 1 000 beads, the box up to 5 000; μ 0.1–1.0; the first step where "
@@ -152,6 +152,10 @@ def main():
       "(12 unknowns): a single box, columns of 5 and 10, piles 3×3×3 and 4×4×4 (touching "
       "laterally), a running-bond wall of 50 bricks; μ ∈ {0.1, 0.3, 0.6, 1}; at rest, impacting "
       "(restitution 0.3) or pushed sideways; small random gaps/penetrations; global and local;")
+    p("- **gyro**: the box scenes that impact, with the gyroscopic term of each spinning box "
+      "linearized in the iteration matrix, M̂ = M + h G(ω⁻), G(ω) = [ω]× J − [J ω]×: M̂ and "
+      "W = Hᵀ M̂⁻¹ H are not symmetric, W has the rank of M (the asymmetry of files from "
+      "rigid-body codes, e.g. Siconos' RockPile_tob1); global and local;")
     p("- **nonsym**: every other local file of the two classes above with W + δK, K a random "
       "antisymmetric matrix on W's pattern, relative asymmetry max|W − Wᵀ| / max|W| of 1e-6, "
       "1e-5, 1e-4 or 1e-3 (½(W + Wᵀ) = W, still PSD);")

@@ -389,6 +389,15 @@ fn small_corpus_has_no_false_converged_on_the_stored_data() {
         }
     }
     assert!(painleve_none >= 2, "the small preset has no-solution cases");
+    // the gyroscopic twins: W not symmetric, in both forms
+    let gyro: Vec<&Value> = files.iter().filter(|e| e["class"] == "gyro").collect();
+    assert_eq!(gyro.len(), 2, "one scene in two forms");
+    for e in gyro {
+        if e["kind"] == "local" {
+            assert!(e["asymmetry"].as_f64().unwrap() > 1e-4, "{e}");
+            assert_eq!(e["rank_w"], e["dofs"], "{e}");
+        }
+    }
     let false_conv: Vec<&String> = classes
         .values()
         .flat_map(|c| c.false_converged.iter())
@@ -400,5 +409,46 @@ fn small_corpus_has_no_false_converged_on_the_stored_data() {
         "only {converged} of {} converged",
         files.len()
     );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn corpus_writes_only_the_classes_asked_for() {
+    let dir = temp_dir("corpus-classes");
+    let corpus = dir.join("c");
+    let made = stdout_json(&coulomb(&[
+        "corpus",
+        "--output",
+        corpus.to_str().unwrap(),
+        "--class",
+        "gyro",
+        "--class",
+        "painleve",
+        "--json",
+    ]));
+    let manifest = read_json(&corpus.join("manifest.json"));
+    let files = manifest["files"].as_array().expect("manifest files");
+    assert_eq!(made["files"].as_u64(), Some(files.len() as u64));
+    let classes: std::collections::BTreeSet<&str> =
+        files.iter().map(|e| e["class"].as_str().unwrap()).collect();
+    assert_eq!(classes, ["gyro", "painleve"].into_iter().collect());
+    // one file per manifest entry, nothing else
+    let names: Vec<String> = std::fs::read_dir(&corpus)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".hdf5"))
+        .collect();
+    assert_eq!(names.len(), files.len());
+    // an unknown class is refused by the parser, with the valid names
+    let bad = coulomb(&[
+        "corpus",
+        "--output",
+        corpus.to_str().unwrap(),
+        "--class",
+        "spheres",
+    ]);
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(err.contains("gyro") && err.contains("nonsym"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -7,6 +7,9 @@
 //!   test), in the global form (M, H, f, w) and the local form (W, q) of (2.10);
 //! - `boxes`: rigid cuboids stacked on a floor, four contact points per face contact, so that
 //!   there are more contact unknowns than degrees of freedom and W = Hᵀ M⁻¹ H is rank-deficient;
+//! - `gyro`: the box scenes that impact, with the linearized gyroscopic term of each spinning
+//!   box in the iteration matrix (M̂ = M + h G(ω⁻), not symmetric): W = Hᵀ M̂⁻¹ H is not
+//!   symmetric but has the rank of M, as in real files from rigid-body codes;
 //! - `nonsym`: local problems of the two classes above with W perturbed to be slightly
 //!   non-symmetric (relative asymmetry 1e-6…1e-3, as in real FCLIB files) by a random
 //!   antisymmetric matrix on W's pattern, so that ½(W + Wᵀ) = W stays PSD;
@@ -54,6 +57,58 @@ pub struct Args {
     /// progress lines stay on stderr)
     #[arg(long)]
     pub json: bool,
+    /// write only these classes (repeatable; default: all). `nonsym` is made from the local
+    /// files of `granular` and `boxes`, which it then writes too. The files of a class are the
+    /// same whatever else is written.
+    #[arg(long = "class", value_enum)]
+    pub classes: Vec<ClassName>,
+}
+
+/// The classes of the corpus (module docs).
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ClassName {
+    Granular,
+    Boxes,
+    Gyro,
+    Nonsym,
+    Painleve,
+    Random,
+}
+
+impl ClassName {
+    fn as_str(self) -> &'static str {
+        match self {
+            Self::Granular => "granular",
+            Self::Boxes => "boxes",
+            Self::Gyro => "gyro",
+            Self::Nonsym => "nonsym",
+            Self::Painleve => "painleve",
+            Self::Random => "random",
+        }
+    }
+}
+
+/// Which classes a run writes: all when none is named; `nonsym` brings its sources.
+fn wanted(named: &[ClassName]) -> Vec<&'static str> {
+    let all = [
+        ClassName::Granular,
+        ClassName::Boxes,
+        ClassName::Gyro,
+        ClassName::Nonsym,
+        ClassName::Painleve,
+        ClassName::Random,
+    ];
+    let mut out: Vec<&'static str> = if named.is_empty() {
+        all.iter().map(|c| c.as_str()).collect()
+    } else {
+        named.iter().map(|c| c.as_str()).collect()
+    };
+    if out.contains(&"nonsym") {
+        out.extend(["granular", "boxes"]);
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
 }
 
 /// One file of the corpus, as recorded in `manifest.json`.
@@ -121,7 +176,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         dir: dir.clone(),
         entries: Vec::new(),
     };
-    generate(args.preset, args.seed, &mut |item| writer.add(item))?;
+    let classes = wanted(&args.classes);
+    generate(args.preset, args.seed, &classes, &mut |item| {
+        if classes.contains(&item.class) {
+            writer.add(item)
+        } else {
+            Ok(())
+        }
+    })?;
     // the perturbed class is made from the local files already written
     let sources: Vec<Entry> = writer
         .entries
@@ -131,7 +193,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .collect();
     // every other local file of classes 1–2
     let every = 2;
-    for (k, src) in sources.iter().enumerate().filter(|(k, _)| k % every == 0) {
+    let nonsym = if classes.contains(&"nonsym") {
+        sources.as_slice()
+    } else {
+        &[]
+    };
+    for (k, src) in nonsym.iter().enumerate().filter(|(k, _)| k % every == 0) {
         let path = dir.join(&src.file);
         let file = fclib::read(&path).with_context(|| format!("re-reading {}", path.display()))?;
         let Problem::Local(p) = file.problem else {
@@ -193,16 +260,27 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Calls `sink` with every problem of the preset except the perturbed ones.
+/// Calls `sink` with every problem of the preset except the perturbed ones, skipping the
+/// generators of no class in `classes` (boxes writes both `boxes` and `gyro`).
 fn generate(
     preset: Preset,
     seed: u64,
+    classes: &[&str],
     sink: &mut dyn FnMut(Item) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
-    painleve(preset, sink)?;
-    random::generate(preset, seed, sink)?;
-    boxes::generate(preset, seed, sink)?;
-    granular::generate(preset, seed, sink)?;
+    let has = |c: &str| classes.contains(&c);
+    if has("painleve") {
+        painleve(preset, sink)?;
+    }
+    if has("random") {
+        random::generate(preset, seed, sink)?;
+    }
+    if has("boxes") || has("gyro") {
+        boxes::generate(preset, seed, sink)?;
+    }
+    if has("granular") {
+        granular::generate(preset, seed, sink)?;
+    }
     Ok(())
 }
 
@@ -500,6 +578,16 @@ impl Rng {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_classes_written_are_those_named_and_nonsym_brings_its_sources() {
+        assert_eq!(wanted(&[]).len(), 6);
+        assert_eq!(wanted(&[ClassName::Gyro]), vec!["gyro"]);
+        assert_eq!(
+            wanted(&[ClassName::Nonsym, ClassName::Random, ClassName::Random]),
+            vec!["boxes", "granular", "nonsym", "random"]
+        );
+    }
 
     #[test]
     fn rank_of_a_rank_two_matrix() {

@@ -9,6 +9,14 @@
 //! e ∈ {n, t₁, t₂} gives the column (e, (p − c_A) × e) on A's dofs and −(e, (p − c_B) × e) on
 //! B's; f = M v⁻ + h (m_b g, 0); w_N = g_p / h + e_r min(u⁻_N, 0) with u⁻ = Hᵀ v⁻, g_p a small
 //! gap (positive: open, negative: penetration), e_r the restitution; w_T = 0.
+//!
+//! The `gyro` class: the same scenes with the gyroscopic term ω × J ω of the Newton–Euler
+//! equations linearized in the time step (a Moreau–Jean step with θ = 1): its Jacobian
+//! G(ω) = [ω]× J − [J ω]× enters the iteration matrix, M̂ = M + h G(ω⁻) on each box's rotational
+//! block, and f = M̂ v⁻ − h ω⁻ × J ω⁻ + h (m_b g, 0). M̂ is not symmetric, so neither is
+//! W = Hᵀ M̂⁻¹ H, but W has the rank of a symmetric W (6 per box): the asymmetry of real FCLIB
+//! files from rigid-body codes (Siconos' RockPile_tob1: rank 743 of 1 389, relative asymmetry
+//! 2.5e-3), not the full-rank perturbation of the `nonsym` class.
 
 use super::{both_forms, Item, Preset, Rng};
 use coulomb::{CscMatrix, GlobalProblem};
@@ -175,12 +183,19 @@ fn layout(scene: &str, rng: &mut Rng) -> Vec<Cuboid> {
     out
 }
 
-/// The global problem of one scene (see the module documentation).
+/// The cross-product matrix [a]×: [a]× x = a × x.
+fn cross_matrix(a: [f64; 3]) -> [[f64; 3]; 3] {
+    [[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]]
+}
+
+/// The global problem of one scene (see the module documentation); with `gyroscopic`, M̂ and
+/// f of the `gyro` class.
 fn problem(
     scene: &str,
     mu: f64,
     motion: &str,
     restitution: f64,
+    gyroscopic: bool,
     rng: &mut Rng,
 ) -> anyhow::Result<GlobalProblem> {
     let boxes = layout(scene, rng);
@@ -188,15 +203,6 @@ fn problem(
     let faces = contacts(&boxes);
     let nb = boxes.len();
     let n = 6 * nb;
-    // M
-    let (mut mr, mut mv) = (Vec::new(), Vec::new());
-    for b in &boxes {
-        let m = b.mass();
-        let j = b.inertia();
-        mv.extend([m, m, m, j[0], j[1], j[2]]);
-        mr.extend(mr.len()..mr.len() + 6);
-    }
-    let m = CscMatrix::from_triplets(n, n, &mr, &mr, &mv)?;
     // v⁻
     let mut vminus = vec![0.0; n];
     for (b, vb) in vminus.chunks_mut(6).enumerate() {
@@ -217,6 +223,36 @@ fn problem(
             _ => {}
         }
     }
+    // M (M̂ with the gyroscopic term)
+    let (mut mr, mut mc, mut mv) = (Vec::new(), Vec::new(), Vec::new());
+    for (b, bx) in boxes.iter().enumerate() {
+        let m = bx.mass();
+        let j = bx.inertia();
+        for k in 0..3 {
+            mr.push(6 * b + k);
+            mc.push(6 * b + k);
+            mv.push(m);
+        }
+        let omega = [vminus[6 * b + 3], vminus[6 * b + 4], vminus[6 * b + 5]];
+        let jw = [j[0] * omega[0], j[1] * omega[1], j[2] * omega[2]];
+        let (wx, jwx) = (cross_matrix(omega), cross_matrix(jw));
+        for r in 0..3 {
+            for c in 0..3 {
+                let g = if gyroscopic {
+                    H * (wx[r][c] * j[c] - jwx[r][c])
+                } else {
+                    0.0
+                };
+                let v = if r == c { j[r] } else { 0.0 } + g;
+                if v != 0.0 {
+                    mr.push(6 * b + 3 + r);
+                    mc.push(6 * b + 3 + c);
+                    mv.push(v);
+                }
+            }
+        }
+    }
+    let m = CscMatrix::from_triplets(n, n, &mr, &mc, &mv)?;
     // H
     let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
     let mut gaps = Vec::new();
@@ -264,6 +300,14 @@ fn problem(
     m.gemv_acc(1.0, &vminus, &mut f);
     for (b, bx) in boxes.iter().enumerate() {
         f[6 * b + 2] -= H * bx.mass() * GRAVITY;
+        if gyroscopic {
+            let j = bx.inertia();
+            let omega = [vminus[6 * b + 3], vminus[6 * b + 4], vminus[6 * b + 5]];
+            let gyro = cross(omega, [j[0] * omega[0], j[1] * omega[1], j[2] * omega[2]]);
+            for k in 0..3 {
+                f[6 * b + 3 + k] -= H * gyro[k];
+            }
+        }
     }
     let uminus = hmat.mul_t_vec(&vminus);
     let mut w = vec![0.0; col];
@@ -307,21 +351,32 @@ pub fn generate(
         }
     };
     for (k, (scene, mu, motion)) in cases.into_iter().enumerate() {
-        let mut rng = Rng::new(seed.wrapping_mul(1_000_003).wrapping_add(k as u64));
         let restitution = if motion == "impact" { 0.3 } else { 0.0 };
-        let g = problem(scene, mu, motion, restitution, &mut rng)?;
-        let nb = g.m.nrows / 6;
-        both_forms(
-            "boxes",
-            &format!("{scene}-mu{mu}-{motion}"),
-            g,
-            None,
-            serde_json::json!({
-                "scene": scene, "boxes": nb, "mu": mu, "motion": motion,
-                "restitution": restitution, "h": H, "points_per_face": 4,
-            }),
-            sink,
-        )?;
+        // the boxes spin only when they impact: their gyroscopic twins (same layout and v⁻);
+        // not for cubes, whose J = j I makes ω × J ω = 0
+        let cubes = scene == "single" || scene.starts_with("pile-");
+        let classes: &[(&'static str, bool)] = if motion == "impact" && !cubes {
+            &[("boxes", false), ("gyro", true)]
+        } else {
+            &[("boxes", false)]
+        };
+        for &(class, gyroscopic) in classes {
+            let mut rng = Rng::new(seed.wrapping_mul(1_000_003).wrapping_add(k as u64));
+            let g = problem(scene, mu, motion, restitution, gyroscopic, &mut rng)?;
+            let nb = g.m.nrows / 6;
+            both_forms(
+                class,
+                &format!("{scene}-mu{mu}-{motion}"),
+                g,
+                None,
+                serde_json::json!({
+                    "scene": scene, "boxes": nb, "mu": mu, "motion": motion,
+                    "restitution": restitution, "h": H, "points_per_face": 4,
+                    "gyroscopic": gyroscopic,
+                }),
+                sink,
+            )?;
+        }
     }
     Ok(())
 }
@@ -333,7 +388,7 @@ mod tests {
     #[test]
     fn a_box_on_the_floor_has_twelve_unknowns_and_rank_six() {
         let mut rng = Rng::new(1);
-        let g = problem("single", 0.5, "rest", 0.0, &mut rng).unwrap();
+        let g = problem("single", 0.5, "rest", 0.0, false, &mut rng).unwrap();
         assert_eq!(g.h.nrows, 6);
         assert_eq!(g.h.ncols, 12);
         let w = coulomb::delassus::Delassus::new(&g).unwrap().local.w;
@@ -345,6 +400,43 @@ mod tests {
         }
         let s = g.h.mul_vec(&ones);
         assert!((s[2] - 4.0).abs() < 1e-12 && s[0].abs() < 1e-12 && s[5].abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_spinning_box_has_a_non_symmetric_w_of_a_symmetric_ones_rank() {
+        // the gyroscopic twin of an impact: M̂ not symmetric, W = Hᵀ M̂⁻¹ H neither, rank 6
+        // per box (its skeleton reproduces it exactly); the twin without the term is
+        // symmetric, and so is a cube's (J = j I: no gyroscopic term)
+        let mut rng = Rng::new(4);
+        let cube = problem("single", 0.5, "impact", 0.3, true, &mut rng).unwrap();
+        assert_eq!(cube.m.asymmetry(), 0.0);
+        for scene in ["column-5", "wall-4x3"] {
+            let twin = |gyroscopic| {
+                let mut rng = Rng::new(4);
+                problem(scene, 0.5, "impact", 0.3, gyroscopic, &mut rng).unwrap()
+            };
+            let (g0, g1) = (twin(false), twin(true));
+            assert_eq!(
+                (g0.h.to_dense(), g0.w.clone()),
+                (g1.h.to_dense(), g1.w.clone())
+            );
+            assert_eq!(g0.m.asymmetry(), 0.0);
+            assert!(g1.m.asymmetry() > 1e-6, "M̂ asymmetry {}", g1.m.asymmetry());
+            let w = coulomb::delassus::Delassus::new(&g1).unwrap().local.w;
+            let (m, n) = (w.nrows, g1.m.nrows);
+            assert!(w.asymmetry() > 1e-4, "W asymmetry {}", w.asymmetry());
+            assert_eq!(super::super::psd_rank(&w), n);
+            let sk = coulomb::skeleton::Skeleton::new(
+                &w,
+                3,
+                m,
+                1e-10,
+                coulomb::deadline::Deadline::NEVER,
+            )
+            .unwrap();
+            assert_eq!(sk.rank(), n);
+            assert!(sk.residual(&w, 1500).unwrap() < 1e-10);
+        }
     }
 
     #[test]

@@ -165,6 +165,42 @@ pub fn solve_from(
     deadline: Deadline,
     judge: impl Fn(&[f64]) -> (f64, f64) + Sync,
 ) -> MultiplierReport {
+    solve_from_with_finish(
+        p,
+        hu,
+        mass,
+        w_mean,
+        starts,
+        tol,
+        params,
+        par,
+        deadline,
+        judge,
+        |_| None,
+    )
+}
+
+/// [`solve_from`] with a finish: when a run crawls close to the tolerance — its lowest merit
+/// ≤ [`MultiplierParams::finish_crawl`] · tol and not halved for
+/// [`MultiplierParams::finish_patience`] outer steps — `finish` is called on its lowest-merit
+/// r (at most [`MultiplierParams::finish_attempts`] times in all, each from a merit at most
+/// half that of the last attempt, for at most [`MultiplierParams::finish_max_unknowns`]
+/// contact unknowns); a point it returns ends the stage as converged (`finish` returns only
+/// points that the caller has judged converged on the problem as stored).
+#[allow(clippy::too_many_arguments)]
+pub fn solve_from_with_finish(
+    p: &GlobalProblem,
+    hu: Option<&CscMatrix>,
+    mass: &MassFactor,
+    w_mean: f64,
+    starts: &mut [Vec<f64>],
+    tol: f64,
+    params: &MultiplierParams,
+    par: faer::Par,
+    deadline: Deadline,
+    judge: impl Fn(&[f64]) -> (f64, f64) + Sync,
+    finish: impl Fn(&[f64]) -> Option<Vec<f64>> + Sync,
+) -> MultiplierReport {
     let n = p.dofs();
     let rho_i = if w_mean > 0.0 && w_mean.is_finite() {
         params.rho_factor / w_mean
@@ -222,9 +258,16 @@ pub fn solve_from(
     // waiting for the slowest run of a round. Each run's iterates are those it would take
     // alone; only which converged run is seen first depends on the timing.
     let stop = AtomicBool::new(false);
+    let finished = std::sync::Mutex::new(Finished {
+        attempts: 0,
+        last: f64::INFINITY,
+        point: None,
+    });
     let work = Work {
         shared: &shared,
         judge: &judge,
+        finish: &finish,
+        finished: &finished,
         stop: &stop,
         deadline,
     };
@@ -233,6 +276,22 @@ pub fn solve_from(
             scope.spawn_fifo(|scope| work.step(run, scope));
         }
     });
+    let finished = finished.into_inner().unwrap_or_else(|e| e.into_inner());
+    if let Some(r) = finished.point {
+        let (error, balance) = judge(&r);
+        report = MultiplierReport {
+            status: MultiplierStatus::Converged,
+            steps: runs.iter().map(|run| run.report.steps).sum(),
+            newton_steps: runs.iter().map(|run| run.report.newton_steps).sum(),
+            chord_steps: runs.iter().map(|run| run.report.chord_steps).sum(),
+            error,
+            balance,
+        };
+        if let Some(r0) = starts.first_mut() {
+            *r0 = r;
+        }
+        return report;
+    }
     let chosen = runs
         .iter()
         .position(|run| run.done == Some(MultiplierStatus::Converged))
@@ -255,16 +314,30 @@ pub fn solve_from(
     report
 }
 
+/// The finish attempts of [`solve_from_with_finish`]: how many, the merit of the last one,
+/// and the converged point one of them returned.
+struct Finished {
+    attempts: usize,
+    last: f64,
+    point: Option<Vec<f64>>,
+}
+
 /// What every outer step of [`solve_from`]'s runs reads: the problem and parameters, the
-/// judge, the flag raised by the first run that converges, and the deadline.
-struct Work<'w, 'a, J> {
+/// judge and the finish, the flag raised by the first run that converges, and the deadline.
+struct Work<'w, 'a, J, F> {
     shared: &'w Shared<'a>,
     judge: &'w J,
+    finish: &'w F,
+    finished: &'w std::sync::Mutex<Finished>,
     stop: &'w AtomicBool,
     deadline: Deadline,
 }
 
-impl<'w, J: Fn(&[f64]) -> (f64, f64) + Sync> Work<'w, '_, J> {
+impl<'w, J, F> Work<'w, '_, J, F>
+where
+    J: Fn(&[f64]) -> (f64, f64) + Sync,
+    F: Fn(&[f64]) -> Option<Vec<f64>> + Sync,
+{
     /// One outer step of `run` (unless a run has converged), then its next one queued on
     /// `scope` while it has not stopped; the deadline stops it with `TimeLimit`.
     fn step(&'w self, run: &'w mut Run, scope: &rayon::ScopeFifo<'w>) {
@@ -277,10 +350,51 @@ impl<'w, J: Fn(&[f64]) -> (f64, f64) + Sync> Work<'w, '_, J> {
         }
         run.newton(self.shared, self.deadline);
         run.conclude(self.shared, self.judge);
+        if run.done.is_none() && self.try_finish(run) {
+            self.stop.store(true, Ordering::Relaxed);
+            return;
+        }
         match run.done {
             Some(MultiplierStatus::Converged) => self.stop.store(true, Ordering::Relaxed),
             Some(_) => {}
             None => scope.spawn_fifo(move |scope| self.step(run, scope)),
+        }
+    }
+}
+
+impl<J, F> Work<'_, '_, J, F>
+where
+    F: Fn(&[f64]) -> Option<Vec<f64>> + Sync,
+{
+    /// Calls the finish on `run`'s lowest-merit point where it crawls close to the tolerance
+    /// ([`solve_from_with_finish`]); true when the finish returned a converged point.
+    fn try_finish(&self, run: &Run) -> bool {
+        let (s, params) = (self.shared, self.shared.params);
+        let crawling = params.finish_steps > 0
+            && s.p.w.len() <= params.finish_max_unknowns
+            && run.best_merit <= params.finish_crawl * s.tol
+            && run.since_gain >= params.finish_patience;
+        if !crawling {
+            return false;
+        }
+        {
+            let mut f = self.finished.lock().unwrap_or_else(|e| e.into_inner());
+            if f.point.is_some()
+                || f.attempts >= params.finish_attempts
+                || run.best_merit > 0.5 * f.last
+            {
+                return false;
+            }
+            f.attempts += 1;
+            f.last = run.best_merit;
+        }
+        match (self.finish)(&run.best_r) {
+            Some(r) => {
+                let mut f = self.finished.lock().unwrap_or_else(|e| e.into_inner());
+                f.point.get_or_insert(r);
+                true
+            }
+            None => false,
         }
     }
 }
@@ -940,6 +1054,62 @@ mod tests {
         }
         // the default takes steps with earlier factors on these problems
         assert!(chords > 0);
+    }
+
+    #[test]
+    fn a_finish_that_returns_a_point_ends_the_stage_and_is_tried_a_capped_number_of_times() {
+        use std::sync::atomic::AtomicUsize;
+        let p = box_on_plane(1.0, [1.0, 0.3, -0.5, 0.2, -0.1, 0.7]);
+        let mass = MassFactor::new(&p.m).unwrap();
+        let wm = w_mean(&p, &mass);
+        let (solution, _) = from_zero(&p, &mass, wm, &MultiplierParams::default());
+        // every outer step counts as a crawl (the merit never falls to 1e-6 of its reference)
+        let params = MultiplierParams {
+            finish_crawl: 1e12,
+            finish_patience: 1,
+            finish_attempts: 2,
+            stall_gain: 1e-6,
+            ..MultiplierParams::default()
+        };
+        let run = |finish: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync)| {
+            let mut starts = vec![vec![0.0; p.w.len()]];
+            let rep = solve_from_with_finish(
+                &p,
+                None,
+                &mass,
+                wm,
+                &mut starts,
+                1e-10,
+                &params,
+                faer::Par::Seq,
+                Deadline::NEVER,
+                |r| judged(&p, &mass, r),
+                finish,
+            );
+            (starts.swap_remove(0), rep)
+        };
+        // a finish that returns the solution at its first call: the stage ends with it
+        let calls = AtomicUsize::new(0);
+        let (r, rep) = run(&|_| {
+            calls.fetch_add(1, Ordering::Relaxed);
+            Some(solution.clone())
+        });
+        assert_eq!(calls.load(Ordering::Relaxed), 1);
+        assert_eq!(rep.status, MultiplierStatus::Converged);
+        assert_eq!(r, solution);
+        assert_eq!((rep.error, rep.balance), judged(&p, &mass, &solution));
+        // a finish that never succeeds: called at most `finish_attempts` times, and the
+        // stage converges by itself
+        let calls = AtomicUsize::new(0);
+        let (r, rep) = run(&|_| {
+            calls.fetch_add(1, Ordering::Relaxed);
+            None
+        });
+        let n = calls.load(Ordering::Relaxed);
+        assert!((1..=2).contains(&n), "{n} calls");
+        assert_eq!(rep.status, MultiplierStatus::Converged, "{rep:?}");
+        let (e, b) = judged(&p, &mass, &r);
+        assert!(e <= 1e-10 && b <= 1e-10);
     }
 
     #[test]

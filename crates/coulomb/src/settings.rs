@@ -659,6 +659,26 @@ pub struct MultiplierParams {
     /// to rounding when rank W equals the skeleton's rank: the stage then solves the stored
     /// W's law; else it could not reach tol on it); ≥ 0
     pub skeleton_residual: f64,
+    /// where the stage ends unconverged at an error (max with the balance residual) ≤
+    /// `finish_below` · tol, at most `finish_steps` Levenberg–Marquardt steps on the natural
+    /// map itself follow from its point ([`crate::newton::least_squares`]: dense, for at most
+    /// `finish_max_unknowns` contact unknowns), kept where they lower the error. Found on
+    /// Siconos' RockPile_tob1, whose runs all crawl at 1.0e-8 … 1.3e-8 (docs/rigid.md): from
+    /// there one such step reaches 8.8e-9, the floor of that point's active set; ≥ 0
+    pub finish_below: f64,
+    /// see `finish_below`; 0: no finish
+    pub finish_steps: usize,
+    /// see `finish_below`
+    pub finish_max_unknowns: usize,
+    /// the finish is also tried while the stage runs ([`crate::multiplier::solve_from_with_finish`]),
+    /// on a run whose lowest merit is ≤ `finish_crawl` · tol and has not halved for this many
+    /// outer steps (a crawl: on RockPile_tob1 the runs spend hundreds of outer steps between
+    /// 1.0e-8 and 1.7e-8), at most `finish_attempts` times per stage; ≥ 1
+    pub finish_patience: usize,
+    /// see `finish_patience`; ≥ 0
+    pub finish_crawl: f64,
+    /// see `finish_patience`
+    pub finish_attempts: usize,
 }
 
 impl Default for MultiplierParams {
@@ -684,6 +704,12 @@ impl Default for MultiplierParams {
             time_share: 0.85,
             starts: 4,
             skeleton_residual: 0.01,
+            finish_below: 10.0,
+            finish_steps: 8,
+            finish_max_unknowns: 2000,
+            finish_patience: 20,
+            finish_crawl: 2.0,
+            finish_attempts: 3,
         }
     }
 }
@@ -695,10 +721,11 @@ impl MultiplierParams {
             || self.halvings == 0
             || self.stall_steps == 0
             || self.starts == 0
+            || self.finish_patience == 0
         {
             return Err(
-                "tuning.multiplier: newton_steps, slow_steps, halvings, stall_steps and starts \
-                 must be ≥ 1"
+                "tuning.multiplier: newton_steps, slow_steps, halvings, stall_steps, starts and \
+                 finish_patience must be ≥ 1"
                     .into(),
             );
         }
@@ -740,6 +767,12 @@ impl MultiplierParams {
         }
         if !(self.skeleton_residual.is_finite() && self.skeleton_residual >= 0.0) {
             return Err("tuning.multiplier.skeleton_residual must be finite and ≥ 0".into());
+        }
+        let nonnegative = |x: f64| x.is_finite() && x >= 0.0;
+        if !nonnegative(self.finish_below) || !nonnegative(self.finish_crawl) {
+            return Err(
+                "tuning.multiplier.finish_below and finish_crawl must be finite and ≥ 0".into(),
+            );
         }
         Ok(())
     }
@@ -1301,7 +1334,7 @@ mod tests {
         let mut s = Settings::default();
         s.tuning.anderson.memory = 0;
         assert!(s.validate().is_err());
-        let refused: [fn(&mut Tuning); 45] = [
+        let refused: [fn(&mut Tuning); 49] = [
             |t| t.multiplier.newton_steps = 0,
             |t| t.multiplier.chord_ratio = 1.0,
             |t| t.multiplier.chord_ratio = f64::NAN,
@@ -1311,6 +1344,10 @@ mod tests {
             |t| t.multiplier.starts = 0,
             |t| t.multiplier.skeleton_residual = f64::NAN,
             |t| t.multiplier.skeleton_residual = -1.0,
+            |t| t.multiplier.finish_below = f64::NAN,
+            |t| t.multiplier.finish_below = f64::INFINITY,
+            |t| t.multiplier.finish_patience = 0,
+            |t| t.multiplier.finish_crawl = -1.0,
             |t| t.barrier.skeleton_rank_ratio = 0.0,
             |t| t.barrier.skeleton_rank_ratio = 1.5,
             |t| t.barrier.dense_parallel_dim = 0,

@@ -570,7 +570,21 @@ impl Solver<'_> {
         let diag = local.w.diagonal();
         let w_mean = diag.iter().sum::<f64>() / diag.len().max(1) as f64;
         let form = &self.form;
-        let report = crate::multiplier::solve_from(
+        let finish_target = settings.tuning.newton.target_fraction * settings.tol;
+        let finish = |r: &[f64]| {
+            let mut trial = r.to_vec();
+            crate::newton::least_squares(
+                local,
+                &mut trial,
+                finish_target,
+                mp.finish_steps,
+                bp.dense_parallel_dim,
+                share,
+            );
+            let v = form.verdict(&trial);
+            (v.error <= settings.tol && v.balance.unwrap_or(0.0) <= settings.tol).then_some(trial)
+        };
+        let report = crate::multiplier::solve_from_with_finish(
             g,
             hu,
             mass,
@@ -584,9 +598,33 @@ impl Solver<'_> {
                 let v = form.verdict(r);
                 (v.error, v.balance.unwrap_or(0.0))
             },
+            finish,
         );
-        let r = starts.swap_remove(0);
-        self.judged(r, report.newton_steps, deadline).map(Some)
+        let mut r = starts.swap_remove(0);
+        let mut steps = report.newton_steps;
+        // the least-squares finish from the stage's end point, if close to the tolerance
+        let merit = report.error.max(report.balance);
+        if report.status != crate::multiplier::MultiplierStatus::Converged
+            && merit <= mp.finish_below * settings.tol
+            && m <= mp.finish_max_unknowns
+            && mp.finish_steps > 0
+        {
+            let mut trial = r.clone();
+            let target = settings.tuning.newton.target_fraction * settings.tol;
+            let last = crate::newton::least_squares(
+                local,
+                &mut trial,
+                target,
+                mp.finish_steps,
+                bp.dense_parallel_dim,
+                deadline,
+            );
+            steps += last.steps;
+            if last.residual < report.error {
+                r = trial;
+            }
+        }
+        self.judged(r, steps, deadline).map(Some)
     }
 }
 

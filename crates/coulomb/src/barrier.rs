@@ -335,6 +335,14 @@ impl<'g> Setup<'g> {
             Linear::Skeleton(s, _) => LinearKind::Skeleton { rank: s.rank() },
         }
     }
+
+    /// The skeleton of W the Newton systems are solved through, if they are.
+    pub fn skeleton(&self) -> Option<&Skeleton> {
+        match &self.linear {
+            Linear::Skeleton(s, _) => Some(s),
+            _ => None,
+        }
+    }
 }
 
 /// [`solve_with`] on [`Setup::new`] (status `NotApplicable` when it is None).

@@ -367,7 +367,7 @@ impl Solver<'_> {
             ..lm
         };
         // the try hands over to the method of multipliers from an end point this close
-        let handover = if self.multipliers_apply() {
+        let handover = if self.multipliers_follow(&setup) {
             target.max(bp.handover * settings.tol)
         } else {
             target
@@ -462,6 +462,26 @@ impl Solver<'_> {
             }
             Stored::Local(_) => m <= bp.max_skeleton_unknowns,
         }
+    }
+
+    /// Whether the method of multipliers' stage will follow an interior-point try run on
+    /// `setup`: [`Solver::multipliers_apply`], and on a local problem a skeleton that
+    /// reproduces W within [`crate::settings::MultiplierParams::skeleton_residual`] · tol (as
+    /// [`Solver::exact_skeleton`] requires; a W with an antisymmetric part outside its range
+    /// has none: its try then goes on to tol instead of handing over at
+    /// [`crate::settings::BarrierParams::handover`] · tol).
+    fn multipliers_follow(&self, setup: &crate::barrier::Setup<'_>) -> bool {
+        let settings = &self.settings;
+        let limit = settings.tuning.multiplier.skeleton_residual * settings.tol;
+        let parallel_dim = settings.tuning.barrier.dense_parallel_dim;
+        self.multipliers_apply()
+            && match (&self.form.stored, setup.skeleton()) {
+                (Stored::Global(..), _) => true,
+                (Stored::Local(p), Some(sk)) => {
+                    sk.residual(&p.w, parallel_dim).is_some_and(|x| x <= limit)
+                }
+                (Stored::Local(_), None) => false,
+            }
     }
 
     /// The skeleton W ≈ C A⁻¹ R of the local problem `p` ([`crate::skeleton`]) of rank at
@@ -988,6 +1008,11 @@ mod tests {
             if let Problem::Local(p) = &problem {
                 let found = solver.exact_skeleton(p, Deadline::NEVER);
                 assert_eq!(found.is_some(), exact, "asymmetry {:e}", p.w.asymmetry());
+                // the try hands over to the stage only where the stage will run
+                let bp = on.tuning.barrier;
+                let setup = crate::barrier::Setup::structured(p, None, &bp, Deadline::NEVER)
+                    .expect("rank m/2: a skeleton");
+                assert_eq!(solver.multipliers_follow(&setup), exact);
             }
             let solver = Solver::new(&problem, off.clone()).unwrap();
             assert!(!solver.multipliers_apply());

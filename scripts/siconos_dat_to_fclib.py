@@ -80,8 +80,11 @@ def read_sparse_block(tok, m):
     nrow, ncol = tok.int("the number of block rows"), tok.int("the number of block columns")
     row_ends = [tok.int(f"block row end {i}") for i in range(nrow)]
     col_ends = [tok.int(f"block column end {j}") for j in range(ncol)]
+    increasing = lambda ends: all(a < b for a, b in zip([0] + ends, ends))
     if not row_ends or row_ends[-1] != m or not col_ends or col_ends[-1] != m:
         raise DatError(f"{tok.path}: block sizes do not add up to {m}")
+    if not increasing(row_ends) or not increasing(col_ends):
+        raise DatError(f"{tok.path}: block row or column ends are not increasing")
     filled1, filled2 = tok.int("filled1"), tok.int("filled2")
     if filled1 != nrow + 1 or filled2 != nbblocks:
         raise DatError(f"{tok.path}: filled1 = {filled1}, filled2 = {filled2} do not match "
@@ -176,7 +179,14 @@ def main():
         print(f"error: {e}", file=sys.stderr)
         return 2
     title = args.title or os.path.basename(args.input)
-    write_fclib(args.output, d, w, q, mu, title)
+    if os.path.abspath(args.output) == os.path.abspath(args.input):
+        print("error: the output would replace the input", file=sys.stderr)
+        return 2
+    try:
+        write_fclib(args.output, d, w, q, mu, title)
+    except OSError as e:
+        print(f"error: cannot write {args.output}: {e}", file=sys.stderr)
+        return 2
     asym = np.abs(w - w.T).max() / max(np.abs(w).max(), 1e-300)
     print(f"{args.output}: d = {d}, {len(mu)} contacts, nnz(W) = {np.count_nonzero(w)}, "
           f"max|W - W^T| / max|W| = {asym:.2e}, mu in [{mu.min():g}, {mu.max():g}]")

@@ -112,6 +112,7 @@ def test_a_converted_problem_is_read_back_exactly_and_solved(tmp_path, writer):
         (lambda t: t.replace("\n1\n", "\n2\n", 1), "storage type 2"),
         (lambda t: "4\n" + t.split("\n", 1)[1], "dimension 4"),
         (lambda t: t.replace("e-", "x-", 1), "expected a number"),
+        (lambda t: t.replace("\n3\t6\t", "\n6\t3\t", 1), "not increasing"),
     ],
 )
 def test_bad_input_is_refused_with_its_reason_and_no_file(tmp_path, damage, message):
@@ -126,3 +127,14 @@ def test_bad_input_is_refused_with_its_reason_and_no_file(tmp_path, damage, mess
     run = subprocess.run([sys.executable, str(SCRIPT), str(dat), str(out)], capture_output=True)
     assert run.returncode == 2 and message in run.stderr.decode()
     assert not out.exists()
+
+
+def test_an_unwritable_output_or_the_input_itself_is_refused(tmp_path):
+    d, w, q, mu = problem()
+    dat = tmp_path / "p.dat"
+    write_dense(dat, d, w, q, mu)
+    before = dat.read_bytes()
+    for out in [tmp_path / "missing" / "p.hdf5", dat]:
+        run = subprocess.run([sys.executable, str(SCRIPT), str(dat), str(out)], capture_output=True)
+        assert run.returncode == 2 and b"error" in run.stderr, run
+    assert dat.read_bytes() == before

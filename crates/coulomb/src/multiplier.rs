@@ -138,6 +138,7 @@ pub fn solve(
         par,
         deadline,
         judge,
+        |_| None,
     );
     r.copy_from_slice(&starts[0]);
     report
@@ -152,35 +153,8 @@ pub fn solve(
 /// run has converged, every run has stopped, or at the deadline. `starts[0]` is replaced by
 /// the point returned: the first converged run's, else the lowest-merit iterate of all
 /// runs. The report is that run's, with `steps` and `newton_steps` summed over all runs.
-#[allow(clippy::too_many_arguments)]
-pub fn solve_from(
-    p: &GlobalProblem,
-    hu: Option<&CscMatrix>,
-    mass: &MassFactor,
-    w_mean: f64,
-    starts: &mut [Vec<f64>],
-    tol: f64,
-    params: &MultiplierParams,
-    par: faer::Par,
-    deadline: Deadline,
-    judge: impl Fn(&[f64]) -> (f64, f64) + Sync,
-) -> MultiplierReport {
-    solve_from_with_finish(
-        p,
-        hu,
-        mass,
-        w_mean,
-        starts,
-        tol,
-        params,
-        par,
-        deadline,
-        judge,
-        |_| None,
-    )
-}
-
-/// [`solve_from`] with a finish: when a run crawls close to the tolerance — its lowest merit
+///
+/// `finish` (`|_| None` for none): when a run crawls close to the tolerance — its lowest merit
 /// ≤ [`MultiplierParams::finish_crawl`] · tol and not halved for
 /// [`MultiplierParams::finish_patience`] outer steps — `finish` is called on its lowest-merit
 /// r (at most [`MultiplierParams::finish_attempts`] times in all, each from a merit at most
@@ -188,7 +162,7 @@ pub fn solve_from(
 /// contact unknowns); a point it returns ends the stage as converged (`finish` returns only
 /// points that the caller has judged converged on the problem as stored).
 #[allow(clippy::too_many_arguments)]
-pub fn solve_from_with_finish(
+pub fn solve_from(
     p: &GlobalProblem,
     hu: Option<&CscMatrix>,
     mass: &MassFactor,
@@ -314,7 +288,7 @@ pub fn solve_from_with_finish(
     report
 }
 
-/// The finish attempts of [`solve_from_with_finish`]: how many, the merit of the last one,
+/// The finish attempts of [`solve_from`]: how many, the merit of the last one,
 /// and the converged point one of them returned.
 struct Finished {
     attempts: usize,
@@ -367,7 +341,7 @@ where
     F: Fn(&[f64]) -> Option<Vec<f64>> + Sync,
 {
     /// Calls the finish on `run`'s lowest-merit point where it crawls close to the tolerance
-    /// ([`solve_from_with_finish`]); true when the finish returned a converged point.
+    /// ([`solve_from`]); true when the finish returned a converged point.
     fn try_finish(&self, run: &Run) -> bool {
         let (s, params) = (self.shared, self.shared.params);
         let crawling = params.finish_steps > 0
@@ -1073,7 +1047,7 @@ mod tests {
         };
         let run = |finish: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync)| {
             let mut starts = vec![vec![0.0; p.w.len()]];
-            let rep = solve_from_with_finish(
+            let rep = solve_from(
                 &p,
                 None,
                 &mass,
@@ -1131,6 +1105,7 @@ mod tests {
                 faer::Par::Seq,
                 Deadline::NEVER,
                 |r| judged(&p, &mass, r),
+                |_| None,
             )
         };
         // a start that cannot run (not finite) beside one that converges: the converged

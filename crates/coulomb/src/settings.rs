@@ -670,7 +670,7 @@ pub struct MultiplierParams {
     pub finish_steps: usize,
     /// see `finish_below`
     pub finish_max_unknowns: usize,
-    /// the finish is also tried while the stage runs ([`crate::multiplier::solve_from_with_finish`]),
+    /// the finish is also tried while the stage runs ([`crate::multiplier::solve_from`]),
     /// on a run whose lowest merit is ≤ `finish_crawl` · tol and has not halved for this many
     /// outer steps (a crawl: on RockPile_tob1 the runs spend hundreds of outer steps between
     /// 1.0e-8 and 1.7e-8), at most `finish_attempts` times per stage; ≥ 1

@@ -604,7 +604,7 @@ impl Solver<'_> {
             let v = form.verdict(&trial);
             (v.error <= settings.tol && v.balance.unwrap_or(0.0) <= settings.tol).then_some(trial)
         };
-        let report = crate::multiplier::solve_from_with_finish(
+        let report = crate::multiplier::solve_from(
             g,
             hu,
             mass,

@@ -131,7 +131,7 @@ pub(crate) fn alart_curnier(
 
 /// The pattern of JᵀJ (every d × d block (a, b) such that block columns a and b of J share a
 /// block row) and its symbolic Cholesky factorization, computed once per run.
-struct NormalPattern {
+pub(crate) struct NormalPattern {
     col_ptr: Vec<usize>,
     row_idx: Vec<usize>,
     symbolic: SymbolicCholesky<usize>,
@@ -140,7 +140,7 @@ struct NormalPattern {
 }
 
 impl NormalPattern {
-    fn new(jac: &JacobianPattern, dim: usize, max_nonzeros: usize) -> Option<Self> {
+    pub(crate) fn new(jac: &JacobianPattern, dim: usize, max_nonzeros: usize) -> Option<Self> {
         let contacts = jac.neighbors.len();
         // rows[k]: the block columns of J with a block in block row k
         let mut rows: Vec<Vec<usize>> = vec![Vec::new(); contacts];
@@ -193,7 +193,7 @@ impl NormalPattern {
 }
 
 /// J (values on `jac`'s pattern, column-major) with its row-major copy, and JᵀJ + λI.
-struct Normal<'p> {
+pub(crate) struct Normal<'p> {
     jac: &'p JacobianPattern,
     pattern: NormalPattern,
     /// J by rows: for each row, (column, value)
@@ -204,7 +204,7 @@ struct Normal<'p> {
 }
 
 impl<'p> Normal<'p> {
-    fn new(jac: &'p JacobianPattern, pattern: NormalPattern, m: usize) -> Self {
+    pub(crate) fn new(jac: &'p JacobianPattern, pattern: NormalPattern, m: usize) -> Self {
         Self {
             jac,
             pattern,
@@ -217,7 +217,7 @@ impl<'p> Normal<'p> {
 
     /// Solves (JᵀJ + λI) δ = −JᵀΦ for J given by its values `jv` on the pattern; None if the
     /// Cholesky factorization fails or δ is not finite.
-    fn direction(&mut self, jv: &[f64], lambda: f64, phi: &[f64]) -> Option<Vec<f64>> {
+    pub(crate) fn direction(&mut self, jv: &[f64], lambda: f64, phi: &[f64]) -> Option<Vec<f64>> {
         let m = phi.len();
         let (cp, ri) = (&self.jac.col_ptr, &self.jac.row_idx);
         // J by rows

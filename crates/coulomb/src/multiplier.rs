@@ -154,13 +154,13 @@ pub fn solve(
 /// the point returned: the first converged run's, else the lowest-merit iterate of all
 /// runs. The report is that run's, with `steps` and `newton_steps` summed over all runs.
 ///
-/// `finish` (`|_| None` for none): when a run crawls close to the tolerance — its lowest merit
-/// ≤ [`MultiplierParams::finish_crawl`] · tol and not halved for
-/// [`MultiplierParams::finish_patience`] outer steps — `finish` is called on its lowest-merit
-/// r (at most [`MultiplierParams::finish_attempts`] times in all, each from a merit at most
-/// half that of the last attempt, for at most [`MultiplierParams::finish_max_unknowns`]
-/// contact unknowns); a point it returns ends the stage as converged (`finish` returns only
-/// points that the caller has judged converged on the problem as stored).
+/// `finish` (`|_| None` for none): when a run's lowest merit falls to at most
+/// [`MultiplierParams::finish_crawl`] · tol and below [`MultiplierParams::finish_gain`]
+/// times the merit from which that run last called it, `finish` is called on its lowest-merit
+/// r (at most [`MultiplierParams::finish_attempts`] times in all, for at most
+/// [`MultiplierParams::finish_max_unknowns`] contact unknowns); a point it returns ends the
+/// stage as converged (`finish` returns only points that the caller has judged converged on
+/// the problem as stored).
 #[allow(clippy::too_many_arguments)]
 pub fn solve_from(
     p: &GlobalProblem,
@@ -234,7 +234,7 @@ pub fn solve_from(
     let stop = AtomicBool::new(false);
     let finished = std::sync::Mutex::new(Finished {
         attempts: 0,
-        last: f64::INFINITY,
+        busy: false,
         point: None,
     });
     let work = Work {
@@ -288,11 +288,12 @@ pub fn solve_from(
     report
 }
 
-/// The finish attempts of [`solve_from`]: how many, the merit of the last one,
-/// and the converged point one of them returned.
+/// The finish attempts of [`solve_from`]: how many, whether one is under way (one at a time:
+/// a run that finds the finish busy goes on and tries at its next new lowest merit), and the
+/// converged point one of them returned.
 struct Finished {
     attempts: usize,
-    last: f64,
+    busy: bool,
     point: Option<Vec<f64>>,
 }
 
@@ -340,31 +341,31 @@ impl<J, F> Work<'_, '_, J, F>
 where
     F: Fn(&[f64]) -> Option<Vec<f64>> + Sync,
 {
-    /// Calls the finish on `run`'s lowest-merit point where it crawls close to the tolerance
-    /// ([`solve_from`]); true when the finish returned a converged point.
-    fn try_finish(&self, run: &Run) -> bool {
+    /// Calls the finish on `run`'s lowest-merit point where it has come close to the
+    /// tolerance ([`solve_from`]); true when the finish returned a converged point.
+    fn try_finish(&self, run: &mut Run) -> bool {
         let (s, params) = (self.shared, self.shared.params);
-        let crawling = params.finish_steps > 0
+        let close = params.finish_steps > 0
             && s.p.w.len() <= params.finish_max_unknowns
             && run.best_merit <= params.finish_crawl * s.tol
-            && run.since_gain >= params.finish_patience;
-        if !crawling {
+            && run.best_merit < params.finish_gain * run.finish_last;
+        if !close {
             return false;
         }
         {
             let mut f = self.finished.lock().unwrap_or_else(|e| e.into_inner());
-            if f.point.is_some()
-                || f.attempts >= params.finish_attempts
-                || run.best_merit > 0.5 * f.last
-            {
+            if f.point.is_some() || f.busy || f.attempts >= params.finish_attempts {
                 return false;
             }
             f.attempts += 1;
-            f.last = run.best_merit;
+            f.busy = true;
         }
-        match (self.finish)(&run.best_r) {
+        run.finish_last = run.best_merit;
+        let point = (self.finish)(&run.best_r);
+        let mut f = self.finished.lock().unwrap_or_else(|e| e.into_inner());
+        f.busy = false;
+        match point {
             Some(r) => {
-                let mut f = self.finished.lock().unwrap_or_else(|e| e.into_inner());
                 f.point.get_or_insert(r);
                 true
             }
@@ -386,6 +387,8 @@ struct Run {
     best_merit: f64,
     stall_reference: f64,
     since_gain: usize,
+    /// the lowest merit from which this run last called the finish ([`solve_from`])
+    finish_last: f64,
     current_error: f64,
     /// the Newton run of the current outer step: its ‖G‖ target, steps that factored J (its
     /// chord steps not counted), and v at its start
@@ -419,6 +422,7 @@ impl Run {
             best_merit: if merit.is_nan() { f64::INFINITY } else { merit },
             stall_reference: merit,
             since_gain: 0,
+            finish_last: f64::INFINITY,
             current_error: report.error,
             target: 0.0,
             newton: 0,
@@ -454,6 +458,7 @@ impl Run {
             best_merit: merit,
             stall_reference: merit,
             since_gain: 0,
+            finish_last: f64::INFINITY,
             current_error: report.error,
             target: 0.0,
             newton: 0,
@@ -1037,12 +1042,11 @@ mod tests {
         let mass = MassFactor::new(&p.m).unwrap();
         let wm = w_mean(&p, &mass);
         let (solution, _) = from_zero(&p, &mass, wm, &MultiplierParams::default());
-        // every outer step counts as a crawl (the merit never falls to 1e-6 of its reference)
+        // every new lowest merit is close enough for the finish
         let params = MultiplierParams {
             finish_crawl: 1e12,
-            finish_patience: 1,
+            finish_gain: 1.0,
             finish_attempts: 2,
-            stall_gain: 1e-6,
             ..MultiplierParams::default()
         };
         let run = |finish: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync)| {

@@ -483,29 +483,36 @@ impl SemismoothMap for DeSaxceMap<'_> {
 }
 
 /// Levenberg–Marquardt on the natural map G(r) = r − P_L(r − ũ(W r + q)) itself, whose norm
-/// over max(‖q‖, ‖r‖, ‖u‖) is the error of docs/error.md: from `r` (overwritten by the iterate
-/// of lowest error), each step solves the least-squares system
+/// over max(‖q‖, ‖r‖, ‖u‖) is the error of docs/error.md: from `r` projected onto
+/// L = Π K_μᵢ (overwritten by the iterate of lowest error), each step solves the
+/// least-squares system
 ///
 /// ```text
 ///     (JᵀJ + λ ν I) δ = −Jᵀ G,     J = I − D + D A W,   ν = trace(JᵀJ) / m,
 /// ```
 ///
-/// densely (JᵀJ by faer's matrix product, an LU of size m), and takes r + δ where it lowers the
-/// error (then λ ← λ/10), else tries λ ← 10 λ (at most 6 times). Where J is singular and G(r)
-/// is not in its range — an active set that no r satisfies exactly, as on rigid piles
-/// (docs/rigid.md) — the semismooth Newton step of [`polish`] has no descent, while this step
-/// goes to the least-squares point of the linearization: the error there is the floor of that
-/// active set, which may lie below the tolerance. At most `max_steps` accepted steps; stops
-/// once the error is ≤ `target`, when no λ gives a decrease, or at `deadline`. Cost per
-/// step: m³ · 8/3 flops (product and LU), on all threads from `parallel_dim` on. A problem
-/// whose sizes disagree takes no step (`NoDescent`, residual NaN). `residual` reports the
-/// error of docs/error.md (not ‖G‖).
+/// with J on W's block pattern (as [`polish`] builds it) and a sparse Cholesky factorization of
+/// JᵀJ + λνI on its block pattern (symbolic once per call, [`crate::levenberg`]'s), and takes
+/// P_L(r + δ) where it lowers the error (then λ ← λ/10), else tries λ ← 10 λ (at most 6
+/// times): every iterate lies in L, as a solver's starting point does (an r outside L can
+/// have a small natural-map residual that its projection does not have).
+/// Where J is singular and G(r) is not in its range — an active set that no r satisfies
+/// exactly, as on rigid piles (docs/rigid.md) — the semismooth Newton step of [`polish`] has
+/// no descent, while this step goes to the least-squares point of the linearization: the
+/// error there is the floor of that active set, which may lie below the tolerance. At most
+/// `max_steps` accepted steps; stops once the error is ≤ `target`, when no λ gives a
+/// decrease, after `slow_steps` steps in a row that each leave more than [`SLOW_RATIO`] of
+/// the error (at that floor: `Slow`; 0: no such stop), or at `deadline`. A problem whose sizes disagree,
+/// or whose JᵀJ would have more than `max_normal_nonzeros` entries (or fails its symbolic
+/// factorization), takes no step (`NoDescent`; residual NaN for the former, r untouched).
+/// `residual` reports the error of docs/error.md at the returned r (not ‖G‖).
 pub fn least_squares(
     p: &LocalProblem,
     r: &mut [f64],
     target: f64,
     max_steps: usize,
-    parallel_dim: usize,
+    slow_steps: usize,
+    max_normal_nonzeros: usize,
     deadline: Deadline,
 ) -> NewtonReport {
     let (d, m) = (p.dim, r.len());
@@ -517,12 +524,23 @@ pub fn least_squares(
     if !p.fits(r) || !r.iter().all(|x| x.is_finite()) || d == 0 {
         return report;
     }
-    let par = crate::dense::parallelism(m, parallel_dim);
+    crate::cone::project_product(d, &p.mu, r);
     let mut err = p.error(r).error;
     report.residual = err;
+    if err <= target {
+        report.status = NewtonStatus::Reached;
+        return report;
+    }
+    let jac = JacobianPattern::without_lu(p);
+    let Some(normal) = crate::levenberg::NormalPattern::new(&jac, d, max_normal_nonzeros) else {
+        return report;
+    };
+    let mut normal = crate::levenberg::Normal::new(&jac, normal, m);
     let (mut g, mut dblocks, mut blocks) = (vec![0.0; m], vec![0.0; m * d], vec![0.0; m * d]);
+    let (mut wcol, mut jv) = (vec![0.0; m], Vec::new());
     let mut lambda = 1e-8;
     let mut trial = vec![0.0; m];
+    let mut slow = 0;
     while err > target && report.steps < max_steps {
         if deadline.passed() {
             report.status = NewtonStatus::TimeLimit;
@@ -531,59 +549,24 @@ pub fn least_squares(
         let mut u = p.q.clone();
         p.w.gemv_acc(1.0, r, &mut u);
         de_saxce_map(d, &p.mu, r, &u, &mut g, &mut dblocks, &mut blocks);
-        // J = I − D + B W (B = D A by contact blocks, row-major), dense
-        let mut jac = faer::Mat::<f64>::zeros(m, m);
-        for (c, dj) in dblocks.chunks(d * d).enumerate() {
-            for x in 0..d {
-                for z in 0..d {
-                    let id = if x == z { 1.0 } else { 0.0 };
-                    jac[(c * d + x, c * d + z)] = id - dj[x * d + z];
-                }
-            }
-        }
-        for j in 0..m {
-            for t in p.w.col_ptr[j]..p.w.col_ptr[j + 1] {
-                let (l, wv) = (p.w.row_idx[t], p.w.values[t]);
-                let (c, a) = (l / d, l % d);
-                let b = &blocks[c * d * d..(c + 1) * d * d];
-                for x in 0..d {
-                    jac[(c * d + x, j)] += b[x * d + a] * wv;
-                }
-            }
-        }
-        let mut normal = faer::Mat::<f64>::zeros(m, m);
-        faer::linalg::matmul::matmul(
-            normal.as_mut(),
-            faer::Accum::Replace,
-            jac.transpose(),
-            jac.as_ref(),
-            1.0,
-            par,
-        );
-        let rhs: Vec<f64> = (0..m)
-            .map(|j| -(0..m).map(|i| jac[(i, j)] * g[i]).sum::<f64>())
-            .collect();
-        let nu = (0..m).map(|i| normal[(i, i)]).sum::<f64>() / m as f64;
+        jac.fill(p, &dblocks, &blocks, &mut wcol, &mut jv);
+        // trace(JᵀJ) = ‖J‖²_F
+        let nu = jv.iter().map(|x| x * x).sum::<f64>() / m as f64;
         if !(nu.is_finite() && nu > 0.0) {
             return report;
         }
         let mut accepted = false;
+        let before = err;
         for _ in 0..6 {
             if deadline.passed() {
                 report.status = NewtonStatus::TimeLimit;
                 return report;
             }
-            let mut shifted = normal.clone();
-            for i in 0..m {
-                shifted[(i, i)] += lambda * nu;
-            }
-            let mut step = rhs.clone();
-            let solved =
-                crate::dense::Lu::new(shifted, par).is_some_and(|lu| lu.solve_in_place(&mut step));
-            if solved && step.iter().all(|x| x.is_finite()) {
+            if let Some(step) = normal.direction(&jv, lambda * nu, &g) {
                 for ((t, x), s) in trial.iter_mut().zip(r.iter()).zip(&step) {
                     *t = x + s;
                 }
+                crate::cone::project_product(d, &p.mu, &mut trial);
                 let e = p.error(&trial).error;
                 if e < err {
                     r.copy_from_slice(&trial);
@@ -600,6 +583,15 @@ pub fn least_squares(
             return report;
         }
         report.steps += 1;
+        slow = if err > SLOW_RATIO * before {
+            slow + 1
+        } else {
+            0
+        };
+        if slow_steps > 0 && slow >= slow_steps && err > target {
+            report.status = NewtonStatus::Slow;
+            return report;
+        }
     }
     report.status = if err <= target {
         NewtonStatus::Reached
@@ -717,7 +709,7 @@ mod tests {
             .map(|(i, x)| x + 1e-6 * ((i % 3) as f64 - 1.0))
             .collect();
         let start = p.error(&r).error;
-        let rep = least_squares(&p, &mut r, 1e-11, 8, 1500, Deadline::NEVER);
+        let rep = least_squares(&p, &mut r, 1e-11, 8, 0, NONZEROS, Deadline::NEVER);
         assert_eq!(rep.status, NewtonStatus::Reached, "{rep:?} from {start:e}");
         assert!(rep.steps <= 8 && rep.residual <= 1e-11);
         assert_eq!(rep.residual, p.error(&r).error);
@@ -725,17 +717,28 @@ mod tests {
         // than the start and its error is the one reported
         let q = crate::levenberg::tests::problem(6, 2811, 0.0, 1e-3);
         let mut r = vec![0.1; 18];
-        let start = q.error(&r).error;
-        let rep = least_squares(&q, &mut r, 1e-12, 5, 1500, Deadline::NEVER);
+        let start = q.error(&crate::levenberg::projected(&q, &r)).error;
+        let rep = least_squares(&q, &mut r, 1e-12, 5, 2, NONZEROS, Deadline::NEVER);
         assert!(
             rep.residual <= start && rep.residual == q.error(&r).error,
             "{rep:?}"
         );
+        // every returned point lies in the cones: it is its own projection
+        assert_eq!(r, crate::levenberg::projected(&q, &r));
         // sizes that disagree: no step
-        let rep = least_squares(&q, &mut [0.0; 5], 1e-8, 5, 1500, Deadline::NEVER);
+        let rep = least_squares(&q, &mut [0.0; 5], 1e-8, 5, 2, NONZEROS, Deadline::NEVER);
         assert_eq!(rep.status, NewtonStatus::NoDescent);
         assert!(rep.residual.is_nan());
+        // a JᵀJ above the cap on its entries: no step, r projected, its error reported
+        let mut r = vec![0.1; 18];
+        let rep = least_squares(&q, &mut r, 1e-12, 5, 2, 10, Deadline::NEVER);
+        assert_eq!((rep.status, rep.steps), (NewtonStatus::NoDescent, 0));
+        assert_eq!(r, crate::levenberg::projected(&q, &[0.1; 18]));
+        assert_eq!(rep.residual, q.error(&r).error);
     }
+
+    /// The default cap on the entries of JᵀJ ([`crate::settings::LmParams::max_normal_nonzeros`]).
+    const NONZEROS: usize = 40_000_000;
 
     /// A deterministic pseudo-random local problem with W = AᵀA + δI (d = 3).
     fn problem(contacts: usize, seed: u64, delta: f64) -> LocalProblem {

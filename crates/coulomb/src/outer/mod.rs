@@ -590,15 +590,17 @@ impl Solver<'_> {
         let diag = local.w.diagonal();
         let w_mean = diag.iter().sum::<f64>() / diag.len().max(1) as f64;
         let form = &self.form;
-        let finish_target = settings.tuning.newton.target_fraction * settings.tol;
+        // the finish's steps stop at tol: its point is then judged by the same error on the
+        // stored problem (each step costs sparse factorizations; the runs wait for none)
         let finish = |r: &[f64]| {
             let mut trial = r.to_vec();
             crate::newton::least_squares(
                 local,
                 &mut trial,
-                finish_target,
+                settings.tol,
                 mp.finish_steps,
-                bp.dense_parallel_dim,
+                mp.finish_slow_steps,
+                settings.tuning.lm.max_normal_nonzeros,
                 share,
             );
             let v = form.verdict(&trial);
@@ -630,13 +632,13 @@ impl Solver<'_> {
             && mp.finish_steps > 0
         {
             let mut trial = r.clone();
-            let target = settings.tuning.newton.target_fraction * settings.tol;
             let last = crate::newton::least_squares(
                 local,
                 &mut trial,
-                target,
+                settings.tol,
                 mp.finish_steps,
-                bp.dense_parallel_dim,
+                mp.finish_slow_steps,
+                settings.tuning.lm.max_normal_nonzeros,
                 deadline,
             );
             steps += last.steps;

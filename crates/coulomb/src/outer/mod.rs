@@ -592,17 +592,20 @@ impl Solver<'_> {
         let form = &self.form;
         // the finish's steps stop at tol: its point is then judged by the same error on the
         // stored problem (each step costs sparse factorizations; the runs wait for none)
-        let finish = |r: &[f64]| {
-            let mut trial = r.to_vec();
+        let least_squares = |r: &mut [f64], until: Deadline| {
             crate::newton::least_squares(
                 local,
-                &mut trial,
+                r,
                 settings.tol,
                 mp.finish_steps,
                 mp.finish_slow_steps,
                 settings.tuning.lm.max_normal_nonzeros,
-                share,
-            );
+                until,
+            )
+        };
+        let finish = |r: &[f64]| {
+            let mut trial = r.to_vec();
+            least_squares(&mut trial, share);
             let v = form.verdict(&trial);
             (v.error <= settings.tol && v.balance.unwrap_or(0.0) <= settings.tol).then_some(trial)
         };
@@ -632,15 +635,7 @@ impl Solver<'_> {
             && mp.finish_steps > 0
         {
             let mut trial = r.clone();
-            let last = crate::newton::least_squares(
-                local,
-                &mut trial,
-                settings.tol,
-                mp.finish_steps,
-                mp.finish_slow_steps,
-                settings.tuning.lm.max_normal_nonzeros,
-                deadline,
-            );
+            let last = least_squares(&mut trial, deadline);
             steps += last.steps;
             if last.residual < report.error {
                 r = trial;

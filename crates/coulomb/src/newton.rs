@@ -502,10 +502,10 @@ impl SemismoothMap for DeSaxceMap<'_> {
 /// error there is the floor of that active set, which may lie below the tolerance. At most
 /// `max_steps` accepted steps; stops once the error is ≤ `target`, when no λ gives a
 /// decrease, after `slow_steps` steps in a row that each leave more than [`SLOW_RATIO`] of
-/// the error (at that floor: `Slow`; 0: no such stop), or at `deadline`. A problem whose sizes disagree,
-/// or whose JᵀJ would have more than `max_normal_nonzeros` entries (or fails its symbolic
-/// factorization), takes no step (`NoDescent`; residual NaN for the former, r untouched).
-/// `residual` reports the error of docs/error.md at the returned r (not ‖G‖).
+/// the error (at that floor: `Slow`; 0: no such stop), or at `deadline`. A problem whose
+/// sizes disagree, or whose JᵀJ would have more than `max_normal_nonzeros` entries (or fails
+/// its symbolic factorization), takes no step (`NoDescent`; residual NaN for the former, r
+/// untouched). `residual` reports the error of docs/error.md at the returned r (not ‖G‖).
 pub fn least_squares(
     p: &LocalProblem,
     r: &mut [f64],

@@ -33,7 +33,8 @@
 //! rule ([`crate::proximal`]) makes ρ so large there that Newton on G fails (docs/rigid.md).
 //! ρ then follows the subproblems: it grows after a step whose Newton run was easy (the
 //! proximal point converges faster as ρ grows), up to a cap, and is halved after a step whose
-//! Newton run failed and whose r is far worse.
+//! Newton run failed and whose r is worse (its error above
+//! [`MultiplierParams::reject_growth`] times the current one).
 //!
 //! Every iterate is judged like the solver's iterates: v = M⁻¹(H r + f) recomputed from r,
 //! u = Hᵀ v + w, the error of docs/error.md and the balance residual on the stored data.
@@ -602,7 +603,7 @@ impl Run {
         let solved = self.g.norm <= self.target;
         let acceptable = e <= params.reject_growth * self.current_error;
         if !solved && !acceptable {
-            // Newton did not solve step k and r_{k+1} is far worse: step k again from λ with
+            // Newton did not solve step k and r_{k+1} is worse: step k again from λ with
             // a smaller penalty (a better conditioned subproblem)
             self.v.copy_from_slice(&self.v_start);
             self.rho.iter_mut().for_each(|x| *x *= params.penalty_cut);
@@ -1270,6 +1271,110 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// An outer step whose Newton run missed its target: the run's current error before and
+    /// after it, whether λ moved, ρ before and after.
+    struct Unsolved {
+        before: f64,
+        after: f64,
+        moved: bool,
+        rho: Vec<f64>,
+        rho_after: Vec<f64>,
+    }
+
+    /// The outer steps of one run from r = 0 with `params` whose Newton run missed its target.
+    fn unsolved_steps(
+        p: &GlobalProblem,
+        mass: &MassFactor,
+        params: &MultiplierParams,
+    ) -> Vec<Unsolved> {
+        let wm = w_mean(p, mass);
+        let shared = Shared {
+            p,
+            h_cols: ContactColumns::new(&p.h, p.dim, p.contacts()),
+            hu_cols: ContactColumns::new(&p.h, p.dim, p.contacts()),
+            params,
+            rho_i: params.rho_factor / wm,
+            f_norm: crate::law::norm(&p.f),
+            tol: 1e-14,
+            par: faer::Par::Seq,
+        };
+        let r = vec![0.0; p.w.len()];
+        let (error, balance) = judged(p, mass, &r);
+        let start = MultiplierReport {
+            status: MultiplierStatus::NumericalError,
+            steps: 0,
+            newton_steps: 0,
+            chord_steps: 0,
+            error,
+            balance,
+        };
+        let mut run = Run::new(&shared, mass, &r, start);
+        let judge = |r: &[f64]| judged(p, mass, r);
+        let mut unsolved = Vec::new();
+        while run.done.is_none() {
+            let (lambda, rho, before) = (run.lambda.clone(), run.rho.clone(), run.current_error);
+            run.newton(&shared, Deadline::NEVER);
+            let solved = run.g.norm <= run.target;
+            run.conclude(&shared, &judge);
+            if !solved && run.done.is_none() {
+                unsolved.push(Unsolved {
+                    before,
+                    after: run.current_error,
+                    moved: run.lambda != lambda,
+                    rho,
+                    rho_after: run.rho.clone(),
+                });
+            }
+        }
+        unsolved
+    }
+
+    #[test]
+    fn an_unsolved_step_is_kept_only_when_it_lowers_the_error() {
+        // one Newton step per outer step (no chord step) leaves many subproblems unsolved;
+        // with reject_growth = 1 (the default) such a step moves the multipliers only when
+        // its r has a lower error, else λ stays and every ρᵢ is cut
+        let p = box_on_plane(1.0, [1.0, 0.3, -0.5, 0.2, -0.1, 0.7]);
+        let mass = MassFactor::new(&p.m).unwrap();
+        let params = MultiplierParams {
+            max_steps: 60,
+            newton_steps: 1,
+            chord_ratio: 0.0,
+            ..MultiplierParams::default()
+        };
+        assert_eq!(params.reject_growth, 1.0);
+        let steps = unsolved_steps(&p, &mass, &params);
+        let (mut kept, mut cut) = (0, 0);
+        for step in &steps {
+            if step.moved {
+                assert!(
+                    step.after <= step.before,
+                    "{:.3e} > {:.3e}",
+                    step.after,
+                    step.before
+                );
+                kept += 1;
+            } else {
+                assert_eq!(step.after, step.before);
+                for (a, b) in step.rho.iter().zip(&step.rho_after) {
+                    assert_eq!(*b, a * params.penalty_cut);
+                }
+                cut += 1;
+            }
+        }
+        assert!(kept > 0 && cut > 0, "kept {kept}, cut {cut}");
+        // with 10, unsolved steps that raise the error up to tenfold are kept
+        let loose = MultiplierParams {
+            reject_growth: 10.0,
+            ..params
+        };
+        let rising = unsolved_steps(&p, &mass, &loose)
+            .iter()
+            .filter(|step| step.moved && step.after > step.before)
+            .count();
+        assert!(rising > 0);
     }
 
     #[test]

@@ -3,10 +3,11 @@
 //! | status | meaning |
 //! |---|---|
 //! | 0 | success: `solve` converged, `error` says "yes", `check` proved that a solution exists, other commands finished |
-//! | 1 | the command ran and the answer is negative: `solve` did not converge (any status other than converged), `error` says "no", `check` proved that no solution exists |
+//! | 1 | the command ran and the answer is negative: `solve` did not converge (any status other than converged), `error` says "no", `check` proved that no solution exists, `simulate --until-rest` stopped at its step cap without reaching rest |
 //! | 2 | bad input or usage: unknown option, invalid value, unreadable or invalid file, output path refused (same as an input, folder missing, not writable) |
 //! | 3 | inconclusive: `check` could neither prove nor disprove existence, or did not finish within its `--time-limit` |
 //! | 4 | an output could not be written (disk full, permissions): the destination is left as it was |
+//! | 130, 143 | `simulate`, `bench` or `solve` stopped by SIGINT (130) or SIGTERM (143) after the step or solve in progress, its outputs written and saying so (`crate::interrupt`) |
 //!
 //! Clap's own usage errors exit with 2 too; `--help` and `--version` exit with 0. A closed
 //! standard output (`coulomb info … | head`) ends the process with 141, as a shell reports a
@@ -17,9 +18,11 @@ use std::process::ExitCode;
 /// The text shown at the end of `coulomb --help`.
 pub const HELP: &str =
     "Exit status: 0 success (solve converged, error says yes, check: a solution exists); \
-1 negative answer (solve did not converge, error says no, check: no solution exists); \
+1 negative answer (solve did not converge, error says no, check: no solution exists, \
+simulate --until-rest at its step cap); \
 2 bad input or usage (invalid option value, unreadable file, refused output path); \
-3 inconclusive (check); 4 an output could not be written (destination left as it was).";
+3 inconclusive (check); 4 an output could not be written (destination left as it was); \
+130/143 simulate, bench or solve stopped by SIGINT/SIGTERM (outputs written, marked interrupted).";
 
 /// How a command that ran to its end answered.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -33,6 +36,8 @@ pub enum Outcome {
     /// status 2, after the command reported its own failures (e.g. `info` on several files,
     /// some unreadable: the table or JSON array names them)
     BadInput,
+    /// status 130 (SIGINT) or 143 (SIGTERM): stopped cleanly by a signal, outputs written
+    Interrupted(crate::interrupt::Signal),
 }
 
 impl Outcome {
@@ -43,6 +48,7 @@ impl Outcome {
             Outcome::No => ExitCode::from(1),
             Outcome::Inconclusive => ExitCode::from(3),
             Outcome::BadInput => ExitCode::from(BAD_INPUT),
+            Outcome::Interrupted(signal) => ExitCode::from(signal.exit_status()),
         }
     }
 }
@@ -62,9 +68,30 @@ pub struct WriteFailed {
     pub source: std::io::Error,
 }
 
-/// The exit status of a failed command: 4 when an output could not be written, else 2.
+/// Whether `e` is (or wraps, as the payload of an [`std::io::Error`]) a refusal of
+/// [`coulomb::atomic`]: the output path exists and is not a regular file.
+fn refused(e: &(dyn std::error::Error + 'static)) -> bool {
+    use coulomb::fclib::{FclibError, FclibErrorKind};
+    let io = e.downcast_ref::<std::io::Error>().or_else(|| {
+        match e.downcast_ref::<FclibError>().map(|f| &f.kind) {
+            Some(FclibErrorKind::Io(io)) => Some(io),
+            _ => None,
+        }
+    });
+    e.downcast_ref::<coulomb::atomic::Refused>().is_some()
+        || io.and_then(coulomb::atomic::refusal).is_some()
+}
+
+/// The exit status of a failed command: 2 when an output path was refused (a device, FIFO,
+/// socket, directory or dangling link: [`coulomb::atomic::Refused`], found through the
+/// I/O errors that carry it), else 4 when an output could not be written, else 2.
 pub fn status_of(e: &anyhow::Error) -> u8 {
     use crate::cmd::bench::{plot::PlotError, BenchError};
+    // the write errors below carry their io::Error as `source`, so it is a link of the chain;
+    // an io::Error's own `source()` skips its payload, hence `refusal` on each link
+    if e.chain().any(refused) {
+        return BAD_INPUT;
+    }
     let write_failed = |c: &(dyn std::error::Error + 'static)| {
         c.downcast_ref::<WriteFailed>().is_some()
             || matches!(

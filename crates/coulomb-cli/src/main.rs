@@ -4,6 +4,7 @@ mod budget;
 mod cmd;
 mod existence_json;
 mod exit;
+mod interrupt;
 mod method;
 mod outputs;
 mod progress;
@@ -117,9 +118,9 @@ fn main() -> ExitCode {
         Command::Solve(a) => cmd::solve::run(a),
         Command::Check(a) => cmd::check::run(a),
         Command::Example(a) => cmd::example::run(a).map(|()| Outcome::Success),
-        Command::Simulate(a) => simulate(a).map(|()| Outcome::Success),
+        Command::Simulate(a) => simulate(a),
         Command::Paper(a) => cmd::paper::run(a).map(|()| Outcome::Success),
-        Command::Bench(a) => cmd::bench::run(a).map(|()| Outcome::Success),
+        Command::Bench(a) => cmd::bench::run(a),
         Command::Demo(a) => cmd::demo::run(a).map(|()| Outcome::Success),
         Command::Corpus(a) => cmd::corpus::run(a).map(|()| Outcome::Success),
         Command::Validate(a) => cmd::validate::run(a).map(|()| Outcome::Success),
@@ -143,7 +144,7 @@ fn main() -> ExitCode {
 
 /// `coulomb simulate`: the scene checked, then the run in this process or, under an MPI
 /// launcher or with `--mpi`, distributed over the ranks, on `--threads` worker threads.
-fn simulate(args: sim_args::Args) -> anyhow::Result<()> {
+fn simulate(args: sim_args::Args) -> anyhow::Result<Outcome> {
     threads::with_threads(args.threads, || {
         let scene = sim_args::checked_scene(&args)?;
         #[cfg(feature = "mpi")]

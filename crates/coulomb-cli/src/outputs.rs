@@ -30,8 +30,10 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
     }
 }
 
-/// Checks an output path before the work starts: not one of `inputs`, not a directory, and a
-/// file can be created in its folder now. `what` names the option (`--output`).
+/// Checks an output path before the work starts: not one of `inputs`, not a directory,
+/// device, FIFO, socket or dangling symbolic link ([`coulomb::atomic::destination`]: the
+/// message then starts with "output path refused"), and a file can be created in its folder
+/// now. `what` names the option (`--output`). Exit status 2 (see `crate::exit`).
 pub fn check(what: &str, path: &Path, inputs: &[&Path]) -> anyhow::Result<()> {
     for input in inputs {
         if same_file(path, input) {
@@ -41,13 +43,10 @@ pub fn check(what: &str, path: &Path, inputs: &[&Path]) -> anyhow::Result<()> {
             );
         }
     }
-    if path.is_dir() {
-        bail!(
-            "{what} {} is a directory, expected a file name",
-            path.display()
-        );
-    }
     if let Err(e) = coulomb::atomic::check_writable(path) {
+        if let Some(refused) = coulomb::atomic::refusal(&e) {
+            bail!("{what}: {refused}");
+        }
         bail!("{what} {}: cannot write there: {e}", path.display());
     }
     Ok(())
@@ -83,10 +82,13 @@ pub struct Staged {
 }
 
 impl Staged {
-    /// A temporary path next to `dest`.
+    /// A temporary path next to the file that `dest` names (the target of a symbolic link
+    /// to a regular file; [`coulomb::atomic::destination`]). A `dest` that is refused is
+    /// refused again by [`Staged::commit`].
     pub fn new(dest: &Path) -> Self {
+        let file = coulomb::atomic::destination(dest).unwrap_or_else(|_| dest.to_path_buf());
         Self {
-            tmp: coulomb::atomic::temp_name(dest),
+            tmp: coulomb::atomic::temp_name(&file),
             dest: dest.to_path_buf(),
             done: false,
         }
@@ -97,17 +99,14 @@ impl Staged {
         &self.tmp
     }
 
-    /// Renames the temporary file over the destination (saying so when one was there).
+    /// Renames the temporary file over the destination (saying so when one was there) with
+    /// [`coulomb::atomic::replace`]: a destination that is not a regular file is refused.
     pub fn commit(mut self) -> Result<(), WriteFailed> {
         let existed = self.dest.is_file();
-        let fail = |source| WriteFailed {
+        coulomb::atomic::replace(&self.tmp, &self.dest).map_err(|source| WriteFailed {
             path: self.dest.display().to_string(),
             source,
-        };
-        if let Ok(f) = std::fs::File::open(&self.tmp) {
-            f.sync_all().map_err(fail)?;
-        }
-        std::fs::rename(&self.tmp, &self.dest).map_err(fail)?;
+        })?;
         self.done = true;
         if existed {
             eprintln!("note: replaced existing {}", self.dest.display());
@@ -173,7 +172,9 @@ mod tests {
         // the same file under another name
         let alias = dir.join(".").join("in.hdf5");
         assert!(check("--output", &alias, &[&input]).is_err());
-        assert!(check("--output", &dir, &[]).is_err());
+        let e = check("--output", &dir, &[]).unwrap_err().to_string();
+        assert!(e.starts_with("--output: output path refused: "), "{e}");
+        assert!(e.contains("is a directory"), "{e}");
         assert!(check("--output", &dir.join("missing/x.json"), &[]).is_err());
         assert!(check("--output", Path::new("/proc/x.json"), &[]).is_err());
         assert!(check("--output", &dir.join("new.json"), &[&input]).is_ok());

@@ -311,6 +311,8 @@ pub(crate) fn summary_json(
         "mean_error": summary.mean_error,
         "max_error": summary.max_error,
         "at_rest": summary.at_rest,
+        "stopped": summary.stopped,
+        "signal": summary.signal,
     });
     if let Some(map) = obj.as_object_mut() {
         map.extend(extra);

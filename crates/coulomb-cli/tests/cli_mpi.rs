@@ -9,24 +9,17 @@ mod common;
 use common::{read_json, stdout_json, temp_dir};
 use std::process::Command;
 
-/// `mpirun` with the options this machine needs: --oversubscribe (more ranks than cores) for
-/// Open MPI, and root allowed by its environment variables.
+/// `mpirun` through `scripts/mpirun-local.sh`, the wrapper docs/distributed.md tells users to
+/// run: it adds --allow-run-as-root (as root) and --oversubscribe (more ranks than cores) for
+/// Open MPI, so this also checks that the quick start works as written.
 fn mpirun(np: usize, args: &[&str]) -> std::process::Output {
-    let version = Command::new("mpirun")
-        .arg("--version")
-        .output()
-        .expect("mpirun is installed (the feature mpi needs an MPI implementation)");
-    let open_mpi = String::from_utf8_lossy(&version.stdout).contains("Open MPI");
-    let mut cmd = Command::new("mpirun");
-    if open_mpi {
-        cmd.arg("--oversubscribe");
-    }
-    cmd.args(["-np", &np.to_string(), env!("CARGO_BIN_EXE_coulomb")])
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scripts/mpirun-local.sh");
+    Command::new("bash")
+        .arg(script)
+        .args(["-np", &np.to_string(), env!("CARGO_BIN_EXE_coulomb")])
         .args(args)
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
         .output()
-        .expect("mpirun runs")
+        .expect("bash runs scripts/mpirun-local.sh")
 }
 
 #[test]
@@ -136,4 +129,35 @@ fn distributed_refuses_rolling_friction() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("rolling friction"), "{err}");
+}
+
+/// `--until-rest` stopped at its step cap before rest is a negative answer on every rank: the
+/// launcher exits non-zero and the summary says why.
+#[test]
+fn distributed_until_rest_at_its_step_cap_exits_non_zero() {
+    let out = mpirun(
+        2,
+        &[
+            "simulate",
+            "box",
+            "--beads",
+            "60",
+            "--until-rest",
+            "--max-steps",
+            "3",
+            "--json",
+        ],
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stdout}\n{err}");
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with('{'))
+        .unwrap_or_else(|| panic!("no JSON summary: {stdout}\n{err}"));
+    let v: serde_json::Value = serde_json::from_str(line).expect("the JSON summary");
+    assert_eq!(v["stopped"], "step_cap", "{v}");
+    assert_eq!(v["at_rest"], false, "{v}");
+    assert_eq!(v["steps"], 3, "{v}");
+    assert!(err.contains("step cap"), "{err}");
 }

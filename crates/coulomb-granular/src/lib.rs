@@ -29,7 +29,7 @@ pub use contact::{Activation, Contact, Partner};
 pub use math::Vec3;
 pub use nsgs::{NsgsSettings, NsgsStatus, StepProblem};
 pub use projection::{Penetration, Projection, ProjectionStats};
-pub use run::{run, run_with, SimulationSettings, Stop, Summary};
+pub use run::{run, run_with, SimulationSettings, Stop, Stopped, Summary};
 pub use scene::Scene;
 pub use simulation::{Params, Simulation, SimulationError, StepMethod, StepStats};
 pub use world::{Motion, Obstacle, Shape, Sphere, World};

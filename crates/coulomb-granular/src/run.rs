@@ -68,6 +68,21 @@ impl Default for SimulationSettings {
     }
 }
 
+/// Why a run stopped (`"stopped"` in summary.json).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Stopped {
+    /// it took the number of steps asked for ([`Stop::Steps`])
+    Steps,
+    /// the rest rule held ([`Stop::UntilRest`])
+    Rest,
+    /// [`Stop::UntilRest`] reached its step cap without the rest rule holding: the pile was
+    /// still moving (a negative answer: `coulomb simulate` exits with status 1)
+    StepCap,
+    /// a signal (SIGINT, SIGTERM) stopped it after the step in progress
+    Interrupted,
+}
+
 /// Summary of a run: Table 1's columns and a few more.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Summary {
@@ -101,6 +116,12 @@ pub struct Summary {
     pub projection_work: f64,
     /// whether the run stopped by the rest rule
     pub at_rest: bool,
+    /// why the run stopped ([`Summary::stopped_by`]; from [`Summary::from_stats`] alone:
+    /// `rest` or `steps`)
+    pub stopped: Stopped,
+    /// the signal that interrupted the run (`SIGINT`, `SIGTERM`), absent otherwise
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub signal: Option<String>,
 }
 
 impl Summary {
@@ -125,7 +146,27 @@ impl Summary {
             end_max_penetration: stats.last().map_or(0.0, |s| s.end_max_penetration),
             projection_work: stats.iter().map(|s| s.projection_work).sum(),
             at_rest,
+            stopped: if at_rest {
+                Stopped::Rest
+            } else {
+                Stopped::Steps
+            },
+            signal: None,
         }
+    }
+
+    /// The summary with why the run stopped, under the rule `stop`: interrupted by `signal`
+    /// (when some), at rest, at the step cap of [`Stop::UntilRest`] without rest, or after
+    /// the steps asked for.
+    pub fn stopped_by(mut self, stop: &Stop, signal: Option<&str>) -> Self {
+        self.stopped = match (signal, stop) {
+            (Some(_), _) => Stopped::Interrupted,
+            (None, _) if self.at_rest => Stopped::Rest,
+            (None, Stop::UntilRest { .. }) => Stopped::StepCap,
+            (None, Stop::Steps(_)) => Stopped::Steps,
+        };
+        self.signal = signal.map(str::to_string);
+        self
     }
 }
 
@@ -178,11 +219,44 @@ pub fn run_with(
             break;
         }
     }
-    let summary = Summary::from_stats(settings.scene.name(), settings.beads, &stats, at_rest);
+    let summary = Summary::from_stats(settings.scene.name(), settings.beads, &stats, at_rest)
+        .stopped_by(&settings.stop, None);
     Ok((summary, stats))
 }
 
 /// Runs a simulation and returns its summary (used by `coulomb demo`).
 pub fn run(settings: &SimulationSettings) -> Result<Summary, SimulationError> {
     run_with(settings, |_, _| {}).map(|(s, _)| s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_stop_reason_tells_rest_cap_steps_and_signals_apart() {
+        let rest_rule = Stop::until_rest();
+        let summary = |at_rest| Summary::from_stats("box", 3, &[], at_rest);
+        assert_eq!(summary(true).stopped, Stopped::Rest);
+        assert_eq!(summary(false).stopped, Stopped::Steps);
+        let capped = summary(false).stopped_by(&rest_rule, None);
+        assert_eq!(capped.stopped, Stopped::StepCap);
+        assert_eq!(capped.signal, None);
+        assert_eq!(
+            summary(true).stopped_by(&rest_rule, None).stopped,
+            Stopped::Rest
+        );
+        assert_eq!(
+            summary(false).stopped_by(&Stop::Steps(5), None).stopped,
+            Stopped::Steps
+        );
+        let stopped = summary(false).stopped_by(&Stop::Steps(5), Some("SIGTERM"));
+        assert_eq!(stopped.stopped, Stopped::Interrupted);
+        let json = serde_json::to_value(&stopped).unwrap();
+        assert_eq!(json["stopped"], "interrupted");
+        assert_eq!(json["signal"], "SIGTERM");
+        let json = serde_json::to_value(&capped).unwrap();
+        assert_eq!(json["stopped"], "step_cap");
+        assert!(json.get("signal").is_none());
+    }
 }

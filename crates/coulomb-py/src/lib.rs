@@ -368,29 +368,10 @@ fn fclib_write(
         )
     })?;
     let io = |e: std::io::Error| errors::fclib_error(py, fclib::FclibError::new(&name, e.into()));
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let file_name = path
-        .file_name()
-        .ok_or_else(|| PyValueError::new_err(format!("{name}: not a file name")))?;
-    // unique per process and call, so that concurrent writes (GIL released) never share it
-    static WRITES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-    let tmp = dir.join(format!(
-        ".{}.tmp-{}-{}",
-        file_name.to_string_lossy(),
-        std::process::id(),
-        WRITES.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
-    ));
-    py.detach(|| {
-        std::fs::write(&tmp, &bytes)
-            .and_then(|_| std::fs::rename(&tmp, &path))
-            .inspect_err(|_| {
-                let _ = std::fs::remove_file(&tmp);
-            })
-    })
-    .map_err(io)
+    // coulomb::atomic: temporary file beside the destination, rename; a destination that
+    // is not a regular file (device, FIFO, directory, dangling link) is refused
+    py.detach(|| coulomb::atomic::write(&path, &bytes))
+        .map_err(io)
 }
 
 /// The compiled module `coulomb._coulomb`.

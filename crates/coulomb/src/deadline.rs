@@ -1,25 +1,73 @@
 //! The instant at which a time-limited solve stops, computed without overflow: one
-//! [`Deadline`] type, made once per solve from [`crate::Settings::time_limit`].
+//! [`Deadline`] type, made once per solve from [`crate::Settings::time_limit`] and
+//! [`crate::Settings::cancel`].
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-/// When a solve must stop: an instant, or never.
+/// A request to stop a solve early, from outside it (a signal handler, another thread): a
+/// flag that the solve reads wherever it reads the clock for its time limit. Once the flag is
+/// set, the deadline counts as passed; the solve returns its best iterate with
+/// [`crate::Status::Interrupted`] (the error recomputed as for any other ending).
+#[derive(Clone, Copy)]
+pub struct Cancel(&'static AtomicBool);
+
+impl Cancel {
+    /// A request read from `flag` (set it to true to stop the solves that carry it).
+    pub fn new(flag: &'static AtomicBool) -> Self {
+        Self(flag)
+    }
+
+    /// Whether the stop was requested.
+    pub fn requested(&self) -> bool {
+        self.0.load(Ordering::Relaxed)
+    }
+}
+
+impl std::fmt::Debug for Cancel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Cancel({})", self.requested())
+    }
+}
+
+/// Two requests are the same when they read the same flag.
+impl PartialEq for Cancel {
+    fn eq(&self, other: &Self) -> bool {
+        std::ptr::eq(self.0, other.0)
+    }
+}
+
+impl Eq for Cancel {}
+
+/// When a solve must stop: an instant, or never; and earlier when its [`Cancel`] is
+/// requested.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Deadline(Option<Instant>);
+pub struct Deadline(Option<Instant>, Option<Cancel>);
 
 impl Deadline {
     /// No deadline.
-    pub const NEVER: Deadline = Deadline(None);
+    pub const NEVER: Deadline = Deadline(None, None);
 
     /// `start + limit` ([`deadline`]): never when there is no limit or when the sum is beyond
     /// what [`Instant`] can represent.
     pub fn after(start: Instant, limit: Option<Duration>) -> Self {
-        Self(deadline(start, limit))
+        Self(deadline(start, limit), None)
     }
 
-    /// Whether the deadline has passed (reads the clock; never for [`Deadline::NEVER`]).
+    /// The same deadline, passed as soon as `cancel` (when some) is requested.
+    pub fn with_cancel(self, cancel: Option<Cancel>) -> Self {
+        Self(self.0, cancel)
+    }
+
+    /// Whether the deadline has passed (reads the clock; never for [`Deadline::NEVER`]) or a
+    /// stop was requested ([`Deadline::cancelled`]).
     pub fn passed(&self) -> bool {
-        self.0.is_some_and(|t| Instant::now() >= t)
+        self.cancelled() || self.0.is_some_and(|t| Instant::now() >= t)
+    }
+
+    /// Whether the solve was asked to stop by its [`Cancel`].
+    pub fn cancelled(&self) -> bool {
+        self.1.is_some_and(|c| c.requested())
     }
 
     /// The deadline of a part of the work that may use `fraction` of the time left now
@@ -34,6 +82,7 @@ impl Deadline {
         Self(
             self.0
                 .map(|t| now + t.saturating_duration_since(now).mul_f64(fraction)),
+            self.1,
         )
     }
 
@@ -45,13 +94,13 @@ impl Deadline {
 
 impl From<Option<Instant>> for Deadline {
     fn from(t: Option<Instant>) -> Self {
-        Self(t)
+        Self(t, None)
     }
 }
 
 impl From<Instant> for Deadline {
     fn from(t: Instant) -> Self {
-        Self(Some(t))
+        Self(Some(t), None)
     }
 }
 
@@ -95,5 +144,18 @@ mod tests {
         let half = d.share(0.5).instant().unwrap();
         assert!(half + Duration::from_secs(45) < t && half + Duration::from_secs(55) > t);
         assert!(!d.share(1.0).passed());
+    }
+
+    #[test]
+    fn a_cancelled_deadline_has_passed_and_its_shares_too() {
+        static FLAG: AtomicBool = AtomicBool::new(false);
+        let d = Deadline::NEVER.with_cancel(Some(Cancel::new(&FLAG)));
+        assert!(!d.passed() && !d.cancelled());
+        let part = d.share(0.5);
+        FLAG.store(true, Ordering::Relaxed);
+        assert!(d.passed() && d.cancelled());
+        assert!(part.passed() && part.cancelled());
+        assert_eq!(d.instant(), None);
+        assert!(!Deadline::NEVER.passed());
     }
 }

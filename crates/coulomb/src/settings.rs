@@ -1182,6 +1182,11 @@ pub struct Settings {
     /// wall-clock limit for the whole solve (None: no limit), turned into one
     /// [`crate::deadline::Deadline`] when the solve starts
     pub time_limit: Option<Duration>,
+    /// a request to stop early from outside the solve (e.g. a signal handler; None: none),
+    /// read wherever the time limit is: the solve then ends with
+    /// [`crate::Status::Interrupted`] and its best iterate
+    #[cfg_attr(feature = "serde", serde(skip))]
+    pub cancel: Option<crate::deadline::Cancel>,
     /// ε of the paper's stopping rule (6.1) ‖F(s) − s‖ / (n (‖s‖ + 1)) ≤ ε, used as an
     /// additional internal stopping test when set (the reported status still requires err ≤ tol)
     pub fixed_point_tol: Option<f64>,
@@ -1213,6 +1218,7 @@ impl Default for Settings {
             max_outer: 200,
             max_inner: 10_000,
             time_limit: Some(Duration::from_secs(60)),
+            cancel: None,
             fixed_point_tol: None,
             facets: 8,
             inner_tol_factor: 0.1,

@@ -38,6 +38,9 @@ pub enum Status {
     /// (v = M⁻¹(H r + f) from the Cholesky factor of one triangle of M does not balance the
     /// whole M: M ill-conditioned or not quite symmetric, as in some FEM files)
     BalanceResidual,
+    /// the solve was asked to stop ([`crate::Settings::cancel`], e.g. on SIGINT) before the
+    /// error reached tol; the returned iterate is the best one found so far
+    Interrupted,
 }
 
 impl Status {
@@ -54,6 +57,7 @@ impl Status {
             Status::FixedPointRule => "fixed_point_rule",
             Status::Unbounded => "unbounded",
             Status::BalanceResidual => "balance_residual",
+            Status::Interrupted => "interrupted",
         }
     }
 }
@@ -158,6 +162,7 @@ mod tests {
             Status::FixedPointRule,
             Status::Unbounded,
             Status::BalanceResidual,
+            Status::Interrupted,
         ] {
             let json = serde_json::to_string(&s).unwrap();
             assert_eq!(json, format!("\"{s}\""));

@@ -14,6 +14,11 @@
 //!
 //! Outputs: a table on stdout (progress on stderr), `--json` with every record, `--svg` with the
 //! performance profile (see [`profile`]).
+//!
+//! SIGINT/SIGTERM ([`crate::interrupt`]) stop the benchmark after the solve in progress: the
+//! table, JSON and SVG are written for the problems whose solvers all ran (a problem cut short
+//! is left out, so that the profile compares every solver on the same problems), the JSON
+//! says `"interrupted"`, and the exit status is 130/143.
 
 mod files;
 pub mod plot;
@@ -21,6 +26,8 @@ mod profile;
 mod record;
 mod solvers;
 
+use crate::exit::Outcome;
+use crate::interrupt::Signal;
 use record::{Criteria, ProblemInfo, Record, Run, RunSummary};
 use serde::Serialize;
 use solvers::SolverSpec;
@@ -130,8 +137,19 @@ fn plan(args: &Args) -> Result<Plan, BenchError> {
     })
 }
 
-/// Runs `coulomb bench`.
-pub fn run(args: Args) -> anyhow::Result<()> {
+/// How far an interrupted benchmark got (`"interrupted"` in the JSON).
+#[derive(Debug, Clone, Serialize)]
+struct Partial {
+    /// SIGINT or SIGTERM
+    signal: &'static str,
+    /// problems whose solvers all ran (those reported)
+    problems_done: usize,
+    /// problems found in the PATHs
+    problems_found: usize,
+}
+
+/// Runs `coulomb bench`: 0 when it ran to its end, 130/143 when a signal stopped it.
+pub fn run(args: Args) -> anyhow::Result<Outcome> {
     let plan = plan(&args)?;
     let files = files::collect(&args.paths)?;
     if files.is_empty() {
@@ -151,27 +169,61 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let names = files::display_names(&files);
     let solver_names: Vec<String> = plan.solvers.iter().map(SolverSpec::name).collect();
+    crate::interrupt::install()?;
 
-    // by_problem[p][s]: the record of solver s on problem p
-    let by_problem: Vec<Vec<Record>> = files
-        .iter()
-        .zip(&names)
-        .enumerate()
-        .map(|(i, (file, name))| {
-            let progress = format!("[{}/{}] {name}", i + 1, files.len());
-            bench_file(file, name, &plan, &progress)
-        })
-        .collect();
+    // by_problem[p][s]: the record of solver s on problem p (problems whose solvers all ran)
+    let mut by_problem: Vec<Vec<Record>> = Vec::with_capacity(files.len());
+    let mut interrupted: Option<Signal> = None;
+    for (i, (file, name)) in files.iter().zip(&names).enumerate() {
+        let progress = format!("[{}/{}] {name}", i + 1, files.len());
+        let records = bench_file(file, name, &plan, &progress);
+        let complete = records.len() == plan.solvers.len();
+        if complete {
+            by_problem.push(records);
+        }
+        interrupted = crate::interrupt::received();
+        if let Some(signal) = interrupted {
+            eprintln!(
+                "interrupted by {}: {} of {} problems benched{}",
+                signal.name(),
+                by_problem.len(),
+                files.len(),
+                if complete {
+                    String::new()
+                } else {
+                    format!(" ({name} cut short, left out)")
+                }
+            );
+            break;
+        }
+    }
+    let partial = interrupted.map(|signal| Partial {
+        signal: signal.name(),
+        problems_done: by_problem.len(),
+        problems_found: files.len(),
+    });
+    if let (Some(signal), true) = (interrupted, by_problem.is_empty()) {
+        eprintln!("no problem was benched by every solver: nothing written");
+        return Ok(Outcome::Interrupted(signal));
+    }
+    let n_problems = by_problem.len();
     let prof = profile::performance_profile(&time_table(&by_problem))?;
     let records: Vec<Record> = by_problem.into_iter().flatten().collect();
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     write_table(&mut out, &records)?;
     writeln!(out)?;
-    write_summary(&mut out, &records, &prof, &solver_names, names.len())?;
+    write_summary(&mut out, &records, &prof, &solver_names, n_problems)?;
 
     if let Some(path) = &args.json {
-        write_json(path, &records, &prof, &solver_names, &plan)?;
+        write_json(
+            path,
+            &records,
+            &prof,
+            &solver_names,
+            &plan,
+            partial.as_ref(),
+        )?;
         writeln!(out, "wrote {}", path.display())?;
     }
     if let Some(path) = &args.svg {
@@ -183,22 +235,26 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     "{} ({}/{} solved)",
                     spec.name(),
                     solved_count(&records, &spec.name()),
-                    names.len()
+                    n_problems
                 ),
                 color: inner_index(spec),
                 dashed: !spec.fallback && spec.outer != coulomb::solver::OuterKind::FixedPoint,
             })
             .collect();
-        let title = format!(
+        let mut title = format!(
             "Performance profile: {} problems, tol {:e}, time limit {} s",
-            names.len(),
-            plan.criteria.tol,
-            plan.criteria.time_limit_s
+            n_problems, plan.criteria.tol, plan.criteria.time_limit_s
         );
+        if let Some(p) = &partial {
+            title.push_str(&format!(
+                " (interrupted: {} of {} problems)",
+                p.problems_done, p.problems_found
+            ));
+        }
         plot::write_svg(path, &prof, &curves, &title)?;
         writeln!(out, "wrote {}", path.display())?;
     }
-    Ok(())
+    Ok(interrupted.map_or(Outcome::Success, Outcome::Interrupted))
 }
 
 /// Colour slot of a solver: one per inner solver, so that `x` and `x+anderson` share a colour.
@@ -221,7 +277,8 @@ fn solved_count(records: &[Record], solver: &str) -> usize {
         .count()
 }
 
-/// Reads one file and runs every solver on it; never fails (failures become records).
+/// Reads one file and runs every solver on it; never fails (failures become records). Fewer
+/// records than solvers when a signal was received ([`crate::interrupt`]).
 fn bench_file(file: &Path, name: &str, plan: &Plan, progress: &str) -> Vec<Record> {
     let mut info = ProblemInfo {
         name: name.to_string(),
@@ -247,16 +304,20 @@ fn bench_file(file: &Path, name: &str, plan: &Plan, progress: &str) -> Vec<Recor
     };
     info.kind = Some(problem.kind().to_string());
     info.contacts = Some(problem.contacts());
+    // a received signal stops the loop before the next solve (the records so far are kept)
     plan.solvers
         .iter()
-        .map(|spec| {
+        .map_while(|spec| {
+            if crate::interrupt::received().is_some() {
+                return None;
+            }
             let settings = spec.settings(plan.criteria.tol, plan.time_limit);
             let mut runs = Vec::with_capacity(plan.repeat);
             for _ in 0..plan.repeat {
                 let run = timed_solve(&problem, &settings);
                 let failed = !plan.criteria.judge(&run).0;
                 runs.push(run);
-                if failed {
+                if failed || crate::interrupt::received().is_some() {
                     break;
                 }
             }
@@ -268,7 +329,7 @@ fn bench_file(file: &Path, name: &str, plan: &Plan, progress: &str) -> Vec<Recor
                 fmt_opt_sci(rec.error),
                 fmt_opt_time(rec.time_s)
             );
-            rec
+            Some(rec)
         })
         .collect()
 }
@@ -528,6 +589,9 @@ struct Report<'a> {
     solvers: &'a [String],
     records: &'a [Record],
     profile: Vec<SolverSummary>,
+    /// present when a signal stopped the benchmark early
+    #[serde(skip_serializing_if = "Option::is_none")]
+    interrupted: Option<&'a Partial>,
 }
 
 fn command_line() -> String {
@@ -549,6 +613,7 @@ fn write_json(
     prof: &profile::Profile,
     solvers: &[String],
     plan: &Plan,
+    interrupted: Option<&Partial>,
 ) -> Result<(), BenchError> {
     let n_problems = prof.n_problems();
     let report = Report {
@@ -560,6 +625,7 @@ fn write_json(
         solvers,
         records,
         profile: summaries(records, prof, solvers, n_problems),
+        interrupted,
     };
     let text = crate::outputs::json(&report, true)?;
     crate::outputs::write(path, (text + "\n").as_bytes()).map_err(|e| BenchError::Write {

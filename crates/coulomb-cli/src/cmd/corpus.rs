@@ -513,9 +513,8 @@ fn write_item(dir: &Path, item: Item) -> anyhow::Result<Entry> {
         math_info: String::new(),
     });
     let path = dir.join(&file_name);
-    let tmp = dir.join(format!(".{file_name}.tmp"));
-    fclib::write(&tmp, &file).with_context(|| format!("writing {}", tmp.display()))?;
-    std::fs::rename(&tmp, &path).with_context(|| format!("renaming to {}", path.display()))?;
+    // atomic (coulomb::atomic): temporary file, rename; a non-regular file there is refused
+    fclib::write(&path, &file).with_context(|| format!("writing {}", path.display()))?;
     Ok(Entry {
         file: file_name,
         class: item.class.to_string(),
@@ -534,11 +533,11 @@ fn write_item(dir: &Path, item: Item) -> anyhow::Result<Entry> {
     })
 }
 
-/// Writes `bytes` to a temporary file beside `path`, then renames it.
+/// Writes `bytes` to `path` with [`crate::outputs::write`] (atomic; a non-regular file at
+/// `path` is refused).
 fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    let tmp = path.with_extension("json.tmp");
-    std::fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("renaming to {}", path.display()))
+    crate::outputs::write(path, bytes)?;
+    Ok(())
 }
 
 /// A small deterministic generator (SplitMix64), so that the corpus depends on nothing but

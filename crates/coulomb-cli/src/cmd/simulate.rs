@@ -1,6 +1,7 @@
 //! `coulomb simulate`: Moreau–Jean time stepping of one of the granular scenes, with per-step
 //! statistics (CSV, JSON), VTK frames for ParaView and optional FCLIB dumps of each step.
 
+use crate::exit::Outcome;
 use crate::sim_args::Args;
 use anyhow::{bail, Context};
 use coulomb_granular::output::{write_stats, VtkWriter};
@@ -9,7 +10,10 @@ use coulomb_granular::{Scene, Simulation, Summary};
 
 /// Runs `coulomb simulate` in this process, on the scene checked by
 /// [`crate::sim_args::checked_scene`] (main.rs hands distributed runs to `simulate_mpi`).
-pub fn run(args: Args, scene: Scene) -> anyhow::Result<()> {
+/// SIGINT/SIGTERM stop it after the step in progress, with every output written
+/// ([`crate::interrupt`]): exit status 130/143; `--until-rest` at its step cap: 1.
+pub fn run(args: Args, scene: Scene) -> anyhow::Result<Outcome> {
+    crate::interrupt::install().context("installing the SIGINT/SIGTERM handlers")?;
     let stop = args.stop();
     let world = if args.spread_top {
         if scene != Scene::Box {
@@ -39,6 +43,7 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<()> {
     let mut stats = Vec::new();
     let mut monitor = RestMonitor::default();
     let mut at_rest = false;
+    let mut interrupted = None;
     while sim.steps_done < stop.max_steps() {
         let s = sim.step().context("time step failed")?;
         pb.set_message(format!(
@@ -60,6 +65,10 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<()> {
             at_rest = rest;
             break;
         }
+        interrupted = crate::interrupt::received();
+        if interrupted.is_some() {
+            break;
+        }
     }
     pb.finish_and_clear();
     // the last state, when the run stopped between two frames
@@ -69,7 +78,8 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<()> {
             w.frame(&sim).context("writing VTK frame")?;
         }
     }
-    let summary = Summary::from_stats(scene.name(), args.beads, &stats, at_rest);
+    let summary = Summary::from_stats(scene.name(), args.beads, &stats, at_rest)
+        .stopped_by(&stop, interrupted.map(|s| s.name()));
     let end_energy = sim.world.kinetic_energy() + sim.world.potential_energy();
     if let Some(dir) = &args.output {
         write_stats(dir, &stats)
@@ -89,7 +99,7 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<()> {
             summary.scene,
             summary.beads,
             summary.steps,
-            if summary.at_rest { " (at rest)" } else { "" },
+            crate::interrupt::stopped_note(&summary),
             summary.mean_contacts,
             summary.mean_subproblems,
             summary.mean_solve_ms,
@@ -103,7 +113,13 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<()> {
             summary.end_max_penetration
         );
     }
-    Ok(())
+    if let Some(signal) = interrupted {
+        return crate::interrupt::simulation_interrupted(&sim, args.output.as_deref(), signal);
+    }
+    Ok(crate::interrupt::simulation_outcome(
+        &summary,
+        stop.max_steps(),
+    ))
 }
 
 /// Writes one step's problem as `step_KKKKKK.hdf5` in FCLIB global format.

@@ -6,6 +6,7 @@
 //! distributed.json (per step: sweeps, communication time, ghosts, interface contacts,
 //! migration, imbalance); every rank writes its VTK pieces, rank 0 the .pvtp/.pvd collections.
 
+use crate::exit::Outcome;
 use crate::progress::bar as progress;
 use crate::sim_args::{Args, Method};
 use anyhow::{bail, Context};
@@ -14,8 +15,9 @@ use coulomb_granular::distributed::{Comm, DistributedSimulation, DistributedStat
 use coulomb_granular::output::write_stats;
 use coulomb_granular::{Scene, StepStats, Stop, Summary};
 
-/// Runs `coulomb simulate` on the ranks of MPI_COMM_WORLD.
-pub fn run(args: Args, scene: Scene) -> anyhow::Result<()> {
+/// Runs `coulomb simulate` on the ranks of MPI_COMM_WORLD. Exit status 1 on every rank when
+/// `--until-rest` stopped at its step cap without reaching rest (as in one process).
+pub fn run(args: Args, scene: Scene) -> anyhow::Result<Outcome> {
     if args.dump_fclib.is_some() {
         bail!("--dump-fclib is not available in a distributed run");
     }
@@ -99,10 +101,18 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<()> {
     let end_energy = sim.energy();
     let ranks = sim.comm.size();
     if rank != 0 {
-        return Ok(());
+        // the status of rank 0 (which says why), so that the launcher reports it whichever
+        // rank it looks at
+        let capped = matches!(stop, Stop::UntilRest { .. }) && !at_rest;
+        return Ok(if capped {
+            Outcome::No
+        } else {
+            Outcome::Success
+        });
     }
     let steps: Vec<StepStats> = stats.iter().map(|s| s.step.clone()).collect();
-    let summary = Summary::from_stats(scene.name(), args.beads, &steps, at_rest);
+    let summary =
+        Summary::from_stats(scene.name(), args.beads, &steps, at_rest).stopped_by(&stop, None);
     let n = stats.len().max(1) as f64;
     let mean = |f: fn(&DistributedStats) -> f64| stats.iter().map(f).sum::<f64>() / n;
     let (step_ms, comm_ms, sweeps) = (
@@ -139,7 +149,7 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<()> {
             summary.beads,
             ranks,
             summary.steps,
-            if summary.at_rest { " (at rest)" } else { "" },
+            crate::interrupt::stopped_note(&summary),
             summary.mean_contacts,
             sweeps,
             step_ms,
@@ -154,5 +164,8 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<()> {
             summary.end_max_penetration
         );
     }
-    Ok(())
+    Ok(crate::interrupt::simulation_outcome(
+        &summary,
+        stop.max_steps(),
+    ))
 }

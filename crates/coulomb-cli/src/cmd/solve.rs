@@ -108,9 +108,14 @@ pub fn settings(args: &Args) -> anyhow::Result<Settings> {
     Ok(s)
 }
 
-/// Runs `coulomb solve`: exit status 0 when converged, 1 otherwise (see `crate::exit`).
+/// Runs `coulomb solve`: exit status 0 when converged, 1 otherwise (see `crate::exit`);
+/// 130/143 when SIGINT/SIGTERM stopped it ([`crate::interrupt`]: the solver stops at its next
+/// time-limit check with status `interrupted` and its best iterate, whose error is reported
+/// as always; the existence check is skipped).
 pub fn run(args: Args) -> anyhow::Result<Outcome> {
-    let settings = settings(&args)?;
+    crate::interrupt::install().context("installing the SIGINT/SIGTERM handlers")?;
+    let mut settings = settings(&args)?;
+    settings.cancel = crate::interrupt::cancel();
     if let Some(out) = &args.output {
         crate::outputs::check("--output", out, &[&args.file])?;
     }
@@ -130,8 +135,14 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
     }
     // a solve that did not converge: say whether a solution can exist at all (§4–5), within
     // the solve's time limit again (30 s without one)
+    let interrupted = crate::interrupt::received();
     let existence = if sol.converged() {
         None
+    } else if let Some(signal) = interrupted {
+        Some(serde_json::json!({
+            "conclusion": "unknown",
+            "skipped": format!("interrupted by {}", signal.name()),
+        }))
     } else {
         let budget = settings.time_limit.unwrap_or(Duration::from_secs(30));
         let check = coulomb::existence::CheckSettings {
@@ -206,6 +217,22 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
                 println!("                  by criterion ({by})");
             }
         }
+    }
+    if let Some(signal) = interrupted {
+        eprintln!(
+            "interrupted by {}: status {}, error {:.3e}{}",
+            signal.name(),
+            report.status,
+            report.error,
+            match &args.output {
+                Some(out) => format!(
+                    "; {} holds the iterate the solve had reached",
+                    out.display()
+                ),
+                None => String::new(),
+            }
+        );
+        return Ok(Outcome::Interrupted(signal));
     }
     Ok(if report.converged {
         Outcome::Success

@@ -247,9 +247,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let failed = checks.iter().filter(|(_, c)| !c.pass()).count();
     let md = markdown(&checks, args.quick);
     if let Some(path) = &args.markdown {
-        let tmp = path.with_extension("md.tmp");
-        std::fs::write(&tmp, &md).with_context(|| format!("writing {}", tmp.display()))?;
-        std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))?;
+        crate::outputs::write(path, md.as_bytes())?;
     }
     if args.json {
         let list: Vec<serde_json::Value> = checks

@@ -232,10 +232,28 @@ impl<'a> Solver<'a> {
     /// Solves the problem from `guess` (a cold start when None) under the settings' policy:
     /// warm-up sweeps, the interior-point try on Coulomb's law ([`Solver::barrier_try`]) on a
     /// cold solve of a rigid problem ([`Solver::barrier_applies`]), the main method,
-    /// the fallback. The time limit covers all of them.
+    /// the fallback. The time limit covers all of them. A solve stopped by
+    /// [`Settings::cancel`] before it converged ends with [`Status::Interrupted`] (rather than
+    /// the cap or time limit that the stop looked like inside a stage).
     pub fn solve(&mut self, guess: Option<&Guess>) -> Result<Solution, SolveError> {
+        let mut sol = self.solve_stages(guess)?;
+        let cancelled = self.settings.cancel.is_some_and(|c| c.requested());
+        if cancelled
+            && matches!(
+                sol.status,
+                Status::TimeLimit | Status::MaxIterations | Status::Stalled
+            )
+        {
+            sol.status = Status::Interrupted;
+        }
+        Ok(sol)
+    }
+
+    /// [`Solver::solve`] before the status of an interrupted solve is set.
+    fn solve_stages(&mut self, guess: Option<&Guess>) -> Result<Solution, SolveError> {
         let start = Instant::now();
-        let deadline = Deadline::after(start, self.settings.time_limit);
+        let deadline =
+            Deadline::after(start, self.settings.time_limit).with_cancel(self.settings.cancel);
         let settings = &self.settings.clone();
         let mut stages: Vec<Ran> = Vec::new();
         if settings.warmup_sweeps > 0 {
@@ -676,6 +694,7 @@ fn merge(earlier: Vec<Ran>, (mut last, last_best): Ran, start: Instant) -> Solut
         last.status,
         Status::MaxIterations
             | Status::TimeLimit
+            | Status::Interrupted
             | Status::Stalled
             | Status::InnerFailure
             | Status::NumericalError
@@ -733,6 +752,37 @@ mod tests {
             }
         }
         LocalProblem::new(3, CscMatrix::from_dense(6, 6, &w), q, vec![0.3, 0.5]).unwrap()
+    }
+
+    /// A stop requested before or during a solve ends it with `Interrupted`, never with a
+    /// claim of convergence, and with the iterate's own error; without the request the same
+    /// settings converge.
+    #[test]
+    fn a_cancelled_solve_ends_interrupted_with_its_error() {
+        use std::sync::atomic::{AtomicBool, Ordering};
+        static STOP: AtomicBool = AtomicBool::new(false);
+        let p = Problem::Local(local(vec![-1.0, 0.4, 0.1, -0.5, -0.2, 0.3]));
+        for base in [
+            Settings::default(),
+            Settings::method(InnerKind::Apgd, OuterKind::FixedPoint),
+        ] {
+            let settings = Settings {
+                cancel: Some(crate::deadline::Cancel::new(&STOP)),
+                ..base
+            };
+            STOP.store(false, Ordering::Relaxed);
+            assert!(solve(&p, &settings).unwrap().converged());
+            STOP.store(true, Ordering::Relaxed);
+            let sol = solve(&p, &settings).unwrap();
+            assert_eq!(sol.status, Status::Interrupted);
+            assert!(!sol.converged());
+            assert!(
+                sol.error.is_finite() && sol.error > settings.tol,
+                "{}",
+                sol.error
+            );
+        }
+        STOP.store(false, Ordering::Relaxed);
     }
 
     #[test]

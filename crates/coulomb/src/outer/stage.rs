@@ -169,6 +169,8 @@ impl<'f, 'a> Stage<'f, 'a> {
             Some(Status::Unbounded)
         } else if self.history.len() >= self.settings.max_outer {
             Some(Status::MaxIterations)
+        } else if self.deadline.cancelled() {
+            Some(Status::Interrupted)
         } else if self.deadline.passed() {
             Some(Status::TimeLimit)
         } else {

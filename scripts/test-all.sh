@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The project's one test command (README, .ci/run): the Rust workspace tests, then the Python
-# package crates/coulomb-py built into a virtual environment and its pytest suite.
+# package crates/coulomb-py built into a virtual environment and its pytest suite, then the MPI
+# tests where MPI is installed. Ends with one line "N passed, N failed, N skipped" (docs/testing.md).
 #
 #   bash scripts/test-all.sh
 #
@@ -8,7 +9,45 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-cargo test --workspace
+mkdir -p target
+LOG=target/test-all.log
+: >"$LOG"
+
+# The closing line, also when a step fails: totals over cargo's "test result:" lines (passed,
+# failed, ignored) and pytest's summary line (passed; failed and errors; skipped). Tests that
+# need ../shared are ignored (Rust) or skipped (pytest) without it, never counted as passed.
+summary() {
+  local status=$?
+  awk '
+    /^test result: / {
+      for (i = 1; i <= NF; i++) {
+        w = $(i + 1); sub(/[;,]$/, "", w)
+        if (w == "passed") p += $i; else if (w == "failed") f += $i; else if (w == "ignored") s += $i
+      }
+      next
+    }
+    / in [0-9.]+s( \([0-9:]+\))?( =+)?$/ && /(passed|failed|skipped|error)/ {
+      line = $0; gsub(/=+/, "", line); sub(/ in [0-9.]+s.*$/, "", line)
+      n = split(line, parts, ", ")
+      for (k = 1; k <= n; k++) {
+        split(parts[k], kv, " "); c = kv[1] + 0; w = kv[2]
+        if (w == "passed") p += c; else if (w == "failed" || w == "error" || w == "errors") f += c
+        else if (w == "skipped") s += c
+      }
+    }
+    END { printf "%d passed, %d failed, %d skipped\n", p, f, s }
+  ' "$LOG"
+  exit "$status"
+}
+trap summary EXIT
+
+# Unit and integration tests, then the doc tests: `--tests` leaves out the examples, which a
+# plain `cargo test` would also compile and link at opt-level 2 only to check that they build
+# (one of them took over a minute); clippy --all-targets (.ci/run) checks that they compile.
+# --no-fail-fast: every test binary runs even when an earlier one fails, so that the counts
+# are complete.
+cargo test --workspace --tests --no-fail-fast 2>&1 | tee -a "$LOG"
+cargo test --workspace --doc --no-fail-fast 2>&1 | tee -a "$LOG"
 
 VENV=${COULOMB_PY_VENV:-target/py-venv}
 PYTHON=${PYTHON:-python3}
@@ -26,24 +65,24 @@ PY="$(cd "$VENV" && pwd)/bin/python"
 # The library then goes where `maturin develop` puts it in this mixed Rust/Python layout: next
 # to the package's Python sources (python/coulomb/_coulomb.abi3.so, git-ignored), which a .pth
 # file in the venv puts on Python's path.
-PYO3_PYTHON="$PY" cargo build --workspace --lib --tests --profile test
+PYO3_PYTHON="$PY" cargo build --workspace --lib --tests --profile test 2>&1 | tee -a "$LOG"
 lib=target/debug/lib_coulomb.so
 [ -f "$lib" ] || lib=target/debug/lib_coulomb.dylib
 cp "$lib" crates/coulomb-py/python/coulomb/_coulomb.abi3.so
 site=$("$PY" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
-echo "$PWD/crates/coulomb-py/python" > "$site/coulomb-dev.pth"
+echo "$PWD/crates/coulomb-py/python" >"$site/coulomb-dev.pth"
 
 # the CLI binary `cargo test` built, for the CLI-equality tests
 export COULOMB_CLI="$PWD/target/debug/coulomb"
 # pytest's exit code fails the script: 1 for failures, 5 when no test was collected
-# (set -e makes both fail the run; nothing is masked)
-"$PY" -m pytest crates/coulomb-py/tests -q -rs
+# (set -e and pipefail make both fail the run; nothing is masked)
+"$PY" -m pytest crates/coulomb-py/tests -q -rs 2>&1 | tee -a "$LOG"
 
 # the distributed feature (docs/distributed.md): its unit tests and `coulomb simulate` under
 # `mpirun -np 2`, when an MPI implementation is installed (.ci/run installs one); last, because
 # its build replaces target/debug/coulomb by the MPI-enabled binary
 if command -v mpicc >/dev/null && command -v mpirun >/dev/null; then
-  cargo test --workspace --features coulomb-cli/mpi --lib --test cli_mpi -- distributed
+  cargo test --workspace --features coulomb-cli/mpi --lib --test cli_mpi -- distributed 2>&1 | tee -a "$LOG"
 else
-  echo "skipped: the distributed (mpi) tests need mpicc and mpirun (apt-get install libopenmpi-dev openmpi-bin libclang-dev)"
+  echo "note: the distributed (mpi) tests were not built: they need mpicc and mpirun (apt-get install libopenmpi-dev openmpi-bin libclang-dev)"
 fi

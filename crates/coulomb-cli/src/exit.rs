@@ -1,4 +1,4 @@
-//! Exit statuses of `coulomb` (also listed in `coulomb --help` and the README):
+//! Exit statuses of `coulomb` (also listed in `coulomb --help` and docs/reference.md):
 //!
 //! | status | meaning |
 //! |---|---|

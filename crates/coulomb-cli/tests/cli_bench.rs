@@ -11,16 +11,15 @@ fn records(report: &Value) -> &Vec<Value> {
 
 #[test]
 fn cli_bench_two_files_two_solvers_json_and_svg() {
-    let Some(dir) = fclib_dir() else { return };
     let out_dir = temp_dir("bench-two");
     let json = out_dir.join("b.json");
     let svg = out_dir.join("b.svg");
-    let a = dir.join("FrictionContact3D_1c.hdf5");
-    let b = dir.join("Rover4396.hdf5");
+    let a = data_file("box-local.hdf5");
+    let b = data_file("painleve.hdf5");
     let out = coulomb(&[
         "bench",
-        &a.display().to_string(),
-        &b.display().to_string(),
+        &a,
+        &b,
         "--solvers",
         "pgs,apgd+anderson",
         "--tol",
@@ -41,7 +40,7 @@ fn cli_bench_two_files_two_solvers_json_and_svg() {
         String::from_utf8_lossy(&out.stderr)
     );
     // the terminal table names every problem and solver
-    for name in ["FrictionContact3D_1c", "Rover4396", "pgs", "apgd+anderson"] {
+    for name in ["box-local", "painleve", "pgs", "apgd+anderson"] {
         assert!(stdout.contains(name), "{name} missing from\n{stdout}");
     }
 
@@ -52,7 +51,7 @@ fn cli_bench_two_files_two_solvers_json_and_svg() {
     assert!(report["machine"].is_object());
     let recs = records(&report);
     assert_eq!(recs.len(), 4, "one record per (problem, solver) pair");
-    for problem in ["FrictionContact3D_1c", "Rover4396"] {
+    for (problem, kind) in [("box-local", "local"), ("painleve", "global")] {
         for solver in ["pgs", "apgd+anderson"] {
             let r = recs
                 .iter()
@@ -71,7 +70,7 @@ fn cli_bench_two_files_two_solvers_json_and_svg() {
             ] {
                 assert!(r.get(key).is_some(), "{key} missing in {r}");
             }
-            assert_eq!(r["kind"], "local");
+            assert_eq!(r["kind"], kind);
             assert!(r["contacts"].as_u64().unwrap() >= 1);
             let time = r["time_s"].as_f64().expect("a solve ran");
             assert!(time >= 0.0);
@@ -88,9 +87,9 @@ fn cli_bench_two_files_two_solvers_json_and_svg() {
     }
     assert_eq!(
         recs.iter()
-            .find(|r| r["problem"] == "Rover4396")
+            .find(|r| r["problem"] == "box-local")
             .and_then(|r| r["contacts"].as_u64()),
-        Some(2)
+        Some(147)
     );
     let profile = report["profile"].as_array().expect("profile summary");
     assert_eq!(profile.len(), 2);

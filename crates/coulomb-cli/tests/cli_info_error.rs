@@ -12,8 +12,9 @@ fn path(dir: &std::path::Path, name: &str) -> String {
 }
 
 #[test]
-fn cli_info_json_several_files_is_an_array() {
-    let Some(dir) = fclib_dir() else { return };
+#[cfg_attr(not(shared_data), ignore = "needs ../shared")]
+fn needs_shared_cli_info_json_several_files_is_an_array() {
+    let dir = fclib_dir();
     let a = path(&dir, "Capsules-i125-1213");
     let b = path(&dir, "Box_Stacks-i0122-82-5");
     let c = path(&dir, "LMGC_100_PR_PerioBox-i00361-60-03000");
@@ -61,8 +62,9 @@ fn cli_info_json_several_files_is_an_array() {
 }
 
 #[test]
-fn cli_error_reproduces_documented_values() {
-    let Some(dir) = fclib_dir() else { return };
+#[cfg_attr(not(shared_data), ignore = "needs ../shared")]
+fn needs_shared_cli_error_reproduces_documented_values() {
+    let dir = fclib_dir();
     // the answer is "no": exit status 1, JSON on stdout all the same
     let out = coulomb(&["error", "--json", &path(&dir, "Capsules-i125-1213")]);
     assert_eq!(out.status.code(), Some(1));
@@ -91,8 +93,9 @@ fn cli_error_reproduces_documented_values() {
 }
 
 #[test]
-fn cli_error_missing_solution_and_bad_file() {
-    let Some(dir) = fclib_dir() else { return };
+#[cfg_attr(not(shared_data), ignore = "needs ../shared")]
+fn needs_shared_cli_error_missing_solution_and_bad_file() {
+    let dir = fclib_dir();
     let out = coulomb(&["error", &path(&dir, "Rover4396")]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);

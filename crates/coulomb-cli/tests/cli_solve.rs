@@ -74,3 +74,46 @@ fn solve_output_is_a_solution_for_coulomb_error() {
     assert!(e["error"].as_f64().unwrap() <= 1e-8);
     assert!(e["balance_residual"].as_f64().unwrap() <= 1e-8);
 }
+
+/// The README's tour on data/'s files: `info` lists each as data/README.md describes it,
+/// `solve --output` converges on each and `error` confirms the written /solution (exit 0),
+/// and `check` gives the documented conclusion with its exit status.
+#[test]
+fn data_files_info_solve_error_check_as_the_readme_shows() {
+    // (file, kind, contacts, check's exit status: 0 a solution exists, 3 unknown)
+    let files = [
+        ("box-local.hdf5", "local", 147, 0),
+        ("box-global.hdf5", "global", 147, 0),
+        ("pile-nonsym-local.hdf5", "local", 64, 3),
+        ("painleve.hdf5", "global", 1, 0),
+    ];
+    let paths: Vec<String> = files.iter().map(|f| data_file(f.0)).collect();
+    let mut args = vec!["info", "--json"];
+    args.extend(paths.iter().map(String::as_str));
+    let info = stdout_json(&coulomb(&args));
+    for ((name, kind, contacts, check_status), path) in files.into_iter().zip(&paths) {
+        let i = info
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|i| i["file"] == path.as_str())
+            .unwrap_or_else(|| panic!("{name} missing from {info}"));
+        assert_eq!(
+            (i["kind"].as_str(), i["contacts"].as_u64()),
+            (Some(kind), Some(contacts))
+        );
+        let solved = tmp(&format!("solved-{name}"));
+        let j = stdout_json(&coulomb(&[
+            "solve",
+            path,
+            "--json",
+            "--output",
+            solved.to_str().unwrap(),
+        ]));
+        assert_eq!(j["converged"], true, "{name}: {j}");
+        let e = coulomb(&["error", solved.to_str().unwrap(), "--worst", "3"]);
+        assert_eq!(e.status.code(), Some(0), "{name}: error says yes");
+        let c = coulomb(&["check", path]);
+        assert_eq!(c.status.code(), Some(check_status), "{name}: check");
+    }
+}

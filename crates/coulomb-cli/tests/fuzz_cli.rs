@@ -86,18 +86,14 @@ struct Files {
     inputs: Vec<PathBuf>,
 }
 
-/// Input files of the campaign: copies of small shared files, byte-mutated copies, garbage.
+/// Input files of the campaign: copies of data/'s three smallest files, byte-mutated copies,
+/// garbage.
 fn files(tag: &str) -> Option<Files> {
-    let shared = common::fclib_dir()?;
     let dir = common::temp_dir(tag);
     let mut inputs = Vec::new();
-    for name in [
-        "FC3D_Example1",
-        "Rover4396",
-        "Confeti-ex13-4contact-Fc3D-SBM",
-    ] {
+    for name in ["box-local", "painleve", "box-global"] {
         let to = dir.join(format!("{name}.hdf5"));
-        std::fs::copy(shared.join(format!("{name}.hdf5")), &to).ok()?;
+        std::fs::copy(common::data_file(&format!("{name}.hdf5")), &to).ok()?;
         inputs.push(to);
     }
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);

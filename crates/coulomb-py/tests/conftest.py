@@ -1,4 +1,4 @@
-"""Shared fixtures: where the FCLIB files and the CLI are."""
+"""Shared fixtures: where the FCLIB files (data/, ../shared/fclib) and the CLI are."""
 
 from __future__ import annotations
 
@@ -12,11 +12,21 @@ REPO = Path(__file__).resolve().parents[3]
 FCLIB = Path(os.environ.get("COULOMB_FCLIB", REPO.parent / "shared" / "fclib"))
 
 
+DATA = REPO / "data"
+
+
 def fclib_file(name: str) -> Path:
-    """The path of ``name`` in ../shared/fclib, or skip the test saying why."""
+    """``data/NAME`` in the repository (always there: data/README.md) for a name starting with
+    ``data/``; otherwise the path of ``name`` in ../shared/fclib, or skip the test saying that it
+    needs ../shared."""
+    if name.startswith("data/"):
+        path = REPO / name
+        assert path.is_file(), f"{path} is part of the repository"
+        return path
     path = FCLIB / name
     if not path.is_file():
-        pytest.skip(f"{path} is absent (the FCLIB files live in ../shared/fclib)")
+        pytest.skip(f"needs ../shared: {path} is absent (the FCLIB collection beside the "
+                    "repository)")
     return path
 
 

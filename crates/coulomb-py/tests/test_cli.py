@@ -11,7 +11,8 @@ import pytest
 import coulomb
 from conftest import cli_binary, fclib_file
 
-FILES = ["NESpheres_10_1.hdf5", "LMGC_100_PR_PerioBox-i00361-60-03000.hdf5",
+FILES = ["data/box-local.hdf5", "data/box-global.hdf5", "data/pile-nonsym-local.hdf5",
+         "NESpheres_10_1.hdf5", "LMGC_100_PR_PerioBox-i00361-60-03000.hdf5",
          "LMGC_GlobalFrictionContactProblem00046.hdf5", "Rover4396.hdf5"]
 
 

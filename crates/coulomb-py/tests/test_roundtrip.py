@@ -11,13 +11,17 @@ from reference import global_error, local_error
 
 sp = pytest.importorskip("scipy.sparse")
 
+# data/ (always there), then ../shared/fclib (skipped without it)
 LOCAL_FILES = [
+    "data/box-local.hdf5",
+    "data/pile-nonsym-local.hdf5",
     "FC3D_Example1.hdf5",
     "NESpheres_10_1.hdf5",
     "LMGC_100_PR_PerioBox-i00361-60-03000.hdf5",
     "BoxesStack1-i100000-32.hdf5",
 ]
-GLOBAL_FILES = ["LMGC_GlobalFrictionContactProblem00046.hdf5", "Box_Stacks-i0122-82-5.hdf5"]
+GLOBAL_FILES = ["data/box-global.hdf5", "data/painleve.hdf5",
+                "LMGC_GlobalFrictionContactProblem00046.hdf5", "Box_Stacks-i0122-82-5.hdf5"]
 
 
 @pytest.mark.parametrize("name", LOCAL_FILES)
@@ -89,7 +93,8 @@ def _h5_matrix(g):
     return sp.coo_matrix((x[:nz], (i[:nz], p[:nz])), shape=(m, n))
 
 
-@pytest.mark.parametrize("name", ["NESpheres_10_1.hdf5", "BoxesStack1-i100000-32.hdf5"])
+@pytest.mark.parametrize("name", ["data/box-local.hdf5", "NESpheres_10_1.hdf5",
+                                  "BoxesStack1-i100000-32.hdf5"])
 def test_arrays_read_by_h5py(name):
     """The data as any Python user has them (h5py, scipy), with no coulomb reader involved."""
     h5py = pytest.importorskip("h5py")

@@ -320,7 +320,7 @@ fn fclib_corrupt_inconsistent_storage() {
     expect_err(&l, "/fclib_local", "non-finite entry in q");
 }
 
-/// Byte edits of a written file and of the real files: every outcome is Ok or an
+/// Byte edits of a written file, of data/'s files and of the real files (when ../shared is there): every outcome is Ok or an
 /// `FclibError`, never a panic (the test fails if one happens).
 #[test]
 fn fclib_corrupt_byte_edits_never_panic() {
@@ -329,6 +329,9 @@ fn fclib_corrupt_byte_edits_never_panic() {
     files.push(
         fclib::to_bytes(&FclibFile::new(Problem::Local(p)), &WriteOptions::default()).unwrap(),
     );
+    for path in common::data_files() {
+        files.push(std::fs::read(path).unwrap());
+    }
     let shared = common::shared_fclib();
     for name in ["Capsules-i125-1213", "Box_Stacks-i0122-82-5", "Rover4396"] {
         if let Ok(b) = std::fs::read(shared.join(format!("{name}.hdf5"))) {
@@ -389,12 +392,10 @@ fn patch_u64(bytes: &mut [u8], from: u64, to: u64) -> usize {
 /// in Box_Stacks the 246-entry vectors (w, solution r/u, guesses) are patched, among them
 /// never-written datasets that HDF5 would fill with zeros of the declared size.
 #[test]
-fn fclib_corrupt_huge_declared_size_is_refused() {
-    let path = common::shared_fclib().join("Box_Stacks-i0122-82-5.hdf5");
-    let Ok(mut bytes) = std::fs::read(&path) else {
-        println!("skipped: ../shared absent");
-        return;
-    };
+#[cfg_attr(not(shared_data), ignore = "needs ../shared")]
+fn needs_shared_fclib_corrupt_huge_declared_size_is_refused() {
+    let path = common::fclib_dir().join("Box_Stacks-i0122-82-5.hdf5");
+    let mut bytes = std::fs::read(&path).unwrap();
     assert!(
         patch_u64(&mut bytes, 246, 1 << 50) > 0,
         "dataspace sizes found"

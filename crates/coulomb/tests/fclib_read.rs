@@ -1,4 +1,5 @@
-//! Every real FCLIB file in ../shared/fclib is read and matches what h5py shows.
+//! The files of data/ are read as data/README.md describes them; every real FCLIB file in
+//! ../shared/fclib (when present) is read and matches what h5py shows.
 
 mod common;
 
@@ -80,9 +81,47 @@ fn read(dir: &Path, name: &str) -> FclibFile {
     }
 }
 
+/// data/'s files: kind, d, contacts, dofs and the asymmetry of W as data/README.md lists them.
 #[test]
-fn fclib_every_shared_file_is_read() {
-    let Some(dir) = fclib_dir() else { return };
+fn fclib_data_files_are_as_documented() {
+    let dir = common::data_dir();
+    let rows: [(&str, &str, usize, usize, Option<usize>, bool); 4] = [
+        ("box-local", "local", 3, 147, None, false),
+        ("box-global", "global", 3, 147, Some(720), false),
+        ("pile-nonsym-local", "local", 3, 64, None, true),
+        ("painleve", "global", 2, 1, Some(1), false),
+    ];
+    assert_eq!(
+        common::data_files().len(),
+        rows.len(),
+        "data/README.md lists every file"
+    );
+    for (name, kind, dim, contacts, dofs, asymmetric) in rows {
+        let f = read(&dir, name);
+        let p = &f.problem;
+        assert_eq!(
+            (p.kind(), p.dim(), p.contacts(), p.dofs()),
+            (kind, dim, contacts, dofs),
+            "{name}"
+        );
+        // pile-nonsym-local: relative asymmetry 1e-5 by construction (coulomb corpus)
+        if asymmetric {
+            assert!(
+                (p.asymmetry() / 1e-5 - 1.0).abs() < 1e-3,
+                "{name}: {}",
+                p.asymmetry()
+            );
+        } else {
+            assert_eq!(p.asymmetry(), 0.0, "{name}");
+        }
+        assert!(f.solution.is_none(), "{name}: data/ stores problems only");
+    }
+}
+
+#[test]
+#[cfg_attr(not(shared_data), ignore = "needs ../shared")]
+fn needs_shared_fclib_every_shared_file_is_read() {
+    let dir = fclib_dir();
     let mut on_disk: Vec<String> = std::fs::read_dir(&dir)
         .unwrap()
         .filter_map(|e| {
@@ -113,8 +152,9 @@ fn fclib_every_shared_file_is_read() {
 }
 
 #[test]
-fn fclib_storage_details_of_real_files() {
-    let Some(dir) = fclib_dir() else { return };
+#[cfg_attr(not(shared_data), ignore = "needs ../shared")]
+fn needs_shared_fclib_storage_details_of_real_files() {
+    let dir = fclib_dir();
     // CSR W (nz = -2), LMGC90.
     let f = read(&dir, "LMGC_100_PR_PerioBox-i00361-60-03000");
     let Problem::Local(p) = &f.problem else {
@@ -177,8 +217,9 @@ for fn in sorted(glob.glob(os.path.join(sys.argv[1], '*.hdf5'))):
 }
 
 #[test]
-fn fclib_matches_live_h5py() {
-    let Some(dir) = fclib_dir() else { return };
+#[cfg_attr(not(shared_data), ignore = "needs ../shared")]
+fn needs_shared_fclib_matches_live_h5py() {
+    let dir = fclib_dir();
     if !h5py_available() {
         println!("skipped: python3 with h5py not available");
         return;
@@ -213,8 +254,9 @@ const ASYMMETRIC: &[(&str, f64)] = &[
 ];
 
 #[test]
-fn fclib_non_symmetric_w_is_read_as_stored() {
-    let Some(dir) = fclib_dir() else { return };
+#[cfg_attr(not(shared_data), ignore = "needs ../shared")]
+fn needs_shared_fclib_non_symmetric_w_is_read_as_stored() {
+    let dir = fclib_dir();
     for &(name, ..) in EXPECTED {
         let f = read(&dir, name);
         let asym = f.problem.asymmetry();
@@ -234,8 +276,9 @@ fn fclib_non_symmetric_w_is_read_as_stored() {
 
 /// The stored solutions of docs/fclib.md, evaluated with the error of docs/error.md.
 #[test]
-fn fclib_stored_solutions_evaluate_as_documented() {
-    let Some(dir) = fclib_dir() else { return };
+#[cfg_attr(not(shared_data), ignore = "needs ../shared")]
+fn needs_shared_fclib_stored_solutions_evaluate_as_documented() {
+    let dir = fclib_dir();
     let f = read(&dir, "Capsules-i125-1213");
     let e = fclib::evaluate(&f.problem, f.solution.as_ref().unwrap()).unwrap();
     println!("Capsules-i125-1213 solution: {e:?}");

@@ -776,9 +776,13 @@ fn mutate_bytes(rng: &mut ChaCha8Rng, mut b: Vec<u8>) -> Vec<u8> {
     b
 }
 
-/// Seed images: the shared FCLIB files (the smaller ones) and structured images.
+/// Seed images: data/'s FCLIB files, the shared ones (the smaller ones, when ../shared is
+/// there) and structured images.
 fn seed_images() -> Vec<Vec<u8>> {
-    let mut out = Vec::new();
+    let mut out: Vec<Vec<u8>> = common::data_files()
+        .iter()
+        .map(|p| std::fs::read(p).unwrap())
+        .collect();
     let dir = common::shared_fclib();
     if let Ok(rd) = std::fs::read_dir(&dir) {
         let mut paths: Vec<_> = rd.filter_map(|e| e.ok()).map(|e| e.path()).collect();

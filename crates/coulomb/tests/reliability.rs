@@ -272,13 +272,17 @@ fn reliability_balance_residual_of_huge_f_is_not_zero() {
 /// found by the command-line fuzz run (`solve F --tol 0.3`).
 #[test]
 fn reliability_large_tolerances_do_not_panic() {
-    let dir = common::shared_fclib();
+    for path in common::data_files() {
+        large_tolerances_on(&coulomb::fclib::read(&path).unwrap().problem);
+    }
+}
+
+#[test]
+#[cfg_attr(not(shared_data), ignore = "needs ../shared")]
+fn needs_shared_reliability_large_tolerances_do_not_panic_on_fclib() {
+    let dir = common::fclib_dir();
     for name in ["Box_Stacks-i0122-82-5.hdf5", "Capsules-i125-1213.hdf5"] {
-        let Ok(f) = coulomb::fclib::read(&dir.join(name)) else {
-            println!("skipped: ../shared absent");
-            return;
-        };
-        large_tolerances_on(&f.problem);
+        large_tolerances_on(&coulomb::fclib::read(&dir.join(name)).unwrap().problem);
     }
 }
 

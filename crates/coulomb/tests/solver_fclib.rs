@@ -1,4 +1,5 @@
-//! Every problem of ../shared/fclib with the default settings reaches error ≤ 1e-8, checked
+//! Every problem of data/ (always) and of ../shared/fclib (when present) with the default
+//! settings reaches error ≤ 1e-8, checked
 //! independently: the solution is written as the file's /solution group, read back, and its
 //! error recomputed by `fclib::evaluate` from r (and v) alone.
 
@@ -8,11 +9,18 @@ use coulomb::fclib::{self, read, FclibFile, StoredSolution};
 use coulomb::solver::{solve, Settings, Status};
 
 #[test]
-fn every_fclib_problem_converges_with_default_settings() {
-    let Some(paths) = common::fclib_files() else {
-        return;
-    };
-    let out_dir = common::tempdir("solver-fclib");
+fn every_data_problem_converges_with_default_settings() {
+    every_problem_converges(common::data_files(), "solver-data");
+}
+
+#[test]
+#[cfg_attr(not(shared_data), ignore = "needs ../shared")]
+fn needs_shared_every_fclib_problem_converges_with_default_settings() {
+    every_problem_converges(common::fclib_files(), "solver-fclib");
+}
+
+fn every_problem_converges(paths: Vec<std::path::PathBuf>, tag: &str) {
+    let out_dir = common::tempdir(tag);
     for path in paths {
         let stem = path.file_stem().unwrap().to_string_lossy().to_string();
         let file = read(&path).unwrap();

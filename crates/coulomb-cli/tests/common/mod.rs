@@ -1,4 +1,4 @@
-//! Helpers shared by the CLI tests: run the built `coulomb` binary, find ../shared/fclib, make
+//! Helpers shared by the CLI tests: run the built `coulomb` binary, find ../shared/fclib and data/, make
 //! scratch folders, read JSON.
 #![allow(dead_code)] // each test crate uses its own subset
 
@@ -14,18 +14,31 @@ pub fn coulomb(args: &[&str]) -> Output {
         .expect("the coulomb binary runs")
 }
 
-/// ../shared/fclib when present (tests print "skipped" and return otherwise).
-pub fn fclib_dir() -> Option<PathBuf> {
+/// ../shared/fclib, for the tests named `needs_shared_*` (ignored without it: see build.rs);
+/// run without it (`--ignored`), they fail here saying what is missing.
+pub fn fclib_dir() -> PathBuf {
     let dir = PathBuf::from(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../../../shared/fclib"
     ));
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        println!("skipped: ../shared absent");
-        None
-    }
+    assert!(
+        dir.is_dir(),
+        "needs ../shared: {} is absent (tests named needs_shared_* read it)",
+        dir.display()
+    );
+    dir
+}
+
+/// `name` in the repository's data/ folder (small FCLIB files written by coulomb itself,
+/// data/README.md), as a string for a command line.
+pub fn data_file(name: &str) -> String {
+    let path = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../data")).join(name);
+    assert!(
+        path.is_file(),
+        "{} is part of the repository",
+        path.display()
+    );
+    path.display().to_string()
 }
 
 /// A fresh empty directory under the system temp dir.

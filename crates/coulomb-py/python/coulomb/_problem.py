@@ -1,6 +1,6 @@
 """Problem data of the incremental problem (2.10): local (W, q, μ) and global (M, H, f, w, μ).
 
-Stored in the FCLIB convention (see the README): ``M v = H r + f``, ``u = Hᵀ v + w`` (global),
+Stored in the FCLIB convention (see docs/reference.md): ``M v = H r + f``, ``u = Hᵀ v + w`` (global),
 ``u = W r + q`` (local), each contact block ordered normal first, ``(uⁱ, rⁱ) ∈ C(eⁱ, μⁱ)`` (2.9).
 """
 
@@ -81,10 +81,8 @@ def _mu(mu: ArrayLike, contacts: int) -> np.ndarray:
 
 def _to_scipy(t: CscTuple) -> Any:
     nrows, ncols, p, i, x = t
-    try:
-        import scipy.sparse as sp
-    except ImportError:  # scipy is optional: the raw CSC arrays then
-        return t
+    import scipy.sparse as sp  # a dependency of the package (pyproject.toml), imported when used
+
     return sp.csc_array((x, i, p), shape=(nrows, ncols))
 
 
@@ -170,7 +168,7 @@ class LocalProblem(Problem):
 
     @property
     def W(self) -> Any:
-        """W as a ``scipy.sparse.csc_array`` (the raw CSC tuple without scipy)."""
+        """W as a ``scipy.sparse.csc_array``."""
         return _to_scipy(self._data()["W"])
 
     @property

@@ -1,4 +1,4 @@
-//! Helpers shared by the library's integration tests: find ../shared/fclib and its files,
+//! Helpers shared by the library's integration tests: find ../shared/fclib, data/ and their files,
 //! make scratch folders, tell whether h5py is there.
 #![allow(dead_code)] // each test crate uses its own subset
 
@@ -13,28 +13,44 @@ pub fn shared_fclib() -> PathBuf {
     ))
 }
 
-/// ../shared/fclib when present (the test prints "skipped" and returns otherwise).
-pub fn fclib_dir() -> Option<PathBuf> {
+/// ../shared/fclib, for the tests named `needs_shared_*` (ignored without it: see build.rs);
+/// run without it (`--ignored`), they fail here saying what is missing.
+pub fn fclib_dir() -> PathBuf {
     let dir = shared_fclib();
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        println!("skipped: ../shared absent");
-        None
-    }
+    assert!(
+        dir.is_dir(),
+        "needs ../shared: {} is absent (tests named needs_shared_* read it)",
+        dir.display()
+    );
+    dir
 }
 
-/// The *.hdf5 files of ../shared/fclib, sorted (None, with "skipped" printed, when absent).
-pub fn fclib_files() -> Option<Vec<PathBuf>> {
-    let dir = fclib_dir()?;
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .expect("../shared/fclib is readable")
+/// The *.hdf5 files of ../shared/fclib, sorted (see [`fclib_dir`]).
+pub fn fclib_files() -> Vec<PathBuf> {
+    hdf5_files(&fclib_dir())
+}
+
+/// The repository's data/ folder: small FCLIB files written by coulomb itself
+/// (data/README.md), present in every clone.
+pub fn data_dir() -> PathBuf {
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../data"))
+}
+
+/// The *.hdf5 files of data/, sorted.
+pub fn data_files() -> Vec<PathBuf> {
+    hdf5_files(&data_dir())
+}
+
+/// The *.hdf5 files of `dir`, sorted; at least one.
+fn hdf5_files(dir: &std::path::Path) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("{} is readable: {e}", dir.display()))
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.extension().is_some_and(|x| x == "hdf5"))
         .collect();
     files.sort();
     assert!(!files.is_empty(), "no .hdf5 file in {}", dir.display());
-    Some(files)
+    files
 }
 
 /// A fresh scratch folder under the system's temp dir, unique to this process and `tag`.

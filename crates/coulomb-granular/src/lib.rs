@@ -23,6 +23,7 @@ pub mod projection;
 pub mod rolling;
 pub mod run;
 pub mod scene;
+pub mod scene_file;
 pub mod simulation;
 pub mod validation;
 pub mod world;

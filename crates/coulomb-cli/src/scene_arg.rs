@@ -11,6 +11,7 @@
 use crate::sim_args::{Args, Method};
 use anyhow::{bail, Context};
 use clap::Parser;
+use coulomb_granular::model::BuildChecks;
 use coulomb_granular::output::{write_stats, VtkWriter};
 use coulomb_granular::run::RestMonitor;
 use coulomb_granular::scene_file::{BuildOptions, BuiltScene, LoadedScene, MethodName};
@@ -85,9 +86,10 @@ fn file_args(args: &Args, scene: &BuiltScene) -> Args {
     a.no_projection = !s.projection;
     a.no_gap_closure = !s.gap_closure;
     a.cold = !s.warm_start;
-    a.mu = scene.default_pair.mu;
-    a.restitution = scene.default_pair.restitution;
-    a.rolling_friction = scene.default_pair.rolling_friction;
+    let law = scene.model.materials.default;
+    a.mu = law.mu;
+    a.restitution = law.restitution;
+    a.rolling_friction = law.rolling_friction;
     a.rest_speed = s.rest_speed;
     a.max_steps = s.max_steps;
     a.until_rest = args.until_rest || (s.until_rest && args.steps.is_none());
@@ -103,12 +105,13 @@ fn file_args(args: &Args, scene: &BuiltScene) -> Args {
 /// radius (g h² > R_min: contacts cannot be detected), and warns above R_min / 10.
 fn check_step(h: f64, scene: &BuiltScene) -> anyhow::Result<()> {
     let r = scene
-        .bodies
+        .model
+        .sphere_batches
         .iter()
-        .map(|b| b.sphere.radius)
+        .flat_map(|b| b.radii.iter().copied())
         .chain(scene.inlets.iter().map(|i| i.inlet.sizes.min_radius()))
         .fold(f64::INFINITY, f64::min);
-    let g = scene.gravity.norm();
+    let g = scene.model.gravity.norm();
     let fall = g * h * h;
     if r.is_finite() && fall > r {
         bail!(
@@ -142,9 +145,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         max_fill: (args.beads != 150).then_some(args.beads),
     };
     let mut scene = loaded.build(&opts)?;
-    let world = scene
-        .world()
-        .map_err(|e| anyhow::anyhow!("{}: {e}", args.scene))?;
+    let (world, _) = scene.build(&BuildChecks::default())?;
     if world.bodies.is_empty() && scene.inlets.is_empty() {
         bail!("{}: the scene has no sphere and no inlet", args.scene);
     }
@@ -178,9 +179,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     while sim.steps_done < stop.max_steps() {
         let t0 = sim.time;
         let s = sim.step().context("time step failed")?;
+        let t1 = sim.time;
         // the spheres the inlets owe for (t_k, t_{k+1}], placed among the bodies at t_{k+1}
         for inlet in &mut scene.inlets {
-            let (n, k) = inlet.emit_into(&mut sim.world, t0, sim.time);
+            let (n, k) = inlet
+                .emit(&mut sim, &scene.model, t0, t1)
+                .context("inlet")?;
             poured += n;
             skipped += k;
         }

@@ -13,7 +13,13 @@
 use crate::generate::{self, FillSpec, Inlet, Packing, Rate, Region, SizeDistribution};
 use crate::import::{self, ImportError, Transform, TriMesh};
 use crate::math::Vec3;
-use crate::world::{Motion, Obstacle, Shape, Sphere, World};
+use crate::mesh::TriangleMesh;
+use crate::model::{
+    BuildChecks, MaterialPair, Materials, ObstacleSpec, SceneError, SceneModel, SphereBatch,
+    StepChoice, StepSettings,
+};
+use crate::simulation::{Params, Simulation, SimulationError};
+use crate::world::{MeshSide, Motion, Shape, World};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -58,6 +64,15 @@ pub enum SceneFileError {
         key: String,
         /// what is wrong
         message: String,
+    },
+    /// the scene model refused the scene (overlapping spheres, a sphere outside every
+    /// container, an invalid obstacle, …)
+    #[error("{}: {source}", path.display())]
+    Model {
+        /// the scene file
+        path: PathBuf,
+        /// the model's error
+        source: SceneError,
     },
     /// a particle or mesh file named by the scene could not be read
     #[error("{}: {key}: {source}", path.display())]
@@ -396,21 +411,6 @@ pub struct ObstacleSection {
     pub motion: MotionSection,
 }
 
-/// Which caps close a cylinder.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Caps {
-    /// both ends
-    #[default]
-    Both,
-    /// the base only
-    Bottom,
-    /// the far end only
-    Top,
-    /// open at both ends
-    None,
-}
-
 /// Geometry of an obstacle.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
@@ -462,9 +462,12 @@ pub enum ObstacleShape {
         /// spheres inside (a silo or drum, default) or outside (a post)
         #[serde(default = "yes")]
         inside: bool,
-        /// which ends are closed
-        #[serde(default)]
-        caps: Caps,
+        /// the base is closed (default true)
+        #[serde(default = "yes")]
+        bottom_cap: bool,
+        /// the far end is closed (default true)
+        #[serde(default = "yes")]
+        top_cap: bool,
         /// radius of a circular hole centred in the base cap (m; 0: none)
         #[serde(default)]
         orifice: f64,
@@ -493,6 +496,10 @@ pub enum ObstacleShape {
         /// scale, rotation and translation applied to the vertices
         #[serde(default)]
         transform: Transform,
+        /// where the spheres live: `surface` (either side, default), `inside` or `outside`
+        /// (a closed, consistently oriented mesh)
+        #[serde(default)]
+        side: MeshSide,
     },
 }
 
@@ -508,7 +515,7 @@ pub enum MotionSection {
     #[default]
     Fixed,
     /// translation at a constant velocity
-    Velocity {
+    Translate {
         /// velocity (m/s)
         velocity: [f64; 3],
     },
@@ -626,24 +633,23 @@ pub struct BuildOptions {
     pub max_fill: Option<usize>,
 }
 
-/// A sphere of the built scene.
+/// A sphere of the built scene, before the scene model's validation.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BodyOut {
-    /// the sphere (position, velocity, radius, mass)
-    pub sphere: Sphere,
+    /// centre (m)
+    pub position: Vec3,
+    /// radius (m)
+    pub radius: f64,
+    /// mass (kg)
+    pub mass: f64,
+    /// velocity (m/s)
+    pub velocity: Vec3,
+    /// angular velocity (rad/s)
+    pub angular_velocity: Vec3,
     /// its material
     pub material: String,
     /// whether it is fixed
     pub fixed: bool,
-}
-
-/// The triangle mesh of an obstacle, in its reference position.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct MeshOut {
-    /// the obstacle's name
-    pub name: String,
-    /// the mesh
-    pub mesh: TriMesh,
 }
 
 /// A running inlet: what emits and the density and material of what it emits.
@@ -658,42 +664,57 @@ pub struct InletRun {
 }
 
 impl InletRun {
-    /// Appends to `world` the spheres due in (t0, t1] ([`Inlet::emit`], placed among the
-    /// bodies present); returns (inserted, skipped).
-    pub fn emit_into(&mut self, world: &mut World, t0: f64, t1: f64) -> (usize, usize) {
-        let present: Vec<(Vec3, f64)> = world
+    /// Inserts into `sim` ([`Simulation::insert_bodies`]) the spheres due in (t0, t1]
+    /// ([`Inlet::emit`], placed among the spheres present), with the materials of `model`;
+    /// returns (inserted, skipped).
+    pub fn emit(
+        &mut self,
+        sim: &mut Simulation,
+        model: &SceneModel,
+        t0: f64,
+        t1: f64,
+    ) -> Result<(usize, usize), SimulationError> {
+        let present: Vec<(Vec3, f64)> = sim
+            .world
             .bodies
             .iter()
             .map(|b| (b.position, b.radius))
             .collect();
         let e = self.inlet.emit(t0, t1, &present);
-        for p in &e.particles {
-            let mut s = Sphere::new(p.position, p.radius, sphere_mass(self.density, p.radius));
-            s.velocity = p.velocity;
-            world.bodies.push(s);
+        if e.particles.is_empty() {
+            return Ok((0, e.skipped));
         }
-        (e.particles.len(), e.skipped)
+        let batch = SphereBatch {
+            positions: e.particles.iter().map(|p| p.position).collect(),
+            radii: e.particles.iter().map(|p| p.radius).collect(),
+            velocities: e.particles.iter().map(|p| p.velocity).collect(),
+            masses: e
+                .particles
+                .iter()
+                .map(|p| sphere_mass(self.density, p.radius))
+                .collect(),
+            material: self.material.clone(),
+            ..SphereBatch::default()
+        };
+        let spheres = model
+            .spheres_of(&batch)
+            .map_err(|e| SimulationError::Parameter(format!("inlet: {e}")))?;
+        sim.insert_bodies(spheres)?;
+        Ok((e.particles.len(), e.skipped))
     }
 }
 
-/// The scene a file describes, built: its bodies, obstacles, laws and inlets.
+/// The scene a file describes, built: the scene model, the run settings of `[step]` and the
+/// inlets.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BuiltScene {
+    /// the scene file
+    pub path: PathBuf,
     /// name for outputs
     pub name: String,
-    /// the spheres
-    pub bodies: Vec<BodyOut>,
-    /// the obstacles of analytic shapes ([`World`]'s obstacles)
-    pub obstacles: Vec<Obstacle>,
-    /// the mesh obstacles
-    pub meshes: Vec<MeshOut>,
-    /// gravity (m/s²)
-    pub gravity: Vec3,
-    /// the default contact law
-    pub default_pair: ContactLaw,
-    /// the laws of listed pairs (material names sorted within each pair)
-    pub pairs: BTreeMap<(String, String), ContactLaw>,
-    /// step settings
+    /// the scene model (spheres as batches, obstacles, materials, step settings)
+    pub model: SceneModel,
+    /// the `[step]` section (run length, activation, projection, warm starts)
     pub step: StepSection,
     /// the inlets
     pub inlets: Vec<InletRun>,
@@ -914,16 +935,16 @@ impl LoadedScene {
             if sources.iter().filter(|&&b| b).count() != 1 {
                 return Err(self.invalid(&p, "give exactly one of `spheres`, `file` and `fill`"));
             }
-            let make = |pos: Vec3, r: f64, v: Option<Vec3>, mat: Option<String>, rho: f64| {
-                let mut s = Sphere::new(pos, r, sphere_mass(rho, r));
-                s.velocity = v.unwrap_or(v3(v0));
-                s.angular_velocity = v3(g.angular_velocity);
-                BodyOut {
-                    sphere: s,
+            let make =
+                |pos: Vec3, r: f64, v: Option<Vec3>, mat: Option<String>, rho: f64| BodyOut {
+                    position: pos,
+                    radius: r,
+                    mass: sphere_mass(rho, r),
+                    velocity: v.unwrap_or(v3(v0)),
+                    angular_velocity: v3(g.angular_velocity),
                     material: mat.unwrap_or_else(|| g.material.clone()),
                     fixed: g.fixed,
-                }
-            };
+                };
             if let Some(list) = &g.spheres {
                 for (k, s) in list.iter().enumerate() {
                     if !(s[..3].iter().all(|x| x.is_finite()) && pos(s[3])) {
@@ -973,10 +994,8 @@ impl LoadedScene {
                         .seed
                         .unwrap_or_else(|| seed.wrapping_add(fill_index as u64)),
                 };
-                let avoid: Vec<(Vec3, f64)> = bodies
-                    .iter()
-                    .map(|b| (b.sphere.position, b.sphere.radius))
-                    .collect();
+                let avoid: Vec<(Vec3, f64)> =
+                    bodies.iter().map(|b| (b.position, b.radius)).collect();
                 let filled = match (&fill.region, &fill.mesh) {
                     (Some(r), None) => {
                         r.validate().map_err(|e| {
@@ -1026,14 +1045,18 @@ impl LoadedScene {
         }
         // obstacles
         let mut obstacles = Vec::new();
-        let mut meshes = Vec::new();
         for (i, o) in f.obstacles.iter().enumerate() {
             let p = vec![key("obstacles"), Seg::Index(i)];
             known(&[&p[..], &[key("material")]].concat(), &o.material)?;
             let name = o.name.clone().unwrap_or_else(|| format!("obstacle-{i}"));
             let motion = self.motion(&[&p[..], &[key("motion")]].concat(), &o.motion)?;
             let sp = [&p[..], &[key("shape")]].concat();
-            self.obstacle(&sp, &name, &o.shape, &motion, &mut obstacles, &mut meshes)?;
+            obstacles.push(ObstacleSpec {
+                name,
+                shape: self.obstacle(&sp, &o.shape)?,
+                motion,
+                material: o.material.clone(),
+            });
         }
         // inlets
         let mut inlets = Vec::new();
@@ -1069,14 +1092,68 @@ impl LoadedScene {
                 .unwrap_or("scene")
                 .to_string()
         });
-        Ok(BuiltScene {
-            name,
-            bodies,
-            obstacles,
-            meshes,
+        let law = |l: &ContactLaw| crate::world::ContactLaw {
+            mu: l.mu,
+            restitution: l.restitution,
+            rolling_friction: l.rolling_friction,
+        };
+        let materials = Materials {
+            names: density
+                .keys()
+                .filter(|n| n.as_str() != DEFAULT_MATERIAL)
+                .cloned()
+                .collect(),
+            default: law(&f.default_pair),
+            pairs: pairs
+                .iter()
+                .map(|((a, b), l)| MaterialPair {
+                    a: a.clone(),
+                    b: b.clone(),
+                    mu: l.mu,
+                    restitution: l.restitution,
+                    rolling_friction: l.rolling_friction,
+                })
+                .collect(),
+        };
+        // With one law for every pair, the model's world carries no material table
+        // (World::materials = None) but keeps the material indices of bodies and obstacles,
+        // which Simulation::new then refuses; the names only select laws (densities are
+        // resolved above), so they all become `default`.
+        let mut bodies = bodies;
+        let mut obstacles = obstacles;
+        let mut materials = materials;
+        if materials.pairs.iter().all(|p| p.law() == materials.default) {
+            materials.names.clear();
+            materials.pairs.clear();
+            for b in &mut bodies {
+                b.material = DEFAULT_MATERIAL.to_string();
+            }
+            for o in &mut obstacles {
+                o.material = DEFAULT_MATERIAL.to_string();
+            }
+        }
+        let model = SceneModel {
             gravity: v3(f.gravity),
-            default_pair: f.default_pair,
-            pairs,
+            materials,
+            bodies: Vec::new(),
+            sphere_batches: batches(&bodies),
+            obstacles,
+            step: StepSettings {
+                h: f.step.h,
+                theta: f.step.theta,
+                tol: f.step.tol,
+                method: match f.step.method {
+                    MethodName::Nsgs => StepChoice::Nsgs,
+                    MethodName::Library => StepChoice::Library,
+                },
+                max_sweeps: f.step.max_sweeps,
+                relaxation: f.step.relaxation,
+            },
+        };
+        Ok(BuiltScene {
+            path: self.path.clone(),
+            name,
+            model,
             step: f.step.clone(),
             inlets,
             fills,
@@ -1153,11 +1230,13 @@ impl LoadedScene {
         };
         Ok(match m {
             MotionSection::Fixed => Motion::Fixed,
-            MotionSection::Velocity { .. } => {
-                return Err(self.invalid(
-                    p,
-                    "constant-velocity motions need the scene model (not in this build)",
-                ))
+            MotionSection::Translate { velocity } => {
+                if !v3(*velocity).is_finite() {
+                    return Err(self.invalid(p, "velocity must be finite"));
+                }
+                Motion::Translate {
+                    velocity: v3(*velocity),
+                }
             }
             MotionSection::Oscillate {
                 direction,
@@ -1190,15 +1269,7 @@ impl LoadedScene {
         })
     }
 
-    fn obstacle(
-        &self,
-        p: &[Seg],
-        name: &str,
-        shape: &ObstacleShape,
-        motion: &Motion,
-        out: &mut Vec<Obstacle>,
-        meshes: &mut Vec<MeshOut>,
-    ) -> Result<(), SceneFileError> {
+    fn obstacle(&self, p: &[Seg], shape: &ObstacleShape) -> Result<Shape, SceneFileError> {
         let unit = |a: [f64; 3], what: &str| -> Result<Vec3, SceneFileError> {
             let v = v3(a);
             if v.is_finite() && v.norm() > 0.0 {
@@ -1207,46 +1278,11 @@ impl LoadedScene {
                 Err(self.invalid(p, format!("{what} {a:?} must be finite and non-zero")))
             }
         };
-        let point = |a: [f64; 3], what: &str| -> Result<Vec3, SceneFileError> {
-            let v = v3(a);
-            if v.is_finite() {
-                Ok(v)
-            } else {
-                Err(self.invalid(p, format!("{what} {a:?} must be finite")))
-            }
-        };
-        let length = |x: f64, what: &str| -> Result<f64, SceneFileError> {
-            if x.is_finite() && x > 0.0 {
-                Ok(x)
-            } else {
-                Err(self.invalid(p, format!("{what} {x} must be finite and positive")))
-            }
-        };
-        let mut push = |suffix: &str, shape: Shape| {
-            out.push(Obstacle {
-                name: if suffix.is_empty() {
-                    name.to_string()
-                } else {
-                    format!("{name}-{suffix}")
-                },
-                shape,
-                motion: motion.clone(),
-            })
-        };
-        let unsupported = |what: &str| {
-            Err(self.invalid(
-                p,
-                format!("{what} obstacles need the scene model (not in this build)"),
-            ))
-        };
-        match shape {
-            ObstacleShape::Plane { point: q, normal } => push(
-                "",
-                Shape::Plane {
-                    point: point(*q, "point")?,
-                    normal: unit(*normal, "normal")?,
-                },
-            ),
+        Ok(match shape {
+            ObstacleShape::Plane { point, normal } => Shape::Plane {
+                point: v3(*point),
+                normal: unit(*normal, "normal")?,
+            },
             ObstacleShape::Rectangle {
                 center,
                 normal,
@@ -1260,99 +1296,59 @@ impl LoadedScene {
                     (u - n * u.dot(n)).to_array(),
                     "u (orthogonal to the normal)",
                 )?;
-                push(
-                    "",
-                    Shape::Rectangle {
-                        center: point(*center, "center")?,
-                        normal: n,
-                        u,
-                        half_u: length(*half_u, "half_u")?,
-                        half_v: length(*half_v, "half_v")?,
-                    },
-                )
+                Shape::Rectangle {
+                    center: v3(*center),
+                    normal: n,
+                    u,
+                    half_u: *half_u,
+                    half_v: *half_v,
+                }
             }
             ObstacleShape::Box {
                 lo,
                 hi,
                 inside,
                 open_top,
-            } => {
-                let (lo, hi) = (point(*lo, "lo")?, point(*hi, "hi")?);
-                if !(lo.x < hi.x && lo.y < hi.y && lo.z < hi.z) {
-                    return Err(self.invalid(p, "box: lo must be below hi on every axis"));
-                }
-                if !inside {
-                    return unsupported("box (outside)");
-                }
-                let mut faces = vec![
-                    ("ground", lo, Vec3::Z),
-                    ("wall-x0", lo, Vec3::X),
-                    ("wall-x1", hi, -Vec3::X),
-                    ("wall-y0", lo, Vec3::Y),
-                    ("wall-y1", hi, -Vec3::Y),
-                ];
-                if !open_top {
-                    faces.push(("lid", hi, -Vec3::Z));
-                }
-                for (s, point, normal) in faces {
-                    push(s, Shape::Plane { point, normal });
-                }
-            }
+            } => Shape::Box {
+                lo: v3(*lo),
+                hi: v3(*hi),
+                inside: *inside,
+                open_top: *open_top,
+            },
             ObstacleShape::Cylinder {
                 base,
                 axis,
                 radius,
                 height,
                 inside,
-                caps,
+                bottom_cap,
+                top_cap,
                 orifice,
-            } => {
-                let (b, a) = (point(*base, "base")?, unit(*axis, "axis")?);
-                let (r, h) = (length(*radius, "radius")?, length(*height, "height")?);
-                if !(orifice.is_finite() && *orifice >= 0.0 && *orifice < r) {
-                    return Err(
-                        self.invalid(p, format!("orifice {orifice} must be in [0, radius)"))
-                    );
-                }
-                if !inside {
-                    return unsupported("cylinder (outside)");
-                }
-                if *orifice > 0.0 {
-                    return unsupported("cylinder with an orifice");
-                }
-                push(
-                    "",
-                    Shape::CylinderInside {
-                        point: b,
-                        axis: a,
-                        radius: r,
-                    },
-                );
-                if matches!(caps, Caps::Both | Caps::Bottom) {
-                    push(
-                        "bottom",
-                        Shape::Plane {
-                            point: b,
-                            normal: a,
-                        },
-                    );
-                }
-                if matches!(caps, Caps::Both | Caps::Top) {
-                    push(
-                        "top",
-                        Shape::Plane {
-                            point: b + a * h,
-                            normal: -a,
-                        },
-                    );
-                }
-            }
-            ObstacleShape::Sphere { .. } => return unsupported("sphere"),
+            } => Shape::Cylinder {
+                base: v3(*base),
+                axis: unit(*axis, "axis")?,
+                radius: *radius,
+                height: *height,
+                inside: *inside,
+                bottom_cap: *bottom_cap,
+                top_cap: *top_cap,
+                orifice: *orifice,
+            },
+            ObstacleShape::Sphere {
+                center,
+                radius,
+                inside,
+            } => Shape::Sphere {
+                center: v3(*center),
+                radius: *radius,
+                inside: *inside,
+            },
             ObstacleShape::Mesh {
                 file,
                 vertices,
                 triangles,
                 transform,
+                side,
             } => {
                 let source = MeshSource {
                     file: file.clone(),
@@ -1360,42 +1356,76 @@ impl LoadedScene {
                     triangles: triangles.clone(),
                     transform: transform.clone(),
                 };
-                let mesh = self.mesh(&source, p)?;
-                meshes.push(MeshOut {
-                    name: name.to_string(),
-                    mesh,
-                });
+                let m = self.mesh(&source, p)?;
+                let tris = m.triangles.iter().map(|t| t.map(|i| i as u64)).collect();
+                let mesh = TriangleMesh::new(m.vertices, tris)
+                    .map_err(|e| self.invalid(p, e.to_string()))?;
+                Shape::Mesh { mesh, side: *side }
             }
-        }
-        Ok(())
+        })
     }
 }
 
+/// The spheres as batches of the scene model: one per run of consecutive spheres of the same
+/// material and mobility, masses given (so that they are the file's to the bit).
+fn batches(bodies: &[BodyOut]) -> Vec<SphereBatch> {
+    let mut out: Vec<SphereBatch> = Vec::new();
+    for b in bodies {
+        let same = out
+            .last()
+            .is_some_and(|l| l.material == b.material && l.fixed == b.fixed);
+        if !same {
+            out.push(SphereBatch {
+                material: b.material.clone(),
+                fixed: b.fixed,
+                ..SphereBatch::default()
+            });
+        }
+        if let Some(l) = out.last_mut() {
+            l.positions.push(b.position);
+            l.radii.push(b.radius);
+            l.masses.push(b.mass);
+            l.velocities.push(b.velocity);
+            l.angular_velocities.push(b.angular_velocity);
+        }
+    }
+    // fixed spheres carry no velocity
+    for l in &mut out {
+        if l.fixed {
+            l.velocities.clear();
+            l.angular_velocities.clear();
+        }
+    }
+    out
+}
+
 impl BuiltScene {
-    /// The [`World`] of the scene: its spheres, analytic obstacles and gravity. Refused
-    /// (with the reason) when the scene uses what `World` cannot hold: mesh obstacles, fixed
-    /// spheres, or contact laws that differ between pairs.
-    pub fn world(&self) -> Result<World, String> {
-        if let Some(m) = self.meshes.first() {
-            return Err(format!(
-                "obstacle '{}': mesh obstacles need the scene model (not in this build)",
-                m.name
-            ));
+    /// The world and parameters of the scene ([`SceneModel::build_with`] with `checks`), the
+    /// parameters completed by `[step]`'s activation, projection and warm-start settings.
+    pub fn build(&self, checks: &BuildChecks) -> Result<(World, Params), SceneFileError> {
+        let (world, mut params) =
+            self.model
+                .build_with(checks)
+                .map_err(|source| SceneFileError::Model {
+                    path: self.path.clone(),
+                    source,
+                })?;
+        params.activation.gamma = self.step.gamma;
+        params.activation.close_gaps = self.step.gap_closure;
+        params.warm_start = self.step.warm_start;
+        if !self.step.projection {
+            params.projection = None;
         }
-        if self.bodies.iter().any(|b| b.fixed) {
-            return Err("fixed spheres need the scene model (not in this build)".into());
-        }
-        if self.pairs.values().any(|l| *l != self.default_pair) {
-            return Err(
-                "contact laws that differ between pairs need the scene model (not in this build)"
-                    .into(),
-            );
-        }
-        let mut w = World::new();
-        w.gravity = self.gravity;
-        w.bodies = self.bodies.iter().map(|b| b.sphere.clone()).collect();
-        w.obstacles = self.obstacles.clone();
-        Ok(w)
+        Ok((world, params))
+    }
+
+    /// Every sphere the scene starts with (free and fixed).
+    pub fn sphere_count(&self) -> usize {
+        self.model
+            .sphere_batches
+            .iter()
+            .map(|b| b.positions.len())
+            .sum()
     }
 }
 
@@ -1501,14 +1531,19 @@ mod tests {
             .unwrap()
             .build(&BuildOptions::default())
             .unwrap();
-        assert_eq!(b.bodies.len(), 2);
-        assert_eq!(b.bodies[1].sphere.mass, sphere_mass(7800.0, 0.2));
-        assert_eq!(b.bodies[0].sphere.velocity, Vec3::X);
-        assert_eq!(b.bodies[0].material, "steel");
-        let law = b.pairs[&("default".to_string(), "steel".to_string())];
-        assert_eq!((law.mu, law.restitution), (0.1, 0.2));
-        // the World cannot hold a pair law that differs from the default
-        assert!(b.world().is_err());
+        assert_eq!(b.sphere_count(), 2);
+        let batch = &b.model.sphere_batches[0];
+        assert_eq!(batch.masses[1], sphere_mass(7800.0, 0.2));
+        assert_eq!(batch.velocities[0], Vec3::X);
+        assert_eq!(batch.material, "steel");
+        let pair = &b.model.materials.pairs[0];
+        assert_eq!((pair.a.as_str(), pair.b.as_str()), ("default", "steel"));
+        assert_eq!((pair.mu, pair.restitution), (0.1, 0.2));
+        let (world, params) = b.build(&BuildChecks::default()).unwrap();
+        assert_eq!(world.bodies.len(), 2);
+        // the steel–default law is in the world's table; the default law in the parameters
+        assert!(world.materials.is_some());
+        assert_eq!(params.mu, 0.3);
     }
 
     #[test]

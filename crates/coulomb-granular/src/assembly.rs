@@ -18,7 +18,7 @@
 
 use crate::contact::{Contact, Partner};
 use crate::math::Vec3;
-use crate::world::World;
+use crate::world::{ContactLaw, World};
 use coulomb::problem::{GlobalProblem, ProblemError};
 use coulomb::sparse::CscMatrix;
 
@@ -29,13 +29,33 @@ pub struct StepData {
     pub h: f64,
     /// time t_{k+1} at which obstacle velocities are evaluated
     pub t_end: f64,
-    /// restitution coefficient e ∈ [0, 1]
+    /// restitution coefficient e ∈ [0, 1] of every contact when the world has no material
+    /// table ([`crate::world::World::materials`]); otherwise each contact's pair law's
     pub restitution: f64,
-    /// friction coefficient μ (all contacts)
+    /// friction coefficient μ of every contact when the world has no material table;
+    /// otherwise each contact's pair law's ([`StepData::law`])
     pub mu: f64,
     /// close the gap of a contact held by gravity's look-ahead ([`gap_closure`];
     /// [`crate::contact::Activation::close_gaps`])
     pub close_gaps: bool,
+}
+
+impl StepData {
+    /// The law (μ, e) of contact `c`: the pair of materials' in the world's table, or
+    /// (`self.mu`, `self.restitution`) without a table (the one-material fast path: the very
+    /// numbers of the parameters). μ_r is not part of the step data (0 here).
+    #[inline]
+    pub fn law(&self, world: &World, c: &Contact) -> ContactLaw {
+        let default = ContactLaw {
+            mu: self.mu,
+            restitution: self.restitution,
+            rolling_friction: 0.0,
+        };
+        if world.materials.is_none() {
+            return default;
+        }
+        world.contact_law(c.body, c.partner, default)
+    }
 }
 
 /// Diagonal of M: (m, m, m, I, I, I) per sphere.
@@ -129,15 +149,20 @@ pub fn contact_offset(world: &World, contacts: &[Contact], data: &StepData) -> V
 /// w_i of one contact (the three entries of [`contact_offset`] for `c`).
 pub fn contact_offset_one(world: &World, c: &Contact, data: &StepData) -> [f64; 3] {
     let mut w = [0.0; 3];
-    if let Partner::Obstacle(o) = c.partner {
+    if let Partner::Obstacle(o, _) = c.partner {
         if let Some(ob) = world.obstacles.get(o) {
             let vb = ob.motion.velocity_at(c.point, data.t_end);
             w = [-c.normal.dot(vb), -c.t1.dot(vb), -c.t2.dot(vb)];
         }
     }
-    w[0] += impact_offset(data.restitution, c.normal_velocity);
+    let e = if world.materials.is_none() {
+        data.restitution
+    } else {
+        data.law(world, c).restitution
+    };
+    w[0] += impact_offset(e, c.normal_velocity);
     if data.close_gaps {
-        w[0] += gap_closure(world, c, data);
+        w[0] += gap_closure_with(world, c, data, e);
     }
     w
 }
@@ -156,13 +181,18 @@ pub fn contact_offset_one(world: &World, c: &Contact, data: &StepData) -> [f64; 
 /// Moreau's law alone: their rebound ratio stays exactly e. 0 for sphere–sphere contacts
 /// (gravity cancels in their look-ahead).
 pub fn gap_closure(world: &World, c: &Contact, data: &StepData) -> f64 {
-    let Partner::Obstacle(_) = c.partner else {
+    gap_closure_with(world, c, data, data.law(world, c).restitution)
+}
+
+/// [`gap_closure`] with the contact's restitution e given.
+fn gap_closure_with(world: &World, c: &Contact, data: &StepData, restitution: f64) -> f64 {
+    let Partner::Obstacle(..) = c.partner else {
         return 0.0;
     };
     let gn = world.gravity.dot(c.normal);
     let held = gn < 0.0 && c.gap > 0.0 && c.normal_velocity >= data.h * gn;
     if held && data.h > 0.0 {
-        (1.0 - data.restitution).clamp(0.0, 1.0) * c.gap / data.h
+        (1.0 - restitution).clamp(0.0, 1.0) * c.gap / data.h
     } else {
         0.0
     }
@@ -189,7 +219,12 @@ pub fn assemble(
         .map_err(|source| ProblemError::Sparse { what: "H", source })?;
     let f = free_momentum(world, data.h);
     let w = contact_offset(world, contacts, data);
-    GlobalProblem::new_unfactored(3, mass, h, f, w, vec![data.mu; contacts.len()])
+    let mu = if world.materials.is_none() {
+        vec![data.mu; contacts.len()]
+    } else {
+        contacts.iter().map(|c| data.law(world, c).mu).collect()
+    };
+    GlobalProblem::new_unfactored(3, mass, h, f, w, mu)
 }
 
 #[cfg(test)]
@@ -212,6 +247,7 @@ mod tests {
                 amplitude: 0.0,
                 frequency: 0.0,
             },
+            material: 0,
         });
         w.obstacles.push(Obstacle {
             name: "drum".into(),
@@ -225,6 +261,7 @@ mod tests {
                 axis: Vec3::Y,
                 omega: 3.0,
             },
+            material: 0,
         });
         let mut a = Sphere::new(Vec3::new(0.0, 0.0, 0.1), 0.1, 2.0);
         a.velocity = Vec3::new(0.3, -0.2, -0.5);
@@ -265,7 +302,7 @@ mod tests {
         // the drum's wall moves at ω R = 3 m/s along −x at the bottom: seen in the tangent rows
         let drum = contacts
             .iter()
-            .position(|c| c.partner == Partner::Obstacle(1))
+            .position(|c| c.partner == Partner::Obstacle(1, 0))
             .unwrap();
         let c = &contacts[drum];
         // V_B = 3 e_y × (p − c) = 3 (p_z − 1, 0, −p_x)

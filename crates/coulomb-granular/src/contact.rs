@@ -14,8 +14,9 @@ use std::collections::HashMap;
 pub enum Partner {
     /// another sphere (its index is larger than the contact's first body)
     Body(usize),
-    /// an obstacle
-    Obstacle(usize),
+    /// a feature of an obstacle: (obstacle index, feature index — the wall of a box, the
+    /// triangle of a mesh, 0 for one-feature shapes; [`crate::world::Obstacle::proximities`])
+    Obstacle(usize, u32),
 }
 
 /// An active contact i between sphere `body` (A) and `partner` (B) at time t_k.
@@ -147,7 +148,7 @@ pub fn relative_velocity(world: &World, a: usize, partner: Partner, p: Vec3, t: 
     let va = point_velocity(a);
     let vb = match partner {
         Partner::Body(j) => point_velocity(j),
-        Partner::Obstacle(o) => world
+        Partner::Obstacle(o, _) => world
             .obstacles
             .get(o)
             .map(|ob| ob.motion.velocity_at(p, t))
@@ -415,7 +416,7 @@ pub fn detect_with_speed(
         // the free motion's normal velocity at t_{k+1}: gravity acts on A alone when B is an
         // obstacle (it cancels between two spheres)
         let free = match partner {
-            Partner::Obstacle(_) => un + h * world.gravity.dot(normal),
+            Partner::Obstacle(..) => un + h * world.gravity.dot(normal),
             Partner::Body(_) => un,
         };
         activation
@@ -443,13 +444,12 @@ pub fn detect_with_speed(
     let obstacle_margin: Vec<f64> = world
         .obstacles
         .iter()
-        .map(|o| {
-            margin + activation.gamma * h * (h * world.gravity.norm() + o.motion.max_normal_speed())
-        })
+        .map(|o| margin + activation.gamma * h * (h * world.gravity.norm() + o.max_normal_speed()))
         .collect();
     let grid = BroadPhase::new(world, margin);
     par_chunked(world.bodies.len(), SPHERE_CHUNK, |range, out| {
         let mut js = Vec::new();
+        let mut near = Vec::new();
         for i in range {
             let Some(a) = world.bodies.get(i) else {
                 continue;
@@ -466,10 +466,11 @@ pub fn detect_with_speed(
                 out.extend(make(i, Partner::Body(j), n, point, gap));
             }
             for (o, ob) in world.obstacles.iter().enumerate() {
-                let p = ob.proximity(a.position, a.radius, t);
-                if p.gap <= obstacle_margin[o] {
+                near.clear();
+                ob.proximities(a.position, a.radius, t, obstacle_margin[o], &mut near);
+                for &(f, p) in &near {
                     let point = p.point + p.normal * (0.5 * p.gap);
-                    out.extend(make(i, Partner::Obstacle(o), p.normal, point, p.gap));
+                    out.extend(make(i, Partner::Obstacle(o, f), p.normal, point, p.gap));
                 }
             }
         }
@@ -593,7 +594,7 @@ mod tests {
         );
         assert!((c[0].gap - 0.01).abs() < 1e-12);
         assert!((c[0].normal_velocity + 1.0).abs() < 1e-12);
-        assert_eq!(c[1].key(), (0, Partner::Obstacle(0)));
+        assert_eq!(c[1].key(), (0, Partner::Obstacle(0, 0)));
         // with γ = 0.4 the pair is inactive
         let c = detect(
             &world,

@@ -14,22 +14,32 @@ pub mod assembly;
 pub mod contact;
 #[cfg(feature = "mpi")]
 pub mod distributed;
+pub mod generate;
+pub mod import;
 pub mod math;
+pub mod mesh;
+pub mod model;
 pub mod nsgs;
 pub mod output;
 pub mod projection;
 pub mod rolling;
 pub mod run;
 pub mod scene;
+pub mod scene_file;
 pub mod simulation;
 pub mod validation;
 pub mod world;
 
 pub use contact::{Activation, Contact, Partner};
 pub use math::Vec3;
+pub use mesh::{MeshError, TriangleMesh};
+pub use model::{
+    resolve_overlaps, BodyShape, BodySpec, BuildChecks, MaterialPair, Materials, ObstacleSpec,
+    SceneError, SceneModel, SphereBatch, StepChoice, StepSettings,
+};
 pub use nsgs::{NsgsSettings, NsgsStatus, StepProblem};
 pub use projection::{Penetration, Projection, ProjectionStats};
 pub use run::{run, run_with, SimulationSettings, Stop, Stopped, Summary};
 pub use scene::Scene;
 pub use simulation::{Params, Simulation, SimulationError, StepMethod, StepStats};
-pub use world::{Motion, Obstacle, Shape, Sphere, World};
+pub use world::{ContactLaw, MaterialTable, MeshSide, Motion, Obstacle, Shape, Sphere, World};

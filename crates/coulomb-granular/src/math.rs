@@ -1,10 +1,11 @@
 //! A minimal 3-vector for the geometry of spheres and obstacles.
 
-use serde::Serialize;
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use std::ops::{Add, AddAssign, Mul, Neg, Sub};
 
-/// A vector of ℝ³.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+/// A vector of ℝ³. Serialized as the array `[x, y, z]` (scene files, checkpoints); read from
+/// that array or from a map `{ x, y, z }`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Vec3 {
     /// first component
     pub x: f64,
@@ -83,6 +84,52 @@ impl Vec3 {
         let t1 = a.cross(self).normalized_or(Vec3::X);
         let t2 = self.cross(t1);
         (t1, t2)
+    }
+}
+
+impl Serialize for Vec3 {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        self.to_array().serialize(s)
+    }
+}
+
+impl<'de> Deserialize<'de> for Vec3 {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Repr {
+            Array([f64; 3]),
+            Map { x: f64, y: f64, z: f64 },
+        }
+        Ok(match Repr::deserialize(d)? {
+            Repr::Array([x, y, z]) => Vec3::new(x, y, z),
+            Repr::Map { x, y, z } => Vec3::new(x, y, z),
+        })
+    }
+}
+
+impl Vec3 {
+    /// The vector rotated by the angle `angle` (rad, right-handed) about the unit `axis`
+    /// (Rodrigues' formula v cos a + (k × v) sin a + k (k·v)(1 − cos a)).
+    pub fn rotated(self, axis: Vec3, angle: f64) -> Vec3 {
+        let (s, c) = angle.sin_cos();
+        self * c + axis.cross(self) * s + axis * (axis.dot(self) * (1.0 - c))
+    }
+    /// Component-wise minimum.
+    pub fn min(self, o: Vec3) -> Vec3 {
+        Vec3::new(self.x.min(o.x), self.y.min(o.y), self.z.min(o.z))
+    }
+    /// Component-wise maximum.
+    pub fn max(self, o: Vec3) -> Vec3 {
+        Vec3::new(self.x.max(o.x), self.y.max(o.y), self.z.max(o.z))
+    }
+    /// Component `k` (0: x, 1: y, otherwise z).
+    pub fn get(self, k: usize) -> f64 {
+        match k {
+            0 => self.x,
+            1 => self.y,
+            _ => self.z,
+        }
     }
 }
 

@@ -204,7 +204,7 @@ impl ContactRow {
         let (b, arm_b) = match c.partner {
             Partner::Body(j) if j != c.body => (Some(j), arm(j)?),
             Partner::Body(_) => return None,
-            Partner::Obstacle(_) => (None, [0.0; 3]),
+            Partner::Obstacle(..) => (None, [0.0; 3]),
         };
         let mut row = Self {
             a: c.body,
@@ -321,7 +321,12 @@ impl StepProblem {
         let inv_mass: Vec<[f64; 6]> = mass.par_iter().map(|m| m.map(|x| 1.0 / x)).collect();
         let row = |c: &Contact| {
             let wi = contact_offset_one(world, c, data);
-            ContactRow::new(world, c, wi, data.mu, &inv_mass)
+            let mu = if world.materials.is_none() {
+                data.mu
+            } else {
+                data.law(world, c).mu
+            };
+            ContactRow::new(world, c, wi, mu, &inv_mass)
         };
         // an indexed collect (each row written in place, in parallel); an invalid contact
         // leaves a placeholder and raises `failed`

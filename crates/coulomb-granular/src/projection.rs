@@ -95,8 +95,11 @@ fn gap_normal(world: &World, a: usize, partner: Partner, t: f64) -> Option<(f64,
             let d = ba.position - bb.position;
             Some((d.norm() - ba.radius - bb.radius, d.normalized_or(Vec3::Z)))
         }
-        Partner::Obstacle(o) => {
-            let p = world.obstacles.get(o)?.proximity(ba.position, ba.radius, t);
+        Partner::Obstacle(o, f) => {
+            let p = world
+                .obstacles
+                .get(o)?
+                .feature_proximity(f, ba.position, ba.radius, t)?;
             Some((p.gap, p.normal))
         }
     }
@@ -109,6 +112,7 @@ fn pairs_within(world: &World, t: f64, margin: f64) -> Vec<(usize, Partner, f64)
     let grid = BroadPhase::new(world, margin.max(0.0));
     par_chunked(world.bodies.len(), SPHERE_CHUNK, |range, out| {
         let mut js = Vec::new();
+        let mut near = Vec::new();
         for i in range {
             let Some(b) = world.bodies.get(i) else {
                 continue;
@@ -122,9 +126,10 @@ fn pairs_within(world: &World, t: f64, margin: f64) -> Vec<(usize, Partner, f64)
                 }
             }
             for (o, ob) in world.obstacles.iter().enumerate() {
-                let g = ob.proximity(b.position, b.radius, t).gap;
-                if g <= margin {
-                    out.push((i, Partner::Obstacle(o), g));
+                near.clear();
+                ob.proximities(b.position, b.radius, t, margin, &mut near);
+                for &(f, p) in &near {
+                    out.push((i, Partner::Obstacle(o, f), p.gap));
                 }
             }
         }
@@ -135,7 +140,7 @@ fn min_radius(world: &World, a: usize, partner: Partner) -> f64 {
     let ra = world.bodies.get(a).map_or(f64::INFINITY, |b| b.radius);
     match partner {
         Partner::Body(j) => ra.min(world.bodies.get(j).map_or(f64::INFINITY, |b| b.radius)),
-        Partner::Obstacle(_) => ra,
+        Partner::Obstacle(..) => ra,
     }
 }
 
@@ -204,8 +209,8 @@ fn gap_normal_of(
                 d.normalized_or(Vec3::Z),
             ))
         }
-        Partner::Obstacle(o) => {
-            let p = world.obstacles.get(o)?.proximity(xa, ra, t);
+        Partner::Obstacle(o, f) => {
+            let p = world.obstacles.get(o)?.feature_proximity(f, xa, ra, t)?;
             Some((p.gap, p.normal))
         }
     }
@@ -221,7 +226,7 @@ fn gap_normal_at(
 ) -> Option<(f64, Vec3)> {
     let xb = match partner {
         Partner::Body(j) => Some(*pos.get(j)?),
-        Partner::Obstacle(_) => None,
+        Partner::Obstacle(..) => None,
     };
     gap_normal_of(world, a, *pos.get(a)?, partner, xb, t)
 }
@@ -288,7 +293,7 @@ pub fn project_measured(
         let (a, partner, _) = found[i];
         match partner {
             Partner::Body(j) => (a, Some(j)),
-            Partner::Obstacle(_) => (a, None),
+            Partner::Obstacle(..) => (a, None),
         }
     });
     // constraints in colour order (pairs_within gives valid, distinct sphere indices)
@@ -310,7 +315,7 @@ pub fn project_measured(
     let update = |c: &mut Constraint| -> f64 {
         let other = match c.partner {
             Partner::Body(j) => Some(j),
-            Partner::Obstacle(_) => None,
+            Partner::Obstacle(..) => None,
         };
         if c.a >= nb || other.is_some_and(|j| j >= nb || j == c.a) {
             return 0.0;
@@ -322,7 +327,7 @@ pub fn project_measured(
         };
         let (wa, wb, b) = match c.partner {
             Partner::Body(j) => (inv_mass[c.a], inv_mass[j], Some(j)),
-            Partner::Obstacle(_) => (inv_mass[c.a], 0.0, None),
+            Partner::Obstacle(..) => (inv_mass[c.a], 0.0, None),
         };
         let new = (c.lambda - g / (wa + wb)).max(0.0);
         let d = new - c.lambda;

@@ -130,7 +130,7 @@ pub fn effective_radius(world: &World, c: &Contact) -> f64 {
                 0.0
             }
         }
-        Partner::Obstacle(_) => ra,
+        Partner::Obstacle(..) => ra,
     }
 }
 
@@ -162,6 +162,8 @@ struct Block {
     j: [[f64; 12]; 6],
     w: [f64; 6],
     mu: f64,
+    /// μ_r of the contact (its pair of materials', or the parameters')
+    mu_r: f64,
     /// W₆ = J M⁻¹ Jᵀ (diagonal block)
     a: [[f64; 6]; 6],
     /// W₆⁻¹ (None: singular, a body without rotational dof)
@@ -217,6 +219,7 @@ fn blocks(
     world: &World,
     contacts: &[Contact],
     problem: &GlobalProblem,
+    mu_r: f64,
 ) -> Result<Vec<Block>, SolveError> {
     let h = &problem.h;
     let minv: Vec<f64> = problem.m.values.iter().map(|m| 1.0 / m).collect();
@@ -225,13 +228,25 @@ fn blocks(
         let a = 6 * c.body;
         let b = match c.partner {
             Partner::Body(j) => Some(6 * j),
-            Partner::Obstacle(_) => None,
+            Partner::Obstacle(..) => None,
         };
         let mut blk = Block {
             dofs: [Some(a), b],
             j: [[0.0; 12]; 6],
             w: [0.0; 6],
             mu: problem.mu.get(i).copied().unwrap_or(0.0),
+            mu_r: if world.materials.is_none() {
+                mu_r
+            } else {
+                let default = crate::world::ContactLaw {
+                    mu: 0.0,
+                    restitution: 0.0,
+                    rolling_friction: mu_r,
+                };
+                world
+                    .contact_law(c.body, c.partner, default)
+                    .rolling_friction
+            },
             a: [[0.0; 6]; 6],
             a_inv: None,
             a3: [0.0; 9],
@@ -281,7 +296,7 @@ fn blocks(
                         }
                     }
                 }
-                Partner::Obstacle(o) => {
+                Partner::Obstacle(o, _) => {
                     if let Some(Motion::Rotate { axis, omega, .. }) =
                         world.obstacles.get(o).map(|ob| &ob.motion)
                     {
@@ -548,20 +563,13 @@ fn solve_block(blk: &Block, mu_r: f64, c: &[f64; 6], old: &[f64; 6], local: usiz
 }
 
 /// The error of the 6-component problem (module doc) and its rolling part, from (r, y) and v.
-fn error_of(
-    blocks: &[Block],
-    mu_r: f64,
-    r: &[f64],
-    y: &[[f64; 3]],
-    v: &[f64],
-    q_norm: f64,
-) -> (f64, f64) {
+fn error_of(blocks: &[Block], r: &[f64], y: &[[f64; 3]], v: &[f64], q_norm: f64) -> (f64, f64) {
     let (mut e2, mut er2, mut r2, mut u2) = (0.0, 0.0, 0.0, 0.0);
     for (i, blk) in blocks.iter().enumerate() {
         let u = blk.velocity(v);
         let ri = &r[3 * i..3 * i + 3];
         e2 += coulomb::law::contact_residual_sq(blk.mu, &u[..3], ri);
-        er2 += rolling_residual_sq(mu_r, ri[0], y[i], [u[3], u[4], u[5]]);
+        er2 += rolling_residual_sq(blk.mu_r, ri[0], y[i], [u[3], u[4], u[5]]);
         r2 += ri.iter().chain(&y[i]).map(|x| x * x).sum::<f64>();
         u2 += u.iter().map(|x| x * x).sum::<f64>();
     }
@@ -622,7 +630,7 @@ pub fn solve_step(
         ));
     }
     let n = contacts.len();
-    let blocks = blocks(world, contacts, problem)?;
+    let blocks = blocks(world, contacts, problem, mu_r)?;
     let minv: Vec<f64> = problem.m.values.iter().map(|m| 1.0 / m).collect();
     let mut r: Vec<f64> = if guess_r.len() == 3 * n {
         guess_r.to_vec()
@@ -641,7 +649,7 @@ pub fn solve_step(
         .sum::<f64>()
         .sqrt();
     let mut v = velocities(problem, &blocks, &r, &y);
-    let (mut err, _) = error_of(&blocks, mu_r, &r, &y, &v, q_norm);
+    let (mut err, _) = error_of(&blocks, &r, &y, &v, q_norm);
     let mut sweeps = 0;
     let (mut stalled, mut window_start) = (false, err);
     let (mut relax, mut relax_start) = (RELAXATION, f64::INFINITY);
@@ -717,7 +725,7 @@ pub fn solve_step(
             for k in 0..6 {
                 c[k] = u[k] - (0..6).map(|l| blk.a[k][l] * old[l]).sum::<f64>();
             }
-            let mut new = solve_block(blk, mu_r, &c, &old, local);
+            let mut new = solve_block(blk, blk.mu_r, &c, &old, local);
             if omega != 1.0 {
                 // a convex combination of two points of the cones stays in them; an
                 // over-relaxed one is projected back (r onto K_μ, then y onto B(μ_r r_N))
@@ -727,7 +735,7 @@ pub fn solve_step(
                 if omega > 1.0 {
                     let mut rr = [new[0], new[1], new[2]];
                     coulomb::cone::project(blk.mu, &mut rr);
-                    let yy = project_ball(mu_r * rr[0].max(0.0), [new[3], new[4], new[5]]);
+                    let yy = project_ball(blk.mu_r * rr[0].max(0.0), [new[3], new[4], new[5]]);
                     new = [rr[0], rr[1], rr[2], yy[0], yy[1], yy[2]];
                 }
             }
@@ -749,12 +757,12 @@ pub fn solve_step(
         }
         // the error costs about a sweep: measured every CHECK_EVERY sweeps far from tol
         if err <= 10.0 * settings.tol || sweeps % CHECK_EVERY == 0 {
-            err = error_of(&blocks, mu_r, &r, &y, &v, q_norm).0;
+            err = error_of(&blocks, &r, &y, &v, q_norm).0;
         }
     };
     // the reported error, on v recomputed from (r, y)
     v = velocities(problem, &blocks, &r, &y);
-    let (err, rolling_err) = error_of(&blocks, mu_r, &r, &y, &v, q_norm);
+    let (err, rolling_err) = error_of(&blocks, &r, &y, &v, q_norm);
     let status = match status {
         Status::Converged if err.is_nan() || err > settings.tol => Status::MaxIterations,
         s => s,
@@ -895,7 +903,9 @@ mod tests {
         sim.step().unwrap();
         let problem = sim.last_problem.clone().unwrap();
         let contacts = sim.contacts.clone();
-        blocks(&sim.world, &contacts, &problem).unwrap().remove(0)
+        blocks(&sim.world, &contacts, &problem, 0.1)
+            .unwrap()
+            .remove(0)
     }
 
     #[test]

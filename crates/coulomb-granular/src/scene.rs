@@ -3,7 +3,8 @@
 //! (ChaCha8).
 
 use crate::math::Vec3;
-use crate::world::{Motion, Obstacle, Shape, Sphere, World};
+use crate::model::{ObstacleSpec, SceneModel, SphereBatch, DEFAULT_MATERIAL};
+use crate::world::{Motion, Shape, Sphere, World};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -147,17 +148,32 @@ impl Scene {
         world
     }
 
-    /// Builds the world of this scene; `layout` is used by the `box` scene only.
+    /// Builds the world of this scene; `layout` is used by the `box` scene only: the world
+    /// of [`Scene::model`] (built without the model's start checks: the built-in
+    /// arrangements are loose by construction, `scenes_are_deterministic_and_start_without_overlap`).
     pub fn build_with(self, beads: usize, seed: u64, layout: &BoxLayout) -> World {
+        // the model of a built-in scene is valid by construction (tested below); an empty
+        // world would only come from a broken built-in
+        self.model(beads, seed, layout).world().unwrap_or_default()
+    }
+
+    /// The scene description of this scene with `beads` spheres, deterministic from `seed`
+    /// (ChaCha8): its obstacles, one material (`default`, the law of `Params::default()`),
+    /// the beads as one [`SphereBatch`] (radius [`BEAD_RADIUS`], density [`BEAD_DENSITY`]),
+    /// gravity −9.81 e_z, the step settings of `coulomb simulate`. `layout` is used by the
+    /// `box` scene only.
+    pub fn model(self, beads: usize, seed: u64, layout: &BoxLayout) -> SceneModel {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let mut world = World::new();
+        let mut model = SceneModel::default();
+        let obstacles = &mut model.obstacles;
+        let mut spheres = Vec::with_capacity(beads);
         let r = BEAD_RADIUS;
         match self {
             Scene::Box => {
                 let l = layout;
-                add_box(&mut world, l.side_x, l.side_y);
+                add_box(obstacles, l.side_x, l.side_y);
                 fill_lattice(
-                    &mut world,
+                    &mut spheres,
                     &mut rng,
                     beads,
                     Lattice {
@@ -171,8 +187,8 @@ impl Scene {
                 );
             }
             Scene::VibratingPlate => {
-                add_box(&mut world, BOX_SIDE, BOX_SIDE);
-                if let Some(ground) = world.obstacles.first_mut() {
+                add_box(obstacles, BOX_SIDE, BOX_SIDE);
+                if let Some(ground) = obstacles.first_mut() {
                     ground.name = "plate".into();
                     ground.motion = Motion::Oscillate {
                         direction: Vec3::Z,
@@ -181,7 +197,7 @@ impl Scene {
                     };
                 }
                 fill(
-                    &mut world,
+                    &mut spheres,
                     &mut rng,
                     beads,
                     Vec3::new(0.0, 0.0, 0.03),
@@ -193,7 +209,7 @@ impl Scene {
                 // floor and walls of a large bin; two inclined plates (45°) forming a V with a
                 // slot of 3 diameters at height 1 m, the beads above them
                 let (lx, ly) = (2.0, BOX_SIDE);
-                add_box(&mut world, lx, ly);
+                add_box(obstacles, lx, ly);
                 let slot = 6.0 * r;
                 let zb = 1.0;
                 let half = 0.5;
@@ -201,7 +217,7 @@ impl Scene {
                 for side in [-1.0, 1.0] {
                     let dir = Vec3::new(side * a.cos(), 0.0, a.sin());
                     let center = Vec3::new(0.5 * lx + side * 0.5 * slot, 0.5 * ly, zb) + dir * half;
-                    world.obstacles.push(Obstacle::fixed(
+                    obstacles.push(ObstacleSpec::fixed(
                         if side < 0.0 {
                             "funnel-left"
                         } else {
@@ -220,7 +236,7 @@ impl Scene {
                 let x1 = 0.5 * lx + 0.5 * slot + 2.0 * half * a.cos();
                 let (xm, sl) = (0.5 * lx, 0.5 * slot);
                 fill(
-                    &mut world,
+                    &mut spheres,
                     &mut rng,
                     beads,
                     Vec3::new(x0, 0.0, zb + 2.0 * r),
@@ -236,7 +252,7 @@ impl Scene {
                     axis: Vec3::Y,
                     omega: 1.0,
                 };
-                world.obstacles.push(Obstacle {
+                obstacles.push(ObstacleSpec {
                     name: "drum".into(),
                     shape: Shape::CylinderInside {
                         point: axis_point,
@@ -244,19 +260,21 @@ impl Scene {
                         radius: rd,
                     },
                     motion: motion.clone(),
+                    material: DEFAULT_MATERIAL.into(),
                 });
                 for (name, y, n) in [("cap-front", 0.0, Vec3::Y), ("cap-back", len, -Vec3::Y)] {
-                    world.obstacles.push(Obstacle {
+                    obstacles.push(ObstacleSpec {
                         name: name.into(),
                         shape: Shape::Plane {
                             point: Vec3::new(0.0, y, 0.0),
                             normal: n,
                         },
                         motion: motion.clone(),
+                        material: DEFAULT_MATERIAL.into(),
                     });
                 }
                 fill(
-                    &mut world,
+                    &mut spheres,
                     &mut rng,
                     beads,
                     Vec3::new(-rd, 0.0, 0.0),
@@ -267,12 +285,19 @@ impl Scene {
                 );
             }
         }
-        world
+        model.sphere_batches.push(SphereBatch {
+            positions: spheres.iter().map(|b| b.position).collect(),
+            radii: vec![r],
+            velocities: spheres.iter().map(|b| b.velocity).collect(),
+            density: Some(BEAD_DENSITY),
+            ..SphereBatch::default()
+        });
+        model
     }
 }
 
 /// Ground z = 0 and four vertical walls around [0, lx] × [0, ly].
-fn add_box(world: &mut World, lx: f64, ly: f64) {
+fn add_box(obstacles: &mut Vec<ObstacleSpec>, lx: f64, ly: f64) {
     let planes = [
         ("ground", Vec3::ZERO, Vec3::Z),
         ("wall-x0", Vec3::ZERO, Vec3::X),
@@ -281,9 +306,7 @@ fn add_box(world: &mut World, lx: f64, ly: f64) {
         ("wall-y1", Vec3::new(0.0, ly, 0.0), -Vec3::Y),
     ];
     for (name, point, normal) in planes {
-        world
-            .obstacles
-            .push(Obstacle::fixed(name, Shape::Plane { point, normal }));
+        obstacles.push(ObstacleSpec::fixed(name, Shape::Plane { point, normal }));
     }
 }
 
@@ -291,7 +314,7 @@ fn add_box(world: &mut World, lx: f64, ly: f64) {
 /// velocities of ±0.1 m/s) in the box [lo, hi] filling layers bottom up, keeping the sites
 /// where `inside` holds.
 fn fill(
-    world: &mut World,
+    spheres: &mut Vec<Sphere>,
     rng: &mut ChaCha8Rng,
     n: usize,
     lo: Vec3,
@@ -306,7 +329,7 @@ fn fill(
         layer_pitch: 2.5 * r,
         base: 1.25 * r,
     };
-    fill_lattice(world, rng, n, lattice, inside)
+    fill_lattice(spheres, rng, n, lattice, inside)
 }
 
 /// Sites of a loose initial arrangement in the box [lo, hi].
@@ -322,7 +345,7 @@ pub(crate) struct Lattice {
 /// Places `n` beads on the sites of `lattice` (jitter ±0.2 R, random initial velocities of
 /// ±0.1 m/s), layer by layer bottom up, keeping the sites where `inside` holds.
 pub(crate) fn fill_lattice(
-    world: &mut World,
+    spheres: &mut Vec<Sphere>,
     rng: &mut ChaCha8Rng,
     n: usize,
     lattice: Lattice,
@@ -365,7 +388,7 @@ pub(crate) fn fill_lattice(
                 let mut b = Sphere::new(p, r, mass);
                 let mut v = || rng.random_range(-0.1..0.1);
                 b.velocity = Vec3::new(v(), v(), v());
-                world.bodies.push(b);
+                spheres.push(b);
                 placed += 1;
             }
         }
@@ -405,6 +428,17 @@ mod tests {
                 contacts.len()
             );
             assert_eq!(Scene::from_name(scene.name()), Some(scene));
+        }
+    }
+
+    #[test]
+    fn builtin_models_are_valid_scenes() {
+        for scene in Scene::ALL {
+            let model = scene.model(200, 5, &BoxLayout::for_beads(200));
+            let (world, params) = model.build().unwrap_or_else(|e| panic!("{scene:?}: {e}"));
+            assert_eq!(world, scene.build(200, 5), "{scene:?}");
+            assert!(world.materials.is_none());
+            assert_eq!((params.mu, params.restitution), (0.3, 0.2));
         }
     }
 

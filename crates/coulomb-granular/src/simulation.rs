@@ -236,17 +236,21 @@ impl Simulation {
         {
             return bad(format!("activation {:?} out of range", p.activation));
         }
-        for (i, b) in world.bodies.iter().enumerate() {
-            let valid = b.radius > 0.0
-                && b.mass > 0.0
-                && b.radius.is_finite()
-                && b.mass.is_finite()
-                && b.position.is_finite()
-                && b.velocity.is_finite();
-            if !valid {
-                return bad(format!("body {i} has invalid radius, mass or state"));
+        if let Some(t) = &world.materials {
+            if let Err(e) = t.check() {
+                return bad(format!("material table: {e}"));
             }
         }
+        let materials = world.materials.as_ref().map_or(1, |t| t.len());
+        for (i, o) in world.obstacles.iter().enumerate() {
+            if o.material as usize >= materials {
+                return bad(format!(
+                    "obstacle {i} ('{}') has material {} of {materials}",
+                    o.name, o.material
+                ));
+            }
+        }
+        check_spheres(&world.bodies, 0, materials)?;
         Ok(Self {
             world,
             params,
@@ -261,6 +265,23 @@ impl Simulation {
             residual_velocity: 0.0,
             rolling: Default::default(),
         })
+    }
+
+    /// Appends `spheres` to the world (an inlet pouring new spheres mid-run), validated as
+    /// [`Simulation::new`] validates its bodies; returns their indices. The existing spheres
+    /// keep their indices, so the warm-start keys (sphere, partner) of the last step stay
+    /// valid; the new spheres start without warm start. A sphere placed overlapping another
+    /// is corrected by the position correction of the next step (if enabled) — place them
+    /// apart.
+    pub fn insert_bodies(
+        &mut self,
+        spheres: Vec<crate::world::Sphere>,
+    ) -> Result<std::ops::Range<usize>, SimulationError> {
+        let start = self.world.bodies.len();
+        let materials = self.world.materials.as_ref().map_or(1, |t| t.len());
+        check_spheres(&spheres, start, materials)?;
+        self.world.bodies.extend(spheres);
+        Ok(start..self.world.bodies.len())
     }
 
     /// One Moreau–Jean step from t_k to t_{k+1} = t_k + h:
@@ -335,9 +356,10 @@ impl Simulation {
                 .zip(&diag)
                 .map(|(f, m)| f / m)
                 .collect()
-        } else if let (StepMethod::Nsgs(settings), true) =
-            (self.params.method, self.params.rolling_friction == 0.0)
-        {
+        } else if let (StepMethod::Nsgs(settings), false) = (
+            self.params.method,
+            self.world.has_rolling(self.params.rolling_friction),
+        ) {
             // with rolling resistance the step is the 6-component law of crate::rolling,
             // solved below whatever the method
             self.step_nsgs(&mut contacts, &data, &settings, &mut stats, t0)?
@@ -367,17 +389,20 @@ impl Simulation {
             // ---- hook: rolling resistance (crate::rolling). With μ_r > 0 the step's
             // 6-component problem is solved there (problem.f then holds the rolling impulses);
             // otherwise the library's solver, as before.
-            let rolling = (self.params.rolling_friction > 0.0).then(|| {
-                crate::rolling::solve_step(
-                    &self.world,
-                    &contacts,
-                    &mut problem,
-                    self.params.rolling_friction,
-                    &self.params.solver,
-                    &guess.r,
-                    &mut self.rolling,
-                )
-            });
+            let rolling = self
+                .world
+                .has_rolling(self.params.rolling_friction)
+                .then(|| {
+                    crate::rolling::solve_step(
+                        &self.world,
+                        &contacts,
+                        &mut problem,
+                        self.params.rolling_friction,
+                        &self.params.solver,
+                        &guess.r,
+                        &mut self.rolling,
+                    )
+                });
             let wrapped = Problem::Global(problem);
             let sol = match rolling {
                 Some(sol) => sol,
@@ -660,6 +685,38 @@ impl Simulation {
             .map(|b| b.velocity.norm() + b.radius * b.angular_velocity.norm())
             .fold(0.0, f64::max)
     }
+}
+
+/// Checks spheres (numbered from `first`): positive finite radius and mass, finite state,
+/// material index below `materials`.
+fn check_spheres(
+    spheres: &[crate::world::Sphere],
+    first: usize,
+    materials: usize,
+) -> Result<(), SimulationError> {
+    for (i, b) in spheres.iter().enumerate() {
+        let valid = b.radius > 0.0
+            && b.mass > 0.0
+            && b.radius.is_finite()
+            && b.mass.is_finite()
+            && b.position.is_finite()
+            && b.velocity.is_finite()
+            && b.angular_velocity.is_finite();
+        if !valid {
+            return Err(SimulationError::Parameter(format!(
+                "body {} has invalid radius, mass or state",
+                first + i
+            )));
+        }
+        if b.material as usize >= materials {
+            return Err(SimulationError::Parameter(format!(
+                "body {} has material {} of {materials}",
+                first + i,
+                b.material
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// A step finished by the library's solver: (r, v, scale max(‖q‖, ‖r‖, ‖u‖)).

@@ -711,7 +711,7 @@ pub fn column_world(beads: usize, r0: f64) -> World {
     ));
     let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(1);
     crate::scene::fill_lattice(
-        &mut world,
+        &mut world.bodies,
         &mut rng,
         beads,
         crate::scene::Lattice {

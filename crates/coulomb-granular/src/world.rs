@@ -1,15 +1,37 @@
 //! The mechanical system: rigid spheres (6 dofs each) and obstacles (fixed or kinematically
-//! driven), the data of (2.1)–(2.3) for a granular material.
+//! driven), the data of (2.1)–(2.3) for a granular material, and the contact laws of the
+//! pairs of materials.
+//!
+//! # Obstacles
+//! An obstacle is a [`Shape`] in its reference position with a prescribed rigid [`Motion`]
+//! (§5.6: external objects in rigid motion). A sphere's contacts with it are found by a
+//! closest-point query ([`Obstacle::proximities`]): one [`Proximity`] per touching *feature*
+//! (a wall of a box, the lateral wall or a cap of a cylinder, a triangle of a mesh; one
+//! feature for the other shapes), the feature's index completing the contact's key
+//! ([`crate::contact::Partner::Obstacle`]) so that warm starts follow it across steps.
+//!
+//! Motions and shapes combine freely. Translations ([`Motion::Translate`],
+//! [`Motion::Oscillate`]) move the shape rigidly: exact for every shape. A rotation
+//! ([`Motion::Rotate`]) moves the shape rigidly too: the query is made in the obstacle's
+//! frame (the sphere centre rotated by −ωt about the axis) and the point and normal rotated
+//! back; for a shape that the rotation maps onto itself (a plane orthogonal to the axis, a
+//! cylinder or a sphere centred on it: [`Obstacle::rotation_invariant`]) that transformation
+//! is skipped (it changes nothing but rounding), and only the surface velocity ω × (p − c)
+//! matters. Every combination is exact; an infinite shape (plane, infinite cylinder) rotating
+//! about an axis that does not leave it invariant has an unbounded surface speed and is
+//! refused by the scene model.
 
 use crate::math::Vec3;
-use serde::Serialize;
+use crate::mesh::{Region, TriangleMesh};
+use serde::{Deserialize, Serialize};
 
 /// Gravity used by every scene (m/s²), acting along −e_z.
 pub const GRAVITY: f64 = 9.81;
 
 /// A rigid sphere: 3 translational and 3 rotational dofs, v = (ẋ, ω). Its mass matrix is
 /// diag(m, m, m, I, I, I) with I = 2/5 m R² (a solid ball; M is constant, as (2.5) assumes).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Sphere {
     /// centre x
     pub position: Vec3,
@@ -23,10 +45,13 @@ pub struct Sphere {
     pub mass: f64,
     /// when true, the rotation is locked: ω stays 0 and contacts do not act on it
     pub rotation_locked: bool,
+    /// index of its material in [`World::materials`] (0 without a table)
+    #[serde(default)]
+    pub material: u32,
 }
 
 impl Sphere {
-    /// A sphere at rest at `position`.
+    /// A sphere at rest at `position` (material 0).
     pub fn new(position: Vec3, radius: f64, mass: f64) -> Self {
         Self {
             position,
@@ -35,6 +60,7 @@ impl Sphere {
             radius,
             mass,
             rotation_locked: false,
+            material: 0,
         }
     }
     /// Moment of inertia 2/5 m R² of a solid ball.
@@ -48,9 +74,141 @@ impl Sphere {
     }
 }
 
+/// The coefficients of the contact law of one pair of materials.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactLaw {
+    /// friction coefficient μ ≥ 0 of Coulomb's cone (2.9)
+    pub mu: f64,
+    /// Newton restitution coefficient e ∈ [0, 1] of Moreau's impact law
+    #[serde(default)]
+    pub restitution: f64,
+    /// rolling-friction coefficient μ_r ≥ 0 ([`crate::rolling`])
+    #[serde(default)]
+    pub rolling_friction: f64,
+}
+
+impl ContactLaw {
+    /// Why the coefficients are out of range (μ, μ_r finite ≥ 0, e ∈ [0, 1]), if they are.
+    pub fn check(&self) -> Result<(), String> {
+        if !(self.mu.is_finite() && self.mu >= 0.0) {
+            return Err(format!("mu = {} is not a finite number ≥ 0", self.mu));
+        }
+        if !(0.0..=1.0).contains(&self.restitution) {
+            return Err(format!(
+                "restitution = {} is not in [0, 1]",
+                self.restitution
+            ));
+        }
+        if !(self.rolling_friction.is_finite() && self.rolling_friction >= 0.0) {
+            return Err(format!(
+                "rolling_friction = {} is not a finite number ≥ 0",
+                self.rolling_friction
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The contact laws of every pair of materials: `names[k]` is material k (the index that
+/// spheres and obstacles carry), `laws[a · n + b]` the law of the pair (a, b), symmetric.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialTable {
+    /// material names, in index order
+    pub names: Vec<String>,
+    /// n × n laws, row-major, symmetric
+    pub laws: Vec<ContactLaw>,
+}
+
+impl MaterialTable {
+    /// A table of the materials `names` whose every pair has the law `default`.
+    pub fn uniform(names: Vec<String>, default: ContactLaw) -> Self {
+        let n = names.len();
+        Self {
+            names,
+            laws: vec![default; n * n],
+        }
+    }
+    /// Number of materials.
+    pub fn len(&self) -> usize {
+        self.names.len()
+    }
+    /// Whether the table has no material.
+    pub fn is_empty(&self) -> bool {
+        self.names.is_empty()
+    }
+    /// The index of material `name`.
+    pub fn index(&self, name: &str) -> Option<u32> {
+        self.names.iter().position(|n| n == name).map(|i| i as u32)
+    }
+    /// The law of the pair (a, b), `None` when an index is out of range.
+    pub fn law(&self, a: u32, b: u32) -> Option<ContactLaw> {
+        let n = self.names.len();
+        let (a, b) = (a as usize, b as usize);
+        (a < n && b < n).then(|| self.laws.get(a * n + b).copied())?
+    }
+    /// Sets the law of the pair (a, b) and (b, a).
+    pub fn set(&mut self, a: u32, b: u32, law: ContactLaw) {
+        let n = self.names.len();
+        let (a, b) = (a as usize, b as usize);
+        if a < n && b < n && self.laws.len() == n * n {
+            self.laws[a * n + b] = law;
+            self.laws[b * n + a] = law;
+        }
+    }
+    /// Whether some pair has rolling friction μ_r > 0.
+    pub fn any_rolling(&self) -> bool {
+        self.laws.iter().any(|l| l.rolling_friction > 0.0)
+    }
+    /// Why the table is malformed (sizes, asymmetry, coefficients out of range), if it is.
+    pub fn check(&self) -> Result<(), String> {
+        let n = self.names.len();
+        if n == 0 || self.laws.len() != n * n {
+            return Err(format!(
+                "{} materials need {} pair laws, the table has {}",
+                n,
+                n * n,
+                self.laws.len()
+            ));
+        }
+        for a in 0..n {
+            for b in 0..n {
+                let l = self.laws[a * n + b];
+                l.check()
+                    .map_err(|e| format!("pair ({}, {}): {e}", self.names[a], self.names[b]))?;
+                if l != self.laws[b * n + a] {
+                    return Err(format!(
+                        "pair ({}, {}) differs from ({}, {})",
+                        self.names[a], self.names[b], self.names[b], self.names[a]
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Which side of a mesh the spheres live on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MeshSide {
+    /// either side: a two-sided surface, open or closed (a chute, a funnel, a drum's shell)
+    #[default]
+    Surface,
+    /// inside a closed, consistently oriented mesh (a container)
+    Inside,
+    /// outside a closed, consistently oriented mesh (a solid)
+    Outside,
+}
+
+fn yes() -> bool {
+    true
+}
+
 /// The shape of an obstacle, in its reference position (time-independent).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Shape {
     /// The infinite plane through `point` with unit `normal`; spheres live on the side the
     /// normal points to (ground, walls, vibrating plate).
@@ -84,14 +242,79 @@ pub enum Shape {
         /// inner radius
         radius: f64,
     },
+    /// The axis-aligned box [lo, hi]. `inside`: a container of thin walls (features 0–5: the
+    /// walls x = lo, x = hi, y = lo, y = hi, z = lo, z = hi), without its top wall z = hi
+    /// when `open_top`; otherwise a solid box the spheres stay out of (one feature: the
+    /// closest point of the box).
+    Box {
+        /// lower corner
+        lo: Vec3,
+        /// upper corner
+        hi: Vec3,
+        /// container (true) or solid (false)
+        inside: bool,
+        /// container without its top wall z = hi
+        #[serde(default)]
+        open_top: bool,
+    },
+    /// A finite circular cylinder: axis from `base` along the unit `axis` over `height`.
+    /// `inside`: a container of thin walls (feature 0: the lateral wall, 1: the bottom cap
+    /// at `base`, 2: the top cap), the caps optional, the bottom cap pierced by a centred
+    /// circular orifice of radius `orifice` (a silo); otherwise a solid cylinder with both
+    /// caps (one feature; `bottom_cap`, `top_cap` must stay true, `orifice` 0).
+    Cylinder {
+        /// centre of the bottom cap
+        base: Vec3,
+        /// unit axis, bottom to top
+        axis: Vec3,
+        /// radius
+        radius: f64,
+        /// length along the axis
+        height: f64,
+        /// container (true) or solid (false)
+        inside: bool,
+        /// the bottom cap is there
+        #[serde(default = "yes")]
+        bottom_cap: bool,
+        /// the top cap is there
+        #[serde(default = "yes")]
+        top_cap: bool,
+        /// radius of the orifice in the bottom cap (0: none)
+        #[serde(default)]
+        orifice: f64,
+    },
+    /// A sphere of radius `radius` about `center`: the spheres live inside it (`inside`, a
+    /// spherical container) or outside (a ball; fixed bodies of the scene model are these).
+    Sphere {
+        /// centre
+        center: Vec3,
+        /// radius
+        radius: f64,
+        /// container (true) or solid (false)
+        inside: bool,
+    },
+    /// A triangle mesh, open or closed (features: the triangles; duplicate contacts at shared
+    /// edges and vertices removed, [`crate::mesh`]).
+    Mesh {
+        /// vertices and triangles, with the spatial index
+        mesh: TriangleMesh,
+        /// which side the spheres live on
+        #[serde(default)]
+        side: MeshSide,
+    },
 }
 
 /// Prescribed rigid motion of an obstacle (§5.6: external objects in rigid motion).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Motion {
     /// motionless
     Fixed,
+    /// translation d(t) = v t at constant velocity v
+    Translate {
+        /// velocity v (m/s)
+        velocity: Vec3,
+    },
     /// translation d(t) = A sin(2π f t) · direction (vibrating plate)
     Oscillate {
         /// unit direction
@@ -101,9 +324,8 @@ pub enum Motion {
         /// frequency f (Hz)
         frequency: f64,
     },
-    /// rotation with angular velocity ω about the line through `center` along `axis`; the
-    /// shape must be invariant under this rotation (a cylinder about its own axis, a plane
-    /// orthogonal to it), so only the surface velocity ω × (p − c) matters
+    /// rotation by the angle ω t about the line through `center` along the unit `axis`
+    /// (right-handed); see the module docs for how shapes follow it
     Rotate {
         /// a point of the rotation axis
         center: Vec3,
@@ -123,11 +345,14 @@ impl Motion {
                 amplitude,
                 frequency,
             } => *direction * (amplitude * (2.0 * std::f64::consts::PI * frequency * t).sin()),
+            Motion::Translate { velocity } => *velocity * t,
             _ => Vec3::ZERO,
         }
     }
-    /// A bound on the normal speed of the obstacle's surface, max_t |n·V_B|: A·2πf for an
-    /// oscillation, 0 for a fixed obstacle and for a rotation (its surface moves in itself).
+    /// A bound on the normal speed of the obstacle's surface, max_t |n·V_B|, for a shape the
+    /// motion maps onto itself: |v| for a translation, A·2πf for an oscillation, 0 for a
+    /// fixed obstacle and for a rotation (its surface moves in itself). For any shape use
+    /// [`Obstacle::max_normal_speed`].
     pub fn max_normal_speed(&self) -> f64 {
         match self {
             Motion::Oscillate {
@@ -135,6 +360,7 @@ impl Motion {
                 frequency,
                 ..
             } => (amplitude * 2.0 * std::f64::consts::PI * frequency).abs(),
+            Motion::Translate { velocity } => velocity.norm(),
             Motion::Fixed | Motion::Rotate { .. } => 0.0,
         }
     }
@@ -142,6 +368,7 @@ impl Motion {
     pub fn velocity_at(&self, p: Vec3, t: f64) -> Vec3 {
         match self {
             Motion::Fixed => Vec3::ZERO,
+            Motion::Translate { velocity } => *velocity,
             Motion::Oscillate {
                 direction,
                 amplitude,
@@ -157,10 +384,32 @@ impl Motion {
             } => (*axis * *omega).cross(p - *center),
         }
     }
+    /// Why the motion's data are invalid (non-finite, non-unit axis), if they are.
+    pub fn check(&self) -> Result<(), String> {
+        let unit = |v: Vec3| v.is_finite() && (v.norm() - 1.0).abs() < 1e-9;
+        match self {
+            Motion::Fixed => Ok(()),
+            Motion::Translate { velocity } if velocity.is_finite() => Ok(()),
+            Motion::Oscillate {
+                direction,
+                amplitude,
+                frequency,
+            } if unit(*direction) && amplitude.is_finite() && frequency.is_finite() => Ok(()),
+            Motion::Rotate {
+                center,
+                axis,
+                omega,
+            } if center.is_finite() && unit(*axis) && omega.is_finite() => Ok(()),
+            m => Err(format!(
+                "motion {m:?}: non-finite value or direction/axis not a unit vector"
+            )),
+        }
+    }
 }
 
-/// An obstacle: a shape with a prescribed motion.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+/// An obstacle: a shape with a prescribed motion and a material.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Obstacle {
     /// a name for outputs ("ground", "plate", "drum", …)
     pub name: String,
@@ -168,6 +417,9 @@ pub struct Obstacle {
     pub shape: Shape,
     /// its prescribed motion
     pub motion: Motion,
+    /// index of its material in [`World::materials`] (0 without a table)
+    #[serde(default)]
+    pub material: u32,
 }
 
 /// Closest-point query of a sphere against an obstacle: the gap g (negative when
@@ -183,28 +435,75 @@ pub struct Proximity {
     pub point: Vec3,
 }
 
-impl Obstacle {
-    /// A fixed obstacle.
-    pub fn fixed(name: &str, shape: Shape) -> Self {
-        Self {
-            name: name.to_string(),
-            shape,
-            motion: Motion::Fixed,
+impl Proximity {
+    /// No feature in reach.
+    pub const FAR: Proximity = Proximity {
+        gap: f64::INFINITY,
+        normal: Vec3::Z,
+        point: Vec3::ZERO,
+    };
+}
+
+/// Closest point of the rectangle (centre c, axes u, v, half-lengths) to x, two-sided.
+fn rectangle_proximity(
+    x: Vec3,
+    radius: f64,
+    c: Vec3,
+    normal: Vec3,
+    u: Vec3,
+    v: Vec3,
+    half_u: f64,
+    half_v: f64,
+) -> Proximity {
+    let d = x - c;
+    let a = d.dot(u).clamp(-half_u, half_u);
+    let b = d.dot(v).clamp(-half_v, half_v);
+    let p = c + u * a + v * b;
+    let e = x - p;
+    let dist = e.norm();
+    let side = if d.dot(normal) >= 0.0 {
+        normal
+    } else {
+        -normal
+    };
+    Proximity {
+        gap: dist - radius,
+        normal: e.normalized_or(side),
+        point: p,
+    }
+}
+
+/// A unit vector orthogonal to the unit `axis`.
+fn orthogonal(axis: Vec3) -> Vec3 {
+    axis.tangent_basis().0
+}
+
+impl Shape {
+    /// Number of features (contacts one sphere can have with it at once, at most).
+    pub fn features(&self) -> usize {
+        match self {
+            Shape::Box { inside: true, .. } => 6,
+            Shape::Cylinder { inside: true, .. } => 3,
+            Shape::Mesh { mesh, .. } => mesh.triangles().len(),
+            _ => 1,
         }
     }
 
-    /// Gap, normal and contact point of a sphere (centre x, radius R) at time t.
-    pub fn proximity(&self, x: Vec3, radius: f64, t: f64) -> Proximity {
-        let off = self.motion.offset(t);
-        match &self.shape {
+    /// The proximity of feature `f` in the shape's reference position translated by `off`
+    /// (legacy shapes compute exactly as before features existed).
+    fn feature(&self, f: u32, x: Vec3, radius: f64, off: Vec3) -> Option<Proximity> {
+        if f as usize >= self.features() {
+            return None;
+        }
+        match self {
             Shape::Plane { point, normal } => {
                 let p0 = *point + off;
                 let d = (x - p0).dot(*normal);
-                Proximity {
+                Some(Proximity {
                     gap: d - radius,
                     normal: *normal,
                     point: x - *normal * d,
-                }
+                })
             }
             Shape::Rectangle {
                 center,
@@ -212,26 +511,16 @@ impl Obstacle {
                 u,
                 half_u,
                 half_v,
-            } => {
-                let c = *center + off;
-                let v = normal.cross(*u);
-                let d = x - c;
-                let a = d.dot(*u).clamp(-half_u, *half_u);
-                let b = d.dot(v).clamp(-half_v, *half_v);
-                let p = c + *u * a + v * b;
-                let e = x - p;
-                let dist = e.norm();
-                let side = if d.dot(*normal) >= 0.0 {
-                    *normal
-                } else {
-                    -*normal
-                };
-                Proximity {
-                    gap: dist - radius,
-                    normal: e.normalized_or(side),
-                    point: p,
-                }
-            }
+            } => Some(rectangle_proximity(
+                x,
+                radius,
+                *center + off,
+                *normal,
+                *u,
+                normal.cross(*u),
+                *half_u,
+                *half_v,
+            )),
             Shape::CylinderInside {
                 point,
                 axis,
@@ -242,18 +531,528 @@ impl Obstacle {
                 let radial = d - *axis * d.dot(*axis);
                 let rho = radial.norm();
                 let outward = radial.normalized_or(-Vec3::Z);
-                Proximity {
+                Some(Proximity {
                     gap: rc - rho - radius,
                     normal: -outward,
                     point: x + outward * (rc - rho),
+                })
+            }
+            Shape::Box {
+                lo,
+                hi,
+                inside: true,
+                open_top,
+            } => {
+                if f >= 6 || (*open_top && f == 5) {
+                    return None;
+                }
+                let (lo, hi) = (*lo + off, *hi + off);
+                let k = (f / 2) as usize;
+                let at_hi = f % 2 == 1;
+                let (a, b) = ((k + 1) % 3, (k + 2) % 3);
+                let unit = |i: usize| [Vec3::X, Vec3::Y, Vec3::Z][i];
+                let face = if at_hi { hi.get(k) } else { lo.get(k) };
+                let inward = if at_hi { -unit(k) } else { unit(k) };
+                let c = (lo + hi) * 0.5;
+                let center = c + unit(k) * (face - c.get(k));
+                Some(rectangle_proximity(
+                    x,
+                    radius,
+                    center,
+                    inward,
+                    unit(a),
+                    unit(b),
+                    0.5 * (hi.get(a) - lo.get(a)),
+                    0.5 * (hi.get(b) - lo.get(b)),
+                ))
+            }
+            Shape::Box {
+                lo,
+                hi,
+                inside: false,
+                ..
+            } => {
+                if f != 0 {
+                    return None;
+                }
+                let (lo, hi) = (*lo + off, *hi + off);
+                let p = x.max(lo).min(hi);
+                let e = x - p;
+                let dist = e.norm();
+                if dist > 0.0 {
+                    return Some(Proximity {
+                        gap: dist - radius,
+                        normal: e * (1.0 / dist),
+                        point: p,
+                    });
+                }
+                // centre inside the solid: out through the nearest face
+                let mut best = (f64::INFINITY, Vec3::Z, x);
+                for k in 0..3 {
+                    let unit = [Vec3::X, Vec3::Y, Vec3::Z][k];
+                    let dl = x.get(k) - lo.get(k);
+                    let dh = hi.get(k) - x.get(k);
+                    if dl < best.0 {
+                        best = (dl, -unit, x - unit * dl);
+                    }
+                    if dh < best.0 {
+                        best = (dh, unit, x + unit * dh);
+                    }
+                }
+                Some(Proximity {
+                    gap: -best.0 - radius,
+                    normal: best.1,
+                    point: best.2,
+                })
+            }
+            Shape::Cylinder {
+                base,
+                axis,
+                radius: rc,
+                height,
+                inside,
+                bottom_cap,
+                top_cap,
+                orifice,
+            } => {
+                let b = *base + off;
+                let d = x - b;
+                let s = d.dot(*axis);
+                let radial = d - *axis * s;
+                let rho = radial.norm();
+                let u = radial.normalized_or(orthogonal(*axis));
+                let near = |p: Vec3, fallback: Vec3| {
+                    let e = x - p;
+                    Proximity {
+                        gap: e.norm() - radius,
+                        normal: e.normalized_or(fallback),
+                        point: p,
+                    }
+                };
+                if *inside {
+                    match f {
+                        0 => Some(near(
+                            b + *axis * s.clamp(0.0, *height) + u * *rc,
+                            if rho <= *rc { -u } else { u },
+                        )),
+                        1 if *bottom_cap => Some(near(
+                            b + u * rho.clamp(orifice.min(*rc), *rc),
+                            if s >= 0.0 { *axis } else { -*axis },
+                        )),
+                        2 if *top_cap => Some(near(
+                            b + *axis * *height + u * rho.min(*rc),
+                            if s <= *height { -*axis } else { *axis },
+                        )),
+                        _ => None,
+                    }
+                } else {
+                    if f != 0 {
+                        return None;
+                    }
+                    let outside = s < 0.0 || s > *height || rho > *rc;
+                    if outside {
+                        return Some(near(
+                            b + *axis * s.clamp(0.0, *height) + u * rho.min(*rc),
+                            u,
+                        ));
+                    }
+                    let (dl, db, dt) = (rc - rho, s, height - s);
+                    let (depth, normal, point) = if dl <= db && dl <= dt {
+                        (dl, u, x + u * dl)
+                    } else if db <= dt {
+                        (db, -*axis, x - *axis * db)
+                    } else {
+                        (dt, *axis, x + *axis * dt)
+                    };
+                    Some(Proximity {
+                        gap: -depth - radius,
+                        normal,
+                        point,
+                    })
+                }
+            }
+            Shape::Sphere {
+                center,
+                radius: rs,
+                inside,
+            } => {
+                if f != 0 {
+                    return None;
+                }
+                let d = x - (*center + off);
+                let dist = d.norm();
+                let dir = d.normalized_or(-Vec3::Z);
+                let point = *center + off + dir * *rs;
+                Some(if *inside {
+                    Proximity {
+                        gap: rs - dist - radius,
+                        normal: -dir,
+                        point,
+                    }
+                } else {
+                    Proximity {
+                        gap: dist - rs - radius,
+                        normal: dir,
+                        point,
+                    }
+                })
+            }
+            Shape::Mesh { mesh, side } => {
+                let xl = x - off;
+                let (p, region) = mesh.closest_on(f as usize, xl)?;
+                Some(mesh_proximity(mesh, *side, f, xl, radius, p, region, off))
+            }
+        }
+    }
+
+    /// Every feature's proximity with gap ≤ `reach`, translated by `off`, into `out` (as
+    /// (feature, proximity), in increasing feature order; not cleared). Features whose
+    /// contact points coincide (an edge of two walls seen from outside) are kept once, the
+    /// lowest feature.
+    fn near(&self, x: Vec3, radius: f64, off: Vec3, reach: f64, out: &mut Vec<(u32, Proximity)>) {
+        match self {
+            Shape::Mesh { mesh, side } => {
+                let xl = x - off;
+                let mut found = Vec::new();
+                mesh.near(xl, radius, reach, &mut found);
+                for (t, p, region) in found {
+                    let prox = mesh_proximity(mesh, *side, t, xl, radius, p, region, off);
+                    if prox.gap <= reach {
+                        out.push((t, prox));
+                    }
+                }
+            }
+            _ => {
+                let start = out.len();
+                for f in 0..self.features() as u32 {
+                    if let Some(p) = self.feature(f, x, radius, off) {
+                        if p.gap <= reach {
+                            let tol = 1e-12 * (1.0 + radius);
+                            if !out[start..]
+                                .iter()
+                                .any(|(_, q)| (q.point - p.point).norm() <= tol)
+                            {
+                                out.push((f, p));
+                            }
+                        }
+                    }
                 }
             }
         }
     }
+
+    /// Whether a rotation about the line (c, unit axis) maps the shape onto itself exactly:
+    /// a plane orthogonal to the axis, an infinite or finite cylinder or a sphere centred on it.
+    pub fn rotation_invariant(&self, c: Vec3, axis: Vec3) -> bool {
+        let on_axis = |p: Vec3| {
+            let d = p - c;
+            (d - axis * d.dot(axis)).norm() <= 1e-12 * (1.0 + d.norm())
+        };
+        let parallel = |a: Vec3| a.cross(axis).norm() <= 1e-12;
+        match self {
+            Shape::Plane { normal, .. } => parallel(*normal),
+            Shape::CylinderInside { point, axis: a, .. } => parallel(*a) && on_axis(*point),
+            Shape::Cylinder { base, axis: a, .. } => parallel(*a) && on_axis(*base),
+            Shape::Sphere { center, .. } => on_axis(*center),
+            _ => false,
+        }
+    }
+
+    /// Largest distance from the point c of a point of the shape (∞ for unbounded shapes).
+    pub fn reach_from(&self, c: Vec3) -> f64 {
+        match self {
+            Shape::Plane { .. } | Shape::CylinderInside { .. } => f64::INFINITY,
+            Shape::Rectangle {
+                center,
+                half_u,
+                half_v,
+                ..
+            } => (*center - c).norm() + half_u.hypot(*half_v),
+            Shape::Box { lo, hi, .. } => {
+                let mut m: f64 = 0.0;
+                for i in 0..8 {
+                    let p = Vec3::new(
+                        if i & 1 == 0 { lo.x } else { hi.x },
+                        if i & 2 == 0 { lo.y } else { hi.y },
+                        if i & 4 == 0 { lo.z } else { hi.z },
+                    );
+                    m = m.max((p - c).norm());
+                }
+                m
+            }
+            Shape::Cylinder {
+                base,
+                radius,
+                height,
+                ..
+            } => (*base - c).norm() + height + radius,
+            Shape::Sphere { center, radius, .. } => (*center - c).norm() + radius,
+            Shape::Mesh { mesh, .. } => mesh.max_norm() + c.norm(),
+        }
+    }
+
+    /// Whether the centre x (shape in its reference position) is where a sphere may be:
+    /// on the free side of a plane, inside a container (a missing cap leaves its end open),
+    /// outside a solid; always for rectangles and two-sided meshes.
+    pub fn admits(&self, x: Vec3) -> bool {
+        match self {
+            Shape::Plane { point, normal } => (x - *point).dot(*normal) >= 0.0,
+            Shape::Rectangle { .. } => true,
+            Shape::CylinderInside {
+                point,
+                axis,
+                radius,
+            } => {
+                let d = x - *point;
+                (d - *axis * d.dot(*axis)).norm() <= *radius
+            }
+            Shape::Box {
+                lo,
+                hi,
+                inside,
+                open_top,
+            } => {
+                let within = (0..3).all(|k| {
+                    x.get(k) >= lo.get(k)
+                        && (x.get(k) <= hi.get(k) || (k == 2 && *open_top && *inside))
+                });
+                if *inside {
+                    within
+                } else {
+                    !(0..3).all(|k| x.get(k) > lo.get(k) && x.get(k) < hi.get(k))
+                }
+            }
+            Shape::Cylinder {
+                base,
+                axis,
+                radius,
+                height,
+                inside,
+                bottom_cap,
+                top_cap,
+                ..
+            } => {
+                let d = x - *base;
+                let s = d.dot(*axis);
+                let rho = (d - *axis * s).norm();
+                if *inside {
+                    rho <= *radius && (s >= 0.0 || !bottom_cap) && (s <= *height || !top_cap)
+                } else {
+                    !(rho < *radius && s > 0.0 && s < *height)
+                }
+            }
+            Shape::Sphere {
+                center,
+                radius,
+                inside,
+            } => {
+                let d = (x - *center).norm();
+                if *inside {
+                    d <= *radius
+                } else {
+                    d >= *radius
+                }
+            }
+            Shape::Mesh { mesh, side } => match side {
+                MeshSide::Surface => true,
+                MeshSide::Inside => mesh.contains(x).unwrap_or(true),
+                MeshSide::Outside => !mesh.contains(x).unwrap_or(false),
+            },
+        }
+    }
+
+    /// Whether the shape is a container (spheres live inside it): the containers of the
+    /// "outside every container" check of the scene model.
+    pub fn is_container(&self) -> bool {
+        matches!(
+            self,
+            Shape::CylinderInside { .. }
+                | Shape::Box { inside: true, .. }
+                | Shape::Cylinder { inside: true, .. }
+                | Shape::Sphere { inside: true, .. }
+                | Shape::Mesh {
+                    side: MeshSide::Inside,
+                    ..
+                }
+        )
+    }
 }
 
-/// The mechanical system: spheres, obstacles, gravity.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+/// The proximity of a sphere (centre xl in the mesh frame) to triangle t at its closest point
+/// p: two-sided, except that a centre on the wrong side of a face of a closed mesh whose
+/// spheres live inside (outside) is pushed back through that face.
+#[allow(clippy::too_many_arguments)]
+fn mesh_proximity(
+    mesh: &TriangleMesh,
+    side: MeshSide,
+    t: u32,
+    xl: Vec3,
+    radius: f64,
+    p: Vec3,
+    region: Region,
+    off: Vec3,
+) -> Proximity {
+    let e = xl - p;
+    let dist = e.norm();
+    let n_out = mesh.face_normal(t as usize);
+    let wrong = region == Region::Face
+        && match side {
+            MeshSide::Surface => false,
+            MeshSide::Inside => e.dot(n_out) > 0.0,
+            MeshSide::Outside => e.dot(n_out) < 0.0,
+        };
+    let fallback = match side {
+        MeshSide::Inside => -n_out,
+        _ => n_out,
+    };
+    if wrong {
+        Proximity {
+            gap: -dist - radius,
+            normal: fallback,
+            point: p + off,
+        }
+    } else {
+        Proximity {
+            gap: dist - radius,
+            normal: e.normalized_or(fallback),
+            point: p + off,
+        }
+    }
+}
+
+impl Obstacle {
+    /// A fixed obstacle (material 0).
+    pub fn fixed(name: &str, shape: Shape) -> Self {
+        Self {
+            name: name.to_string(),
+            shape,
+            motion: Motion::Fixed,
+            material: 0,
+        }
+    }
+
+    /// Whether the obstacle's rotation (if any) leaves its shape invariant, or it does not
+    /// rotate ([`Shape::rotation_invariant`]).
+    pub fn rotation_invariant(&self) -> bool {
+        match &self.motion {
+            Motion::Rotate { center, axis, .. } => self.shape.rotation_invariant(*center, *axis),
+            _ => true,
+        }
+    }
+
+    /// The rigid rotation (centre, axis, angle) to apply at time t, when the shape rotates and
+    /// is not invariant under it.
+    fn rotation_at(&self, t: f64) -> Option<(Vec3, Vec3, f64)> {
+        match &self.motion {
+            Motion::Rotate {
+                center,
+                axis,
+                omega,
+            } if !self.shape.rotation_invariant(*center, *axis) => {
+                Some((*center, *axis, omega * t))
+            }
+            _ => None,
+        }
+    }
+
+    /// A bound on the normal speed max_t |n·V_B| of the obstacle's surface: the motion's
+    /// ([`Motion::max_normal_speed`]), and for a rotation of a shape it does not leave
+    /// invariant |ω| times the shape's largest distance from the centre (∞ if unbounded).
+    pub fn max_normal_speed(&self) -> f64 {
+        match &self.motion {
+            Motion::Rotate { center, omega, .. } if !self.rotation_invariant() => {
+                omega.abs() * self.shape.reach_from(*center)
+            }
+            m => m.max_normal_speed(),
+        }
+    }
+
+    /// The proximities of every feature of the obstacle within `reach` of a sphere (centre x,
+    /// radius R, gap ≤ reach) at time t, appended to `out` as (feature, proximity), in
+    /// increasing feature order.
+    pub fn proximities(
+        &self,
+        x: Vec3,
+        radius: f64,
+        t: f64,
+        reach: f64,
+        out: &mut Vec<(u32, Proximity)>,
+    ) {
+        match self.rotation_at(t) {
+            None => self
+                .shape
+                .near(x, radius, self.motion.offset(t), reach, out),
+            Some((c, axis, angle)) => {
+                let xl = (x - c).rotated(axis, -angle) + c;
+                let start = out.len();
+                self.shape.near(xl, radius, Vec3::ZERO, reach, out);
+                for (_, p) in &mut out[start..] {
+                    p.point = (p.point - c).rotated(axis, angle) + c;
+                    p.normal = p.normal.rotated(axis, angle);
+                }
+            }
+        }
+    }
+
+    /// The proximity of feature `feature` of the obstacle to a sphere (centre x, radius R) at
+    /// time t (`None` if there is no such feature).
+    pub fn feature_proximity(
+        &self,
+        feature: u32,
+        x: Vec3,
+        radius: f64,
+        t: f64,
+    ) -> Option<Proximity> {
+        match self.rotation_at(t) {
+            None => self
+                .shape
+                .feature(feature, x, radius, self.motion.offset(t)),
+            Some((c, axis, angle)) => {
+                let xl = (x - c).rotated(axis, -angle) + c;
+                let mut p = self.shape.feature(feature, xl, radius, Vec3::ZERO)?;
+                p.point = (p.point - c).rotated(axis, angle) + c;
+                p.normal = p.normal.rotated(axis, angle);
+                Some(p)
+            }
+        }
+    }
+
+    /// Gap, normal and contact point of a sphere (centre x, radius R) at time t: the feature
+    /// with the smallest gap ([`Proximity::FAR`] for a mesh with no triangle within 2R + 1 of
+    /// the centre).
+    pub fn proximity(&self, x: Vec3, radius: f64, t: f64) -> Proximity {
+        if self.shape.features() == 1 && !matches!(self.shape, Shape::Mesh { .. }) {
+            return self
+                .feature_proximity(0, x, radius, t)
+                .unwrap_or(Proximity::FAR);
+        }
+        let mut out = Vec::new();
+        let reach = if matches!(self.shape, Shape::Mesh { .. }) {
+            radius + 1.0
+        } else {
+            f64::INFINITY
+        };
+        self.proximities(x, radius, t, reach, &mut out);
+        out.into_iter()
+            .map(|(_, p)| p)
+            .min_by(|a, b| a.gap.total_cmp(&b.gap))
+            .unwrap_or(Proximity::FAR)
+    }
+
+    /// Whether the centre x is where a sphere may be at time t ([`Shape::admits`] in the
+    /// obstacle's frame).
+    pub fn admits(&self, x: Vec3, t: f64) -> bool {
+        let xl = match self.rotation_at(t) {
+            Some((c, axis, angle)) => (x - c).rotated(axis, -angle) + c,
+            None => x - self.motion.offset(t),
+        };
+        self.shape.admits(xl)
+    }
+}
+
+/// The mechanical system: spheres, obstacles, gravity, and the contact laws of the materials.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct World {
     /// the rigid spheres
     pub bodies: Vec<Sphere>,
@@ -261,6 +1060,10 @@ pub struct World {
     pub obstacles: Vec<Obstacle>,
     /// gravity vector (m/s²)
     pub gravity: Vec3,
+    /// the contact law of each pair of materials; `None`: every contact has the law of
+    /// [`crate::Params`] (μ, e, μ_r), the one-material case
+    #[serde(default)]
+    pub materials: Option<MaterialTable>,
 }
 
 impl World {
@@ -270,6 +1073,7 @@ impl World {
             bodies: Vec::new(),
             obstacles: Vec::new(),
             gravity: Vec3::new(0.0, 0.0, -GRAVITY),
+            materials: None,
         }
     }
     /// Number of dofs n = 6 · bodies.
@@ -295,6 +1099,37 @@ impl World {
             v.extend_from_slice(&b.angular_velocity.to_array());
         }
         v
+    }
+    /// The contact law of sphere `a` with `partner`: the pair of their materials in
+    /// [`World::materials`], or `default` (the parameters' law) without a table or for an
+    /// index out of range.
+    #[inline]
+    pub fn contact_law(
+        &self,
+        a: usize,
+        partner: crate::contact::Partner,
+        default: ContactLaw,
+    ) -> ContactLaw {
+        let Some(table) = &self.materials else {
+            return default;
+        };
+        let ma = self.bodies.get(a).map(|b| b.material);
+        let mb = match partner {
+            crate::contact::Partner::Body(j) => self.bodies.get(j).map(|b| b.material),
+            crate::contact::Partner::Obstacle(o, _) => self.obstacles.get(o).map(|b| b.material),
+        };
+        match (ma, mb) {
+            (Some(ma), Some(mb)) => table.law(ma, mb).unwrap_or(default),
+            _ => default,
+        }
+    }
+    /// Whether some contact of this world may have rolling friction, given the parameters'
+    /// μ_r.
+    pub fn has_rolling(&self, default_rolling: f64) -> bool {
+        match &self.materials {
+            Some(t) => t.any_rolling(),
+            None => default_rolling > 0.0,
+        }
     }
 }
 

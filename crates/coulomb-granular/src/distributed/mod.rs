@@ -171,6 +171,13 @@ impl DistributedSimulation {
     /// beads r N/P … (r+1) N/P − 1, then the slabs are placed at the quantiles and the beads
     /// migrate to their owners.
     pub fn new(comm: Comm, world: World, params: Params) -> Result<Self, SimulationError> {
+        if world.materials.is_some() {
+            // per-pair contact laws are not carried by the subdomain exchange
+            return Err(SimulationError::Parameter(
+                "per-pair materials are not supported by the distributed step (use one process)"
+                    .into(),
+            ));
+        }
         if params.rolling_friction != 0.0 {
             // the subdomain sweep solves the law (2.9) only; ignoring μ_r silently would
             // change the physics (crate::rolling)
@@ -320,7 +327,8 @@ impl DistributedSimulation {
                     for (p, r) in w {
                         let (kind, idx) = match p {
                             Partner::Body(j) => (0.0, j),
-                            Partner::Obstacle(o) => (1.0, o),
+                            // an obstacle's kind word carries its feature: 1 + feature
+                            Partner::Obstacle(o, f) => (1.0 + f as f64, o),
                         };
                         buf.extend_from_slice(&[kind, idx as f64, r[0], r[1], r[2]]);
                     }
@@ -345,7 +353,7 @@ impl DistributedSimulation {
                         let p = if w[0] == 0.0 {
                             Partner::Body(idx)
                         } else {
-                            Partner::Obstacle(idx)
+                            Partner::Obstacle(idx, (w[0] - 1.0) as u32)
                         };
                         self.warm.insert((gid, p), [w[2], w[3], w[4]]);
                     }
@@ -410,6 +418,7 @@ impl DistributedSimulation {
             bodies: Vec::with_capacity(n),
             obstacles: self.obstacles.clone(),
             gravity: self.gravity,
+            materials: None,
         };
         let mut of_owned = Vec::with_capacity(self.beads.len());
         let mut of_ghost = Vec::with_capacity(ghosts.beads.len());
@@ -995,6 +1004,7 @@ impl DistributedSimulation {
             bodies: all.into_iter().map(|x| x.1).collect(),
             obstacles: self.obstacles.clone(),
             gravity: self.gravity,
+            materials: None,
         }
     }
 }

@@ -1,0 +1,1154 @@
+//! The scene model: the one description every entry point (the built-in scenes, scene files,
+//! Python) builds a simulation from — bodies, obstacles with their motions, gravity, materials
+//! with per-pair contact laws, and the step settings — and its validated conversion into a
+//! [`World`] and [`Params`] ([`SceneModel::build`]).
+//!
+//! Every type here is serde (`deny_unknown_fields` on structs): a scene file is the
+//! serialization of a [`SceneModel`]. Vectors are arrays `[x, y, z]`.
+//!
+//! # Bodies
+//! A body is a [`BodySpec`] whose shape is one field ([`BodyShape`]; spheres only for now), or
+//! a columnar [`SphereBatch`] (positions, radii, velocities, … as arrays: building 10⁶ spheres
+//! is one tight loop). The world's spheres are the free bodies of `bodies` in order, then the
+//! free spheres of each batch in order.
+//!
+//! A *fixed* body (`fixed = true`) does not become a sphere of the world: it becomes a fixed
+//! obstacle [`Shape::Sphere`] (`inside = false`) of its radius and material, appended after
+//! the model's obstacles (named `fixed-body-K` / `fixed-batch-B-K`). Contacts with it are then
+//! sphere–obstacle contacts (infinite mass, no dof), which the assembly, the body-level
+//! Gauss–Seidel and the position correction already handle; its mass and velocities are not
+//! used (a nonzero velocity is refused).
+//!
+//! # Materials
+//! Materials are names; `default` always exists. Every pair of materials has a contact law
+//! ([`ContactLaw`]: μ, e, μ_r): the pair's entry of `materials.pairs` (symmetric: (a, b) is
+//! (b, a)) or `materials.default`. With a single law for every pair the world carries no table
+//! ([`World::materials`] = `None`) and the [`Params`]' μ, e, μ_r are that law: the numbers are
+//! those of the one-material code path, bit for bit.
+//!
+//! # Validation ([`SceneError`])
+//! Non-finite or nonpositive radius, mass, density; both or neither of mass and density;
+//! unknown materials (in a body, an obstacle or a pair); invalid obstacles (non-unit normals
+//! or axes, empty boxes, orifice wider than the silo, degenerate, non-finite or out-of-range
+//! meshes, open or inconsistently oriented meshes used as containers or solids, infinite
+//! shapes rotating about an axis that moves them); spheres overlapping at the start (count
+//! and worst overlap; [`resolve_overlaps`] relaxes them); free spheres outside every
+//! container or inside a solid obstacle or behind a plane ([`Shape::admits`]); a memory
+//! estimate above the memory available ([`memory_estimate`]).
+
+use crate::contact::candidate_pairs;
+use crate::math::Vec3;
+use crate::mesh::MeshError;
+use crate::nsgs::NsgsSettings;
+use crate::projection::Projection;
+use crate::simulation::{Params, StepMethod};
+use crate::world::{
+    ContactLaw, MaterialTable, MeshSide, Motion, Obstacle, Shape, Sphere, World, GRAVITY,
+};
+use crate::Activation;
+use coulomb::{InnerKind, Method, OuterKind, Settings};
+use serde::{Deserialize, Serialize};
+
+/// The name of the material that always exists.
+pub const DEFAULT_MATERIAL: &str = "default";
+
+fn default_material() -> String {
+    DEFAULT_MATERIAL.to_string()
+}
+
+fn default_gravity() -> Vec3 {
+    Vec3::new(0.0, 0.0, -GRAVITY)
+}
+
+/// The contact law of `Params::default()`: μ = 0.3, e = 0.2, μ_r = 0.
+pub const DEFAULT_LAW: ContactLaw = ContactLaw {
+    mu: 0.3,
+    restitution: 0.2,
+    rolling_friction: 0.0,
+};
+
+fn default_law() -> ContactLaw {
+    DEFAULT_LAW
+}
+
+/// A scene: everything a simulation is built from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneModel {
+    /// gravity vector (m/s²), default (0, 0, −9.81)
+    #[serde(default = "default_gravity")]
+    pub gravity: Vec3,
+    /// materials and the contact laws of their pairs
+    #[serde(default)]
+    pub materials: Materials,
+    /// bodies one by one
+    #[serde(default)]
+    pub bodies: Vec<BodySpec>,
+    /// spheres in columns
+    #[serde(default)]
+    pub sphere_batches: Vec<SphereBatch>,
+    /// obstacles
+    #[serde(default)]
+    pub obstacles: Vec<ObstacleSpec>,
+    /// time step, θ, tolerance, step method
+    #[serde(default)]
+    pub step: StepSettings,
+}
+
+impl Default for SceneModel {
+    fn default() -> Self {
+        Self {
+            gravity: default_gravity(),
+            materials: Materials::default(),
+            bodies: Vec::new(),
+            sphere_batches: Vec::new(),
+            obstacles: Vec::new(),
+            step: StepSettings::default(),
+        }
+    }
+}
+
+/// The materials of a scene: their names (besides `default`), the law of every pair not
+/// listed, and the listed pairs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Materials {
+    /// material names besides `default` (which may be listed too)
+    #[serde(default)]
+    pub names: Vec<String>,
+    /// the law of every pair not in `pairs` (default μ = 0.3, e = 0.2, μ_r = 0)
+    #[serde(default = "default_law")]
+    pub default: ContactLaw,
+    /// the laws of given pairs (symmetric)
+    #[serde(default)]
+    pub pairs: Vec<MaterialPair>,
+}
+
+impl Default for Materials {
+    fn default() -> Self {
+        Self {
+            names: Vec::new(),
+            default: DEFAULT_LAW,
+            pairs: Vec::new(),
+        }
+    }
+}
+
+/// The contact law of the pair of materials (a, b), which is also that of (b, a).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialPair {
+    /// first material
+    pub a: String,
+    /// second material
+    pub b: String,
+    /// friction coefficient μ
+    pub mu: f64,
+    /// restitution e
+    #[serde(default)]
+    pub restitution: f64,
+    /// rolling friction μ_r
+    #[serde(default)]
+    pub rolling_friction: f64,
+}
+
+impl MaterialPair {
+    /// The pair's law.
+    pub fn law(&self) -> ContactLaw {
+        ContactLaw {
+            mu: self.mu,
+            restitution: self.restitution,
+            rolling_friction: self.rolling_friction,
+        }
+    }
+}
+
+/// The shape of a body (spheres only for now; the next shapes join this enum).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum BodyShape {
+    /// a solid ball of radius R (I = 2/5 m R²)
+    Sphere {
+        /// radius R (m)
+        radius: f64,
+    },
+}
+
+/// One body.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodySpec {
+    /// its shape
+    pub shape: BodyShape,
+    /// centre (m)
+    pub position: Vec3,
+    /// velocity (m/s)
+    #[serde(default)]
+    pub velocity: Vec3,
+    /// angular velocity (rad/s)
+    #[serde(default)]
+    pub angular_velocity: Vec3,
+    /// mass (kg); exactly one of `mass` and `density`
+    #[serde(default)]
+    pub mass: Option<f64>,
+    /// density (kg/m³); exactly one of `mass` and `density`
+    #[serde(default)]
+    pub density: Option<f64>,
+    /// material name
+    #[serde(default = "default_material")]
+    pub material: String,
+    /// immobile (becomes a fixed obstacle, see the module docs)
+    #[serde(default)]
+    pub fixed: bool,
+}
+
+impl BodySpec {
+    /// A free sphere at rest of radius R and density ρ, material `default`.
+    pub fn sphere(position: Vec3, radius: f64, density: f64) -> Self {
+        Self {
+            shape: BodyShape::Sphere { radius },
+            position,
+            velocity: Vec3::ZERO,
+            angular_velocity: Vec3::ZERO,
+            mass: None,
+            density: Some(density),
+            material: default_material(),
+            fixed: false,
+        }
+    }
+}
+
+/// Spheres in columns: one entry per sphere in each array (`radii` and `masses` may also have
+/// a single entry for all; `velocities`, `angular_velocities` may be empty: at rest).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SphereBatch {
+    /// centres (m)
+    pub positions: Vec<Vec3>,
+    /// radii (m): one per sphere, or one for all
+    pub radii: Vec<f64>,
+    /// velocities (m/s): one per sphere, or none
+    #[serde(default)]
+    pub velocities: Vec<Vec3>,
+    /// angular velocities (rad/s): one per sphere, or none
+    #[serde(default)]
+    pub angular_velocities: Vec<Vec3>,
+    /// density (kg/m³) of every sphere; exactly one of `density` and `masses`
+    #[serde(default)]
+    pub density: Option<f64>,
+    /// masses (kg): one per sphere, or one for all
+    #[serde(default)]
+    pub masses: Vec<f64>,
+    /// material of every sphere
+    #[serde(default = "default_material")]
+    pub material: String,
+    /// immobile spheres (fixed obstacles)
+    #[serde(default)]
+    pub fixed: bool,
+}
+
+impl Default for SphereBatch {
+    /// No spheres, material `default`, free.
+    fn default() -> Self {
+        Self {
+            positions: Vec::new(),
+            radii: Vec::new(),
+            velocities: Vec::new(),
+            angular_velocities: Vec::new(),
+            density: None,
+            masses: Vec::new(),
+            material: default_material(),
+            fixed: false,
+        }
+    }
+}
+
+/// An obstacle of the scene.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObstacleSpec {
+    /// a name for outputs (default `obstacle-K`)
+    #[serde(default)]
+    pub name: String,
+    /// its shape in the reference position
+    pub shape: Shape,
+    /// its prescribed motion (default fixed)
+    #[serde(default = "fixed_motion")]
+    pub motion: Motion,
+    /// material name
+    #[serde(default = "default_material")]
+    pub material: String,
+}
+
+fn fixed_motion() -> Motion {
+    Motion::Fixed
+}
+
+impl ObstacleSpec {
+    /// A fixed obstacle of material `default`.
+    pub fn fixed(name: &str, shape: Shape) -> Self {
+        Self {
+            name: name.to_string(),
+            shape,
+            motion: Motion::Fixed,
+            material: default_material(),
+        }
+    }
+}
+
+/// Which solver takes each step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StepChoice {
+    /// body-level nonsmooth Gauss–Seidel, finished by the library's solver where it stalls
+    /// (the default of `coulomb simulate`)
+    #[default]
+    Nsgs,
+    /// the library's solver on the assembled problem of each step
+    Library,
+}
+
+/// The time stepping of a scene.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StepSettings {
+    /// time step h (s), default 0.02
+    #[serde(default = "d_h")]
+    pub h: f64,
+    /// θ of (2.7), default 0.5
+    #[serde(default = "d_theta")]
+    pub theta: f64,
+    /// tolerance on the error of docs/error.md at every step, default 1e-4
+    #[serde(default = "d_tol")]
+    pub tol: f64,
+    /// step solver, default `nsgs`
+    #[serde(default)]
+    pub method: StepChoice,
+    /// cap on Gauss–Seidel sweeps per step (nsgs), default 20 000
+    #[serde(default = "d_sweeps")]
+    pub max_sweeps: usize,
+    /// over-relaxation ω ∈ [1, 2) (nsgs), default 1.5
+    #[serde(default = "d_relax")]
+    pub relaxation: f64,
+}
+
+fn d_h() -> f64 {
+    0.02
+}
+fn d_theta() -> f64 {
+    0.5
+}
+fn d_tol() -> f64 {
+    1e-4
+}
+fn d_sweeps() -> usize {
+    20_000
+}
+fn d_relax() -> f64 {
+    1.5
+}
+
+impl Default for StepSettings {
+    fn default() -> Self {
+        Self {
+            h: d_h(),
+            theta: d_theta(),
+            tol: d_tol(),
+            method: StepChoice::Nsgs,
+            max_sweeps: d_sweeps(),
+            relaxation: d_relax(),
+        }
+    }
+}
+
+impl StepSettings {
+    /// The [`Params`] of these settings with the contact law `law` (the parameters of
+    /// `coulomb simulate` with its default arguments otherwise: accurate activation, position
+    /// correction, warm starts; the library's solver with Gauss–Seidel inner iterations fused
+    /// with the law, APGD + Anderson as fallback, up to 20 outer iterations).
+    pub fn params(&self, law: ContactLaw) -> Params {
+        let d = Settings::time_stepping(Method::new(InnerKind::Pgs, Settings::default().outer));
+        let solver = Settings {
+            tol: self.tol,
+            max_outer: 20,
+            fixed_point_tol: None,
+            outer: OuterKind::Fused,
+            fallback: Some((InnerKind::Apgd, OuterKind::Anderson)),
+            ..d
+        };
+        Params {
+            h: self.h,
+            theta: self.theta,
+            restitution: law.restitution,
+            mu: law.mu,
+            activation: Activation::accurate(),
+            solver,
+            warm_start: true,
+            projection: Some(Projection::default()),
+            method: match self.method {
+                StepChoice::Nsgs => StepMethod::Nsgs(NsgsSettings {
+                    tol: self.tol,
+                    max_sweeps: self.max_sweeps,
+                    relaxation: self.relaxation,
+                    ..NsgsSettings::default()
+                }),
+                StepChoice::Library => StepMethod::Library,
+            },
+            rolling_friction: law.rolling_friction,
+        }
+    }
+
+    fn check(&self) -> Result<(), SceneError> {
+        let bad = |s: String| Err(SceneError::InvalidStep(s));
+        if !(self.h.is_finite() && self.h > 0.0) {
+            return bad(format!(
+                "h = {} must be a positive number of seconds",
+                self.h
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.theta) {
+            return bad(format!("theta = {} is not in [0, 1]", self.theta));
+        }
+        if !(self.tol.is_finite() && self.tol > 0.0) {
+            return bad(format!("tol = {} must be positive", self.tol));
+        }
+        if self.max_sweeps == 0 {
+            return bad("max_sweeps must be at least 1".into());
+        }
+        if !(self.relaxation.is_finite() && (1.0..2.0).contains(&self.relaxation)) {
+            return bad(format!("relaxation = {} is not in [1, 2)", self.relaxation));
+        }
+        Ok(())
+    }
+}
+
+/// Why a scene cannot be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SceneError {
+    /// a body, obstacle or pair names a material that is not declared
+    #[error("{what}: unknown material '{name}' (declared: {known})")]
+    UnknownMaterial {
+        /// where ("body 3", "obstacle 1 ('floor')", "material pair 0")
+        what: String,
+        /// the unknown name
+        name: String,
+        /// the declared names, comma-separated
+        known: String,
+    },
+    /// a material is declared twice
+    #[error("material '{0}' is declared twice")]
+    DuplicateMaterial(String),
+    /// a pair's law is out of range, or a pair is given twice
+    #[error("material pair ({a}, {b}): {reason}")]
+    InvalidLaw {
+        /// first material
+        a: String,
+        /// second material
+        b: String,
+        /// what is wrong
+        reason: String,
+    },
+    /// a body's data are invalid
+    #[error("{what}: {reason}")]
+    InvalidBody {
+        /// where ("body 3", "sphere batch 0, sphere 17")
+        what: String,
+        /// what is wrong
+        reason: String,
+    },
+    /// an obstacle's data are invalid
+    #[error("obstacle {index} ('{name}'): {reason}")]
+    InvalidObstacle {
+        /// obstacle index in the model
+        index: usize,
+        /// its name
+        name: String,
+        /// what is wrong
+        reason: String,
+    },
+    /// a mesh obstacle is invalid
+    #[error("obstacle {index} ('{name}'): {source}")]
+    Mesh {
+        /// obstacle index in the model
+        index: usize,
+        /// its name
+        name: String,
+        /// the mesh problem
+        source: MeshError,
+    },
+    /// the step settings are invalid
+    #[error("step settings: {0}")]
+    InvalidStep(String),
+    /// gravity is not finite
+    #[error("gravity {0:?} is not finite")]
+    InvalidGravity([f64; 3]),
+    /// spheres overlap at the start
+    #[error("{count} pair(s) of spheres overlap at the start, the worst by {worst:.3e} m (world spheres {pair:?}); relax them first (resolve_overlaps)")]
+    Overlaps {
+        /// overlapping pairs
+        count: usize,
+        /// largest overlap (m)
+        worst: f64,
+        /// the worst pair (world sphere indices)
+        pair: (usize, usize),
+    },
+    /// a free sphere's centre is where no sphere may be
+    #[error("{what} at {position:?} is {reason}")]
+    Outside {
+        /// which body
+        what: String,
+        /// its centre
+        position: [f64; 3],
+        /// "outside every container", "inside obstacle 2 ('rock')", …
+        reason: String,
+    },
+    /// the scene would need more memory than the machine has
+    #[error("the scene needs about {estimate} bytes ({spheres} spheres, {triangles} mesh triangles), more than the {available} bytes of memory available")]
+    Memory {
+        /// spheres
+        spheres: usize,
+        /// triangles of all meshes
+        triangles: usize,
+        /// estimate (bytes)
+        estimate: u64,
+        /// MemAvailable of /proc/meminfo (bytes)
+        available: u64,
+    },
+}
+
+/// What [`SceneModel::build_with`] checks beyond the data's validity.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BuildChecks {
+    /// refuse overlapping spheres
+    pub overlaps: bool,
+    /// refuse free spheres outside every container, inside a solid, behind a plane
+    pub containment: bool,
+    /// refuse scenes whose memory estimate exceeds MemAvailable
+    pub memory: bool,
+}
+
+impl Default for BuildChecks {
+    fn default() -> Self {
+        Self {
+            overlaps: true,
+            containment: true,
+            memory: true,
+        }
+    }
+}
+
+/// Estimated bytes per sphere of a running simulation: the sphere (112), its blocks of the
+/// step problem (mass, M⁻¹, f, v: 192), the broad phase (48) and about 3 contacts per sphere
+/// (contact 184, Gauss–Seidel row 272, warm start 48, colouring 16: ≈ 1 560), rounded up.
+pub const BYTES_PER_SPHERE: u64 = 2_048;
+/// Estimated bytes per mesh triangle (indices, hierarchy node share, vertices).
+pub const BYTES_PER_TRIANGLE: u64 = 128;
+
+/// The memory a simulation of `spheres` spheres and `triangles` mesh triangles needs, about
+/// (bytes).
+pub fn memory_estimate(spheres: usize, triangles: usize) -> u64 {
+    (spheres as u64)
+        .saturating_mul(BYTES_PER_SPHERE)
+        .saturating_add((triangles as u64).saturating_mul(BYTES_PER_TRIANGLE))
+        .saturating_add(64 << 20)
+}
+
+/// MemAvailable of /proc/meminfo (bytes), `None` where it cannot be read.
+pub fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb.saturating_mul(1024))
+}
+
+/// Overlaps of the spheres of a world: pairs with gap < −10⁻⁹ (R_A + R_B).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct Overlaps {
+    /// overlapping pairs
+    pub count: usize,
+    /// largest overlap (m), 0 when none
+    pub worst: f64,
+    /// the worst pair
+    pub pair: (usize, usize),
+}
+
+/// The overlapping sphere pairs of `world` (broad phase of [`crate::contact`], O(N)).
+pub fn overlaps(world: &World) -> Overlaps {
+    let mut o = Overlaps::default();
+    for (i, j) in candidate_pairs(world, 0.0) {
+        let (a, b) = (&world.bodies[i], &world.bodies[j]);
+        let sum = a.radius + b.radius;
+        let depth = sum - (a.position - b.position).norm();
+        if depth > 1e-9 * sum {
+            o.count += 1;
+            if depth > o.worst {
+                o.worst = depth;
+                o.pair = (i, j);
+            }
+        }
+    }
+    o
+}
+
+/// Result of [`resolve_overlaps`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Resolved {
+    /// Gauss–Seidel sweeps done
+    pub sweeps: usize,
+    /// overlaps left (none when `count` is 0)
+    pub left: Overlaps,
+}
+
+/// Relaxes the overlaps of the spheres of `world`: Gauss–Seidel sweeps over the overlapping
+/// pairs (each moves both centres apart along their line by half the overlap, and 0.1 % more)
+/// and over the spheres penetrating an obstacle whose centre it admits (moved out along the
+/// normal), at most `max_sweeps` sweeps; the velocities are not changed. Deterministic (pairs
+/// in (i, j) order).
+pub fn resolve_overlaps(world: &mut World, max_sweeps: usize) -> Resolved {
+    let mut sweeps = 0;
+    let mut buf = Vec::new();
+    while sweeps < max_sweeps {
+        let pairs = candidate_pairs(world, 0.0);
+        let mut moved = false;
+        for (i, j) in pairs {
+            let (xa, xb) = (world.bodies[i].position, world.bodies[j].position);
+            let sum = world.bodies[i].radius + world.bodies[j].radius;
+            let d = xa - xb;
+            let depth = sum - d.norm();
+            if depth > 1e-9 * sum {
+                let n = d.normalized_or(Vec3::Z);
+                let push = n * (0.5 * depth * 1.001);
+                world.bodies[i].position += push;
+                world.bodies[j].position += -push;
+                moved = true;
+            }
+        }
+        for b in world.bodies.iter_mut() {
+            for ob in &world.obstacles {
+                buf.clear();
+                ob.proximities(b.position, b.radius, 0.0, 0.0, &mut buf);
+                for (_, p) in &buf {
+                    if p.gap < -1e-9 * b.radius && ob.admits(b.position, 0.0) {
+                        b.position += p.normal * (-p.gap * 1.001);
+                        moved = true;
+                    }
+                }
+            }
+        }
+        sweeps += 1;
+        if !moved {
+            break;
+        }
+    }
+    Resolved {
+        sweeps,
+        left: overlaps(world),
+    }
+}
+
+/// A name → index map of the materials of a model.
+struct MaterialIndex {
+    names: Vec<String>,
+}
+
+impl MaterialIndex {
+    fn get(&self, what: impl FnOnce() -> String, name: &str) -> Result<u32, SceneError> {
+        self.names
+            .iter()
+            .position(|n| n == name)
+            .map(|i| i as u32)
+            .ok_or_else(|| SceneError::UnknownMaterial {
+                what: what(),
+                name: name.to_string(),
+                known: self.names.join(", "),
+            })
+    }
+}
+
+fn positive(x: f64) -> bool {
+    x.is_finite() && x > 0.0
+}
+
+/// Mass of a ball of radius r and density ρ: ρ · 4/3 · π r³ (evaluated as the built-in
+/// scenes always did).
+pub fn ball_mass(density: f64, r: f64) -> f64 {
+    density * 4.0 / 3.0 * std::f64::consts::PI * r * r * r
+}
+
+impl SceneModel {
+    /// The material table (index order: `default`, then `materials.names` in order) and
+    /// whether every pair has the same law (then the world carries no table).
+    pub fn material_table(&self) -> Result<(MaterialTable, bool), SceneError> {
+        let mut names = vec![default_material()];
+        for n in &self.materials.names {
+            if n == DEFAULT_MATERIAL {
+                continue;
+            }
+            if names.contains(n) {
+                return Err(SceneError::DuplicateMaterial(n.clone()));
+            }
+            names.push(n.clone());
+        }
+        let d = self.materials.default;
+        d.check().map_err(|reason| SceneError::InvalidLaw {
+            a: "default".into(),
+            b: "default".into(),
+            reason: format!("the default law: {reason}"),
+        })?;
+        let index = MaterialIndex {
+            names: names.clone(),
+        };
+        let mut table = MaterialTable::uniform(names, d);
+        let mut seen = Vec::new();
+        for (k, p) in self.materials.pairs.iter().enumerate() {
+            let a = index.get(|| format!("material pair {k}"), &p.a)?;
+            let b = index.get(|| format!("material pair {k}"), &p.b)?;
+            let key = (a.min(b), a.max(b));
+            let invalid = |reason: String| SceneError::InvalidLaw {
+                a: p.a.clone(),
+                b: p.b.clone(),
+                reason,
+            };
+            if seen.contains(&key) {
+                return Err(invalid("the pair is given twice".into()));
+            }
+            seen.push(key);
+            p.law().check().map_err(invalid)?;
+            table.set(a, b, p.law());
+        }
+        let uniform = table.laws.iter().all(|l| *l == d);
+        Ok((table, uniform))
+    }
+
+    /// Number of free spheres the world will have.
+    pub fn sphere_count(&self) -> usize {
+        self.bodies.iter().filter(|b| !b.fixed).count()
+            + self
+                .sphere_batches
+                .iter()
+                .filter(|b| !b.fixed)
+                .map(|b| b.positions.len())
+                .sum::<usize>()
+    }
+
+    /// Total triangles of the mesh obstacles.
+    pub fn triangle_count(&self) -> usize {
+        self.obstacles
+            .iter()
+            .map(|o| match &o.shape {
+                Shape::Mesh { mesh, .. } => mesh.triangles().len(),
+                _ => 0,
+            })
+            .sum()
+    }
+
+    /// The world and parameters of the scene, with every check ([`BuildChecks::default`]).
+    pub fn build(&self) -> Result<(World, Params), SceneError> {
+        self.build_with(&BuildChecks::default())
+    }
+
+    /// The world and parameters of the scene: the data validated, then the checks asked for.
+    pub fn build_with(&self, checks: &BuildChecks) -> Result<(World, Params), SceneError> {
+        self.step.check()?;
+        if checks.memory {
+            let (spheres, triangles) = (self.sphere_count(), self.triangle_count());
+            let estimate = memory_estimate(spheres, triangles);
+            if let Some(available) = available_memory() {
+                if estimate > available {
+                    return Err(SceneError::Memory {
+                        spheres,
+                        triangles,
+                        estimate,
+                        available,
+                    });
+                }
+            }
+        }
+        let world = self.world()?;
+        if checks.containment {
+            check_containment(&world)?;
+        }
+        if checks.overlaps {
+            let o = overlaps(&world);
+            if o.count > 0 {
+                return Err(SceneError::Overlaps {
+                    count: o.count,
+                    worst: o.worst,
+                    pair: o.pair,
+                });
+            }
+        }
+        let params = self.step.params(self.materials.default);
+        Ok((world, params))
+    }
+
+    /// The world of the scene, the data validated (materials, bodies, obstacles, gravity),
+    /// without the checks of [`BuildChecks`].
+    pub fn world(&self) -> Result<World, SceneError> {
+        let g = self.gravity;
+        if !g.is_finite() {
+            return Err(SceneError::InvalidGravity(g.to_array()));
+        }
+        let (table, uniform) = self.material_table()?;
+        let index = MaterialIndex {
+            names: table.names.clone(),
+        };
+        let mut world = World::new();
+        world.gravity = g;
+        world.materials = (!uniform).then(|| table.clone());
+        for (k, spec) in self.obstacles.iter().enumerate() {
+            let name = if spec.name.is_empty() {
+                format!("obstacle-{k}")
+            } else {
+                spec.name.clone()
+            };
+            check_obstacle(k, &name, &spec.shape, &spec.motion)?;
+            let material = index.get(|| format!("obstacle {k} ('{name}')"), &spec.material)?;
+            world.obstacles.push(Obstacle {
+                name,
+                shape: spec.shape.clone(),
+                motion: spec.motion.clone(),
+                material,
+            });
+        }
+        let mut fixed = Vec::new();
+        world.bodies.reserve(self.sphere_count());
+        for (k, b) in self.bodies.iter().enumerate() {
+            let what = || format!("body {k}");
+            let material = index.get(what, &b.material)?;
+            let sphere = body_sphere(b, material).map_err(|reason| SceneError::InvalidBody {
+                what: what(),
+                reason,
+            })?;
+            if b.fixed {
+                fixed.push((format!("fixed-body-{k}"), sphere));
+            } else {
+                world.bodies.push(sphere);
+            }
+        }
+        for (k, batch) in self.sphere_batches.iter().enumerate() {
+            let material = index.get(|| format!("sphere batch {k}"), &batch.material)?;
+            let spheres = batch_spheres(k, batch, material)?;
+            if batch.fixed {
+                for (i, s) in spheres.into_iter().enumerate() {
+                    fixed.push((format!("fixed-batch-{k}-{i}"), s));
+                }
+            } else {
+                world.bodies.extend(spheres);
+            }
+        }
+        for (name, s) in fixed {
+            world.obstacles.push(Obstacle {
+                name,
+                shape: Shape::Sphere {
+                    center: s.position,
+                    radius: s.radius,
+                    inside: false,
+                },
+                motion: Motion::Fixed,
+                material: s.material,
+            });
+        }
+        Ok(world)
+    }
+
+    /// The spheres of `batch` with the materials of this model (an inlet's new spheres,
+    /// [`crate::Simulation::insert_bodies`]); the batch's `fixed` flag is ignored.
+    pub fn spheres_of(&self, batch: &SphereBatch) -> Result<Vec<Sphere>, SceneError> {
+        let (table, _) = self.material_table()?;
+        let index = MaterialIndex { names: table.names };
+        let material = index.get(|| "inserted sphere batch".into(), &batch.material)?;
+        batch_spheres(0, batch, material)
+    }
+}
+
+/// The sphere of a body spec (its velocities unchecked for fixed bodies beyond being zero).
+fn body_sphere(b: &BodySpec, material: u32) -> Result<Sphere, String> {
+    let BodyShape::Sphere { radius } = b.shape;
+    if !positive(radius) {
+        return Err(format!("radius {radius} is not a finite positive number"));
+    }
+    let mass = match (b.mass, b.density) {
+        (Some(m), None) if positive(m) => m,
+        (None, Some(rho)) if positive(rho) => ball_mass(rho, radius),
+        (Some(m), None) => return Err(format!("mass {m} is not a finite positive number")),
+        (None, Some(rho)) => return Err(format!("density {rho} is not a finite positive number")),
+        (Some(_), Some(_)) => return Err("give a mass or a density, not both".into()),
+        (None, None) => return Err("give a mass or a density".into()),
+    };
+    if !(b.position.is_finite() && b.velocity.is_finite() && b.angular_velocity.is_finite()) {
+        return Err("non-finite position, velocity or angular velocity".into());
+    }
+    if b.fixed && (b.velocity != Vec3::ZERO || b.angular_velocity != Vec3::ZERO) {
+        return Err("a fixed body cannot have a velocity (use a moving obstacle)".into());
+    }
+    Ok(Sphere {
+        position: b.position,
+        velocity: b.velocity,
+        angular_velocity: b.angular_velocity,
+        radius,
+        mass,
+        rotation_locked: false,
+        material,
+    })
+}
+
+/// The spheres of a batch, validated (one tight loop).
+fn batch_spheres(k: usize, batch: &SphereBatch, material: u32) -> Result<Vec<Sphere>, SceneError> {
+    let n = batch.positions.len();
+    let bad = |what: String, reason: String| SceneError::InvalidBody { what, reason };
+    let len_ok = |len: usize, allow_empty: bool, allow_one: bool| {
+        len == n || (allow_empty && len == 0) || (allow_one && len == 1)
+    };
+    let field = |name: &str, len: usize, rule: &str| {
+        bad(
+            format!("sphere batch {k}"),
+            format!("{name} has {len} entries for {n} spheres ({rule})"),
+        )
+    };
+    if !len_ok(batch.radii.len(), false, true) {
+        return Err(field(
+            "radii",
+            batch.radii.len(),
+            "one per sphere or one for all",
+        ));
+    }
+    if !len_ok(batch.velocities.len(), true, false) {
+        return Err(field(
+            "velocities",
+            batch.velocities.len(),
+            "one per sphere or none",
+        ));
+    }
+    if !len_ok(batch.angular_velocities.len(), true, false) {
+        return Err(field(
+            "angular_velocities",
+            batch.angular_velocities.len(),
+            "one per sphere or none",
+        ));
+    }
+    match (batch.density, batch.masses.len()) {
+        (Some(rho), 0) if positive(rho) => {}
+        (Some(rho), 0) => {
+            return Err(bad(
+                format!("sphere batch {k}"),
+                format!("density {rho} is not a finite positive number"),
+            ))
+        }
+        (None, 0) => {
+            return Err(bad(
+                format!("sphere batch {k}"),
+                "give a density or masses".into(),
+            ))
+        }
+        (Some(_), _) => {
+            return Err(bad(
+                format!("sphere batch {k}"),
+                "give a density or masses, not both".into(),
+            ))
+        }
+        (None, m) if !len_ok(m, false, true) => {
+            return Err(field("masses", m, "one per sphere or one for all"))
+        }
+        _ => {}
+    }
+    if batch.fixed && (!batch.velocities.is_empty() || !batch.angular_velocities.is_empty()) {
+        if batch
+            .velocities
+            .iter()
+            .chain(&batch.angular_velocities)
+            .any(|v| *v != Vec3::ZERO)
+        {
+            return Err(bad(
+                format!("sphere batch {k}"),
+                "fixed spheres cannot have velocities".into(),
+            ));
+        }
+    }
+    let pick = |v: &[f64], i: usize| if v.len() == 1 { v[0] } else { v[i] };
+    let mut out = Vec::with_capacity(n);
+    for i in 0..n {
+        let radius = pick(&batch.radii, i);
+        let mass = match batch.density {
+            Some(rho) => ball_mass(rho, radius),
+            None => pick(&batch.masses, i),
+        };
+        let position = batch.positions[i];
+        let velocity = batch.velocities.get(i).copied().unwrap_or(Vec3::ZERO);
+        let angular_velocity = batch
+            .angular_velocities
+            .get(i)
+            .copied()
+            .unwrap_or(Vec3::ZERO);
+        if !(positive(radius)
+            && positive(mass)
+            && position.is_finite()
+            && velocity.is_finite()
+            && angular_velocity.is_finite())
+        {
+            let reason = if !positive(radius) {
+                format!("radius {radius} is not a finite positive number")
+            } else if !positive(mass) {
+                format!("mass {mass} is not a finite positive number")
+            } else {
+                "non-finite position, velocity or angular velocity".into()
+            };
+            return Err(bad(format!("sphere batch {k}, sphere {i}"), reason));
+        }
+        out.push(Sphere {
+            position,
+            velocity,
+            angular_velocity,
+            radius,
+            mass,
+            rotation_locked: false,
+            material,
+        });
+    }
+    Ok(out)
+}
+
+/// Validation of one obstacle's shape and motion.
+fn check_obstacle(
+    index: usize,
+    name: &str,
+    shape: &Shape,
+    motion: &Motion,
+) -> Result<(), SceneError> {
+    let bad = |reason: String| {
+        Err(SceneError::InvalidObstacle {
+            index,
+            name: name.to_string(),
+            reason,
+        })
+    };
+    let unit = |v: Vec3| v.is_finite() && (v.norm() - 1.0).abs() < 1e-9;
+    let finite = |v: Vec3| v.is_finite();
+    match shape {
+        Shape::Plane { point, normal } => {
+            if !(finite(*point) && unit(*normal)) {
+                return bad("plane: non-finite point or normal not a unit vector".into());
+            }
+        }
+        Shape::Rectangle {
+            center,
+            normal,
+            u,
+            half_u,
+            half_v,
+        } => {
+            if !(finite(*center) && unit(*normal) && unit(*u) && normal.dot(*u).abs() < 1e-9)
+                || !(positive(*half_u) && positive(*half_v))
+            {
+                return bad("rectangle: needs a finite centre, orthogonal unit normal and u, positive half-lengths".into());
+            }
+        }
+        Shape::CylinderInside {
+            point,
+            axis,
+            radius,
+        } => {
+            if !(finite(*point) && unit(*axis) && positive(*radius)) {
+                return bad(
+                    "cylinder_inside: needs a finite point, unit axis, positive radius".into(),
+                );
+            }
+        }
+        Shape::Box {
+            lo,
+            hi,
+            inside,
+            open_top,
+        } => {
+            if !(finite(*lo) && finite(*hi) && lo.x < hi.x && lo.y < hi.y && lo.z < hi.z) {
+                return bad(format!(
+                    "box: lo {lo:?} must be below hi {hi:?} in every coordinate"
+                ));
+            }
+            if *open_top && !inside {
+                return bad("box: open_top is for containers (inside = true)".into());
+            }
+        }
+        Shape::Cylinder {
+            base,
+            axis,
+            radius,
+            height,
+            inside,
+            bottom_cap,
+            top_cap,
+            orifice,
+        } => {
+            if !(finite(*base) && unit(*axis) && positive(*radius) && positive(*height)) {
+                return bad(
+                    "cylinder: needs a finite base, unit axis, positive radius and height".into(),
+                );
+            }
+            if !(orifice.is_finite() && *orifice >= 0.0 && orifice < radius) {
+                return bad(format!(
+                    "cylinder: orifice {orifice} must be in [0, radius {radius})"
+                ));
+            }
+            if *orifice > 0.0 && !bottom_cap {
+                return bad("cylinder: an orifice needs the bottom cap".into());
+            }
+            if !inside && (!bottom_cap || !top_cap || *orifice > 0.0) {
+                return bad(
+                    "cylinder: a solid cylinder (inside = false) has both caps and no orifice"
+                        .into(),
+                );
+            }
+        }
+        Shape::Sphere { center, radius, .. } => {
+            if !(finite(*center) && positive(*radius)) {
+                return bad("sphere: needs a finite centre and a positive radius".into());
+            }
+        }
+        Shape::Mesh { mesh, side } => {
+            if *side != MeshSide::Surface {
+                mesh.check_closed().map_err(|source| SceneError::Mesh {
+                    index,
+                    name: name.to_string(),
+                    source,
+                })?;
+            }
+        }
+    }
+    motion.check().or_else(|e| bad(e))?;
+    if let Motion::Rotate { center, axis, .. } = motion {
+        if !shape.rotation_invariant(*center, *axis) && !shape.reach_from(*center).is_finite() {
+            return bad("an unbounded shape rotating about an axis that moves it (its surface speed is unbounded)".into());
+        }
+    }
+    Ok(())
+}
+
+/// Every free sphere at t = 0 must be admitted by every obstacle that is not a container
+/// (free side of planes, outside solids) and, when there are containers, by one of them.
+fn check_containment(world: &World) -> Result<(), SceneError> {
+    let containers: Vec<&Obstacle> = world
+        .obstacles
+        .iter()
+        .filter(|o| o.shape.is_container())
+        .collect();
+    for (i, b) in world.bodies.iter().enumerate() {
+        let x = b.position;
+        for (k, o) in world.obstacles.iter().enumerate() {
+            if !o.shape.is_container() && !o.admits(x, 0.0) {
+                return Err(SceneError::Outside {
+                    what: format!("sphere {i}"),
+                    position: x.to_array(),
+                    reason: format!("on the wrong side of obstacle {k} ('{}')", o.name),
+                });
+            }
+        }
+        if !containers.is_empty() && !containers.iter().any(|o| o.admits(x, 0.0)) {
+            return Err(SceneError::Outside {
+                what: format!("sphere {i}"),
+                position: x.to_array(),
+                reason: "outside every container".into(),
+            });
+        }
+    }
+    Ok(())
+}

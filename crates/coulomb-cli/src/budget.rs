@@ -5,21 +5,30 @@
 use std::time::{Duration, Instant};
 
 /// `f()` run on its own thread, or None if it has not returned within `budget` counted from
-/// this call: the work is then abandoned, and its thread ends with the process. A result that
-/// arrives after the deadline is None too, so the answer does not depend on how the two
-/// threads happened to be scheduled.
+/// this call, or when SIGINT/SIGTERM arrives first (after [`crate::interrupt::install`]; looked
+/// at every 100 ms): the work is then abandoned, and its thread ends with the process. A
+/// result that arrives after the deadline is None too, so the answer does not depend on how
+/// the two threads happened to be scheduled.
 pub fn within<T: Send + 'static>(
     budget: Duration,
     f: impl FnOnce() -> T + Send + 'static,
 ) -> Option<T> {
+    use std::sync::mpsc::RecvTimeoutError;
     let start = Instant::now();
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
         // the receiver may be gone (time is up): nothing to report then
         let _ = tx.send(f());
     });
-    let left = budget.saturating_sub(start.elapsed());
-    let value = rx.recv_timeout(left).ok()?;
+    let value = loop {
+        let left = budget.saturating_sub(start.elapsed());
+        match rx.recv_timeout(left.min(Duration::from_millis(100))) {
+            Ok(v) => break v,
+            Err(RecvTimeoutError::Timeout)
+                if !left.is_zero() && crate::interrupt::received().is_none() => {}
+            Err(_) => return None,
+        }
+    };
     (start.elapsed() <= budget).then_some(value)
 }
 

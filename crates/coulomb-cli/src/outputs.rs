@@ -52,6 +52,16 @@ pub fn check(what: &str, path: &Path, inputs: &[&Path]) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// [`check`] on the files `names` that a run will write into the folder `dir`, before the run
+/// (`simulate --output DIR`: stats.csv, stats.json, summary.json), so that one of them that
+/// is a device, FIFO or folder is refused now rather than after the last step.
+pub fn check_in(what: &str, dir: &Path, names: &[&str]) -> anyhow::Result<()> {
+    for name in names {
+        check(what, &dir.join(name), &[])?;
+    }
+    Ok(())
+}
+
 /// Replaces `path` by `bytes` atomically, saying so when a file was there.
 pub fn write(path: &Path, bytes: &[u8]) -> Result<(), WriteFailed> {
     let existed = path.is_file();

@@ -182,7 +182,8 @@ fn outputs_refuse_fifos_dangling_links_and_folders_and_write_through_links_to_fi
     let info = coulomb(&["info", s(&target), "--json"]);
     let v: Value = serde_json::from_slice(&info.stdout).expect("info JSON");
     assert!(v.to_string().contains("\"global\""), "{v}");
-    // at write time too: simulate checks its folder first, then finds summary.json a FIFO
+    // simulate --output DIR: its summary.json a FIFO, refused before the run (and at write
+    // time: coulomb::atomic's own tests)
     let run = dir.join("run");
     std::fs::create_dir(&run).unwrap();
     let summary = run.join("summary.json");

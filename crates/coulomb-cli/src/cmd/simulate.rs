@@ -34,6 +34,10 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<Outcome> {
         ),
         None => None,
     };
+    if let Some(dir) = &args.output {
+        let names = ["stats.csv", "stats.json", "summary.json"];
+        crate::outputs::check_in("--output", dir, &names)?;
+    }
     if let Some(w) = vtk.as_mut() {
         w.frame(&sim).context("writing VTK frame")?;
     }

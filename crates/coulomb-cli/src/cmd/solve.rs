@@ -152,9 +152,17 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         let problem = file.problem.clone();
         let checked =
             crate::budget::within(budget, move || coulomb::existence::check(&problem, &check));
+        let stopped = crate::interrupt::received();
         Some(match checked {
             Some(Ok(ex)) => crate::existence_json::to_json(&args.file, &ex, false),
             Some(Err(e)) => serde_json::json!({ "error": e.to_string() }),
+            None if stopped.is_some() => serde_json::json!({
+                "conclusion": "unknown",
+                "skipped": format!(
+                    "interrupted by {}",
+                    stopped.map_or("a signal", |s| s.name())
+                ),
+            }),
             None => serde_json::json!({
                 "conclusion": "unknown",
                 "skipped": format!(
@@ -218,7 +226,8 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             }
         }
     }
-    if let Some(signal) = interrupted {
+    // a signal during the existence check counts too
+    if let Some(signal) = interrupted.or_else(crate::interrupt::received) {
         eprintln!(
             "interrupted by {}: status {}, error {:.3e}{}",
             signal.name(),

@@ -1527,4 +1527,65 @@ mod tests {
         assert!(t.check().is_err());
         assert!(!t.any_rolling());
     }
+
+    #[test]
+    fn a_rotating_mesh_drum_is_the_rotating_cylinder_up_to_its_chords() {
+        let n = 256;
+        let d = crate::mesh::cylinder_mesh(0.6, -0.25, 0.25, n);
+        let mesh = crate::mesh::TriangleMesh::new(d.vertices, d.triangles).unwrap();
+        let motion = Motion::Rotate {
+            center: Vec3::ZERO,
+            axis: Vec3::Z,
+            omega: 1.0,
+        };
+        let drum = Obstacle {
+            name: "drum".into(),
+            shape: Shape::Mesh {
+                mesh,
+                side: MeshSide::Inside,
+            },
+            motion: motion.clone(),
+            material: 0,
+        };
+        let cyl = Obstacle {
+            name: "cyl".into(),
+            shape: Shape::CylinderInside {
+                point: Vec3::ZERO,
+                axis: Vec3::Z,
+                radius: 0.6,
+            },
+            motion,
+            material: 0,
+        };
+        let sag = 0.6 * (1.0 - (std::f64::consts::PI / n as f64).cos());
+        let half = std::f64::consts::PI / n as f64;
+        for t in [0.0, 0.3, half, 2.0] {
+            for a in [0.0, 0.1, 1.0, 4.0] {
+                let x = Vec3::new(0.55 * f64::cos(a), 0.55 * f64::sin(a), 0.05);
+                // one chord, or two at a (concave) vertex of the polygon
+                let c = near(&drum, x, 0.05, t, 0.01);
+                assert!((1..=2).contains(&c.len()), "t {t} a {a}: {c:?}");
+                let m = c
+                    .iter()
+                    .map(|x| x.1)
+                    .min_by(|a, b| a.gap.total_cmp(&b.gap))
+                    .unwrap();
+                let p = cyl.proximity(x, 0.05, t);
+                let diff = p.gap - m.gap;
+                assert!(
+                    (-1e-12..=sag + 1e-12).contains(&diff),
+                    "t {t} a {a}: {diff}"
+                );
+                assert!(m.normal.dot(p.normal) > (2.0 * half).cos());
+            }
+        }
+        // at t = π/(n ω) the middle of a chord has turned to the angle 0: the gap there is
+        // shorter by the full sagitta (at t = 0 a vertex of the polygon is there)
+        let x = Vec3::new(0.55, 0.0, 0.05);
+        let at = |t: f64| cyl.proximity(x, 0.05, t).gap - drum.proximity(x, 0.05, t).gap;
+        assert!((at(half) - sag).abs() < 1e-9, "{}", at(half));
+        // at a vertex the chords' lines pass 0.05 (1 − cos(π/n)) closer: 1/12 of the sagitta
+        assert!((at(0.0) - sag * 0.05 / 0.6).abs() < 1e-9, "{}", at(0.0));
+        assert!((drum.max_normal_speed() - drum.shape.reach_from(Vec3::ZERO)).abs() < 1e-15);
+    }
 }

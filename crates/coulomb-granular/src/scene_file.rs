@@ -1046,7 +1046,7 @@ impl LoadedScene {
         // obstacles
         let mut obstacles = Vec::new();
         for (i, o) in f.obstacles.iter().enumerate() {
-            let p = vec![key("obstacles"), Seg::Index(i)];
+            let p = [key("obstacles"), Seg::Index(i)];
             known(&[&p[..], &[key("material")]].concat(), &o.material)?;
             let name = o.name.clone().unwrap_or_else(|| format!("obstacle-{i}"));
             let motion = self.motion(&[&p[..], &[key("motion")]].concat(), &o.motion)?;
@@ -1119,8 +1119,6 @@ impl LoadedScene {
         // (World::materials = None) but keeps the material indices of bodies and obstacles,
         // which Simulation::new then refuses; the names only select laws (densities are
         // resolved above), so they all become `default`.
-        let mut bodies = bodies;
-        let mut obstacles = obstacles;
         let mut materials = materials;
         if materials.pairs.iter().all(|p| p.law() == materials.default) {
             materials.names.clear();

@@ -11,6 +11,7 @@
 //! ```
 
 pub mod assembly;
+pub mod checkpoint;
 pub mod contact;
 #[cfg(feature = "mpi")]
 pub mod distributed;
@@ -25,6 +26,7 @@ pub mod simulation;
 pub mod validation;
 pub mod world;
 
+pub use checkpoint::CheckpointError;
 pub use contact::{Activation, Contact, Partner};
 pub use math::Vec3;
 pub use nsgs::{NsgsSettings, NsgsStatus, StepProblem};

@@ -4,7 +4,7 @@ use serde::Serialize;
 use std::ops::{Add, AddAssign, Mul, Neg, Sub};
 
 /// A vector of ℝ³.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, serde::Deserialize)]
 pub struct Vec3 {
     /// first component
     pub x: f64,

@@ -14,7 +14,7 @@ use serde::Serialize;
 use std::time::Instant;
 
 /// Parameters of the time stepping.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 pub struct Params {
     /// time step h (s)
     pub h: f64,
@@ -47,7 +47,7 @@ pub struct Params {
 }
 
 /// Which solver takes each step.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum StepMethod {
     /// `coulomb::solver::solve_with_guess` with [`Params::solver`] on the assembled global
@@ -188,9 +188,9 @@ pub struct Simulation {
     /// time the formation of the Delassus operator separately (`StepStats::delassus_ms`)
     pub profile_delassus: bool,
     /// the last step's impulses by contact key, sorted by key (warm starts by merge)
-    previous: Vec<((usize, Partner), [f64; 3])>,
+    pub(crate) previous: Vec<((usize, Partner), [f64; 3])>,
     /// bound ε_u = max(err, tol) · scale on the residual velocity of the last step's contacts
-    residual_velocity: f64,
+    pub(crate) residual_velocity: f64,
     /// rolling resistance (crate::rolling): warm start and last rolling impulses
     pub rolling: crate::rolling::RollingState,
 }

@@ -49,7 +49,7 @@ impl Sphere {
 }
 
 /// The shape of an obstacle, in its reference position (time-independent).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Shape {
     /// The infinite plane through `point` with unit `normal`; spheres live on the side the
@@ -87,7 +87,7 @@ pub enum Shape {
 }
 
 /// Prescribed rigid motion of an obstacle (§5.6: external objects in rigid motion).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Motion {
     /// motionless
@@ -160,7 +160,7 @@ impl Motion {
 }
 
 /// An obstacle: a shape with a prescribed motion.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 pub struct Obstacle {
     /// a name for outputs ("ground", "plate", "drum", …)
     pub name: String,

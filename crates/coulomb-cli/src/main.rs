@@ -145,9 +145,19 @@ fn main() -> ExitCode {
 /// launcher or with `--mpi`, distributed over the ranks, on `--threads` worker threads.
 fn simulate(args: sim_args::Args) -> anyhow::Result<()> {
     threads::with_threads(args.threads, || {
+        if args.restart.is_some() {
+            #[cfg(feature = "mpi")]
+            if args.mpi || sim_args::under_launcher() {
+                anyhow::bail!("--restart runs in one process, not distributed");
+            }
+            return cmd::simulate::restart(args.clone());
+        }
         let scene = sim_args::checked_scene(&args)?;
         #[cfg(feature = "mpi")]
         if args.mpi || sim_args::under_launcher() {
+            if args.checkpoint_every > 0 {
+                anyhow::bail!("--checkpoint-every is not supported by distributed runs");
+            }
             return cmd::simulate_mpi::run(args.clone(), scene);
         }
         cmd::simulate::run(args.clone(), scene)

@@ -1,16 +1,39 @@
 //! `coulomb simulate`: Moreau–Jean time stepping of one of the granular scenes, with per-step
-//! statistics (CSV, JSON), VTK frames for ParaView and optional FCLIB dumps of each step.
+//! statistics (CSV, JSON), VTK frames for ParaView, checkpoints of the full state
+//! (`--checkpoint-every`, `--restart`) and optional FCLIB dumps of each step.
 
 use crate::sim_args::Args;
 use anyhow::{bail, Context};
-use coulomb_granular::output::{write_stats, VtkWriter};
+use coulomb_granular::output::{write_stats, write_stats_continued, VtkWriter};
 use coulomb_granular::run::RestMonitor;
-use coulomb_granular::{Scene, Simulation, Summary};
+use coulomb_granular::{CheckpointError, Scene, Simulation, Summary};
+use std::path::Path;
+
+/// The checkpoint file that `--checkpoint-every` writes into the output folder.
+pub const CHECKPOINT_FILE: &str = "checkpoint.h5";
+
+/// Writes the full state of `sim` into `dir/checkpoint.h5` (replaced atomically: an existing
+/// checkpoint stays whole until the new one is complete); a failure is an output that could
+/// not be written (exit status 4). Called every `--checkpoint-every` steps, at the end of a
+/// run, and meant for the interrupt path too.
+pub fn write_checkpoint(dir: &Path, sim: &Simulation) -> anyhow::Result<()> {
+    let path = dir.join(CHECKPOINT_FILE);
+    sim.save_checkpoint(&path).map_err(|e| {
+        let source = match e {
+            CheckpointError::Io { source, .. } => source,
+            other => std::io::Error::other(other.to_string()),
+        };
+        crate::exit::WriteFailed {
+            path: path.display().to_string(),
+            source,
+        }
+        .into()
+    })
+}
 
 /// Runs `coulomb simulate` in this process, on the scene checked by
 /// [`crate::sim_args::checked_scene`] (main.rs hands distributed runs to `simulate_mpi`).
 pub fn run(args: Args, scene: Scene) -> anyhow::Result<()> {
-    let stop = args.stop();
     let world = if args.spread_top {
         if scene != Scene::Box {
             bail!("--spread-top applies to the box scene only");
@@ -19,14 +42,39 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<()> {
     } else {
         scene.build_with(args.beads, args.seed, &args.layout()?)
     };
-    let mut sim = Simulation::new(world, args.params()).context("invalid simulation parameters")?;
+    let sim = Simulation::new(world, args.params()).context("invalid simulation parameters")?;
+    steps(&args, sim, scene.name(), false)
+}
+
+/// `coulomb simulate --restart FILE`: the simulation stored in FILE, continued for `--steps`
+/// more steps (or until rest, at most `--max-steps` more); with `--output`, the stats files
+/// found there keep their rows before the checkpoint's step and get this run's appended.
+pub fn restart(args: Args) -> anyhow::Result<()> {
+    let Some(file) = args.restart.clone() else {
+        bail!("--restart needs a checkpoint file");
+    };
+    let sim = Simulation::load_checkpoint(&file)
+        .with_context(|| format!("cannot restart from {}", file.display()))?;
+    steps(&args, sim, "restart", true)
+}
+
+/// The time steps of a run from `sim` (new, or loaded by a restart) and its outputs.
+fn steps(args: &Args, mut sim: Simulation, name: &str, restarted: bool) -> anyhow::Result<()> {
+    let first_step = sim.steps_done;
+    let stop = args.stop_after(first_step);
+    let beads = sim.world.bodies.len();
     sim.keep_problem = args.dump_fclib.is_some();
     if let Some(dir) = &args.dump_fclib {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
     let mut vtk = match &args.output {
         Some(dir) => Some(
-            VtkWriter::new(dir).with_context(|| format!("cannot write into {}", dir.display()))?,
+            if restarted {
+                VtkWriter::resume(dir, first_step)
+            } else {
+                VtkWriter::new(dir)
+            }
+            .with_context(|| format!("cannot write into {}", dir.display()))?,
         ),
         None => None,
     };
@@ -34,8 +82,8 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<()> {
         w.frame(&sim).context("writing VTK frame")?;
     }
     let start_energy = sim.world.kinetic_energy() + sim.world.potential_energy();
-    let pb = crate::progress::bar(stop.max_steps(), args.json);
-    pb.set_prefix(format!("{} {}", scene.name(), args.beads));
+    let pb = crate::progress::bar(stop.max_steps().saturating_sub(first_step), args.json);
+    pb.set_prefix(format!("{name} {beads}"));
     let mut stats = Vec::new();
     let mut monitor = RestMonitor::default();
     let mut at_rest = false;
@@ -55,6 +103,11 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<()> {
             }
         }
         stats.push(s);
+        if let Some(dir) = &args.output {
+            if args.checkpoint_every > 0 && sim.steps_done % args.checkpoint_every == 0 {
+                write_checkpoint(dir, &sim)?;
+            }
+        }
         let (stop_now, rest) = monitor.should_stop(&stop, &sim);
         if stop_now {
             at_rest = rest;
@@ -69,11 +122,22 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<()> {
             w.frame(&sim).context("writing VTK frame")?;
         }
     }
-    let summary = Summary::from_stats(scene.name(), args.beads, &stats, at_rest);
+    let summary = Summary::from_stats(name, beads, &stats, at_rest);
     let end_energy = sim.world.kinetic_energy() + sim.world.potential_energy();
     if let Some(dir) = &args.output {
-        write_stats(dir, &stats)
-            .with_context(|| format!("writing stats into {}", dir.display()))?;
+        if restarted {
+            write_stats_continued(dir, first_step, &stats)
+        } else {
+            write_stats(dir, &stats)
+        }
+        .with_context(|| format!("writing stats into {}", dir.display()))?;
+        // the end state, unless the last step just wrote it
+        let written = !stats.is_empty()
+            && args.checkpoint_every > 0
+            && sim.steps_done % args.checkpoint_every == 0;
+        if args.checkpoint_every > 0 && !written {
+            write_checkpoint(dir, &sim)?;
+        }
         crate::outputs::write(
             &dir.join("summary.json"),
             crate::outputs::json(&summary, true)?.as_bytes(),

@@ -1069,7 +1069,7 @@ mod tests {
     #[test]
     fn restart_is_bitwise_with_rolling_friction() {
         let p = rolling_params();
-        restart_is_exact(p, 60, 60, "rolling");
+        restart_is_exact(p, 60, 100, "rolling");
     }
 
     #[test]

@@ -1085,7 +1085,7 @@ mod tests {
         }
         let mut w = World::new();
         w.obstacles.push(Obstacle {
-            name: "o".into(),
+            name: "paroi inclinée \"α\"".into(),
             shape: Shape::Rectangle {
                 center: Vec3::new(0.1, 0.2, 1.0 / 3.0),
                 normal: Vec3::Z,

@@ -105,8 +105,8 @@ pub fn cancel() -> Option<coulomb::deadline::Cancel> {
 /// (saying `"stopped": "interrupted"`) were written: says so on stderr. The one place for
 /// what an interrupted simulation does besides a normal end.
 ///
-/// CHECKPOINT HOOK: when checkpoints exist (the scenes/checkpoints work), write the last
-/// checkpoint of `sim` here, so that an interrupted run can be resumed.
+/// The last checkpoint (`OUTPUT/checkpoint.h5`) is written with the other outputs, before
+/// this (`cmd::simulate::steps`), so that an interrupted run can be resumed with `--restart`.
 pub fn simulation_interrupted(
     sim: &coulomb_granular::Simulation,
     output: Option<&std::path::Path>,
@@ -114,7 +114,7 @@ pub fn simulation_interrupted(
 ) -> anyhow::Result<Outcome> {
     match output {
         Some(dir) => eprintln!(
-            "interrupted by {} after {} steps: frames, stats.csv, stats.json and summary.json in {} cover those steps",
+            "interrupted by {} after {} steps: frames, stats.csv, stats.json, summary.json and checkpoint.h5 (resume with --restart) in {} cover those steps",
             signal.name(),
             sim.steps_done,
             dir.display()

@@ -147,12 +147,24 @@ fn main() -> ExitCode {
 /// launcher or with `--mpi`, distributed over the ranks, on `--threads` worker threads.
 fn simulate(args: sim_args::Args) -> anyhow::Result<Outcome> {
     threads::with_threads(args.threads, || {
-        if scene_arg::is_scene_file(&args.scene) {
+        #[cfg(feature = "mpi")]
+        if (args.restart.is_some() || args.scene.as_deref().is_some_and(scene_arg::is_scene_file))
+            && (args.mpi || sim_args::under_launcher())
+        {
+            anyhow::bail!("--restart and scene files run in one process, not distributed");
+        }
+        if args.restart.is_some() {
+            return cmd::simulate::restart(args.clone());
+        }
+        if args.scene.as_deref().is_some_and(scene_arg::is_scene_file) {
             return scene_arg::run(&args);
         }
         let scene = sim_args::checked_scene(&args)?;
         #[cfg(feature = "mpi")]
         if args.mpi || sim_args::under_launcher() {
+            if args.checkpoint_every > 0 {
+                anyhow::bail!("--checkpoint-every is not supported by distributed runs");
+            }
             return cmd::simulate_mpi::run(args.clone(), scene);
         }
         cmd::simulate::run(args.clone(), scene)

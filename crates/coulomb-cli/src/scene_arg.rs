@@ -8,14 +8,14 @@
 //! file sets (`--dt`, `--mu`, …) are refused when given, rather than silently ignored.
 //! Every error in the file exits with status 2 before anything is written.
 
+use crate::cmd::simulate::StepHook;
+use crate::exit::Outcome;
 use crate::sim_args::{Args, Method};
 use anyhow::{bail, Context};
 use clap::Parser;
 use coulomb_granular::model::BuildChecks;
-use coulomb_granular::output::{write_stats, VtkWriter};
-use coulomb_granular::run::RestMonitor;
 use coulomb_granular::scene_file::{BuildOptions, BuiltScene, LoadedScene, MethodName};
-use coulomb_granular::{Simulation, Summary};
+use coulomb_granular::Simulation;
 use std::path::Path;
 
 /// Whether the scene argument names a scene file (it ends in .toml or .json).
@@ -129,17 +129,18 @@ fn check_step(h: f64, scene: &BuiltScene) -> anyhow::Result<()> {
 }
 
 /// Runs `coulomb simulate FILE`.
-pub fn run(args: &Args) -> anyhow::Result<()> {
+pub fn run(args: &Args) -> anyhow::Result<Outcome> {
     let refused = refused_options(args);
     if !refused.is_empty() {
         bail!(
             "{} {} set by the scene file {} ([step], [default_pair]); change them there",
             refused.join(", "),
             if refused.len() == 1 { "is" } else { "are" },
-            args.scene
+            args.scene.as_deref().unwrap_or_default()
         );
     }
-    let loaded = LoadedScene::load(Path::new(&args.scene))?;
+    let file = args.scene.as_deref().unwrap_or_default();
+    let loaded = LoadedScene::load(Path::new(file))?;
     let opts = BuildOptions {
         seed: (args.seed != 1).then_some(args.seed),
         max_fill: (args.beads != 150).then_some(args.beads),
@@ -147,115 +148,52 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let mut scene = loaded.build(&opts)?;
     let (world, _) = scene.build(&BuildChecks::default())?;
     if world.bodies.is_empty() && scene.inlets.is_empty() {
-        bail!("{}: the scene has no sphere and no inlet", args.scene);
+        bail!("{file}: the scene has no sphere and no inlet");
     }
     let a = file_args(args, &scene);
     check_step(a.dt, &scene)?;
     if a.outer == coulomb::OuterKind::Fused && a.inner != coulomb::InnerKind::Pgs {
         bail!("--outer fused needs --inner pgs");
     }
-    let stop = a.stop();
-    let mut sim = Simulation::new(world, a.params()).context("invalid simulation parameters")?;
-    sim.keep_problem = a.dump_fclib.is_some();
-    if let Some(dir) = &a.dump_fclib {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    }
-    let mut vtk = match &a.output {
-        Some(dir) => Some(
-            VtkWriter::new(dir).with_context(|| format!("cannot write into {}", dir.display()))?,
-        ),
-        None => None,
+    let sim = Simulation::new(world, a.params()).context("invalid simulation parameters")?;
+    let mut inlets = Inlets {
+        scene: &mut scene,
+        poured: 0,
+        skipped: 0,
     };
-    if let Some(w) = vtk.as_mut() {
-        w.frame(&sim).context("writing VTK frame")?;
-    }
-    let start_energy = sim.world.kinetic_energy() + sim.world.potential_energy();
-    let pb = crate::progress::bar(stop.max_steps(), a.json);
-    pb.set_prefix(format!("{} {}", scene.name, sim.world.bodies.len()));
-    let mut stats = Vec::new();
-    let mut monitor = RestMonitor::default();
-    let mut at_rest = false;
-    let (mut poured, mut skipped) = (0usize, 0usize);
-    while sim.steps_done < stop.max_steps() {
-        let t0 = sim.time;
-        let s = sim.step().context("time step failed")?;
-        let t1 = sim.time;
-        // the spheres the inlets owe for (t_k, t_{k+1}], placed among the bodies at t_{k+1}
-        for inlet in &mut scene.inlets {
-            let (n, k) = inlet
-                .emit(&mut sim, &scene.model, t0, t1)
-                .context("inlet")?;
-            poured += n;
-            skipped += k;
+    let name = inlets.scene.name.clone();
+    crate::cmd::simulate::steps(&a, sim, &name, false, &mut inlets)
+}
+
+/// The inlets of a scene file, driven after each step: the spheres they owe for
+/// (t_k, t_{k+1}] placed among the bodies at t_{k+1}.
+struct Inlets<'a> {
+    scene: &'a mut BuiltScene,
+    poured: usize,
+    skipped: usize,
+}
+
+impl StepHook for Inlets<'_> {
+    fn after_step(&mut self, sim: &mut Simulation, t0: f64, t1: f64) -> anyhow::Result<()> {
+        let model = &self.scene.model;
+        for inlet in &mut self.scene.inlets {
+            let (n, k) = inlet.emit(sim, model, t0, t1).context("inlet")?;
+            self.poured += n;
+            self.skipped += k;
         }
-        pb.set_message(format!(
-            "{} contacts, {} subproblems, {:.1} ms, err {:.1e}",
-            s.contacts, s.subproblems, s.solve_ms, s.error
-        ));
-        pb.inc(1);
-        if let (Some(dir), Some(p)) = (&a.dump_fclib, &sim.last_problem) {
-            crate::cmd::simulate::dump_fclib(dir, sim.steps_done - 1, p)?;
+        Ok(())
+    }
+
+    fn report(&self) -> (serde_json::Map<String, serde_json::Value>, String) {
+        let mut extra = serde_json::Map::new();
+        if self.scene.inlets.is_empty() {
+            return (extra, String::new());
         }
-        if let Some(w) = vtk.as_mut() {
-            if a.frames_every > 0 && sim.steps_done % a.frames_every == 0 {
-                w.frame(&sim).context("writing VTK frame")?;
-            }
-        }
-        stats.push(s);
-        let (stop_now, rest) = monitor.should_stop(&stop, &sim);
-        if stop_now {
-            at_rest = rest;
-            break;
-        }
+        extra.insert("poured".into(), self.poured.into());
+        extra.insert("inlet_skipped".into(), self.skipped.into());
+        let note = format!(" ({} poured, {} skipped)", self.poured, self.skipped);
+        (extra, note)
     }
-    pb.finish_and_clear();
-    if let Some(w) = vtk.as_mut() {
-        let written = a.frames_every > 0 && sim.steps_done % a.frames_every == 0;
-        if !written && sim.steps_done > 0 {
-            w.frame(&sim).context("writing VTK frame")?;
-        }
-    }
-    let beads = sim.world.bodies.len();
-    let summary = Summary::from_stats(&scene.name, beads, &stats, at_rest);
-    let end_energy = sim.world.kinetic_energy() + sim.world.potential_energy();
-    if let Some(dir) = &a.output {
-        write_stats(dir, &stats)
-            .with_context(|| format!("writing stats into {}", dir.display()))?;
-        crate::outputs::write(
-            &dir.join("summary.json"),
-            crate::outputs::json(&summary, true)?.as_bytes(),
-        )?;
-    }
-    let mut extra = serde_json::Map::new();
-    if !scene.inlets.is_empty() {
-        extra.insert("poured".into(), poured.into());
-        extra.insert("inlet_skipped".into(), skipped.into());
-    }
-    if a.json {
-        let obj = crate::sim_args::summary_json(&summary, start_energy, end_energy, extra);
-        println!("{}", crate::outputs::json(&obj, false)?);
-    } else {
-        println!(
-            "{}: {} spheres{}, {} steps{}, {:.1} contacts/step, {:.2} ms solve/step, mean error {:.2e} (max {:.2e}), {} / {} steps converged, max penetration during the run {:.2e} m",
-            summary.scene,
-            summary.beads,
-            if scene.inlets.is_empty() {
-                String::new()
-            } else {
-                format!(" ({poured} poured, {skipped} skipped)")
-            },
-            summary.steps,
-            if summary.at_rest { " (at rest)" } else { "" },
-            summary.mean_contacts,
-            summary.mean_solve_ms,
-            summary.mean_error,
-            summary.max_error,
-            summary.converged_steps,
-            summary.steps,
-            summary.max_penetration,
-        );
-    }
-    Ok(())
 }
 
 /// The stop rule of a file run (for tests).

@@ -20,12 +20,42 @@ pub enum Method {
     Library,
 }
 
+/// The options that a checkpoint fixes (the scene and the parameters): refused with --restart.
+const RESTART_CONFLICTS: [&str; 25] = [
+    "scene",
+    "beads",
+    "mu",
+    "rolling_friction",
+    "restitution",
+    "dt",
+    "theta",
+    "method",
+    "max_sweeps",
+    "relaxation",
+    "inner",
+    "outer",
+    "tol",
+    "fp_tol",
+    "max_outer",
+    "max_inner",
+    "gamma",
+    "no_projection",
+    "no_gap_closure",
+    "cold",
+    "seed",
+    "box_side",
+    "layer_pitch",
+    "drop_base",
+    "spread_top",
+];
+
 /// Arguments of `coulomb simulate`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
     /// scene: box, funnel, vibrating-plate, rotating-drum, or a scene file ending in .toml or
-    /// .json (docs/granular.md, "Scene files"; examples in examples/scenes)
-    pub scene: String,
+    /// .json (docs/granular.md, "Scene files"; examples in examples/scenes); none with --restart
+    #[arg(required_unless_present = "restart")]
+    pub scene: Option<String>,
     /// number of beads
     #[arg(long, default_value_t = 150, value_parser = crate::values::beads)]
     pub beads: usize,
@@ -127,6 +157,17 @@ pub struct Args {
     /// write a VTK frame every K steps (with --output)
     #[arg(long, default_value_t = 10, value_parser = crate::values::count0)]
     pub frames_every: usize,
+    /// write OUTPUT/checkpoint.h5, the full state of the run (docs/granular.md, "Checkpoint
+    /// and restart"), every K steps and at the end (replaced atomically each time; 0: never;
+    /// needs --output)
+    #[arg(long, default_value_t = 0, value_parser = crate::values::count0, requires = "output")]
+    pub checkpoint_every: usize,
+    /// continue the run stored in this checkpoint file (written by --checkpoint-every or by
+    /// Python's save_checkpoint): the scene, its state and every parameter come from the file,
+    /// --steps counts the steps to add to the stored ones, and the stats files of --output
+    /// continue those found there
+    #[arg(long, conflicts_with_all = RESTART_CONFLICTS)]
+    pub restart: Option<PathBuf>,
     /// write each step's problem as an FCLIB global file into this folder
     #[arg(long)]
     pub dump_fclib: Option<PathBuf>,
@@ -244,26 +285,33 @@ impl Args {
         }
         Ok(l)
     }
+    /// The stop rule of a new run.
+    #[cfg(any(feature = "mpi", test))]
     pub(crate) fn stop(&self) -> Stop {
+        self.stop_after(0)
+    }
+    /// The stop rule of a run that starts after `done` steps (a restart): its step counts
+    /// (--steps, --max-steps) are added to `done`.
+    pub(crate) fn stop_after(&self, done: usize) -> Stop {
         if self.until_rest {
             Stop::UntilRest {
                 speed: self.rest_speed,
                 window: 10,
-                max_steps: self.max_steps,
+                max_steps: done.saturating_add(self.max_steps),
             }
         } else {
-            Stop::Steps(self.steps.unwrap_or(200))
+            Stop::Steps(done.saturating_add(self.steps.unwrap_or(200)))
         }
     }
 }
 
 /// The checked scene of `args`: a known name, 1 ≤ beads ≤ 10⁶, a usable time step.
 pub(crate) fn checked_scene(args: &Args) -> anyhow::Result<Scene> {
-    let Some(scene) = Scene::from_name(&args.scene) else {
+    let name = args.scene.as_deref().unwrap_or_default();
+    let Some(scene) = Scene::from_name(name) else {
         let names: Vec<&str> = Scene::ALL.iter().map(|s| s.name()).collect();
         bail!(
-            "unknown scene '{}': expected one of {}, or a scene file (.toml, .json)",
-            args.scene,
+            "unknown scene '{name}': expected one of {}, or a scene file (.toml, .json)",
             names.join(", ")
         );
     };

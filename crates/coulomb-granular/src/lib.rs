@@ -29,6 +29,7 @@
 //! ```
 
 pub mod assembly;
+pub mod checkpoint;
 pub mod contact;
 #[cfg(feature = "mpi")]
 pub mod distributed;
@@ -48,6 +49,7 @@ pub mod simulation;
 pub mod validation;
 pub mod world;
 
+pub use checkpoint::CheckpointError;
 pub use contact::{Activation, Contact, Partner};
 pub use math::Vec3;
 pub use mesh::{MeshError, TriangleMesh};

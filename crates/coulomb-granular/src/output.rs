@@ -1,8 +1,15 @@
-//! Outputs: per-step statistics as CSV and JSON, and VTK PolyData frames (.vtp, ASCII)
-//! indexed by a ParaView collection (.pvd) with positions, radii, velocities and contact
-//! forces.
+//! Outputs: per-step statistics as CSV and JSON, and VTK PolyData frames (.vtp) indexed by
+//! ParaView collections (.pvd): the beads (positions, radii, velocities, contact forces), the
+//! contacts (points, normals, forces, gaps) and the obstacles as surfaces (triangles).
+//!
+//! Frames are binary by default ([`VtkFormat::Binary`]: VTK XML with raw appended data,
+//! `header_type="UInt64"`, little-endian; 8 bytes a number instead of ~20 characters, so a
+//! frame of 10⁶ beads is ~100 MB instead of ~300 MB and is written without formatting
+//! numbers); [`VtkFormat::Ascii`] writes the same arrays as text.
 
+use crate::math::Vec3;
 use crate::simulation::{Simulation, StepStats};
+use crate::world::{Motion, Obstacle, Shape};
 use std::fmt::Write as _;
 use std::fs;
 use std::io;
@@ -36,170 +43,1025 @@ pub fn csv_line(s: &StepStats) -> String {
 
 /// Writes `stats.csv` and `stats.json` in `dir`.
 pub fn write_stats(dir: &Path, stats: &[StepStats]) -> io::Result<()> {
+    write_stats_after(dir, Vec::new(), Vec::new(), stats)
+}
+
+/// Writes `stats.csv` and `stats.json` in `dir` for a run restarted at step `first_step`: the
+/// rows of the files already there (the run that wrote the checkpoint, or an earlier restart)
+/// for the steps before `first_step` are kept, this run's `stats` follow. Files that are
+/// missing or unreadable contribute no rows.
+pub fn write_stats_continued(dir: &Path, first_step: usize, stats: &[StepStats]) -> io::Result<()> {
+    let before = |step: Option<u64>| step.is_some_and(|k| k < first_step as u64);
+    let csv_rows: Vec<String> = fs::read_to_string(dir.join("stats.csv"))
+        .map(|text| {
+            text.lines()
+                .skip(1)
+                .filter(|l| before(l.split(',').next().and_then(|k| k.parse().ok())))
+                .map(str::to_string)
+                .collect()
+        })
+        .unwrap_or_default();
+    let json_rows: Vec<serde_json::Value> = fs::read_to_string(dir.join("stats.json"))
+        .ok()
+        .and_then(|text| serde_json::from_str::<Vec<serde_json::Value>>(&text).ok())
+        .unwrap_or_default()
+        .into_iter()
+        .filter(|v| before(v.get("step").and_then(|k| k.as_u64())))
+        .collect();
+    write_stats_after(dir, csv_rows, json_rows, stats)
+}
+
+fn write_stats_after(
+    dir: &Path,
+    csv_rows: Vec<String>,
+    json_rows: Vec<serde_json::Value>,
+    stats: &[StepStats],
+) -> io::Result<()> {
     fs::create_dir_all(dir)?;
     let mut csv = String::from(CSV_HEADER);
     csv.push('\n');
+    for row in csv_rows {
+        csv.push_str(&row);
+        csv.push('\n');
+    }
     for s in stats {
         csv.push_str(&csv_line(s));
         csv.push('\n');
     }
     coulomb::atomic::write(dir.join("stats.csv"), csv)?;
-    let json = serde_json::to_string_pretty(stats).map_err(io::Error::other)?;
+    let json = if json_rows.is_empty() {
+        serde_json::to_string_pretty(stats)
+    } else {
+        let mut all = json_rows;
+        for s in stats {
+            all.push(serde_json::to_value(s).map_err(io::Error::other)?);
+        }
+        serde_json::to_string_pretty(&all)
+    }
+    .map_err(io::Error::other)?;
     coulomb::atomic::write(dir.join("stats.json"), json)
+}
+
+/// How the arrays of a .vtp file are stored.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum VtkFormat {
+    /// raw little-endian binary in an `<AppendedData encoding="raw">` block, each array
+    /// preceded by its length in bytes as UInt64 (VTK XML's `header_type="UInt64"`)
+    #[default]
+    Binary,
+    /// numbers as text inside each `<DataArray>` (readable, ~2.5× larger)
+    Ascii,
+}
+
+/// Values of one VTK data array.
+#[derive(Debug, Clone, PartialEq)]
+enum Values {
+    F64(Vec<f64>),
+    I64(Vec<i64>),
+}
+
+impl Values {
+    fn vtk_type(&self) -> &'static str {
+        match self {
+            Values::F64(_) => "Float64",
+            Values::I64(_) => "Int64",
+        }
+    }
+    fn byte_len(&self) -> usize {
+        match self {
+            Values::F64(v) => 8 * v.len(),
+            Values::I64(v) => 8 * v.len(),
+        }
+    }
+    fn append_bytes(&self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&(self.byte_len() as u64).to_le_bytes());
+        match self {
+            Values::F64(v) => v
+                .iter()
+                .for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+            Values::I64(v) => v
+                .iter()
+                .for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+        }
+    }
+    fn append_text(&self, components: usize, out: &mut String) {
+        let c = components.max(1);
+        match self {
+            Values::F64(v) => {
+                for row in v.chunks(c) {
+                    let line: Vec<String> = row.iter().map(|x| x.to_string()).collect();
+                    out.push_str(&line.join(" "));
+                    out.push('\n');
+                }
+            }
+            Values::I64(v) => {
+                for row in v.chunks(c) {
+                    let line: Vec<String> = row.iter().map(|x| x.to_string()).collect();
+                    out.push_str(&line.join(" "));
+                    out.push('\n');
+                }
+            }
+        }
+    }
+}
+
+/// A named data array (`components` values per point or cell).
+#[derive(Debug, Clone, PartialEq)]
+struct Array {
+    name: &'static str,
+    components: usize,
+    values: Values,
+}
+
+impl Array {
+    fn vectors(name: &'static str, v: impl Iterator<Item = Vec3>) -> Self {
+        Self {
+            name,
+            components: 3,
+            values: Values::F64(v.flat_map(Vec3::to_array).collect()),
+        }
+    }
+    fn scalars(name: &'static str, v: impl Iterator<Item = f64>) -> Self {
+        Self {
+            name,
+            components: 1,
+            values: Values::F64(v.collect()),
+        }
+    }
+}
+
+/// A VTK PolyData piece: points with point and cell data, and either one vertex per point or
+/// triangles.
+#[derive(Debug, Clone, PartialEq, Default)]
+struct PolyData {
+    points: Vec<Vec3>,
+    point_data: Vec<Array>,
+    cell_data: Vec<Array>,
+    /// triangles (point indices); none: one vertex cell per point
+    triangles: Option<Vec<[usize; 3]>>,
+}
+
+impl PolyData {
+    /// The .vtp file.
+    fn to_vtp(&self, format: VtkFormat) -> Vec<u8> {
+        let n = self.points.len();
+        let (cells, conn, offsets): (usize, Vec<i64>, Vec<i64>) = match &self.triangles {
+            None => (n, (0..n as i64).collect(), (1..=n as i64).collect()),
+            Some(t) => (
+                t.len(),
+                t.iter().flatten().map(|&i| i as i64).collect(),
+                (1..=t.len() as i64).map(|k| 3 * k).collect(),
+            ),
+        };
+        let (nverts, npolys) = if self.triangles.is_some() {
+            (0, cells)
+        } else {
+            (cells, 0)
+        };
+        let mut xml = String::new();
+        let header = match format {
+            VtkFormat::Binary => " header_type=\"UInt64\"",
+            VtkFormat::Ascii => "",
+        };
+        let _ = writeln!(
+            xml,
+            "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\"{header}>\n<PolyData>\n<Piece NumberOfPoints=\"{n}\" NumberOfVerts=\"{nverts}\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"{npolys}\">"
+        );
+        let mut appended: Vec<u8> = Vec::new();
+        let mut array = |xml: &mut String, name: Option<&str>, components: usize, v: &Values| {
+            let name = name.map(|s| format!(" Name=\"{s}\"")).unwrap_or_default();
+            let comps = if components > 1 {
+                format!(" NumberOfComponents=\"{components}\"")
+            } else {
+                String::new()
+            };
+            let ty = v.vtk_type();
+            match format {
+                VtkFormat::Binary => {
+                    let _ = writeln!(
+                        xml,
+                        "<DataArray type=\"{ty}\"{name}{comps} format=\"appended\" offset=\"{}\"/>",
+                        appended.len()
+                    );
+                    v.append_bytes(&mut appended);
+                }
+                VtkFormat::Ascii => {
+                    let _ = writeln!(
+                        xml,
+                        "<DataArray type=\"{ty}\"{name}{comps} format=\"ascii\">"
+                    );
+                    v.append_text(components, xml);
+                    xml.push_str("</DataArray>\n");
+                }
+            }
+        };
+        xml.push_str("<Points>\n");
+        let pts = Values::F64(self.points.iter().flat_map(|p| p.to_array()).collect());
+        array(&mut xml, Some("points"), 3, &pts);
+        xml.push_str("</Points>\n");
+        for (tag, arrays) in [
+            ("PointData", &self.point_data),
+            ("CellData", &self.cell_data),
+        ] {
+            if arrays.is_empty() {
+                continue;
+            }
+            let scalars = arrays.iter().find(|a| a.components == 1);
+            let vectors = arrays.iter().find(|a| a.components == 3);
+            let _ = write!(xml, "<{tag}");
+            if let Some(a) = scalars {
+                let _ = write!(xml, " Scalars=\"{}\"", a.name);
+            }
+            if let Some(a) = vectors {
+                let _ = write!(xml, " Vectors=\"{}\"", a.name);
+            }
+            xml.push_str(">\n");
+            for a in arrays {
+                array(&mut xml, Some(a.name), a.components, &a.values);
+            }
+            let _ = writeln!(xml, "</{tag}>");
+        }
+        let cell_tag = if self.triangles.is_some() {
+            "Polys"
+        } else {
+            "Verts"
+        };
+        let _ = writeln!(xml, "<{cell_tag}>");
+        array(&mut xml, Some("connectivity"), 1, &Values::I64(conn));
+        array(&mut xml, Some("offsets"), 1, &Values::I64(offsets));
+        let _ = writeln!(xml, "</{cell_tag}>");
+        xml.push_str("</Piece>\n</PolyData>\n");
+        let mut out = xml.into_bytes();
+        if format == VtkFormat::Binary {
+            out.extend_from_slice(b"<AppendedData encoding=\"raw\">\n_");
+            out.extend_from_slice(&appended);
+            out.extend_from_slice(b"\n</AppendedData>\n");
+        }
+        out.extend_from_slice(b"</VTKFile>\n");
+        out
+    }
+}
+
+/// The total contact force Σ r / h on each sphere (world frame).
+fn contact_forces(sim: &Simulation) -> Vec<Vec3> {
+    let h = sim.params.h;
+    let mut force = vec![Vec3::ZERO; sim.world.bodies.len()];
+    for c in &sim.contacts {
+        let f = c.world_impulse() * (1.0 / h);
+        if let Some(fa) = force.get_mut(c.body) {
+            *fa += f;
+        }
+        if let crate::contact::Partner::Body(j) = c.partner {
+            if let Some(fb) = force.get_mut(j) {
+                *fb += -f;
+            }
+        }
+    }
+    force
+}
+
+/// The beads of `sim` as PolyData: points = centres, point data radius, velocity, angular
+/// velocity and the total contact force Σ r / h on each sphere.
+fn beads_polydata(sim: &Simulation) -> PolyData {
+    let b = &sim.world.bodies;
+    PolyData {
+        points: b.iter().map(|s| s.position).collect(),
+        point_data: vec![
+            Array::scalars("radius", b.iter().map(|s| s.radius)),
+            Array::vectors("velocity", b.iter().map(|s| s.velocity)),
+            Array::vectors("angular_velocity", b.iter().map(|s| s.angular_velocity)),
+            Array::vectors("contact_force", contact_forces(sim).into_iter()),
+        ],
+        cell_data: Vec::new(),
+        triangles: None,
+    }
+}
+
+/// The active contacts of the last step: points, normals, forces r / h, gaps.
+fn contacts_polydata(sim: &Simulation) -> PolyData {
+    let h = sim.params.h;
+    let c = &sim.contacts;
+    PolyData {
+        points: c.iter().map(|x| x.point).collect(),
+        point_data: vec![
+            Array::vectors("normal", c.iter().map(|x| x.normal)),
+            Array::vectors("force", c.iter().map(|x| x.world_impulse() * (1.0 / h))),
+            Array::scalars("gap", c.iter().map(|x| x.gap)),
+        ],
+        cell_data: Vec::new(),
+        triangles: None,
+    }
+}
+
+/// The frame of the beads and of the contacts (two .vtp files) in `format`.
+pub fn vtp_frame_with(sim: &Simulation, format: VtkFormat) -> (Vec<u8>, Vec<u8>) {
+    (
+        beads_polydata(sim).to_vtp(format),
+        contacts_polydata(sim).to_vtp(format),
+    )
 }
 
 /// VTK PolyData (.vtp, ASCII) of the spheres: points = centres, point data radius, velocity,
 /// angular velocity and the total contact force Σ r / h on each sphere; plus a second file
-/// with one vertex per contact (point, normal, force r/h).
+/// with one vertex per contact (point, normal, force r/h, gap).
 pub fn vtp_frame(sim: &Simulation) -> (String, String) {
-    let h = sim.params.h;
-    let nb = sim.world.bodies.len();
-    let mut force = vec![[0.0f64; 3]; nb];
-    for c in &sim.contacts {
-        let f = c.world_impulse() * (1.0 / h);
-        if let Some(fa) = force.get_mut(c.body) {
-            fa[0] += f.x;
-            fa[1] += f.y;
-            fa[2] += f.z;
+    let (b, c) = vtp_frame_with(sim, VtkFormat::Ascii);
+    (
+        String::from_utf8_lossy(&b).into_owned(),
+        String::from_utf8_lossy(&c).into_owned(),
+    )
+}
+
+/// An axis-aligned box [lo, hi]: the region the obstacles' drawings must cover.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Extent {
+    /// lower corner
+    pub lo: Vec3,
+    /// upper corner
+    pub hi: Vec3,
+}
+
+impl Extent {
+    /// The bounding box of the spheres (centres ± radii) grown by 10 % of its diagonal and by
+    /// the largest diameter on every side; a unit box around the origin without spheres.
+    pub fn of_bodies(sim: &Simulation) -> Self {
+        let b = &sim.world.bodies;
+        let mut lo = Vec3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
+        let mut hi = -lo;
+        let mut rmax: f64 = 0.0;
+        for s in b.iter().filter(|s| s.position.is_finite()) {
+            let r = Vec3::new(s.radius, s.radius, s.radius);
+            lo = lo.min(s.position - r);
+            hi = hi.max(s.position + r);
+            rmax = rmax.max(s.radius);
         }
-        if let crate::contact::Partner::Body(j) = c.partner {
-            if let Some(fb) = force.get_mut(j) {
-                fb[0] -= f.x;
-                fb[1] -= f.y;
-                fb[2] -= f.z;
+        if !(lo.is_finite() && hi.is_finite()) {
+            return Self {
+                lo: Vec3::new(-1.0, -1.0, -1.0),
+                hi: Vec3::new(1.0, 1.0, 1.0),
+            };
+        }
+        let m = 0.1 * (hi - lo).norm() + 2.0 * rmax;
+        let m = Vec3::new(m, m, m);
+        Self {
+            lo: lo - m,
+            hi: hi + m,
+        }
+    }
+    /// The smallest box holding both.
+    pub fn union(self, o: Extent) -> Self {
+        Self {
+            lo: self.lo.min(o.lo),
+            hi: self.hi.max(o.hi),
+        }
+    }
+    /// The box grown by `fraction` of its diagonal on every side.
+    pub fn grown(self, fraction: f64) -> Self {
+        let m = fraction * (self.hi - self.lo).norm();
+        let m = Vec3::new(m, m, m);
+        Self {
+            lo: self.lo - m,
+            hi: self.hi + m,
+        }
+    }
+    fn center(&self) -> Vec3 {
+        (self.lo + self.hi) * 0.5
+    }
+    fn half_diagonal(&self) -> f64 {
+        0.5 * (self.hi - self.lo).norm()
+    }
+    /// The range of (x − p)·a over the box's corners.
+    fn range_along(&self, p: Vec3, a: Vec3) -> (f64, f64) {
+        let mut r = (f64::INFINITY, f64::NEG_INFINITY);
+        for i in 0..8 {
+            let c = Vec3::new(
+                if i & 1 == 0 { self.lo.x } else { self.hi.x },
+                if i & 2 == 0 { self.lo.y } else { self.hi.y },
+                if i & 4 == 0 { self.lo.z } else { self.hi.z },
+            );
+            let d = (c - p).dot(a);
+            r = (r.0.min(d), r.1.max(d));
+        }
+        r
+    }
+}
+
+/// Segments around a cylinder's circumference in its drawing.
+pub const CYLINDER_SEGMENTS: usize = 64;
+
+/// Rotation of `p` by angle `a` about the line through `c` along the unit vector `k`
+/// (Rodrigues' formula).
+fn rotate_about(p: Vec3, c: Vec3, k: Vec3, a: f64) -> Vec3 {
+    let v = p - c;
+    let (s, co) = a.sin_cos();
+    c + v * co + k.cross(v) * s + k * (k.dot(v) * (1.0 - co))
+}
+
+/// The rigid placement of an obstacle's motion at time t, applied to a point of its shape in
+/// the reference position: the translation `offset(t)` of an oscillation; the rotation by ω t
+/// about the axis of a rotation (the shapes it moves are invariant under it, so contacts see
+/// only the surface velocity, but the drawing turns).
+fn place(motion: &Motion, t: f64, p: Vec3) -> Vec3 {
+    match motion {
+        Motion::Rotate {
+            center,
+            axis,
+            omega,
+        } => rotate_about(p, *center, *axis, omega * t),
+        other => p + other.offset(t),
+    }
+}
+
+/// The reference-position surface of an unmoved obstacle as triangles. Planes are drawn as
+/// squares centred at the projection of the extent's centre, as wide as the extent's
+/// diagonal; infinite cylinders over the extent's range along their axis; curved shapes
+/// tessellated with [`CYLINDER_SEGMENTS`] sides; meshes as they are.
+fn reference_surface(shape: &Shape, extent: &Extent) -> (Vec<Vec3>, Vec<[usize; 3]>) {
+    let quad = |c: Vec3, u: Vec3, v: Vec3, hu: f64, hv: f64| {
+        let pts = vec![
+            c - u * hu - v * hv,
+            c + u * hu - v * hv,
+            c + u * hu + v * hv,
+            c - u * hu + v * hv,
+        ];
+        (pts, vec![[0, 1, 2], [0, 2, 3]])
+    };
+    match shape {
+        Shape::Plane { point, normal } => {
+            let (u, v) = normal.tangent_basis();
+            let e = extent.center();
+            let c = e - *normal * (e - *point).dot(*normal);
+            let half = extent.half_diagonal();
+            quad(c, u, v, half, half)
+        }
+        Shape::Rectangle {
+            center,
+            normal,
+            u,
+            half_u,
+            half_v,
+        } => quad(*center, *u, normal.cross(*u), *half_u, *half_v),
+        Shape::CylinderInside {
+            point,
+            axis,
+            radius,
+        } => {
+            let (a0, a1) = extent.range_along(*point, *axis);
+            cylinder_surface(*point, *axis, *radius, (a0, a1), None, None)
+        }
+        Shape::Cylinder {
+            base,
+            axis,
+            radius,
+            height,
+            bottom_cap,
+            top_cap,
+            orifice,
+            ..
+        } => cylinder_surface(
+            *base,
+            *axis,
+            *radius,
+            (0.0, *height),
+            bottom_cap.then_some(*orifice),
+            top_cap.then_some(0.0),
+        ),
+        Shape::Box {
+            lo,
+            hi,
+            inside,
+            open_top,
+        } => {
+            let data = crate::mesh::box_mesh(*lo, *hi);
+            // the box mesh's faces in order z = lo, z = hi, …: two triangles each
+            let skip_top = *inside && *open_top;
+            let tris = data
+                .triangles
+                .iter()
+                .enumerate()
+                .filter(|(k, _)| !(skip_top && (2..4).contains(k)))
+                .map(|(_, t)| t.map(|i| i as usize))
+                .collect();
+            (data.vertices, tris)
+        }
+        Shape::Sphere { center, radius, .. } => sphere_surface(*center, *radius),
+        Shape::Mesh { mesh, .. } => (
+            mesh.vertices().to_vec(),
+            mesh.triangles()
+                .iter()
+                .map(|t| t.map(|i| i as usize))
+                .collect(),
+        ),
+    }
+}
+
+/// A tessellated cylinder surface about the line through `base` along the unit `axis`, from
+/// `range.0` to `range.1` along it ([`CYLINDER_SEGMENTS`] sides), with a cap at either end
+/// when given: an annulus from the given inner radius (0: a disc; an orifice otherwise) to
+/// `radius`.
+fn cylinder_surface(
+    base: Vec3,
+    axis: Vec3,
+    radius: f64,
+    range: (f64, f64),
+    bottom: Option<f64>,
+    top: Option<f64>,
+) -> (Vec<Vec3>, Vec<[usize; 3]>) {
+    let (u, v) = axis.tangent_basis();
+    let n = CYLINDER_SEGMENTS;
+    let ring = |along: f64, r: f64| -> Vec<Vec3> {
+        (0..n)
+            .map(|k| {
+                let phi = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
+                let (s, c) = phi.sin_cos();
+                base + axis * along + (u * c + v * s) * r
+            })
+            .collect()
+    };
+    let mut pts = ring(range.0, radius);
+    pts.extend(ring(range.1, radius));
+    let mut tris = Vec::with_capacity(4 * n);
+    // a band of quads between the rings starting at i and j
+    let band = |tris: &mut Vec<[usize; 3]>, i: usize, j: usize| {
+        for k in 0..n {
+            let k1 = (k + 1) % n;
+            tris.push([i + k, i + k1, j + k1]);
+            tris.push([i + k, j + k1, j + k]);
+        }
+    };
+    band(&mut tris, 0, n);
+    for (cap, along, outer) in [(bottom, range.0, 0), (top, range.1, n)] {
+        let Some(inner) = cap else { continue };
+        let start = pts.len();
+        if inner > 0.0 {
+            pts.extend(ring(along, inner));
+            band(&mut tris, start, outer);
+        } else {
+            pts.push(base + axis * along);
+            for k in 0..n {
+                tris.push([start, outer + k, outer + (k + 1) % n]);
             }
         }
     }
-    let bodies = &sim.world.bodies;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n<PolyData>\n<Piece NumberOfPoints=\"{nb}\" NumberOfVerts=\"{nb}\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"0\">"
-    );
-    s.push_str("<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
-    for b in bodies {
-        let _ = writeln!(s, "{} {} {}", b.position.x, b.position.y, b.position.z);
-    }
-    s.push_str("</DataArray></Points>\n<PointData Scalars=\"radius\" Vectors=\"velocity\">\n");
-    s.push_str("<DataArray type=\"Float64\" Name=\"radius\" format=\"ascii\">\n");
-    for b in bodies {
-        let _ = writeln!(s, "{}", b.radius);
-    }
-    s.push_str("</DataArray>\n");
-    let vec_array = |s: &mut String, name: &str, it: &mut dyn Iterator<Item = [f64; 3]>| {
-        let _ = writeln!(
-            s,
-            "<DataArray type=\"Float64\" Name=\"{name}\" NumberOfComponents=\"3\" format=\"ascii\">"
-        );
-        for v in it {
-            let _ = writeln!(s, "{} {} {}", v[0], v[1], v[2]);
+    (pts, tris)
+}
+
+/// A tessellated sphere (latitude–longitude, [`CYLINDER_SEGMENTS`] around, half as many from
+/// pole to pole).
+fn sphere_surface(center: Vec3, radius: f64) -> (Vec<Vec3>, Vec<[usize; 3]>) {
+    let n = CYLINDER_SEGMENTS;
+    let m = n / 2;
+    let mut pts = Vec::with_capacity(n * (m - 1) + 2);
+    pts.push(center - Vec3::Z * radius);
+    for i in 1..m {
+        let theta = std::f64::consts::PI * i as f64 / m as f64;
+        let (st, ct) = theta.sin_cos();
+        for k in 0..n {
+            let phi = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
+            let (s, c) = phi.sin_cos();
+            pts.push(center + Vec3::new(st * c, st * s, -ct) * radius);
         }
-        s.push_str("</DataArray>\n");
+    }
+    pts.push(center + Vec3::Z * radius);
+    let top = pts.len() - 1;
+    let ring = |i: usize, k: usize| 1 + (i - 1) * n + k % n;
+    let mut tris = Vec::with_capacity(2 * n * m);
+    for k in 0..n {
+        tris.push([0, ring(1, k + 1), ring(1, k)]);
+        tris.push([top, ring(m - 1, k), ring(m - 1, k + 1)]);
+    }
+    for i in 1..m - 1 {
+        for k in 0..n {
+            tris.push([ring(i, k), ring(i, k + 1), ring(i + 1, k + 1)]);
+            tris.push([ring(i, k), ring(i + 1, k + 1), ring(i + 1, k)]);
+        }
+    }
+    (pts, tris)
+}
+
+/// The surface of `obstacle` at time t as triangles (points, index triples), for drawing:
+/// its shape in the reference position (unbounded shapes cut to `extent`), then placed by its
+/// motion at t. One arm per [`Shape`]; a new shape adds its tessellation here.
+pub fn obstacle_surface(
+    obstacle: &Obstacle,
+    t: f64,
+    extent: &Extent,
+) -> (Vec<Vec3>, Vec<[usize; 3]>) {
+    // unbounded shapes are cut to the extent in the reference position: move the extent back
+    // by the translation so that a moving plane stays under the beads
+    let back = match &obstacle.motion {
+        Motion::Rotate { .. } => Vec3::ZERO,
+        other => other.offset(t),
     };
-    vec_array(
-        &mut s,
-        "velocity",
-        &mut bodies.iter().map(|b| b.velocity.to_array()),
-    );
-    vec_array(
-        &mut s,
-        "angular_velocity",
-        &mut bodies.iter().map(|b| b.angular_velocity.to_array()),
-    );
-    vec_array(&mut s, "contact_force", &mut force.iter().copied());
-    s.push_str("</PointData>\n");
-    verts(&mut s, nb);
-    s.push_str("</Piece>\n</PolyData>\n</VTKFile>\n");
-
-    let nc = sim.contacts.len();
-    let mut c = String::new();
-    let _ = writeln!(
-        c,
-        "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n<PolyData>\n<Piece NumberOfPoints=\"{nc}\" NumberOfVerts=\"{nc}\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"0\">"
-    );
-    c.push_str("<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
-    for ct in &sim.contacts {
-        let _ = writeln!(c, "{} {} {}", ct.point.x, ct.point.y, ct.point.z);
-    }
-    c.push_str("</DataArray></Points>\n<PointData Vectors=\"force\">\n");
-    vec_array(
-        &mut c,
-        "normal",
-        &mut sim.contacts.iter().map(|x| x.normal.to_array()),
-    );
-    vec_array(
-        &mut c,
-        "force",
-        &mut sim
-            .contacts
-            .iter()
-            .map(|x| (x.world_impulse() * (1.0 / h)).to_array()),
-    );
-    c.push_str("<DataArray type=\"Float64\" Name=\"gap\" format=\"ascii\">\n");
-    for ct in &sim.contacts {
-        let _ = writeln!(c, "{}", ct.gap);
-    }
-    c.push_str("</DataArray>\n</PointData>\n");
-    verts(&mut c, nc);
-    c.push_str("</Piece>\n</PolyData>\n</VTKFile>\n");
-    (s, c)
+    let local = Extent {
+        lo: extent.lo - back,
+        hi: extent.hi - back,
+    };
+    let (pts, tris) = reference_surface(&obstacle.shape, &local);
+    let pts = pts
+        .into_iter()
+        .map(|p| place(&obstacle.motion, t, p))
+        .collect();
+    (pts, tris)
 }
 
-fn verts(s: &mut String, n: usize) {
-    s.push_str("<Verts><DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
-    for i in 0..n {
-        let _ = writeln!(s, "{i}");
+/// The obstacles at time t as one PolyData of triangles, with the obstacle's index as cell
+/// data (`obstacle`).
+fn obstacles_polydata(obstacles: &[Obstacle], t: f64, extent: &Extent) -> PolyData {
+    let mut points = Vec::new();
+    let mut triangles = Vec::new();
+    let mut index = Vec::new();
+    for (k, o) in obstacles.iter().enumerate() {
+        let (p, tris) = obstacle_surface(o, t, extent);
+        let base = points.len();
+        points.extend(p);
+        index.extend(std::iter::repeat_n(k as f64, tris.len()));
+        triangles.extend(
+            tris.into_iter()
+                .map(|[a, b, c]| [a + base, b + base, c + base]),
+        );
     }
-    s.push_str("</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
-    for i in 0..n {
-        let _ = writeln!(s, "{}", i + 1);
+    PolyData {
+        points,
+        point_data: Vec::new(),
+        cell_data: vec![Array::scalars("obstacle", index.into_iter())],
+        triangles: Some(triangles),
     }
-    s.push_str("</DataArray></Verts>\n");
 }
 
-/// Writes VTK frames into a directory and the ParaView collections `beads.pvd` and
-/// `contacts.pvd` indexing them.
+/// One frame of the collections: time, the beads, contacts and obstacles files.
+#[derive(Debug, Clone, PartialEq)]
+struct FrameFiles {
+    time: f64,
+    beads: String,
+    contacts: String,
+    obstacles: String,
+}
+
+/// Writes VTK frames into a directory and the ParaView collections `beads.pvd`,
+/// `contacts.pvd` and `obstacles.pvd` indexing them. Obstacles are written as triangles into
+/// `frames/obstacles_KKKKKK.vtp` when they move or when the region they must cover (the
+/// bodies' [`Extent`], only ever grown) has grown; otherwise the collection points again to
+/// the last obstacles file (a scene whose obstacles are fixed has one file as long as the
+/// beads stay inside the first extent).
 #[derive(Debug)]
 pub struct VtkWriter {
     dir: PathBuf,
-    frames: Vec<(f64, String, String)>,
+    format: VtkFormat,
+    frames: Vec<FrameFiles>,
+    /// the region the last obstacles file covers, and that file
+    obstacles: Option<(Extent, String)>,
 }
 
 impl VtkWriter {
-    /// A writer into `dir` (created).
+    /// A writer into `dir` (created), binary frames.
     pub fn new(dir: &Path) -> io::Result<Self> {
         fs::create_dir_all(dir.join("frames"))?;
         Ok(Self {
             dir: dir.to_path_buf(),
+            format: VtkFormat::default(),
             frames: Vec::new(),
+            obstacles: None,
         })
     }
+
+    /// A writer into `dir` that continues the collections found there (a restarted run): the
+    /// frames before step `first_step` that `beads.pvd` lists are kept, later ones dropped.
+    pub fn resume(dir: &Path, first_step: usize) -> io::Result<Self> {
+        let mut w = Self::new(dir)?;
+        let listed = |name: &str| -> Vec<(f64, String)> {
+            fs::read_to_string(dir.join(name))
+                .map(|s| collection_entries(&s))
+                .unwrap_or_default()
+        };
+        let contacts = listed("contacts.pvd");
+        let obstacles = listed("obstacles.pvd");
+        for (k, (time, beads)) in listed("beads.pvd").into_iter().enumerate() {
+            let step = beads
+                .rsplit('_')
+                .next()
+                .and_then(|s| s.trim_end_matches(".vtp").parse::<usize>().ok());
+            if step.is_none_or(|s| s >= first_step) {
+                continue;
+            }
+            let file =
+                |list: &[(f64, String)]| list.get(k).map(|x| x.1.clone()).unwrap_or_default();
+            w.frames.push(FrameFiles {
+                time,
+                beads,
+                contacts: file(&contacts),
+                obstacles: file(&obstacles),
+            });
+        }
+        Ok(w)
+    }
+
+    /// The same writer with frames in `format`.
+    pub fn with_format(mut self, format: VtkFormat) -> Self {
+        self.format = format;
+        self
+    }
+
     /// Writes the frame of the simulation's current state.
     pub fn frame(&mut self, sim: &Simulation) -> io::Result<()> {
-        let (beads, contacts) = vtp_frame(sim);
+        let (beads, contacts) = vtp_frame_with(sim, self.format);
         let k = sim.steps_done;
         let b = format!("frames/beads_{k:06}.vtp");
         let c = format!("frames/contacts_{k:06}.vtp");
         coulomb::atomic::write(self.dir.join(&b), beads)?;
         coulomb::atomic::write(self.dir.join(&c), contacts)?;
-        self.frames.push((sim.time, b, c));
+        let o = self.obstacles_file(sim)?;
+        self.frames.push(FrameFiles {
+            time: sim.time,
+            beads: b,
+            contacts: c,
+            obstacles: o,
+        });
         self.write_collections()
     }
+
+    /// The obstacles file of this frame: the last one, unless an obstacle moves or the bodies
+    /// left the region it covers (then a new one over the grown region).
+    fn obstacles_file(&mut self, sim: &Simulation) -> io::Result<String> {
+        let now = Extent::of_bodies(sim);
+        let moving = sim
+            .world
+            .obstacles
+            .iter()
+            .any(|o| o.motion != Motion::Fixed);
+        if let Some((covered, file)) = &self.obstacles {
+            if !moving && covered.union(now) == *covered {
+                return Ok(file.clone());
+            }
+        }
+        // grown by a quarter of its diagonal on every side, so that beads spreading slowly do
+        // not make a new file at every frame
+        let extent = match &self.obstacles {
+            Some((covered, _)) => covered.union(now),
+            None => now,
+        }
+        .grown(0.25);
+        let k = sim.steps_done;
+        let file = format!("frames/obstacles_{k:06}.vtp");
+        let poly = obstacles_polydata(&sim.world.obstacles, sim.time, &extent);
+        coulomb::atomic::write(self.dir.join(&file), poly.to_vtp(self.format))?;
+        self.obstacles = Some((extent, file.clone()));
+        Ok(file)
+    }
+
     fn write_collections(&self) -> io::Result<()> {
-        for (name, pick) in [("beads.pvd", 0usize), ("contacts.pvd", 1)] {
+        for name in ["beads.pvd", "contacts.pvd", "obstacles.pvd"] {
             let mut s = String::from(
                 "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n",
             );
-            for (t, b, c) in &self.frames {
-                let file = if pick == 0 { b } else { c };
+            for f in &self.frames {
+                let file = match name {
+                    "beads.pvd" => &f.beads,
+                    "contacts.pvd" => &f.contacts,
+                    _ => &f.obstacles,
+                };
+                if file.is_empty() {
+                    continue;
+                }
                 let _ = writeln!(
                     s,
-                    "<DataSet timestep=\"{t}\" group=\"\" part=\"0\" file=\"{file}\"/>"
+                    "<DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{file}\"/>",
+                    f.time
                 );
             }
             s.push_str("</Collection>\n</VTKFile>\n");
             coulomb::atomic::write(self.dir.join(name), s)?;
         }
         Ok(())
+    }
+}
+
+/// The (timestep, file) entries of a .pvd collection written by [`VtkWriter`] (one
+/// `<DataSet …/>` element a line).
+fn collection_entries(pvd: &str) -> Vec<(f64, String)> {
+    let attr = |line: &str, name: &str| -> Option<String> {
+        let start = line.find(&format!(" {name}=\""))? + name.len() + 3;
+        let len = line[start..].find('"')?;
+        Some(line[start..start + len].to_string())
+    };
+    pvd.lines()
+        .filter(|l| l.trim_start().starts_with("<DataSet"))
+        .filter_map(|l| Some((attr(l, "timestep")?.parse().ok()?, attr(l, "file")?)))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Scene;
+    use crate::simulation::Params;
+
+    fn stepped(scene: Scene, beads: usize, steps: usize) -> Simulation {
+        let mut sim = Simulation::new(scene.build(beads, 1), Params::default()).unwrap();
+        for _ in 0..steps {
+            sim.step().unwrap();
+        }
+        sim
+    }
+
+    /// The value of attribute `name` in the XML element `elem`.
+    fn attr<'a>(elem: &'a str, name: &str) -> &'a str {
+        let key = format!(" {name}=\"");
+        let start = elem.find(&key).map(|k| k + key.len()).expect(name);
+        let len = elem[start..].find('"').unwrap();
+        &elem[start..start + len]
+    }
+
+    /// The f64 values of the appended array whose `<DataArray` element starts at `at`.
+    fn appended_f64(file: &[u8], at: usize) -> Vec<f64> {
+        let text = String::from_utf8_lossy(file);
+        let elem = &text[at..at + text[at..].find("/>").unwrap()];
+        assert_eq!(attr(elem, "format"), "appended");
+        assert_eq!(attr(elem, "type"), "Float64");
+        let offset: usize = attr(elem, "offset").parse().unwrap();
+        let marker = b"<AppendedData encoding=\"raw\">\n_";
+        let base = file
+            .windows(marker.len())
+            .position(|w| w == marker)
+            .unwrap()
+            + marker.len();
+        let p = base + offset;
+        let len = u64::from_le_bytes(file[p..p + 8].try_into().unwrap()) as usize;
+        file[p + 8..p + 8 + len]
+            .chunks_exact(8)
+            .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+            .collect()
+    }
+
+    #[test]
+    fn binary_frames_hold_the_exact_positions_and_are_smaller() {
+        let sim = stepped(Scene::Box, 200, 5);
+        let (bin, _) = vtp_frame_with(&sim, VtkFormat::Binary);
+        let (ascii, _) = vtp_frame_with(&sim, VtkFormat::Ascii);
+        assert!(
+            bin.len() < ascii.len(),
+            "binary {} B, ascii {} B",
+            bin.len(),
+            ascii.len()
+        );
+        let text = String::from_utf8_lossy(&bin);
+        assert!(text.contains("header_type=\"UInt64\""));
+        let points = text.find("<Points>").unwrap();
+        let at = points + text[points..].find("<DataArray").unwrap();
+        let xyz = appended_f64(&bin, at);
+        let want: Vec<f64> = sim
+            .world
+            .bodies
+            .iter()
+            .flat_map(|b| b.position.to_array())
+            .collect();
+        assert_eq!(xyz.len(), want.len());
+        assert!(xyz
+            .iter()
+            .zip(&want)
+            .all(|(a, b)| a.to_bits() == b.to_bits()));
+        let r_at = text.find("Name=\"radius\"").unwrap();
+        let r_at = text[..r_at].rfind("<DataArray").unwrap();
+        let radii = appended_f64(&bin, r_at);
+        assert!(radii
+            .iter()
+            .zip(&sim.world.bodies)
+            .all(|(r, b)| *r == b.radius));
+        // the ASCII frame lists the same numbers
+        let a = String::from_utf8(ascii).unwrap();
+        let p = sim.world.bodies[7].position;
+        assert!(a.contains(&format!("{} {} {}", p.x, p.y, p.z)));
+    }
+
+    #[test]
+    fn obstacle_surfaces_lie_on_the_obstacles_and_cover_the_beads() {
+        for scene in Scene::ALL {
+            let sim = stepped(scene, 60, 3);
+            let extent = Extent::of_bodies(&sim);
+            for o in &sim.world.obstacles {
+                let (pts, tris) = obstacle_surface(o, sim.time, &extent);
+                assert!(!tris.is_empty(), "{}", o.name);
+                assert!(tris.iter().flatten().all(|&i| i < pts.len()));
+                // every vertex is on the obstacle's surface: zero distance to it
+                for p in &pts {
+                    let d = o.proximity(*p, 0.0, sim.time).gap.abs();
+                    assert!(d < 1e-9, "{} vertex {p:?} at {d}", o.name);
+                }
+                if let Shape::Plane { normal, .. } = o.shape {
+                    // the quad covers every bead's foot on the plane
+                    let (u, v) = normal.tangent_basis();
+                    let (lo_u, hi_u) = minmax(pts.iter().map(|p| p.dot(u)));
+                    let (lo_v, hi_v) = minmax(pts.iter().map(|p| p.dot(v)));
+                    for b in &sim.world.bodies {
+                        let (bu, bv) = (b.position.dot(u), b.position.dot(v));
+                        assert!(bu > lo_u && bu < hi_u && bv > lo_v && bv < hi_v);
+                    }
+                }
+            }
+        }
+    }
+
+    fn minmax(it: impl Iterator<Item = f64>) -> (f64, f64) {
+        it.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(x), b.max(x))
+        })
+    }
+
+    #[test]
+    fn moving_obstacles_are_drawn_at_their_place() {
+        let sim = stepped(Scene::VibratingPlate, 20, 1);
+        let plate = sim
+            .world
+            .obstacles
+            .iter()
+            .find(|o| o.motion != Motion::Fixed)
+            .unwrap();
+        let e = Extent::of_bodies(&sim);
+        for t in [0.0, 0.013, 0.031] {
+            let (pts, _) = obstacle_surface(plate, t, &e);
+            for p in pts {
+                assert!(plate.proximity(p, 0.0, t).gap.abs() < 1e-12);
+            }
+        }
+        // a rotating drum turns by ω t
+        let drum = Obstacle {
+            name: "drum".into(),
+            material: 0,
+            shape: Shape::CylinderInside {
+                point: Vec3::ZERO,
+                axis: Vec3::Y,
+                radius: 1.0,
+            },
+            motion: Motion::Rotate {
+                center: Vec3::ZERO,
+                axis: Vec3::Y,
+                omega: 2.0,
+            },
+        };
+        let (p0, _) = obstacle_surface(&drum, 0.0, &e);
+        let (p1, _) = obstacle_surface(&drum, 0.25, &e);
+        let radial = |p: Vec3| p - Vec3::Y * p.y;
+        let (a, b) = (radial(p0[0]), radial(p1[0]));
+        let angle = a.cross(b).dot(Vec3::Y).atan2(a.dot(b));
+        assert!((angle - 0.5).abs() < 1e-12, "{angle}");
+    }
+
+    #[test]
+    fn writer_keeps_one_obstacles_file_when_nothing_moves_and_resumes() {
+        let dir = std::env::temp_dir().join(format!("coulomb-vtk-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        let mut sim = Simulation::new(Scene::Box.build(30, 1), Params::default()).unwrap();
+        let mut w = VtkWriter::new(&dir).unwrap();
+        for _ in 0..3 {
+            w.frame(&sim).unwrap();
+            for _ in 0..5 {
+                sim.step().unwrap();
+            }
+        }
+        let pvd = fs::read_to_string(dir.join("obstacles.pvd")).unwrap();
+        let files = collection_entries(&pvd);
+        assert_eq!(files.len(), 3);
+        // the beads fall and stay inside the first frame's (grown) extent: one file
+        assert!(files.iter().all(|f| f.1 == files[0].1), "{pvd}");
+        let obstacles = fs::read(dir.join(&files[0].1)).unwrap();
+        let text = String::from_utf8_lossy(&obstacles);
+        assert!(
+            text.contains("NumberOfPolys=\"10\""),
+            "5 planes, 2 triangles each"
+        );
+        // a restart at step 10 keeps frames 0 and 5, then adds its own
+        let mut r = VtkWriter::resume(&dir, 10).unwrap();
+        assert_eq!(r.frames.len(), 2);
+        r.frame(&sim).unwrap();
+        let beads = collection_entries(&fs::read_to_string(dir.join("beads.pvd")).unwrap());
+        let names: Vec<&str> = beads.iter().map(|x| x.1.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "frames/beads_000000.vtp",
+                "frames/beads_000005.vtp",
+                "frames/beads_000015.vtp"
+            ]
+        );
+        fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn stats_continue_after_a_restart() {
+        let dir = std::env::temp_dir().join(format!("coulomb-stats-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        let mut sim = Simulation::new(Scene::Box.build(10, 1), Params::default()).unwrap();
+        let stats: Vec<StepStats> = (0..6).map(|_| sim.step().unwrap()).collect();
+        write_stats(&dir, &stats).unwrap();
+        // restarted at step 4: rows 0..3 kept, the new 4, 5 appended
+        write_stats_continued(&dir, 4, &stats[4..]).unwrap();
+        let csv = fs::read_to_string(dir.join("stats.csv")).unwrap();
+        let steps: Vec<&str> = csv.lines().skip(1).map(|l| &l[..1]).collect();
+        assert_eq!(steps, ["0", "1", "2", "3", "4", "5"]);
+        let json: Vec<serde_json::Value> =
+            serde_json::from_str(&fs::read_to_string(dir.join("stats.json")).unwrap()).unwrap();
+        let steps: Vec<u64> = json.iter().map(|v| v["step"].as_u64().unwrap()).collect();
+        assert_eq!(steps, [0, 1, 2, 3, 4, 5]);
+        fs::remove_dir_all(&dir).ok();
     }
 }

@@ -109,7 +109,8 @@ const LOCAL: usize = 5;
 /// State kept across steps: the rolling impulses of the last step (warm start and output).
 #[derive(Debug, Clone, Default)]
 pub struct RollingState {
-    previous: HashMap<(usize, Partner), [f64; 3]>,
+    /// the last step's rolling impulses by contact key (warm start)
+    pub(crate) previous: HashMap<(usize, Partner), [f64; 3]>,
     /// the rolling impulses y of the last step that had contacts, in the order of that
     /// step's contacts (`Simulation::contacts` after it); empty when μ_r = 0
     pub impulses: Vec<[f64; 3]>,

@@ -189,9 +189,9 @@ pub struct Simulation {
     /// time the formation of the Delassus operator separately (`StepStats::delassus_ms`)
     pub profile_delassus: bool,
     /// the last step's impulses by contact key, sorted by key (warm starts by merge)
-    previous: Vec<((usize, Partner), [f64; 3])>,
+    pub(crate) previous: Vec<((usize, Partner), [f64; 3])>,
     /// bound ε_u = max(err, tol) · scale on the residual velocity of the last step's contacts
-    residual_velocity: f64,
+    pub(crate) residual_velocity: f64,
     /// rolling resistance (crate::rolling): warm start and last rolling impulses
     pub rolling: crate::rolling::RollingState,
 }

@@ -227,3 +227,47 @@ pub fn fclib_error(py: Python<'_>, e: FclibError) -> PyErr {
         ],
     )
 }
+
+/// [`coulomb_granular::CheckpointError`] → `OSError` (with errno and file name) for I/O
+/// failures, otherwise `coulomb.CheckpointError` (a `ValueError`) with `file`, `path` (the
+/// HDF5 object, where known) and `kind` (`not_hdf5`, `wrong_format`, `version`, `corrupt`,
+/// `checksum`, `invalid`, `unrepresentable`).
+pub fn checkpoint_error(py: Python<'_>, e: coulomb_granular::CheckpointError) -> PyErr {
+    use coulomb_granular::CheckpointError as E;
+    let msg = e.to_string();
+    let shown = |p: &std::path::Path| Some(p.display().to_string());
+    let (kind, file, path) = match &e {
+        E::Io { path, source } => {
+            let args = (
+                source.raw_os_error().unwrap_or(0),
+                source.to_string(),
+                path.display().to_string(),
+            );
+            return match source.kind() {
+                std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(args),
+                std::io::ErrorKind::PermissionDenied => PyPermissionError::new_err(args),
+                std::io::ErrorKind::IsADirectory => PyIsADirectoryError::new_err(args),
+                _ => PyOSError::new_err(args),
+            };
+        }
+        E::NotHdf5 { path } => ("not_hdf5", shown(path), None),
+        E::WrongFormat { path, .. } => ("wrong_format", shown(path), None),
+        E::Version { path, .. } => ("version", shown(path), None),
+        E::Corrupt { path, location, .. } => ("corrupt", shown(path), Some(location.clone())),
+        E::Checksum { path, .. } => ("checksum", shown(path), None),
+        E::Invalid { path, location, .. } => ("invalid", shown(path), Some(location.clone())),
+        E::Unrepresentable(_) => ("unrepresentable", None, None),
+        #[allow(unreachable_patterns)]
+        _ => ("other", None, None),
+    };
+    raise(
+        py,
+        "CheckpointError",
+        msg,
+        vec![
+            ("file", obj(py, file)),
+            ("path", obj(py, path)),
+            ("kind", obj(py, kind)),
+        ],
+    )
+}

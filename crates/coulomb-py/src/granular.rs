@@ -9,6 +9,7 @@ use numpy::{PyReadonlyArray1, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use std::path::PathBuf;
 use std::sync::Arc;
 
 fn sim_error(e: SimulationError) -> PyErr {
@@ -247,6 +248,24 @@ impl PySimulation {
     #[setter]
     fn set_keep_problem(&mut self, keep: bool) {
         self.sim.keep_problem = keep;
+    }
+
+    /// Writes the full state (bodies, obstacles, parameters and solver settings, t, k, warm
+    /// starts) into the HDF5 checkpoint file `path`, atomically
+    /// (`coulomb_granular::checkpoint`).
+    fn save_checkpoint(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        let sim = &self.sim;
+        py.detach(|| sim.save_checkpoint(&path))
+            .map_err(|e| crate::errors::checkpoint_error(py, e))
+    }
+
+    /// The simulation stored in the checkpoint file `path`; stepping it gives the same bits as
+    /// stepping the saved one.
+    #[staticmethod]
+    fn load_checkpoint(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        py.detach(|| Simulation::load_checkpoint(&path))
+            .map(|sim| Self { sim })
+            .map_err(|e| crate::errors::checkpoint_error(py, e))
     }
 
     /// The last step's global problem (when `keep_problem` is set and the step had contacts).

@@ -40,7 +40,7 @@ use crate::skeleton::Skeleton;
 /// The two constants that shape the path of one run of [`solve`] (the policy tries several:
 /// [`BarrierParams::paths`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct PathParams {
     /// ‖u_T‖ is smoothed to √(‖u_T‖² + δᵢ²) with δᵢ = `smoothing` · κ / aᵢ₀ (κ = aᵀb /
     /// contacts, so δ → 0 along the path); ≥ 0

@@ -19,7 +19,7 @@ use std::time::Duration;
 
 /// Which method computes F(s) (§6, options (i), (iv), (v)).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum InnerKind {
     /// Clarabel interior point on the SOC-QP (primal (3.15) for global problems, dual (4.7) for local).
@@ -34,7 +34,7 @@ pub enum InnerKind {
 
 /// How the fixed point s = F(s) is sought.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum OuterKind {
     /// successive approximation s ← F(s)
@@ -142,7 +142,7 @@ impl fmt::Display for OuterKind {
 /// fixed point s ← F(s)) or `inner+outer`, e.g. `apgd+anderson`, `pgs+fused`; the one
 /// spelling of every CLI command and of the Python bindings.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Method {
     /// the solver of the inner problem (3.15)/(4.7)
     pub inner: InnerKind,
@@ -198,7 +198,7 @@ impl FromStr for Method {
 
 /// Parameters of safeguarded Anderson mixing on s ([`crate::outer::anderson`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct AndersonParams {
     /// number of previous differences kept (≥ 1)
     pub memory: usize,
@@ -207,7 +207,7 @@ pub struct AndersonParams {
 /// Parameters of the semismooth Newton end game ([`crate::outer::newton`]); the budget and
 /// the starting level are [`Settings::newton_steps`] and [`Settings::newton_start`].
 #[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct NewtonParams {
     /// Newton steps one end-game try may take (all tries of a stage share
     /// [`Settings::newton_steps`])
@@ -263,7 +263,7 @@ pub struct NewtonParams {
 /// and stops once it converges (or is within `handover` · tol where the method of multipliers
 /// follows) or has used `time_share` of the time left.
 #[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct BarrierParams {
     /// a run stops when its lowest error has not improved for this many steps; ≥ 1
     pub stall_steps: usize,
@@ -432,7 +432,7 @@ impl BarrierParams {
 /// [`NewtonParams::stagnation`]) and the error is ≤ `start`, and again whenever the error has dropped below `retry` times
 /// the lowest error of the previous run; `max_steps = 0` turns it off.
 #[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct LmParams {
     /// cap on LM steps (factorizations of JᵀJ + λI) of all runs of a stage; 0: no LM end game
     pub max_steps: usize,
@@ -515,7 +515,7 @@ impl Default for LmParams {
 /// last such run; (b) after a Levenberg–Marquardt run of the stage that stalled, from LM's
 /// best point when that error is ≤ `start`, in what LM left of [`LmParams::time_share`].
 #[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ProxParams {
     /// cap on proximal steps per run; 0: no proximal end game
     pub max_outer: usize,
@@ -578,7 +578,7 @@ impl Default for ProxParams {
 /// reproduces it (`skeleton_residual`) — run after the interior-point try, from its
 /// lowest-error point and the end points of its other runs.
 #[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct MultiplierParams {
     /// cap on outer (multiplier) steps per run; 0: no such stage
     pub max_steps: usize,
@@ -876,7 +876,7 @@ impl LmParams {
 /// ‖W d‖ ≤ `residual` · ‖W‖ and bᵀd ≤ −`descent` · ‖b‖ (see [`crate::inner::unbounded_ray`]).
 /// Used by the outer stage after each inner solve, by projected Gauss–Seidel and by APGD.
 #[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct RayParams {
     /// bound on ‖W d‖ / ‖W‖ (d in the recession directions: W d ≈ 0); > 0
     pub residual: f64,
@@ -896,7 +896,7 @@ impl Default for RayParams {
 /// Parameters of APGD's step-size control on (4.7) ([`crate::inner::apgd`]): L estimates
 /// λ_max(W), the step is 1/L.
 #[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ApgdParams {
     /// L is kept ≥ `lip_floor` · L₀ (L₀ the power-iteration estimate); in (0, 1]
     pub lip_floor: f64,
@@ -945,7 +945,7 @@ impl Default for ApgdParams {
 /// of (2.9) is kept when its residual is ≤ `LAW_RESIDUAL` (‖A r‖ + ‖c‖)) and
 /// `FALLBACK_STEPS` (projected-gradient steps of the last resort).
 #[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct InnerParams {
     /// APGD: power iterations of the initial estimate L of λ_max(W) (the step is 1/L, raised
     /// by backtracking when too small); ≥ 1
@@ -988,7 +988,7 @@ impl Default for InnerParams {
 /// Every tuning constant of the outer loop, in one place. The defaults are those the solver
 /// has always used; they are not meant to be changed per problem.
 #[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Tuning {
     /// the inner tolerance is kept at least `inner_tol_floor` × tol (see [`Tuning::inner_tol`])
     pub inner_tol_floor: f64,
@@ -1155,7 +1155,7 @@ pub const STALL_WINDOW: usize = 25;
 /// ≤ [`Settings::newton_start`] (1e-3), and fused Gauss–Seidel as fallback when the first
 /// stage stalls. [`Settings::paper`] is the paper's algorithm.
 #[derive(Debug, Clone, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Settings {
     /// tolerance on the reported error (docs/error.md); also on the balance residual
     pub tol: f64,

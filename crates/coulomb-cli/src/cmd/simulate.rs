@@ -1,20 +1,42 @@
 //! `coulomb simulate`: Moreau–Jean time stepping of one of the granular scenes, with per-step
-//! statistics (CSV, JSON), VTK frames for ParaView and optional FCLIB dumps of each step.
+//! statistics (CSV, JSON), VTK frames for ParaView, checkpoints of the full state
+//! (`--checkpoint-every`, `--restart`) and optional FCLIB dumps of each step.
 
 use crate::exit::Outcome;
 use crate::sim_args::Args;
 use anyhow::{bail, Context};
-use coulomb_granular::output::{write_stats, VtkWriter};
+use coulomb_granular::output::{write_stats, write_stats_continued, VtkWriter};
 use coulomb_granular::run::RestMonitor;
-use coulomb_granular::{Scene, Simulation, Summary};
+use coulomb_granular::{CheckpointError, Scene, Simulation, Summary};
+use std::path::Path;
+
+/// The checkpoint file that `--checkpoint-every` writes into the output folder.
+pub const CHECKPOINT_FILE: &str = "checkpoint.h5";
+
+/// Writes the full state of `sim` into `dir/checkpoint.h5` (replaced atomically: an existing
+/// checkpoint stays whole until the new one is complete); a failure is an output that could
+/// not be written (exit status 4). Called every `--checkpoint-every` steps, at the end of a
+/// run, and meant for the interrupt path too.
+pub fn write_checkpoint(dir: &Path, sim: &Simulation) -> anyhow::Result<()> {
+    let path = dir.join(CHECKPOINT_FILE);
+    sim.save_checkpoint(&path).map_err(|e| {
+        let source = match e {
+            CheckpointError::Io { source, .. } => source,
+            other => std::io::Error::other(other.to_string()),
+        };
+        crate::exit::WriteFailed {
+            path: path.display().to_string(),
+            source,
+        }
+        .into()
+    })
+}
 
 /// Runs `coulomb simulate` in this process, on the scene checked by
 /// [`crate::sim_args::checked_scene`] (main.rs hands distributed runs to `simulate_mpi`).
 /// SIGINT/SIGTERM stop it after the step in progress, with every output written
 /// ([`crate::interrupt`]): exit status 130/143; `--until-rest` at its step cap: 1.
 pub fn run(args: Args, scene: Scene) -> anyhow::Result<Outcome> {
-    crate::interrupt::install().context("installing the SIGINT/SIGTERM handlers")?;
-    let stop = args.stop();
     let world = if args.spread_top {
         if scene != Scene::Box {
             bail!("--spread-top applies to the box scene only");
@@ -23,14 +45,68 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<Outcome> {
     } else {
         scene.build_with(args.beads, args.seed, &args.layout()?)
     };
-    let mut sim = Simulation::new(world, args.params()).context("invalid simulation parameters")?;
+    let sim = Simulation::new(world, args.params()).context("invalid simulation parameters")?;
+    steps(&args, sim, scene.name(), false, &mut NoHook)
+}
+
+/// `coulomb simulate --restart FILE`: the simulation stored in FILE, continued for `--steps`
+/// more steps (or until rest, at most `--max-steps` more); with `--output`, the stats files
+/// found there keep their rows before the checkpoint's step and get this run's appended.
+pub fn restart(args: Args) -> anyhow::Result<Outcome> {
+    let Some(file) = args.restart.clone() else {
+        bail!("--restart needs a checkpoint file");
+    };
+    let sim = Simulation::load_checkpoint(&file)
+        .with_context(|| format!("cannot restart from {}", file.display()))?;
+    steps(&args, sim, "restart", true, &mut NoHook)
+}
+
+/// What a run does after each step besides the outputs (the inlets of a scene file), and
+/// what it adds to the printed JSON summary.
+pub(crate) trait StepHook {
+    /// Called after the step from `t0` to `t1`.
+    fn after_step(&mut self, sim: &mut Simulation, t0: f64, t1: f64) -> anyhow::Result<()>;
+    /// Fields added to the `--json` summary, and a note for the one-line summary.
+    fn report(&self) -> (serde_json::Map<String, serde_json::Value>, String) {
+        (serde_json::Map::new(), String::new())
+    }
+}
+
+/// A run with nothing to do between steps.
+struct NoHook;
+
+impl StepHook for NoHook {
+    fn after_step(&mut self, _: &mut Simulation, _: f64, _: f64) -> anyhow::Result<()> {
+        Ok(())
+    }
+}
+
+/// The time steps of a run from `sim` (new, loaded by a restart, or built from a scene file)
+/// and its outputs: frames, statistics, summary, checkpoints, FCLIB dumps; one loop for every
+/// kind of run, stopped by its stop rule or by SIGINT/SIGTERM.
+pub(crate) fn steps(
+    args: &Args,
+    mut sim: Simulation,
+    name: &str,
+    restarted: bool,
+    hook: &mut dyn StepHook,
+) -> anyhow::Result<Outcome> {
+    crate::interrupt::install().context("installing the SIGINT/SIGTERM handlers")?;
+    let first_step = sim.steps_done;
+    let stop = args.stop_after(first_step);
+    let beads = sim.world.bodies.len();
     sim.keep_problem = args.dump_fclib.is_some();
     if let Some(dir) = &args.dump_fclib {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
     let mut vtk = match &args.output {
         Some(dir) => Some(
-            VtkWriter::new(dir).with_context(|| format!("cannot write into {}", dir.display()))?,
+            if restarted {
+                VtkWriter::resume(dir, first_step)
+            } else {
+                VtkWriter::new(dir)
+            }
+            .with_context(|| format!("cannot write into {}", dir.display()))?,
         ),
         None => None,
     };
@@ -42,14 +118,17 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<Outcome> {
         w.frame(&sim).context("writing VTK frame")?;
     }
     let start_energy = sim.world.kinetic_energy() + sim.world.potential_energy();
-    let pb = crate::progress::bar(stop.max_steps(), args.json);
-    pb.set_prefix(format!("{} {}", scene.name(), args.beads));
+    let pb = crate::progress::bar(stop.max_steps().saturating_sub(first_step), args.json);
+    pb.set_prefix(format!("{name} {beads}"));
     let mut stats = Vec::new();
     let mut monitor = RestMonitor::default();
     let mut at_rest = false;
     let mut interrupted = None;
     while sim.steps_done < stop.max_steps() {
+        let t0 = sim.time;
         let s = sim.step().context("time step failed")?;
+        let t1 = sim.time;
+        hook.after_step(&mut sim, t0, t1)?;
         pb.set_message(format!(
             "{} contacts, {} subproblems, {:.1} ms, err {:.1e}",
             s.contacts, s.subproblems, s.solve_ms, s.error
@@ -64,6 +143,11 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<Outcome> {
             }
         }
         stats.push(s);
+        if let Some(dir) = &args.output {
+            if args.checkpoint_every > 0 && sim.steps_done % args.checkpoint_every == 0 {
+                write_checkpoint(dir, &sim)?;
+            }
+        }
         let (stop_now, rest) = monitor.should_stop(&stop, &sim);
         if stop_now {
             at_rest = rest;
@@ -82,24 +166,36 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<Outcome> {
             w.frame(&sim).context("writing VTK frame")?;
         }
     }
-    let summary = Summary::from_stats(scene.name(), args.beads, &stats, at_rest)
+    let summary = Summary::from_stats(name, sim.world.bodies.len(), &stats, at_rest)
         .stopped_by(&stop, interrupted.map(|s| s.name()));
     let end_energy = sim.world.kinetic_energy() + sim.world.potential_energy();
     if let Some(dir) = &args.output {
-        write_stats(dir, &stats)
-            .with_context(|| format!("writing stats into {}", dir.display()))?;
+        if restarted {
+            write_stats_continued(dir, first_step, &stats)
+        } else {
+            write_stats(dir, &stats)
+        }
+        .with_context(|| format!("writing stats into {}", dir.display()))?;
+        // the end state, unless the last step just wrote it; an interrupted run always
+        // leaves one, to be resumed with --restart
+        let written = !stats.is_empty()
+            && args.checkpoint_every > 0
+            && sim.steps_done % args.checkpoint_every == 0;
+        if (args.checkpoint_every > 0 || interrupted.is_some()) && !written {
+            write_checkpoint(dir, &sim)?;
+        }
         crate::outputs::write(
             &dir.join("summary.json"),
             crate::outputs::json(&summary, true)?.as_bytes(),
         )?;
     }
+    let (extra, note) = hook.report();
     if args.json {
-        let obj =
-            crate::sim_args::summary_json(&summary, start_energy, end_energy, Default::default());
+        let obj = crate::sim_args::summary_json(&summary, start_energy, end_energy, extra);
         println!("{}", crate::outputs::json(&obj, false)?);
     } else {
         println!(
-            "{}: {} beads, {} steps{}, {:.1} contacts/step, {:.2} subproblems/step, {:.2} ms solve/step, mean error {:.2e} (max {:.2e}), {} / {} steps converged ({} not converged), max penetration during the run {:.2e} m, at the end: mean {:.2e} m, max {:.2e} m",
+            "{}: {} beads{note}, {} steps{}, {:.1} contacts/step, {:.2} subproblems/step, {:.2} ms solve/step, mean error {:.2e} (max {:.2e}), {} / {} steps converged ({} not converged), max penetration during the run {:.2e} m, at the end: mean {:.2e} m, max {:.2e} m",
             summary.scene,
             summary.beads,
             summary.steps,

@@ -18,7 +18,7 @@ Modules: :mod:`coulomb.fclib` (HDF5 exchange format), :mod:`coulomb.granular`
 from __future__ import annotations
 
 from . import _coulomb
-from ._errors import CoulombError, FclibError, InputError, ProblemError, SettingsError
+from ._errors import CheckpointError, CoulombError, FclibError, InputError, ProblemError, SettingsError
 from ._problem import GlobalProblem, LocalProblem, Problem
 from ._solve import (
     CriterionReport,
@@ -37,6 +37,7 @@ from . import fclib, granular  # noqa: E402  (submodules that use the names abov
 __version__: str = _coulomb.__version__
 
 __all__ = [
+    "CheckpointError",
     "CoulombError",
     "CriterionReport",
     "Evaluation",

@@ -10,6 +10,7 @@ __all__ = [
     "SettingsError",
     "InputError",
     "FclibError",
+    "CheckpointError",
 ]
 
 
@@ -51,6 +52,22 @@ class FclibError(CoulombError, ValueError):
     ``wrong_length``, ``bad_value``, ``unsupported``, ``invalid_problem``, ``write``); for
     ``invalid_problem`` also ``field`` and ``index`` as in :class:`ProblemError`. Operating-
     system failures (missing file, permissions) are raised as :class:`OSError` subclasses.
+    """
+
+    file: Optional[str] = None
+    path: Optional[str] = None
+
+
+class CheckpointError(CoulombError, ValueError):
+    """A simulation checkpoint could not be read or written
+    (``coulomb_granular::CheckpointError``): the file is not HDF5, not a checkpoint, of
+    another format version, damaged (truncated, bytes changed: its checksum does not match) or
+    holds out-of-range values; no simulation is returned then.
+
+    ``file`` is the file, ``path`` the HDF5 object where known (e.g. ``/contacts/body``),
+    ``kind`` one of ``not_hdf5``, ``wrong_format``, ``version``, ``corrupt``, ``checksum``,
+    ``invalid``, ``unrepresentable``. Operating-system failures (missing file, permissions)
+    are raised as :class:`OSError` subclasses.
     """
 
     file: Optional[str] = None

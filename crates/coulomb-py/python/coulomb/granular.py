@@ -9,8 +9,9 @@ Steer a run step by step with :class:`Simulation` (``step()``, ``for stats in si
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
-from typing import Any, Callable, Dict, Iterator, List, Mapping, Optional
+from typing import Any, Callable, Dict, Iterator, List, Mapping, Optional, Union
 
 import numpy as np
 
@@ -112,6 +113,25 @@ class Simulation:
     def set_solver(self, **settings: Any) -> None:
         """Replaces the solver settings (keyword arguments of :func:`coulomb.solve`)."""
         self._sim.set_solver(**settings)
+
+    def save_checkpoint(self, path: Union[str, "os.PathLike[str]"]) -> None:
+        """Writes the full state of the simulation (spheres, obstacles, gravity, parameters and
+        solver settings, time, step count, warm-start impulses, last contacts) into the HDF5
+        file ``path``, atomically (a complete file replaces an existing one or nothing does).
+        :meth:`load_checkpoint` continues it to the bit; ``coulomb simulate --restart path``
+        continues it from the command line."""
+        self._sim.save_checkpoint(os.fspath(path))
+
+    @staticmethod
+    def load_checkpoint(path: Union[str, "os.PathLike[str]"]) -> "Simulation":
+        """The simulation stored in the checkpoint file ``path`` (written by
+        :meth:`save_checkpoint` or ``coulomb simulate --checkpoint-every``): stepping it gives
+        the same numbers as stepping the saved one. Raises :class:`coulomb.CheckpointError`
+        for a file of another format version, a damaged or truncated one, and ``OSError`` when
+        it cannot be read."""
+        sim = Simulation.__new__(Simulation)
+        sim._sim = _coulomb._Simulation.load_checkpoint(os.fspath(path))
+        return sim
 
     @property
     def keep_problem(self) -> bool:

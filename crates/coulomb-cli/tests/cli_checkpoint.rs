@@ -1,0 +1,124 @@
+//! `coulomb simulate --checkpoint-every K` and `--restart FILE`: a run of 20 steps with
+//! checkpoints, continued for 10 steps from its checkpoint, ends in the state of a 30-step run
+//! to the bit (the checkpoint files, the last VTK frames and the numbers of the stats files are
+//! identical); bad checkpoints and options a checkpoint fixes are refused with status 2.
+
+mod common;
+
+use common::{coulomb, ok, temp_dir};
+use std::path::Path;
+
+fn simulate(extra: &[&str], out: &Path) {
+    let mut args = vec!["simulate"];
+    args.extend_from_slice(extra);
+    args.extend_from_slice(&["--frames-every", "10", "--output", out.to_str().unwrap()]);
+    ok(&coulomb(&args));
+}
+
+/// The columns of stats.csv that do not depend on the clock (step, time, counts, errors,
+/// energies, penetration), row by row.
+fn stats_numbers(dir: &Path) -> Vec<String> {
+    let csv = std::fs::read_to_string(dir.join("stats.csv")).unwrap();
+    csv.lines()
+        .skip(1)
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            [0, 1, 2, 3, 4, 8, 9, 10, 11, 12, 13, 14, 15]
+                .iter()
+                .map(|&i| f[i])
+                .collect::<Vec<_>>()
+                .join(",")
+        })
+        .collect()
+}
+
+#[test]
+fn restart_continues_a_run_to_the_bit() {
+    let root = temp_dir("checkpoint");
+    let (a, c) = (root.join("a"), root.join("c"));
+    let box100 = ["box", "--beads", "100", "--checkpoint-every", "10"];
+    simulate(&[&box100[..], &["--steps", "20"]].concat(), &a);
+    simulate(&[&box100[..], &["--steps", "30"]].concat(), &c);
+    let ckpt = a.join("checkpoint.h5");
+    assert!(ckpt.is_file());
+    // continued in its own folder: --steps counts the steps added
+    simulate(
+        &[
+            "--restart",
+            ckpt.to_str().unwrap(),
+            "--steps",
+            "10",
+            "--checkpoint-every",
+            "10",
+        ],
+        &a,
+    );
+    let read = |p: &Path| std::fs::read(p).unwrap();
+    assert_eq!(read(&ckpt), read(&c.join("checkpoint.h5")));
+    for f in ["frames/beads_000030.vtp", "frames/contacts_000030.vtp"] {
+        assert_eq!(read(&a.join(f)), read(&c.join(f)), "{f}");
+    }
+    let (sa, sc) = (stats_numbers(&a), stats_numbers(&c));
+    assert_eq!(sa.len(), 30);
+    assert_eq!(sa, sc);
+    let json: Vec<serde_json::Value> =
+        serde_json::from_str(&std::fs::read_to_string(a.join("stats.json")).unwrap()).unwrap();
+    assert_eq!(json.len(), 30);
+    let pvd = std::fs::read_to_string(a.join("beads.pvd")).unwrap();
+    assert_eq!(
+        pvd.matches("<DataSet").count(),
+        4,
+        "frames 0, 10, 20, 30: {pvd}"
+    );
+    assert!(a.join("obstacles.pvd").is_file());
+    std::fs::remove_dir_all(&root).ok();
+}
+
+#[test]
+fn bad_restarts_are_refused() {
+    let root = temp_dir("checkpoint-bad");
+    let out = root.join("out");
+    let status = |args: &[&str]| coulomb(args).status.code();
+    // --checkpoint-every needs --output
+    assert_eq!(
+        status(&["simulate", "box", "--steps", "2", "--checkpoint-every", "1"]),
+        Some(2)
+    );
+    simulate(
+        &[
+            "box",
+            "--beads",
+            "10",
+            "--steps",
+            "2",
+            "--checkpoint-every",
+            "1",
+        ],
+        &out,
+    );
+    let ckpt = out.join("checkpoint.h5");
+    let c = ckpt.to_str().unwrap();
+    // the scene and its parameters come from the checkpoint
+    assert_eq!(status(&["simulate", "box", "--restart", c]), Some(2));
+    assert_eq!(
+        status(&["simulate", "--restart", c, "--mu", "0.5"]),
+        Some(2)
+    );
+    // missing, truncated, flipped
+    let missing = root.join("none.h5");
+    let r = coulomb(&["simulate", "--restart", missing.to_str().unwrap()]);
+    assert_eq!(r.status.code(), Some(2));
+    let bytes = std::fs::read(&ckpt).unwrap();
+    let bad = root.join("bad.h5");
+    std::fs::write(&bad, &bytes[..bytes.len() / 2]).unwrap();
+    let r = coulomb(&["simulate", "--restart", bad.to_str().unwrap()]);
+    assert_eq!(r.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains("bad.h5"), "{err}");
+    // a valid restart of the same file works
+    let r = coulomb(&["simulate", "--restart", c, "--steps", "2", "--json"]);
+    let v: serde_json::Value = serde_json::from_str(&ok(&r)).unwrap();
+    assert_eq!(v["steps"], 2);
+    assert_eq!(v["beads"], 10);
+    std::fs::remove_dir_all(&root).ok();
+}

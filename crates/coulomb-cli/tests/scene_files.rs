@@ -155,3 +155,37 @@ fn bad_scene_files_exit_2_with_the_place_and_write_nothing() {
     let out = coulomb(&["simulate", "no/such/scene.toml"]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+#[test]
+fn beads_caps_the_fills_and_json_scenes_run() {
+    let drum = scenes_dir().join("rotating-drum.toml");
+    let j = json(&ok(&coulomb(&[
+        "simulate",
+        drum.to_str().unwrap(),
+        "--beads",
+        "20",
+        "--steps",
+        "2",
+        "--json",
+    ])));
+    assert_eq!(j["beads"].as_u64(), Some(20));
+    assert_eq!(j["steps"].as_u64(), Some(2));
+    assert_eq!(j["scene"].as_str(), Some("rotating-drum"));
+    let dir = temp_dir("scene-json");
+    let scene = dir.join("two.json");
+    std::fs::write(
+        &scene,
+        r#"{"step": {"h": 0.01, "steps": 5},
+            "obstacles": [{"shape": {"kind": "plane", "point": [0, 0, 0], "normal": [0, 0, 1]}}],
+            "bodies": [{"spheres": [[0, 0, 0.1, 0.1], [0.5, 0, 0.1, 0.1]]}]}"#,
+    )
+    .unwrap();
+    let j = json(&ok(&coulomb(&[
+        "simulate",
+        scene.to_str().unwrap(),
+        "--json",
+    ])));
+    assert_eq!(j["beads"].as_u64(), Some(2));
+    assert_eq!(j["steps"].as_u64(), Some(5));
+    assert_eq!(j["not_converged_steps"].as_u64(), Some(0));
+}

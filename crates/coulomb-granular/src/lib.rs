@@ -14,6 +14,8 @@ pub mod assembly;
 pub mod contact;
 #[cfg(feature = "mpi")]
 pub mod distributed;
+pub mod generate;
+pub mod import;
 pub mod math;
 pub mod mesh;
 pub mod model;

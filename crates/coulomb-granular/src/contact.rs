@@ -74,7 +74,7 @@ impl Contact {
 /// resting contact lifted by solver error never leaves the index set (docs/granular.md,
 /// "Activation and tolerance"). `Default` is Siconos' rule (γ = 1/2, unclamped), used by
 /// `coulomb paper`; [`Activation::accurate`] is the rule of `coulomb simulate`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
 pub struct Activation {
     /// γ ∈ [0, 1]
     pub gamma: f64,

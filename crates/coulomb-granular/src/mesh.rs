@@ -6,16 +6,20 @@
 //!
 //! # Contacts with a mesh
 //! A sphere (centre x, radius R) gets one candidate per triangle T whose closest point p_T is
-//! within R + reach of x (gap g_T = |x − p_T| − R, normal (x − p_T)/|x − p_T|: the surface is
-//! two-sided unless the obstacle says which side the spheres live on). A candidate whose
-//! closest point lies on an edge or a vertex of T (not in T's interior) is *dropped* when
-//! another candidate triangle T' also contains that edge or vertex and has g_T' < g_T − ε,
-//! or |g_T' − g_T| ≤ ε and T' < T (ε = 1e-12 (1 + R)): since the feature belongs to T', the
-//! distance to T' is at most the distance to the feature, so T's constraint is implied by
-//! T''s (or is the same contact, at a shared edge or vertex). Face-interior candidates are
-//! always kept. The rule depends on the geometry and the triangle indices only, so the
-//! surviving contact at a shared edge is the same from step to step: its key (obstacle,
-//! triangle index) keeps its warm start.
+//! within R + reach of x (gap g_T = |x − p_T| − R, normal (x − p_T)/|x − p_T|, or the face's
+//! normal in its interior: the surface is two-sided unless the obstacle says which side the
+//! spheres live on). Candidates are ordered by gap, ties (|g_T' − g_T| ≤ ε = 1e-12 (1 + R))
+//! by triangle index. A candidate T is *dropped* when a better-ordered candidate T'
+//! - contains the edge or vertex on which T's closest point lies: the distance to T' is then
+//!   at most the distance to that feature, so T's constraint is implied by T''s (at a shared
+//!   edge or vertex it is the same contact); or
+//! - has the same normal direction (n_T · n_T' ≥ 1 − 10⁻⁹): coplanar triangles under the
+//!   sphere (a point on the diagonal of a flat quad) or a parallel face behind the closer one.
+//!
+//! The rule depends on the geometry and the triangle indices only (not on rounding: a sphere
+//! resting on the shared edge of two coplanar triangles keeps the lower triangle until it
+//! moves ~√(2 R ε) off the edge), so the surviving contact is the same from step to step: its
+//! key (obstacle, triangle index) keeps its warm start.
 
 use crate::math::Vec3;
 use serde::{Deserialize, Serialize};
@@ -173,7 +177,12 @@ impl TriangleMesh {
         for (t, tri) in tris.iter().enumerate() {
             let [a, b, c] = tri.map(|i| vertices[i as usize]);
             let area = 0.5 * (b - a).cross(c - a).norm();
-            if !(area > 1e-12 * size2) || tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] {
+            if area.is_nan()
+                || area <= 1e-12 * size2
+                || tri[0] == tri[1]
+                || tri[1] == tri[2]
+                || tri[0] == tri[2]
+            {
                 return Err(MeshError::Degenerate { triangle: t, area });
             }
         }
@@ -295,6 +304,18 @@ impl TriangleMesh {
             },
         );
         cand.sort_unstable_by_key(|c| c.0);
+        // the direction of each candidate's contact normal (face: the face's normal)
+        let normals: Vec<Vec3> = cand
+            .iter()
+            .map(|&(t, p, region, _)| {
+                let n = self.face_normal(t as usize);
+                match region {
+                    Region::Face if (x - p).dot(n) < 0.0 => -n,
+                    Region::Face => n,
+                    _ => (x - p).normalized_or(n),
+                }
+            })
+            .collect();
         let eps = 1e-12 * (1.0 + radius);
         for (k, &(t, p, region, gap)) in cand.iter().enumerate() {
             let tri = self.inner.triangles[t as usize];
@@ -303,14 +324,15 @@ impl TriangleMesh {
                 Region::Edge(e) => &[tri[e as usize], tri[(e as usize + 1) % 3]],
                 Region::Vertex(v) => &[tri[v as usize]],
             };
-            let dominated = !shared.is_empty()
-                && cand.iter().enumerate().any(|(k2, &(t2, _, _, g2))| {
-                    k2 != k
-                        && shared
-                            .iter()
-                            .all(|v| self.inner.triangles[t2 as usize].contains(v))
-                        && (g2 < gap - eps || ((g2 - gap).abs() <= eps && t2 < t))
-                });
+            let dominated = cand.iter().enumerate().any(|(k2, &(t2, _, _, g2))| {
+                let better = g2 < gap - eps || ((g2 - gap).abs() <= eps && t2 < t);
+                let on_its_feature = !shared.is_empty()
+                    && shared
+                        .iter()
+                        .all(|v| self.inner.triangles[t2 as usize].contains(v));
+                let same_direction = normals[k].dot(normals[k2]) >= 1.0 - 1e-9;
+                k2 != k && better && (on_its_feature || same_direction)
+            });
             if !dominated {
                 out.push((t, p, region));
             }

@@ -561,6 +561,25 @@ pub fn available_memory() -> Option<u64> {
     Some(kb.saturating_mul(1024))
 }
 
+/// Refuses a scene of `spheres` spheres and `triangles` mesh triangles whose
+/// [`memory_estimate`] exceeds `available` bytes (no check when `None`).
+pub fn check_memory(
+    spheres: usize,
+    triangles: usize,
+    available: Option<u64>,
+) -> Result<(), SceneError> {
+    let estimate = memory_estimate(spheres, triangles);
+    match available {
+        Some(available) if estimate > available => Err(SceneError::Memory {
+            spheres,
+            triangles,
+            estimate,
+            available,
+        }),
+        _ => Ok(()),
+    }
+}
+
 /// Overlaps of the spheres of a world: pairs with gap < −10⁻⁹ (R_A + R_B).
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
 pub struct Overlaps {
@@ -751,18 +770,11 @@ impl SceneModel {
     pub fn build_with(&self, checks: &BuildChecks) -> Result<(World, Params), SceneError> {
         self.step.check()?;
         if checks.memory {
-            let (spheres, triangles) = (self.sphere_count(), self.triangle_count());
-            let estimate = memory_estimate(spheres, triangles);
-            if let Some(available) = available_memory() {
-                if estimate > available {
-                    return Err(SceneError::Memory {
-                        spheres,
-                        triangles,
-                        estimate,
-                        available,
-                    });
-                }
-            }
+            check_memory(
+                self.sphere_count(),
+                self.triangle_count(),
+                available_memory(),
+            )?;
         }
         let world = self.world()?;
         if checks.containment {
@@ -952,18 +964,17 @@ fn batch_spheres(k: usize, batch: &SphereBatch, material: u32) -> Result<Vec<Sph
         }
         _ => {}
     }
-    if batch.fixed && (!batch.velocities.is_empty() || !batch.angular_velocities.is_empty()) {
-        if batch
+    if batch.fixed
+        && batch
             .velocities
             .iter()
             .chain(&batch.angular_velocities)
             .any(|v| *v != Vec3::ZERO)
-        {
-            return Err(bad(
-                format!("sphere batch {k}"),
-                "fixed spheres cannot have velocities".into(),
-            ));
-        }
+    {
+        return Err(bad(
+            format!("sphere batch {k}"),
+            "fixed spheres cannot have velocities".into(),
+        ));
     }
     let pick = |v: &[f64], i: usize| if v.len() == 1 { v[0] } else { v[i] };
     let mut out = Vec::with_capacity(n);
@@ -1037,9 +1048,13 @@ fn check_obstacle(
             half_u,
             half_v,
         } => {
-            if !(finite(*center) && unit(*normal) && unit(*u) && normal.dot(*u).abs() < 1e-9)
-                || !(positive(*half_u) && positive(*half_v))
-            {
+            let ok = finite(*center)
+                && unit(*normal)
+                && unit(*u)
+                && normal.dot(*u).abs() < 1e-9
+                && positive(*half_u)
+                && positive(*half_v);
+            if !ok {
                 return bad("rectangle: needs a finite centre, orthogonal unit normal and u, positive half-lengths".into());
             }
         }
@@ -1114,7 +1129,7 @@ fn check_obstacle(
             }
         }
     }
-    motion.check().or_else(|e| bad(e))?;
+    motion.check().or_else(bad)?;
     if let Motion::Rotate { center, axis, .. } = motion {
         if !shape.rotation_invariant(*center, *axis) && !shape.reach_from(*center).is_finite() {
             return bad("an unbounded shape rotating about an axis that moves it (its surface speed is unbounded)".into());
@@ -1151,4 +1166,364 @@ fn check_containment(world: &World) -> Result<(), SceneError> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::{box_mesh, TriangleMesh};
+
+    fn ball(x: f64, y: f64, z: f64) -> BodySpec {
+        BodySpec::sphere(Vec3::new(x, y, z), 0.1, 1000.0)
+    }
+
+    fn floor() -> ObstacleSpec {
+        ObstacleSpec::fixed(
+            "floor",
+            Shape::Plane {
+                point: Vec3::ZERO,
+                normal: Vec3::Z,
+            },
+        )
+    }
+
+    /// A model with every kind of body, obstacle and motion.
+    fn everything() -> SceneModel {
+        let cube = box_mesh(Vec3::new(2.0, 2.0, 0.0), Vec3::new(3.0, 3.0, 1.0));
+        let mesh = TriangleMesh::new(cube.vertices, cube.triangles).unwrap();
+        let mut m = SceneModel::default();
+        m.materials.names = vec!["steel".into(), "glass".into()];
+        m.materials.pairs.push(MaterialPair {
+            a: "steel".into(),
+            b: "glass".into(),
+            mu: 0.6,
+            restitution: 0.5,
+            rolling_friction: 0.01,
+        });
+        m.bodies.push(ball(0.0, 0.0, 0.5));
+        let mut fixed = ball(1.0, 0.0, 0.1);
+        fixed.fixed = true;
+        fixed.material = "steel".into();
+        m.bodies.push(fixed);
+        m.sphere_batches.push(SphereBatch {
+            positions: vec![Vec3::new(0.0, 1.0, 0.5), Vec3::new(0.5, 1.0, 0.5)],
+            radii: vec![0.1, 0.12],
+            masses: vec![1.0],
+            material: "glass".into(),
+            ..SphereBatch::default()
+        });
+        m.obstacles.push(floor());
+        m.obstacles.push(ObstacleSpec {
+            name: "cube".into(),
+            shape: Shape::Mesh {
+                mesh,
+                side: MeshSide::Outside,
+            },
+            motion: Motion::Rotate {
+                center: Vec3::new(2.5, 2.5, 0.5),
+                axis: Vec3::Z,
+                omega: 1.0,
+            },
+            material: "steel".into(),
+        });
+        m.obstacles.push(ObstacleSpec {
+            name: "silo".into(),
+            shape: Shape::Cylinder {
+                base: Vec3::new(0.0, 0.0, -0.5),
+                axis: Vec3::Z,
+                radius: 5.0,
+                height: 10.0,
+                inside: true,
+                bottom_cap: true,
+                top_cap: false,
+                orifice: 0.5,
+            },
+            motion: Motion::Oscillate {
+                direction: Vec3::Z,
+                amplitude: 0.01,
+                frequency: 5.0,
+            },
+            material: "default".into(),
+        });
+        m.obstacles.push(ObstacleSpec {
+            name: "lid".into(),
+            shape: Shape::Box {
+                lo: Vec3::new(-1.0, -1.0, 3.0),
+                hi: Vec3::new(1.0, 1.0, 3.5),
+                inside: false,
+                open_top: false,
+            },
+            motion: Motion::Translate {
+                velocity: Vec3::new(0.0, 0.0, -0.1),
+            },
+            material: "default".into(),
+        });
+        m
+    }
+
+    #[test]
+    fn a_model_builds_and_round_trips_through_serde() {
+        let m = everything();
+        let (world, params) = m.build().unwrap();
+        // free spheres: the body, then the batch; the fixed body is the last obstacle
+        assert_eq!(world.bodies.len(), 3);
+        assert_eq!(world.obstacles.len(), 5);
+        assert_eq!(world.obstacles[4].name, "fixed-body-1");
+        assert!(matches!(
+            world.obstacles[4].shape,
+            Shape::Sphere { inside: false, .. }
+        ));
+        let t = world.materials.as_ref().unwrap();
+        assert_eq!(t.names, vec!["default", "steel", "glass"]);
+        assert_eq!(world.bodies[2].material, 2);
+        assert_eq!(world.obstacles[4].material, 1);
+        assert_eq!(t.law(1, 2).unwrap().mu, 0.6);
+        assert_eq!(t.law(2, 1).unwrap().mu, 0.6);
+        assert_eq!(t.law(0, 2).unwrap().mu, 0.3);
+        assert_eq!(world.bodies[1].radius, 0.1);
+        assert_eq!(world.bodies[2].radius, 0.12);
+        assert_eq!(world.bodies[2].mass, 1.0);
+        assert_eq!(world.bodies[0].mass, ball_mass(1000.0, 0.1));
+        assert_eq!(params.h, 0.02);
+        assert!(matches!(params.method, StepMethod::Nsgs(_)));
+        let json = serde_json::to_string(&m).unwrap();
+        let back: SceneModel = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, m);
+        let wjson = serde_json::to_string(&world).unwrap();
+        let wback: World = serde_json::from_str(&wjson).unwrap();
+        assert_eq!(wback, world);
+        // unknown keys are refused, at every level
+        let bad = json.replacen("\"gravity\"", "\"gravitty\"", 1);
+        assert!(serde_json::from_str::<SceneModel>(&bad).is_err());
+        let bad = json.replacen("\"open_top\"", "\"open_tpo\"", 1);
+        assert!(serde_json::from_str::<SceneModel>(&bad).is_err());
+        // defaults: an almost empty model
+        let m: SceneModel = serde_json::from_str(
+            r#"{"bodies": [{"shape": {"kind": "sphere", "radius": 0.1}, "position": [0, 0, 1], "density": 2500}]}"#,
+        )
+        .unwrap();
+        assert_eq!(m.gravity, Vec3::new(0.0, 0.0, -GRAVITY));
+        assert_eq!(m.step, StepSettings::default());
+        assert_eq!(m.build().unwrap().0.bodies.len(), 1);
+    }
+
+    #[test]
+    fn bad_input_gives_typed_errors() {
+        let base = || {
+            let mut m = SceneModel::default();
+            m.obstacles.push(floor());
+            m.bodies.push(ball(0.0, 0.0, 0.5));
+            m
+        };
+        let err = |m: SceneModel| m.build().unwrap_err();
+        // unknown materials: body, obstacle, pair
+        let mut m = base();
+        m.bodies[0].material = "wood".into();
+        assert!(matches!(err(m), SceneError::UnknownMaterial { name, .. } if name == "wood"));
+        let mut m = base();
+        m.obstacles[0].material = "ice".into();
+        assert!(matches!(err(m), SceneError::UnknownMaterial { name, .. } if name == "ice"));
+        let mut m = base();
+        m.materials.pairs.push(MaterialPair {
+            a: "default".into(),
+            b: "rubber".into(),
+            mu: 1.0,
+            restitution: 0.0,
+            rolling_friction: 0.0,
+        });
+        assert!(matches!(err(m), SceneError::UnknownMaterial { name, .. } if name == "rubber"));
+        let mut m = base();
+        m.materials.names = vec!["a".into(), "a".into()];
+        assert!(matches!(err(m), SceneError::DuplicateMaterial(n) if n == "a"));
+        let mut m = base();
+        m.materials.default.restitution = 1.5;
+        assert!(matches!(err(m), SceneError::InvalidLaw { .. }));
+        // radius, mass, density
+        let mut m = base();
+        m.bodies[0].shape = BodyShape::Sphere { radius: -0.1 };
+        assert!(matches!(err(m), SceneError::InvalidBody { what, .. } if what == "body 0"));
+        let mut m = base();
+        m.bodies[0].density = Some(f64::NAN);
+        assert!(matches!(err(m), SceneError::InvalidBody { .. }));
+        let mut m = base();
+        m.bodies[0].mass = Some(1.0);
+        assert!(
+            matches!(err(m), SceneError::InvalidBody { reason, .. } if reason.contains("not both"))
+        );
+        let mut m = base();
+        m.sphere_batches.push(SphereBatch {
+            positions: vec![Vec3::new(1.0, 0.0, 1.0), Vec3::new(2.0, 0.0, 1.0)],
+            radii: vec![0.1, 0.1, 0.1],
+            density: Some(1.0),
+            ..SphereBatch::default()
+        });
+        assert!(
+            matches!(err(m), SceneError::InvalidBody { reason, .. } if reason.contains("radii"))
+        );
+        let mut m = base();
+        m.sphere_batches.push(SphereBatch {
+            positions: vec![Vec3::new(1.0, 0.0, 1.0), Vec3::new(2.0, 0.0, 1.0)],
+            radii: vec![0.1, f64::INFINITY],
+            density: Some(1.0),
+            ..SphereBatch::default()
+        });
+        assert!(
+            matches!(err(m), SceneError::InvalidBody { what, .. } if what == "sphere batch 0, sphere 1")
+        );
+        // obstacles
+        let mut m = base();
+        m.obstacles.push(ObstacleSpec::fixed(
+            "silo",
+            Shape::Cylinder {
+                base: Vec3::ZERO,
+                axis: Vec3::Z,
+                radius: 1.0,
+                height: 2.0,
+                inside: true,
+                bottom_cap: true,
+                top_cap: true,
+                orifice: 1.5,
+            },
+        ));
+        assert!(matches!(
+            err(m),
+            SceneError::InvalidObstacle { index: 1, .. }
+        ));
+        let mut m = base();
+        m.obstacles[0].motion = Motion::Rotate {
+            center: Vec3::ZERO,
+            axis: Vec3::X,
+            omega: 1.0,
+        };
+        assert!(
+            matches!(err(m), SceneError::InvalidObstacle { reason, .. } if reason.contains("unbounded"))
+        );
+        let mut m = base();
+        let open = TriangleMesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]).unwrap();
+        m.obstacles.push(ObstacleSpec::fixed(
+            "tray",
+            Shape::Mesh {
+                mesh: open,
+                side: MeshSide::Inside,
+            },
+        ));
+        assert!(matches!(
+            err(m),
+            SceneError::Mesh {
+                source: MeshError::NotClosed(..),
+                ..
+            }
+        ));
+        // a mesh file with a NaN vertex does not even deserialize
+        let json = r#"{"kind": "mesh", "mesh": {"vertices": [[0,0,0],[1,0,0],[0,1,1e999]], "triangles": [[0,1,2]]}}"#;
+        assert!(serde_json::from_str::<Shape>(json).is_err());
+        let json = r#"{"kind": "mesh", "mesh": {"vertices": [[0,0,0],[1,0,0],[0,1,0]], "triangles": [[0,1,3]]}}"#;
+        let e = serde_json::from_str::<Shape>(json).unwrap_err().to_string();
+        assert!(e.contains("vertex 3"), "{e}");
+        // step settings, gravity
+        let mut m = base();
+        m.step.h = 0.0;
+        assert!(matches!(err(m), SceneError::InvalidStep(_)));
+        let mut m = base();
+        m.gravity = Vec3::new(0.0, f64::NAN, 0.0);
+        assert!(matches!(err(m), SceneError::InvalidGravity(_)));
+        // memory
+        assert!(check_memory(1000, 0, Some(1 << 40)).is_ok());
+        let e = check_memory(10_000_000, 5, Some(1 << 30)).unwrap_err();
+        assert!(matches!(
+            e,
+            SceneError::Memory {
+                spheres: 10_000_000,
+                triangles: 5,
+                ..
+            }
+        ));
+        assert!(e.to_string().contains("20547109504"), "{e}");
+        assert!(check_memory(10_000_000, 5, None).is_ok());
+    }
+
+    #[test]
+    fn overlaps_and_containment_are_refused_and_overlaps_relaxed() {
+        let mut m = SceneModel::default();
+        m.obstacles.push(ObstacleSpec::fixed(
+            "bin",
+            Shape::Box {
+                lo: Vec3::ZERO,
+                hi: Vec3::new(1.0, 1.0, 1.0),
+                inside: true,
+                open_top: true,
+            },
+        ));
+        m.bodies.push(ball(0.5, 0.5, 0.2));
+        m.bodies.push(ball(0.65, 0.5, 0.2));
+        m.bodies.push(ball(0.5, 0.62, 0.2));
+        match m.build().unwrap_err() {
+            SceneError::Overlaps { count, worst, pair } => {
+                assert_eq!(count, 3);
+                assert!((worst - 0.08).abs() < 1e-12);
+                assert_eq!(pair, (0, 2));
+            }
+            e => panic!("{e}"),
+        }
+        let checks = BuildChecks {
+            overlaps: false,
+            ..BuildChecks::default()
+        };
+        let (mut world, _) = m.build_with(&checks).unwrap();
+        let r = resolve_overlaps(&mut world, 1000);
+        assert_eq!(r.left.count, 0, "{r:?}");
+        assert!(r.sweeps >= 2 && r.sweeps < 1000);
+        assert_eq!(overlaps(&world).count, 0);
+        // outside the container, and inside a solid
+        let mut out = m.clone();
+        out.bodies.truncate(1);
+        out.bodies.push(ball(2.0, 0.5, 0.5));
+        match out.build().unwrap_err() {
+            SceneError::Outside { what, reason, .. } => {
+                assert_eq!(what, "sphere 1");
+                assert!(reason.contains("every container"));
+            }
+            e => panic!("{e}"),
+        }
+        let mut inside_rock = m.clone();
+        inside_rock.bodies.truncate(1);
+        inside_rock.obstacles.push(ObstacleSpec::fixed(
+            "rock",
+            Shape::Sphere {
+                center: Vec3::new(0.5, 0.5, 0.25),
+                radius: 0.1,
+                inside: false,
+            },
+        ));
+        assert!(matches!(
+            inside_rock.build().unwrap_err(),
+            SceneError::Outside { reason, .. } if reason.contains("rock")
+        ));
+        // behind a plane
+        let mut behind = SceneModel::default();
+        behind.obstacles.push(floor());
+        behind.bodies.push(ball(0.0, 0.0, -0.5));
+        assert!(matches!(
+            behind.build().unwrap_err(),
+            SceneError::Outside { .. }
+        ));
+        // a closed mesh container: inside is fine, outside is not
+        let cube = box_mesh(Vec3::ZERO, Vec3::new(1.0, 1.0, 1.0));
+        let mesh = TriangleMesh::new(cube.vertices, cube.triangles).unwrap();
+        let mut cup = SceneModel::default();
+        cup.obstacles.push(ObstacleSpec::fixed(
+            "cup",
+            Shape::Mesh {
+                mesh,
+                side: MeshSide::Inside,
+            },
+        ));
+        cup.bodies.push(ball(0.5, 0.5, 0.5));
+        assert!(cup.build().is_ok());
+        cup.bodies.push(ball(1.5, 0.5, 0.5));
+        assert!(matches!(
+            cup.build().unwrap_err(),
+            SceneError::Outside { .. }
+        ));
+    }
 }

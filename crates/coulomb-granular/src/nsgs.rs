@@ -631,7 +631,7 @@ pub fn update_contact(
 }
 
 /// Settings of [`solve`].
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
 pub struct NsgsSettings {
     /// tolerance on the error of docs/error.md (and on the balance residual)
     pub tol: f64,

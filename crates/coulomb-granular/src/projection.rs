@@ -25,7 +25,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 /// Settings of the position correction.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
 pub struct Projection {
     /// start correcting when some penetration exceeds `trigger` × R_min (m/m)
     pub trigger: f64,

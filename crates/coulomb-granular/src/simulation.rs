@@ -14,7 +14,7 @@ use serde::Serialize;
 use std::time::Instant;
 
 /// Parameters of the time stepping.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 pub struct Params {
     /// time step h (s)
     pub h: f64,
@@ -26,7 +26,8 @@ pub struct Params {
     pub mu: f64,
     /// the activation rule of the index set
     pub activation: Activation,
-    /// settings of `coulomb::solver`
+    /// settings of `coulomb::solver` (not serialized: a deserialized `Params` has
+    /// `Settings::default()` here; whoever restores parameters sets it again)
     #[serde(skip)]
     pub solver: Settings,
     /// warm start from the previous step's impulses of persisting contacts
@@ -47,7 +48,7 @@ pub struct Params {
 }
 
 /// Which solver takes each step.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum StepMethod {
     /// `coulomb::solver::solve_with_guess` with [`Params::solver`] on the assembled global

@@ -445,6 +445,7 @@ impl Proximity {
 }
 
 /// Closest point of the rectangle (centre c, axes u, v, half-lengths) to x, two-sided.
+#[allow(clippy::too_many_arguments)]
 fn rectangle_proximity(
     x: Vec3,
     radius: f64,
@@ -892,31 +893,38 @@ fn mesh_proximity(
     region: Region,
     off: Vec3,
 ) -> Proximity {
+    let n_out = mesh.face_normal(t as usize);
+    if region == Region::Face {
+        // in a face's interior the distance is along its normal: exact for flat faces
+        let d = (xl - p).dot(n_out);
+        let wrong = match side {
+            MeshSide::Surface => false,
+            MeshSide::Inside => d > 0.0,
+            MeshSide::Outside => d < 0.0,
+        };
+        let toward = if d > 0.0 || (d == 0.0 && side != MeshSide::Inside) {
+            n_out
+        } else {
+            -n_out
+        };
+        let normal = if wrong { -toward } else { toward };
+        let dist = d.abs();
+        return Proximity {
+            gap: if wrong { -dist - radius } else { dist - radius },
+            normal,
+            point: xl - toward * dist + off,
+        };
+    }
     let e = xl - p;
     let dist = e.norm();
-    let n_out = mesh.face_normal(t as usize);
-    let wrong = region == Region::Face
-        && match side {
-            MeshSide::Surface => false,
-            MeshSide::Inside => e.dot(n_out) > 0.0,
-            MeshSide::Outside => e.dot(n_out) < 0.0,
-        };
     let fallback = match side {
         MeshSide::Inside => -n_out,
         _ => n_out,
     };
-    if wrong {
-        Proximity {
-            gap: -dist - radius,
-            normal: fallback,
-            point: p + off,
-        }
-    } else {
-        Proximity {
-            gap: dist - radius,
-            normal: e.normalized_or(fallback),
-            point: p + off,
-        }
+    Proximity {
+        gap: dist - radius,
+        normal: e.normalized_or(fallback),
+        point: p + off,
     }
 }
 
@@ -1212,5 +1220,372 @@ mod tests {
             (r.velocity_at(Vec3::new(0.0, 0.0, -1.0), 0.0) - Vec3::new(-2.0, 0.0, 0.0)).norm()
                 < 1e-12
         );
+    }
+
+    fn near(o: &Obstacle, x: Vec3, r: f64, t: f64, reach: f64) -> Vec<(u32, Proximity)> {
+        let mut out = Vec::new();
+        o.proximities(x, r, t, reach, &mut out);
+        out
+    }
+
+    fn close(a: Vec3, b: Vec3) -> bool {
+        (a - b).norm() < 1e-12
+    }
+
+    #[test]
+    fn box_container_walls_and_open_top() {
+        let lo = Vec3::ZERO;
+        let hi = Vec3::new(1.0, 2.0, 3.0);
+        let b = Obstacle::fixed(
+            "bin",
+            Shape::Box {
+                lo,
+                hi,
+                inside: true,
+                open_top: false,
+            },
+        );
+        // in the corner (x = lo, y = lo, z = lo): three walls, normals inward
+        let c = near(&b, Vec3::new(0.11, 0.12, 0.13), 0.1, 0.0, 0.05);
+        assert_eq!(c.iter().map(|x| x.0).collect::<Vec<_>>(), vec![0, 2, 4]);
+        assert!((c[0].1.gap - 0.01).abs() < 1e-12 && close(c[0].1.normal, Vec3::X));
+        assert!((c[1].1.gap - 0.02).abs() < 1e-12 && close(c[1].1.normal, Vec3::Y));
+        assert!((c[2].1.gap - 0.03).abs() < 1e-12 && close(c[2].1.normal, Vec3::Z));
+        assert!(close(c[2].1.point, Vec3::new(0.11, 0.12, 0.0)));
+        // under the lid: the top wall z = hi, normal −e_z
+        let c = near(&b, Vec3::new(0.5, 1.0, 2.95), 0.1, 0.0, 0.0);
+        assert_eq!(c.len(), 1);
+        assert_eq!(c[0].0, 5);
+        assert!((c[0].1.gap + 0.05).abs() < 1e-12 && close(c[0].1.normal, -Vec3::Z));
+        // the closest single feature
+        let p = b.proximity(Vec3::new(0.5, 1.0, 2.95), 0.1, 0.0);
+        assert!((p.gap + 0.05).abs() < 1e-12);
+        // open top: no lid, and a sphere above the rim of the wall x = hi touches its edge
+        let open = Obstacle::fixed(
+            "bin",
+            Shape::Box {
+                lo,
+                hi,
+                inside: true,
+                open_top: true,
+            },
+        );
+        assert!(near(&open, Vec3::new(0.5, 1.0, 2.95), 0.1, 0.0, 0.0).is_empty());
+        let c = near(&open, Vec3::new(1.0, 1.0, 3.08), 0.1, 0.0, 0.0);
+        assert_eq!(c.len(), 1);
+        assert_eq!(c[0].0, 1);
+        assert!((c[0].1.gap + 0.02).abs() < 1e-12 && close(c[0].1.normal, Vec3::Z));
+        assert!(open.admits(Vec3::new(0.5, 1.0, 10.0), 0.0));
+        assert!(!b.admits(Vec3::new(0.5, 1.0, 10.0), 0.0));
+        assert!(!b.admits(Vec3::new(-0.5, 1.0, 1.0), 0.0));
+    }
+
+    #[test]
+    fn solid_box_faces_edges_and_inside() {
+        let b = Obstacle::fixed(
+            "rock",
+            Shape::Box {
+                lo: Vec3::ZERO,
+                hi: Vec3::new(1.0, 1.0, 1.0),
+                inside: false,
+                open_top: false,
+            },
+        );
+        let p = b.proximity(Vec3::new(0.5, 0.5, 1.2), 0.1, 0.0);
+        assert!((p.gap - 0.1).abs() < 1e-12 && close(p.normal, Vec3::Z));
+        assert!(close(p.point, Vec3::new(0.5, 0.5, 1.0)));
+        // off an edge: the normal points from the edge to the centre
+        let p = b.proximity(Vec3::new(1.3, 0.5, 1.4), 0.1, 0.0);
+        assert!((p.gap - 0.4).abs() < 1e-12);
+        assert!(close(p.normal, Vec3::new(0.6, 0.0, 0.8)));
+        // centre inside, nearest face x = hi: pushed out along +x
+        let p = b.proximity(Vec3::new(0.9, 0.5, 0.5), 0.1, 0.0);
+        assert!((p.gap + 0.2).abs() < 1e-12 && close(p.normal, Vec3::X));
+        assert!(!b.admits(Vec3::new(0.9, 0.5, 0.5), 0.0));
+        assert!(b.admits(Vec3::new(1.9, 0.5, 0.5), 0.0));
+        assert_eq!(near(&b, Vec3::new(0.5, 0.5, 1.2), 0.1, 0.0, 0.1).len(), 1);
+    }
+
+    #[test]
+    fn silo_with_orifice_and_solid_cylinder() {
+        let silo = Obstacle::fixed(
+            "silo",
+            Shape::Cylinder {
+                base: Vec3::ZERO,
+                axis: Vec3::Z,
+                radius: 1.0,
+                height: 2.0,
+                inside: true,
+                bottom_cap: true,
+                top_cap: false,
+                orifice: 0.3,
+            },
+        );
+        // against the wall, 0.5 above the floor
+        let c = near(&silo, Vec3::new(0.85, 0.0, 0.5), 0.1, 0.0, 0.1);
+        assert_eq!(c.len(), 1);
+        assert_eq!(c[0].0, 0);
+        assert!((c[0].1.gap - 0.05).abs() < 1e-12 && close(c[0].1.normal, -Vec3::X));
+        // on the floor ring (outside the orifice): the bottom cap, normal +z
+        let c = near(&silo, Vec3::new(0.0, 0.6, 0.09), 0.1, 0.0, 0.0);
+        assert_eq!(c.len(), 1);
+        assert_eq!(c[0].0, 1);
+        assert!((c[0].1.gap + 0.01).abs() < 1e-12 && close(c[0].1.normal, Vec3::Z));
+        // over the middle of the orifice: nothing within reach, the sphere falls through
+        assert!(near(&silo, Vec3::new(0.0, 0.0, 0.09), 0.1, 0.0, 0.05).is_empty());
+        // at the rim of the orifice: the contact point is on the rim circle
+        let c = near(&silo, Vec3::new(0.25, 0.0, 0.05), 0.1, 0.0, 0.0);
+        assert_eq!(c.len(), 1);
+        assert!(close(c[0].1.point, Vec3::new(0.3, 0.0, 0.0)));
+        let n = Vec3::new(-0.05, 0.0, 0.05).normalized_or(Vec3::Z);
+        assert!(close(c[0].1.normal, n));
+        // in the bottom corner: wall and floor
+        assert_eq!(
+            near(&silo, Vec3::new(0.0, 0.95, 0.05), 0.1, 0.0, 0.0).len(),
+            2
+        );
+        // no top cap: open above
+        assert!(silo.admits(Vec3::new(0.0, 0.0, 5.0), 0.0));
+        assert!(!silo.admits(Vec3::new(0.0, 0.0, -0.5), 0.0));
+        assert!(!silo.admits(Vec3::new(1.2, 0.0, 0.5), 0.0));
+        let post = Obstacle::fixed(
+            "post",
+            Shape::Cylinder {
+                base: Vec3::ZERO,
+                axis: Vec3::Z,
+                radius: 0.5,
+                height: 1.0,
+                inside: false,
+                bottom_cap: true,
+                top_cap: true,
+                orifice: 0.0,
+            },
+        );
+        let p = post.proximity(Vec3::new(0.0, 0.7, 0.5), 0.1, 0.0);
+        assert!((p.gap - 0.1).abs() < 1e-12 && close(p.normal, Vec3::Y));
+        let p = post.proximity(Vec3::new(0.1, 0.0, 1.15), 0.1, 0.0);
+        assert!((p.gap - 0.05).abs() < 1e-12 && close(p.normal, Vec3::Z));
+        // off the top rim
+        let p = post.proximity(Vec3::new(0.8, 0.0, 1.4), 0.1, 0.0);
+        assert!((p.gap - 0.4).abs() < 1e-12);
+        assert!(close(p.normal, Vec3::new(0.6, 0.0, 0.8)));
+        // centre inside, nearest the top
+        let p = post.proximity(Vec3::new(0.0, 0.0, 0.9), 0.1, 0.0);
+        assert!((p.gap + 0.2).abs() < 1e-12 && close(p.normal, Vec3::Z));
+    }
+
+    #[test]
+    fn sphere_obstacles_inside_and_outside() {
+        let ball = Obstacle::fixed(
+            "ball",
+            Shape::Sphere {
+                center: Vec3::ZERO,
+                radius: 1.0,
+                inside: false,
+            },
+        );
+        let p = ball.proximity(Vec3::new(0.0, 1.2, 0.0), 0.1, 0.0);
+        assert!((p.gap - 0.1).abs() < 1e-12 && close(p.normal, Vec3::Y));
+        assert!(close(p.point, Vec3::Y));
+        let shell = Obstacle::fixed(
+            "shell",
+            Shape::Sphere {
+                center: Vec3::ZERO,
+                radius: 1.0,
+                inside: true,
+            },
+        );
+        let p = shell.proximity(Vec3::new(0.0, 0.0, -0.85), 0.1, 0.0);
+        assert!((p.gap - 0.05).abs() < 1e-12 && close(p.normal, Vec3::Z));
+        assert!(close(p.point, -Vec3::Z));
+        assert!(shell.admits(Vec3::new(0.0, 0.5, 0.0), 0.0));
+        assert!(!ball.admits(Vec3::new(0.0, 0.5, 0.0), 0.0));
+    }
+
+    #[test]
+    fn translating_and_rotating_obstacles_move_rigidly() {
+        // a plane translating upwards at 0.5 m/s: at t = 2 it is at z = 1
+        let mut lift = Obstacle::fixed(
+            "lift",
+            Shape::Plane {
+                point: Vec3::ZERO,
+                normal: Vec3::Z,
+            },
+        );
+        lift.motion = Motion::Translate {
+            velocity: Vec3::new(0.0, 0.0, 0.5),
+        };
+        let p = lift.proximity(Vec3::new(0.0, 0.0, 1.3), 0.1, 2.0);
+        assert!((p.gap - 0.2).abs() < 1e-12);
+        assert!((lift.max_normal_speed() - 0.5).abs() < 1e-15);
+        assert_eq!(
+            lift.motion.velocity_at(Vec3::ZERO, 1.0),
+            Vec3::new(0.0, 0.0, 0.5)
+        );
+        // a solid box [−1, 1] × [−0.5, 0.5] × [−0.5, 0.5] spinning about z at ω = π/2: at t = 1
+        // it has turned by 90°, its long side along y
+        let mut paddle = Obstacle::fixed(
+            "paddle",
+            Shape::Box {
+                lo: Vec3::new(-1.0, -0.5, -0.5),
+                hi: Vec3::new(1.0, 0.5, 0.5),
+                inside: false,
+                open_top: false,
+            },
+        );
+        let w = std::f64::consts::FRAC_PI_2;
+        paddle.motion = Motion::Rotate {
+            center: Vec3::ZERO,
+            axis: Vec3::Z,
+            omega: w,
+        };
+        assert!(!paddle.rotation_invariant());
+        let p = paddle.proximity(Vec3::new(0.0, 1.3, 0.0), 0.1, 1.0);
+        assert!((p.gap - 0.2).abs() < 1e-12, "{p:?}");
+        assert!((p.normal - Vec3::Y).norm() < 1e-12);
+        assert!((p.point - Vec3::new(0.0, 1.0, 0.0)).norm() < 1e-12);
+        // at t = 0 the same point is 0.8 from the long face y = 0.5
+        let p = paddle.proximity(Vec3::new(0.0, 1.3, 0.0), 0.1, 0.0);
+        assert!((p.gap - 0.7).abs() < 1e-12);
+        // surface speed bound: ω × the farthest corner
+        let corner = Vec3::new(1.0, 0.5, 0.5).norm();
+        assert!((paddle.max_normal_speed() - w * corner).abs() < 1e-12);
+        // a coaxial cylinder is invariant: its surface moves in itself
+        let drum = Obstacle {
+            name: "drum".into(),
+            shape: Shape::CylinderInside {
+                point: Vec3::ZERO,
+                axis: Vec3::Y,
+                radius: 1.0,
+            },
+            motion: Motion::Rotate {
+                center: Vec3::new(0.0, 3.0, 0.0),
+                axis: Vec3::Y,
+                omega: 2.0,
+            },
+            material: 0,
+        };
+        assert!(drum.rotation_invariant());
+        assert_eq!(drum.max_normal_speed(), 0.0);
+    }
+
+    #[test]
+    fn mesh_square_is_a_plane_to_a_sphere_on_it() {
+        let mesh = crate::mesh::TriangleMesh::new(
+            vec![
+                Vec3::new(-1.0, -1.0, 0.0),
+                Vec3::new(1.0, -1.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::new(-1.0, 1.0, 0.0),
+            ],
+            vec![[0, 1, 2], [0, 2, 3]],
+        )
+        .unwrap();
+        let square = Obstacle::fixed(
+            "square",
+            Shape::Mesh {
+                mesh,
+                side: MeshSide::Surface,
+            },
+        );
+        let plane = Obstacle::fixed(
+            "plane",
+            Shape::Plane {
+                point: Vec3::ZERO,
+                normal: Vec3::Z,
+            },
+        );
+        for x in [
+            Vec3::new(0.3, -0.2, 0.12),
+            Vec3::new(0.0, 0.0, 0.1),
+            Vec3::new(-0.5, 0.5, 0.09),
+            Vec3::new(0.7, 0.1, 0.101),
+        ] {
+            let c = near(&square, x, 0.1, 0.0, 0.05);
+            assert_eq!(c.len(), 1, "{x:?}: {c:?}");
+            let (m, p) = (c[0].1, plane.proximity(x, 0.1, 0.0));
+            assert!((m.gap - p.gap).abs() < 1e-15, "{x:?}");
+            assert!((m.normal - p.normal).norm() < 1e-15);
+            assert!((m.point - p.point).norm() < 1e-15);
+        }
+    }
+
+    #[test]
+    fn material_table_is_symmetric_and_checked() {
+        let law = |mu| ContactLaw {
+            mu,
+            restitution: 0.1,
+            rolling_friction: 0.0,
+        };
+        let mut t = MaterialTable::uniform(vec!["default".into(), "steel".into()], law(0.3));
+        t.set(0, 1, law(0.6));
+        assert_eq!(t.law(1, 0), Some(law(0.6)));
+        assert_eq!(t.law(1, 1), Some(law(0.3)));
+        assert_eq!(t.law(2, 0), None);
+        assert!(t.check().is_ok());
+        t.laws[1] = law(0.7);
+        assert!(t.check().is_err());
+        assert!(!t.any_rolling());
+    }
+
+    #[test]
+    fn a_rotating_mesh_drum_is_the_rotating_cylinder_up_to_its_chords() {
+        let n = 256;
+        let d = crate::mesh::cylinder_mesh(0.6, -0.25, 0.25, n);
+        let mesh = crate::mesh::TriangleMesh::new(d.vertices, d.triangles).unwrap();
+        let motion = Motion::Rotate {
+            center: Vec3::ZERO,
+            axis: Vec3::Z,
+            omega: 1.0,
+        };
+        let drum = Obstacle {
+            name: "drum".into(),
+            shape: Shape::Mesh {
+                mesh,
+                side: MeshSide::Inside,
+            },
+            motion: motion.clone(),
+            material: 0,
+        };
+        let cyl = Obstacle {
+            name: "cyl".into(),
+            shape: Shape::CylinderInside {
+                point: Vec3::ZERO,
+                axis: Vec3::Z,
+                radius: 0.6,
+            },
+            motion,
+            material: 0,
+        };
+        let sag = 0.6 * (1.0 - (std::f64::consts::PI / n as f64).cos());
+        let half = std::f64::consts::PI / n as f64;
+        for t in [0.0, 0.3, half, 2.0] {
+            for a in [0.0, 0.1, 1.0, 4.0] {
+                let x = Vec3::new(0.55 * f64::cos(a), 0.55 * f64::sin(a), 0.05);
+                // one chord, or two at a (concave) vertex of the polygon
+                let c = near(&drum, x, 0.05, t, 0.01);
+                assert!((1..=2).contains(&c.len()), "t {t} a {a}: {c:?}");
+                let m = c
+                    .iter()
+                    .map(|x| x.1)
+                    .min_by(|a, b| a.gap.total_cmp(&b.gap))
+                    .unwrap();
+                let p = cyl.proximity(x, 0.05, t);
+                let diff = p.gap - m.gap;
+                assert!(
+                    (-1e-12..=sag + 1e-12).contains(&diff),
+                    "t {t} a {a}: {diff}"
+                );
+                assert!(m.normal.dot(p.normal) > (2.0 * half).cos());
+            }
+        }
+        // at t = π/(n ω) the middle of a chord has turned to the angle 0: the gap there is
+        // shorter by the full sagitta (at t = 0 a vertex of the polygon is there)
+        let x = Vec3::new(0.55, 0.0, 0.05);
+        let at = |t: f64| cyl.proximity(x, 0.05, t).gap - drum.proximity(x, 0.05, t).gap;
+        assert!((at(half) - sag).abs() < 1e-9, "{}", at(half));
+        // at a vertex the chords' lines pass 0.05 (1 − cos(π/n)) closer: 1/12 of the sagitta
+        assert!((at(0.0) - sag * 0.05 / 0.6).abs() < 1e-9, "{}", at(0.0));
+        assert!((drum.max_normal_speed() - drum.shape.reach_from(Vec3::ZERO)).abs() < 1e-15);
     }
 }

@@ -10,6 +10,7 @@ __all__ = [
     "SettingsError",
     "InputError",
     "FclibError",
+    "SceneError",
 ]
 
 
@@ -55,3 +56,16 @@ class FclibError(CoulombError, ValueError):
 
     file: Optional[str] = None
     path: Optional[str] = None
+
+
+class SceneError(CoulombError, ValueError):
+    """A granular scene built in Python cannot be built (``coulomb_granular::SceneError``, and
+    the checks of :class:`coulomb.granular.Scene`).
+
+    ``kind`` is the variant (``unknown_material``, ``invalid_law``, ``invalid_body``,
+    ``invalid_obstacle``, ``mesh``, ``invalid_step``, ``invalid_gravity``, ``overlaps``,
+    ``outside``, ``memory``, ``fill``, ``description``, ``argument``); ``field`` names the datum
+    (``radii``, ``positions``, ``masses``, ``density``, ``material``, ``material_pair``, ``mu``,
+    ``vertices``, ``triangles``, ``obstacles``, ``gravity``, ``h``, ...) and ``index`` the
+    sphere, obstacle, triangle or vertex (or the overlapping pair) where there is one.
+    """

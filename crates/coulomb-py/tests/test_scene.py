@@ -177,3 +177,25 @@ def test_a_hundred_thousand_spheres_build():
     sim = Simulation(scene)
     assert sim.positions.shape == (n, 3) and sim.masses[0] == pytest.approx(
         2500.0 * 4.0 / 3.0 * math.pi * R**3)
+
+
+def test_checkpoint_round_trip_of_a_python_scene(tmp_path):
+    if not hasattr(Simulation, "save_checkpoint"):
+        pytest.skip("Simulation.save_checkpoint/load_checkpoint come with the checkpoint branch")
+    scene = (Scene().add_plane([0, 0, 0], [0, 0, 1], material="floor")
+             .add_box([0, 0, 0], [1.5, 1.5, 2], open_top=True, material="floor")
+             .set_material_pair("default", "floor", mu=0.5, restitution=0.1))
+    scene.fill(Region.box([0.1, 0.1, 0.1], [1.4, 1.4, 1.0]), 40, radius=R, seed=5,
+               velocity_jitter=0.1)
+    whole = Simulation(scene)
+    whole.run(20)
+    first = Simulation(scene)
+    first.run(10)
+    path = tmp_path / "scene.h5"
+    first.save_checkpoint(path)
+    again = Simulation.load_checkpoint(path)
+    assert again.time == first.time and again.steps_done == 10
+    again.run(10)
+    for name in ("positions", "velocities", "angular_velocities"):
+        np.testing.assert_array_equal(getattr(again, name), getattr(whole, name))
+    assert again.time == whole.time

@@ -226,22 +226,26 @@ struct FillArgs {
 }
 
 /// Fills the region `region` (JSON of `coulomb_granular::generate::Shape`: a box or a
-/// cylinder) as `spec` says (JSON: count, sizes, packing, velocity, velocity_jitter, seed),
-/// avoiding the spheres (`avoid_positions` (3n), `avoid_radii` (n)) already in the scene;
-/// deterministic from the seed (ChaCha8). Returns (positions (n, 3), radii (n,), velocities
-/// (n, 3), attempts).
+/// cylinder; or `{"kind": "mesh"}`: the interior of the closed, consistently oriented mesh
+/// `mesh` = (vertices (3n float64), triangles (3m uint64))) as `spec` says (JSON: count,
+/// sizes, packing, velocity, velocity_jitter, seed), avoiding the spheres (`avoid_positions`
+/// (3n), `avoid_radii` (n)) already in the scene; deterministic from the seed (ChaCha8).
+/// Returns (positions (n, 3), radii (n,), velocities (n, 3), attempts).
 #[pyfunction]
+#[pyo3(signature = (region, spec, avoid_positions, avoid_radii, mesh=None))]
 pub(crate) fn scene_fill<'py>(
     py: Python<'py>,
     region: &str,
     spec: &str,
     avoid_positions: PyReadonlyArray1<'_, f64>,
     avoid_radii: PyReadonlyArray1<'_, f64>,
+    mesh: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Bound<'py, PyTuple>> {
     let fill_err =
         |field: &str, m: String| errors::scene_input_error(py, "fill", Some(field), py.None(), m);
-    let region: generate::Shape = serde_json::from_str(region)
+    let region: Value = serde_json::from_str(region)
         .map_err(|e| fill_err("region", format!("fill region: {e}")))?;
+    let is_mesh = region.get("kind").and_then(Value::as_str) == Some("mesh");
     let args: FillArgs =
         serde_json::from_str(spec).map_err(|e| fill_err("fill", format!("fill: {e}")))?;
     let pos = flat3("avoid_positions", &avoid_positions)?;
@@ -255,12 +259,38 @@ pub(crate) fn scene_fill<'py>(
         velocity_jitter: args.velocity_jitter,
         seed: args.seed,
     };
-    region
-        .validate()
-        .map_err(|e| fill_err("region", format!("fill: {e}")))?;
-    let filled = py
-        .detach(|| generate::fill(&region, &spec, &avoid))
-        .map_err(|e| fill_err("fill", format!("fill: {e}")))?;
+    let filled = if is_mesh {
+        let (vertices, triangles) = match mesh {
+            Some(m) => mesh_arrays(m)?,
+            None => {
+                return Err(fill_err(
+                    "region",
+                    "fill: a mesh region needs its arrays".into(),
+                ))
+            }
+        };
+        let mesh = TriangleMesh::new(vertices, triangles)
+            .and_then(|m| m.check_closed().map(|()| m))
+            .map_err(|e| fill_err("region", format!("fill region mesh: {e}")))?;
+        let (lo, hi) = mesh.bounds();
+        py.detach(|| {
+            let inside = |x: Vec3| mesh.contains(x) == Some(true);
+            let region = generate::Predicate {
+                lo,
+                hi,
+                inside: &inside,
+            };
+            generate::fill(&region, &spec, &avoid)
+        })
+    } else {
+        let region: generate::Shape = serde_json::from_value(region)
+            .map_err(|e| fill_err("region", format!("fill region: {e}")))?;
+        region
+            .validate()
+            .map_err(|e| fill_err("region", format!("fill: {e}")))?;
+        py.detach(|| generate::fill(&region, &spec, &avoid))
+    }
+    .map_err(|e| fill_err("fill", format!("fill: {e}")))?;
     let p = &filled.particles;
     let positions = convert::rows3(py, p.iter().map(|s| s.position.to_array()));
     let radii = PyArray1::from_iter(py, p.iter().map(|s| s.radius)).into_any();

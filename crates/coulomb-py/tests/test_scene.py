@@ -199,3 +199,24 @@ def test_checkpoint_round_trip_of_a_python_scene(tmp_path):
     for name in ("positions", "velocities", "angular_velocities"):
         np.testing.assert_array_equal(getattr(again, name), getattr(whole, name))
     assert again.time == whole.time
+
+
+def _cube(side: float):
+    """A closed cube [0, side]³ as a triangle mesh, outward counter-clockwise triangles."""
+    v = np.array([[i & 1, (i >> 1) & 1, (i >> 2) & 1] for i in range(8)], dtype=float) * side
+    t = np.array([[0, 2, 3], [0, 3, 1], [4, 5, 7], [4, 7, 6], [0, 1, 5], [0, 5, 4],
+                  [2, 6, 7], [2, 7, 3], [0, 4, 6], [0, 6, 2], [1, 3, 7], [1, 7, 5]])
+    return v, t
+
+
+def test_a_closed_mesh_is_filled_and_holds_its_spheres():
+    v, t = _cube(0.6)
+    scene = Scene().add_mesh(v, t, side="inside", material="wall")
+    assert scene.fill(Region.mesh(v, t), 30, radius=R, seed=2) == 30
+    x, _ = scene._sphere_arrays()
+    assert np.all((x >= R) & (x <= 0.6 - R))
+    sim = Simulation(scene)
+    assert all(s["converged"] for s in sim.run(30))
+    assert np.all(sim.positions > 0.9 * R) and np.all(sim.positions < 0.6 - 0.9 * R)
+    with pytest.raises(coulomb.SceneError):  # an open mesh has no inside
+        Simulation(Scene().add_mesh(v, t[:-1], side="inside").add_spheres([[0.3] * 3], R))

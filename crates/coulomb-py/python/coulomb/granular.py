@@ -156,6 +156,28 @@ class Region:
                 "radius": _real("radius", radius), "height": _real("height", height)}
 
 
+    @staticmethod
+    def mesh(vertices: Any, triangles: Any) -> Dict[str, Any]:
+        """The interior of a closed, consistently oriented triangle mesh (vertices (n, 3),
+        triangles (m, 3) integer indices)."""
+        v = _rows3("vertices", vertices)
+        t = _triangles(triangles)
+        return {"kind": "mesh", "vertices": v, "triangles": t}
+
+
+def _triangles(triangles: Any) -> np.ndarray:
+    """Triangles (m, 3) of nonnegative integer vertex indices, as uint64."""
+    t = np.asarray(triangles)
+    if t.dtype.kind not in "iu":
+        raise TypeError(f"triangles must be integers, got dtype {t.dtype}")
+    if t.ndim != 2 or t.shape[1] != 3:
+        raise _arg_error("triangles", f"triangles must have shape (m, 3), got {t.shape}")
+    if t.size and t.min() < 0:
+        k = int(np.argmin(t.min(axis=1)))
+        raise _arg_error("triangles", f"triangle {k} has a negative vertex index", k)
+    return np.ascontiguousarray(t, dtype=np.uint64)
+
+
 def _sizes(radius: Any) -> Dict[str, Any]:
     """A size distribution: a radius (mono) or a dict of
     ``coulomb_granular::generate::SizeDistribution``."""
@@ -302,7 +324,8 @@ class Scene:
              velocity_jitter: float = 0.0, pitch: Optional[float] = None,
              layer_pitch: Optional[float] = None, jitter: float = 0.2,
              max_attempts: Optional[int] = None) -> int:
-        """Fills ``region`` (:meth:`Region.box`, :meth:`Region.cylinder`) with ``count``
+        """Fills ``region`` (:meth:`Region.box`, :meth:`Region.cylinder`, :meth:`Region.mesh`:
+        a closed mesh's interior) with ``count``
         spheres that overlap neither each other nor the spheres already in the scene, and
         adds them; returns how many were placed (fewer when the region is full).
 
@@ -336,9 +359,14 @@ class Scene:
                 "velocity_jitter": _real("velocity_jitter", velocity_jitter, nonnegative=True),
                 "seed": int(seed)}
         ap, ar = self._sphere_arrays()
+        mesh = None
+        if region.get("kind") == "mesh":
+            mesh = (np.asarray(region["vertices"], dtype=np.float64).ravel(),
+                    np.asarray(region["triangles"], dtype=np.uint64).ravel())
+            region = {"kind": "mesh"}
         pos, rad, vel, _attempts = _coulomb.scene_fill(
             json.dumps(dict(region)), json.dumps(spec), np.ascontiguousarray(ap).ravel(),
-            np.ascontiguousarray(ar))
+            np.ascontiguousarray(ar), mesh)
         if len(rad):
             self.add_spheres(pos, rad, density=density, material=material,
                              velocities=vel if np.any(vel) else None)
@@ -422,18 +450,11 @@ class Scene:
         range, no degenerate triangle (errors name ``vertices`` / ``triangles`` and the
         index)."""
         v = _rows3("vertices", vertices)
-        t = np.asarray(triangles)
-        if t.dtype.kind not in "iu":
-            raise TypeError(f"triangles must be integers, got dtype {t.dtype}")
-        if t.ndim != 2 or t.shape[1] != 3:
-            raise _arg_error("triangles", f"triangles must have shape (m, 3), got {t.shape}")
-        if t.size and t.min() < 0:
-            k = int(np.argmin(t.min(axis=1)))
-            raise _arg_error("triangles", f"triangle {k} has a negative vertex index", k)
+        t = _triangles(triangles)
         if side not in ("surface", "inside", "outside"):
             raise _arg_error("side", f"side {side!r}: 'surface', 'inside' or 'outside'")
         k = len(self._meshes)
-        self._meshes.append((v.ravel(), np.ascontiguousarray(t, dtype=np.uint64).ravel()))
+        self._meshes.append((v.ravel(), t.ravel()))
         return self._obstacle({"kind": "mesh", "mesh": k, "side": side}, material, motion, name)
 
     @property

@@ -8,6 +8,7 @@ mod method;
 mod outputs;
 mod progress;
 mod read;
+mod scene_arg;
 mod sim_args;
 mod threads;
 mod values;
@@ -145,6 +146,9 @@ fn main() -> ExitCode {
 /// launcher or with `--mpi`, distributed over the ranks, on `--threads` worker threads.
 fn simulate(args: sim_args::Args) -> anyhow::Result<()> {
     threads::with_threads(args.threads, || {
+        if scene_arg::is_scene_file(&args.scene) {
+            return scene_arg::run(&args);
+        }
         let scene = sim_args::checked_scene(&args)?;
         #[cfg(feature = "mpi")]
         if args.mpi || sim_args::under_launcher() {

@@ -23,7 +23,8 @@ pub enum Method {
 /// Arguments of `coulomb simulate`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
-    /// scene: box, funnel, vibrating-plate, rotating-drum
+    /// scene: box, funnel, vibrating-plate, rotating-drum, or a scene file ending in .toml or
+    /// .json (docs/granular.md, "Scene files"; examples in examples/scenes)
     pub scene: String,
     /// number of beads
     #[arg(long, default_value_t = 150, value_parser = crate::values::beads)]
@@ -261,7 +262,7 @@ pub(crate) fn checked_scene(args: &Args) -> anyhow::Result<Scene> {
     let Some(scene) = Scene::from_name(&args.scene) else {
         let names: Vec<&str> = Scene::ALL.iter().map(|s| s.name()).collect();
         bail!(
-            "unknown scene '{}': expected one of {}",
+            "unknown scene '{}': expected one of {}, or a scene file (.toml, .json)",
             args.scene,
             names.join(", ")
         );

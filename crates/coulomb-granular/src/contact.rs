@@ -282,6 +282,93 @@ impl<'a> BroadPhase<'a> {
     }
 }
 
+/// Solid sphere obstacles (fixed bodies of the scene model) from which a grid is built: below
+/// this many, every sphere is tested against every obstacle.
+pub(crate) const OBSTACLE_GRID_MIN: usize = 32;
+
+/// The obstacles a sphere may touch: every obstacle, except that when the world has at least
+/// [`OBSTACLE_GRID_MIN`] solid sphere obstacles these are found through a uniform grid of their
+/// centres (cells of 2 (r_max + R_max) + reach: a sphere is tested against the obstacles of
+/// the 27 cells around it), so that a floor made of 10⁴ fixed spheres costs O(contacts), not
+/// O(N · obstacles). The candidates come in increasing obstacle order; the contacts found are
+/// those of the full loop (the grid only skips obstacles out of reach).
+pub(crate) struct ObstacleIndex {
+    /// obstacles tested for every sphere
+    always: Vec<usize>,
+    /// cell size and the ball obstacles by cell
+    grid: Option<(f64, CellMap)>,
+}
+
+/// Obstacle indices by grid cell.
+type CellMap = HashMap<[i64; 3], Vec<usize>>;
+
+impl ObstacleIndex {
+    /// The index of `world`'s obstacles at time t for contacts within `reach` of the surfaces.
+    pub(crate) fn new(world: &World, t: f64, reach: f64) -> Self {
+        let balls = world
+            .obstacles
+            .iter()
+            .filter(|o| o.ball_at(t).is_some())
+            .count();
+        let all = (0..world.obstacles.len()).collect();
+        if balls < OBSTACLE_GRID_MIN || !reach.is_finite() {
+            return Self {
+                always: all,
+                grid: None,
+            };
+        }
+        let rmax = world
+            .bodies
+            .iter()
+            .map(|b| b.radius)
+            .fold(0.0_f64, f64::max);
+        let bmax = world
+            .obstacles
+            .iter()
+            .filter_map(|o| o.ball_at(t).map(|b| b.1))
+            .fold(0.0_f64, f64::max);
+        let cell = (2.0 * (rmax + bmax) + reach.max(0.0)).max(1e-12);
+        let mut always = Vec::new();
+        let mut cells: CellMap = HashMap::new();
+        for (o, ob) in world.obstacles.iter().enumerate() {
+            match ob.ball_at(t) {
+                Some((c, _)) if c.is_finite() => {
+                    cells.entry(cell_key(c, cell)).or_default().push(o)
+                }
+                _ => always.push(o),
+            }
+        }
+        Self {
+            always,
+            grid: Some((cell, cells)),
+        }
+    }
+
+    /// The candidate obstacles of a sphere centred at x, in increasing order, into `out`.
+    pub(crate) fn candidates(&self, x: Vec3, out: &mut Vec<usize>) {
+        out.clear();
+        out.extend_from_slice(&self.always);
+        if let Some((cell, cells)) = &self.grid {
+            let [cx, cy, cz] = cell_key(x, *cell);
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for dz in -1..=1 {
+                        if let Some(v) = cells.get(&[cx + dx, cy + dy, cz + dz]) {
+                            out.extend_from_slice(v);
+                        }
+                    }
+                }
+            }
+            out.sort_unstable();
+        }
+    }
+}
+
+fn cell_key(x: Vec3, cell: f64) -> [i64; 3] {
+    let k = |c: f64| (c / cell).floor().clamp(-1e15, 1e15) as i64;
+    [k(x.x), k(x.y), k(x.z)]
+}
+
 /// Uniform grid broad phase: candidate sphere pairs (i < j) whose bounding boxes, enlarged by
 /// `margin`, may overlap. Cells have the size of the largest enlarged diameter, so each sphere
 /// is compared with the spheres of its 27 neighbouring cells only: O(N) for bounded density.
@@ -447,9 +534,12 @@ pub fn detect_with_speed(
         .map(|o| margin + activation.gamma * h * (h * world.gravity.norm() + o.max_normal_speed()))
         .collect();
     let grid = BroadPhase::new(world, margin);
+    let reach = obstacle_margin.iter().copied().fold(0.0_f64, f64::max);
+    let obstacles = ObstacleIndex::new(world, t, reach);
     par_chunked(world.bodies.len(), SPHERE_CHUNK, |range, out| {
         let mut js = Vec::new();
         let mut near = Vec::new();
+        let mut obs = Vec::new();
         for i in range {
             let Some(a) = world.bodies.get(i) else {
                 continue;
@@ -465,7 +555,9 @@ pub fn detect_with_speed(
                 let point = b.position + n * (b.radius + 0.5 * gap);
                 out.extend(make(i, Partner::Body(j), n, point, gap));
             }
-            for (o, ob) in world.obstacles.iter().enumerate() {
+            obstacles.candidates(a.position, &mut obs);
+            for &o in &obs {
+                let ob = &world.obstacles[o];
                 near.clear();
                 ob.proximities(a.position, a.radius, t, obstacle_margin[o], &mut near);
                 for &(f, p) in &near {
@@ -609,5 +701,68 @@ mod tests {
             },
         );
         assert_eq!(c.len(), 1);
+    }
+
+    #[test]
+    fn a_floor_of_fixed_balls_is_found_through_the_obstacle_grid() {
+        // 10 × 10 fixed balls (a rough floor) under 30 free spheres: the contacts found through
+        // the grid are those of testing every obstacle
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let mut world = World::new();
+        world.obstacles.push(Obstacle::fixed(
+            "ground",
+            Shape::Plane {
+                point: Vec3::new(0.0, 0.0, -0.05),
+                normal: Vec3::Z,
+            },
+        ));
+        for k in 0..100 {
+            let c = Vec3::new(0.1 * (k % 10) as f64, 0.1 * (k / 10) as f64, 0.0);
+            world.obstacles.push(Obstacle::fixed(
+                "ball",
+                Shape::Sphere {
+                    center: c,
+                    radius: 0.05,
+                    inside: false,
+                },
+            ));
+        }
+        for _ in 0..30 {
+            let x = Vec3::new(
+                rng.random_range(0.0..0.9),
+                rng.random_range(0.0..0.9),
+                rng.random_range(0.06..0.09),
+            );
+            let mut s = Sphere::new(x, 0.05, 1.0);
+            s.velocity = Vec3::new(0.0, 0.0, -0.5);
+            world.bodies.push(s);
+        }
+        let h = 0.01;
+        let act = Activation::accurate();
+        let contacts = detect(&world, 0.0, h, &act);
+        let index = ObstacleIndex::new(&world, 0.0, 1.0);
+        assert!(index.grid.is_some());
+        // brute force: every obstacle within the same reach
+        let mut expected = Vec::new();
+        let vmax = 0.5;
+        let margin = act.delta + 2.0 * vmax * h * act.gamma + 1e-12;
+        let reach = margin + act.gamma * h * (h * 9.81);
+        for (i, b) in world.bodies.iter().enumerate() {
+            for (o, ob) in world.obstacles.iter().enumerate() {
+                let p = ob.proximity(b.position, b.radius, 0.0);
+                let u = -0.5 * p.normal.z;
+                let free = u + h * world.gravity.dot(p.normal);
+                if p.gap <= reach && act.is_active(p.gap, u.min(free), h) {
+                    expected.push((i, Partner::Obstacle(o, 0)));
+                }
+            }
+        }
+        let got: Vec<_> = contacts
+            .iter()
+            .filter(|c| matches!(c.partner, Partner::Obstacle(..)))
+            .map(|c| c.key())
+            .collect();
+        assert!(got.len() > 20, "{}", got.len());
+        assert_eq!(got, expected);
     }
 }

@@ -360,7 +360,7 @@ impl TriMesh {
             }
             let [a, b, c] = t.map(|i| self.vertices[i]);
             let area2 = (b - a).cross(c - a).norm();
-            if !(area2 > 1e-12 * scale) {
+            if area2.is_nan() || area2 <= 1e-12 * scale {
                 return Err(format!("triangle {k} {t:?} is degenerate (zero area)"));
             }
         }

@@ -9,6 +9,24 @@
 //! let stats = sim.step().unwrap();
 //! println!("{} contacts, {} subproblems", stats.contacts, stats.subproblems);
 //! ```
+//!
+//! A scene of one's own is a [`SceneModel`] ([`model`]): bodies (or columns of spheres),
+//! obstacles ([`Shape`]: planes, rectangles, box and cylinder containers or solids, spheres,
+//! triangle meshes) with prescribed [`Motion`]s, gravity, materials with per-pair contact laws
+//! and the step settings, built into a [`World`] and [`Params`] with typed errors:
+//!
+//! ```
+//! use coulomb_granular::{BodySpec, ObstacleSpec, SceneModel, Shape, Simulation, Vec3};
+//! let mut scene = SceneModel::default();
+//! scene.obstacles.push(ObstacleSpec::fixed(
+//!     "bin",
+//!     Shape::Box { lo: Vec3::ZERO, hi: Vec3::new(1.0, 1.0, 1.0), inside: true, open_top: true },
+//! ));
+//! scene.bodies.push(BodySpec::sphere(Vec3::new(0.5, 0.5, 0.3), 0.05, 2500.0));
+//! let (world, params) = scene.build().unwrap();
+//! let mut sim = Simulation::new(world, params).unwrap();
+//! sim.step().unwrap();
+//! ```
 
 pub mod assembly;
 pub mod contact;
@@ -25,6 +43,7 @@ pub mod projection;
 pub mod rolling;
 pub mod run;
 pub mod scene;
+pub mod scene_file;
 pub mod simulation;
 pub mod validation;
 pub mod world;

@@ -18,7 +18,7 @@
 //! [`ProjectionStats::work`]): the energy balance of a step is then
 //! E_{k+1} − E_k = (dissipation of the velocity step, ≤ 0) + W_p (docs/granular.md).
 
-use crate::contact::{par_chunked, BroadPhase, Partner, SPHERE_CHUNK};
+use crate::contact::{par_chunked, BroadPhase, ObstacleIndex, Partner, SPHERE_CHUNK};
 use crate::math::Vec3;
 use crate::world::World;
 use rayon::prelude::*;
@@ -110,9 +110,11 @@ fn gap_normal(world: &World, a: usize, partner: Partner, t: f64) -> Option<(f64,
 /// spheres) whatever the number of threads.
 fn pairs_within(world: &World, t: f64, margin: f64) -> Vec<(usize, Partner, f64)> {
     let grid = BroadPhase::new(world, margin.max(0.0));
+    let obstacles = ObstacleIndex::new(world, t, margin.max(0.0));
     par_chunked(world.bodies.len(), SPHERE_CHUNK, |range, out| {
         let mut js = Vec::new();
         let mut near = Vec::new();
+        let mut obs = Vec::new();
         for i in range {
             let Some(b) = world.bodies.get(i) else {
                 continue;
@@ -125,7 +127,9 @@ fn pairs_within(world: &World, t: f64, margin: f64) -> Vec<(usize, Partner, f64)
                     }
                 }
             }
-            for (o, ob) in world.obstacles.iter().enumerate() {
+            obstacles.candidates(b.position, &mut obs);
+            for &o in &obs {
+                let ob = &world.obstacles[o];
                 near.clear();
                 ob.proximities(b.position, b.radius, t, margin, &mut near);
                 for &(f, p) in &near {

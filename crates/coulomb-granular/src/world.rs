@@ -1047,6 +1047,24 @@ impl Obstacle {
             .unwrap_or(Proximity::FAR)
     }
 
+    /// Centre and radius at time t of a solid sphere obstacle ([`Shape::Sphere`] with
+    /// `inside = false`, e.g. a fixed body of the scene model); `None` for other shapes.
+    pub fn ball_at(&self, t: f64) -> Option<(Vec3, f64)> {
+        let Shape::Sphere {
+            center,
+            radius,
+            inside: false,
+        } = &self.shape
+        else {
+            return None;
+        };
+        let c = match self.rotation_at(t) {
+            Some((rc, axis, angle)) => (*center - rc).rotated(axis, angle) + rc,
+            None => *center + self.motion.offset(t),
+        };
+        Some((c, *radius))
+    }
+
     /// Whether the centre x is where a sphere may be at time t ([`Shape::admits`] in the
     /// obstacle's frame).
     pub fn admits(&self, x: Vec3, t: f64) -> bool {

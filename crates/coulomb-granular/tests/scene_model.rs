@@ -231,3 +231,57 @@ fn inserted_spheres_leave_the_others_and_their_warm_starts_unchanged() {
     assert!(b.insert_bodies(bad).is_err());
     assert_eq!(b.world.bodies.len(), 7);
 }
+
+#[test]
+fn restitution_and_rolling_friction_are_per_pair() {
+    // two floors: (default, bouncy) e = 0.9, μ_r = 0.02; (default, dead) e = 0, μ_r = 0.2.
+    // A sphere dropped on each bounces (or not) by its pair's e; a sphere rolling on each
+    // decelerates at 5/7 μ_r g by its pair's μ_r (crate::rolling).
+    let mut m = SceneModel::default();
+    m.materials.names = vec!["bouncy".into(), "dead".into()];
+    for (name, e, mu_r) in [("bouncy", 0.9, 0.02), ("dead", 0.0, 0.2)] {
+        m.materials.pairs.push(MaterialPair {
+            a: "default".into(),
+            b: name.into(),
+            mu: 0.5,
+            restitution: e,
+            rolling_friction: mu_r,
+        });
+    }
+    m.obstacles.push(slab("bouncy", -5.0, 0.0, "bouncy"));
+    m.obstacles.push(slab("dead", 0.0, 5.0, "dead"));
+    let v0 = 1.0;
+    for x in [-2.0, 2.0] {
+        let mut drop = BodySpec::sphere(Vec3::new(x, -2.0, R + 0.02), R, 2500.0);
+        drop.velocity = Vec3::new(0.0, 0.0, -1.0);
+        m.bodies.push(drop);
+        let mut roll = BodySpec::sphere(Vec3::new(x, 2.0, R), R, 2500.0);
+        roll.velocity = Vec3::new(0.0, v0, 0.0);
+        roll.angular_velocity = Vec3::new(-v0 / R, 0.0, 0.0);
+        m.bodies.push(roll);
+    }
+    m.step.h = 0.005;
+    let (world, params) = m.build().unwrap();
+    assert!(world.has_rolling(params.rolling_friction));
+    let mut sim = Simulation::new(world, params).unwrap();
+    let mut top = [0.0_f64; 2];
+    let steps = 40;
+    for k in 0..steps {
+        sim.step().unwrap();
+        if k > 5 {
+            for (i, b) in [0, 2].into_iter().enumerate() {
+                top[i] = top[i].max(sim.world.bodies[b].velocity.z);
+            }
+        }
+    }
+    // the bouncy floor sends the sphere back up at about 0.9 m/s; the dead one does not
+    assert!(top[0] > 0.7, "{top:?}");
+    assert!(top[1] < 0.05, "{top:?}");
+    let t = steps as f64 * sim.params.h;
+    let g = 9.81;
+    for (b, mu_r) in [(1, 0.02), (3, 0.2)] {
+        let v = sim.world.bodies[b].velocity.y;
+        let expected = v0 - 5.0 / 7.0 * mu_r * g * t;
+        assert!((v - expected).abs() < 0.02, "μ_r {mu_r}: {v} vs {expected}");
+    }
+}

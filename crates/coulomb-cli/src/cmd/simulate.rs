@@ -107,7 +107,7 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<()> {
 }
 
 /// Writes one step's problem as `step_KKKKKK.hdf5` in FCLIB global format.
-fn dump_fclib(
+pub(crate) fn dump_fclib(
     dir: &std::path::Path,
     step: usize,
     problem: &coulomb::problem::GlobalProblem,

@@ -1,0 +1,313 @@
+//! `coulomb simulate SCENE.toml` (or `.json`): a scene file (docs/granular.md, "Scene
+//! files") instead of a built-in scene name. The file gives the spheres, obstacles,
+//! materials, gravity and step settings; the command line adds the run's options
+//! (`--steps`, `--until-rest`, `--output`, `--frames-every`, `--json`, `--threads`,
+//! `--dump-fclib`, the library solver's `--inner`/`--outer`/`--fp-tol`/`--max-outer`/
+//! `--max-inner`), `--seed` (when not 1: replaces the file's seed) and `--beads` (when not
+//! 150: caps every generated group at that many spheres, for quick trials). Options that the
+//! file sets (`--dt`, `--mu`, …) are refused when given, rather than silently ignored.
+//! Every error in the file exits with status 2 before anything is written.
+
+use crate::sim_args::{Args, Method};
+use anyhow::{bail, Context};
+use clap::Parser;
+use coulomb_granular::model::BuildChecks;
+use coulomb_granular::output::{write_stats, VtkWriter};
+use coulomb_granular::run::RestMonitor;
+use coulomb_granular::scene_file::{BuildOptions, BuiltScene, LoadedScene, MethodName};
+use coulomb_granular::{Simulation, Summary};
+use std::path::Path;
+
+/// Whether the scene argument names a scene file (it ends in .toml or .json).
+pub fn is_scene_file(scene: &str) -> bool {
+    let lower = scene.to_ascii_lowercase();
+    lower.ends_with(".toml") || lower.ends_with(".json")
+}
+
+#[derive(Parser)]
+struct Defaults {
+    #[command(flatten)]
+    args: Args,
+}
+
+/// The command line's values of the options a scene file sets, when they differ from the
+/// defaults: refused, since the file's values are used.
+fn refused_options(args: &Args) -> Vec<&'static str> {
+    let Ok(d) = Defaults::try_parse_from(["simulate", "x.toml"]) else {
+        return Vec::new();
+    };
+    let d = d.args;
+    let mut out = Vec::new();
+    let mut check = |differs: bool, name: &'static str| {
+        if differs {
+            out.push(name);
+        }
+    };
+    check(args.mu != d.mu, "--mu");
+    check(
+        args.rolling_friction != d.rolling_friction,
+        "--rolling-friction",
+    );
+    check(args.restitution != d.restitution, "--restitution");
+    check(args.dt != d.dt, "--dt");
+    check(args.theta != d.theta, "--theta");
+    check(args.tol != d.tol, "--tol");
+    check(args.method != d.method, "--method");
+    check(args.max_sweeps != d.max_sweeps, "--max-sweeps");
+    check(args.relaxation != d.relaxation, "--relaxation");
+    check(args.gamma != d.gamma, "--gamma");
+    check(args.no_projection, "--no-projection");
+    check(args.no_gap_closure, "--no-gap-closure");
+    check(args.cold, "--cold");
+    check(args.rest_speed != d.rest_speed, "--rest-speed");
+    check(args.max_steps != d.max_steps, "--max-steps");
+    check(args.box_side.is_some(), "--box-side");
+    check(args.layer_pitch.is_some(), "--layer-pitch");
+    check(args.drop_base.is_some(), "--drop-base");
+    check(args.spread_top, "--spread-top");
+    out
+}
+
+/// The arguments of a built-in run with the file's step settings and default contact law
+/// (so that [`Args::params`] makes the same parameters as for a built-in scene).
+fn file_args(args: &Args, scene: &BuiltScene) -> Args {
+    let s = &scene.step;
+    let mut a = args.clone();
+    a.dt = s.h;
+    a.theta = s.theta;
+    a.tol = s.tol;
+    a.method = match s.method {
+        MethodName::Nsgs => Method::Nsgs,
+        MethodName::Library => Method::Library,
+    };
+    a.max_sweeps = s.max_sweeps;
+    a.relaxation = s.relaxation;
+    a.gamma = s.gamma;
+    a.no_projection = !s.projection;
+    a.no_gap_closure = !s.gap_closure;
+    a.cold = !s.warm_start;
+    let law = scene.model.materials.default;
+    a.mu = law.mu;
+    a.restitution = law.restitution;
+    a.rolling_friction = law.rolling_friction;
+    a.rest_speed = s.rest_speed;
+    a.max_steps = s.max_steps;
+    a.until_rest = args.until_rest || (s.until_rest && args.steps.is_none());
+    a.steps = if a.until_rest {
+        None
+    } else {
+        Some(args.steps.unwrap_or_else(|| s.fixed_steps()))
+    };
+    a
+}
+
+/// Refuses a time step in which the smallest sphere of the scene would fall more than its
+/// radius (g h² > R_min: contacts cannot be detected), and warns above R_min / 10.
+fn check_step(h: f64, scene: &BuiltScene) -> anyhow::Result<()> {
+    let r = scene
+        .model
+        .sphere_batches
+        .iter()
+        .flat_map(|b| b.radii.iter().copied())
+        .chain(scene.inlets.iter().map(|i| i.inlet.sizes.min_radius()))
+        .fold(f64::INFINITY, f64::min);
+    let g = scene.model.gravity.norm();
+    let fall = g * h * h;
+    if r.is_finite() && fall > r {
+        bail!(
+            "[step] h = {h} is too large: a sphere falls g·h² = {fall:.3e} m in one step, more than the smallest radius {r} m; use h ≤ {:.3e}",
+            (r / g).sqrt()
+        );
+    }
+    if r.is_finite() && fall > 0.1 * r {
+        eprintln!(
+            "warning: [step] h = {h}: a sphere falls g·h² = {fall:.3e} m in one step (> R_min/10 = {:.3e} m); expect large transient penetrations",
+            0.1 * r
+        );
+    }
+    Ok(())
+}
+
+/// Runs `coulomb simulate FILE`.
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    let refused = refused_options(args);
+    if !refused.is_empty() {
+        bail!(
+            "{} {} set by the scene file {} ([step], [default_pair]); change them there",
+            refused.join(", "),
+            if refused.len() == 1 { "is" } else { "are" },
+            args.scene
+        );
+    }
+    let loaded = LoadedScene::load(Path::new(&args.scene))?;
+    let opts = BuildOptions {
+        seed: (args.seed != 1).then_some(args.seed),
+        max_fill: (args.beads != 150).then_some(args.beads),
+    };
+    let mut scene = loaded.build(&opts)?;
+    let (world, _) = scene.build(&BuildChecks::default())?;
+    if world.bodies.is_empty() && scene.inlets.is_empty() {
+        bail!("{}: the scene has no sphere and no inlet", args.scene);
+    }
+    let a = file_args(args, &scene);
+    check_step(a.dt, &scene)?;
+    if a.outer == coulomb::OuterKind::Fused && a.inner != coulomb::InnerKind::Pgs {
+        bail!("--outer fused needs --inner pgs");
+    }
+    let stop = a.stop();
+    let mut sim = Simulation::new(world, a.params()).context("invalid simulation parameters")?;
+    sim.keep_problem = a.dump_fclib.is_some();
+    if let Some(dir) = &a.dump_fclib {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    let mut vtk = match &a.output {
+        Some(dir) => Some(
+            VtkWriter::new(dir).with_context(|| format!("cannot write into {}", dir.display()))?,
+        ),
+        None => None,
+    };
+    if let Some(w) = vtk.as_mut() {
+        w.frame(&sim).context("writing VTK frame")?;
+    }
+    let start_energy = sim.world.kinetic_energy() + sim.world.potential_energy();
+    let pb = crate::progress::bar(stop.max_steps(), a.json);
+    pb.set_prefix(format!("{} {}", scene.name, sim.world.bodies.len()));
+    let mut stats = Vec::new();
+    let mut monitor = RestMonitor::default();
+    let mut at_rest = false;
+    let (mut poured, mut skipped) = (0usize, 0usize);
+    while sim.steps_done < stop.max_steps() {
+        let t0 = sim.time;
+        let s = sim.step().context("time step failed")?;
+        let t1 = sim.time;
+        // the spheres the inlets owe for (t_k, t_{k+1}], placed among the bodies at t_{k+1}
+        for inlet in &mut scene.inlets {
+            let (n, k) = inlet
+                .emit(&mut sim, &scene.model, t0, t1)
+                .context("inlet")?;
+            poured += n;
+            skipped += k;
+        }
+        pb.set_message(format!(
+            "{} contacts, {} subproblems, {:.1} ms, err {:.1e}",
+            s.contacts, s.subproblems, s.solve_ms, s.error
+        ));
+        pb.inc(1);
+        if let (Some(dir), Some(p)) = (&a.dump_fclib, &sim.last_problem) {
+            crate::cmd::simulate::dump_fclib(dir, sim.steps_done - 1, p)?;
+        }
+        if let Some(w) = vtk.as_mut() {
+            if a.frames_every > 0 && sim.steps_done % a.frames_every == 0 {
+                w.frame(&sim).context("writing VTK frame")?;
+            }
+        }
+        stats.push(s);
+        let (stop_now, rest) = monitor.should_stop(&stop, &sim);
+        if stop_now {
+            at_rest = rest;
+            break;
+        }
+    }
+    pb.finish_and_clear();
+    if let Some(w) = vtk.as_mut() {
+        let written = a.frames_every > 0 && sim.steps_done % a.frames_every == 0;
+        if !written && sim.steps_done > 0 {
+            w.frame(&sim).context("writing VTK frame")?;
+        }
+    }
+    let beads = sim.world.bodies.len();
+    let summary = Summary::from_stats(&scene.name, beads, &stats, at_rest);
+    let end_energy = sim.world.kinetic_energy() + sim.world.potential_energy();
+    if let Some(dir) = &a.output {
+        write_stats(dir, &stats)
+            .with_context(|| format!("writing stats into {}", dir.display()))?;
+        crate::outputs::write(
+            &dir.join("summary.json"),
+            crate::outputs::json(&summary, true)?.as_bytes(),
+        )?;
+    }
+    let mut extra = serde_json::Map::new();
+    if !scene.inlets.is_empty() {
+        extra.insert("poured".into(), poured.into());
+        extra.insert("inlet_skipped".into(), skipped.into());
+    }
+    if a.json {
+        let obj = crate::sim_args::summary_json(&summary, start_energy, end_energy, extra);
+        println!("{}", crate::outputs::json(&obj, false)?);
+    } else {
+        println!(
+            "{}: {} spheres{}, {} steps{}, {:.1} contacts/step, {:.2} ms solve/step, mean error {:.2e} (max {:.2e}), {} / {} steps converged, max penetration during the run {:.2e} m",
+            summary.scene,
+            summary.beads,
+            if scene.inlets.is_empty() {
+                String::new()
+            } else {
+                format!(" ({poured} poured, {skipped} skipped)")
+            },
+            summary.steps,
+            if summary.at_rest { " (at rest)" } else { "" },
+            summary.mean_contacts,
+            summary.mean_solve_ms,
+            summary.mean_error,
+            summary.max_error,
+            summary.converged_steps,
+            summary.steps,
+            summary.max_penetration,
+        );
+    }
+    Ok(())
+}
+
+/// The stop rule of a file run (for tests).
+#[cfg(test)]
+fn stop_of(args: &Args, scene: &BuiltScene) -> coulomb_granular::Stop {
+    file_args(args, scene).stop()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(extra: &[&str]) -> Args {
+        let mut v = vec!["simulate", "x.toml"];
+        v.extend_from_slice(extra);
+        Defaults::try_parse_from(v).unwrap().args
+    }
+
+    #[test]
+    fn scene_files_are_recognised_by_extension() {
+        assert!(is_scene_file("a/b.toml") && is_scene_file("B.JSON"));
+        assert!(!is_scene_file("box") && !is_scene_file("box.csv"));
+    }
+
+    #[test]
+    fn options_the_file_sets_are_refused() {
+        assert!(refused_options(&args(&[])).is_empty());
+        assert!(refused_options(&args(&["--steps", "3", "--json", "--seed", "4"])).is_empty());
+        assert_eq!(refused_options(&args(&["--dt", "0.01"])), vec!["--dt"]);
+        assert_eq!(
+            refused_options(&args(&["--mu", "0.5", "--cold"])),
+            vec!["--mu", "--cold"]
+        );
+    }
+
+    #[test]
+    fn steps_come_from_the_file_unless_given() {
+        let text = "[step]\nh = 0.01\nduration = 0.1\n[[bodies]]\nspheres = [[0, 0, 1, 0.1]]\n";
+        let loaded = LoadedScene::parse(Path::new("x.toml"), text.to_string(), true).unwrap();
+        let scene = loaded.build(&BuildOptions::default()).unwrap();
+        assert_eq!(
+            stop_of(&args(&[]), &scene),
+            coulomb_granular::Stop::Steps(10)
+        );
+        assert_eq!(
+            stop_of(&args(&["--steps", "3"]), &scene),
+            coulomb_granular::Stop::Steps(3)
+        );
+        assert!(matches!(
+            stop_of(&args(&["--until-rest"]), &scene),
+            coulomb_granular::Stop::UntilRest { .. }
+        ));
+        assert_eq!(file_args(&args(&[]), &scene).dt, 0.01);
+    }
+}

@@ -1,0 +1,1554 @@
+//! Scene files: a whole simulation — materials and their pairs, gravity, the step settings,
+//! groups of spheres (inline, from a generator, or from a CSV/NPY file), obstacles (planes,
+//! rectangles, boxes, cylinders with caps and an orifice, spheres, triangle meshes from
+//! STL/OBJ) with their motions, and inlets — in TOML (`.toml`) or JSON (`.json`), read with
+//! serde. Every key is documented in docs/granular.md, "Scene files".
+//!
+//! Unknown keys are refused with the file, line and column (for TOML, the byte span of the
+//! parser's error turned into line:column; JSON's parser gives line:column itself), and so
+//! are the semantic errors found after parsing (an unknown material, a bad radius, …), located
+//! by their key path in the TOML document. Relative file names (particles, meshes) are
+//! resolved against the scene file's folder.
+
+use crate::generate::{self, FillSpec, Inlet, Packing, Rate, Region, SizeDistribution};
+use crate::import::{self, ImportError, Transform, TriMesh};
+use crate::math::Vec3;
+use crate::mesh::TriangleMesh;
+use crate::model::{
+    BuildChecks, MaterialPair, Materials, ObstacleSpec, SceneError, SceneModel, SphereBatch,
+    StepChoice, StepSettings,
+};
+use crate::simulation::{Params, Simulation, SimulationError};
+use crate::world::{MeshSide, Motion, Shape, World};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Why a scene file could not be used.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneFileError {
+    /// the file could not be read
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// the scene file
+        path: PathBuf,
+        /// the system's error
+        source: std::io::Error,
+    },
+    /// the extension is neither .toml nor .json
+    #[error("{}: a scene file must end in .toml or .json", path.display())]
+    Extension {
+        /// the scene file
+        path: PathBuf,
+    },
+    /// the text does not parse, has an unknown key or a value of the wrong type
+    #[error("{}:{line}:{column}: {message}", path.display())]
+    Syntax {
+        /// the scene file
+        path: PathBuf,
+        /// 1-based line
+        line: usize,
+        /// 1-based column (in characters)
+        column: usize,
+        /// the parser's message (it names the key)
+        message: String,
+    },
+    /// a value is out of range or refers to something that does not exist
+    #[error("{}{}: {key}: {message}", path.display(), at.map(|(l, c)| format!(":{l}:{c}")).unwrap_or_default())]
+    Invalid {
+        /// the scene file
+        path: PathBuf,
+        /// line and column of the key, when the format gives them
+        at: Option<(usize, usize)>,
+        /// the key path, e.g. `pairs[0].materials`
+        key: String,
+        /// what is wrong
+        message: String,
+    },
+    /// the scene model refused the scene (overlapping spheres, a sphere outside every
+    /// container, an invalid obstacle, …)
+    #[error("{}: {source}", path.display())]
+    Model {
+        /// the scene file
+        path: PathBuf,
+        /// the model's error
+        source: SceneError,
+    },
+    /// a particle or mesh file named by the scene could not be read
+    #[error("{}: {key}: {source}", path.display())]
+    Import {
+        /// the scene file
+        path: PathBuf,
+        /// the key that names the file
+        key: String,
+        /// the reader's error (it names the file)
+        source: ImportError,
+    },
+}
+
+fn default_seed() -> u64 {
+    1
+}
+fn default_gravity() -> [f64; 3] {
+    [0.0, 0.0, -crate::world::GRAVITY]
+}
+fn default_material() -> String {
+    DEFAULT_MATERIAL.to_string()
+}
+fn yes() -> bool {
+    true
+}
+
+/// The material every body and obstacle has unless told otherwise.
+pub const DEFAULT_MATERIAL: &str = "default";
+/// Density of the default material (kg/m³, glass).
+pub const DEFAULT_DENSITY: f64 = 2500.0;
+
+/// A whole scene file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// a name for outputs (default: the file's stem)
+    #[serde(default)]
+    pub name: Option<String>,
+    /// seed of every generator that has none of its own (default 1)
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// gravity vector (m/s², default (0, 0, −9.81))
+    #[serde(default = "default_gravity")]
+    pub gravity: [f64; 3],
+    /// time stepping and solver
+    #[serde(default)]
+    pub step: StepSection,
+    /// materials by name; `default` always exists (density 2500 kg/m³ unless redefined)
+    #[serde(default)]
+    pub materials: BTreeMap<String, MaterialSection>,
+    /// the contact law of every pair of materials not listed in `pairs`
+    #[serde(default)]
+    pub default_pair: ContactLaw,
+    /// contact laws of given pairs of materials
+    #[serde(default)]
+    pub pairs: Vec<PairSection>,
+    /// groups of spheres
+    #[serde(default)]
+    pub bodies: Vec<BodiesSection>,
+    /// obstacles
+    #[serde(default)]
+    pub obstacles: Vec<ObstacleSection>,
+    /// inlets pouring spheres during the run
+    #[serde(default)]
+    pub inlets: Vec<InletSection>,
+}
+
+/// Which solver takes each step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MethodName {
+    /// body-level nonsmooth Gauss–Seidel (the CLI's default)
+    #[default]
+    Nsgs,
+    /// the library solver on the assembled problem
+    Library,
+}
+
+fn d_h() -> f64 {
+    0.02
+}
+fn d_theta() -> f64 {
+    0.5
+}
+fn d_tol() -> f64 {
+    1e-4
+}
+fn d_rest_speed() -> f64 {
+    0.05
+}
+fn d_max_steps() -> usize {
+    2000
+}
+fn d_max_sweeps() -> usize {
+    20_000
+}
+fn d_relaxation() -> f64 {
+    1.5
+}
+fn d_gamma() -> f64 {
+    1.0
+}
+
+/// `[step]`: the time stepping (defaults: those of `coulomb simulate`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StepSection {
+    /// time step h (s)
+    #[serde(default = "d_h")]
+    pub h: f64,
+    /// θ of the position update (2.7)
+    #[serde(default = "d_theta")]
+    pub theta: f64,
+    /// tolerance on each step's error
+    #[serde(default = "d_tol")]
+    pub tol: f64,
+    /// step solver
+    #[serde(default)]
+    pub method: MethodName,
+    /// number of steps (default 200 unless `duration` or `until_rest`)
+    #[serde(default)]
+    pub steps: Option<usize>,
+    /// simulated time (s): ⌈duration / h⌉ steps
+    #[serde(default)]
+    pub duration: Option<f64>,
+    /// run until every sphere moves slower than `rest_speed` for 10 steps
+    #[serde(default)]
+    pub until_rest: bool,
+    /// rest speed (m/s)
+    #[serde(default = "d_rest_speed")]
+    pub rest_speed: f64,
+    /// step cap of `until_rest`
+    #[serde(default = "d_max_steps")]
+    pub max_steps: usize,
+    /// cap on Gauss–Seidel sweeps per step (nsgs)
+    #[serde(default = "d_max_sweeps")]
+    pub max_sweeps: usize,
+    /// over-relaxation ω ∈ [1, 2) (nsgs)
+    #[serde(default = "d_relaxation")]
+    pub relaxation: f64,
+    /// γ of the activation rule
+    #[serde(default = "d_gamma")]
+    pub gamma: f64,
+    /// position correction after each step
+    #[serde(default = "yes")]
+    pub projection: bool,
+    /// gap closure of resting contacts
+    #[serde(default = "yes")]
+    pub gap_closure: bool,
+    /// warm starts from the previous step's impulses
+    #[serde(default = "yes")]
+    pub warm_start: bool,
+}
+
+impl Default for StepSection {
+    fn default() -> Self {
+        Self {
+            h: d_h(),
+            theta: d_theta(),
+            tol: d_tol(),
+            method: MethodName::Nsgs,
+            steps: None,
+            duration: None,
+            until_rest: false,
+            rest_speed: d_rest_speed(),
+            max_steps: d_max_steps(),
+            max_sweeps: d_max_sweeps(),
+            relaxation: d_relaxation(),
+            gamma: d_gamma(),
+            projection: true,
+            gap_closure: true,
+            warm_start: true,
+        }
+    }
+}
+
+impl StepSection {
+    /// The number of steps of a fixed-length run: `steps`, else ⌈duration / h⌉, else 200.
+    pub fn fixed_steps(&self) -> usize {
+        match (self.steps, self.duration) {
+            (Some(n), _) => n,
+            (None, Some(d)) => (d / self.h - 1e-9).ceil().max(0.0) as usize,
+            (None, None) => 200,
+        }
+    }
+}
+
+/// `[materials.NAME]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSection {
+    /// density (kg/m³)
+    pub density: f64,
+}
+
+fn d_mu() -> f64 {
+    0.3
+}
+fn d_e() -> f64 {
+    0.2
+}
+
+/// A contact law: Coulomb friction μ, Newton restitution e, rolling friction μ_r.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactLaw {
+    /// friction coefficient μ ≥ 0
+    #[serde(default = "d_mu")]
+    pub mu: f64,
+    /// restitution e ∈ [0, 1]
+    #[serde(default = "d_e")]
+    pub restitution: f64,
+    /// rolling-friction coefficient μ_r ≥ 0
+    #[serde(default)]
+    pub rolling_friction: f64,
+}
+
+impl Default for ContactLaw {
+    fn default() -> Self {
+        Self {
+            mu: d_mu(),
+            restitution: d_e(),
+            rolling_friction: 0.0,
+        }
+    }
+}
+
+/// `[[pairs]]`: the law of one pair of materials (unset coefficients: `default_pair`'s).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PairSection {
+    /// the two materials (the same name twice for contacts within one material)
+    pub materials: [String; 2],
+    /// friction coefficient μ
+    #[serde(default)]
+    pub mu: Option<f64>,
+    /// restitution e
+    #[serde(default)]
+    pub restitution: Option<f64>,
+    /// rolling-friction coefficient μ_r
+    #[serde(default)]
+    pub rolling_friction: Option<f64>,
+}
+
+/// `[[bodies]]`: a group of spheres, from exactly one of `spheres`, `file` or `fill`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodiesSection {
+    /// material of the group (a CSV `material` column overrides it per sphere)
+    #[serde(default = "default_material")]
+    pub material: String,
+    /// density (kg/m³), instead of the material's
+    #[serde(default)]
+    pub density: Option<f64>,
+    /// fixed spheres (they do not move; obstacles made of spheres)
+    #[serde(default)]
+    pub fixed: bool,
+    /// initial velocity (m/s) of spheres that have none from their source (default 0)
+    #[serde(default)]
+    pub velocity: Option<[f64; 3]>,
+    /// initial angular velocity (rad/s)
+    #[serde(default)]
+    pub angular_velocity: [f64; 3],
+    /// inline spheres: [x, y, z, r] each
+    #[serde(default)]
+    pub spheres: Option<Vec<[f64; 4]>>,
+    /// a CSV or NPY file (relative to the scene file)
+    #[serde(default)]
+    pub file: Option<String>,
+    /// a generator
+    #[serde(default)]
+    pub fill: Option<FillSection>,
+}
+
+/// A generated group: `count` spheres with radii from `sizes` placed in `region` (or in the
+/// interior of the closed `mesh`) by `packing`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FillSection {
+    /// how many spheres
+    pub count: usize,
+    /// a box or cylinder region (or give `mesh`)
+    #[serde(default)]
+    pub region: Option<generate::Shape>,
+    /// a closed mesh whose interior is the region
+    #[serde(default)]
+    pub mesh: Option<MeshSource>,
+    /// radii
+    pub sizes: SizeDistribution,
+    /// lattice (default) or random sequential addition
+    #[serde(default)]
+    pub packing: Packing,
+    /// each velocity component gets U(−a, a) added (m/s)
+    #[serde(default)]
+    pub velocity_jitter: f64,
+    /// seed (default: the scene's seed + the fill's index among the fills)
+    #[serde(default)]
+    pub seed: Option<u64>,
+    /// refuse the scene when fewer than `count` spheres fit (default true)
+    #[serde(default = "yes")]
+    pub require_all: bool,
+}
+
+/// A triangle mesh: from a file (STL or OBJ, relative to the scene file) or inline.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshSource {
+    /// an .stl or .obj file
+    #[serde(default)]
+    pub file: Option<String>,
+    /// inline vertices (m)
+    #[serde(default)]
+    pub vertices: Option<Vec<[f64; 3]>>,
+    /// inline triangles (vertex indices, from 0)
+    #[serde(default)]
+    pub triangles: Option<Vec<[usize; 3]>>,
+    /// scale, rotation and translation applied to the vertices
+    #[serde(default)]
+    pub transform: Transform,
+}
+
+/// `[[obstacles]]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObstacleSection {
+    /// a name for outputs (default `obstacle-K`)
+    #[serde(default)]
+    pub name: Option<String>,
+    /// material
+    #[serde(default = "default_material")]
+    pub material: String,
+    /// geometry
+    pub shape: ObstacleShape,
+    /// prescribed motion (default fixed)
+    #[serde(default)]
+    pub motion: MotionSection,
+}
+
+/// Geometry of an obstacle.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ObstacleShape {
+    /// an infinite plane; spheres live on the side `normal` points to
+    Plane {
+        /// a point of the plane (m)
+        point: [f64; 3],
+        /// normal (normalized here)
+        normal: [f64; 3],
+    },
+    /// a thin two-sided rectangle
+    Rectangle {
+        /// centre (m)
+        center: [f64; 3],
+        /// normal (normalized here)
+        normal: [f64; 3],
+        /// in-plane axis (made orthogonal to the normal, normalized)
+        u: [f64; 3],
+        /// half-length along u (m)
+        half_u: f64,
+        /// half-length along normal × u (m)
+        half_v: f64,
+    },
+    /// an axis-aligned box container [lo, hi] (spheres inside), or a solid block (outside)
+    Box {
+        /// lower corner (m)
+        lo: [f64; 3],
+        /// upper corner (m)
+        hi: [f64; 3],
+        /// spheres inside (a container, default) or outside (a block)
+        #[serde(default = "yes")]
+        inside: bool,
+        /// no lid (a container open at z = hi.z)
+        #[serde(default)]
+        open_top: bool,
+    },
+    /// a circular cylinder from `base` along `axis` over `height`
+    Cylinder {
+        /// centre of the base (m)
+        base: [f64; 3],
+        /// axis (normalized here; default +z)
+        #[serde(default = "z_axis")]
+        axis: [f64; 3],
+        /// radius (m)
+        radius: f64,
+        /// length along the axis (m)
+        height: f64,
+        /// spheres inside (a silo or drum, default) or outside (a post)
+        #[serde(default = "yes")]
+        inside: bool,
+        /// the base is closed (default true)
+        #[serde(default = "yes")]
+        bottom_cap: bool,
+        /// the far end is closed (default true)
+        #[serde(default = "yes")]
+        top_cap: bool,
+        /// radius of a circular hole centred in the base cap (m; 0: none)
+        #[serde(default)]
+        orifice: f64,
+    },
+    /// a sphere
+    Sphere {
+        /// centre (m)
+        center: [f64; 3],
+        /// radius (m)
+        radius: f64,
+        /// spheres inside (a spherical container) or outside (default)
+        #[serde(default)]
+        inside: bool,
+    },
+    /// a triangle mesh (any closed or open surface), from `file` or inline
+    Mesh {
+        /// an .stl or .obj file (relative to the scene file)
+        #[serde(default)]
+        file: Option<String>,
+        /// inline vertices (m)
+        #[serde(default)]
+        vertices: Option<Vec<[f64; 3]>>,
+        /// inline triangles (vertex indices, from 0)
+        #[serde(default)]
+        triangles: Option<Vec<[usize; 3]>>,
+        /// scale, rotation and translation applied to the vertices
+        #[serde(default)]
+        transform: Transform,
+        /// where the spheres live: `surface` (either side, default), `inside` or `outside`
+        /// (a closed, consistently oriented mesh)
+        #[serde(default)]
+        side: MeshSide,
+    },
+}
+
+fn z_axis() -> [f64; 3] {
+    [0.0, 0.0, 1.0]
+}
+
+/// Prescribed motion of an obstacle.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum MotionSection {
+    /// motionless
+    #[default]
+    Fixed,
+    /// translation at a constant velocity
+    Translate {
+        /// velocity (m/s)
+        velocity: [f64; 3],
+    },
+    /// translation A sin(2π f t) along `direction`
+    Oscillate {
+        /// direction (normalized here)
+        direction: [f64; 3],
+        /// amplitude A (m)
+        amplitude: f64,
+        /// frequency f (Hz)
+        frequency: f64,
+    },
+    /// rotation at ω about the line through `center` along `axis`
+    Rotate {
+        /// a point of the axis (m)
+        center: [f64; 3],
+        /// axis (normalized here)
+        axis: [f64; 3],
+        /// angular velocity (rad/s)
+        omega: f64,
+    },
+}
+
+/// `[[inlets]]`: an [`Inlet`] whose spheres are of `material`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InletSection {
+    /// material of the poured spheres (its density turns a mass rate into spheres)
+    #[serde(default = "default_material")]
+    pub material: String,
+    /// where the spheres appear (box or cylinder)
+    pub region: generate::Shape,
+    /// radii
+    pub sizes: SizeDistribution,
+    /// `{ count = spheres/s }` or `{ mass = kg/s }`
+    pub rate: Rate,
+    /// first emission time (s)
+    #[serde(default)]
+    pub start: f64,
+    /// last emission time (s; default none)
+    #[serde(default)]
+    pub end: Option<f64>,
+    /// initial velocity (m/s)
+    #[serde(default)]
+    pub velocity: [f64; 3],
+    /// candidate positions per sphere (default 20)
+    #[serde(default)]
+    pub attempts: Option<usize>,
+    /// seed (default: the scene's seed + 1000 + the inlet's index)
+    #[serde(default)]
+    pub seed: Option<u64>,
+}
+
+/// One segment of a key path.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Seg {
+    /// a table key
+    Key(String),
+    /// an array index
+    Index(usize),
+}
+
+fn key(s: &str) -> Seg {
+    Seg::Key(s.to_string())
+}
+
+fn path_string(p: &[Seg]) -> String {
+    let mut s = String::new();
+    for seg in p {
+        match seg {
+            Seg::Key(k) => {
+                if !s.is_empty() {
+                    s.push('.');
+                }
+                s.push_str(k);
+            }
+            Seg::Index(i) => s.push_str(&format!("[{i}]")),
+        }
+    }
+    s
+}
+
+/// 1-based line and column (in characters) of byte `offset` of `text`.
+pub fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let offset = offset.min(text.len());
+    let mut cut = offset;
+    while !text.is_char_boundary(cut) {
+        cut -= 1;
+    }
+    let before = &text[..cut];
+    let line = before.matches('\n').count() + 1;
+    let start = before.rfind('\n').map(|i| i + 1).unwrap_or(0);
+    (line, before[start..].chars().count() + 1)
+}
+
+/// A parsed scene file, with its text (to locate keys) and folder (to resolve file names).
+#[derive(Debug, Clone)]
+pub struct LoadedScene {
+    /// the scene file
+    pub path: PathBuf,
+    /// its content
+    pub text: String,
+    /// whether it is TOML (else JSON)
+    pub is_toml: bool,
+    /// the parsed content
+    pub file: SceneFile,
+}
+
+/// Options of [`LoadedScene::build`].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct BuildOptions {
+    /// replaces the file's `seed`
+    pub seed: Option<u64>,
+    /// caps the count of every fill (and lets a capped fill place fewer): small test runs
+    pub max_fill: Option<usize>,
+}
+
+/// A sphere of the built scene, before the scene model's validation.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BodyOut {
+    /// centre (m)
+    pub position: Vec3,
+    /// radius (m)
+    pub radius: f64,
+    /// mass (kg)
+    pub mass: f64,
+    /// velocity (m/s)
+    pub velocity: Vec3,
+    /// angular velocity (rad/s)
+    pub angular_velocity: Vec3,
+    /// its material
+    pub material: String,
+    /// whether it is fixed
+    pub fixed: bool,
+}
+
+/// A running inlet: what emits and the density and material of what it emits.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InletRun {
+    /// the inlet
+    pub inlet: Inlet,
+    /// density of its spheres (kg/m³)
+    pub density: f64,
+    /// material of its spheres
+    pub material: String,
+}
+
+impl InletRun {
+    /// Inserts into `sim` ([`Simulation::insert_bodies`]) the spheres due in (t0, t1]
+    /// ([`Inlet::emit`], placed among the spheres present), with the materials of `model`;
+    /// returns (inserted, skipped).
+    pub fn emit(
+        &mut self,
+        sim: &mut Simulation,
+        model: &SceneModel,
+        t0: f64,
+        t1: f64,
+    ) -> Result<(usize, usize), SimulationError> {
+        let present: Vec<(Vec3, f64)> = sim
+            .world
+            .bodies
+            .iter()
+            .map(|b| (b.position, b.radius))
+            .collect();
+        let e = self.inlet.emit(t0, t1, &present);
+        if e.particles.is_empty() {
+            return Ok((0, e.skipped));
+        }
+        let batch = SphereBatch {
+            positions: e.particles.iter().map(|p| p.position).collect(),
+            radii: e.particles.iter().map(|p| p.radius).collect(),
+            velocities: e.particles.iter().map(|p| p.velocity).collect(),
+            masses: e
+                .particles
+                .iter()
+                .map(|p| sphere_mass(self.density, p.radius))
+                .collect(),
+            material: self.material.clone(),
+            ..SphereBatch::default()
+        };
+        let spheres = model
+            .spheres_of(&batch)
+            .map_err(|e| SimulationError::Parameter(format!("inlet: {e}")))?;
+        sim.insert_bodies(spheres)?;
+        Ok((e.particles.len(), e.skipped))
+    }
+}
+
+/// The scene a file describes, built: the scene model, the run settings of `[step]` and the
+/// inlets.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BuiltScene {
+    /// the scene file
+    pub path: PathBuf,
+    /// name for outputs
+    pub name: String,
+    /// the scene model (spheres as batches, obstacles, materials, step settings)
+    pub model: SceneModel,
+    /// the `[step]` section (run length, activation, projection, warm starts)
+    pub step: StepSection,
+    /// the inlets
+    pub inlets: Vec<InletRun>,
+    /// what each fill placed, (asked, placed)
+    pub fills: Vec<(usize, usize)>,
+}
+
+/// Mass ρ · 4/3 π R³ of a solid ball (the built-in scenes' expression, to the bit).
+pub fn sphere_mass(density: f64, r: f64) -> f64 {
+    density * 4.0 / 3.0 * std::f64::consts::PI * r * r * r
+}
+
+fn v3(a: [f64; 3]) -> Vec3 {
+    Vec3::new(a[0], a[1], a[2])
+}
+
+impl LoadedScene {
+    /// Reads and parses a scene file (`.toml` or `.json`), refusing unknown keys.
+    pub fn load(path: &Path) -> Result<Self, SceneFileError> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase());
+        let is_toml = match ext.as_deref() {
+            Some("toml") => true,
+            Some("json") => false,
+            _ => {
+                return Err(SceneFileError::Extension {
+                    path: path.to_path_buf(),
+                })
+            }
+        };
+        let text = std::fs::read_to_string(path).map_err(|source| SceneFileError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::parse(path, text, is_toml)
+    }
+
+    /// Parses `text` as the content of `path` (TOML or JSON).
+    pub fn parse(path: &Path, text: String, is_toml: bool) -> Result<Self, SceneFileError> {
+        let file: SceneFile = if is_toml {
+            toml::from_str(&text).map_err(|e| {
+                let (line, column) = line_column(&text, e.span().map(|s| s.start).unwrap_or(0));
+                SceneFileError::Syntax {
+                    path: path.to_path_buf(),
+                    line,
+                    column,
+                    message: e.message().trim().to_string(),
+                }
+            })?
+        } else {
+            serde_json::from_str(&text).map_err(|e| SceneFileError::Syntax {
+                path: path.to_path_buf(),
+                line: e.line(),
+                column: e.column(),
+                message: e.to_string(),
+            })?
+        };
+        Ok(Self {
+            path: path.to_path_buf(),
+            text,
+            is_toml,
+            file,
+        })
+    }
+
+    /// Line and column of the key at `p` (TOML only; the deepest part of the path found).
+    fn locate(&self, p: &[Seg]) -> Option<(usize, usize)> {
+        if !self.is_toml {
+            return None;
+        }
+        let doc = toml::de::DeTable::parse(&self.text).ok()?;
+        let root = toml::de::DeValue::Table(doc.into_inner());
+        let mut cur = &root;
+        let mut span = None;
+        for seg in p {
+            let next = match seg {
+                Seg::Key(k) => cur.get(k.as_str()),
+                Seg::Index(i) => cur.get(*i),
+            };
+            match next {
+                Some(v) => {
+                    span = Some(v.span());
+                    cur = v.get_ref();
+                }
+                None => break,
+            }
+        }
+        span.map(|s| line_column(&self.text, s.start))
+    }
+
+    fn invalid(&self, p: &[Seg], message: impl Into<String>) -> SceneFileError {
+        SceneFileError::Invalid {
+            path: self.path.clone(),
+            at: self.locate(p),
+            key: path_string(p),
+            message: message.into(),
+        }
+    }
+
+    fn resolve(&self, name: &str) -> PathBuf {
+        let p = Path::new(name);
+        if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            self.path.parent().unwrap_or_else(|| Path::new(".")).join(p)
+        }
+    }
+
+    fn mesh(&self, src: &MeshSource, p: &[Seg]) -> Result<TriMesh, SceneFileError> {
+        let mesh =
+            match (&src.file, &src.vertices, &src.triangles) {
+                (Some(f), None, None) => import::read_mesh(&self.resolve(f), &src.transform)
+                    .map_err(|source| SceneFileError::Import {
+                        path: self.path.clone(),
+                        key: path_string(p),
+                        source,
+                    })?,
+                (None, Some(v), Some(t)) => {
+                    src.transform
+                        .validate()
+                        .map_err(|m| self.invalid(&[p, &[key("transform")]].concat(), m))?;
+                    let m = TriMesh {
+                        vertices: v.iter().map(|&a| v3(a)).collect(),
+                        triangles: t.clone(),
+                    }
+                    .transformed(&src.transform);
+                    m.validate().map_err(|m| self.invalid(p, m))?;
+                    m
+                }
+                _ => {
+                    return Err(self.invalid(
+                        p,
+                        "a mesh needs either `file` or both `vertices` and `triangles`",
+                    ))
+                }
+            };
+        Ok(mesh)
+    }
+
+    /// Builds the scene: checks every value, resolves materials, generates and reads the
+    /// spheres (each group avoiding the spheres of the groups before it), reads the meshes.
+    pub fn build(&self, opts: &BuildOptions) -> Result<BuiltScene, SceneFileError> {
+        let f = &self.file;
+        let seed = opts.seed.unwrap_or(f.seed);
+        let fin3 = |a: &[f64; 3]| a.iter().all(|x| x.is_finite());
+        let pos = |x: f64| x.is_finite() && x > 0.0;
+        if !fin3(&f.gravity) {
+            return Err(self.invalid(&[key("gravity")], "must be finite"));
+        }
+        self.check_step()?;
+        // materials
+        let mut density: BTreeMap<String, f64> = BTreeMap::new();
+        density.insert(DEFAULT_MATERIAL.into(), DEFAULT_DENSITY);
+        for (name, m) in &f.materials {
+            if !pos(m.density) {
+                return Err(self.invalid(
+                    &[key("materials"), key(name), key("density")],
+                    format!("density {} must be finite and positive", m.density),
+                ));
+            }
+            density.insert(name.clone(), m.density);
+        }
+        let known = |p: &[Seg], name: &str| -> Result<f64, SceneFileError> {
+            density.get(name).copied().ok_or_else(|| {
+                let names: Vec<&str> = density.keys().map(String::as_str).collect();
+                self.invalid(
+                    p,
+                    format!(
+                        "unknown material '{name}' (materials: {})",
+                        names.join(", ")
+                    ),
+                )
+            })
+        };
+        self.check_law(&[key("default_pair")], &f.default_pair)?;
+        let mut pairs = BTreeMap::new();
+        for (i, pr) in f.pairs.iter().enumerate() {
+            let p = [key("pairs"), Seg::Index(i)];
+            for (k, m) in pr.materials.iter().enumerate() {
+                known(&[&p[..], &[key("materials"), Seg::Index(k)]].concat(), m)?;
+            }
+            let law = ContactLaw {
+                mu: pr.mu.unwrap_or(f.default_pair.mu),
+                restitution: pr.restitution.unwrap_or(f.default_pair.restitution),
+                rolling_friction: pr
+                    .rolling_friction
+                    .unwrap_or(f.default_pair.rolling_friction),
+            };
+            self.check_law(&p, &law)?;
+            let mut k = pr.materials.clone();
+            k.sort();
+            let [a, b] = k;
+            if pairs.insert((a.clone(), b.clone()), law).is_some() {
+                return Err(self.invalid(&p, format!("the pair ({a}, {b}) is listed twice")));
+            }
+        }
+        // bodies
+        let mut bodies: Vec<BodyOut> = Vec::new();
+        let mut fills = Vec::new();
+        for (i, g) in f.bodies.iter().enumerate() {
+            let p = vec![key("bodies"), Seg::Index(i)];
+            let at = |k: &str| [&p[..], &[key(k)]].concat();
+            let rho_group = match g.density {
+                Some(d) if !pos(d) => {
+                    return Err(self.invalid(&at("density"), format!("{d} must be positive")))
+                }
+                Some(d) => d,
+                None => known(&at("material"), &g.material)?,
+            };
+            known(&at("material"), &g.material)?;
+            let v0 = g.velocity.unwrap_or([0.0; 3]);
+            if !fin3(&v0) || !fin3(&g.angular_velocity) {
+                return Err(self.invalid(&p, "velocity and angular_velocity must be finite"));
+            }
+            let sources = [g.spheres.is_some(), g.file.is_some(), g.fill.is_some()];
+            if sources.iter().filter(|&&b| b).count() != 1 {
+                return Err(self.invalid(&p, "give exactly one of `spheres`, `file` and `fill`"));
+            }
+            let make =
+                |pos: Vec3, r: f64, v: Option<Vec3>, mat: Option<String>, rho: f64| BodyOut {
+                    position: pos,
+                    radius: r,
+                    mass: sphere_mass(rho, r),
+                    velocity: v.unwrap_or(v3(v0)),
+                    angular_velocity: v3(g.angular_velocity),
+                    material: mat.unwrap_or_else(|| g.material.clone()),
+                    fixed: g.fixed,
+                };
+            if let Some(list) = &g.spheres {
+                for (k, s) in list.iter().enumerate() {
+                    if !(s[..3].iter().all(|x| x.is_finite()) && pos(s[3])) {
+                        return Err(self.invalid(
+                            &[&p[..], &[key("spheres"), Seg::Index(k)]].concat(),
+                            format!("sphere {s:?}: needs a finite centre and a positive radius"),
+                        ));
+                    }
+                    bodies.push(make(
+                        Vec3::new(s[0], s[1], s[2]),
+                        s[3],
+                        None,
+                        None,
+                        rho_group,
+                    ));
+                }
+            } else if let Some(name) = &g.file {
+                let recs = import::read_particles(&self.resolve(name)).map_err(|source| {
+                    SceneFileError::Import {
+                        path: self.path.clone(),
+                        key: path_string(&at("file")),
+                        source,
+                    }
+                })?;
+                for r in recs {
+                    let rho = match (&r.material, g.density) {
+                        (Some(m), None) => known(&at("file"), m)?,
+                        (Some(m), Some(d)) => {
+                            known(&at("file"), m)?;
+                            d
+                        }
+                        (None, _) => rho_group,
+                    };
+                    bodies.push(make(r.position, r.radius, r.velocity, r.material, rho));
+                }
+            } else if let Some(fill) = &g.fill {
+                let fp = at("fill");
+                let fill_index = f.bodies[..i].iter().filter(|b| b.fill.is_some()).count();
+                let count = opts.max_fill.map_or(fill.count, |m| fill.count.min(m));
+                let spec = FillSpec {
+                    count,
+                    sizes: fill.sizes.clone(),
+                    packing: fill.packing.clone(),
+                    velocity: v3(v0),
+                    velocity_jitter: fill.velocity_jitter,
+                    seed: fill
+                        .seed
+                        .unwrap_or_else(|| seed.wrapping_add(fill_index as u64)),
+                };
+                let avoid: Vec<(Vec3, f64)> =
+                    bodies.iter().map(|b| (b.position, b.radius)).collect();
+                let filled = match (&fill.region, &fill.mesh) {
+                    (Some(r), None) => {
+                        r.validate().map_err(|e| {
+                            self.invalid(&[&fp[..], &[key("region")]].concat(), e.to_string())
+                        })?;
+                        generate::fill(r, &spec, &avoid)
+                    }
+                    (None, Some(m)) => {
+                        let mp = [&fp[..], &[key("mesh")]].concat();
+                        let mesh = self.mesh(m, &mp)?;
+                        mesh.check_closed_and_oriented()
+                            .map_err(|e| self.invalid(&mp, e))?;
+                        let (lo, hi) = mesh.bounds();
+                        let inside = |x: Vec3| mesh.inside(x);
+                        let region = generate::Predicate {
+                            lo,
+                            hi,
+                            inside: &inside,
+                        };
+                        generate::fill(&region as &dyn Region, &spec, &avoid)
+                    }
+                    _ => return Err(self.invalid(&fp, "give exactly one of `region` and `mesh`")),
+                }
+                .map_err(|e| self.invalid(&fp, e.to_string()))?;
+                if fill.require_all && opts.max_fill.is_none() && filled.placed() < filled.asked {
+                    return Err(self.invalid(
+                        &fp,
+                        format!(
+                            "only {} of {} spheres fit in the region ({} positions tried); enlarge it, lower `count`, or set require_all = false",
+                            filled.placed(),
+                            filled.asked,
+                            filled.attempts
+                        ),
+                    ));
+                }
+                fills.push((filled.asked, filled.placed()));
+                for q in filled.particles {
+                    bodies.push(make(
+                        q.position,
+                        q.radius,
+                        Some(q.velocity),
+                        None,
+                        rho_group,
+                    ));
+                }
+            }
+        }
+        // obstacles
+        let mut obstacles = Vec::new();
+        for (i, o) in f.obstacles.iter().enumerate() {
+            let p = [key("obstacles"), Seg::Index(i)];
+            known(&[&p[..], &[key("material")]].concat(), &o.material)?;
+            let name = o.name.clone().unwrap_or_else(|| format!("obstacle-{i}"));
+            let motion = self.motion(&[&p[..], &[key("motion")]].concat(), &o.motion)?;
+            let sp = [&p[..], &[key("shape")]].concat();
+            obstacles.push(ObstacleSpec {
+                name,
+                shape: self.obstacle(&sp, &o.shape)?,
+                motion,
+                material: o.material.clone(),
+            });
+        }
+        // inlets
+        let mut inlets = Vec::new();
+        for (i, s) in f.inlets.iter().enumerate() {
+            let p = vec![key("inlets"), Seg::Index(i)];
+            let rho = known(&[&p[..], &[key("material")]].concat(), &s.material)?;
+            let mut inlet = Inlet::new(
+                s.region.clone(),
+                s.sizes.clone(),
+                rho,
+                s.rate,
+                s.seed.unwrap_or_else(|| seed.wrapping_add(1000 + i as u64)),
+            );
+            inlet.start = s.start;
+            inlet.end = s.end.unwrap_or(f64::INFINITY);
+            inlet.velocity = s.velocity;
+            if let Some(a) = s.attempts {
+                inlet.attempts = a;
+            }
+            inlet
+                .validate()
+                .map_err(|e| self.invalid(&p, e.to_string()))?;
+            inlets.push(InletRun {
+                inlet,
+                density: rho,
+                material: s.material.clone(),
+            });
+        }
+        let name = f.name.clone().unwrap_or_else(|| {
+            self.path
+                .file_stem()
+                .and_then(|s| s.to_str())
+                .unwrap_or("scene")
+                .to_string()
+        });
+        let law = |l: &ContactLaw| crate::world::ContactLaw {
+            mu: l.mu,
+            restitution: l.restitution,
+            rolling_friction: l.rolling_friction,
+        };
+        let materials = Materials {
+            names: density
+                .keys()
+                .filter(|n| n.as_str() != DEFAULT_MATERIAL)
+                .cloned()
+                .collect(),
+            default: law(&f.default_pair),
+            pairs: pairs
+                .iter()
+                .map(|((a, b), l)| MaterialPair {
+                    a: a.clone(),
+                    b: b.clone(),
+                    mu: l.mu,
+                    restitution: l.restitution,
+                    rolling_friction: l.rolling_friction,
+                })
+                .collect(),
+        };
+        // With one law for every pair, the model's world carries no material table
+        // (World::materials = None) but keeps the material indices of bodies and obstacles,
+        // which Simulation::new then refuses; the names only select laws (densities are
+        // resolved above), so they all become `default`.
+        let mut materials = materials;
+        if materials.pairs.iter().all(|p| p.law() == materials.default) {
+            materials.names.clear();
+            materials.pairs.clear();
+            for b in &mut bodies {
+                b.material = DEFAULT_MATERIAL.to_string();
+            }
+            for o in &mut obstacles {
+                o.material = DEFAULT_MATERIAL.to_string();
+            }
+        }
+        let model = SceneModel {
+            gravity: v3(f.gravity),
+            materials,
+            bodies: Vec::new(),
+            sphere_batches: batches(&bodies),
+            obstacles,
+            step: StepSettings {
+                h: f.step.h,
+                theta: f.step.theta,
+                tol: f.step.tol,
+                method: match f.step.method {
+                    MethodName::Nsgs => StepChoice::Nsgs,
+                    MethodName::Library => StepChoice::Library,
+                },
+                max_sweeps: f.step.max_sweeps,
+                relaxation: f.step.relaxation,
+            },
+        };
+        Ok(BuiltScene {
+            path: self.path.clone(),
+            name,
+            model,
+            step: f.step.clone(),
+            inlets,
+            fills,
+        })
+    }
+
+    fn check_step(&self) -> Result<(), SceneFileError> {
+        let s = &self.file.step;
+        let at = |k: &str| [key("step"), key(k)];
+        let pos = |x: f64| x.is_finite() && x > 0.0;
+        if !pos(s.h) {
+            return Err(self.invalid(&at("h"), format!("{} must be a positive time (s)", s.h)));
+        }
+        if !(0.0..=1.0).contains(&s.theta) {
+            return Err(self.invalid(&at("theta"), format!("{} must be in [0, 1]", s.theta)));
+        }
+        if !pos(s.tol) {
+            return Err(self.invalid(&at("tol"), format!("{} must be positive", s.tol)));
+        }
+        if let Some(d) = s.duration {
+            if !(d.is_finite() && d >= 0.0) {
+                return Err(self.invalid(&at("duration"), format!("{d} must be ≥ 0")));
+            }
+            if s.steps.is_some() {
+                return Err(self.invalid(&at("duration"), "give `steps` or `duration`, not both"));
+            }
+        }
+        if s.until_rest && (s.steps.is_some() || s.duration.is_some()) {
+            return Err(self.invalid(
+                &at("until_rest"),
+                "until_rest stops by itself (cap: max_steps): drop `steps` and `duration`",
+            ));
+        }
+        if !pos(s.rest_speed) {
+            return Err(self.invalid(&at("rest_speed"), "must be positive"));
+        }
+        if !(s.relaxation.is_finite() && (1.0..2.0).contains(&s.relaxation)) {
+            return Err(self.invalid(&at("relaxation"), "must be in [1, 2)"));
+        }
+        if !(s.gamma.is_finite() && s.gamma >= 0.0) {
+            return Err(self.invalid(&at("gamma"), "must be ≥ 0"));
+        }
+        if s.max_sweeps == 0 || s.max_steps == 0 {
+            return Err(self.invalid(&[key("step")], "max_sweeps and max_steps must be ≥ 1"));
+        }
+        if self.file.step.fixed_steps() > 100_000_000 {
+            return Err(self.invalid(&[key("step")], "more than 1e8 steps"));
+        }
+        Ok(())
+    }
+
+    fn check_law(&self, p: &[Seg], l: &ContactLaw) -> Result<(), SceneFileError> {
+        let nonneg = |x: f64| x.is_finite() && x >= 0.0;
+        if !nonneg(l.mu) || !nonneg(l.rolling_friction) || !(0.0..=1.0).contains(&l.restitution) {
+            return Err(self.invalid(
+                p,
+                format!(
+                    "mu {} and rolling_friction {} must be ≥ 0, restitution {} in [0, 1]",
+                    l.mu, l.rolling_friction, l.restitution
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    fn motion(&self, p: &[Seg], m: &MotionSection) -> Result<Motion, SceneFileError> {
+        let unit = |a: [f64; 3], what: &str| -> Result<Vec3, SceneFileError> {
+            let v = v3(a);
+            if v.is_finite() && v.norm() > 0.0 {
+                Ok(v.normalized_or(Vec3::Z))
+            } else {
+                Err(self.invalid(p, format!("{what} {a:?} must be finite and non-zero")))
+            }
+        };
+        Ok(match m {
+            MotionSection::Fixed => Motion::Fixed,
+            MotionSection::Translate { velocity } => {
+                if !v3(*velocity).is_finite() {
+                    return Err(self.invalid(p, "velocity must be finite"));
+                }
+                Motion::Translate {
+                    velocity: v3(*velocity),
+                }
+            }
+            MotionSection::Oscillate {
+                direction,
+                amplitude,
+                frequency,
+            } => {
+                if !(amplitude.is_finite() && frequency.is_finite()) {
+                    return Err(self.invalid(p, "amplitude and frequency must be finite"));
+                }
+                Motion::Oscillate {
+                    direction: unit(*direction, "direction")?,
+                    amplitude: *amplitude,
+                    frequency: *frequency,
+                }
+            }
+            MotionSection::Rotate {
+                center,
+                axis,
+                omega,
+            } => {
+                if !(v3(*center).is_finite() && omega.is_finite()) {
+                    return Err(self.invalid(p, "center and omega must be finite"));
+                }
+                Motion::Rotate {
+                    center: v3(*center),
+                    axis: unit(*axis, "axis")?,
+                    omega: *omega,
+                }
+            }
+        })
+    }
+
+    fn obstacle(&self, p: &[Seg], shape: &ObstacleShape) -> Result<Shape, SceneFileError> {
+        let unit = |a: [f64; 3], what: &str| -> Result<Vec3, SceneFileError> {
+            let v = v3(a);
+            if v.is_finite() && v.norm() > 0.0 {
+                Ok(v.normalized_or(Vec3::Z))
+            } else {
+                Err(self.invalid(p, format!("{what} {a:?} must be finite and non-zero")))
+            }
+        };
+        Ok(match shape {
+            ObstacleShape::Plane { point, normal } => Shape::Plane {
+                point: v3(*point),
+                normal: unit(*normal, "normal")?,
+            },
+            ObstacleShape::Rectangle {
+                center,
+                normal,
+                u,
+                half_u,
+                half_v,
+            } => {
+                let n = unit(*normal, "normal")?;
+                let u = v3(*u);
+                let u = unit(
+                    (u - n * u.dot(n)).to_array(),
+                    "u (orthogonal to the normal)",
+                )?;
+                Shape::Rectangle {
+                    center: v3(*center),
+                    normal: n,
+                    u,
+                    half_u: *half_u,
+                    half_v: *half_v,
+                }
+            }
+            ObstacleShape::Box {
+                lo,
+                hi,
+                inside,
+                open_top,
+            } => Shape::Box {
+                lo: v3(*lo),
+                hi: v3(*hi),
+                inside: *inside,
+                open_top: *open_top,
+            },
+            ObstacleShape::Cylinder {
+                base,
+                axis,
+                radius,
+                height,
+                inside,
+                bottom_cap,
+                top_cap,
+                orifice,
+            } => Shape::Cylinder {
+                base: v3(*base),
+                axis: unit(*axis, "axis")?,
+                radius: *radius,
+                height: *height,
+                inside: *inside,
+                bottom_cap: *bottom_cap,
+                top_cap: *top_cap,
+                orifice: *orifice,
+            },
+            ObstacleShape::Sphere {
+                center,
+                radius,
+                inside,
+            } => Shape::Sphere {
+                center: v3(*center),
+                radius: *radius,
+                inside: *inside,
+            },
+            ObstacleShape::Mesh {
+                file,
+                vertices,
+                triangles,
+                transform,
+                side,
+            } => {
+                let source = MeshSource {
+                    file: file.clone(),
+                    vertices: vertices.clone(),
+                    triangles: triangles.clone(),
+                    transform: transform.clone(),
+                };
+                let m = self.mesh(&source, p)?;
+                let tris = m.triangles.iter().map(|t| t.map(|i| i as u64)).collect();
+                let mesh = TriangleMesh::new(m.vertices, tris)
+                    .map_err(|e| self.invalid(p, e.to_string()))?;
+                Shape::Mesh { mesh, side: *side }
+            }
+        })
+    }
+}
+
+/// The spheres as batches of the scene model: one per run of consecutive spheres of the same
+/// material and mobility, masses given (so that they are the file's to the bit).
+fn batches(bodies: &[BodyOut]) -> Vec<SphereBatch> {
+    let mut out: Vec<SphereBatch> = Vec::new();
+    for b in bodies {
+        let same = out
+            .last()
+            .is_some_and(|l| l.material == b.material && l.fixed == b.fixed);
+        if !same {
+            out.push(SphereBatch {
+                material: b.material.clone(),
+                fixed: b.fixed,
+                ..SphereBatch::default()
+            });
+        }
+        if let Some(l) = out.last_mut() {
+            l.positions.push(b.position);
+            l.radii.push(b.radius);
+            l.masses.push(b.mass);
+            l.velocities.push(b.velocity);
+            l.angular_velocities.push(b.angular_velocity);
+        }
+    }
+    // fixed spheres carry no velocity
+    for l in &mut out {
+        if l.fixed {
+            l.velocities.clear();
+            l.angular_velocities.clear();
+        }
+    }
+    out
+}
+
+impl BuiltScene {
+    /// The world and parameters of the scene ([`SceneModel::build_with`] with `checks`), the
+    /// parameters completed by `[step]`'s activation, projection and warm-start settings.
+    pub fn build(&self, checks: &BuildChecks) -> Result<(World, Params), SceneFileError> {
+        let (world, mut params) =
+            self.model
+                .build_with(checks)
+                .map_err(|source| SceneFileError::Model {
+                    path: self.path.clone(),
+                    source,
+                })?;
+        params.activation.gamma = self.step.gamma;
+        params.activation.close_gaps = self.step.gap_closure;
+        params.warm_start = self.step.warm_start;
+        if !self.step.projection {
+            params.projection = None;
+        }
+        Ok((world, params))
+    }
+
+    /// Every sphere the scene starts with (free and fixed).
+    pub fn sphere_count(&self) -> usize {
+        self.model
+            .sphere_batches
+            .iter()
+            .map(|b| b.positions.len())
+            .sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<LoadedScene, SceneFileError> {
+        LoadedScene::parse(Path::new("t.toml"), text.to_string(), true)
+    }
+
+    #[test]
+    fn unknown_keys_are_refused_with_file_line_and_column() {
+        let e = parse("seed = 1\ngravty = [0, 0, -1]\n").unwrap_err();
+        match &e {
+            SceneFileError::Syntax {
+                line,
+                column,
+                message,
+                ..
+            } => {
+                assert_eq!((*line, *column), (2, 1), "{e}");
+                assert!(message.contains("gravty"), "{e}");
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(e.to_string().starts_with("t.toml:2:1: "), "{e}");
+        let e = parse("[step]\nh = 0.01\n  tehta = 0.5\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("t.toml:3:3: ") && e.contains("tehta"), "{e}");
+        let e = parse("[[bodies]]\nspheres = [[0, 0, 1, 0.1]]\ncolour = 'red'\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("t.toml:3:1: ") && e.contains("colour"), "{e}");
+        // JSON: serde_json's line and column
+        let e = LoadedScene::parse(
+            Path::new("t.json"),
+            "{\n  \"seed\": 1,\n  \"stepp\": {}\n}".into(),
+            false,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.starts_with("t.json:3:") && e.contains("stepp"), "{e}");
+        // a syntax error
+        let e = parse("seed = \n").unwrap_err();
+        assert!(matches!(e, SceneFileError::Syntax { line: 1, .. }), "{e}");
+    }
+
+    #[test]
+    fn a_pair_naming_an_unknown_material_is_refused_where_it_is() {
+        let text = "[materials.glass]\ndensity = 2500\n\n[[pairs]]\nmaterials = [\"glass\", \"steel\"]\nmu = 0.5\n";
+        let e = parse(text)
+            .unwrap()
+            .build(&BuildOptions::default())
+            .unwrap_err();
+        let s = e.to_string();
+        assert!(s.starts_with("t.toml:5:"), "{s}");
+        assert!(
+            s.contains("pairs[0].materials[1]") && s.contains("unknown material 'steel'"),
+            "{s}"
+        );
+        // a body's material too
+        let e = parse("[[bodies]]\nmaterial = \"sand\"\nspheres = [[0, 0, 1, 0.1]]\n")
+            .unwrap()
+            .build(&BuildOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("t.toml:2:") && e.contains("'sand'"), "{e}");
+    }
+
+    #[test]
+    fn bad_values_are_refused() {
+        let cases = [
+            ("[step]\nh = -1\n", "step.h"),
+            ("[[bodies]]\nspheres = [[0, 0, 1, -0.1]]\n", "bodies[0].spheres[0]"),
+            ("[[bodies]]\n", "exactly one of"),
+            ("[default_pair]\nrestitution = 2\n", "default_pair"),
+            ("[materials.x]\ndensity = 0\n", "materials.x.density"),
+            (
+                "[[bodies]]\n[bodies.fill]\ncount = 1000\nregion = { kind = \"box\", lo = [0,0,0], hi = [0.2,0.2,0.2] }\nsizes = { kind = \"mono\", radius = 0.05 }\n",
+                "only 1 of 1000",
+            ),
+            (
+                "[[obstacles]]\nshape = { kind = \"plane\", point = [0,0,0], normal = [0,0,0] }\n",
+                "obstacles[0].shape",
+            ),
+            ("[[bodies]]\nfile = \"missing.csv\"\n", "missing.csv"),
+        ];
+        for (text, want) in cases {
+            let e = parse(text)
+                .and_then(|s| s.build(&BuildOptions::default()))
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(want), "{text}: {e}");
+        }
+    }
+
+    #[test]
+    fn inline_spheres_materials_and_pairs() {
+        let text = "[materials.steel]\ndensity = 7800\n[[pairs]]\nmaterials = [\"steel\", \"default\"]\nmu = 0.1\n[[bodies]]\nmaterial = \"steel\"\nvelocity = [1, 0, 0]\nspheres = [[0, 0, 1, 0.1], [1, 0, 1, 0.2]]\n";
+        let b = parse(text)
+            .unwrap()
+            .build(&BuildOptions::default())
+            .unwrap();
+        assert_eq!(b.sphere_count(), 2);
+        let batch = &b.model.sphere_batches[0];
+        assert_eq!(batch.masses[1], sphere_mass(7800.0, 0.2));
+        assert_eq!(batch.velocities[0], Vec3::X);
+        assert_eq!(batch.material, "steel");
+        let pair = &b.model.materials.pairs[0];
+        assert_eq!((pair.a.as_str(), pair.b.as_str()), ("default", "steel"));
+        assert_eq!((pair.mu, pair.restitution), (0.1, 0.2));
+        let (world, params) = b.build(&BuildChecks::default()).unwrap();
+        assert_eq!(world.bodies.len(), 2);
+        // the steel–default law is in the world's table; the default law in the parameters
+        assert!(world.materials.is_some());
+        assert_eq!(params.mu, 0.3);
+    }
+
+    #[test]
+    fn line_column_counts_characters() {
+        let t = "ab\nμx = 1\n";
+        assert_eq!(line_column(t, 0), (1, 1));
+        assert_eq!(line_column(t, 3), (2, 1));
+        assert_eq!(line_column(t, 5), (2, 2));
+    }
+}

@@ -323,3 +323,43 @@ pub fn scene_error(py: Python<'_>, e: &coulomb_granular::SceneError) -> PyErr {
     };
     scene_input_error(py, &variant_name(e), field, index, msg)
 }
+
+/// [`coulomb_granular::scene_file::SceneFileError`] → `OSError` when the file cannot be read,
+/// otherwise `coulomb.SceneError` with the message (file:line:column: key: what) and `kind`
+/// (`extension`, `syntax`, `invalid`, `import`, or the model's variant with its `field` and
+/// `index`).
+pub fn scene_file_error(py: Python<'_>, e: &coulomb_granular::scene_file::SceneFileError) -> PyErr {
+    use coulomb_granular::scene_file::SceneFileError as E;
+    let msg = e.to_string();
+    match e {
+        E::Io { path, source } => {
+            let args = (
+                source.raw_os_error().unwrap_or(0),
+                source.to_string(),
+                path.display().to_string(),
+            );
+            match source.kind() {
+                std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(args),
+                std::io::ErrorKind::PermissionDenied => PyPermissionError::new_err(args),
+                std::io::ErrorKind::IsADirectory => PyIsADirectoryError::new_err(args),
+                _ => PyOSError::new_err(args),
+            }
+        }
+        E::Model { source, .. } => {
+            let err = scene_error(py, source);
+            // the model's field and index, the message with the file's name
+            let v = err.value(py);
+            let field = v
+                .getattr("field")
+                .map_or_else(|_| py.None(), |x| x.unbind());
+            let index = v
+                .getattr("index")
+                .map_or_else(|_| py.None(), |x| x.unbind());
+            let field: Option<String> = field.extract(py).ok();
+            scene_input_error(py, &variant_name(source), field.as_deref(), index, msg)
+        }
+        E::Invalid { key, .. } => scene_input_error(py, "invalid", Some(key), py.None(), msg),
+        E::Import { key, .. } => scene_input_error(py, "import", Some(key), py.None(), msg),
+        _ => scene_input_error(py, &variant_name(e), None, py.None(), msg),
+    }
+}

@@ -7,6 +7,7 @@ use crate::PyProblem;
 use coulomb::problem::Problem;
 use coulomb_granular::nsgs::NsgsSettings;
 use coulomb_granular::scene::BoxLayout;
+use coulomb_granular::scene_file::{BuildOptions, LoadedScene, SceneFileError};
 use coulomb_granular::{
     BuildChecks, Params, Scene, SceneModel, Simulation, SimulationError, StepChoice, StepMethod,
     Vec3, World,
@@ -15,6 +16,7 @@ use numpy::{PyReadonlyArray1, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
+use std::path::PathBuf;
 use std::sync::Arc;
 
 fn sim_error(e: SimulationError) -> PyErr {
@@ -267,6 +269,46 @@ impl PySimulation {
         let rest = apply_to_model(&mut model, params)?;
         let built = py.detach(move || model.build());
         Self::finish(py, built, rest, solver)
+    }
+
+    /// The scene of the file `path` (`.toml` or `.json`, `coulomb_granular::scene_file`;
+    /// `seed` replaces the file's), `params` applied on top of its step settings. Scenes with
+    /// inlets are refused (the CLI runs them).
+    #[staticmethod]
+    #[pyo3(signature = (path, seed, params, solver))]
+    fn from_file(
+        py: Python<'_>,
+        path: PathBuf,
+        seed: Option<u64>,
+        params: &Bound<'_, PyDict>,
+        solver: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
+        let file_err = |e: SceneFileError| crate::errors::scene_file_error(py, &e);
+        let loaded = py.detach(|| LoadedScene::load(&path)).map_err(file_err)?;
+        let opts = BuildOptions {
+            seed,
+            max_fill: None,
+        };
+        let mut built = py.detach(|| loaded.build(&opts)).map_err(file_err)?;
+        if !built.inlets.is_empty() {
+            return Err(crate::errors::scene_input_error(
+                py,
+                "description",
+                Some("inlets"),
+                py.None(),
+                format!(
+                    "{}: the scene has inlets, which Python does not drive yet: run it with \
+                     `coulomb simulate {}`",
+                    path.display(),
+                    path.display()
+                ),
+            ));
+        }
+        let rest = apply_to_model(&mut built.model, params)?;
+        let world_params = py
+            .detach(move || built.build(&BuildChecks::default()))
+            .map_err(file_err)?;
+        Self::finish(py, Ok(world_params), rest, solver)
     }
 
     /// One time step; its statistics (the fields of `coulomb_granular::StepStats`) as a dict.

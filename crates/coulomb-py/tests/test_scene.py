@@ -220,3 +220,25 @@ def test_a_closed_mesh_is_filled_and_holds_its_spheres():
     assert np.all(sim.positions > 0.9 * R) and np.all(sim.positions < 0.6 - 0.9 * R)
     with pytest.raises(coulomb.SceneError):  # an open mesh has no inside
         Simulation(Scene().add_mesh(v, t[:-1], side="inside").add_spheres([[0.3] * 3], R))
+
+
+def test_a_scene_file_runs_from_python(tmp_path):
+    from pathlib import Path
+
+    box = Path(__file__).resolve().parents[3] / "examples" / "scenes" / "box.toml"
+    if not box.exists():
+        pytest.skip(f"{box} is absent")
+    mine = Simulation.from_file(box)
+    ref = Simulation("box", beads=150, seed=1)  # box.toml is the built-in box, to the bit
+    np.testing.assert_array_equal(mine.positions, ref.positions)
+    mine.run(3)
+    ref.run(3)
+    np.testing.assert_array_equal(mine.positions, ref.positions)
+    assert Simulation.from_file(box, h=0.01).params["h"] == 0.01
+    bad = tmp_path / "bad.toml"
+    bad.write_text(box.read_text().replace("theta = 0.5", "theta = 0.5\nthetta = 0.5"))
+    with pytest.raises(coulomb.SceneError) as e:
+        Simulation.from_file(bad)
+    assert "thetta" in str(e.value) and "bad.toml:" in str(e.value)
+    with pytest.raises(FileNotFoundError):
+        Simulation.from_file(tmp_path / "missing.toml")

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from dataclasses import dataclass, field
 from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
@@ -515,6 +516,21 @@ class Simulation:
         else:
             raise TypeError(f"scene must be a coulomb.granular.Scene or the name of a built-in "
                             f"scene {SCENES}, got {type(scene).__name__}")
+
+    @staticmethod
+    def from_file(path: Union[str, "os.PathLike[str]"], seed: Optional[int] = None,
+                  solver: Optional[Mapping[str, Any]] = None,
+                  **params: Any) -> "Simulation":
+        """The scene of a scene file (``.toml`` or ``.json``, the format of ``coulomb
+        simulate SCENE.toml``, docs/granular.md "Scene files"); ``seed`` replaces the file's,
+        ``params`` (as for :class:`Simulation`) override its ``[step]`` settings. Errors name
+        the file, line and key (:class:`coulomb.SceneError`; ``OSError`` when it cannot be
+        read). Scenes with inlets are refused: run them with ``coulomb simulate``."""
+        sim = Simulation.__new__(Simulation)
+        sim._sim = _coulomb._Simulation.from_file(
+            os.fspath(path), None if seed is None else int(seed), dict(params),
+            dict(solver or {}))
+        return sim
 
     @classmethod
     def _wrap(cls, sim: Any) -> "Simulation":

@@ -112,6 +112,8 @@ impl SceneArrays {
 pub(crate) enum ModelError {
     /// a malformed description (the message says what and where)
     Description(String),
+    /// a malformed obstacle (its index in the model, the message)
+    Obstacle(usize, String),
     /// the model refused its data
     Scene(SceneError),
 }
@@ -120,6 +122,14 @@ impl ModelError {
     pub(crate) fn into_py(self, py: Python<'_>) -> PyErr {
         match self {
             ModelError::Description(m) => describe_error(py, None, m),
+            ModelError::Obstacle(k, m) => errors::scene_input_error(
+                py,
+                "description",
+                Some("obstacles"),
+                k.into_pyobject(py)
+                    .map_or_else(|_| py.None(), |i| i.into_any().unbind()),
+                m,
+            ),
             ModelError::Scene(e) => errors::scene_error(py, &e),
         }
     }
@@ -160,23 +170,23 @@ pub(crate) fn model_from_parts(json: &str, arrays: SceneArrays) -> Result<SceneM
             .and_then(Value::as_u64);
         let Some(m) = mesh_ref else {
             let spec: ObstacleSpec = serde_json::from_value(ob)
-                .map_err(|e| ModelError::Description(format!("obstacle {k}: {e}")))?;
+                .map_err(|e| ModelError::Obstacle(k, format!("obstacle {k}: {e}")))?;
             model.obstacles.push(spec);
             continue;
         };
         let side: MeshSide = match ob["shape"].get("side") {
             Some(s) => serde_json::from_value(s.clone())
-                .map_err(|e| ModelError::Description(format!("obstacle {k}: side: {e}")))?,
+                .map_err(|e| ModelError::Obstacle(k, format!("obstacle {k}: side: {e}")))?,
             None => MeshSide::default(),
         };
         ob["shape"] = placeholder_shape();
         let mut spec: ObstacleSpec = serde_json::from_value(ob)
-            .map_err(|e| ModelError::Description(format!("obstacle {k}: {e}")))?;
+            .map_err(|e| ModelError::Obstacle(k, format!("obstacle {k}: {e}")))?;
         let (vertices, triangles) = meshes
             .get_mut(m as usize)
             .and_then(Option::take)
             .ok_or_else(|| {
-                ModelError::Description(format!("obstacle {k}: no mesh arrays number {m}"))
+                ModelError::Obstacle(k, format!("obstacle {k}: no mesh arrays number {m}"))
             })?;
         let name = if spec.name.is_empty() {
             format!("obstacle-{k}")

@@ -163,8 +163,9 @@ def test_bad_input_names_the_field():
         Simulation(Scene(), gravity=1.0)
     with pytest.raises(TypeError):
         Scene().add_plane([0, 0, 0], [0, 0, 1], motion="spin")
-    with pytest.raises(ValueError):
+    with pytest.raises(coulomb.SceneError) as e:
         Simulation(Scene().add_plane(*floor, motion={"kind": "spin"}))
+    assert e.value.field == "obstacles" and e.value.index == 0 and "spin" in str(e.value)
     with pytest.raises(ValueError):
         Simulation(Scene().add_plane(*floor).add_spheres(x, R), method="newton")
 

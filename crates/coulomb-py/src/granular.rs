@@ -7,7 +7,7 @@ use crate::PyProblem;
 use coulomb::problem::Problem;
 use coulomb_granular::nsgs::NsgsSettings;
 use coulomb_granular::scene::BoxLayout;
-use coulomb_granular::scene_file::{BuildOptions, LoadedScene, SceneFileError};
+use coulomb_granular::scene_file::{BuildOptions, InletRun, LoadedScene, SceneFileError};
 use coulomb_granular::{
     BuildChecks, Params, Scene, SceneModel, Simulation, SimulationError, StepChoice, StepMethod,
     Vec3, World,
@@ -272,8 +272,8 @@ impl PySimulation {
     }
 
     /// The scene of the file `path` (`.toml` or `.json`, `coulomb_granular::scene_file`;
-    /// `seed` replaces the file's), `params` applied on top of its step settings. Scenes with
-    /// inlets are refused (the CLI runs them).
+    /// `seed` replaces the file's), `params` applied on top of its step settings; with the
+    /// file's inlets when it has some.
     #[staticmethod]
     #[pyo3(signature = (path, seed, params, solver))]
     fn from_file(
@@ -282,7 +282,7 @@ impl PySimulation {
         seed: Option<u64>,
         params: &Bound<'_, PyDict>,
         solver: Option<&Bound<'_, PyDict>>,
-    ) -> PyResult<Self> {
+    ) -> PyResult<(Self, Option<PyFeed>)> {
         let file_err = |e: SceneFileError| crate::errors::scene_file_error(py, &e);
         let loaded = py.detach(|| LoadedScene::load(&path)).map_err(file_err)?;
         let opts = BuildOptions {
@@ -290,25 +290,18 @@ impl PySimulation {
             max_fill: None,
         };
         let mut built = py.detach(|| loaded.build(&opts)).map_err(file_err)?;
-        if !built.inlets.is_empty() {
-            return Err(crate::errors::scene_input_error(
-                py,
-                "description",
-                Some("inlets"),
-                py.None(),
-                format!(
-                    "{}: the scene has inlets, which Python does not drive yet: run it with \
-                     `coulomb simulate {}`",
-                    path.display(),
-                    path.display()
-                ),
-            ));
-        }
+        let feed = (!built.inlets.is_empty()).then(|| PyFeed {
+            model: SceneModel {
+                materials: built.model.materials.clone(),
+                ..SceneModel::default()
+            },
+            inlets: built.inlets.clone(),
+        });
         let rest = apply_to_model(&mut built.model, params)?;
         let world_params = py
             .detach(move || built.build(&BuildChecks::default()))
             .map_err(file_err)?;
-        Self::finish(py, Ok(world_params), rest, solver)
+        Ok((Self::finish(py, Ok(world_params), rest, solver)?, feed))
     }
 
     /// One time step; its statistics (the fields of `coulomb_granular::StepStats`) as a dict.
@@ -519,5 +512,101 @@ impl PySimulation {
             .detach(move || Simulation::new(world, p))
             .map_err(sim_error)?;
         Ok(Self { sim })
+    }
+}
+
+/// The inlets of a scene: spheres poured into a running simulation
+/// (`coulomb_granular::generate::Inlet`, the emission rule of `coulomb simulate`).
+#[pyclass(name = "_Feed", module = "coulomb._coulomb")]
+pub struct PyFeed {
+    /// the scene's materials (the inserted spheres' material indices)
+    model: SceneModel,
+    inlets: Vec<InletRun>,
+}
+
+#[pymethods]
+impl PyFeed {
+    /// The inlets `inlets` (JSON list of `{inlet, material}`: `inlet` the serde form of
+    /// `Inlet`) with the materials of the scene description `json`.
+    #[new]
+    fn new(py: Python<'_>, json: &str, inlets: &str) -> PyResult<Self> {
+        #[derive(serde::Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Entry {
+            inlet: coulomb_granular::generate::Inlet,
+            material: String,
+        }
+        let bad = |field: &str, index: Option<usize>, m: String| {
+            let index = index.map_or_else(
+                || py.None(),
+                |i| {
+                    i.into_pyobject(py)
+                        .map_or_else(|_| py.None(), |x| x.into_any().unbind())
+                },
+            );
+            crate::errors::scene_input_error(py, "inlet", Some(field), index, m)
+        };
+        let desc: serde_json::Value = serde_json::from_str(json)
+            .map_err(|e| bad("inlets", None, format!("scene description: {e}")))?;
+        let materials: coulomb_granular::Materials = desc
+            .get("materials")
+            .map(|m| serde_json::from_value(m.clone()))
+            .transpose()
+            .map_err(|e| bad("inlets", None, format!("materials: {e}")))?
+            .unwrap_or_default();
+        let model = SceneModel {
+            materials,
+            ..SceneModel::default()
+        };
+        let entries: Vec<Entry> = serde_json::from_str(inlets)
+            .map_err(|e| bad("inlets", None, format!("inlets: {e}")))?;
+        let mut out = Vec::with_capacity(entries.len());
+        for (k, e) in entries.into_iter().enumerate() {
+            e.inlet
+                .validate()
+                .map_err(|err| bad("inlets", Some(k), format!("inlet {k}: {err}")))?;
+            // the material must exist (the error of the model, naming the inlet)
+            let probe = coulomb_granular::SphereBatch {
+                material: e.material.clone(),
+                density: Some(e.inlet.density),
+                ..Default::default()
+            };
+            model
+                .spheres_of(&probe)
+                .map_err(|err| bad("material", Some(k), format!("inlet {k}: {err}")))?;
+            out.push(InletRun {
+                density: e.inlet.density,
+                material: e.material,
+                inlet: e.inlet,
+            });
+        }
+        Ok(Self { model, inlets: out })
+    }
+
+    /// Inserts into `sim` the spheres the inlets owe for (t0, t1], placed among the spheres
+    /// present; returns (inserted, skipped).
+    fn emit(
+        &mut self,
+        py: Python<'_>,
+        sim: &mut PySimulation,
+        t0: f64,
+        t1: f64,
+    ) -> PyResult<(usize, usize)> {
+        let (model, inlets, sim) = (&self.model, &mut self.inlets, &mut sim.sim);
+        py.detach(move || {
+            let (mut n, mut k) = (0, 0);
+            for inlet in inlets.iter_mut() {
+                let (a, b) = inlet.emit(sim, model, t0, t1)?;
+                n += a;
+                k += b;
+            }
+            Ok((n, k))
+        })
+        .map_err(sim_error)
+    }
+
+    /// Number of inlets.
+    fn __len__(&self) -> usize {
+        self.inlets.len()
     }
 }

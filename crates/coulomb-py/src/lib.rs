@@ -407,6 +407,7 @@ fn _coulomb(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fclib_read, m)?)?;
     m.add_function(wrap_pyfunction!(fclib_write, m)?)?;
     m.add_class::<granular::PySimulation>()?;
+    m.add_class::<granular::PyFeed>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -243,3 +243,26 @@ def test_a_scene_file_runs_from_python(tmp_path):
     assert "thetta" in str(e.value) and "bad.toml:" in str(e.value)
     with pytest.raises(FileNotFoundError):
         Simulation.from_file(tmp_path / "missing.toml")
+    silo = Simulation.from_file(box.with_name("silo.toml"))  # its inlet pours 100 beads/s
+    n0 = len(silo.radii)
+    silo.run(40)  # 0.2 s at h = 0.005 s
+    assert len(silo.radii) == n0 + 20
+
+
+def test_an_inlet_pours_spheres_deterministically():
+    def poured():
+        scene = Scene().add_box([0, 0, 0], [1, 1, 2], open_top=True)
+        scene.add_inlet(Region.box([0.2, 0.2, 1.0], [0.8, 0.8, 1.3]), 100.0, radius=0.03,
+                        material="sand", end=0.3, velocity=[0, 0, -0.5], seed=4)
+        sim = Simulation(scene)
+        assert sim.positions.shape == (0, 3)
+        stats = sim.run(20)  # 0.4 s: 100 spheres/s for 0.3 s
+        assert all(s["converged"] for s in stats)
+        return sim
+
+    a, b = poured(), poured()
+    assert 20 <= len(a.radii) <= 30 and np.all(a.radii == 0.03)
+    np.testing.assert_array_equal(a.positions, b.positions)
+    with pytest.raises(coulomb.SceneError) as e:
+        Simulation(Scene().add_inlet(Region.box([0, 0, 0], [1, 1, 1]), 10.0, radius=-1.0))
+    assert e.value.field == "radius"

@@ -211,6 +211,7 @@ class Scene:
         self._meshes: List[Tuple[np.ndarray, np.ndarray]] = []
         # (description, (positions, radii, velocities, angular velocities, masses))
         self._batches: List[Tuple[Dict[str, Any], Tuple[np.ndarray, ...]]] = []
+        self._inlets: List[Dict[str, Any]] = []
 
     # -- materials and gravity --------------------------------------------------------------
 
@@ -375,6 +376,35 @@ class Scene:
             self._use(material)
         return int(len(rad))
 
+    def add_inlet(self, region: Mapping[str, Any], rate: float, radius: Any = 0.05,
+                  density: float = 2500.0, material: str = "default", rate_kind: str = "count",
+                  start: float = 0.0, end: Optional[float] = None,
+                  velocity: Sequence[float] = (0.0, 0.0, 0.0), attempts: int = 20,
+                  seed: int = 0) -> "Scene":
+        """Pours spheres into the running simulation: from ``start`` to ``end`` (s),
+        ``rate`` spheres per second (``rate_kind="count"``) or kilograms per second
+        (``"mass"``) appear in ``region`` (:meth:`Region.box` or :meth:`Region.cylinder`)
+        with ``velocity``, radii from ``radius`` (a number or a size distribution as in
+        :meth:`fill`). Sphere i is placed at the first of ``attempts`` seeded random
+        positions that overlaps nothing, else skipped (``coulomb_granular::generate::Inlet``,
+        the rule of ``coulomb simulate``); the spheres due in (t_k, t_{k+1}] are inserted
+        after step k, after those already present in the arrays."""
+        if rate_kind not in ("count", "mass"):
+            raise _arg_error("rate_kind", f"rate_kind {rate_kind!r}: 'count' or 'mass'")
+        if not isinstance(region, Mapping) or region.get("kind") not in ("box", "cylinder"):
+            raise _arg_error("region", "an inlet's region is a Region.box or Region.cylinder")
+        inlet: Dict[str, Any] = {
+            "region": dict(region), "sizes": _sizes(radius),
+            "density": _real("density", density, positive=True),
+            "rate": {rate_kind: _real("rate", rate, nonnegative=True)},
+            "start": _real("start", start, nonnegative=True),
+            "velocity": _vec3("velocity", velocity), "attempts": int(attempts),
+            "seed": int(seed)}
+        if end is not None:
+            inlet["end"] = _real("end", end)
+        self._inlets.append({"inlet": inlet, "material": self._use(material)})
+        return self
+
     # -- obstacles --------------------------------------------------------------------------
 
     def _obstacle(self, shape: Dict[str, Any], material: str, motion: Any, name: str) -> "Scene":
@@ -508,6 +538,8 @@ class Simulation:
                  solver: Optional[Mapping[str, Any]] = None, **params: Any) -> None:
         if isinstance(scene, Scene):
             desc, batches, meshes = scene._parts()
+            if scene._inlets:  # checked before the build
+                self._feed = _coulomb._Feed(desc, json.dumps(scene._inlets, allow_nan=False))
             self._sim = _coulomb._Simulation.from_scene(desc, batches, meshes, dict(params),
                                                         dict(solver or {}))
         elif isinstance(scene, str):
@@ -517,6 +549,9 @@ class Simulation:
             raise TypeError(f"scene must be a coulomb.granular.Scene or the name of a built-in "
                             f"scene {SCENES}, got {type(scene).__name__}")
 
+    #: the scene's inlets (None: none)
+    _feed: Any = None
+
     @staticmethod
     def from_file(path: Union[str, "os.PathLike[str]"], seed: Optional[int] = None,
                   solver: Optional[Mapping[str, Any]] = None,
@@ -525,9 +560,9 @@ class Simulation:
         simulate SCENE.toml``, docs/granular.md "Scene files"); ``seed`` replaces the file's,
         ``params`` (as for :class:`Simulation`) override its ``[step]`` settings. Errors name
         the file, line and key (:class:`coulomb.SceneError`; ``OSError`` when it cannot be
-        read). Scenes with inlets are refused: run them with ``coulomb simulate``."""
+        read). The file's inlets pour as in ``coulomb simulate``."""
         sim = Simulation.__new__(Simulation)
-        sim._sim = _coulomb._Simulation.from_file(
+        sim._sim, sim._feed = _coulomb._Simulation.from_file(
             os.fspath(path), None if seed is None else int(seed), dict(params),
             dict(solver or {}))
         return sim
@@ -539,13 +574,21 @@ class Simulation:
         return self
 
     def step(self) -> StepStats:
-        """Advances one step t_k → t_{k+1} (GIL released) and returns its statistics."""
-        return self._sim.step()
+        """Advances one step t_k → t_{k+1} (GIL released) and returns its statistics; then
+        the scene's inlets insert the spheres due in (t_k, t_{k+1}]."""
+        if self._feed is None:
+            return self._sim.step()
+        t0 = self._sim.time
+        stats = self._sim.step()
+        self._feed.emit(self._sim, t0, self._sim.time)
+        return stats
 
     def run(self, steps: int) -> List[StepStats]:
         """Advances ``steps`` steps at once (GIL released for all of them) and returns their
         statistics (a list; use :meth:`step` to read or steer the state between steps)."""
-        return self._sim.run(int(steps))
+        if self._feed is None:
+            return self._sim.run(int(steps))
+        return [self.step() for _ in range(int(steps))]
 
     @property
     def positions(self) -> np.ndarray:

@@ -567,12 +567,6 @@ class Simulation:
             dict(solver or {}))
         return sim
 
-    @classmethod
-    def _wrap(cls, sim: Any) -> "Simulation":
-        self = cls.__new__(cls)
-        self._sim = sim
-        return self
-
     def step(self) -> StepStats:
         """Advances one step t_k → t_{k+1} (GIL released) and returns its statistics; then
         the scene's inlets insert the spheres due in (t_k, t_{k+1}]."""

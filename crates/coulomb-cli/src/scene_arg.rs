@@ -130,6 +130,10 @@ fn check_step(h: f64, scene: &BuiltScene) -> anyhow::Result<()> {
 
 /// Runs `coulomb simulate FILE`.
 pub fn run(args: &Args) -> anyhow::Result<()> {
+    #[cfg(feature = "mpi")]
+    if args.mpi || crate::sim_args::under_launcher() {
+        bail!("scene files run in one process; distributed runs take the built-in scenes (docs/distributed.md)");
+    }
     let refused = refused_options(args);
     if !refused.is_empty() {
         bail!(

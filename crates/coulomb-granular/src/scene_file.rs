@@ -1545,6 +1545,61 @@ mod tests {
     }
 
     #[test]
+    fn files_next_to_the_scene_fixed_spheres_and_a_mesh_obstacle() {
+        let dir = std::env::temp_dir().join(format!("coulomb-scene-file-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let stl = "solid f\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 2 0 0\nvertex 2 2 0\nendloop\nendfacet\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 2 2 0\nvertex 0 2 0\nendloop\nendfacet\nendsolid f\n";
+        std::fs::write(dir.join("floor.stl"), stl).unwrap();
+        std::fs::write(
+            dir.join("beads.csv"),
+            "x,y,z,r,material\n0.5,0.5,0.5,0.1,rubber\n1.5,1.5,0.5,0.1,\n",
+        )
+        .unwrap();
+        let scene = dir.join("s.toml");
+        let text = "[materials.rubber]\ndensity = 1100\n[[pairs]]\nmaterials = [\"rubber\", \"default\"]\nrestitution = 0.8\n[[bodies]]\nfile = \"beads.csv\"\n[[bodies]]\nfixed = true\nspheres = [[1.0, 1.0, 0.1, 0.1]]\n[[obstacles]]\nname = \"floor\"\nshape = { kind = \"mesh\", file = \"floor.stl\", transform = { translate = [-0.5, -0.5, 0.0], scale = 1.5 } }\n";
+        std::fs::write(&scene, text).unwrap();
+        let b = LoadedScene::load(&scene)
+            .unwrap()
+            .build(&BuildOptions::default())
+            .unwrap();
+        // the CSV's material column splits the group: rubber, then default; then the fixed one
+        let mats: Vec<(&str, bool, usize)> = b
+            .model
+            .sphere_batches
+            .iter()
+            .map(|x| (x.material.as_str(), x.fixed, x.positions.len()))
+            .collect();
+        assert_eq!(
+            mats,
+            vec![
+                ("rubber", false, 1),
+                ("default", false, 1),
+                ("default", true, 1)
+            ]
+        );
+        assert_eq!(
+            b.model.sphere_batches[0].masses[0],
+            sphere_mass(1100.0, 0.1)
+        );
+        let (world, _) = b.build(&BuildChecks::default()).unwrap();
+        assert_eq!(world.bodies.len(), 2);
+        // the mesh (scaled by 1.5, moved by −0.5) and the fixed sphere
+        assert_eq!(world.obstacles.len(), 2);
+        match &world.obstacles[0].shape {
+            Shape::Mesh { mesh, .. } => {
+                let (lo, hi) = mesh.bounds();
+                assert_eq!((lo.x, hi.x), (-0.5, 2.5));
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(matches!(
+            world.obstacles[1].shape,
+            Shape::Sphere { inside: false, .. }
+        ));
+        assert!(world.materials.is_some());
+    }
+
+    #[test]
     fn line_column_counts_characters() {
         let t = "ab\nμx = 1\n";
         assert_eq!(line_column(t, 0), (1, 1));

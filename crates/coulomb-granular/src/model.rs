@@ -861,16 +861,27 @@ impl SceneModel {
                 material: s.material,
             });
         }
+        if world.materials.is_none() {
+            // one law for every pair: no table, so every material is index 0 (the
+            // one-material path; `Simulation::new` refuses indices beyond the table)
+            for b in &mut world.bodies {
+                b.material = 0;
+            }
+            for o in &mut world.obstacles {
+                o.material = 0;
+            }
+        }
         Ok(world)
     }
 
     /// The spheres of `batch` with the materials of this model (an inlet's new spheres,
     /// [`crate::Simulation::insert_bodies`]); the batch's `fixed` flag is ignored.
     pub fn spheres_of(&self, batch: &SphereBatch) -> Result<Vec<Sphere>, SceneError> {
-        let (table, _) = self.material_table()?;
+        let (table, uniform) = self.material_table()?;
         let index = MaterialIndex { names: table.names };
         let material = index.get(|| "inserted sphere batch".into(), &batch.material)?;
-        batch_spheres(0, batch, material)
+        // without a table (one law) every material is index 0, as in `world`
+        batch_spheres(0, batch, if uniform { 0 } else { material })
     }
 }
 

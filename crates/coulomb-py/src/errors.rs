@@ -228,6 +228,142 @@ pub fn fclib_error(py: Python<'_>, e: FclibError) -> PyErr {
     )
 }
 
+/// An error of a Python-built scene → `coulomb.SceneError` (a `ValueError`) with `kind`,
+/// `field` (the datum: `"radii"`, `"material"`, `"triangles"`, ...) and `index` (an int, a
+/// pair, or None).
+pub fn scene_input_error(
+    py: Python<'_>,
+    kind: &str,
+    field: Option<&str>,
+    index: Py<PyAny>,
+    msg: String,
+) -> PyErr {
+    let field = field.map_or_else(|| py.None(), |f| obj(py, f));
+    raise(
+        py,
+        "SceneError",
+        msg,
+        vec![("kind", obj(py, kind)), ("field", field), ("index", index)],
+    )
+}
+
+/// The index `I` of `"… sphere I"` / `"sphere I …"` in a scene error's location, if any.
+fn sphere_index(what: &str) -> Option<usize> {
+    let rest = &what[what.rfind("sphere ")? + "sphere ".len()..];
+    let digits: String = rest.chars().take_while(|c| c.is_ascii_digit()).collect();
+    digits.parse().ok()
+}
+
+/// The datum a body error's reason names (`"radius nan is not …"` → `radii`).
+fn body_field(reason: &str) -> &'static str {
+    let first = reason.split_whitespace().next().unwrap_or("");
+    match first {
+        "radius" | "radii" => "radii",
+        "mass" | "masses" => "masses",
+        "density" => "density",
+        "velocities" => "velocities",
+        "angular_velocities" => "angular_velocities",
+        "fixed" | "a" => "fixed",
+        "give" => "density",
+        _ => "positions",
+    }
+}
+
+/// [`coulomb_granular::SceneError`] → `coulomb.SceneError` with the message of the Rust error
+/// and the datum it is about.
+pub fn scene_error(py: Python<'_>, e: &coulomb_granular::SceneError) -> PyErr {
+    use coulomb_granular::{MeshError, SceneError as E};
+    let msg = e.to_string();
+    let none = || py.None();
+    let (field, index): (Option<&str>, Py<PyAny>) = match e {
+        E::UnknownMaterial { what, .. } => (
+            Some(if what.starts_with("material pair") {
+                "material_pair"
+            } else {
+                "material"
+            }),
+            none(),
+        ),
+        E::DuplicateMaterial(_) => (Some("material"), none()),
+        E::InvalidLaw { reason, .. } => {
+            let first = reason.split_whitespace().next().unwrap_or("");
+            let f = match first {
+                "mu" | "restitution" | "rolling_friction" => first,
+                _ if reason.contains("mu =") => "mu",
+                _ if reason.contains("restitution") => "restitution",
+                _ if reason.contains("rolling") => "rolling_friction",
+                _ => "material_pair",
+            };
+            (Some(f), none())
+        }
+        E::InvalidBody { what, reason } => (
+            Some(body_field(reason)),
+            sphere_index(what).map_or_else(none, |i| obj(py, i)),
+        ),
+        E::InvalidObstacle { index, .. } => (Some("obstacles"), obj(py, *index)),
+        E::Mesh { source, .. } => {
+            let (f, i) = match source {
+                MeshError::NonFiniteVertex { vertex } => ("vertices", obj(py, *vertex)),
+                MeshError::IndexOutOfRange { triangle, .. }
+                | MeshError::Degenerate { triangle, .. } => ("triangles", obj(py, *triangle)),
+                _ => ("triangles", none()),
+            };
+            (Some(f), i)
+        }
+        E::InvalidStep(reason) => (reason.split_whitespace().next(), none()),
+        E::InvalidGravity(_) => (Some("gravity"), none()),
+        E::Overlaps { pair, .. } => (Some("positions"), obj(py, *pair)),
+        E::Outside { what, .. } => (
+            Some("positions"),
+            sphere_index(what).map_or_else(none, |i| obj(py, i)),
+        ),
+        E::Memory { .. } => (None, none()),
+        #[allow(unreachable_patterns)]
+        _ => (None, none()),
+    };
+    scene_input_error(py, &variant_name(e), field, index, msg)
+}
+
+/// [`coulomb_granular::scene_file::SceneFileError`] → `OSError` when the file cannot be read,
+/// otherwise `coulomb.SceneError` with the message (file:line:column: key: what) and `kind`
+/// (`extension`, `syntax`, `invalid`, `import`, or the model's variant with its `field` and
+/// `index`).
+pub fn scene_file_error(py: Python<'_>, e: &coulomb_granular::scene_file::SceneFileError) -> PyErr {
+    use coulomb_granular::scene_file::SceneFileError as E;
+    let msg = e.to_string();
+    match e {
+        E::Io { path, source } => {
+            let args = (
+                source.raw_os_error().unwrap_or(0),
+                source.to_string(),
+                path.display().to_string(),
+            );
+            match source.kind() {
+                std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(args),
+                std::io::ErrorKind::PermissionDenied => PyPermissionError::new_err(args),
+                std::io::ErrorKind::IsADirectory => PyIsADirectoryError::new_err(args),
+                _ => PyOSError::new_err(args),
+            }
+        }
+        E::Model { source, .. } => {
+            let err = scene_error(py, source);
+            // the model's field and index, the message with the file's name
+            let v = err.value(py);
+            let field = v
+                .getattr("field")
+                .map_or_else(|_| py.None(), |x| x.unbind());
+            let index = v
+                .getattr("index")
+                .map_or_else(|_| py.None(), |x| x.unbind());
+            let field: Option<String> = field.extract(py).ok();
+            scene_input_error(py, &variant_name(source), field.as_deref(), index, msg)
+        }
+        E::Invalid { key, .. } => scene_input_error(py, "invalid", Some(key), py.None(), msg),
+        E::Import { key, .. } => scene_input_error(py, "import", Some(key), py.None(), msg),
+        _ => scene_input_error(py, &variant_name(e), None, py.None(), msg),
+    }
+}
+
 /// [`coulomb_granular::CheckpointError`] → `OSError` (with errno and file name) for I/O
 /// failures, otherwise `coulomb.CheckpointError` (a `ValueError`) with `file`, `path` (the
 /// HDF5 object, where known) and `kind` (`not_hdf5`, `wrong_format`, `version`, `corrupt`,

@@ -2,13 +2,20 @@
 //! steer the state (positions, velocities, parameters) between steps.
 
 use crate::convert;
+use crate::scene::{model_from_parts, SceneArrays};
 use crate::PyProblem;
 use coulomb::problem::Problem;
-use coulomb_granular::{Params, Scene, Simulation, SimulationError, Vec3, World};
+use coulomb_granular::nsgs::NsgsSettings;
+use coulomb_granular::scene::BoxLayout;
+use coulomb_granular::scene_file::{BuildOptions, InletRun, LoadedScene, SceneFileError};
+use coulomb_granular::{
+    BuildChecks, Params, Scene, SceneModel, Simulation, SimulationError, StepChoice, StepMethod,
+    Vec3, World,
+};
 use numpy::{PyReadonlyArray1, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyList};
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -19,29 +26,143 @@ fn sim_error(e: SimulationError) -> PyErr {
     }
 }
 
+/// The step method named `v` (`"nsgs"` or `"library"`).
+fn step_choice(v: &Bound<'_, PyAny>) -> PyResult<StepChoice> {
+    let name: String = v
+        .extract()
+        .map_err(|_| PyTypeError::new_err("method must be a string: 'nsgs' or 'library'"))?;
+    match name.as_str() {
+        "nsgs" => Ok(StepChoice::Nsgs),
+        "library" => Ok(StepChoice::Library),
+        other => Err(PyValueError::new_err(format!(
+            "method: unknown step method {other:?} (methods: nsgs, library)"
+        ))),
+    }
+}
+
+fn real(name: &str, v: &Bound<'_, PyAny>) -> PyResult<f64> {
+    v.extract()
+        .map_err(|_| PyTypeError::new_err(format!("{name} must be a float")))
+}
+
+fn count(name: &str, v: &Bound<'_, PyAny>) -> PyResult<usize> {
+    v.extract()
+        .map_err(|_| PyTypeError::new_err(format!("{name} must be a nonnegative int")))
+}
+
+const PARAM_NAMES: &str = "h, theta, tol, method, max_sweeps, relaxation, restitution, mu, \
+rolling_friction, warm_start, gap_closure; solver settings go in solver=";
+
+/// The keyword parameters in the order they are applied: `method` first (so that `tol`,
+/// `max_sweeps` and `relaxation` apply to the method chosen in the same call).
+fn ordered<'py>(kw: &Bound<'py, PyDict>) -> PyResult<Vec<(String, Bound<'py, PyAny>)>> {
+    let mut v: Vec<(String, Bound<'py, PyAny>)> = kw
+        .iter()
+        .map(|(k, v)| Ok((k.extract::<String>()?, v)))
+        .collect::<PyResult<_>>()?;
+    v.sort_by_key(|(k, _)| k != "method");
+    Ok(v)
+}
+
+/// Applies the constructor's keyword parameters to the scene model: the step settings (h,
+/// theta, tol, method, max_sweeps, relaxation) and the default contact law (mu, restitution,
+/// rolling_friction: the law of every pair of materials not set by a pair). The others
+/// (warm_start, gap_closure) are returned, to be applied to the built parameters.
+fn apply_to_model<'py>(
+    model: &mut SceneModel,
+    kw: &Bound<'py, PyDict>,
+) -> PyResult<Vec<(String, Bound<'py, PyAny>)>> {
+    let mut rest = Vec::new();
+    for (name, v) in ordered(kw)? {
+        let (step, law) = (&mut model.step, &mut model.materials.default);
+        match name.as_str() {
+            "h" => step.h = real(&name, &v)?,
+            "theta" => step.theta = real(&name, &v)?,
+            "tol" => step.tol = real(&name, &v)?,
+            "method" => step.method = step_choice(&v)?,
+            "max_sweeps" => step.max_sweeps = count(&name, &v)?,
+            "relaxation" => step.relaxation = real(&name, &v)?,
+            "mu" => law.mu = real(&name, &v)?,
+            "restitution" => law.restitution = real(&name, &v)?,
+            "rolling_friction" => law.rolling_friction = real(&name, &v)?,
+            "warm_start" | "gap_closure" => rest.push((name, v)),
+            other => {
+                return Err(PyTypeError::new_err(format!(
+                    "unexpected simulation parameter '{other}' (parameters: {PARAM_NAMES})"
+                )))
+            }
+        }
+    }
+    Ok(rest)
+}
+
 /// Applies `name = value` to the time-stepping parameters (the names of
-/// `coulomb_granular::Params`).
+/// `coulomb_granular::Params`, and `tol`, `method`, `max_sweeps`, `relaxation` of the step
+/// settings: `tol` is the tolerance of both the library solver and the Gauss–Seidel steps).
 fn set_param(p: &mut Params, name: &str, v: &Bound<'_, PyAny>) -> PyResult<()> {
-    let real = || -> PyResult<f64> {
-        v.extract()
-            .map_err(|_| PyTypeError::new_err(format!("{name} must be a float")))
-    };
     match name {
-        "h" => p.h = real()?,
-        "theta" => p.theta = real()?,
-        "restitution" => p.restitution = real()?,
-        "mu" => p.mu = real()?,
-        "rolling_friction" => p.rolling_friction = real()?,
-        "warm_start" => p.warm_start = v.extract()?,
+        "h" => p.h = real(name, v)?,
+        "theta" => p.theta = real(name, v)?,
+        "restitution" => p.restitution = real(name, v)?,
+        "mu" => p.mu = real(name, v)?,
+        "rolling_friction" => p.rolling_friction = real(name, v)?,
+        "warm_start" => {
+            p.warm_start = v
+                .extract()
+                .map_err(|_| PyTypeError::new_err("warm_start must be a bool"))?
+        }
         "gap_closure" => {
             p.activation.close_gaps = v
                 .extract()
                 .map_err(|_| PyTypeError::new_err("gap_closure must be a bool"))?
         }
+        "tol" => {
+            let t = real(name, v)?;
+            if !(t.is_finite() && t > 0.0) {
+                return Err(PyValueError::new_err(format!("tol = {t} must be positive")));
+            }
+            p.solver.tol = t;
+            if let StepMethod::Nsgs(s) = &mut p.method {
+                s.tol = t;
+            }
+        }
+        "method" => {
+            p.method = match step_choice(v)? {
+                StepChoice::Library => StepMethod::Library,
+                StepChoice::Nsgs => match &p.method {
+                    StepMethod::Nsgs(s) => StepMethod::Nsgs(*s),
+                    _ => StepMethod::Nsgs(NsgsSettings {
+                        tol: p.solver.tol,
+                        ..NsgsSettings::default()
+                    }),
+                },
+            }
+        }
+        "max_sweeps" | "relaxation" => {
+            let StepMethod::Nsgs(s) = &mut p.method else {
+                return Err(PyValueError::new_err(format!(
+                    "{name} is a setting of method='nsgs'"
+                )));
+            };
+            if name == "max_sweeps" {
+                let n = count(name, v)?;
+                if n == 0 {
+                    return Err(PyValueError::new_err("max_sweeps must be at least 1"));
+                }
+                s.max_sweeps = n;
+            } else {
+                let w = real(name, v)?;
+                if !(w.is_finite() && (1.0..2.0).contains(&w)) {
+                    return Err(PyValueError::new_err(format!(
+                        "relaxation = {w} is not in [1, 2)"
+                    )));
+                }
+                s.relaxation = w;
+            }
+        }
         other => {
             return Err(PyTypeError::new_err(format!(
-                "unexpected simulation parameter '{other}' \
-                 (parameters: h, theta, restitution, mu, rolling_friction, warm_start, gap_closure; solver settings go in solver=)"
+                "unexpected simulation parameter '{other}' (parameters: {PARAM_NAMES})"
             )))
         }
     }
@@ -76,6 +197,16 @@ fn points(what: &str, n: usize, a: &PyReadonlyArray1<'_, f64>) -> PyResult<Vec<V
         .collect())
 }
 
+/// A step's statistics (the fields of `coulomb_granular::StepStats`) as a dict.
+fn stats_to_py<'py>(
+    py: Python<'py>,
+    stats: &coulomb_granular::StepStats,
+) -> PyResult<Bound<'py, PyAny>> {
+    let json = serde_json::to_value(stats)
+        .map_err(|e| PyRuntimeError::new_err(format!("cannot serialize step stats: {e}")))?;
+    convert::json_to_py(py, &json)
+}
+
 /// A granular simulation (Moreau–Jean time stepping (2.5)–(2.7), one problem (2.10) per step).
 #[pyclass(name = "_Simulation", module = "coulomb._coulomb")]
 pub struct PySimulation {
@@ -84,6 +215,9 @@ pub struct PySimulation {
 
 #[pymethods]
 impl PySimulation {
+    /// A built-in scene (`box`, `funnel`, `vibrating-plate`, `rotating-drum`) of `beads`
+    /// spheres, deterministic from `seed`; the step settings of `coulomb simulate` (body-level
+    /// Gauss–Seidel to tol = 1e-4) unless `params` say otherwise.
     #[new]
     #[pyo3(signature = (scene, beads, seed, params, solver))]
     fn new(
@@ -101,25 +235,103 @@ impl PySimulation {
                 names.join(", ")
             ))
         })?;
-        let mut p = Params {
-            solver: convert::settings_from_kwargs(py, "Simulation", solver)?,
-            ..Params::default()
+        let mut model = py.detach(move || scene.model(beads, seed, &BoxLayout::for_beads(beads)));
+        let rest = apply_to_model(&mut model, params)?;
+        // the built-in arrangements are loose by construction: the data are validated, the
+        // start checks (overlaps, containment) are those of `Scene::build` (none)
+        let checks = BuildChecks {
+            overlaps: false,
+            containment: false,
+            memory: true,
         };
-        for (k, v) in params.iter() {
-            set_param(&mut p, &k.extract::<String>()?, &v)?;
-        }
-        let world = py.detach(move || scene.build(beads, seed));
-        let sim = Simulation::new(world, p).map_err(sim_error)?;
-        Ok(Self { sim })
+        let built = py.detach(move || model.build_with(&checks));
+        Self::finish(py, built, rest, solver)
+    }
+
+    /// A scene built in Python: `json` is the [`SceneModel`] without its arrays, `batches`
+    /// and `meshes` the arrays (see `scene.rs`); `params` as for the constructor. Built and
+    /// validated with every check of `SceneModel::build`, without the GIL.
+    #[staticmethod]
+    #[pyo3(signature = (json, batches, meshes, params, solver))]
+    fn from_scene(
+        py: Python<'_>,
+        json: &str,
+        batches: &Bound<'_, PyList>,
+        meshes: &Bound<'_, PyList>,
+        params: &Bound<'_, PyDict>,
+        solver: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
+        let arrays = SceneArrays::extract(batches, meshes)?;
+        let json = json.to_string();
+        let mut model = py
+            .detach(move || model_from_parts(&json, arrays))
+            .map_err(|e| e.into_py(py))?;
+        let rest = apply_to_model(&mut model, params)?;
+        let built = py.detach(move || model.build());
+        Self::finish(py, built, rest, solver)
+    }
+
+    /// The scene of the file `path` (`.toml` or `.json`, `coulomb_granular::scene_file`;
+    /// `seed` replaces the file's), `params` applied on top of its step settings; with the
+    /// file's inlets when it has some.
+    #[staticmethod]
+    #[pyo3(signature = (path, seed, params, solver))]
+    fn from_file(
+        py: Python<'_>,
+        path: PathBuf,
+        seed: Option<u64>,
+        params: &Bound<'_, PyDict>,
+        solver: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<(Self, Option<PyFeed>)> {
+        let file_err = |e: SceneFileError| crate::errors::scene_file_error(py, &e);
+        let loaded = py.detach(|| LoadedScene::load(&path)).map_err(file_err)?;
+        let opts = BuildOptions {
+            seed,
+            max_fill: None,
+        };
+        let mut built = py.detach(|| loaded.build(&opts)).map_err(file_err)?;
+        let feed = (!built.inlets.is_empty()).then(|| PyFeed {
+            model: SceneModel {
+                materials: built.model.materials.clone(),
+                ..SceneModel::default()
+            },
+            inlets: built.inlets.clone(),
+        });
+        let rest = apply_to_model(&mut built.model, params)?;
+        let world_params = py
+            .detach(move || built.build(&BuildChecks::default()))
+            .map_err(file_err)?;
+        Ok((Self::finish(py, Ok(world_params), rest, solver)?, feed))
     }
 
     /// One time step; its statistics (the fields of `coulomb_granular::StepStats`) as a dict.
     fn step<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let sim = &mut self.sim;
         let stats = py.detach(move || sim.step()).map_err(sim_error)?;
-        let json = serde_json::to_value(&stats)
-            .map_err(|e| PyRuntimeError::new_err(format!("cannot serialize step stats: {e}")))?;
-        convert::json_to_py(py, &json)
+        stats_to_py(py, &stats)
+    }
+
+    /// `n` time steps at once (GIL released for all of them); their statistics as a list.
+    fn run<'py>(&mut self, py: Python<'py>, n: usize) -> PyResult<Bound<'py, PyList>> {
+        let sim = &mut self.sim;
+        let (stats, err) = py.detach(move || {
+            let mut out = Vec::with_capacity(n);
+            for _ in 0..n {
+                match sim.step() {
+                    Ok(s) => out.push(s),
+                    Err(e) => return (out, Some(e)),
+                }
+            }
+            (out, None)
+        });
+        if let Some(e) = err {
+            return Err(sim_error(e));
+        }
+        let list = PyList::empty(py);
+        for s in &stats {
+            list.append(stats_to_py(py, s)?)?;
+        }
+        Ok(list)
     }
 
     /// Sphere centres x at t_k, shape (n, 3).
@@ -195,8 +407,16 @@ impl PySimulation {
     fn set_params(&mut self, params: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
         let mut p = self.sim.params.clone();
         if let Some(kw) = params {
-            for (k, v) in kw.iter() {
-                set_param(&mut p, &k.extract::<String>()?, &v)?;
+            for (k, v) in ordered(kw)? {
+                if self.sim.world.materials.is_some()
+                    && matches!(k.as_str(), "mu" | "restitution" | "rolling_friction")
+                {
+                    return Err(PyValueError::new_err(format!(
+                        "{k}: this scene has per-pair contact laws (a material table); \
+                         set them with Scene.set_material_pair before building"
+                    )));
+                }
+                set_param(&mut p, &k, &v)?;
             }
         }
         validate(&p)?;
@@ -223,6 +443,18 @@ impl PySimulation {
         d.set_item("rolling_friction", p.rolling_friction)?;
         d.set_item("warm_start", p.warm_start)?;
         d.set_item("gap_closure", p.activation.close_gaps)?;
+        match &p.method {
+            StepMethod::Nsgs(s) => {
+                d.set_item("method", "nsgs")?;
+                d.set_item("tol", s.tol)?;
+                d.set_item("max_sweeps", s.max_sweeps)?;
+                d.set_item("relaxation", s.relaxation)?;
+            }
+            _ => {
+                d.set_item("method", "library")?;
+                d.set_item("tol", p.solver.tol)?;
+            }
+        }
         d.set_item("solver", convert::settings_to_dict(py, &p.solver)?)?;
         Ok(d)
     }
@@ -250,6 +482,14 @@ impl PySimulation {
         self.sim.keep_problem = keep;
     }
 
+    /// The last step's global problem (when `keep_problem` is set and the step had contacts).
+    #[getter]
+    fn last_problem(&self) -> Option<PyProblem> {
+        self.sim.last_problem.as_ref().map(|g| PyProblem {
+            inner: Arc::new(Problem::Global(g.clone())),
+        })
+    }
+
     /// Writes the full state (bodies, obstacles, parameters and solver settings, t, k, warm
     /// starts) into the HDF5 checkpoint file `path`, atomically
     /// (`coulomb_granular::checkpoint`).
@@ -267,12 +507,124 @@ impl PySimulation {
             .map(|sim| Self { sim })
             .map_err(|e| crate::errors::checkpoint_error(py, e))
     }
+}
 
-    /// The last step's global problem (when `keep_problem` is set and the step had contacts).
-    #[getter]
-    fn last_problem(&self) -> Option<PyProblem> {
-        self.sim.last_problem.as_ref().map(|g| PyProblem {
-            inner: Arc::new(Problem::Global(g.clone())),
+impl PySimulation {
+    /// The simulation of a built scene: `rest` (warm_start, gap_closure) applied to its
+    /// parameters, `solver` (keyword settings of `coulomb.solve`) replacing the library
+    /// solver's settings when given.
+    fn finish(
+        py: Python<'_>,
+        built: Result<(World, Params), coulomb_granular::SceneError>,
+        rest: Vec<(String, Bound<'_, PyAny>)>,
+        solver: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
+        let (world, mut p) = built.map_err(|e| crate::errors::scene_error(py, &e))?;
+        for (k, v) in rest {
+            set_param(&mut p, &k, &v)?;
+        }
+        if let Some(kw) = solver.filter(|d| !d.is_empty()) {
+            p.solver = convert::settings_from_kwargs(py, "Simulation", Some(kw))?;
+        }
+        let sim = py
+            .detach(move || Simulation::new(world, p))
+            .map_err(sim_error)?;
+        Ok(Self { sim })
+    }
+}
+
+/// The inlets of a scene: spheres poured into a running simulation
+/// (`coulomb_granular::generate::Inlet`, the emission rule of `coulomb simulate`).
+#[pyclass(name = "_Feed", module = "coulomb._coulomb")]
+pub struct PyFeed {
+    /// the scene's materials (the inserted spheres' material indices)
+    model: SceneModel,
+    inlets: Vec<InletRun>,
+}
+
+#[pymethods]
+impl PyFeed {
+    /// The inlets `inlets` (JSON list of `{inlet, material}`: `inlet` the serde form of
+    /// `Inlet`) with the materials of the scene description `json`.
+    #[new]
+    fn new(py: Python<'_>, json: &str, inlets: &str) -> PyResult<Self> {
+        #[derive(serde::Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Entry {
+            inlet: coulomb_granular::generate::Inlet,
+            material: String,
+        }
+        let bad = |field: &str, index: Option<usize>, m: String| {
+            let index = index.map_or_else(
+                || py.None(),
+                |i| {
+                    i.into_pyobject(py)
+                        .map_or_else(|_| py.None(), |x| x.into_any().unbind())
+                },
+            );
+            crate::errors::scene_input_error(py, "inlet", Some(field), index, m)
+        };
+        let desc: serde_json::Value = serde_json::from_str(json)
+            .map_err(|e| bad("inlets", None, format!("scene description: {e}")))?;
+        let materials: coulomb_granular::Materials = desc
+            .get("materials")
+            .map(|m| serde_json::from_value(m.clone()))
+            .transpose()
+            .map_err(|e| bad("inlets", None, format!("materials: {e}")))?
+            .unwrap_or_default();
+        let model = SceneModel {
+            materials,
+            ..SceneModel::default()
+        };
+        let entries: Vec<Entry> = serde_json::from_str(inlets)
+            .map_err(|e| bad("inlets", None, format!("inlets: {e}")))?;
+        let mut out = Vec::with_capacity(entries.len());
+        for (k, e) in entries.into_iter().enumerate() {
+            e.inlet
+                .validate()
+                .map_err(|err| bad("inlets", Some(k), format!("inlet {k}: {err}")))?;
+            // the material must exist (the error of the model, naming the inlet)
+            let probe = coulomb_granular::SphereBatch {
+                material: e.material.clone(),
+                density: Some(e.inlet.density),
+                ..Default::default()
+            };
+            model
+                .spheres_of(&probe)
+                .map_err(|err| bad("material", Some(k), format!("inlet {k}: {err}")))?;
+            out.push(InletRun {
+                density: e.inlet.density,
+                material: e.material,
+                inlet: e.inlet,
+            });
+        }
+        Ok(Self { model, inlets: out })
+    }
+
+    /// Inserts into `sim` the spheres the inlets owe for (t0, t1], placed among the spheres
+    /// present; returns (inserted, skipped).
+    fn emit(
+        &mut self,
+        py: Python<'_>,
+        sim: &mut PySimulation,
+        t0: f64,
+        t1: f64,
+    ) -> PyResult<(usize, usize)> {
+        let (model, inlets, sim) = (&self.model, &mut self.inlets, &mut sim.sim);
+        py.detach(move || {
+            let (mut n, mut k) = (0, 0);
+            for inlet in inlets.iter_mut() {
+                let (a, b) = inlet.emit(sim, model, t0, t1)?;
+                n += a;
+                k += b;
+            }
+            Ok((n, k))
         })
+        .map_err(sim_error)
+    }
+
+    /// Number of inlets.
+    fn __len__(&self) -> usize {
+        self.inlets.len()
     }
 }

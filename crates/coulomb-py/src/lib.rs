@@ -9,6 +9,7 @@
 mod convert;
 mod errors;
 mod granular;
+mod scene;
 
 use coulomb::existence::{self, CheckSettings};
 use coulomb::fclib::{self, FclibFile, Info, StoredSolution};
@@ -383,9 +384,11 @@ fn _coulomb(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(resolve_settings, m)?)?;
     m.add_function(wrap_pyfunction!(error, m)?)?;
     m.add_function(wrap_pyfunction!(check, m)?)?;
+    m.add_function(wrap_pyfunction!(scene::scene_fill, m)?)?;
     m.add_function(wrap_pyfunction!(fclib_read, m)?)?;
     m.add_function(wrap_pyfunction!(fclib_write, m)?)?;
     m.add_class::<granular::PySimulation>()?;
+    m.add_class::<granular::PyFeed>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

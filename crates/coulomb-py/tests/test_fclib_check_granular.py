@@ -65,7 +65,10 @@ def test_simulate_box_with_callback_and_steering():
 
 def test_simulation_iterator_and_parameters():
     sim = coulomb.granular.Simulation("box", beads=10, seed=3, mu=0.5)
-    assert sim.params["mu"] == 0.5 and sim.params["solver"]["tol"] == 1e-8
+    # the defaults of `coulomb simulate`: body-level Gauss–Seidel to 1e-4 (the library solver,
+    # its fallback, to the same tolerance)
+    assert sim.params["mu"] == 0.5 and sim.params["method"] == "nsgs"
+    assert sim.params["tol"] == 1e-4 and sim.params["solver"]["tol"] == 1e-4
     x0 = sim.positions
     stats = list(sim.run(2))
     assert [s["step"] for s in stats] == [0, 1] and sim.steps_done == 2
@@ -78,6 +81,15 @@ def test_simulation_iterator_and_parameters():
         sim.set_params(gravity=1.0)
     with pytest.raises(TypeError):
         coulomb.granular.Simulation("box", beads=10, friction=0.1)
+    # the library's solver stays available, at the tolerance asked for
+    lib = coulomb.granular.Simulation("box", beads=10, seed=3, method="library", tol=1e-8)
+    assert lib.params["method"] == "library" and lib.params["solver"]["tol"] == 1e-8
+    assert all(s["converged"] and s["error"] <= 1e-8 for s in lib.run(3))
+    lib.set_params(method="nsgs", tol=1e-5, max_sweeps=500)
+    assert lib.params["method"] == "nsgs" and lib.params["max_sweeps"] == 500
+    assert lib.params["tol"] == 1e-5
+    with pytest.raises(ValueError):
+        lib.set_params(method="newton")
 
 
 def test_rolling_friction_brings_a_heap_to_rest():

@@ -18,7 +18,8 @@ Modules: :mod:`coulomb.fclib` (HDF5 exchange format), :mod:`coulomb.granular`
 from __future__ import annotations
 
 from . import _coulomb
-from ._errors import CheckpointError, CoulombError, FclibError, InputError, ProblemError, SettingsError
+from ._errors import (CheckpointError, CoulombError, FclibError, InputError, ProblemError,
+                      SceneError, SettingsError)
 from ._problem import GlobalProblem, LocalProblem, Problem
 from ._solve import (
     CriterionReport,
@@ -48,6 +49,7 @@ __all__ = [
     "LocalProblem",
     "Problem",
     "ProblemError",
+    "SceneError",
     "SettingsError",
     "Solution",
     "Status",

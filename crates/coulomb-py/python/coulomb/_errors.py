@@ -11,6 +11,7 @@ __all__ = [
     "InputError",
     "FclibError",
     "CheckpointError",
+    "SceneError",
 ]
 
 
@@ -56,6 +57,19 @@ class FclibError(CoulombError, ValueError):
 
     file: Optional[str] = None
     path: Optional[str] = None
+
+
+class SceneError(CoulombError, ValueError):
+    """A granular scene built in Python cannot be built (``coulomb_granular::SceneError``, and
+    the checks of :class:`coulomb.granular.Scene`).
+
+    ``kind`` is the variant (``unknown_material``, ``invalid_law``, ``invalid_body``,
+    ``invalid_obstacle``, ``mesh``, ``invalid_step``, ``invalid_gravity``, ``overlaps``,
+    ``outside``, ``memory``, ``fill``, ``description``, ``argument``); ``field`` names the datum
+    (``radii``, ``positions``, ``masses``, ``density``, ``material``, ``material_pair``, ``mu``,
+    ``vertices``, ``triangles``, ``obstacles``, ``gravity``, ``h``, ...) and ``index`` the
+    sphere, obstacle, triangle or vertex (or the overlapping pair) where there is one.
+    """
 
 
 class CheckpointError(CoulombError, ValueError):

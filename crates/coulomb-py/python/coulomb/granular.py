@@ -3,22 +3,27 @@
 problem (2.10) is assembled and solved by :func:`coulomb.solve`'s library solver, and the
 velocities and positions are updated by the θ-method.
 
-Steer a run step by step with :class:`Simulation` (``step()``, ``for stats in sim.run(n)``,
+Build your own scene with :class:`Scene` (spheres from numpy arrays, planes, boxes, cylinders,
+meshes, moving walls, materials with per-pair laws) and run it with :class:`Simulation`.
+Steer a run step by step with :class:`Simulation` (``step()``, ``sim.run(n)``,
 ``set_velocities``, ``set_params``), or run it at once with :func:`simulate` and a callback.
 """
 
 from __future__ import annotations
 
+import json
+import math
 import os
 from dataclasses import dataclass, field
-from typing import Any, Callable, Dict, Iterator, List, Mapping, Optional, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 from . import _coulomb
+from ._errors import SceneError
 from ._problem import GlobalProblem, Problem
 
-__all__ = ["SCENES", "Simulation", "SimulationResult", "simulate"]
+__all__ = ["SCENES", "Motion", "Region", "Scene", "Simulation", "SimulationResult", "simulate"]
 
 #: the scenes of ``coulomb_granular::Scene``
 SCENES = ("box", "funnel", "vibrating-plate", "rotating-drum")
@@ -29,33 +34,555 @@ SCENES = ("box", "funnel", "vibrating-plate", "rotating-drum")
 StepStats = Dict[str, Any]
 
 
-class Simulation:
-    """A granular simulation of ``beads`` spheres in ``scene``, built deterministically from
-    ``seed``.
+# --------------------------------------------------------------------------------------------
+# Scenes of your own
+# --------------------------------------------------------------------------------------------
 
-    Parameters (``coulomb_granular::Params``): ``h`` (time step, 0.02 s), ``theta`` (θ of
-    (2.7), 0.5), ``restitution`` (Newton's e, 0.2), ``mu`` (friction, 0.3),
-    ``rolling_friction`` (μ_r: resisting torque ≤ μ_r R r_N, 0 = off; docs/granular.md,
-    "Rolling resistance"), ``warm_start`` (True), ``gap_closure`` (True: a sphere at rest
-    settles onto an obstacle instead of hovering at the activation rule's look-ahead distance;
-    docs/granular.md, "Resting on an obstacle"). ``solver`` holds keyword settings of :func:`coulomb.solve`. Unknown names raise
-    :class:`TypeError`, values out of range :class:`ValueError`.
+def _arg_error(field_: str, msg: str, index: Any = None) -> SceneError:
+    e = SceneError(msg)
+    e.kind, e.field, e.index = "argument", field_, index
+    return e
+
+
+def _real(name: str, x: Any, positive: bool = False, nonnegative: bool = False) -> float:
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a number, got {x!r}") from None
+    if not math.isfinite(v) or (positive and v <= 0.0) or (nonnegative and v < 0.0):
+        want = "positive" if positive else "nonnegative" if nonnegative else "finite"
+        raise _arg_error(name, f"{name} = {v} must be a {want} finite number")
+    return v
+
+
+def _vec3(name: str, v: Any) -> List[float]:
+    try:
+        a = np.asarray(v, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be 3 numbers, got {v!r}") from None
+    if a.shape != (3,):
+        raise _arg_error(name, f"{name} must be 3 numbers [x, y, z], got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise _arg_error(name, f"{name} = {a.tolist()} must be finite")
+    return [float(x) for x in a]
+
+
+def _unit(name: str, v: Any) -> List[float]:
+    a = np.array(_vec3(name, v))
+    n = float(np.linalg.norm(a))
+    if n == 0.0:
+        raise _arg_error(name, f"{name} must not be the zero vector")
+    return [float(x) for x in a / n]
+
+
+def _array(name: str, x: Any, dtype: Any = np.float64) -> np.ndarray:
+    try:
+        return np.array(x, dtype=dtype, order="C", copy=True)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be an array of numbers") from None
+
+
+def _rows3(name: str, x: Any, n: Optional[int] = None) -> np.ndarray:
+    a = _array(name, x)
+    if a.ndim == 1 and a.shape[0] == 3 and n in (None, 1):
+        a = a.reshape(1, 3)
+    if a.ndim != 2 or a.shape[1] != 3 or (n is not None and a.shape[0] != n):
+        want = "(n, 3)" if n is None else f"({n}, 3)"
+        raise _arg_error(name, f"{name} must have shape {want}, got {a.shape}")
+    return a
+
+
+def _material(name: Any) -> str:
+    if not isinstance(name, str) or not name:
+        raise TypeError(f"material must be a non-empty string, got {name!r}")
+    return name
+
+
+class Motion:
+    """Prescribed motions of obstacles (the serde form of ``coulomb_granular::Motion``, plain
+    dicts: ``{"kind": "rotate", "center": [...], "axis": [...], "omega": 1.0}``, which may
+    be passed as such). Directions and axes are normalized here."""
+
+    @staticmethod
+    def fixed() -> Dict[str, Any]:
+        """Motionless (the default)."""
+        return {"kind": "fixed"}
+
+    @staticmethod
+    def translate(velocity: Sequence[float]) -> Dict[str, Any]:
+        """Translation d(t) = v t at constant velocity v (m/s)."""
+        return {"kind": "translate", "velocity": _vec3("velocity", velocity)}
+
+    @staticmethod
+    def oscillate(direction: Sequence[float], amplitude: float,
+                  frequency: float) -> Dict[str, Any]:
+        """Translation d(t) = A sin(2π f t) · direction (amplitude A in m, frequency f in
+        Hz): a vibrating wall or plate."""
+        return {"kind": "oscillate", "direction": _unit("direction", direction),
+                "amplitude": _real("amplitude", amplitude),
+                "frequency": _real("frequency", frequency)}
+
+    @staticmethod
+    def rotate(center: Sequence[float], axis: Sequence[float], omega: float) -> Dict[str, Any]:
+        """Rotation by the angle ω t (ω in rad/s, right-handed) about the line through
+        ``center`` along ``axis``: a rotating drum, a stirrer."""
+        return {"kind": "rotate", "center": _vec3("center", center),
+                "axis": _unit("axis", axis), "omega": _real("omega", omega)}
+
+
+def _motion(m: Any) -> Dict[str, Any]:
+    if m is None:
+        return Motion.fixed()
+    if not isinstance(m, Mapping) or "kind" not in m:
+        raise TypeError("motion must be a dict with a 'kind' (see coulomb.granular.Motion), "
+                        f"got {m!r}")
+    return dict(m)
+
+
+class Region:
+    """Regions for :meth:`Scene.fill` (plain dicts, the serde form of
+    ``coulomb_granular::generate::Shape``)."""
+
+    @staticmethod
+    def box(lo: Sequence[float], hi: Sequence[float]) -> Dict[str, Any]:
+        """The box [lo, hi]."""
+        return {"kind": "box", "lo": _vec3("lo", lo), "hi": _vec3("hi", hi)}
+
+    @staticmethod
+    def cylinder(base: Sequence[float], axis: Sequence[float], radius: float,
+                 height: float) -> Dict[str, Any]:
+        """The solid cylinder of ``radius`` whose axis runs from ``base`` along ``axis``
+        over ``height``."""
+        return {"kind": "cylinder", "base": _vec3("base", base), "axis": _unit("axis", axis),
+                "radius": _real("radius", radius), "height": _real("height", height)}
+
+
+    @staticmethod
+    def mesh(vertices: Any, triangles: Any) -> Dict[str, Any]:
+        """The interior of a closed, consistently oriented triangle mesh (vertices (n, 3),
+        triangles (m, 3) integer indices)."""
+        v = _rows3("vertices", vertices)
+        t = _triangles(triangles)
+        return {"kind": "mesh", "vertices": v, "triangles": t}
+
+
+def _triangles(triangles: Any) -> np.ndarray:
+    """Triangles (m, 3) of nonnegative integer vertex indices, as uint64."""
+    t = np.asarray(triangles)
+    if t.dtype.kind not in "iu":
+        raise TypeError(f"triangles must be integers, got dtype {t.dtype}")
+    if t.ndim != 2 or t.shape[1] != 3:
+        raise _arg_error("triangles", f"triangles must have shape (m, 3), got {t.shape}")
+    if t.size and t.min() < 0:
+        k = int(np.argmin(t.min(axis=1)))
+        raise _arg_error("triangles", f"triangle {k} has a negative vertex index", k)
+    return np.ascontiguousarray(t, dtype=np.uint64)
+
+
+def _sizes(radius: Any) -> Dict[str, Any]:
+    """A size distribution: a radius (mono) or a dict of
+    ``coulomb_granular::generate::SizeDistribution``."""
+    if isinstance(radius, Mapping):
+        return dict(radius)
+    return {"kind": "mono", "radius": _real("radius", radius, positive=True)}
+
+
+class Scene:
+    """A granular scene of your own: spheres, obstacles (planes, boxes, cylinders, spheres,
+    triangle meshes) with prescribed motions, gravity and materials with per-pair contact
+    laws — the Python face of ``coulomb_granular::SceneModel``.
+
+    Obstacles, materials and gravity are kept as plain data, the spheres as numpy arrays;
+    :class:`Simulation` hands them to Rust (one JSON description plus the arrays), where the
+    scene is validated and built without the GIL. Materials are names: ``"default"`` always
+    exists, others are declared by :meth:`add_material` or by using them; a pair of
+    :meth:`set_material_pair` naming a material declared nowhere is refused at build.
+
+    Every ``add_*`` method returns the scene, so calls chain. Lengths in m, masses in kg.
     """
 
-    def __init__(self, scene: str = "box", beads: int = 100, seed: int = 1,
+    def __init__(self) -> None:
+        self._gravity: List[float] = [0.0, 0.0, -9.81]
+        self._names: List[str] = []
+        self._default_law: Dict[str, float] = {"mu": 0.3, "restitution": 0.2,
+                                               "rolling_friction": 0.0}
+        self._pairs: Dict[Tuple[str, str], Dict[str, Any]] = {}
+        self._obstacles: List[Dict[str, Any]] = []
+        self._meshes: List[Tuple[np.ndarray, np.ndarray]] = []
+        # (description, (positions, radii, velocities, angular velocities, masses))
+        self._batches: List[Tuple[Dict[str, Any], Tuple[np.ndarray, ...]]] = []
+        self._inlets: List[Dict[str, Any]] = []
+
+    # -- materials and gravity --------------------------------------------------------------
+
+    def _use(self, material: Any) -> str:
+        m = _material(material)
+        if m != "default" and m not in self._names:
+            self._names.append(m)
+        return m
+
+    def add_material(self, name: str) -> "Scene":
+        """Declares the material ``name`` (materials are also declared by using them)."""
+        self._use(name)
+        return self
+
+    @property
+    def materials(self) -> List[str]:
+        """The material names: ``default``, then the others in order of declaration."""
+        return ["default"] + list(self._names)
+
+    def set_default_law(self, mu: float = 0.3, restitution: float = 0.2,
+                        rolling_friction: float = 0.0) -> "Scene":
+        """The contact law of every pair of materials not set by :meth:`set_material_pair`:
+        friction μ of Coulomb's cone (2.9), Newton restitution e ∈ [0, 1], rolling
+        friction μ_r (docs/granular.md, "Rolling resistance")."""
+        self._default_law = {"mu": _real("mu", mu), "restitution": _real("restitution",
+                                                                         restitution),
+                             "rolling_friction": _real("rolling_friction", rolling_friction)}
+        return self
+
+    def set_material_pair(self, a: str, b: str, mu: float = 0.3, restitution: float = 0.2,
+                          rolling_friction: float = 0.0) -> "Scene":
+        """The contact law (μ, e, μ_r) of contacts between materials ``a`` and ``b`` (the
+        same for (b, a); set again, it replaces the earlier law). The materials must be
+        declared (used, or :meth:`add_material`) by the time the scene is built."""
+        a, b = _material(a), _material(b)
+        self._pairs[(min(a, b), max(a, b))] = {
+            "a": a, "b": b, "mu": _real("mu", mu), "restitution": _real("restitution",
+                                                                        restitution),
+            "rolling_friction": _real("rolling_friction", rolling_friction)}
+        return self
+
+    def set_gravity(self, g: Sequence[float]) -> "Scene":
+        """The gravity vector (m/s², default (0, 0, −9.81))."""
+        self._gravity = _vec3("gravity", g)
+        return self
+
+    @property
+    def gravity(self) -> np.ndarray:
+        """The gravity vector."""
+        return np.array(self._gravity)
+
+    # -- spheres ----------------------------------------------------------------------------
+
+    def add_spheres(self, positions: Any, radii: Any, density: Optional[float] = 2500.0,
+                    velocities: Any = None, material: str = "default",
+                    angular_velocities: Any = None, masses: Any = None,
+                    fixed: bool = False) -> "Scene":
+        """Adds spheres from arrays: ``positions`` (n, 3) centres, ``radii`` (n,) or one
+        radius for all, ``density`` (kg/m³; mass ρ 4/3 π R³) or ``masses`` ((n,) or one for
+        all; then ``density`` is ignored), ``velocities`` and ``angular_velocities`` (n, 3)
+        (default at rest), one ``material``. ``fixed=True`` makes them immobile obstacles.
+
+        The arrays are copied and passed to Rust as one column batch at build (10⁶ spheres
+        build in about a second); values are validated there (non-finite or nonpositive
+        radius → :class:`coulomb.SceneError` with ``field="radii"`` and the sphere's index).
+        """
+        pos = _rows3("positions", positions)
+        n = pos.shape[0]
+        r = _array("radii", radii)
+        if r.ndim == 0:
+            r = r.reshape(1)
+        if r.ndim != 1 or r.shape[0] not in (1, n):
+            raise _arg_error("radii", f"radii must be one number or shape ({n},), got {r.shape}")
+        empty = np.zeros(0)
+        vel = empty if velocities is None else _rows3("velocities", velocities, n).ravel()
+        ang = (empty if angular_velocities is None
+               else _rows3("angular_velocities", angular_velocities, n).ravel())
+        desc: Dict[str, Any] = {"positions": [], "radii": [], "material": self._use(material),
+                                "fixed": bool(fixed)}
+        if masses is not None:
+            m = _array("masses", masses)
+            if m.ndim == 0:
+                m = m.reshape(1)
+            if m.ndim != 1 or m.shape[0] not in (1, n):
+                raise _arg_error("masses",
+                                 f"masses must be one number or shape ({n},), got {m.shape}")
+        else:
+            if density is None:
+                raise _arg_error("density", "give a density or masses")
+            desc["density"] = _real("density", density)
+            m = empty
+        self._batches.append((desc, (pos.ravel(), r, vel, ang, m)))
+        return self
+
+    @property
+    def sphere_count(self) -> int:
+        """Number of spheres added (free and fixed)."""
+        return sum(arrays[0].shape[0] // 3 for _, arrays in self._batches)
+
+    def _sphere_arrays(self) -> Tuple[np.ndarray, np.ndarray]:
+        """Centres (n, 3) and radii (n,) of every sphere added so far."""
+        pos, rad = [np.zeros((0, 3))], [np.zeros(0)]
+        for _, (p, r, *_rest) in self._batches:
+            n = p.shape[0] // 3
+            pos.append(p.reshape(n, 3))
+            rad.append(np.broadcast_to(r, (n,)) if r.shape[0] == 1 else r)
+        return np.concatenate(pos), np.concatenate(rad)
+
+    def fill(self, region: Mapping[str, Any], count: int, radius: Any = 0.05,
+             method: str = "lattice", seed: int = 0, density: float = 2500.0,
+             material: str = "default", velocity: Sequence[float] = (0.0, 0.0, 0.0),
+             velocity_jitter: float = 0.0, pitch: Optional[float] = None,
+             layer_pitch: Optional[float] = None, jitter: float = 0.2,
+             max_attempts: Optional[int] = None) -> int:
+        """Fills ``region`` (:meth:`Region.box`, :meth:`Region.cylinder`, :meth:`Region.mesh`:
+        a closed mesh's interior) with ``count``
+        spheres that overlap neither each other nor the spheres already in the scene, and
+        adds them; returns how many were placed (fewer when the region is full).
+
+        ``radius``: one radius, or a size distribution as a dict (``{"kind": "uniform",
+        "min": .., "max": ..}``, ``{"kind": "normal", "mean": .., "sd": ..}``,
+        ``{"kind": "log_normal", "median": .., "sigma": ..}``, ``{"kind": "psd",
+        "diameters": [..], "cumulative": [..], "basis": "mass"}``). ``method``:
+        ``"lattice"`` (a jittered cubic lattice filled from the bottom up; ``pitch``
+        default 2.5 × the largest radius, ``jitter`` as a fraction of it) or ``"rsa"``
+        (random sequential addition, at most ``max_attempts`` tries). Deterministic from
+        ``seed`` (ChaCha8; ``coulomb_granular::generate::fill``).
+        """
+        if method == "lattice":
+            packing: Dict[str, Any] = {"method": "lattice", "jitter": _real("jitter", jitter)}
+            if pitch is not None:
+                packing["pitch"] = _real("pitch", pitch, positive=True)
+            if layer_pitch is not None:
+                packing["layer_pitch"] = _real("layer_pitch", layer_pitch, positive=True)
+        elif method in ("rsa", "random"):
+            packing = {"method": "random"}
+            if max_attempts is not None:
+                packing["max_attempts"] = int(max_attempts)
+        else:
+            raise _arg_error("method", f"fill method {method!r}: 'lattice' or 'rsa'")
+        if isinstance(count, bool) or int(count) != count or count < 0:
+            raise _arg_error("count", f"count must be a nonnegative int, got {count!r}")
+        if not isinstance(region, Mapping):
+            raise TypeError("region must be a dict (coulomb.granular.Region.box / .cylinder)")
+        spec = {"count": int(count), "sizes": _sizes(radius), "packing": packing,
+                "velocity": _vec3("velocity", velocity),
+                "velocity_jitter": _real("velocity_jitter", velocity_jitter, nonnegative=True),
+                "seed": int(seed)}
+        ap, ar = self._sphere_arrays()
+        mesh = None
+        if region.get("kind") == "mesh":
+            mesh = (np.asarray(region["vertices"], dtype=np.float64).ravel(),
+                    np.asarray(region["triangles"], dtype=np.uint64).ravel())
+            region = {"kind": "mesh"}
+        pos, rad, vel, _attempts = _coulomb.scene_fill(
+            json.dumps(dict(region)), json.dumps(spec), np.ascontiguousarray(ap).ravel(),
+            np.ascontiguousarray(ar), mesh)
+        if len(rad):
+            self.add_spheres(pos, rad, density=density, material=material,
+                             velocities=vel if np.any(vel) else None)
+        else:
+            self._use(material)
+        return int(len(rad))
+
+    def add_inlet(self, region: Mapping[str, Any], rate: float, radius: Any = 0.05,
+                  density: float = 2500.0, material: str = "default", rate_kind: str = "count",
+                  start: float = 0.0, end: Optional[float] = None,
+                  velocity: Sequence[float] = (0.0, 0.0, 0.0), attempts: int = 20,
+                  seed: int = 0) -> "Scene":
+        """Pours spheres into the running simulation: from ``start`` to ``end`` (s),
+        ``rate`` spheres per second (``rate_kind="count"``) or kilograms per second
+        (``"mass"``) appear in ``region`` (:meth:`Region.box` or :meth:`Region.cylinder`)
+        with ``velocity``, radii from ``radius`` (a number or a size distribution as in
+        :meth:`fill`). Sphere i is placed at the first of ``attempts`` seeded random
+        positions that overlaps nothing, else skipped (``coulomb_granular::generate::Inlet``,
+        the rule of ``coulomb simulate``); the spheres due in (t_k, t_{k+1}] are inserted
+        after step k, after those already present in the arrays."""
+        if rate_kind not in ("count", "mass"):
+            raise _arg_error("rate_kind", f"rate_kind {rate_kind!r}: 'count' or 'mass'")
+        if not isinstance(region, Mapping) or region.get("kind") not in ("box", "cylinder"):
+            raise _arg_error("region", "an inlet's region is a Region.box or Region.cylinder")
+        inlet: Dict[str, Any] = {
+            "region": dict(region), "sizes": _sizes(radius),
+            "density": _real("density", density, positive=True),
+            "rate": {rate_kind: _real("rate", rate, nonnegative=True)},
+            "start": _real("start", start, nonnegative=True),
+            "velocity": _vec3("velocity", velocity), "attempts": int(attempts),
+            "seed": int(seed)}
+        if end is not None:
+            inlet["end"] = _real("end", end)
+        self._inlets.append({"inlet": inlet, "material": self._use(material)})
+        return self
+
+    # -- obstacles --------------------------------------------------------------------------
+
+    def _obstacle(self, shape: Dict[str, Any], material: str, motion: Any, name: str) -> "Scene":
+        if not isinstance(name, str):
+            raise TypeError("name must be a string")
+        self._obstacles.append({"name": name, "shape": shape, "motion": _motion(motion),
+                                "material": self._use(material)})
+        return self
+
+    def add_plane(self, point: Sequence[float], normal: Sequence[float],
+                  material: str = "default", motion: Any = None, name: str = "") -> "Scene":
+        """An infinite plane through ``point``; the spheres live on the side ``normal``
+        points to (normalized here)."""
+        return self._obstacle({"kind": "plane", "point": _vec3("point", point),
+                               "normal": _unit("normal", normal)}, material, motion, name)
+
+    def add_rectangle(self, center: Sequence[float], normal: Sequence[float],
+                      u: Sequence[float], half_u: float, half_v: float,
+                      material: str = "default", motion: Any = None,
+                      name: str = "") -> "Scene":
+        """A thin two-sided rectangle: centre, normal, in-plane axis ``u`` (orthogonal to the
+        normal; the other axis is normal × u) and half-lengths along them."""
+        return self._obstacle({"kind": "rectangle", "center": _vec3("center", center),
+                               "normal": _unit("normal", normal), "u": _unit("u", u),
+                               "half_u": _real("half_u", half_u),
+                               "half_v": _real("half_v", half_v)}, material, motion, name)
+
+    def add_box(self, lo: Sequence[float], hi: Sequence[float], inside: bool = True,
+                open_top: bool = False, material: str = "default", motion: Any = None,
+                name: str = "") -> "Scene":
+        """The axis-aligned box [lo, hi]: a container of six thin walls when ``inside``
+        (without its top wall z = hi when ``open_top``), else a solid block the spheres
+        stay out of."""
+        return self._obstacle({"kind": "box", "lo": _vec3("lo", lo), "hi": _vec3("hi", hi),
+                               "inside": bool(inside), "open_top": bool(open_top)},
+                              material, motion, name)
+
+    def add_cylinder(self, base: Sequence[float], axis: Sequence[float], radius: float,
+                     height: Optional[float], inside: bool = True, bottom_cap: bool = True,
+                     top_cap: bool = True, orifice: float = 0.0, material: str = "default",
+                     motion: Any = None, name: str = "") -> "Scene":
+        """A circular cylinder whose axis runs from ``base`` (centre of the bottom cap) along
+        ``axis`` over ``height``. ``inside``: a container (a silo: caps optional, the bottom
+        cap pierced by a centred circular ``orifice`` of that radius); otherwise a solid
+        cylinder with both caps. ``height=None`` with ``inside``: the inside of an infinite
+        cylinder through ``base`` (a drum without end walls)."""
+        if height is None:
+            if not inside:
+                raise _arg_error("height", "an infinite cylinder (height=None) is a container")
+            return self._obstacle({"kind": "cylinder_inside", "point": _vec3("base", base),
+                                   "axis": _unit("axis", axis),
+                                   "radius": _real("radius", radius)}, material, motion, name)
+        return self._obstacle({"kind": "cylinder", "base": _vec3("base", base),
+                               "axis": _unit("axis", axis), "radius": _real("radius", radius),
+                               "height": _real("height", height), "inside": bool(inside),
+                               "bottom_cap": bool(bottom_cap), "top_cap": bool(top_cap),
+                               "orifice": _real("orifice", orifice)}, material, motion, name)
+
+    def add_sphere(self, center: Sequence[float], radius: float, inside: bool = False,
+                   material: str = "default", motion: Any = None, name: str = "") -> "Scene":
+        """A spherical obstacle: a ball the spheres stay out of, or (``inside``) a spherical
+        container."""
+        return self._obstacle({"kind": "sphere", "center": _vec3("center", center),
+                               "radius": _real("radius", radius), "inside": bool(inside)},
+                              material, motion, name)
+
+    def add_mesh(self, vertices: Any, triangles: Any, motion: Any = None,
+                 material: str = "default", side: str = "surface", name: str = "") -> "Scene":
+        """A triangle mesh obstacle: ``vertices`` (n, 3) floats, ``triangles`` (m, 3)
+        integer vertex indices. ``side``: ``"surface"`` (either side, open or closed: a
+        chute, a drum's shell), ``"inside"`` (a closed, consistently oriented container) or
+        ``"outside"`` (a closed solid). Contacts are found through a bounding-volume
+        hierarchy (O(contacts) per step). Validated at build: finite vertices, indices in
+        range, no degenerate triangle (errors name ``vertices`` / ``triangles`` and the
+        index)."""
+        v = _rows3("vertices", vertices)
+        t = _triangles(triangles)
+        if side not in ("surface", "inside", "outside"):
+            raise _arg_error("side", f"side {side!r}: 'surface', 'inside' or 'outside'")
+        k = len(self._meshes)
+        self._meshes.append((v.ravel(), t.ravel()))
+        return self._obstacle({"kind": "mesh", "mesh": k, "side": side}, material, motion, name)
+
+    @property
+    def obstacles(self) -> List[Dict[str, Any]]:
+        """The obstacles as dicts (meshes by their index in the scene's meshes)."""
+        return [dict(o) for o in self._obstacles]
+
+    # -- hand-over to Rust ------------------------------------------------------------------
+
+    def _description(self) -> str:
+        """The scene without its arrays, as JSON (``coulomb_granular::SceneModel``)."""
+        desc = {
+            "gravity": self._gravity,
+            "materials": {"names": list(self._names), "default": dict(self._default_law),
+                          "pairs": [dict(p) for p in self._pairs.values()]},
+            "sphere_batches": [d for d, _ in self._batches],
+            "obstacles": self._obstacles,
+        }
+        return json.dumps(desc, allow_nan=False)
+
+    def _parts(self) -> Tuple[str, List[Tuple[np.ndarray, ...]], List[Tuple[np.ndarray, ...]]]:
+        return self._description(), [a for _, a in self._batches], list(self._meshes)
+
+
+
+class Simulation:
+    """A granular simulation of a :class:`Scene` of your own, or of the built-in ``scene``
+    (``box``, ``funnel``, ``vibrating-plate``, ``rotating-drum``) with ``beads`` spheres built
+    deterministically from ``seed``.
+
+    Step settings (those of ``coulomb simulate``): ``h`` (time step, 0.02 s), ``theta`` (θ of
+    (2.7), 0.5), ``tol`` (tolerance on the error of docs/error.md reached at every step,
+    1e-4), ``method`` (``"nsgs"``: body-level nonsmooth Gauss–Seidel, finished by the
+    library's solver where it stalls — the default; ``"library"``: the library's solver on
+    each step's problem (2.10)), ``max_sweeps`` (20 000) and ``relaxation`` (ω, 1.5) of
+    ``nsgs``. Contact law of every pair of materials without its own law: ``restitution``
+    (Newton's e, 0.2), ``mu`` (friction, 0.3), ``rolling_friction`` (μ_r: resisting torque ≤
+    μ_r R r_N, 0 = off; docs/granular.md, "Rolling resistance"). Also ``warm_start`` (True),
+    ``gap_closure`` (True: a sphere at rest settles onto an obstacle instead of hovering at
+    the activation rule's look-ahead distance; docs/granular.md, "Resting on an obstacle").
+    ``solver`` holds keyword settings of :func:`coulomb.solve` that replace the library
+    solver's (used by ``method="library"`` and as the fallback of ``nsgs``).
+
+    Unknown names raise :class:`TypeError`, values out of range :class:`ValueError`; a scene
+    that cannot be built raises :class:`coulomb.SceneError` (a ``ValueError``) naming the
+    datum. Building and stepping run without the GIL.
+    """
+
+    def __init__(self, scene: Union[Scene, str] = "box", beads: int = 100, seed: int = 1,
                  solver: Optional[Mapping[str, Any]] = None, **params: Any) -> None:
-        self._sim = _coulomb._Simulation(str(scene), int(beads), int(seed), dict(params),
-                                         dict(solver or {}))
+        if isinstance(scene, Scene):
+            desc, batches, meshes = scene._parts()
+            if scene._inlets:  # checked before the build
+                self._feed = _coulomb._Feed(desc, json.dumps(scene._inlets, allow_nan=False))
+            self._sim = _coulomb._Simulation.from_scene(desc, batches, meshes, dict(params),
+                                                        dict(solver or {}))
+        elif isinstance(scene, str):
+            self._sim = _coulomb._Simulation(scene, int(beads), int(seed), dict(params),
+                                             dict(solver or {}))
+        else:
+            raise TypeError(f"scene must be a coulomb.granular.Scene or the name of a built-in "
+                            f"scene {SCENES}, got {type(scene).__name__}")
+
+    #: the scene's inlets (None: none)
+    _feed: Any = None
+
+    @staticmethod
+    def from_file(path: Union[str, "os.PathLike[str]"], seed: Optional[int] = None,
+                  solver: Optional[Mapping[str, Any]] = None,
+                  **params: Any) -> "Simulation":
+        """The scene of a scene file (``.toml`` or ``.json``, the format of ``coulomb
+        simulate SCENE.toml``, docs/granular.md "Scene files"); ``seed`` replaces the file's,
+        ``params`` (as for :class:`Simulation`) override its ``[step]`` settings. Errors name
+        the file, line and key (:class:`coulomb.SceneError`; ``OSError`` when it cannot be
+        read). The file's inlets pour as in ``coulomb simulate``."""
+        sim = Simulation.__new__(Simulation)
+        sim._sim, sim._feed = _coulomb._Simulation.from_file(
+            os.fspath(path), None if seed is None else int(seed), dict(params),
+            dict(solver or {}))
+        return sim
 
     def step(self) -> StepStats:
-        """Advances one step t_k → t_{k+1} (GIL released) and returns its statistics."""
-        return self._sim.step()
+        """Advances one step t_k → t_{k+1} (GIL released) and returns its statistics; then
+        the scene's inlets insert the spheres due in (t_k, t_{k+1}]."""
+        if self._feed is None:
+            return self._sim.step()
+        t0 = self._sim.time
+        stats = self._sim.step()
+        self._feed.emit(self._sim, t0, self._sim.time)
+        return stats
 
-    def run(self, steps: int) -> Iterator[StepStats]:
-        """Iterator over ``steps`` further steps; the state can be read or changed between
-        them (``sim.velocities``, ``sim.set_velocities(...)``, ``sim.set_params(...)``)."""
-        for _ in range(int(steps)):
-            yield self._sim.step()
+    def run(self, steps: int) -> List[StepStats]:
+        """Advances ``steps`` steps at once (GIL released for all of them) and returns their
+        statistics (a list; use :meth:`step` to read or steer the state between steps)."""
+        if self._feed is None:
+            return self._sim.run(int(steps))
+        return [self.step() for _ in range(int(steps))]
 
     @property
     def positions(self) -> np.ndarray:
@@ -114,25 +641,6 @@ class Simulation:
         """Replaces the solver settings (keyword arguments of :func:`coulomb.solve`)."""
         self._sim.set_solver(**settings)
 
-    def save_checkpoint(self, path: Union[str, "os.PathLike[str]"]) -> None:
-        """Writes the full state of the simulation (spheres, obstacles, gravity, parameters and
-        solver settings, time, step count, warm-start impulses, last contacts) into the HDF5
-        file ``path``, atomically (a complete file replaces an existing one or nothing does).
-        :meth:`load_checkpoint` continues it to the bit; ``coulomb simulate --restart path``
-        continues it from the command line."""
-        self._sim.save_checkpoint(os.fspath(path))
-
-    @staticmethod
-    def load_checkpoint(path: Union[str, "os.PathLike[str]"]) -> "Simulation":
-        """The simulation stored in the checkpoint file ``path`` (written by
-        :meth:`save_checkpoint` or ``coulomb simulate --checkpoint-every``): stepping it gives
-        the same numbers as stepping the saved one. Raises :class:`coulomb.CheckpointError`
-        for a file of another format version, a damaged or truncated one, and ``OSError`` when
-        it cannot be read."""
-        sim = Simulation.__new__(Simulation)
-        sim._sim = _coulomb._Simulation.load_checkpoint(os.fspath(path))
-        return sim
-
     @property
     def keep_problem(self) -> bool:
         """When True, each step's problem (2.10) is kept in :attr:`last_problem`."""
@@ -147,6 +655,26 @@ class Simulation:
         """The last step's global problem (needs ``keep_problem``), e.g. to write as FCLIB."""
         p = self._sim.last_problem
         return None if p is None else Problem._wrap(p)  # type: ignore[return-value]
+
+    def save_checkpoint(self, path: Union[str, "os.PathLike[str]"]) -> None:
+        """Writes the full state of the simulation (spheres, obstacles, materials, gravity,
+        parameters and solver settings, time, step count, warm-start impulses, last contacts)
+        into the HDF5 file ``path``, atomically (a complete file replaces an existing one or
+        nothing does). :meth:`load_checkpoint` continues it to the bit; ``coulomb simulate
+        --restart path`` continues it from the command line. A scene's inlets are not stored:
+        a loaded simulation pours nothing more."""
+        self._sim.save_checkpoint(os.fspath(path))
+
+    @staticmethod
+    def load_checkpoint(path: Union[str, "os.PathLike[str]"]) -> "Simulation":
+        """The simulation stored in the checkpoint file ``path`` (written by
+        :meth:`save_checkpoint` or ``coulomb simulate --checkpoint-every``): stepping it gives
+        the same numbers as stepping the saved one. Raises :class:`coulomb.CheckpointError`
+        for a file of another format version, a damaged or truncated one, and ``OSError`` when
+        it cannot be read."""
+        sim = Simulation.__new__(Simulation)
+        sim._sim = _coulomb._Simulation.load_checkpoint(os.fspath(path))
+        return sim
 
 
 @dataclass
@@ -187,7 +715,8 @@ def simulate(scene: str = "box", beads: int = 100, steps: int = 50, seed: int = 
     traj = [sim.positions] if record else None
     vtraj = [sim.velocities] if record else None
     stats: List[StepStats] = []
-    for s in sim.run(steps):
+    for _ in range(int(steps)):
+        s = sim.step()
         stats.append(s)
         if traj is not None and vtraj is not None:
             traj.append(sim.positions)

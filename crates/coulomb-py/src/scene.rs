@@ -1,0 +1,317 @@
+//! Scenes built in Python (`coulomb.granular.Scene`): the non-array part of a
+//! [`SceneModel`] (gravity, materials, obstacles with their motions, batch metadata, step
+//! settings) arrives as one JSON string (the model's serde form), the arrays (sphere
+//! batches, mesh vertices and triangles) as numpy vectors; they are joined here into the
+//! model, which `SceneModel::build` then validates. Also the region fills of
+//! `coulomb_granular::generate` for `Scene.fill`.
+
+use crate::convert;
+use crate::errors;
+use coulomb_granular::generate::{self, FillSpec, Packing, SizeDistribution};
+use coulomb_granular::{MeshSide, ObstacleSpec, SceneError, SceneModel, Shape, TriangleMesh, Vec3};
+use numpy::{PyArray1, PyReadonlyArray1, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::{PyList, PyTuple};
+use serde::Deserialize;
+use serde_json::Value;
+
+/// A scene-description error that is not one of the model's (malformed JSON, a mesh
+/// reference out of range, ...).
+fn describe_error(py: Python<'_>, field: Option<&str>, msg: String) -> PyErr {
+    errors::scene_input_error(py, "description", field, py.None(), msg)
+}
+
+/// `n` points from a flat vector of 3n floats.
+fn points(flat: &[f64]) -> Vec<Vec3> {
+    flat.chunks_exact(3)
+        .map(|c| Vec3::new(c[0], c[1], c[2]))
+        .collect()
+}
+
+/// The vertices and triangles of one mesh.
+type MeshArrays = (Vec<Vec3>, Vec<[u64; 3]>);
+
+/// The arrays of one sphere batch, copied out of numpy.
+struct BatchArrays {
+    positions: Vec<Vec3>,
+    radii: Vec<f64>,
+    velocities: Vec<Vec3>,
+    angular_velocities: Vec<Vec3>,
+    masses: Vec<f64>,
+}
+
+/// A flat float64 vector whose length is a multiple of 3 (an (n, 3) array raveled).
+fn flat3(what: &str, a: &PyReadonlyArray1<'_, f64>) -> PyResult<Vec<Vec3>> {
+    let s = convert::slice(what, a)?;
+    if s.len() % 3 != 0 {
+        return Err(PyErr::new::<pyo3::exceptions::PyValueError, _>(format!(
+            "{what}: expected shape (n, 3), got {} entries",
+            a.len()
+        )));
+    }
+    Ok(points(s))
+}
+
+fn batch_arrays(item: &Bound<'_, PyAny>) -> PyResult<BatchArrays> {
+    let t = item.cast::<PyTuple>()?;
+    let arr = |i: usize| -> PyResult<PyReadonlyArray1<'_, f64>> { t.get_item(i)?.extract() };
+    Ok(BatchArrays {
+        positions: flat3("positions", &arr(0)?)?,
+        radii: convert::slice("radii", &arr(1)?)?.to_vec(),
+        velocities: flat3("velocities", &arr(2)?)?,
+        angular_velocities: flat3("angular_velocities", &arr(3)?)?,
+        masses: convert::slice("masses", &arr(4)?)?.to_vec(),
+    })
+}
+
+fn mesh_arrays(item: &Bound<'_, PyAny>) -> PyResult<MeshArrays> {
+    let t = item.cast::<PyTuple>()?;
+    let v: PyReadonlyArray1<'_, f64> = t.get_item(0)?.extract()?;
+    let tri: PyReadonlyArray1<'_, u64> = t.get_item(1)?.extract()?;
+    let tri = tri.as_slice().map_err(|_| {
+        PyErr::new::<pyo3::exceptions::PyValueError, _>("triangles: not contiguous")
+    })?;
+    if tri.len() % 3 != 0 {
+        return Err(PyErr::new::<pyo3::exceptions::PyValueError, _>(format!(
+            "triangles: expected shape (m, 3), got {} entries",
+            tri.len()
+        )));
+    }
+    let tris = tri.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    Ok((flat3("vertices", &v)?, tris))
+}
+
+/// The arrays of a Python scene: one entry per sphere batch and per mesh.
+pub(crate) struct SceneArrays {
+    batches: Vec<BatchArrays>,
+    meshes: Vec<MeshArrays>,
+}
+
+impl SceneArrays {
+    /// Copies the arrays out of the Python lists `batches` (tuples of float64 vectors:
+    /// positions (3n), radii, velocities (3n or 0), angular velocities (3n or 0), masses)
+    /// and `meshes` (tuples: vertices (3n float64), triangles (3m uint64)).
+    pub(crate) fn extract(
+        batches: &Bound<'_, PyList>,
+        meshes: &Bound<'_, PyList>,
+    ) -> PyResult<Self> {
+        Ok(Self {
+            batches: batches
+                .iter()
+                .map(|b| batch_arrays(&b))
+                .collect::<PyResult<_>>()?,
+            meshes: meshes
+                .iter()
+                .map(|m| mesh_arrays(&m))
+                .collect::<PyResult<_>>()?,
+        })
+    }
+}
+
+/// Why the JSON description and the arrays do not make a model.
+pub(crate) enum ModelError {
+    /// a malformed description (the message says what and where)
+    Description(String),
+    /// a malformed obstacle (its index in the model, the message)
+    Obstacle(usize, String),
+    /// the model refused its data
+    Scene(SceneError),
+}
+
+impl ModelError {
+    pub(crate) fn into_py(self, py: Python<'_>) -> PyErr {
+        match self {
+            ModelError::Description(m) => describe_error(py, None, m),
+            ModelError::Obstacle(k, m) => errors::scene_input_error(
+                py,
+                "description",
+                Some("obstacles"),
+                k.into_pyobject(py)
+                    .map_or_else(|_| py.None(), |i| i.into_any().unbind()),
+                m,
+            ),
+            ModelError::Scene(e) => errors::scene_error(py, &e),
+        }
+    }
+}
+
+/// The placeholder shape a mesh obstacle's JSON is read with before its mesh is put in.
+fn placeholder_shape() -> Value {
+    serde_json::json!({"kind": "plane", "point": [0.0, 0.0, 0.0], "normal": [0.0, 0.0, 1.0]})
+}
+
+/// The model of `json` (a [`SceneModel`] whose sphere batches have empty `positions` and
+/// `radii`, filled from `arrays.batches` in order, and whose mesh obstacles have the shape
+/// `{"kind": "mesh", "mesh": K, "side": ...}` with K the index of their mesh in
+/// `arrays.meshes`). Runs without the GIL (the meshes' spatial indices are built here).
+pub(crate) fn model_from_parts(json: &str, arrays: SceneArrays) -> Result<SceneModel, ModelError> {
+    let desc = |e: serde_json::Error| ModelError::Description(format!("scene description: {e}"));
+    let mut root: Value = serde_json::from_str(json).map_err(desc)?;
+    let obstacles = match root.as_object_mut() {
+        Some(o) => o.remove("obstacles").unwrap_or(Value::Array(Vec::new())),
+        None => {
+            return Err(ModelError::Description(
+                "scene description: not a JSON object".into(),
+            ))
+        }
+    };
+    let mut model: SceneModel = serde_json::from_value(root).map_err(desc)?;
+    let Value::Array(obstacles) = obstacles else {
+        return Err(ModelError::Description(
+            "scene description: obstacles is not a list".into(),
+        ));
+    };
+    let mut meshes: Vec<Option<MeshArrays>> = arrays.meshes.into_iter().map(Some).collect();
+    for (k, mut ob) in obstacles.into_iter().enumerate() {
+        let mesh_ref = ob
+            .get("shape")
+            .filter(|s| s.get("kind").and_then(Value::as_str) == Some("mesh"))
+            .and_then(|s| s.get("mesh"))
+            .and_then(Value::as_u64);
+        let Some(m) = mesh_ref else {
+            let spec: ObstacleSpec = serde_json::from_value(ob)
+                .map_err(|e| ModelError::Obstacle(k, format!("obstacle {k}: {e}")))?;
+            model.obstacles.push(spec);
+            continue;
+        };
+        let side: MeshSide = match ob["shape"].get("side") {
+            Some(s) => serde_json::from_value(s.clone())
+                .map_err(|e| ModelError::Obstacle(k, format!("obstacle {k}: side: {e}")))?,
+            None => MeshSide::default(),
+        };
+        ob["shape"] = placeholder_shape();
+        let mut spec: ObstacleSpec = serde_json::from_value(ob)
+            .map_err(|e| ModelError::Obstacle(k, format!("obstacle {k}: {e}")))?;
+        let (vertices, triangles) = meshes
+            .get_mut(m as usize)
+            .and_then(Option::take)
+            .ok_or_else(|| {
+                ModelError::Obstacle(k, format!("obstacle {k}: no mesh arrays number {m}"))
+            })?;
+        let name = if spec.name.is_empty() {
+            format!("obstacle-{k}")
+        } else {
+            spec.name.clone()
+        };
+        let mesh = TriangleMesh::new(vertices, triangles).map_err(|source| {
+            ModelError::Scene(SceneError::Mesh {
+                index: k,
+                name,
+                source,
+            })
+        })?;
+        spec.shape = Shape::Mesh { mesh, side };
+        model.obstacles.push(spec);
+    }
+    if model.sphere_batches.len() != arrays.batches.len() {
+        return Err(ModelError::Description(format!(
+            "scene description: {} sphere batches for {} sets of arrays",
+            model.sphere_batches.len(),
+            arrays.batches.len()
+        )));
+    }
+    for (batch, a) in model.sphere_batches.iter_mut().zip(arrays.batches) {
+        batch.positions = a.positions;
+        batch.radii = a.radii;
+        batch.velocities = a.velocities;
+        batch.angular_velocities = a.angular_velocities;
+        batch.masses = a.masses;
+    }
+    Ok(model)
+}
+
+/// What `Scene.fill` asks for (the fields of [`FillSpec`]).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FillArgs {
+    count: usize,
+    sizes: SizeDistribution,
+    packing: Packing,
+    #[serde(default)]
+    velocity: [f64; 3],
+    #[serde(default)]
+    velocity_jitter: f64,
+    #[serde(default)]
+    seed: u64,
+}
+
+/// Fills the region `region` (JSON of `coulomb_granular::generate::Shape`: a box or a
+/// cylinder; or `{"kind": "mesh"}`: the interior of the closed, consistently oriented mesh
+/// `mesh` = (vertices (3n float64), triangles (3m uint64))) as `spec` says (JSON: count,
+/// sizes, packing, velocity, velocity_jitter, seed), avoiding the spheres (`avoid_positions`
+/// (3n), `avoid_radii` (n)) already in the scene; deterministic from the seed (ChaCha8).
+/// Returns (positions (n, 3), radii (n,), velocities (n, 3), attempts).
+#[pyfunction]
+#[pyo3(signature = (region, spec, avoid_positions, avoid_radii, mesh=None))]
+pub(crate) fn scene_fill<'py>(
+    py: Python<'py>,
+    region: &str,
+    spec: &str,
+    avoid_positions: PyReadonlyArray1<'_, f64>,
+    avoid_radii: PyReadonlyArray1<'_, f64>,
+    mesh: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Bound<'py, PyTuple>> {
+    let fill_err =
+        |field: &str, m: String| errors::scene_input_error(py, "fill", Some(field), py.None(), m);
+    let region: Value = serde_json::from_str(region)
+        .map_err(|e| fill_err("region", format!("fill region: {e}")))?;
+    let is_mesh = region.get("kind").and_then(Value::as_str) == Some("mesh");
+    let args: FillArgs =
+        serde_json::from_str(spec).map_err(|e| fill_err("fill", format!("fill: {e}")))?;
+    let pos = flat3("avoid_positions", &avoid_positions)?;
+    let rad = convert::slice("avoid_radii", &avoid_radii)?;
+    let avoid: Vec<(Vec3, f64)> = pos.into_iter().zip(rad.iter().copied()).collect();
+    let spec = FillSpec {
+        count: args.count,
+        sizes: args.sizes,
+        packing: args.packing,
+        velocity: Vec3::new(args.velocity[0], args.velocity[1], args.velocity[2]),
+        velocity_jitter: args.velocity_jitter,
+        seed: args.seed,
+    };
+    let filled = if is_mesh {
+        let (vertices, triangles) = match mesh {
+            Some(m) => mesh_arrays(m)?,
+            None => {
+                return Err(fill_err(
+                    "region",
+                    "fill: a mesh region needs its arrays".into(),
+                ))
+            }
+        };
+        let mesh = TriangleMesh::new(vertices, triangles)
+            .and_then(|m| m.check_closed().map(|()| m))
+            .map_err(|e| fill_err("region", format!("fill region mesh: {e}")))?;
+        let (lo, hi) = mesh.bounds();
+        py.detach(|| {
+            let inside = |x: Vec3| mesh.contains(x) == Some(true);
+            let region = generate::Predicate {
+                lo,
+                hi,
+                inside: &inside,
+            };
+            generate::fill(&region, &spec, &avoid)
+        })
+    } else {
+        let region: generate::Shape = serde_json::from_value(region)
+            .map_err(|e| fill_err("region", format!("fill region: {e}")))?;
+        region
+            .validate()
+            .map_err(|e| fill_err("region", format!("fill: {e}")))?;
+        py.detach(|| generate::fill(&region, &spec, &avoid))
+    }
+    .map_err(|e| fill_err("fill", format!("fill: {e}")))?;
+    let p = &filled.particles;
+    let positions = convert::rows3(py, p.iter().map(|s| s.position.to_array()));
+    let radii = PyArray1::from_iter(py, p.iter().map(|s| s.radius)).into_any();
+    let velocities = convert::rows3(py, p.iter().map(|s| s.velocity.to_array()));
+    PyTuple::new(
+        py,
+        [
+            positions,
+            radii,
+            velocities,
+            filled.attempts.into_pyobject(py)?.into_any(),
+        ],
+    )
+}

@@ -82,7 +82,10 @@ export COULOMB_CLI="$PWD/target/debug/coulomb"
 # `mpirun -np 2`, when an MPI implementation is installed (.ci/run installs one); last, because
 # its build replaces target/debug/coulomb by the MPI-enabled binary
 if command -v mpicc >/dev/null && command -v mpirun >/dev/null; then
-  cargo test --workspace --features coulomb-cli/mpi --lib --test cli_mpi -- distributed 2>&1 | tee -a "$LOG"
+  # (without the Python bindings, which the feature does not concern: otherwise pyo3, numpy and
+  # the binding crate would be compiled again for nothing)
+  cargo test --workspace --exclude coulomb-py --features coulomb-cli/mpi --lib --test cli_mpi \
+    -- distributed 2>&1 | tee -a "$LOG"
 else
   echo "note: the distributed (mpi) tests were not built: they need mpicc and mpirun (apt-get install libopenmpi-dev openmpi-bin libclang-dev)"
 fi

@@ -85,7 +85,7 @@ fn read(dir: &Path, name: &str) -> FclibFile {
 #[test]
 fn fclib_data_files_are_as_documented() {
     let dir = common::data_dir();
-    let rows: [(&str, &str, usize, usize, Option<usize>, bool); 4] = [
+    let rows = [
         ("box-local", "local", 3, 147, None, false),
         ("box-global", "global", 3, 147, Some(720), false),
         ("pile-nonsym-local", "local", 3, 64, None, true),

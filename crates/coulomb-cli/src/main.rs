@@ -43,7 +43,7 @@ enum Command {
     /// Write one of the paper's examples as an FCLIB file
     Example(cmd::example::Args),
     /// Granular simulation (Moreau–Jean time stepping of rigid spheres)
-    Simulate(sim_args::Args),
+    Simulate(Box<sim_args::Args>),
     /// Reproduce the paper's Table 1, Fig. 8 and Fig. 9
     Paper(cmd::paper::Args),
     /// Solvers side by side on FCLIB collections, with performance profiles
@@ -119,7 +119,7 @@ fn main() -> ExitCode {
         Command::Solve(a) => cmd::solve::run(a),
         Command::Check(a) => cmd::check::run(a),
         Command::Example(a) => cmd::example::run(a).map(|()| Outcome::Success),
-        Command::Simulate(a) => simulate(a),
+        Command::Simulate(a) => simulate(*a),
         Command::Paper(a) => cmd::paper::run(a).map(|()| Outcome::Success),
         Command::Bench(a) => cmd::bench::run(a),
         Command::Demo(a) => cmd::demo::run(a).map(|()| Outcome::Success),
@@ -158,6 +158,11 @@ fn simulate(args: sim_args::Args) -> anyhow::Result<Outcome> {
         }
         if args.scene.as_deref().is_some_and(scene_arg::is_scene_file) {
             return scene_arg::run(&args);
+        }
+        if args.resolve_overlaps.is_some() {
+            anyhow::bail!(
+                "--resolve-overlaps applies to scene files: the built-in scenes start without overlaps"
+            );
         }
         let scene = sim_args::checked_scene(&args)?;
         #[cfg(feature = "mpi")]

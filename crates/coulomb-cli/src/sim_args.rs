@@ -21,7 +21,7 @@ pub enum Method {
 }
 
 /// The options that a checkpoint fixes (the scene and the parameters): refused with --restart.
-const RESTART_CONFLICTS: [&str; 25] = [
+const RESTART_CONFLICTS: [&str; 26] = [
     "scene",
     "beads",
     "mu",
@@ -47,6 +47,7 @@ const RESTART_CONFLICTS: [&str; 25] = [
     "layer_pitch",
     "drop_base",
     "spread_top",
+    "resolve_overlaps",
 ];
 
 /// Arguments of `coulomb simulate`.
@@ -151,6 +152,11 @@ pub struct Args {
     /// heap structure of `paper scaling --accurate`, docs/scaling.md)
     #[arg(long)]
     pub spread_top: bool,
+    /// scene files: relax the spheres that overlap at the start (or sit in an obstacle) by at
+    /// most this many Gauss–Seidel sweeps of pairwise separation, instead of refusing them
+    /// (`coulomb_granular::model::resolve_overlaps`); the run is refused if overlaps remain
+    #[arg(long, value_name = "SWEEPS", num_args = 0..=1, default_missing_value = "1000")]
+    pub resolve_overlaps: Option<usize>,
     /// output folder: stats.csv, stats.json, summary.json, beads.pvd, contacts.pvd, frames/
     #[arg(long)]
     pub output: Option<PathBuf>,

@@ -189,3 +189,35 @@ fn beads_caps_the_fills_and_json_scenes_run() {
     assert_eq!(j["steps"].as_u64(), Some(5));
     assert_eq!(j["not_converged_steps"].as_u64(), Some(0));
 }
+
+#[test]
+fn overlapping_spheres_are_refused_unless_resolve_overlaps_relaxes_them() {
+    let dir = temp_dir("scene-overlap");
+    let scene = dir.join("overlap.toml");
+    // two spheres of radius 0.05 whose centres are 0.06 apart (overlap 0.04) above a floor
+    std::fs::write(
+        &scene,
+        "[step]\nh = 0.005\nsteps = 5\n\
+         [[bodies]]\nspheres = [[0.0, 0.0, 0.2, 0.05], [0.06, 0.0, 0.2, 0.05]]\n\
+         [[obstacles]]\nshape = { kind = \"plane\", point = [0, 0, 0], normal = [0, 0, 1] }\n",
+    )
+    .unwrap();
+    let scene = scene.to_str().unwrap();
+    let refused = dir.join("refused");
+    let out = coulomb(&["simulate", scene, "--output", refused.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("overlap"), "{err}");
+    assert!(!refused.exists(), "output written");
+    // relaxed: the run goes on, and says what it did
+    let out = coulomb(&["simulate", scene, "--resolve-overlaps", "--json"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(err.contains("1 overlaps at the start") && err.contains("0 left"), "{err}");
+    assert_eq!(json(&String::from_utf8_lossy(&out.stdout))["steps"], 5);
+    // not for the built-in scenes, and not with a zero sweep budget that leaves overlaps
+    let out = coulomb(&["simulate", "box", "--resolve-overlaps"]);
+    assert_eq!(out.status.code(), Some(2));
+    let out = coulomb(&["simulate", scene, "--resolve-overlaps", "0"]);
+    assert_eq!(out.status.code(), Some(2));
+}

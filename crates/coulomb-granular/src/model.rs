@@ -1151,7 +1151,7 @@ fn check_obstacle(
 
 /// Every free sphere at t = 0 must be admitted by every obstacle that is not a container
 /// (free side of planes, outside solids) and, when there are containers, by one of them.
-fn check_containment(world: &World) -> Result<(), SceneError> {
+pub fn check_containment(world: &World) -> Result<(), SceneError> {
     let containers: Vec<&Obstacle> = world
         .obstacles
         .iter()

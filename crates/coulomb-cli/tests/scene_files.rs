@@ -213,7 +213,10 @@ fn overlapping_spheres_are_refused_unless_resolve_overlaps_relaxes_them() {
     let out = coulomb(&["simulate", scene, "--resolve-overlaps", "--json"]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(0), "{err}");
-    assert!(err.contains("1 overlaps at the start") && err.contains("0 left"), "{err}");
+    assert!(
+        err.contains("1 overlaps at the start") && err.contains("0 left"),
+        "{err}"
+    );
     assert_eq!(json(&String::from_utf8_lossy(&out.stdout))["steps"], 5);
     // not for the built-in scenes, and not with a zero sweep budget that leaves overlaps
     let out = coulomb(&["simulate", "box", "--resolve-overlaps"]);

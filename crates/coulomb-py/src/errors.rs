@@ -201,13 +201,7 @@ pub fn fclib_error(py: Python<'_>, e: FclibError) -> PyErr {
         FclibErrorKind::InvalidProblem { source, .. } => {
             // reuse the field/index extraction of the problem error
             let pe = problem_error(py, source);
-            let v = pe.value(py);
-            let field = v
-                .getattr("field")
-                .map_or_else(|_| py.None(), |x| x.unbind());
-            let index = v
-                .getattr("index")
-                .map_or_else(|_| py.None(), |x| x.unbind());
+            let (field, index) = field_and_index(py, &pe);
             ("invalid_problem", field, index)
         }
         FclibErrorKind::Write { .. } => ("write", py.None(), py.None()),
@@ -332,29 +326,11 @@ pub fn scene_file_error(py: Python<'_>, e: &coulomb_granular::scene_file::SceneF
     use coulomb_granular::scene_file::SceneFileError as E;
     let msg = e.to_string();
     match e {
-        E::Io { path, source } => {
-            let args = (
-                source.raw_os_error().unwrap_or(0),
-                source.to_string(),
-                path.display().to_string(),
-            );
-            match source.kind() {
-                std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(args),
-                std::io::ErrorKind::PermissionDenied => PyPermissionError::new_err(args),
-                std::io::ErrorKind::IsADirectory => PyIsADirectoryError::new_err(args),
-                _ => PyOSError::new_err(args),
-            }
-        }
+        E::Io { path, source } => os_error(source, path),
         E::Model { source, .. } => {
             let err = scene_error(py, source);
             // the model's field and index, the message with the file's name
-            let v = err.value(py);
-            let field = v
-                .getattr("field")
-                .map_or_else(|_| py.None(), |x| x.unbind());
-            let index = v
-                .getattr("index")
-                .map_or_else(|_| py.None(), |x| x.unbind());
+            let (field, index) = field_and_index(py, &err);
             let field: Option<String> = field.extract(py).ok();
             scene_input_error(py, &variant_name(source), field.as_deref(), index, msg)
         }
@@ -374,17 +350,7 @@ pub fn checkpoint_error(py: Python<'_>, e: coulomb_granular::CheckpointError) ->
     let shown = |p: &std::path::Path| Some(p.display().to_string());
     let (kind, file, path) = match &e {
         E::Io { path, source } => {
-            let args = (
-                source.raw_os_error().unwrap_or(0),
-                source.to_string(),
-                path.display().to_string(),
-            );
-            return match source.kind() {
-                std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(args),
-                std::io::ErrorKind::PermissionDenied => PyPermissionError::new_err(args),
-                std::io::ErrorKind::IsADirectory => PyIsADirectoryError::new_err(args),
-                _ => PyOSError::new_err(args),
-            };
+            return os_error(source, path);
         }
         E::NotHdf5 { path } => ("not_hdf5", shown(path), None),
         E::WrongFormat { path, .. } => ("wrong_format", shown(path), None),
@@ -406,4 +372,27 @@ pub fn checkpoint_error(py: Python<'_>, e: coulomb_granular::CheckpointError) ->
             ("kind", obj(py, kind)),
         ],
     )
+}
+
+/// The `field` and `index` attributes of a raised error of this package (None where absent).
+fn field_and_index(py: Python<'_>, err: &PyErr) -> (Py<PyAny>, Py<PyAny>) {
+    let v = err.value(py);
+    let get = |name: &str| v.getattr(name).map_or_else(|_| py.None(), |x| x.unbind());
+    (get("field"), get("index"))
+}
+
+/// An operating-system failure on `path` as the matching `OSError` subclass, with errno, the
+/// message and the file name.
+fn os_error(source: &std::io::Error, path: &std::path::Path) -> PyErr {
+    let args = (
+        source.raw_os_error().unwrap_or(0),
+        source.to_string(),
+        path.display().to_string(),
+    );
+    match source.kind() {
+        std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(args),
+        std::io::ErrorKind::PermissionDenied => PyPermissionError::new_err(args),
+        std::io::ErrorKind::IsADirectory => PyIsADirectoryError::new_err(args),
+        _ => PyOSError::new_err(args),
+    }
 }

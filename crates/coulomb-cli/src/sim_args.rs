@@ -225,6 +225,7 @@ impl Args {
                     tol: self.tol,
                     max_sweeps: self.max_sweeps,
                     relaxation: self.relaxation,
+                    time_limit: Some(step_time_limit(self.beads)),
                     ..NsgsSettings::default()
                 }),
                 Method::Library => StepMethod::Library,
@@ -332,6 +333,16 @@ pub(crate) fn checked_scene(args: &Args) -> anyhow::Result<Scene> {
     Ok(scene)
 }
 
+/// The wall-clock cap of one step's Gauss–Seidel solve for a scene of `beads` beads: 60 s
+/// (`NsgsSettings::default`) up to 120 000 beads, then 0.5 ms per bead (500 s at 10⁶). A
+/// sweep costs about 0.3 µs per contact on one core (≈ 1 contact per bead), so a 10⁶-bead
+/// step gets some 1 600 sweeps of one core before the cap; with 60 s it got ~50 on a loaded
+/// machine and stopped unconverged (docs/scaling.md, "A million beads"). The sweep cap
+/// (`--max-sweeps`) bounds the step whatever the clock.
+pub(crate) fn step_time_limit(beads: usize) -> std::time::Duration {
+    std::time::Duration::from_secs_f64((beads as f64 * 5e-4).max(60.0))
+}
+
 /// Refuses, before anything is built, a built-in scene of `beads` spheres whose memory
 /// estimate ([`coulomb_granular::model::memory_estimate`], about 2 KiB per sphere: measured
 /// 1.6 KiB at 10⁶ beads, docs/scaling.md) exceeds `available` bytes (MemAvailable; no check
@@ -391,6 +402,15 @@ pub(crate) fn summary_json(
 #[cfg(test)]
 mod tests {
     use super::check_beads_fit;
+
+    #[test]
+    fn the_step_time_cap_grows_with_the_bead_count_past_120_000() {
+        use super::step_time_limit;
+        use std::time::Duration;
+        assert_eq!(step_time_limit(150), Duration::from_secs(60));
+        assert_eq!(step_time_limit(120_000), Duration::from_secs(60));
+        assert_eq!(step_time_limit(1_000_000), Duration::from_secs(500));
+    }
 
     #[test]
     fn a_bead_count_the_memory_cannot_hold_is_refused_with_the_estimate() {

@@ -654,7 +654,8 @@ pub struct NsgsSettings {
     /// (`Params::solver`, `Simulation::step`); false: Gauss–Seidel's result stands, so that
     /// the step depends on this crate's sweep and the one-contact law solve only, not on the
     /// library's solver pipeline (`coulomb corpus` generates its granular class this way, so
-    /// that its files do not change when the solver under test does)
+    /// that its files do not change when the solver under test does). Not applied to steps
+    /// of more than `simulation::LIBRARY_FINISH_MAX_CONTACTS` contacts (memory)
     pub library_finish: bool,
 }
 

@@ -567,7 +567,10 @@ impl Simulation {
             .unwrap_or_else(|| format!("{:?}", sol.status));
         // Gauss–Seidel can stall (cycle) on a frictional step: then the library's solver
         // finishes the same problem (2.10) from Gauss–Seidel's iterate (unless turned off)
-        let finish = if stats.converged || !settings.library_finish {
+        let finish = if stats.converged
+            || !settings.library_finish
+            || contacts.len() > LIBRARY_FINISH_MAX_CONTACTS
+        {
             None
         } else {
             self.finish_with_library(&problem, &sol, &r0, settings, stats)?
@@ -719,6 +722,16 @@ fn check_spheres(
     }
     Ok(())
 }
+
+/// Above this many contacts a step that Gauss–Seidel leaves above its tolerance is not handed
+/// to the library's solver (`NsgsSettings::library_finish`): it stands as Gauss–Seidel left it,
+/// reported not converged with Gauss–Seidel's status. The finish assembles the global problem
+/// (2.10) (H as triplets, then compressed columns) and the library's solver forms W = H M⁻¹ Hᵀ:
+/// about 2.7 KiB per contact on top of the body-level problem, measured as a transient of
+/// +2.7 GB on a 10⁶-bead box (docs/scaling.md, "A million beads"), more than the whole
+/// simulation holds otherwise — and on a step that large Gauss–Seidel stops on its time cap,
+/// which the finish, given the same cap, does not beat.
+pub const LIBRARY_FINISH_MAX_CONTACTS: usize = 200_000;
 
 /// A step finished by the library's solver: (r, v, scale max(‖q‖, ‖r‖, ‖u‖)).
 type Finish = (Vec<f64>, Vec<f64>, f64);

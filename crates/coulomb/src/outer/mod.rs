@@ -360,8 +360,8 @@ impl Solver<'_> {
     /// ≤ [`crate::settings::LmParams::start`] (its stall rule
     /// [`crate::settings::BarrierParams::lm_stall_segments`]), until one reaches the
     /// tolerance — or [`crate::settings::BarrierParams::handover`] · tol where the method of
-    /// multipliers follows ([`Solver::multipliers_apply`]) — or the try's share of the time
-    /// is spent. Its best point is judged on the problem as stored like
+    /// multipliers follows ([`Solver::multipliers_apply`]) — or the try's budget of steps
+    /// ([`crate::settings::BarrierParams::max_work`]) is spent. Its best point is judged on the problem as stored like
     /// every iterate (status `converged`, `unbounded` or `max_iterations`; one outer record
     /// whose inner iterations are all its Newton and LM steps); with it, the end points of
     /// all its runs, lowest error first (the starts of [`Solver::multiplier_try`]). None
@@ -371,13 +371,12 @@ impl Solver<'_> {
         let settings = &self.settings;
         let (bp, lm) = (settings.tuning.barrier, settings.tuning.lm);
         let local = self.form.local();
-        let share = deadline.share(bp.time_share);
         let target = settings.tuning.newton.target_fraction * settings.tol;
         let global = match &self.form.stored {
             Stored::Global(g, _) => Some(&**g),
             Stored::Local(_) => None,
         };
-        let Some(setup) = crate::barrier::Setup::structured(local, global, &bp, share) else {
+        let Some(setup) = crate::barrier::Setup::structured(local, global, &bp, deadline) else {
             return Ok(None);
         };
         let try_lm = crate::settings::LmParams {
@@ -392,24 +391,30 @@ impl Solver<'_> {
         };
         let mut ends: Vec<(Vec<f64>, f64)> = Vec::new();
         let mut steps = 0;
+        // the budget in steps (not in time: the same path on any machine and under any load)
         for path in bp.paths {
-            if share.passed() {
+            if steps >= bp.max_work || deadline.passed() {
                 break;
             }
             let (mut r, report) = crate::barrier::solve_with(
                 local,
                 &setup,
                 target,
-                settings.barrier_steps,
+                settings.barrier_steps.min(bp.max_work - steps),
                 &bp,
                 path,
-                share,
+                deadline,
             );
             steps += report.steps;
             let mut error = report.error;
-            if error > target && error <= lm.start && lm.max_steps > 0 && !share.passed() {
+            let left = bp.max_work.saturating_sub(steps);
+            if error > target && error <= lm.start && lm.max_steps > 0 && left > 0 {
                 let mut trial = r.clone();
-                let lr = crate::levenberg::solve(local, &mut trial, target, &try_lm, share);
+                let finish_lm = crate::settings::LmParams {
+                    max_steps: try_lm.max_steps.min(left),
+                    ..try_lm
+                };
+                let lr = crate::levenberg::solve(local, &mut trial, target, &finish_lm, deadline);
                 steps += lr.steps;
                 if lr.error < error {
                     (r, error) = (trial, lr.error);
@@ -530,7 +535,8 @@ impl Solver<'_> {
     /// [`crate::settings::MultiplierParams`]) from the best point of the interior-point try
     /// `tried` and, at once, from the end points `ends` of its other runs (at most
     /// [`crate::settings::MultiplierParams::starts`] runs in all, [`crate::multiplier::solve_from`]),
-    /// in its share of the time left. It applies where the try did: a global
+    /// within its budget of factorizations
+    /// ([`crate::settings::MultiplierParams::max_factorizations`]). It applies where the try did: a global
     /// problem with at most [`crate::settings::BarrierParams::max_schur_dofs`] degrees of
     /// freedom and at most half as many as contact unknowns (rigid bodies touching at several
     /// points per face), or a local one whose W has a skeleton W ≈ C A⁻¹ R of rank at most
@@ -555,14 +561,13 @@ impl Solver<'_> {
         let mp = settings.tuning.multiplier;
         let bp = settings.tuning.barrier;
         let local = self.form.local();
-        let share = deadline.share(mp.time_share);
         let m = local.q.len();
         let skeleton_form;
         let (g, hu, mass): (&GlobalProblem, Option<&CscMatrix>, &crate::mass::MassFactor) =
             match &self.form.stored {
                 Stored::Global(g, delassus) => (g, None, &delassus.factor),
                 Stored::Local(p) => {
-                    let Some(skeleton) = self.exact_skeleton(p, share) else {
+                    let Some(skeleton) = self.exact_skeleton(p, deadline) else {
                         return Ok(None);
                     };
                     let (a, a_sym, h, hu) = skeleton.velocity_form();
@@ -623,7 +628,7 @@ impl Solver<'_> {
         };
         let finish = |r: &[f64]| {
             let mut trial = r.to_vec();
-            least_squares(&mut trial, share);
+            least_squares(&mut trial, deadline);
             let v = form.verdict(&trial);
             (v.error <= settings.tol && v.balance.unwrap_or(0.0) <= settings.tol).then_some(trial)
         };
@@ -636,7 +641,7 @@ impl Solver<'_> {
             settings.tol,
             &mp,
             par,
-            share,
+            deadline,
             |r| {
                 let v = form.verdict(r);
                 (v.error, v.balance.unwrap_or(0.0))

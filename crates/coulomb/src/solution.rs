@@ -80,6 +80,9 @@ pub struct OuterRecord {
     pub rule_6_1: f64,
     /// inner iterations spent in this outer iteration
     pub inner_iterations: usize,
+    /// the step of the solve's plan that made this record ([`crate::plan`]); the records of
+    /// the interior point and the multipliers have no fixed-point residual (NaN)
+    pub step: crate::plan::StepKind,
 }
 
 /// A starting point: impulses r, and velocities v for global problems.

@@ -29,6 +29,7 @@ use crate::delassus::Delassus;
 use crate::inner::{
     apgd::ApgdSolver, faceted::FacetedSolver, ipm::IpmSolver, pgs::PgsSolver, InnerSolver,
 };
+use crate::plan::{Plan, Rigid, StepKind, Structure};
 use crate::problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
 use crate::settings::{InnerKind, InnerParams, OuterKind, Settings};
 use crate::solution::{Guess, OuterRecord, Solution, SolveError, Status};
@@ -37,6 +38,57 @@ use form::{Form, Stored};
 use stage::{Best, Stage};
 use std::borrow::Cow;
 use std::time::Instant;
+
+/// The [`Structure`] of the problem of `form` (the rigid-body limits from `settings`).
+fn structure_of(form: &Form<'_>, settings: &Settings) -> Structure {
+    let local = form.local();
+    let m = local.q.len();
+    let bp = &settings.tuning.barrier;
+    let (dofs, rigid) = match &form.stored {
+        Stored::Global(g, _) => {
+            let n = g.m.nrows;
+            let schur = n <= bp.max_schur_dofs && 2 * n <= m;
+            (Some(n), if schur { Rigid::Schur } else { Rigid::No })
+        }
+        Stored::Local(_) => (
+            None,
+            if m <= bp.max_skeleton_unknowns {
+                Rigid::SkeletonProbe
+            } else {
+                Rigid::No
+            },
+        ),
+    };
+    let mu = &local.mu;
+    let mu_range = if mu.is_empty() {
+        (f64::NAN, f64::NAN)
+    } else {
+        mu.iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+                (lo.min(x), hi.max(x))
+            })
+    };
+    Structure {
+        dim: local.dim,
+        contacts: mu.len(),
+        unknowns: m,
+        dofs,
+        symmetric: form.symmetric,
+        density: if m == 0 {
+            0.0
+        } else {
+            local.w.nnz() as f64 / (m as f64 * m as f64)
+        },
+        mu_range,
+        mu_positive: !mu.is_empty() && mu.iter().all(|&x| x > 0.0 && x.is_finite()),
+        rigid,
+    }
+}
+
+/// Names `kind` as the step that made every history record of `ran`.
+fn label(ran: &mut Ran, kind: StepKind) {
+    ran.0.history.iter_mut().for_each(|h| h.step = kind);
+}
 
 /// The inner solvers of a [`Solver`], each set up for the problem's (d, W, μ) when first
 /// needed (a fallback never reached costs nothing) and kept across stages and solves: the
@@ -118,6 +170,8 @@ pub struct Solver<'a> {
     form: Form<'a>,
     settings: Settings,
     solvers: InnerSolvers,
+    /// what the solver knows of the problem ([`crate::plan::Structure`]), computed once
+    structure: Structure,
 }
 
 impl<'a> Solver<'a> {
@@ -146,11 +200,25 @@ impl<'a> Solver<'a> {
 
     fn with_stored(stored: Stored<'a>, settings: Settings) -> Result<Self, SolveError> {
         settings.validate()?;
+        let form = Form::new(stored, settings.tuning.unbounded_ratio);
         Ok(Self {
-            form: Form::new(stored, settings.tuning.unbounded_ratio),
+            structure: structure_of(&form, &settings),
+            form,
             solvers: InnerSolvers::new(&settings),
             settings,
         })
+    }
+
+    /// What the solver knows of the problem: local or global, contacts, symmetry and density
+    /// of W, the range of μ, whether the rigid-body steps apply ([`crate::plan`]).
+    pub fn structure(&self) -> &Structure {
+        &self.structure
+    }
+
+    /// The steps a solve from `guess` runs ([`crate::plan::choose`]): printed by
+    /// `coulomb solve --explain`.
+    pub fn plan(&self, guess: Option<&Guess>) -> Plan {
+        crate::plan::choose(&self.structure, &self.settings, guess.is_none())
     }
 
     /// The settings of the next solves.
@@ -167,6 +235,7 @@ impl<'a> Solver<'a> {
             self.solvers = InnerSolvers::new(&settings);
         }
         self.form.unbounded_ratio = settings.tuning.unbounded_ratio;
+        self.structure = structure_of(&self.form, &settings);
         self.settings = settings;
         Ok(())
     }
@@ -225,6 +294,7 @@ impl<'a> Solver<'a> {
         let checked = LocalProblem::new(p.dim as i64, w, p.q.clone(), p.mu.clone())?;
         *p = Cow::Owned(checked);
         self.form.refresh();
+        self.structure = structure_of(&self.form, &self.settings);
         self.solvers = InnerSolvers::new(&self.settings);
         Ok(())
     }
@@ -249,70 +319,108 @@ impl<'a> Solver<'a> {
         Ok(sol)
     }
 
-    /// [`Solver::solve`] before the status of an interrupted solve is set.
+    /// [`Solver::solve`] before the status of an interrupted solve is set: the steps of
+    /// [`Solver::plan`] in order, until one converges, the deadline passes, or the main step
+    /// ends in a way its fallback cannot improve.
     fn solve_stages(&mut self, guess: Option<&Guess>) -> Result<Solution, SolveError> {
         let start = Instant::now();
         let deadline =
             Deadline::after(start, self.settings.time_limit).with_cancel(self.settings.cancel);
         let settings = &self.settings.clone();
+        let plan = self.plan(guess);
+        let has_fallback = plan.steps.iter().any(|s| s.kind == StepKind::Fallback);
         let mut stages: Vec<Ran> = Vec::new();
-        if settings.warmup_sweeps > 0 {
-            let warm = self.run(&warmup_settings(settings), guess, deadline, false, true)?;
-            if warm.0.converged() || deadline.passed() {
-                return Ok(merge(Vec::new(), warm, start));
-            }
-            stages.push(warm);
-        }
-        if guess.is_none() && self.barrier_applies() {
-            if let Some((tried, ends)) = self.barrier_try(deadline)? {
-                if tried.0.converged() || deadline.passed() {
-                    return Ok(merge(stages, tried, start));
-                }
-                // the main method below starts from the caller's point, not from these
-                if let Some(m) = self.multiplier_try(&tried, ends, deadline)? {
-                    if m.0.converged() || deadline.passed() {
-                        stages.push(tried);
-                        return Ok(merge(stages, m, start));
+        // the interior point's result and end points, waiting for the multipliers
+        let mut tried: Option<(Ran, Ends)> = None;
+        // the main step's result, waiting for the fallback
+        let mut main: Option<Ran> = None;
+        for step in &plan.steps {
+            match step.kind {
+                StepKind::Warmup => {
+                    let mut warm =
+                        self.run(&warmup_settings(settings), guess, deadline, false, true)?;
+                    label(&mut warm, StepKind::Warmup);
+                    if warm.0.converged() || deadline.passed() {
+                        return Ok(merge(Vec::new(), warm, start));
                     }
-                    stages.push(m);
+                    stages.push(warm);
                 }
-                stages.push(tried);
+                StepKind::InteriorPoint => {
+                    if let Some((mut t, ends)) = self.barrier_try(deadline)? {
+                        label(&mut t, StepKind::InteriorPoint);
+                        if t.0.converged() || deadline.passed() {
+                            return Ok(merge(stages, t, start));
+                        }
+                        tried = Some((t, ends));
+                    }
+                }
+                StepKind::Multipliers => {
+                    // runs only after an interior point that ran and did not converge
+                    // (the history in the order the steps ran: the try's record first)
+                    if let Some((t, ends)) = tried.take() {
+                        let m = self.multiplier_try(&t, ends, deadline)?;
+                        stages.push(t);
+                        if let Some(mut m) = m {
+                            label(&mut m, StepKind::Multipliers);
+                            if m.0.converged() || deadline.passed() {
+                                return Ok(merge(stages, m, start));
+                            }
+                            stages.push(m);
+                        }
+                    }
+                }
+                StepKind::Main => {
+                    if let Some((t, _)) = tried.take() {
+                        stages.push(t);
+                    }
+                    // the main method starts from the caller's point, not from the
+                    // warm-up's r: on hard problems Gauss–Seidel's r leads the fixed point
+                    // of the main method astray
+                    let mut first = self.run(settings, guess, deadline, has_fallback, false)?;
+                    label(&mut first, StepKind::Main);
+                    let handover = matches!(
+                        first.0.status,
+                        Status::MaxIterations
+                            | Status::Stalled
+                            | Status::InnerFailure
+                            | Status::NumericalError
+                    );
+                    if !has_fallback || first.0.converged() || !handover || deadline.passed() {
+                        return Ok(merge(stages, first, start));
+                    }
+                    main = Some(first);
+                }
+                StepKind::Fallback => {
+                    let (Some(first), Some(method)) = (main.take(), step.method) else {
+                        continue;
+                    };
+                    // the fallback goes on from the main step's last iterate, not its best
+                    // one: that is where its own iteration stood
+                    let from_first = Guess {
+                        r: first.0.r.clone(),
+                        v: first.0.v.clone(),
+                    };
+                    let second_settings = Settings {
+                        inner: method.inner,
+                        outer: method.outer,
+                        fallback: None,
+                        ..settings.clone()
+                    };
+                    let warm = if first.0.r.iter().all(|x| x.is_finite()) {
+                        Some(&from_first)
+                    } else {
+                        guess
+                    };
+                    stages.push(first);
+                    let mut second = self.run(&second_settings, warm, deadline, false, false)?;
+                    label(&mut second, StepKind::Fallback);
+                    return Ok(merge(stages, second, start));
+                }
             }
         }
-        // the main method starts from the caller's point, not from the warm-up's r: on hard
-        // problems Gauss–Seidel's r leads the fixed point of the main method astray
-        let Some((inner, outer)) = settings.fallback else {
-            let main = self.run(settings, guess, deadline, false, false)?;
-            return Ok(merge(stages, main, start));
-        };
-        let first = self.run(settings, guess, deadline, true, false)?;
-        let handover = matches!(
-            first.0.status,
-            Status::MaxIterations | Status::Stalled | Status::InnerFailure | Status::NumericalError
-        );
-        if first.0.converged() || !handover || deadline.passed() {
-            return Ok(merge(stages, first, start));
-        }
-        // the fallback goes on from the first stage's last iterate, not its best one: that is
-        // where its own iteration stood
-        let from_first = Guess {
-            r: first.0.r.clone(),
-            v: first.0.v.clone(),
-        };
-        let second_settings = Settings {
-            inner,
-            outer,
-            fallback: None,
-            ..settings.clone()
-        };
-        let warm = if first.0.r.iter().all(|x| x.is_finite()) {
-            Some(&from_first)
-        } else {
-            guess
-        };
-        stages.push(first);
-        let second = self.run(&second_settings, warm, deadline, false, false)?;
-        Ok(merge(stages, second, start))
+        Err(SolveError::Settings(
+            "the plan of this solve has no main step".into(),
+        ))
     }
 }
 
@@ -328,30 +436,6 @@ impl Solver<'_> {
     ) -> Result<Ran, SolveError> {
         let stage = Stage::new(&self.form, settings, guess, deadline, stop_on_stall, warmup)?;
         Ok(stage.run(&mut self.solvers))
-    }
-
-    /// Whether the interior-point try may run first: [`Settings::barrier_steps`] > 0, every
-    /// μ > 0, and a global problem with at most half as many degrees of freedom as contact
-    /// unknowns and at most [`crate::settings::BarrierParams::max_schur_dofs`] (rigid bodies
-    /// touching at several points per face: W is rank-deficient, and the Newton systems are of
-    /// the size of M), or a local problem with at most
-    /// [`crate::settings::BarrierParams::max_skeleton_unknowns`] contact unknowns (the try
-    /// then runs only if W has a skeleton of rank ≤
-    /// [`crate::settings::BarrierParams::skeleton_rank_ratio`] · m:
-    /// [`crate::barrier::Setup::structured`]).
-    fn barrier_applies(&self) -> bool {
-        let (settings, local) = (&self.settings, self.form.local());
-        let bp = &settings.tuning.barrier;
-        let small = match &self.form.stored {
-            Stored::Global(g, _) => {
-                g.m.nrows <= bp.max_schur_dofs && 2 * g.m.nrows <= local.q.len()
-            }
-            Stored::Local(_) => local.q.len() <= bp.max_skeleton_unknowns,
-        };
-        small
-            && settings.barrier_steps > 0
-            && !local.mu.is_empty()
-            && local.mu.iter().all(|&mu| mu > 0.0 && mu.is_finite())
     }
 
     /// The interior-point try on Coulomb's law ([`crate::barrier`], policy and parameters
@@ -455,6 +539,7 @@ impl Solver<'_> {
             fixed_point_residual: f64::NAN,
             rule_6_1: f64::NAN,
             inner_iterations: steps,
+            step: crate::plan::StepKind::Main,
         });
         solution.outer_iterations += 1;
         solution.inner_iterations += steps;
@@ -890,7 +975,7 @@ mod tests {
                     ..Settings::default()
                 };
                 let sol = solve(&Problem::Local(p.clone()), &settings).unwrap();
-                assert!(sol.history[0].fixed_point_residual.is_nan(), "seed {seed}");
+                assert_eq!(sol.history[0].step, StepKind::InteriorPoint, "seed {seed}");
                 assert_eq!(barrier_records(&sol), 1, "seed {seed} skew {skew}");
                 let recomputed = p.error(&sol.r).error;
                 assert!(
@@ -913,9 +998,10 @@ mod tests {
     /// History records of interior-point tries and of the method of multipliers that follows
     /// them (they have no fixed-point residual).
     fn barrier_records(sol: &Solution) -> usize {
+        use crate::plan::StepKind::{InteriorPoint, Multipliers};
         sol.history
             .iter()
-            .filter(|h| h.fixed_point_residual.is_nan())
+            .filter(|h| matches!(h.step, InteriorPoint | Multipliers))
             .count()
     }
 
@@ -947,14 +1033,14 @@ mod tests {
                 ..Settings::default()
             };
             let sol = solve(&problem, &settings).unwrap();
-            assert!(sol.history[0].fixed_point_residual.is_nan(), "seed {seed}");
+            assert_eq!(sol.history[0].step, StepKind::InteriorPoint, "seed {seed}");
             // the try's record, and the method of multipliers' (also without a fixed-point
             // residual) right after it when the try did not converge
             let records = barrier_records(&sol);
             let tried_on = sol.history.len() > 1;
             assert_eq!(records, 1 + usize::from(tried_on), "seed {seed}");
             if tried_on {
-                assert!(sol.history[1].fixed_point_residual.is_nan(), "seed {seed}");
+                assert_eq!(sol.history[1].step, StepKind::Multipliers, "seed {seed}");
             }
             solved += usize::from(sol.converged() && sol.history.len() == 1);
             let off = Settings {

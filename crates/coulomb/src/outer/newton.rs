@@ -160,6 +160,7 @@ impl EndGame {
                 fixed_point_residual,
                 rule_6_1,
                 inner_iterations: nr.steps,
+                step: crate::plan::StepKind::Main,
             };
             let mut records = best.map_or_else(Vec::new, |b| b.records);
             records.push(record);
@@ -337,6 +338,7 @@ impl Improved {
             fixed_point_residual,
             rule_6_1,
             inner_iterations: steps,
+            step: crate::plan::StepKind::Main,
         });
         Self {
             r,

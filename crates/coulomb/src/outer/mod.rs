@@ -519,6 +519,11 @@ impl Solver<'_> {
             .first()
             .cloned()
             .unwrap_or_else(|| vec![0.0; local.q.len()]);
+        // the skeleton goes on to the method of multipliers (built once per solve)
+        let ends = Ends {
+            points: ends,
+            skeleton: setup.into_skeleton(),
+        };
         let ran = self.judged(r, steps, deadline)?;
         Ok(Some((ran, ends)))
     }
@@ -597,28 +602,38 @@ impl Solver<'_> {
     /// [`crate::settings::BarrierParams::skeleton_rank_ratio`] · m), when it reproduces W
     /// (symmetric or not) within [`crate::settings::MultiplierParams::skeleton_residual`] · tol
     /// ([`crate::skeleton::Skeleton::residual`]); None otherwise or when `deadline` passes.
+    #[cfg(test)]
     fn exact_skeleton(
         &self,
         p: &LocalProblem,
         deadline: Deadline,
     ) -> Option<crate::skeleton::Skeleton> {
-        let (mp, bp) = (
-            &self.settings.tuning.multiplier,
-            &self.settings.tuning.barrier,
-        );
+        let bp = &self.settings.tuning.barrier;
         let m = p.q.len();
         let max_rank = bp
             .max_schur_dofs
             .min((bp.skeleton_rank_ratio * m as f64) as usize);
         let skeleton =
             crate::skeleton::Skeleton::new(&p.w, p.dim, max_rank, bp.rank_tol, deadline)?;
-        let residual = skeleton.residual(&p.w, bp.dense_parallel_dim)?;
-        (residual <= mp.skeleton_residual * self.settings.tol).then_some(skeleton)
+        self.reproduces(&skeleton, p).then_some(skeleton)
+    }
+
+    /// Whether `skeleton` reproduces the W of `p` within
+    /// [`crate::settings::MultiplierParams::skeleton_residual`] · tol.
+    fn reproduces(&self, skeleton: &crate::skeleton::Skeleton, p: &LocalProblem) -> bool {
+        let (mp, bp) = (
+            &self.settings.tuning.multiplier,
+            &self.settings.tuning.barrier,
+        );
+        skeleton
+            .residual(&p.w, bp.dense_parallel_dim)
+            .is_some_and(|r| r <= mp.skeleton_residual * self.settings.tol)
     }
 
     /// The method of multipliers in the velocities ([`crate::multiplier`], parameters
     /// [`crate::settings::MultiplierParams`]) from the best point of the interior-point try
-    /// `tried` and, at once, from the end points `ends` of its other runs (at most
+    /// `tried` and, at once, from the end points `ends` of its other runs, on a local problem
+    /// through the skeleton of W the try built (at most
     /// [`crate::settings::MultiplierParams::starts`] runs in all, [`crate::multiplier::solve_from`]),
     /// within its budget of factorizations
     /// ([`crate::settings::MultiplierParams::max_factorizations`]). It applies where the try did: a global
@@ -636,7 +651,7 @@ impl Solver<'_> {
     fn multiplier_try(
         &mut self,
         tried: &Ran,
-        ends: Vec<Vec<f64>>,
+        ends: Ends,
         deadline: Deadline,
     ) -> Result<Option<Ran>, SolveError> {
         if !self.multipliers_apply() {
@@ -652,7 +667,7 @@ impl Solver<'_> {
             match &self.form.stored {
                 Stored::Global(g, delassus) => (g, None, &delassus.factor),
                 Stored::Local(p) => {
-                    let Some(skeleton) = self.exact_skeleton(p, deadline) else {
+                    let Some(skeleton) = ends.skeleton.filter(|sk| self.reproduces(sk, p)) else {
                         return Ok(None);
                     };
                     let (a, a_sym, h, hu) = skeleton.velocity_form();
@@ -686,7 +701,7 @@ impl Solver<'_> {
         }
         // the try's best point, then the end points of its other runs (distinct, finite)
         let mut starts = vec![r];
-        for end in ends {
+        for end in ends.points {
             if starts.len() >= mp.starts {
                 break;
             }
@@ -757,8 +772,13 @@ impl Solver<'_> {
 /// that one is lower.
 type Ran = (Solution, Option<Best>);
 
-/// The end points of the interior-point try's runs, lowest error first.
-type Ends = Vec<Vec<f64>>;
+/// What the interior-point try hands to the method of multipliers: the end points of its
+/// runs, lowest error first, and the skeleton of a local W its Newton systems were solved
+/// through (None for a global problem: the Schur complement).
+struct Ends {
+    points: Vec<Vec<f64>>,
+    skeleton: Option<crate::skeleton::Skeleton>,
+}
 
 /// The warm-up try: at most `warmup_sweeps` fused Gauss–Seidel sweeps, one outer iteration,
 /// no end game.

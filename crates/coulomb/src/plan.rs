@@ -16,36 +16,7 @@
 use crate::settings::{Method, Settings};
 use std::fmt;
 
-/// Which step of a [`Plan`] a history record comes from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize))]
-#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
-pub enum StepKind {
-    /// Gauss–Seidel sweeps on Coulomb's law itself (fused), one outer iteration
-    Warmup,
-    /// the interior-point method on Coulomb's law ([`crate::barrier`]) with its
-    /// Levenberg–Marquardt finishes, from r = 0
-    InteriorPoint,
-    /// the method of multipliers in the velocities ([`crate::multiplier`]) from the
-    /// interior point's end points
-    Multipliers,
-    /// the main (inner, outer) method with its end game (Newton, proximal point, LM)
-    Main,
-    /// the fallback (inner, outer) method
-    Fallback,
-}
-
-impl fmt::Display for StepKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            StepKind::Warmup => "warm-up",
-            StepKind::InteriorPoint => "interior point",
-            StepKind::Multipliers => "multipliers",
-            StepKind::Main => "main",
-            StepKind::Fallback => "fallback",
-        })
-    }
-}
+pub use crate::solution::StepKind;
 
 /// Where a step starts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -1078,7 +1078,7 @@ mod tests {
                 r: vec![0.0; m],
                 v: None,
             };
-            let warm = crate::solver::solve_with_guess(&problem, &settings, Some(&guess)).unwrap();
+            let warm = solve_with_guess(&problem, &settings, Some(&guess)).unwrap();
             assert_eq!(barrier_records(&warm), 0, "seed {seed}");
         }
         // the try itself converged (no later stage) on half of them at least

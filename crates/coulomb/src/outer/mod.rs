@@ -7,9 +7,11 @@
 //! [`anderson`] (mixing on s), [`fused`] (Gauss–Seidel on Coulomb's law itself, the fused
 //! outer method) and [`newton`] (the semismooth Newton end game).
 //!
-//! The policy ([`Solver::solve`]): an optional warm-up of Gauss–Seidel sweeps on Coulomb's
-//! law, then the main method, then the fallback method when the main one stops without
-//! converging; every status is decided on the problem as stored ([`form`]).
+//! The policy ([`Solver::solve`]) is the plan of [`crate::plan`]: an optional warm-up of
+//! Gauss–Seidel sweeps on Coulomb's law, on a cold solve of a rigid problem the interior
+//! point and the method of multipliers, then the main method, then the fallback method when
+//! the main one stops without converging; every status is decided on the problem as stored
+//! ([`form`]).
 //!
 //! The setup/solve split: [`Solver::new`] checks the settings and builds the Delassus form of
 //! a global problem (W = Hᵀ M⁻¹ H, q = Hᵀ M⁻¹ f + w, the factorization of M) once;
@@ -299,10 +301,11 @@ impl<'a> Solver<'a> {
         Ok(())
     }
 
-    /// Solves the problem from `guess` (a cold start when None) under the settings' policy:
-    /// warm-up sweeps, the interior-point try on Coulomb's law ([`Solver::barrier_try`]) on a
-    /// cold solve of a rigid problem ([`Solver::barrier_applies`]), the main method,
-    /// the fallback. The time limit covers all of them. A solve stopped by
+    /// Solves the problem from `guess` (a cold start when None) by the steps of
+    /// [`Solver::plan`] ([`crate::plan::choose`]): warm-up sweeps, on a cold solve of a rigid
+    /// problem the interior point on Coulomb's law and the method of multipliers, the main
+    /// method, the fallback; each with a budget in work. The time limit covers all of them
+    /// and only truncates. A solve stopped by
     /// [`Settings::cancel`] before it converged ends with [`Status::Interrupted`] (rather than
     /// the cap or time limit that the stop looked like inside a stage).
     pub fn solve(&mut self, guess: Option<&Guess>) -> Result<Solution, SolveError> {

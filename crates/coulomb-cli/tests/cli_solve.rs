@@ -117,3 +117,44 @@ fn data_files_info_solve_error_check_as_the_readme_shows() {
         assert_eq!(c.status.code(), Some(check_status), "{name}: check");
     }
 }
+
+/// `--explain` prints the structure and the plan; `--json` carries both: on the rigid pile of
+/// data/ (a cold solve of a local W small enough for the skeleton probe) the plan has the
+/// interior point and the multipliers between the warm-up and the main method.
+#[test]
+fn explain_prints_the_structure_and_the_plan_and_json_carries_them() {
+    let file = data_file("pile-nonsym-local.hdf5");
+    let out = coulomb(&["solve", &file, "--explain"]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    for expected in [
+        "structure         local; d = 3, 64 contacts, m = 192; W not symmetric",
+        "1. warm-up (pgs+fused)",
+        "2. interior point",
+        "3. multipliers",
+        "4. main (apgd+anderson)",
+        "5. fallback (pgs+fused)",
+    ] {
+        assert!(text.contains(expected), "{expected:?} not in\n{text}");
+    }
+    let j = stdout_json(&coulomb(&["solve", &file, "--json"]));
+    let kinds: Vec<&str> = j["plan"]["steps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["kind"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        kinds,
+        [
+            "warmup",
+            "interior_point",
+            "multipliers",
+            "main",
+            "fallback"
+        ]
+    );
+    assert_eq!(j["structure"]["contacts"], 64);
+    assert_eq!(j["structure"]["symmetric"], false);
+    assert_eq!(j["structure"]["rigid"], "skeleton_probe");
+}

@@ -336,6 +336,15 @@ impl<'g> Setup<'g> {
         }
     }
 
+    /// The skeleton of W the Newton systems were solved through, if they were, taken out of
+    /// the setup (for the method of multipliers: the skeleton is built once per solve).
+    pub fn into_skeleton(self) -> Option<Skeleton> {
+        match self.linear {
+            Linear::Skeleton(s, _) => Some(*s),
+            _ => None,
+        }
+    }
+
     /// The skeleton of W the Newton systems are solved through, if they are.
     pub fn skeleton(&self) -> Option<&Skeleton> {
         match &self.linear {

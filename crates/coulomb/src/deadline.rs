@@ -1,6 +1,9 @@
 //! The instant at which a time-limited solve stops, computed without overflow: one
 //! [`Deadline`] type, made once per solve from [`crate::Settings::time_limit`] and
-//! [`crate::Settings::cancel`].
+//! [`crate::Settings::cancel`]. A deadline only truncates a solve (status `time_limit` or
+//! `interrupted`): no decision of the solver's path reads the clock, every stage's budget is
+//! in work (iterations, factorizations), so that the same input and settings give the same
+//! iterates on any machine and under any load (docs/solver-core.md).
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -70,22 +73,6 @@ impl Deadline {
         self.1.is_some_and(|c| c.requested())
     }
 
-    /// The deadline of a part of the work that may use `fraction` of the time left now
-    /// (clamped to [0, 1]; NaN counts as 0): never stays never.
-    pub fn share(&self, fraction: f64) -> Self {
-        let fraction = if fraction > 0.0 {
-            fraction.min(1.0)
-        } else {
-            0.0
-        };
-        let now = Instant::now();
-        Self(
-            self.0
-                .map(|t| now + t.saturating_duration_since(now).mul_f64(fraction)),
-            self.1,
-        )
-    }
-
     /// The instant, None for no deadline (for the time left, e.g. Clarabel's time limit).
     pub fn instant(&self) -> Option<Instant> {
         self.0
@@ -133,28 +120,12 @@ mod tests {
     }
 
     #[test]
-    fn a_share_lies_between_now_and_the_deadline_and_never_stays_never() {
-        assert_eq!(Deadline::NEVER.share(0.5), Deadline::NEVER);
-        let d = Deadline::after(Instant::now(), Some(Duration::from_secs(100)));
-        let t = d.instant().unwrap();
-        for f in [0.0, 0.25, 1.0, 7.0, -1.0, f64::NAN] {
-            let s = d.share(f).instant().unwrap();
-            assert!(s <= t, "{f}");
-        }
-        let half = d.share(0.5).instant().unwrap();
-        assert!(half + Duration::from_secs(45) < t && half + Duration::from_secs(55) > t);
-        assert!(!d.share(1.0).passed());
-    }
-
-    #[test]
-    fn a_cancelled_deadline_has_passed_and_its_shares_too() {
+    fn a_cancelled_deadline_has_passed() {
         static FLAG: AtomicBool = AtomicBool::new(false);
         let d = Deadline::NEVER.with_cancel(Some(Cancel::new(&FLAG)));
         assert!(!d.passed() && !d.cancelled());
-        let part = d.share(0.5);
         FLAG.store(true, Ordering::Relaxed);
         assert!(d.passed() && d.cancelled());
-        assert!(part.passed() && part.cancelled());
         assert_eq!(d.instant(), None);
         assert!(!Deadline::NEVER.passed());
     }

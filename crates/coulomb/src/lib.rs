@@ -54,6 +54,7 @@ pub mod multiplier;
 pub mod natural_map;
 pub mod newton;
 pub mod outer;
+pub mod plan;
 pub mod problem;
 pub mod proximal;
 pub mod settings;

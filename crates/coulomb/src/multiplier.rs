@@ -43,7 +43,7 @@
 //! [`solve_from`] runs it from several starts at once and keeps the first run that
 //! converges.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use rayon::prelude::*;
 
 use crate::deadline::Deadline;
 use crate::mass::MassFactor;
@@ -227,32 +227,70 @@ pub fn solve_from(
     if runs.is_empty() {
         return report;
     }
-    // Every live run is a chain of tasks on rayon's pool, one outer step (Newton run, then
-    // its conclusion) per task, each task queueing the run's next one: FIFO order takes the
-    // runs in turn, and a thread that finishes a step takes the next queued one instead of
-    // waiting for the slowest run of a round. Each run's iterates are those it would take
-    // alone; only which converged run is seen first depends on the timing.
-    let stop = AtomicBool::new(false);
-    let finished = std::sync::Mutex::new(Finished {
-        attempts: 0,
-        busy: false,
-        point: None,
-    });
-    let work = Work {
-        shared: &shared,
-        judge: &judge,
-        finish: &finish,
-        finished: &finished,
-        stop: &stop,
-        deadline,
-    };
-    rayon::scope_fifo(|scope| {
-        for run in runs.iter_mut().filter(|run| run.done.is_none()) {
-            scope.spawn_fifo(|scope| work.step(run, scope));
+    // Lock-step rounds: in each round every live run takes one outer step (Newton run, then
+    // its conclusion), the runs on rayon's threads; between rounds the decisions are taken
+    // in the runs' order (the first converged run by index, the finishes, the budget), so
+    // that the result is the same on any number of threads and under any load. Each run's
+    // iterates are those it would take alone.
+    let mut attempts = 0;
+    let mut point: Option<Vec<f64>> = None;
+    loop {
+        if runs
+            .iter()
+            .any(|run| run.done == Some(MultiplierStatus::Converged))
+        {
+            break;
         }
-    });
-    let finished = finished.into_inner().unwrap_or_else(|e| e.into_inner());
-    if let Some(r) = finished.point {
+        let mut live: Vec<&mut Run> = runs.iter_mut().filter(|run| run.done.is_none()).collect();
+        if live.is_empty() {
+            break;
+        }
+        if deadline.passed() {
+            live.iter_mut()
+                .for_each(|run| run.done = Some(MultiplierStatus::TimeLimit));
+            break;
+        }
+        live.par_iter_mut().for_each(|run| {
+            run.newton(&shared, deadline);
+            run.conclude(&shared, &judge);
+        });
+        if runs
+            .iter()
+            .any(|run| run.done == Some(MultiplierStatus::Converged))
+        {
+            continue;
+        }
+        // the finishes of this round: the runs close to tol, in index order, while attempts
+        // are left; run at once, the first converged point by index kept
+        let mut close = Vec::new();
+        for (i, run) in runs.iter_mut().enumerate() {
+            if attempts < params.finish_attempts && run.done.is_none() && wants_finish(&shared, run)
+            {
+                attempts += 1;
+                run.finish_last = run.best_merit;
+                close.push(i);
+            }
+        }
+        if !close.is_empty() {
+            let found: Vec<Option<Vec<f64>>> =
+                close.par_iter().map(|&i| finish(&runs[i].best_r)).collect();
+            if let Some(r) = found.into_iter().flatten().next() {
+                point = Some(r);
+                break;
+            }
+        }
+        let factorizations: usize = runs
+            .iter()
+            .map(|run| run.report.newton_steps - run.report.chord_steps)
+            .sum();
+        if factorizations >= params.max_factorizations {
+            runs.iter_mut()
+                .filter(|run| run.done.is_none())
+                .for_each(|run| run.done = Some(MultiplierStatus::MaxSteps));
+            break;
+        }
+    }
+    if let Some(r) = point {
         let (error, balance) = judge(&r);
         report = MultiplierReport {
             status: MultiplierStatus::Converged,
@@ -289,90 +327,16 @@ pub fn solve_from(
     report
 }
 
-/// The finish attempts of [`solve_from`]: how many, whether one is under way (one at a time:
-/// a run that finds the finish busy goes on and tries at its next new lowest merit), and the
-/// converged point one of them returned.
-struct Finished {
-    attempts: usize,
-    busy: bool,
-    point: Option<Vec<f64>>,
-}
-
-/// What every outer step of [`solve_from`]'s runs reads: the problem and parameters, the
-/// judge and the finish, the flag raised by the first run that converges, and the deadline.
-struct Work<'w, 'a, J, F> {
-    shared: &'w Shared<'a>,
-    judge: &'w J,
-    finish: &'w F,
-    finished: &'w std::sync::Mutex<Finished>,
-    stop: &'w AtomicBool,
-    deadline: Deadline,
-}
-
-impl<'w, J, F> Work<'w, '_, J, F>
-where
-    J: Fn(&[f64]) -> (f64, f64) + Sync,
-    F: Fn(&[f64]) -> Option<Vec<f64>> + Sync,
-{
-    /// One outer step of `run` (unless a run has converged), then its next one queued on
-    /// `scope` while it has not stopped; the deadline stops it with `TimeLimit`.
-    fn step(&'w self, run: &'w mut Run, scope: &rayon::ScopeFifo<'w>) {
-        if self.stop.load(Ordering::Relaxed) {
-            return;
-        }
-        if self.deadline.passed() {
-            run.done = Some(MultiplierStatus::TimeLimit);
-            return;
-        }
-        run.newton(self.shared, self.deadline);
-        run.conclude(self.shared, self.judge);
-        if run.done.is_none() && self.try_finish(run) {
-            self.stop.store(true, Ordering::Relaxed);
-            return;
-        }
-        match run.done {
-            Some(MultiplierStatus::Converged) => self.stop.store(true, Ordering::Relaxed),
-            Some(_) => {}
-            None => scope.spawn_fifo(move |scope| self.step(run, scope)),
-        }
-    }
-}
-
-impl<J, F> Work<'_, '_, J, F>
-where
-    F: Fn(&[f64]) -> Option<Vec<f64>> + Sync,
-{
-    /// Calls the finish on `run`'s lowest-merit point where it has come close to the
-    /// tolerance ([`solve_from`]); true when the finish returned a converged point.
-    fn try_finish(&self, run: &mut Run) -> bool {
-        let (s, params) = (self.shared, self.shared.params);
-        let close = params.finish_steps > 0
-            && s.p.w.len() <= params.finish_max_unknowns
-            && run.best_merit <= params.finish_crawl * s.tol
-            && run.best_merit < params.finish_gain * run.finish_last;
-        if !close {
-            return false;
-        }
-        {
-            let mut f = self.finished.lock().unwrap_or_else(|e| e.into_inner());
-            if f.point.is_some() || f.busy || f.attempts >= params.finish_attempts {
-                return false;
-            }
-            f.attempts += 1;
-            f.busy = true;
-        }
-        run.finish_last = run.best_merit;
-        let point = (self.finish)(&run.best_r);
-        let mut f = self.finished.lock().unwrap_or_else(|e| e.into_inner());
-        f.busy = false;
-        match point {
-            Some(r) => {
-                f.point.get_or_insert(r);
-                true
-            }
-            None => false,
-        }
-    }
+/// Whether [`solve_from`] calls the finish on `run`'s lowest-merit point: it has come to at
+/// most [`MultiplierParams::finish_crawl`] · tol and below [`MultiplierParams::finish_gain`]
+/// times the merit from which it last called it (for at most
+/// [`MultiplierParams::finish_max_unknowns`] contact unknowns).
+fn wants_finish(s: &Shared<'_>, run: &Run) -> bool {
+    let params = s.params;
+    params.finish_steps > 0
+        && s.p.w.len() <= params.finish_max_unknowns
+        && run.best_merit <= params.finish_crawl * s.tol
+        && run.best_merit < params.finish_gain * run.finish_last
 }
 
 /// One run of the method of multipliers: its multipliers λ, penalties ρ, velocity v, the
@@ -1038,7 +1002,7 @@ mod tests {
 
     #[test]
     fn a_finish_that_returns_a_point_ends_the_stage_and_is_tried_a_capped_number_of_times() {
-        use std::sync::atomic::AtomicUsize;
+        use std::sync::atomic::{AtomicUsize, Ordering};
         let p = box_on_plane(1.0, [1.0, 0.3, -0.5, 0.2, -0.1, 0.7]);
         let mass = MassFactor::new(&p.m).unwrap();
         let wm = w_mean(&p, &mass);

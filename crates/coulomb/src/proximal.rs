@@ -29,7 +29,8 @@ use crate::settings::ProxParams;
 pub enum ProxStatus {
     /// the error of docs/error.md is ≤ the target
     Reached,
-    /// [`ProxParams::max_outer`] proximal steps were taken above the target
+    /// [`ProxParams::max_outer`] proximal steps, or [`ProxParams::max_steps`] Newton steps,
+    /// were taken above the target
     MaxSteps,
     /// the deadline passed
     TimeLimit,
@@ -103,7 +104,7 @@ pub fn solve(
         if best_err <= target {
             break ProxStatus::Reached;
         }
-        if report.outer >= params.max_outer {
+        if report.outer >= params.max_outer || report.steps >= params.max_steps {
             break ProxStatus::MaxSteps;
         }
         if deadline.passed() {
@@ -133,7 +134,7 @@ pub fn solve(
                 solved = true;
                 break;
             }
-            if deadline.passed() || phi.is_nan() {
+            if deadline.passed() || phi.is_nan() || report.steps >= params.max_steps {
                 break;
             }
             report.steps += 1;

@@ -261,7 +261,8 @@ pub struct NewtonParams {
 /// [`Settings::barrier_steps`] Newton steps each), finishes a run with the
 /// Levenberg–Marquardt end game when its error is ≤ [`LmParams::start`], keeps the best point
 /// and stops once it converges (or is within `handover` · tol where the method of multipliers
-/// follows) or has used `time_share` of the time left.
+/// follows) or has spent its work budget `max_work` (Newton and LM steps: a budget in work, so
+/// that the same input takes the same path on any machine and under any load).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct BarrierParams {
@@ -286,8 +287,12 @@ pub struct BarrierParams {
     pub start_margin: f64,
     /// … and by at least this multiple of ‖q‖/√contacts; > 0
     pub start_floor: f64,
-    /// a try (with its LM finishes) may use at most this share of the time left; in (0, 1]
-    pub time_share: f64,
+    /// a try takes at most this many steps in all (the interior point's Newton steps and
+    /// its LM finishes' steps, each a factorization): no new run or finish starts once they
+    /// are spent, and a run or finish gets at most what is left; ≥ 1. It replaced a share
+    /// of the time left (0.5) so that the path does not depend on the machine's speed or
+    /// load; calibrated on the corpus (docs/solver-core.md)
+    pub max_work: usize,
     /// the LM finish of a run of the try stops when its lowest error has not dropped below
     /// [`LmParams::stall_gain`] times its value this many segments earlier (the try's own
     /// [`LmParams::stall_segments`]); ≥ 1
@@ -362,7 +367,7 @@ impl Default for BarrierParams {
             ],
             start_margin: 1e-2,
             start_floor: 1e-3,
-            time_share: 0.5,
+            max_work: BARRIER_MAX_WORK,
             lm_stall_segments: 2,
             handover: 10.0,
             max_schur_dofs: 1500,
@@ -387,10 +392,11 @@ impl BarrierParams {
             || self.dense_parallel_dim == 0
             || self.skeleton_strikes == 0
             || self.lm_stall_segments == 0
+            || self.max_work == 0
         {
             return Err(
                 "tuning.barrier: stall_steps, settle_steps, max_schur_dofs, \
-                 dense_parallel_dim, skeleton_strikes and lm_stall_segments must be ≥ 1"
+                 dense_parallel_dim, skeleton_strikes, lm_stall_segments and max_work must be ≥ 1"
                     .into(),
             );
         }
@@ -407,8 +413,6 @@ impl BarrierParams {
             && fraction(self.settle_alpha)
             && positive(self.start_margin)
             && positive(self.start_floor)
-            && positive(self.time_share)
-            && self.time_share <= 1.0
             && self.handover.is_finite()
             && self.handover >= 0.0
             && fraction(self.rank_tol)
@@ -444,8 +448,6 @@ pub struct LmParams {
     pub stall_segments: usize,
     /// see `stall_segments`; in (0, 1]
     pub stall_gain: f64,
-    /// a run may use at most this share of the time left before the deadline; in (0, 1]
-    pub time_share: f64,
     /// the end game runs again once the error is below `retry` times the lowest error of its
     /// previous run; in (0, 1]
     pub retry: f64,
@@ -491,7 +493,6 @@ impl Default for LmParams {
             start: 2e-5,
             stall_segments: 6,
             stall_gain: 0.5,
-            time_share: 0.5,
             retry: 0.1,
             keep_gain: 0.5,
             segment_steps: 8,
@@ -510,10 +511,11 @@ impl Default for LmParams {
 }
 
 /// The proximal-point end game ([`crate::proximal`]) of a stage. It runs (a) after a Newton
-/// try of the end game that did not converge, from an error ≤ `try_start`, with a share of
-/// the time of its own, and again only once the error is below `retry` times the end of its
-/// last such run; (b) after a Levenberg–Marquardt run of the stage that stalled, from LM's
-/// best point when that error is ≤ `start`, in what LM left of [`LmParams::time_share`].
+/// try of the end game that did not converge, from an error ≤ `try_start`, with a budget of
+/// `max_steps` Newton steps (`capped_max_steps` after an inner solve at its iteration cap),
+/// and again only once the error is below `retry` times the end of its last such run; (b)
+/// after a Levenberg–Marquardt run of the stage that stalled, from LM's best point when that
+/// error is ≤ `start`, with a budget of `max_steps` Newton steps.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ProxParams {
@@ -540,13 +542,15 @@ pub struct ProxParams {
     pub start: f64,
     /// (a) starts only from an error ≤ this (LM's own start, [`LmParams::start`]); ≥ 0
     pub try_start: f64,
-    /// a run of (a) may use at most this share of the time left before the deadline; in
-    /// (0, 1]. With 0.5 it took 4 s of a granular box (n5000, μ = 0.1) that the fixed point
-    /// solves in 3 s, and the file was lost (docs/rigid.md)
-    pub time_share: f64,
-    /// the share of (a) after an inner solve that hit its iteration cap (the fixed point does
-    /// not solve its subproblems: the granular drums of the corpus); in (0, 1]
-    pub capped_time_share: f64,
+    /// a run takes at most this many Newton steps (sparse LU factorizations of J) in all its
+    /// proximal steps; ≥ 1. It replaced a share of the time left (0.1 for (a), what LM left
+    /// of its half for (b)), so that the path does not depend on the machine's speed or
+    /// load; calibrated on the corpus (docs/solver-core.md)
+    pub max_steps: usize,
+    /// the budget of (a) after an inner solve that hit its iteration cap (the fixed point does
+    /// not solve its subproblems: the granular drums of the corpus; it replaced a share of
+    /// 0.5 of the time left); ≥ 1
+    pub capped_max_steps: usize,
     /// (a) runs again once the error is below `retry` times the lowest error of its previous
     /// run; in (0, 1]
     pub retry: f64,
@@ -564,8 +568,8 @@ impl Default for ProxParams {
             stall_steps: 5,
             start: 1e-6,
             try_start: 2e-5,
-            time_share: 0.1,
-            capped_time_share: 0.5,
+            max_steps: PROX_MAX_STEPS,
+            capped_max_steps: PROX_CAPPED_MAX_STEPS,
             retry: 0.1,
         }
     }
@@ -645,12 +649,13 @@ pub struct MultiplierParams {
     pub stall_steps: usize,
     /// see `stall_steps`; in (0, 1)
     pub stall_gain: f64,
-    /// the stage may use at most this share of the time left; in (0, 1]. On the rigid files
-    /// it applies to it is the stage that solves them (the main loop after it rarely does).
-    /// Measured on the box files of corpus seeds 4–5 (docs/rigid.md), 0.85 against 0.6 in
-    /// passes side by side: 863 of 864 solved in 10 s against 1 147 of 1 152 (the wall files
-    /// whose stage needs 3–8 s on a busy 2-core machine); seeds 1–3 unchanged
-    pub time_share: f64,
+    /// the stage factors J at most this many times in all its runs (chord steps not
+    /// counted); its runs take their steps in lock-step rounds and the budget is checked
+    /// between rounds; ≥ 1. It replaced a share of the time left (0.85; measured then on the
+    /// box files of corpus seeds 4–5 against 0.6: 863 of 864 solved in 10 s against 1 147 of
+    /// 1 152, docs/rigid.md), so that the path does not depend on the machine's speed or
+    /// load; calibrated on the corpus (docs/solver-core.md)
+    pub max_factorizations: usize,
     /// the stage runs the method from at most this many starts at once, the best point of
     /// the interior-point try and the end points of its other runs
     /// ([`crate::multiplier::solve_from`]); ≥ 1 (1: from the best point only). Measured on
@@ -714,7 +719,7 @@ impl Default for MultiplierParams {
             penalty_cap: 100.0,
             stall_steps: 1000,
             stall_gain: 0.5,
-            time_share: 0.85,
+            max_factorizations: MULTIPLIER_MAX_FACTORIZATIONS,
             starts: 4,
             skeleton_residual: 0.01,
             finish_below: 10.0,
@@ -775,8 +780,8 @@ impl MultiplierParams {
                     .into(),
             );
         }
-        if !(self.time_share > 0.0 && self.time_share <= 1.0) {
-            return Err("tuning.multiplier.time_share must be in (0, 1]".into());
+        if self.max_factorizations == 0 {
+            return Err("tuning.multiplier.max_factorizations must be ≥ 1".into());
         }
         if !(self.skeleton_residual.is_finite() && self.skeleton_residual >= 0.0) {
             return Err("tuning.multiplier.skeleton_residual must be finite and ≥ 0".into());
@@ -814,9 +819,8 @@ impl ProxParams {
         if !level(self.start) || !level(self.try_start) {
             return Err("tuning.prox: start and try_start must be finite and ≥ 0".into());
         }
-        let share = |x: f64| x > 0.0 && x <= 1.0;
-        if !share(self.time_share) || !share(self.capped_time_share) {
-            return Err("tuning.prox: time_share and capped_time_share must be in (0, 1]".into());
+        if self.max_steps == 0 || self.capped_max_steps == 0 {
+            return Err("tuning.prox: max_steps and capped_max_steps must be ≥ 1".into());
         }
         if !(self.retry > 0.0 && self.retry <= 1.0) {
             return Err("tuning.prox.retry must be in (0, 1]".into());
@@ -842,7 +846,6 @@ impl LmParams {
         if ![
             self.segment_gain,
             self.stall_gain,
-            self.time_share,
             self.retry,
             self.keep_gain,
         ]
@@ -850,8 +853,7 @@ impl LmParams {
         .all(fraction)
         {
             return Err(
-                "tuning.lm: segment_gain, stall_gain, time_share, retry, keep_gain must be in (0, 1]"
-                    .into(),
+                "tuning.lm: segment_gain, stall_gain, retry, keep_gain must be in (0, 1]".into(),
             );
         }
         if !(self.rho_factors.iter().all(|&f| positive(f))
@@ -1145,6 +1147,18 @@ impl Tuning {
 /// solution) reach 1e7 and more. The default of [`Tuning::unbounded_ratio`].
 pub const UNBOUNDED_RATIO: f64 = 1e6;
 
+/// The default of [`BarrierParams::max_work`] (docs/solver-core.md: how it was calibrated).
+pub const BARRIER_MAX_WORK: usize = 150;
+
+/// The default of [`MultiplierParams::max_factorizations`] (docs/solver-core.md).
+pub const MULTIPLIER_MAX_FACTORIZATIONS: usize = 2000;
+
+/// The default of [`ProxParams::max_steps`] (docs/solver-core.md).
+pub const PROX_MAX_STEPS: usize = 40;
+
+/// The default of [`ProxParams::capped_max_steps`] (docs/solver-core.md).
+pub const PROX_CAPPED_MAX_STEPS: usize = 200;
+
 /// Outer iterations over which the error must halve for a first stage to be considered
 /// progressing (see [`Settings::fallback`]). The default of [`Tuning::stall_window`].
 pub const STALL_WINDOW: usize = 25;
@@ -1380,7 +1394,8 @@ mod tests {
             |t| t.multiplier.rho_factor = 0.0,
             |t| t.multiplier.inner_ratio = f64::NAN,
             |t| t.multiplier.stall_gain = 1.0,
-            |t| t.multiplier.time_share = 0.0,
+            |t| t.multiplier.max_factorizations = 0,
+            |t| t.barrier.max_work = 0,
             |t| t.multiplier.penalty_growth = 0.5,
             |t| t.multiplier.penalty_cap = f64::INFINITY,
             |t| t.inner.gs_anderson_memory = 0,
@@ -1390,15 +1405,14 @@ mod tests {
             |t| t.prox.sigma_factor = 0.0,
             |t| t.prox.start = f64::NAN,
             |t| t.prox.try_start = -1.0,
-            |t| t.prox.time_share = 0.0,
-            |t| t.prox.capped_time_share = f64::NAN,
+            |t| t.prox.max_steps = 0,
+            |t| t.prox.capped_max_steps = 0,
             |t| t.prox.retry = 1.5,
             |t| t.prox.sigma_growth = 0.5,
             |t| t.prox.inner_ratio = 1.0,
             |t| t.lm.segment_steps = 0,
             |t| t.lm.max_rejections = 0,
             |t| t.lm.stall_gain = 0.0,
-            |t| t.lm.time_share = 1.5,
             |t| t.lm.rho_factors[3] = -1.0,
             |t| t.lm.accept_ratio = 1.0,
             |t| t.newton.shift_tries = 0,

@@ -80,6 +80,9 @@ pub struct OuterRecord {
     pub rule_6_1: f64,
     /// inner iterations spent in this outer iteration
     pub inner_iterations: usize,
+    /// the step of the solve's plan that made this record ([`crate::plan`]); the records of
+    /// the interior point and the multipliers have no fixed-point residual (NaN)
+    pub step: StepKind,
 }
 
 /// A starting point: impulses r, and velocities v for global problems.
@@ -142,6 +145,37 @@ pub enum SolveError {
     /// the guess has the wrong size
     #[error("invalid guess: {0}")]
     Guess(String),
+}
+
+/// Which step of a solve's plan ([`crate::plan::Plan`]) a history record comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+pub enum StepKind {
+    /// Gauss–Seidel sweeps on Coulomb's law itself (fused), one outer iteration
+    Warmup,
+    /// the interior-point method on Coulomb's law ([`crate::barrier`]) with its
+    /// Levenberg–Marquardt finishes, from r = 0
+    InteriorPoint,
+    /// the method of multipliers in the velocities ([`crate::multiplier`]) from the
+    /// interior point's end points
+    Multipliers,
+    /// the main (inner, outer) method with its end game (Newton, proximal point, LM)
+    Main,
+    /// the fallback (inner, outer) method
+    Fallback,
+}
+
+impl std::fmt::Display for StepKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            StepKind::Warmup => "warm-up",
+            StepKind::InteriorPoint => "interior point",
+            StepKind::Multipliers => "multipliers",
+            StepKind::Main => "main",
+            StepKind::Fallback => "fallback",
+        })
+    }
 }
 
 #[cfg(test)]

@@ -40,6 +40,11 @@ pub struct Args {
     /// Print one JSON object
     #[arg(long)]
     pub json: bool,
+    /// Also print what the solver learnt of the problem (its structure) and the steps it
+    /// runs (its plan: method, budget in work, starting point of each step); `--json`
+    /// always carries both
+    #[arg(long)]
+    pub explain: bool,
 }
 
 /// What `coulomb solve --json` prints.
@@ -67,6 +72,10 @@ pub struct Report {
     /// relative asymmetry of W (local) or M (global) as stored; the problem solved, and the
     /// error reported, are always those of the stored data
     pub asymmetry: f64,
+    /// what the solver learnt of the problem ([`coulomb::plan::Structure`])
+    pub structure: coulomb::plan::Structure,
+    /// the steps of the solve ([`coulomb::plan::Plan`])
+    pub plan: coulomb::plan::Plan,
 }
 
 /// Settings from the arguments, on top of the library defaults.
@@ -120,8 +129,10 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         crate::outputs::check("--output", out, &[&args.file])?;
     }
     let file = crate::read::read_relaxed(&args.file)?;
-    let sol = solver::solve(&file.problem, &settings)
-        .with_context(|| format!("solving {}", args.file.display()))?;
+    let context = || format!("solving {}", args.file.display());
+    let mut solver = solver::Solver::new(&file.problem, settings.clone()).with_context(context)?;
+    let (structure, plan) = (solver.structure().clone(), solver.plan(None));
+    let sol = solver.solve(None).with_context(context)?;
     if let Some(out) = &args.output {
         let mut written = FclibFile::new(file.problem.clone());
         written.info = file.info.clone();
@@ -183,6 +194,8 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         solve_time_s: sol.solve_time.as_secs_f64(),
         existence,
         asymmetry: file.problem.asymmetry(),
+        structure,
+        plan,
     };
     if args.json {
         println!("{}", crate::outputs::json(&report, false)?);
@@ -207,6 +220,13 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         println!("outer iterations  {}", report.outer_iterations);
         println!("inner iterations  {}", report.inner_iterations);
         println!("solve time        {:.3} ms", 1e3 * report.solve_time_s);
+        if args.explain {
+            print!("structure         {}", report.structure);
+            println!("plan");
+            for line in report.plan.to_string().lines() {
+                println!("  {line}");
+            }
+        }
         if let Some(ex) = &report.existence {
             let conclusion = ex
                 .get("conclusion")

@@ -7,9 +7,11 @@
 //! [`anderson`] (mixing on s), [`fused`] (Gauss–Seidel on Coulomb's law itself, the fused
 //! outer method) and [`newton`] (the semismooth Newton end game).
 //!
-//! The policy ([`Solver::solve`]): an optional warm-up of Gauss–Seidel sweeps on Coulomb's
-//! law, then the main method, then the fallback method when the main one stops without
-//! converging; every status is decided on the problem as stored ([`form`]).
+//! The policy ([`Solver::solve`]) is the plan of [`crate::plan`]: an optional warm-up of
+//! Gauss–Seidel sweeps on Coulomb's law, on a cold solve of a rigid problem the interior
+//! point and the method of multipliers, then the main method, then the fallback method when
+//! the main one stops without converging; every status is decided on the problem as stored
+//! ([`form`]).
 //!
 //! The setup/solve split: [`Solver::new`] checks the settings and builds the Delassus form of
 //! a global problem (W = Hᵀ M⁻¹ H, q = Hᵀ M⁻¹ f + w, the factorization of M) once;
@@ -29,6 +31,7 @@ use crate::delassus::Delassus;
 use crate::inner::{
     apgd::ApgdSolver, faceted::FacetedSolver, ipm::IpmSolver, pgs::PgsSolver, InnerSolver,
 };
+use crate::plan::{Plan, Rigid, StepKind, Structure};
 use crate::problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
 use crate::settings::{InnerKind, InnerParams, OuterKind, Settings};
 use crate::solution::{Guess, OuterRecord, Solution, SolveError, Status};
@@ -37,6 +40,57 @@ use form::{Form, Stored};
 use stage::{Best, Stage};
 use std::borrow::Cow;
 use std::time::Instant;
+
+/// The [`Structure`] of the problem of `form` (the rigid-body limits from `settings`).
+fn structure_of(form: &Form<'_>, settings: &Settings) -> Structure {
+    let local = form.local();
+    let m = local.q.len();
+    let bp = &settings.tuning.barrier;
+    let (dofs, rigid) = match &form.stored {
+        Stored::Global(g, _) => {
+            let n = g.m.nrows;
+            let schur = n <= bp.max_schur_dofs && 2 * n <= m;
+            (Some(n), if schur { Rigid::Schur } else { Rigid::No })
+        }
+        Stored::Local(_) => (
+            None,
+            if m <= bp.max_skeleton_unknowns {
+                Rigid::SkeletonProbe
+            } else {
+                Rigid::No
+            },
+        ),
+    };
+    let mu = &local.mu;
+    let mu_range = if mu.is_empty() {
+        (f64::NAN, f64::NAN)
+    } else {
+        mu.iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+                (lo.min(x), hi.max(x))
+            })
+    };
+    Structure {
+        dim: local.dim,
+        contacts: mu.len(),
+        unknowns: m,
+        dofs,
+        symmetric: form.symmetric,
+        density: if m == 0 {
+            0.0
+        } else {
+            local.w.nnz() as f64 / (m as f64 * m as f64)
+        },
+        mu_range,
+        mu_positive: !mu.is_empty() && mu.iter().all(|&x| x > 0.0 && x.is_finite()),
+        rigid,
+    }
+}
+
+/// Names `kind` as the step that made every history record of `ran`.
+fn label(ran: &mut Ran, kind: StepKind) {
+    ran.0.history.iter_mut().for_each(|h| h.step = kind);
+}
 
 /// The inner solvers of a [`Solver`], each set up for the problem's (d, W, μ) when first
 /// needed (a fallback never reached costs nothing) and kept across stages and solves: the
@@ -118,6 +172,8 @@ pub struct Solver<'a> {
     form: Form<'a>,
     settings: Settings,
     solvers: InnerSolvers,
+    /// what the solver knows of the problem ([`crate::plan::Structure`]), computed once
+    structure: Structure,
 }
 
 impl<'a> Solver<'a> {
@@ -146,11 +202,25 @@ impl<'a> Solver<'a> {
 
     fn with_stored(stored: Stored<'a>, settings: Settings) -> Result<Self, SolveError> {
         settings.validate()?;
+        let form = Form::new(stored, settings.tuning.unbounded_ratio);
         Ok(Self {
-            form: Form::new(stored, settings.tuning.unbounded_ratio),
+            structure: structure_of(&form, &settings),
+            form,
             solvers: InnerSolvers::new(&settings),
             settings,
         })
+    }
+
+    /// What the solver knows of the problem: local or global, contacts, symmetry and density
+    /// of W, the range of μ, whether the rigid-body steps apply ([`crate::plan`]).
+    pub fn structure(&self) -> &Structure {
+        &self.structure
+    }
+
+    /// The steps a solve from `guess` runs ([`crate::plan::choose`]): printed by
+    /// `coulomb solve --explain`.
+    pub fn plan(&self, guess: Option<&Guess>) -> Plan {
+        crate::plan::choose(&self.structure, &self.settings, guess.is_none())
     }
 
     /// The settings of the next solves.
@@ -167,6 +237,7 @@ impl<'a> Solver<'a> {
             self.solvers = InnerSolvers::new(&settings);
         }
         self.form.unbounded_ratio = settings.tuning.unbounded_ratio;
+        self.structure = structure_of(&self.form, &settings);
         self.settings = settings;
         Ok(())
     }
@@ -225,14 +296,16 @@ impl<'a> Solver<'a> {
         let checked = LocalProblem::new(p.dim as i64, w, p.q.clone(), p.mu.clone())?;
         *p = Cow::Owned(checked);
         self.form.refresh();
+        self.structure = structure_of(&self.form, &self.settings);
         self.solvers = InnerSolvers::new(&self.settings);
         Ok(())
     }
 
-    /// Solves the problem from `guess` (a cold start when None) under the settings' policy:
-    /// warm-up sweeps, the interior-point try on Coulomb's law ([`Solver::barrier_try`]) on a
-    /// cold solve of a rigid problem ([`Solver::barrier_applies`]), the main method,
-    /// the fallback. The time limit covers all of them. A solve stopped by
+    /// Solves the problem from `guess` (a cold start when None) by the steps of
+    /// [`Solver::plan`] ([`crate::plan::choose`]): warm-up sweeps, on a cold solve of a rigid
+    /// problem the interior point on Coulomb's law and the method of multipliers, the main
+    /// method, the fallback; each with a budget in work. The time limit covers all of them
+    /// and only truncates. A solve stopped by
     /// [`Settings::cancel`] before it converged ends with [`Status::Interrupted`] (rather than
     /// the cap or time limit that the stop looked like inside a stage).
     pub fn solve(&mut self, guess: Option<&Guess>) -> Result<Solution, SolveError> {
@@ -249,70 +322,108 @@ impl<'a> Solver<'a> {
         Ok(sol)
     }
 
-    /// [`Solver::solve`] before the status of an interrupted solve is set.
+    /// [`Solver::solve`] before the status of an interrupted solve is set: the steps of
+    /// [`Solver::plan`] in order, until one converges, the deadline passes, or the main step
+    /// ends in a way its fallback cannot improve.
     fn solve_stages(&mut self, guess: Option<&Guess>) -> Result<Solution, SolveError> {
         let start = Instant::now();
         let deadline =
             Deadline::after(start, self.settings.time_limit).with_cancel(self.settings.cancel);
         let settings = &self.settings.clone();
+        let plan = self.plan(guess);
+        let has_fallback = plan.steps.iter().any(|s| s.kind == StepKind::Fallback);
         let mut stages: Vec<Ran> = Vec::new();
-        if settings.warmup_sweeps > 0 {
-            let warm = self.run(&warmup_settings(settings), guess, deadline, false, true)?;
-            if warm.0.converged() || deadline.passed() {
-                return Ok(merge(Vec::new(), warm, start));
-            }
-            stages.push(warm);
-        }
-        if guess.is_none() && self.barrier_applies() {
-            if let Some((tried, ends)) = self.barrier_try(deadline)? {
-                if tried.0.converged() || deadline.passed() {
-                    return Ok(merge(stages, tried, start));
-                }
-                // the main method below starts from the caller's point, not from these
-                if let Some(m) = self.multiplier_try(&tried, ends, deadline)? {
-                    if m.0.converged() || deadline.passed() {
-                        stages.push(tried);
-                        return Ok(merge(stages, m, start));
+        // the interior point's result and end points, waiting for the multipliers
+        let mut tried: Option<(Ran, Ends)> = None;
+        // the main step's result, waiting for the fallback
+        let mut main: Option<Ran> = None;
+        for step in &plan.steps {
+            match step.kind {
+                StepKind::Warmup => {
+                    let mut warm =
+                        self.run(&warmup_settings(settings), guess, deadline, false, true)?;
+                    label(&mut warm, StepKind::Warmup);
+                    if warm.0.converged() || deadline.passed() {
+                        return Ok(merge(Vec::new(), warm, start));
                     }
-                    stages.push(m);
+                    stages.push(warm);
                 }
-                stages.push(tried);
+                StepKind::InteriorPoint => {
+                    if let Some((mut t, ends)) = self.barrier_try(deadline)? {
+                        label(&mut t, StepKind::InteriorPoint);
+                        if t.0.converged() || deadline.passed() {
+                            return Ok(merge(stages, t, start));
+                        }
+                        tried = Some((t, ends));
+                    }
+                }
+                StepKind::Multipliers => {
+                    // runs only after an interior point that ran and did not converge
+                    // (the history in the order the steps ran: the try's record first)
+                    if let Some((t, ends)) = tried.take() {
+                        let m = self.multiplier_try(&t, ends, deadline)?;
+                        stages.push(t);
+                        if let Some(mut m) = m {
+                            label(&mut m, StepKind::Multipliers);
+                            if m.0.converged() || deadline.passed() {
+                                return Ok(merge(stages, m, start));
+                            }
+                            stages.push(m);
+                        }
+                    }
+                }
+                StepKind::Main => {
+                    if let Some((t, _)) = tried.take() {
+                        stages.push(t);
+                    }
+                    // the main method starts from the caller's point, not from the
+                    // warm-up's r: on hard problems Gauss–Seidel's r leads the fixed point
+                    // of the main method astray
+                    let mut first = self.run(settings, guess, deadline, has_fallback, false)?;
+                    label(&mut first, StepKind::Main);
+                    let handover = matches!(
+                        first.0.status,
+                        Status::MaxIterations
+                            | Status::Stalled
+                            | Status::InnerFailure
+                            | Status::NumericalError
+                    );
+                    if !has_fallback || first.0.converged() || !handover || deadline.passed() {
+                        return Ok(merge(stages, first, start));
+                    }
+                    main = Some(first);
+                }
+                StepKind::Fallback => {
+                    let (Some(first), Some(method)) = (main.take(), step.method) else {
+                        continue;
+                    };
+                    // the fallback goes on from the main step's last iterate, not its best
+                    // one: that is where its own iteration stood
+                    let from_first = Guess {
+                        r: first.0.r.clone(),
+                        v: first.0.v.clone(),
+                    };
+                    let second_settings = Settings {
+                        inner: method.inner,
+                        outer: method.outer,
+                        fallback: None,
+                        ..settings.clone()
+                    };
+                    let warm = if first.0.r.iter().all(|x| x.is_finite()) {
+                        Some(&from_first)
+                    } else {
+                        guess
+                    };
+                    stages.push(first);
+                    let mut second = self.run(&second_settings, warm, deadline, false, false)?;
+                    label(&mut second, StepKind::Fallback);
+                    return Ok(merge(stages, second, start));
+                }
             }
         }
-        // the main method starts from the caller's point, not from the warm-up's r: on hard
-        // problems Gauss–Seidel's r leads the fixed point of the main method astray
-        let Some((inner, outer)) = settings.fallback else {
-            let main = self.run(settings, guess, deadline, false, false)?;
-            return Ok(merge(stages, main, start));
-        };
-        let first = self.run(settings, guess, deadline, true, false)?;
-        let handover = matches!(
-            first.0.status,
-            Status::MaxIterations | Status::Stalled | Status::InnerFailure | Status::NumericalError
-        );
-        if first.0.converged() || !handover || deadline.passed() {
-            return Ok(merge(stages, first, start));
-        }
-        // the fallback goes on from the first stage's last iterate, not its best one: that is
-        // where its own iteration stood
-        let from_first = Guess {
-            r: first.0.r.clone(),
-            v: first.0.v.clone(),
-        };
-        let second_settings = Settings {
-            inner,
-            outer,
-            fallback: None,
-            ..settings.clone()
-        };
-        let warm = if first.0.r.iter().all(|x| x.is_finite()) {
-            Some(&from_first)
-        } else {
-            guess
-        };
-        stages.push(first);
-        let second = self.run(&second_settings, warm, deadline, false, false)?;
-        Ok(merge(stages, second, start))
+        Err(SolveError::Settings(
+            "the plan of this solve has no main step".into(),
+        ))
     }
 }
 
@@ -330,38 +441,14 @@ impl Solver<'_> {
         Ok(stage.run(&mut self.solvers))
     }
 
-    /// Whether the interior-point try may run first: [`Settings::barrier_steps`] > 0, every
-    /// μ > 0, and a global problem with at most half as many degrees of freedom as contact
-    /// unknowns and at most [`crate::settings::BarrierParams::max_schur_dofs`] (rigid bodies
-    /// touching at several points per face: W is rank-deficient, and the Newton systems are of
-    /// the size of M), or a local problem with at most
-    /// [`crate::settings::BarrierParams::max_skeleton_unknowns`] contact unknowns (the try
-    /// then runs only if W has a skeleton of rank ≤
-    /// [`crate::settings::BarrierParams::skeleton_rank_ratio`] · m:
-    /// [`crate::barrier::Setup::structured`]).
-    fn barrier_applies(&self) -> bool {
-        let (settings, local) = (&self.settings, self.form.local());
-        let bp = &settings.tuning.barrier;
-        let small = match &self.form.stored {
-            Stored::Global(g, _) => {
-                g.m.nrows <= bp.max_schur_dofs && 2 * g.m.nrows <= local.q.len()
-            }
-            Stored::Local(_) => local.q.len() <= bp.max_skeleton_unknowns,
-        };
-        small
-            && settings.barrier_steps > 0
-            && !local.mu.is_empty()
-            && local.mu.iter().all(|&mu| mu > 0.0 && mu.is_finite())
-    }
-
     /// The interior-point try on Coulomb's law ([`crate::barrier`], policy and parameters
     /// [`crate::settings::BarrierParams`]): cold-started runs along each path of
     /// `paths` in turn, each finished by the Levenberg–Marquardt end game when its error is
     /// ≤ [`crate::settings::LmParams::start`] (its stall rule
     /// [`crate::settings::BarrierParams::lm_stall_segments`]), until one reaches the
     /// tolerance — or [`crate::settings::BarrierParams::handover`] · tol where the method of
-    /// multipliers follows ([`Solver::multipliers_apply`]) — or the try's share of the time
-    /// is spent. Its best point is judged on the problem as stored like
+    /// multipliers follows ([`Solver::multipliers_apply`]) — or the try's budget of steps
+    /// ([`crate::settings::BarrierParams::max_work`]) is spent. Its best point is judged on the problem as stored like
     /// every iterate (status `converged`, `unbounded` or `max_iterations`; one outer record
     /// whose inner iterations are all its Newton and LM steps); with it, the end points of
     /// all its runs, lowest error first (the starts of [`Solver::multiplier_try`]). None
@@ -371,13 +458,12 @@ impl Solver<'_> {
         let settings = &self.settings;
         let (bp, lm) = (settings.tuning.barrier, settings.tuning.lm);
         let local = self.form.local();
-        let share = deadline.share(bp.time_share);
         let target = settings.tuning.newton.target_fraction * settings.tol;
         let global = match &self.form.stored {
             Stored::Global(g, _) => Some(&**g),
             Stored::Local(_) => None,
         };
-        let Some(setup) = crate::barrier::Setup::structured(local, global, &bp, share) else {
+        let Some(setup) = crate::barrier::Setup::structured(local, global, &bp, deadline) else {
             return Ok(None);
         };
         let try_lm = crate::settings::LmParams {
@@ -392,24 +478,30 @@ impl Solver<'_> {
         };
         let mut ends: Vec<(Vec<f64>, f64)> = Vec::new();
         let mut steps = 0;
+        // the budget in steps (not in time: the same path on any machine and under any load)
         for path in bp.paths {
-            if share.passed() {
+            if steps >= bp.max_work || deadline.passed() {
                 break;
             }
             let (mut r, report) = crate::barrier::solve_with(
                 local,
                 &setup,
                 target,
-                settings.barrier_steps,
+                settings.barrier_steps.min(bp.max_work - steps),
                 &bp,
                 path,
-                share,
+                deadline,
             );
             steps += report.steps;
             let mut error = report.error;
-            if error > target && error <= lm.start && lm.max_steps > 0 && !share.passed() {
+            let left = bp.max_work.saturating_sub(steps);
+            if error > target && error <= lm.start && lm.max_steps > 0 && left > 0 {
                 let mut trial = r.clone();
-                let lr = crate::levenberg::solve(local, &mut trial, target, &try_lm, share);
+                let finish_lm = crate::settings::LmParams {
+                    max_steps: try_lm.max_steps.min(left),
+                    ..try_lm
+                };
+                let lr = crate::levenberg::solve(local, &mut trial, target, &finish_lm, deadline);
                 steps += lr.steps;
                 if lr.error < error {
                     (r, error) = (trial, lr.error);
@@ -430,6 +522,11 @@ impl Solver<'_> {
             .first()
             .cloned()
             .unwrap_or_else(|| vec![0.0; local.q.len()]);
+        // the skeleton goes on to the method of multipliers (built once per solve)
+        let ends = Ends {
+            points: ends,
+            skeleton: setup.into_skeleton(),
+        };
         let ran = self.judged(r, steps, deadline)?;
         Ok(Some((ran, ends)))
     }
@@ -450,6 +547,7 @@ impl Solver<'_> {
             fixed_point_residual: f64::NAN,
             rule_6_1: f64::NAN,
             inner_iterations: steps,
+            step: crate::plan::StepKind::Main,
         });
         solution.outer_iterations += 1;
         solution.inner_iterations += steps;
@@ -507,30 +605,41 @@ impl Solver<'_> {
     /// [`crate::settings::BarrierParams::skeleton_rank_ratio`] · m), when it reproduces W
     /// (symmetric or not) within [`crate::settings::MultiplierParams::skeleton_residual`] · tol
     /// ([`crate::skeleton::Skeleton::residual`]); None otherwise or when `deadline` passes.
+    #[cfg(test)]
     fn exact_skeleton(
         &self,
         p: &LocalProblem,
         deadline: Deadline,
     ) -> Option<crate::skeleton::Skeleton> {
-        let (mp, bp) = (
-            &self.settings.tuning.multiplier,
-            &self.settings.tuning.barrier,
-        );
+        let bp = &self.settings.tuning.barrier;
         let m = p.q.len();
         let max_rank = bp
             .max_schur_dofs
             .min((bp.skeleton_rank_ratio * m as f64) as usize);
         let skeleton =
             crate::skeleton::Skeleton::new(&p.w, p.dim, max_rank, bp.rank_tol, deadline)?;
-        let residual = skeleton.residual(&p.w, bp.dense_parallel_dim)?;
-        (residual <= mp.skeleton_residual * self.settings.tol).then_some(skeleton)
+        self.reproduces(&skeleton, p).then_some(skeleton)
+    }
+
+    /// Whether `skeleton` reproduces the W of `p` within
+    /// [`crate::settings::MultiplierParams::skeleton_residual`] · tol.
+    fn reproduces(&self, skeleton: &crate::skeleton::Skeleton, p: &LocalProblem) -> bool {
+        let (mp, bp) = (
+            &self.settings.tuning.multiplier,
+            &self.settings.tuning.barrier,
+        );
+        skeleton
+            .residual(&p.w, bp.dense_parallel_dim)
+            .is_some_and(|r| r <= mp.skeleton_residual * self.settings.tol)
     }
 
     /// The method of multipliers in the velocities ([`crate::multiplier`], parameters
     /// [`crate::settings::MultiplierParams`]) from the best point of the interior-point try
-    /// `tried` and, at once, from the end points `ends` of its other runs (at most
+    /// `tried` and, at once, from the end points `ends` of its other runs, on a local problem
+    /// through the skeleton of W the try built (at most
     /// [`crate::settings::MultiplierParams::starts`] runs in all, [`crate::multiplier::solve_from`]),
-    /// in its share of the time left. It applies where the try did: a global
+    /// within its budget of factorizations
+    /// ([`crate::settings::MultiplierParams::max_factorizations`]). It applies where the try did: a global
     /// problem with at most [`crate::settings::BarrierParams::max_schur_dofs`] degrees of
     /// freedom and at most half as many as contact unknowns (rigid bodies touching at several
     /// points per face), or a local one whose W has a skeleton W ≈ C A⁻¹ R of rank at most
@@ -545,7 +654,7 @@ impl Solver<'_> {
     fn multiplier_try(
         &mut self,
         tried: &Ran,
-        ends: Vec<Vec<f64>>,
+        ends: Ends,
         deadline: Deadline,
     ) -> Result<Option<Ran>, SolveError> {
         if !self.multipliers_apply() {
@@ -555,14 +664,13 @@ impl Solver<'_> {
         let mp = settings.tuning.multiplier;
         let bp = settings.tuning.barrier;
         let local = self.form.local();
-        let share = deadline.share(mp.time_share);
         let m = local.q.len();
         let skeleton_form;
         let (g, hu, mass): (&GlobalProblem, Option<&CscMatrix>, &crate::mass::MassFactor) =
             match &self.form.stored {
                 Stored::Global(g, delassus) => (g, None, &delassus.factor),
                 Stored::Local(p) => {
-                    let Some(skeleton) = self.exact_skeleton(p, share) else {
+                    let Some(skeleton) = ends.skeleton.filter(|sk| self.reproduces(sk, p)) else {
                         return Ok(None);
                     };
                     let (a, a_sym, h, hu) = skeleton.velocity_form();
@@ -596,7 +704,7 @@ impl Solver<'_> {
         }
         // the try's best point, then the end points of its other runs (distinct, finite)
         let mut starts = vec![r];
-        for end in ends {
+        for end in ends.points {
             if starts.len() >= mp.starts {
                 break;
             }
@@ -623,7 +731,7 @@ impl Solver<'_> {
         };
         let finish = |r: &[f64]| {
             let mut trial = r.to_vec();
-            least_squares(&mut trial, share);
+            least_squares(&mut trial, deadline);
             let v = form.verdict(&trial);
             (v.error <= settings.tol && v.balance.unwrap_or(0.0) <= settings.tol).then_some(trial)
         };
@@ -636,7 +744,7 @@ impl Solver<'_> {
             settings.tol,
             &mp,
             par,
-            share,
+            deadline,
             |r| {
                 let v = form.verdict(r);
                 (v.error, v.balance.unwrap_or(0.0))
@@ -667,8 +775,13 @@ impl Solver<'_> {
 /// that one is lower.
 type Ran = (Solution, Option<Best>);
 
-/// The end points of the interior-point try's runs, lowest error first.
-type Ends = Vec<Vec<f64>>;
+/// What the interior-point try hands to the method of multipliers: the end points of its
+/// runs, lowest error first, and the skeleton of a local W its Newton systems were solved
+/// through (None for a global problem: the Schur complement).
+struct Ends {
+    points: Vec<Vec<f64>>,
+    skeleton: Option<crate::skeleton::Skeleton>,
+}
 
 /// The warm-up try: at most `warmup_sweeps` fused Gauss–Seidel sweeps, one outer iteration,
 /// no end game.
@@ -885,7 +998,7 @@ mod tests {
                     ..Settings::default()
                 };
                 let sol = solve(&Problem::Local(p.clone()), &settings).unwrap();
-                assert!(sol.history[0].fixed_point_residual.is_nan(), "seed {seed}");
+                assert_eq!(sol.history[0].step, StepKind::InteriorPoint, "seed {seed}");
                 assert_eq!(barrier_records(&sol), 1, "seed {seed} skew {skew}");
                 let recomputed = p.error(&sol.r).error;
                 assert!(
@@ -908,9 +1021,10 @@ mod tests {
     /// History records of interior-point tries and of the method of multipliers that follows
     /// them (they have no fixed-point residual).
     fn barrier_records(sol: &Solution) -> usize {
+        use crate::plan::StepKind::{InteriorPoint, Multipliers};
         sol.history
             .iter()
-            .filter(|h| h.fixed_point_residual.is_nan())
+            .filter(|h| matches!(h.step, InteriorPoint | Multipliers))
             .count()
     }
 
@@ -942,14 +1056,14 @@ mod tests {
                 ..Settings::default()
             };
             let sol = solve(&problem, &settings).unwrap();
-            assert!(sol.history[0].fixed_point_residual.is_nan(), "seed {seed}");
+            assert_eq!(sol.history[0].step, StepKind::InteriorPoint, "seed {seed}");
             // the try's record, and the method of multipliers' (also without a fixed-point
             // residual) right after it when the try did not converge
             let records = barrier_records(&sol);
             let tried_on = sol.history.len() > 1;
             assert_eq!(records, 1 + usize::from(tried_on), "seed {seed}");
             if tried_on {
-                assert!(sol.history[1].fixed_point_residual.is_nan(), "seed {seed}");
+                assert_eq!(sol.history[1].step, StepKind::Multipliers, "seed {seed}");
             }
             solved += usize::from(sol.converged() && sol.history.len() == 1);
             let off = Settings {
@@ -967,7 +1081,7 @@ mod tests {
                 r: vec![0.0; m],
                 v: None,
             };
-            let warm = crate::solver::solve_with_guess(&problem, &settings, Some(&guess)).unwrap();
+            let warm = solve_with_guess(&problem, &settings, Some(&guess)).unwrap();
             assert_eq!(barrier_records(&warm), 0, "seed {seed}");
         }
         // the try itself converged (no later stage) on half of them at least

@@ -11,7 +11,8 @@
 //! stage at most [`crate::Settings::newton_steps`], so that the iteration is deterministic.
 //!
 //! A try that did not converge at err ≤ [`crate::settings::ProxParams::try_start`] hands its
-//! best point to the proximal point ([`crate::proximal`]) with a share of the time of its own;
+//! best point to the proximal point ([`crate::proximal`]) with a budget of Newton steps of its
+//! own ([`crate::settings::ProxParams::max_steps`]);
 //! once the Newton budget is spent on a stagnating iterate, Levenberg–Marquardt
 //! ([`crate::levenberg`]) runs, and the proximal point again after an LM run that stalled.
 
@@ -159,6 +160,7 @@ impl EndGame {
                 fixed_point_residual,
                 rule_6_1,
                 inner_iterations: nr.steps,
+                step: crate::plan::StepKind::Main,
             };
             let mut records = best.map_or_else(Vec::new, |b| b.records);
             records.push(record);
@@ -216,9 +218,9 @@ impl EndGame {
         if self.lm_used >= lm.max_steps || deadline.passed() {
             return None;
         }
+        // what is left of the stage's budget of LM steps (a budget in work: the path does
+        // not depend on the machine's speed)
         lm.max_steps -= self.lm_used;
-        // at most a share of the time left, so that the stage (and its fallback) goes on
-        let share = deadline.share(lm.time_share);
         let (r, error, fs) = at.or_best(best);
         if error > lm.start {
             return None;
@@ -226,9 +228,10 @@ impl EndGame {
         let local = form.local();
         let mut trial = r.to_vec();
         let target = settings.tuning.newton.target_fraction * tol;
-        let mut report = crate::levenberg::solve(local, &mut trial, target, &lm, share);
+        let mut report = crate::levenberg::solve(local, &mut trial, target, &lm, deadline);
         let lm_steps = report.steps;
-        // a stalled LM hands its best point to the proximal point, in what is left of the share
+        // a stalled LM hands its best point to the proximal point (its own budget of Newton
+        // steps, [`crate::settings::ProxParams::max_steps`])
         let prox = &settings.tuning.prox;
         let stalled = matches!(
             report.status,
@@ -238,10 +241,10 @@ impl EndGame {
             && report.error > target
             && report.error <= prox.start
             && prox.max_outer > 0
-            && !share.passed()
+            && !deadline.passed()
         {
             let mut point = trial.clone();
-            let pr = crate::proximal::solve(local, &mut point, target, prox, share);
+            let pr = crate::proximal::solve(local, &mut point, target, prox, deadline);
             report.steps += pr.steps;
             // a proximal point that followed a ray of diverging r (no solution: the
             // relative error falls only because ‖r‖ grows) is not kept
@@ -268,8 +271,8 @@ impl EndGame {
     /// steps and, if it lowered the error (of the problem as stored) to at most
     /// [`crate::settings::LmParams::keep_gain`] times its start (or converged), the new
     /// iterate with one history record. A run takes at most
-    /// [`crate::settings::ProxParams::time_share`] of the time left, or
-    /// [`crate::settings::ProxParams::capped_time_share`] after an inner solve (`inner`) that
+    /// [`crate::settings::ProxParams::max_steps`] Newton steps, or
+    /// [`crate::settings::ProxParams::capped_max_steps`] after an inner solve (`inner`) that
     /// hit its iteration cap.
     fn proximal(
         &mut self,
@@ -290,16 +293,18 @@ impl EndGame {
             return None;
         }
         // an inner solve at its iteration cap: the fixed point does not solve its subproblems
-        // (the granular drums of the corpus), and the proximal point gets the larger share
-        let part = if inner.status == InnerStatus::MaxIterations {
-            prox.capped_time_share
-        } else {
-            prox.time_share
+        // (the granular drums of the corpus), and the proximal point gets the larger budget
+        let budget = crate::settings::ProxParams {
+            max_steps: if inner.status == InnerStatus::MaxIterations {
+                prox.capped_max_steps
+            } else {
+                prox.max_steps
+            },
+            ..*prox
         };
         let mut trial = r.to_vec();
         let target = settings.tuning.newton.target_fraction * tol;
-        let share = deadline.share(part);
-        let report = crate::proximal::solve(form.local(), &mut trial, target, prox, share);
+        let report = crate::proximal::solve(form.local(), &mut trial, target, &budget, deadline);
         self.prox_gate = prox.retry * report.error.min(error);
         let candidate = form.verdict(&trial);
         // as for LM: a small gain is lost again once the fixed point goes on; a result on a
@@ -333,6 +338,7 @@ impl Improved {
             fixed_point_residual,
             rule_6_1,
             inner_iterations: steps,
+            step: crate::plan::StepKind::Main,
         });
         Self {
             r,

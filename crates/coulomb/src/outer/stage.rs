@@ -270,6 +270,7 @@ impl<'f, 'a> Stage<'f, 'a> {
             fixed_point_residual,
             rule_6_1,
             inner_iterations,
+            step: crate::plan::StepKind::Main,
         });
     }
 

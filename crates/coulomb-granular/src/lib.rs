@@ -45,6 +45,7 @@ pub mod rolling;
 pub mod run;
 pub mod scene;
 pub mod scene_file;
+pub mod shape;
 pub mod simulation;
 pub mod validation;
 pub mod world;

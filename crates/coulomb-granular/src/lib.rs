@@ -41,6 +41,7 @@ pub mod model;
 pub mod nsgs;
 pub mod output;
 pub mod projection;
+pub mod rigid;
 pub mod rolling;
 pub mod run;
 pub mod scene;

@@ -42,6 +42,7 @@ pub mod nsgs;
 pub mod output;
 pub mod projection;
 pub mod rigid;
+pub mod rigid_scene;
 pub mod rolling;
 pub mod run;
 pub mod scene;

@@ -421,7 +421,8 @@ impl StepSettings {
         }
     }
 
-    fn check(&self) -> Result<(), SceneError> {
+    /// Refuses invalid step settings (h, θ, tolerance, sweep cap, relaxation).
+    pub fn check(&self) -> Result<(), SceneError> {
         let bad = |s: String| Err(SceneError::InvalidStep(s));
         if !(self.h.is_finite() && self.h > 0.0) {
             return bad(format!(
@@ -525,6 +526,10 @@ pub enum SceneError {
         /// "outside every container", "inside obstacle 2 ('rock')", …
         reason: String,
     },
+    /// the rigid-body simulator refused the scene (interpenetrating bodies, invalid mass
+    /// properties, …)
+    #[error("rigid bodies: {0}")]
+    Rigid(crate::rigid::RigidError),
     /// the scene would need more memory than the machine has
     #[error("the scene needs about {estimate} bytes ({spheres} spheres, {triangles} mesh triangles), more than the {available} bytes of memory available")]
     Memory {

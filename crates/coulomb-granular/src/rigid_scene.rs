@@ -104,17 +104,17 @@ fn y_to(a: Vec3) -> [f64; 4] {
     [r.w, r.x, r.y, r.z]
 }
 
+/// A parry shape with its position and orientation (w, x, y, z).
+type Placed = (SharedShape, [f64; 3], [f64; 4]);
+
 /// The parry shapes (with their positions and orientations) of one obstacle.
-fn obstacle_shapes(
-    k: usize,
-    o: &Obstacle,
-) -> Result<Vec<(SharedShape, [f64; 3], [f64; 4])>, SceneError> {
+fn obstacle_shapes(k: usize, o: &Obstacle) -> Result<Vec<Placed>, SceneError> {
     let bad = |reason: &str| SceneError::InvalidObstacle {
         index: k,
         name: o.name.clone(),
         reason: reason.to_string(),
     };
-    let surface = || -> Result<(SharedShape, [f64; 3], [f64; 4]), SceneError> {
+    let surface = || -> Result<Placed, SceneError> {
         let fixed = Obstacle {
             motion: Motion::Fixed,
             ..o.clone()

@@ -1801,7 +1801,7 @@ mass = 3.0
         let kinds: Vec<&str> = m.bodies.iter().map(|b| b.shape.kind()).collect();
         assert_eq!(kinds, ["sphere", "cuboid", "cuboid", "compound"]);
         assert_eq!(m.bodies[2].position, Vec3::new(0.5, 0.0, 0.05));
-        assert_eq!(m.bodies[2].orientation[3], 0.7071067811865476);
+        assert_eq!(m.bodies[2].orientation[3], std::f64::consts::FRAC_1_SQRT_2);
         assert_eq!(m.bodies[1].density, Some(2000.0));
         assert_eq!(m.bodies[1].velocity, Vec3::new(1.0, 0.0, 0.0));
         assert_eq!((m.bodies[3].mass, m.bodies[3].density), (Some(3.0), None));

@@ -410,7 +410,7 @@ fn check_points(kind: &'static str, name: &str, pts: &[[f64; 3]]) -> Result<(), 
     } else {
         0.0
     };
-    if !(size > 0.0) || thickness <= 1e-9 * size {
+    if size.is_nan() || size <= 0.0 || thickness <= 1e-9 * size {
         return Err(ShapeError::Coplanar {
             count: pts.len(),
             thickness,
@@ -494,7 +494,7 @@ fn check_faces(vertices: &[[f64; 3]], faces: &[Vec<usize>]) -> Result<(), ShapeE
             nrm[2] += (a[0] - b[0]) * (a[1] + b[1]);
         }
         let len = norm(nrm);
-        if !(len > 0.0) {
+        if len.is_nan() || len <= 0.0 {
             return Err(bad("the face has no area".into()));
         }
         let nrm = [nrm[0] / len, nrm[1] / len, nrm[2] / len];

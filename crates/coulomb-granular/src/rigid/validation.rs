@@ -596,3 +596,116 @@ mod report {
         }
     }
 }
+
+#[cfg(test)]
+mod shape_tests {
+    use super::*;
+    use crate::rigid::parry::math::Pose;
+
+    fn body(shape: SharedShape, z: f64) -> RigidBodyDesc {
+        let mass = MassProperties::from_shape(&shape, 1000.0).unwrap();
+        RigidBodyDesc {
+            shape,
+            mass,
+            position: [0.0, 0.0, z],
+            orientation: [1.0, 0.0, 0.0, 0.0],
+            velocity: [0.0; 3],
+            angular_velocity: [0.0; 3],
+            material: 0,
+            fixed: false,
+        }
+    }
+
+    /// Every shape kind falls 2 cm onto the floor (a half-space, then a two-triangle mesh)
+    /// and comes to rest on it without sinking: the lowest surface point ends within 1 % of
+    /// the shape's size of z = 0, and the last steps converge.
+    #[test]
+    fn every_shape_comes_to_rest_on_a_plane_and_a_mesh() {
+        let hull = SharedShape::convex_hull(&[
+            Vector::new(-0.05, -0.05, -0.04),
+            Vector::new(0.06, -0.04, -0.05),
+            Vector::new(0.0, 0.07, -0.05),
+            Vector::new(0.01, 0.0, 0.06),
+            Vector::new(-0.03, 0.02, 0.03),
+        ])
+        .unwrap();
+        let compound = SharedShape::compound(vec![
+            (
+                Pose::translation(-0.05, 0.0, 0.0),
+                SharedShape::cuboid(0.05, 0.05, 0.05),
+            ),
+            (Pose::translation(0.05, 0.0, 0.0), SharedShape::ball(0.05)),
+        ]);
+        // (shape, how far its lowest point is below its frame's origin: z of the origin at rest)
+        let lying = crate::rigid::body::rotation_to_wxyz(
+            crate::rigid::parry::math::Rotation::from_rotation_x(std::f64::consts::FRAC_PI_2),
+        );
+        let cases: Vec<(SharedShape, [f64; 4], f64)> = vec![
+            (SharedShape::ball(0.05), [1.0, 0.0, 0.0, 0.0], 0.05),
+            (
+                SharedShape::cuboid(0.05, 0.03, 0.02),
+                [1.0, 0.0, 0.0, 0.0],
+                0.02,
+            ),
+            // capsule and cylinder axes along y, lying on their side
+            (
+                SharedShape::capsule_y(0.05, 0.03),
+                [1.0, 0.0, 0.0, 0.0],
+                0.03,
+            ),
+            (SharedShape::cylinder(0.05, 0.04), lying, 0.05),
+            (SharedShape::cone(0.05, 0.04), lying, 0.05),
+            (compound, [1.0, 0.0, 0.0, 0.0], 0.05),
+            (hull, [1.0, 0.0, 0.0, 0.0], 0.05),
+        ];
+        let mesh = SharedShape::trimesh(
+            vec![
+                Vector::new(-1.0, -1.0, 0.0),
+                Vector::new(1.0, -1.0, 0.0),
+                Vector::new(1.0, 1.0, 0.0),
+                Vector::new(-1.0, 1.0, 0.0),
+            ],
+            vec![[0, 1, 2], [0, 2, 3]],
+        )
+        .unwrap();
+        for use_mesh in [false, true] {
+            for (k, (shape, q, depth)) in cases.iter().enumerate() {
+                let mut b = body(shape.clone(), depth + 0.02);
+                b.orientation = *q;
+                // capsule lying: rotate it too (its axis is y, so it already lies flat)
+                let mut ob = floor();
+                if use_mesh {
+                    ob.shape = mesh.clone();
+                }
+                let mut w = RigidWorld::new(
+                    vec![b],
+                    vec![ob],
+                    one_material(0.5),
+                    RigidSettings::default(),
+                )
+                .unwrap();
+                let mut last = None;
+                for _ in 0..300 {
+                    last = Some(w.step().unwrap());
+                }
+                let last = last.unwrap();
+                assert_eq!(
+                    last.status,
+                    RigidStatus::Converged,
+                    "case {k}, mesh {use_mesh}"
+                );
+                assert!(last.contacts >= 1, "case {k}, mesh {use_mesh}");
+                // the lowest point of the shape: its AABB's bottom at the final pose
+                let pose = Pose::from_parts(
+                    Vector::from_array(w.positions()[0]),
+                    crate::rigid::body::rotation_from_wxyz(w.orientations()[0]),
+                );
+                let bottom = shape.compute_aabb(&pose).mins.z;
+                assert!(
+                    bottom.abs() < 0.01 * 2.0 * depth,
+                    "case {k}, mesh {use_mesh}: bottom {bottom}, {last:?}"
+                );
+            }
+        }
+    }
+}

@@ -1029,3 +1029,138 @@ pub mod nsgs {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::validation::{cuboid, floor, one_material};
+    use super::*;
+
+    fn world(bodies: Vec<RigidBodyDesc>) -> Result<RigidWorld, RigidError> {
+        RigidWorld::new(
+            bodies,
+            vec![floor()],
+            one_material(0.5),
+            RigidSettings::default(),
+        )
+    }
+
+    #[test]
+    fn refuses_bad_quaternions_without_normalizing() {
+        let mut b = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
+        b.orientation = [1.0, 1e-4, 0.0, 0.0]; // |q| − 1 = 5e-9
+        let e = world(vec![b.clone()]).unwrap_err();
+        assert!(
+            matches!(e, RigidError::Quaternion { ref what, .. } if what == "body 0"),
+            "{e}"
+        );
+        b.orientation = [f64::NAN, 0.0, 0.0, 0.0];
+        assert!(matches!(
+            world(vec![b]).unwrap_err(),
+            RigidError::Quaternion { .. }
+        ));
+    }
+
+    #[test]
+    fn refuses_bad_mass_state_and_material() {
+        let good = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
+        let mut b = good.clone();
+        b.mass.mass = 0.0;
+        assert!(matches!(
+            world(vec![b]).unwrap_err(),
+            RigidError::Mass { .. }
+        ));
+        let mut b = good.clone();
+        b.mass.inertia[0][0] = -1.0;
+        assert!(matches!(
+            world(vec![b]).unwrap_err(),
+            RigidError::Mass { .. }
+        ));
+        let mut b = good.clone();
+        b.velocity[1] = f64::INFINITY;
+        assert!(matches!(
+            world(vec![b]).unwrap_err(),
+            RigidError::NonFinite {
+                field: "velocity",
+                ..
+            }
+        ));
+        let mut b = good.clone();
+        b.material = 3;
+        assert!(matches!(
+            world(vec![b]).unwrap_err(),
+            RigidError::Material { material: 3, .. }
+        ));
+        let s = super::super::parry::shape::SharedShape::cuboid(0.0, 0.1, 0.1);
+        assert!(MassPropertiesCheck::zero_volume(&s));
+    }
+
+    struct MassPropertiesCheck;
+    impl MassPropertiesCheck {
+        fn zero_volume(s: &SharedShape) -> bool {
+            matches!(
+                super::super::MassProperties::from_shape(s, 1000.0),
+                Err(RigidError::Mass { .. })
+            )
+        }
+    }
+
+    #[test]
+    fn refuses_interpenetrating_bodies_with_count_and_depth() {
+        let a = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
+        let b = cuboid([0.1; 3], 1000.0, [0.15, 0.0, 0.1]).unwrap();
+        match world(vec![a.clone(), b]).unwrap_err() {
+            RigidError::Interpenetration {
+                count, depth, a, b, ..
+            } => {
+                assert!(count >= 1);
+                assert!((depth - 0.05).abs() < 1e-9, "{depth}");
+                assert_eq!((a, b), (0, RigidPartner::Body(1)));
+            }
+            e => panic!("{e}"),
+        }
+        // sunk into the floor by 1 cm
+        let c = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.09]).unwrap();
+        match world(vec![c]).unwrap_err() {
+            RigidError::Interpenetration { depth, b, .. } => {
+                assert!((depth - 0.01).abs() < 1e-9, "{depth}");
+                assert_eq!(b, RigidPartner::Obstacle(0));
+            }
+            e => panic!("{e}"),
+        }
+        // touching is fine
+        assert!(world(vec![a]).is_ok());
+    }
+
+    #[test]
+    fn free_fall_is_exact_and_the_problem_is_kept() {
+        let b = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 1.0]).unwrap();
+        let mut w = world(vec![b]).unwrap();
+        let r = w.step().unwrap();
+        assert_eq!(r.status, RigidStatus::NoContact);
+        assert!(w.last_problem().is_none());
+        let g = crate::world::GRAVITY;
+        let h = w.settings().h;
+        assert!((w.velocities()[0][2] + g * h).abs() < 1e-15);
+        // θ = ½: x₁ = x₀ + h (v₀ + v₁)/2
+        assert!((w.positions()[0][2] - (1.0 - 0.5 * g * h * h)).abs() < 1e-15);
+        // dropped onto the floor, the step's global problem is stored
+        let b = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
+        let mut w = world(vec![b]).unwrap();
+        let r = w.step().unwrap();
+        assert_eq!(r.status, RigidStatus::Converged);
+        let p = w.last_problem().unwrap();
+        assert_eq!(p.contacts(), r.contacts);
+        assert_eq!(p.dofs(), 6);
+    }
+
+    #[test]
+    fn warm_start_matches_manifold_points_across_steps() {
+        let b = cuboid([0.1, 0.05, 0.05], 1000.0, [0.0, 0.0, 0.05]).unwrap();
+        let mut w = world(vec![b]).unwrap();
+        let first = w.step().unwrap();
+        let second = w.step().unwrap();
+        assert_eq!(first.warm_started, 0);
+        assert_eq!(second.warm_started, second.contacts);
+        assert_eq!(second.contacts, 4);
+    }
+}

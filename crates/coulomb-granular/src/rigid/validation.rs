@@ -234,6 +234,102 @@ pub fn incline(
     })
 }
 
+/// Result of [`stack`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stack {
+    /// bodies
+    pub bodies: usize,
+    /// largest displacement of a body's centre of mass over the run (m)
+    pub max_displacement: f64,
+    /// contacts at the last step
+    pub contacts: usize,
+    /// steps whose error was above the tolerance
+    pub not_converged: usize,
+    /// steps finished by the library's solver
+    pub handed_over: usize,
+    /// Gauss–Seidel sweeps, summed
+    pub sweeps: usize,
+}
+
+/// Runs `bodies` on the floor with friction μ for `steps` steps of the default settings and
+/// measures how far they move.
+pub fn stack(bodies: Vec<RigidBodyDesc>, mu: f64, steps: usize) -> Result<Stack, RigidError> {
+    let n = bodies.len();
+    let mut w = RigidWorld::new(
+        bodies,
+        vec![floor()],
+        one_material(mu),
+        RigidSettings::default(),
+    )?;
+    let x0 = w.centres_of_mass();
+    let mut out = Stack {
+        bodies: n,
+        max_displacement: 0.0,
+        contacts: 0,
+        not_converged: 0,
+        handed_over: 0,
+        sweeps: 0,
+    };
+    for _ in 0..steps {
+        let r = w.step()?;
+        out.contacts = r.contacts;
+        out.sweeps += r.sweeps;
+        if r.status == RigidStatus::NotConverged {
+            out.not_converged += 1;
+        }
+        if r.method == "nsgs+library" {
+            out.handed_over += 1;
+        }
+        for (a, b) in w.centres_of_mass().iter().zip(&x0) {
+            let d = Vector::from_array(*a) - Vector::from_array(*b);
+            out.max_displacement = out.max_displacement.max(d.length());
+        }
+    }
+    Ok(out)
+}
+
+/// A running-bond brick wall of `courses` courses of `bricks` bricks 0.2 × 0.1 × 0.05 m
+/// (ρ = 2000) along x, each course on the one below; odd courses are shifted by half a brick
+/// and have one brick less.
+pub fn brick_wall(courses: usize, bricks: usize) -> Result<Vec<RigidBodyDesc>, RigidError> {
+    let half = [0.1, 0.05, 0.025];
+    let mut out = Vec::new();
+    for c in 0..courses {
+        let odd = c % 2 == 1;
+        let n = if odd {
+            bricks.saturating_sub(1)
+        } else {
+            bricks
+        };
+        for i in 0..n {
+            let x = (2 * i) as f64 * half[0] + if odd { half[0] } else { 0.0 };
+            let z = (2 * c + 1) as f64 * half[2];
+            out.push(cuboid(half, 2000.0, [x, 0.0, z])?);
+        }
+    }
+    Ok(out)
+}
+
+/// A square pyramid of unit-density-ρ = 1000 cubes of side 0.1 m, `layers` layers: layer k
+/// (from 0 at the bottom) has (layers − k)² cubes, shifted by half a cube in x and y from
+/// the layer below (each cube rests on four).
+pub fn cube_pyramid(layers: usize) -> Result<Vec<RigidBodyDesc>, RigidError> {
+    let a = 0.05;
+    let mut out = Vec::new();
+    for k in 0..layers {
+        let n = layers - k;
+        for i in 0..n {
+            for j in 0..n {
+                let x = (2 * i + k) as f64 * a;
+                let y = (2 * j + k) as f64 * a;
+                let z = (2 * k + 1) as f64 * a;
+                out.push(cuboid([a; 3], 1000.0, [x, y, z])?);
+            }
+        }
+    }
+    Ok(out)
+}
+
 /// The `coulomb validate` checks of the rigid-body simulator, by section. `quick` skips the
 /// wall and the pyramid.
 pub fn checks(_quick: bool) -> Result<Vec<(String, Check)>, RigidError> {
@@ -310,6 +406,91 @@ pub fn checks(_quick: bool) -> Result<Vec<(String, Check)>, RigidError> {
             ),
         );
     }
+    // slide vs topple: block of width w (downhill) and height hgt, textbook thresholds
+    // tan θ = w / hgt (topple, rough contact) and tan θ = μ (slide)
+    for (tan, mu, width, height) in [
+        (0.4, 1.0, 0.05, 0.1),
+        (0.6, 1.0, 0.05, 0.1),
+        (0.25, 0.3, 0.1, 0.1),
+        (0.4, 0.3, 0.1, 0.1),
+    ] {
+        let deg = f64::atan(tan).to_degrees();
+        let r = incline(deg, mu, width, height, 1000)?;
+        let (topples, slides) = (r.rotation > 0.2, r.displacement > 1e-3);
+        let expect_topple = tan > width / height;
+        let expect_slide = !expect_topple && tan > mu;
+        push(
+            "Rigid bodies",
+            check(
+                format!(
+                    "block w/h = {:.2} on an incline tan θ = {tan}, μ = {mu}, 1 s: topples (1) / slides (2) / stays (0)",
+                    width / height
+                ),
+                if expect_topple { 1.0 } else if expect_slide { 2.0 } else { 0.0 },
+                if topples { 1.0 } else if slides { 2.0 } else { 0.0 },
+                0.0,
+                r.not_converged,
+            ),
+        );
+    }
+    let rest = resting_box(0.01, 300)?;
+    push(
+        "Rigid bodies",
+        check(
+            format!(
+                "box at rest on the floor ({} contacts): Σ r_N / (m g h)",
+                rest.contacts
+            ),
+            1.0,
+            rest.normal_impulse / rest.weight_impulse,
+            1e-8,
+            rest.not_converged,
+        ),
+    );
+    push(
+        "Rigid bodies",
+        check(
+            "box at rest on the floor: corner impulses statically admissible (1 = yes)".into(),
+            1.0,
+            if rest.admissible { 1.0 } else { 0.0 },
+            0.0,
+            rest.not_converged,
+        ),
+    );
+    push(
+        "Rigid bodies",
+        check(
+            "box dropped 1 cm onto the floor: penetration at rest / smallest side".into(),
+            0.0,
+            rest.penetration,
+            0.01,
+            rest.not_converged,
+        ),
+    );
+    if !_quick {
+        for (what, bodies) in [
+            (
+                "10-course running-bond brick wall (10/9 bricks a course)",
+                brick_wall(10, 10)?,
+            ),
+            ("5-layer cube pyramid (55 cubes)", cube_pyramid(5)?),
+        ] {
+            let r = stack(bodies, 0.7, 1000)?;
+            push(
+                "Rigid bodies",
+                check(
+                    format!(
+                        "{what}, μ = 0.7, 1 000 steps of 1 ms ({} contacts, {} steps handed to the library): largest displacement (m)",
+                        r.contacts, r.handed_over
+                    ),
+                    0.0,
+                    r.max_displacement,
+                    1e-5,
+                    r.not_converged,
+                ),
+            );
+        }
+    }
     Ok(out)
 }
 
@@ -364,5 +545,167 @@ mod tests {
         let r = incline(20.0, 0.5, 0.1, 0.1, 500).unwrap();
         assert!(r.displacement.abs() < 1e-6, "{r:?}");
         assert_eq!(r.not_converged, 0);
+    }
+}
+
+#[cfg(test)]
+mod stack_tests {
+    use super::*;
+
+    #[test]
+    fn tall_block_topples_and_cube_slides_on_an_incline() {
+        // tan θ = 0.6 > w/h = 0.5 with rough contact: topples
+        let r = incline(0.6f64.atan().to_degrees(), 1.0, 0.05, 0.1, 600).unwrap();
+        assert!(r.rotation > 0.2, "{r:?}");
+        // tan θ = 0.4 < w/h: stays
+        let r = incline(0.4f64.atan().to_degrees(), 1.0, 0.05, 0.1, 600).unwrap();
+        assert!(r.rotation < 1e-6 && r.displacement.abs() < 1e-6, "{r:?}");
+        // μ = 0.3 < tan θ = 0.4 < w/h = 1: slides without toppling
+        let r = incline(0.4f64.atan().to_degrees(), 0.3, 0.1, 0.1, 600).unwrap();
+        assert!(r.rotation < 1e-3 && r.displacement > 1e-2, "{r:?}");
+    }
+
+    #[test]
+    fn small_wall_and_pyramid_stand() {
+        let r = stack(brick_wall(3, 3).unwrap(), 0.7, 100).unwrap();
+        assert!(r.max_displacement < 1e-6, "{r:?}");
+        assert_eq!(r.not_converged, 0, "{r:?}");
+        let r = stack(cube_pyramid(2).unwrap(), 0.7, 100).unwrap();
+        assert!(r.max_displacement < 1e-6, "{r:?}");
+        assert_eq!(r.not_converged, 0, "{r:?}");
+    }
+}
+
+#[cfg(test)]
+mod report {
+    /// The full list of `coulomb validate`'s rigid checks, printed (long: the wall and the
+    /// pyramid run 1 000 steps each).
+    #[test]
+    #[ignore = "long (the 10-course wall and the 5-layer pyramid): run by `coulomb validate`"]
+    fn print_rigid_checks() {
+        for (s, c) in super::checks(false).unwrap() {
+            println!(
+                "{s} | {} | expected {:e} | measured {:e} | tol {:e} | not converged {} | {}",
+                c.name,
+                c.expected,
+                c.measured,
+                c.tolerance,
+                c.not_converged,
+                if c.pass() { "pass" } else { "FAIL" }
+            );
+        }
+    }
+}
+
+#[cfg(test)]
+mod shape_tests {
+    use super::*;
+    use crate::rigid::parry::math::Pose;
+
+    fn body(shape: SharedShape, z: f64) -> RigidBodyDesc {
+        let mass = MassProperties::from_shape(&shape, 1000.0).unwrap();
+        RigidBodyDesc {
+            shape,
+            mass,
+            position: [0.0, 0.0, z],
+            orientation: [1.0, 0.0, 0.0, 0.0],
+            velocity: [0.0; 3],
+            angular_velocity: [0.0; 3],
+            material: 0,
+            fixed: false,
+        }
+    }
+
+    /// Every shape kind falls 2 cm onto the floor (a half-space, then a two-triangle mesh)
+    /// and comes to rest on it without sinking: the lowest surface point ends within 1 % of
+    /// the shape's size of z = 0, and the last steps converge.
+    #[test]
+    fn every_shape_comes_to_rest_on_a_plane_and_a_mesh() {
+        let hull = SharedShape::convex_hull(&[
+            Vector::new(-0.05, -0.05, -0.04),
+            Vector::new(0.06, -0.04, -0.05),
+            Vector::new(0.0, 0.07, -0.05),
+            Vector::new(0.01, 0.0, 0.06),
+            Vector::new(-0.03, 0.02, 0.03),
+        ])
+        .unwrap();
+        let compound = SharedShape::compound(vec![
+            (
+                Pose::translation(-0.05, 0.0, 0.0),
+                SharedShape::cuboid(0.05, 0.05, 0.05),
+            ),
+            (Pose::translation(0.05, 0.0, 0.0), SharedShape::ball(0.05)),
+        ]);
+        // (shape, how far its lowest point is below its frame's origin: z of the origin at rest)
+        let lying = crate::rigid::body::rotation_to_wxyz(
+            crate::rigid::parry::math::Rotation::from_rotation_x(std::f64::consts::FRAC_PI_2),
+        );
+        let cases: Vec<(SharedShape, [f64; 4], f64)> = vec![
+            (SharedShape::ball(0.05), [1.0, 0.0, 0.0, 0.0], 0.05),
+            (
+                SharedShape::cuboid(0.05, 0.03, 0.02),
+                [1.0, 0.0, 0.0, 0.0],
+                0.02,
+            ),
+            // capsule and cylinder axes along y, lying on their side
+            (
+                SharedShape::capsule_y(0.05, 0.03),
+                [1.0, 0.0, 0.0, 0.0],
+                0.03,
+            ),
+            (SharedShape::cylinder(0.05, 0.04), lying, 0.05),
+            (SharedShape::cone(0.05, 0.04), lying, 0.05),
+            (compound, [1.0, 0.0, 0.0, 0.0], 0.05),
+            (hull, [1.0, 0.0, 0.0, 0.0], 0.05),
+        ];
+        let mesh = SharedShape::trimesh(
+            vec![
+                Vector::new(-1.0, -1.0, 0.0),
+                Vector::new(1.0, -1.0, 0.0),
+                Vector::new(1.0, 1.0, 0.0),
+                Vector::new(-1.0, 1.0, 0.0),
+            ],
+            vec![[0, 1, 2], [0, 2, 3]],
+        )
+        .unwrap();
+        for use_mesh in [false, true] {
+            for (k, (shape, q, depth)) in cases.iter().enumerate() {
+                let mut b = body(shape.clone(), depth + 0.02);
+                b.orientation = *q;
+                // capsule lying: rotate it too (its axis is y, so it already lies flat)
+                let mut ob = floor();
+                if use_mesh {
+                    ob.shape = mesh.clone();
+                }
+                let mut w = RigidWorld::new(
+                    vec![b],
+                    vec![ob],
+                    one_material(0.5),
+                    RigidSettings::default(),
+                )
+                .unwrap();
+                let mut last = None;
+                for _ in 0..300 {
+                    last = Some(w.step().unwrap());
+                }
+                let last = last.unwrap();
+                assert_eq!(
+                    last.status,
+                    RigidStatus::Converged,
+                    "case {k}, mesh {use_mesh}"
+                );
+                assert!(last.contacts >= 1, "case {k}, mesh {use_mesh}");
+                // the lowest point of the shape: its AABB's bottom at the final pose
+                let pose = Pose::from_parts(
+                    Vector::from_array(w.positions()[0]),
+                    crate::rigid::body::rotation_from_wxyz(w.orientations()[0]),
+                );
+                let bottom = shape.compute_aabb(&pose).mins.z;
+                assert!(
+                    bottom.abs() < 0.01 * 2.0 * depth,
+                    "case {k}, mesh {use_mesh}: bottom {bottom}, {last:?}"
+                );
+            }
+        }
     }
 }

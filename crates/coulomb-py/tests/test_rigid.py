@@ -91,3 +91,14 @@ def test_a_shipped_scene_file_runs_from_python():
     assert sim.is_rigid
     sim.run(3)
     assert sim.body_positions.shape[1] == 3 and math.isfinite(sim.time)
+
+
+def test_the_readme_brick_wall_runs_and_stands():
+    text = (Path(__file__).resolve().parents[3] / "README.md").read_text(encoding="utf-8")
+    start = text.index("```python\n", text.index("### Rigid bodies of any shape")) + 10
+    block = text[start:text.index("```", start)].replace("print(", "(")
+    env: dict = {}
+    exec(compile(block, "README.md", "exec"), env)
+    sim = env["sim"]
+    assert sim.body_positions.shape == (22, 3) and sim.body_orientations.shape == (22, 4)
+    assert sim.body_positions[:, 2].min() > 0.0249

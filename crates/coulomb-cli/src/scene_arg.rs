@@ -178,6 +178,11 @@ pub fn run(args: &Args) -> anyhow::Result<Outcome> {
     };
     let mut scene = loaded.build(&opts)?;
     if scene.model.has_shapes() {
+        if args.resolve_overlaps.is_some() || args.checkpoint_every > 0 {
+            bail!(
+                "{file}: --resolve-overlaps and --checkpoint-every are for sphere-only scenes; this scene has bodies of other shapes"
+            );
+        }
         return crate::cmd::simulate_rigid::run(&file_args(args, &scene), &scene);
     }
     let world = match args.resolve_overlaps {

@@ -1101,4 +1101,42 @@ mod tests {
             toml::from_str::<BodyShape>("kind = \"cuboid\"\nhalf_extent = [1, 1, 1]\n").is_err()
         );
     }
+    #[test]
+    fn random_and_degenerate_point_sets_never_panic() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(41);
+        let mut accepted = 0;
+        for k in 0..300 {
+            let n = rng.random_range(0..9);
+            let flat = k % 3 == 0; // every third set on a plane, up to a tiny offset
+            let line = k % 7 == 0; // some on a line
+            let pts: Vec<[f64; 3]> = (0..n)
+                .map(|_| {
+                    let t: f64 = rng.random_range(-1.0..1.0);
+                    if line {
+                        [t, 2.0 * t, -t]
+                    } else {
+                        let z = if flat {
+                            rng.random_range(-1e-12..1e-12)
+                        } else {
+                            rng.random_range(-1.0..1.0)
+                        };
+                        [t, rng.random_range(-1.0..1.0), z]
+                    }
+                })
+                .collect();
+            // duplicates
+            let mut pts2 = pts.clone();
+            pts2.extend(pts.iter().take(2));
+            for p in [pts, pts2] {
+                let s = BodyShape::ConvexHull { points: p };
+                if let Ok(m) = s.mass_properties(1.0) {
+                    accepted += 1;
+                    assert!(m.mass > 0.0 && m.inertia[0][0] > 0.0);
+                    assert!(!s.tessellation().unwrap().faces.is_empty());
+                }
+            }
+        }
+        assert!(accepted > 50, "{accepted}");
+    }
 }

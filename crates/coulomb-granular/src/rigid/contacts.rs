@@ -220,7 +220,7 @@ impl Detector {
             }
             self.pairs.insert((a, b), cache);
         }
-        points.sort_by(|x, y| x.key.cmp(&y.key));
+        points.sort_by_key(|x| x.key);
         Ok(points)
     }
 }

@@ -106,7 +106,7 @@ impl MassProperties {
         }
         let p = self.principal()?.0;
         let min = p.iter().copied().fold(f64::INFINITY, f64::min);
-        if !(min > 0.0) {
+        if min.is_nan() || min <= 0.0 {
             return Err(format!(
                 "inertia tensor {i:?} is not positive definite (principal moments {p:?})"
             ));
@@ -134,7 +134,7 @@ impl MassProperties {
         }
         // with_inertia_matrix drops negative eigenvalues to 0: check the trace too
         let trace = i[0][0] + i[1][1] + i[2][2];
-        if !(trace > 0.0) || p.min_element() <= 1e-14 * trace {
+        if trace.is_nan() || trace <= 0.0 || p.min_element() <= 1e-14 * trace {
             return Err(format!(
                 "inertia tensor {i:?} is not positive definite (principal moments {p:?})"
             ));

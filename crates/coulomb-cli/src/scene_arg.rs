@@ -177,6 +177,14 @@ pub fn run(args: &Args) -> anyhow::Result<Outcome> {
         max_fill: (args.beads != 150).then_some(args.beads),
     };
     let mut scene = loaded.build(&opts)?;
+    if scene.model.has_shapes() {
+        if args.resolve_overlaps.is_some() || args.checkpoint_every > 0 {
+            bail!(
+                "{file}: --resolve-overlaps and --checkpoint-every are for sphere-only scenes; this scene has bodies of other shapes"
+            );
+        }
+        return crate::cmd::simulate_rigid::run(&file_args(args, &scene), &scene);
+    }
     let world = match args.resolve_overlaps {
         None => scene.build(&BuildChecks::default())?.0,
         Some(sweeps) => relaxed(&scene, sweeps, file)?,

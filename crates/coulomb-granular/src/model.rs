@@ -7,10 +7,17 @@
 //! serialization of a [`SceneModel`]. Vectors are arrays `[x, y, z]`.
 //!
 //! # Bodies
-//! A body is a [`BodySpec`] whose shape is one field ([`BodyShape`]; spheres only for now), or
+//! A body is a [`BodySpec`] whose shape is one field ([`BodyShape`], [`crate::shape`]), or
 //! a columnar [`SphereBatch`] (positions, radii, velocities, … as arrays: building 10⁶ spheres
 //! is one tight loop). The world's spheres are the free bodies of `bodies` in order, then the
 //! free spheres of each batch in order.
+//!
+//! A model whose bodies are all spheres ([`SceneModel::has_shapes`] false) builds the sphere
+//! simulator's [`World`] ([`SceneModel::build`], the fast path, unchanged); a model with any
+//! other shape (cuboid, capsule, cylinder, cone, convex hull or polyhedron, compound) runs in
+//! the rigid-body simulator (`crate::rigid_scene`), where spheres are balls and every body
+//! has an orientation (unit quaternion (w, x, y, z), refused if not of unit norm) and may
+//! override its mass and inertia.
 //!
 //! A *fixed* body (`fixed = true`) does not become a sphere of the world: it becomes a fixed
 //! obstacle [`Shape::Sphere`] (`inside = false`) of its radius and material, appended after
@@ -41,6 +48,7 @@ use crate::math::Vec3;
 use crate::mesh::MeshError;
 use crate::nsgs::NsgsSettings;
 use crate::projection::Projection;
+pub use crate::shape::{BodyShape, CompoundPart, ShapeError};
 use crate::simulation::{Params, StepMethod};
 use crate::world::{
     ContactLaw, MaterialTable, MeshSide, Motion, Obstacle, Shape, Sphere, World, GRAVITY,
@@ -163,37 +171,36 @@ impl MaterialPair {
     }
 }
 
-/// The shape of a body (spheres only for now; the next shapes join this enum).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
-pub enum BodyShape {
-    /// a solid ball of radius R (I = 2/5 m R²)
-    Sphere {
-        /// radius R (m)
-        radius: f64,
-    },
-}
-
 /// One body.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BodySpec {
     /// its shape
     pub shape: BodyShape,
-    /// centre (m)
+    /// origin of the shape frame (m): a sphere's centre
     pub position: Vec3,
-    /// velocity (m/s)
+    /// unit quaternion (w, x, y, z) turning the shape frame into the world frame (default
+    /// identity); refused, not normalized, when not of unit norm. Spheres keep no
+    /// orientation in the sphere simulator (their orientation is reported as the identity).
+    #[serde(default = "identity_quaternion")]
+    pub orientation: [f64; 4],
+    /// velocity (m/s) of the centre of mass
     #[serde(default)]
     pub velocity: Vec3,
-    /// angular velocity (rad/s)
+    /// angular velocity (rad/s, world frame)
     #[serde(default)]
     pub angular_velocity: Vec3,
-    /// mass (kg); exactly one of `mass` and `density`
+    /// mass (kg); exactly one of `mass` and `density` (with `mass`, a non-sphere shape's
+    /// inertia is that of a uniform body of that mass)
     #[serde(default)]
     pub mass: Option<f64>,
     /// density (kg/m³); exactly one of `mass` and `density`
     #[serde(default)]
     pub density: Option<f64>,
+    /// inertia tensor about the centre of mass in the shape frame (kg m²), replacing the
+    /// shape's (non-sphere shapes only: symmetric positive definite)
+    #[serde(default)]
+    pub inertia: Option<[[f64; 3]; 3]>,
     /// material name
     #[serde(default = "default_material")]
     pub material: String,
@@ -208,14 +215,30 @@ impl BodySpec {
         Self {
             shape: BodyShape::Sphere { radius },
             position,
+            orientation: identity_quaternion(),
             velocity: Vec3::ZERO,
             angular_velocity: Vec3::ZERO,
             mass: None,
             density: Some(density),
+            inertia: None,
             material: default_material(),
             fixed: false,
         }
     }
+
+    /// A free body of any shape at rest, in the orientation (w, x, y, z), of density ρ,
+    /// material `default`.
+    pub fn new(shape: BodyShape, position: Vec3, orientation: [f64; 4], density: f64) -> Self {
+        Self {
+            shape,
+            orientation,
+            ..Self::sphere(position, 1.0, density)
+        }
+    }
+}
+
+fn identity_quaternion() -> [f64; 4] {
+    crate::shape::IDENTITY
 }
 
 /// Spheres in columns: one entry per sphere in each array (`radii` and `masses` may also have
@@ -398,7 +421,8 @@ impl StepSettings {
         }
     }
 
-    fn check(&self) -> Result<(), SceneError> {
+    /// Refuses invalid step settings (h, θ, tolerance, sweep cap, relaxation).
+    pub fn check(&self) -> Result<(), SceneError> {
         let bad = |s: String| Err(SceneError::InvalidStep(s));
         if !(self.h.is_finite() && self.h > 0.0) {
             return bad(format!(
@@ -502,6 +526,10 @@ pub enum SceneError {
         /// "outside every container", "inside obstacle 2 ('rock')", …
         reason: String,
     },
+    /// the rigid-body simulator refused the scene (interpenetrating bodies, invalid mass
+    /// properties, …)
+    #[error("rigid bodies: {0}")]
+    Rigid(crate::rigid::RigidError),
     /// the scene would need more memory than the machine has
     #[error("the scene needs about {estimate} bytes ({spheres} spheres, {triangles} mesh triangles), more than the {available} bytes of memory available")]
     Memory {
@@ -739,6 +767,12 @@ impl SceneModel {
         Ok((table, uniform))
     }
 
+    /// Whether some body is not a sphere: then the scene runs in the rigid-body simulator
+    /// (spheres as balls), else in the sphere simulator ([`SceneModel::build`]).
+    pub fn has_shapes(&self) -> bool {
+        self.bodies.iter().any(|b| !b.shape.is_sphere())
+    }
+
     /// Number of free spheres the world will have.
     pub fn sphere_count(&self) -> usize {
         self.bodies.iter().filter(|b| !b.fixed).count()
@@ -887,7 +921,16 @@ impl SceneModel {
 
 /// The sphere of a body spec (its velocities unchecked for fixed bodies beyond being zero).
 fn body_sphere(b: &BodySpec, material: u32) -> Result<Sphere, String> {
-    let BodyShape::Sphere { radius } = b.shape;
+    let BodyShape::Sphere { radius } = b.shape else {
+        return Err(format!(
+            "a {} is not a sphere: scenes with other shapes run in the rigid-body simulator (SceneModel::has_shapes)",
+            b.shape.kind()
+        ));
+    };
+    crate::shape::check_quaternion("orientation", b.orientation).map_err(|e| e.to_string())?;
+    if b.inertia.is_some() {
+        return Err("a sphere's inertia is 2/5 m R²: `inertia` is for other shapes".into());
+    }
     if !positive(radius) {
         return Err(format!("radius {radius} is not a finite positive number"));
     }

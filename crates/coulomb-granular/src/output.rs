@@ -199,25 +199,35 @@ struct PolyData {
     cell_data: Vec<Array>,
     /// triangles (point indices); none: one vertex cell per point
     triangles: Option<Vec<[usize; 3]>>,
+    /// polygons of any size (point indices), instead of `triangles` when given
+    polygons: Option<Vec<Vec<u32>>>,
 }
 
 impl PolyData {
     /// The .vtp file.
     fn to_vtp(&self, format: VtkFormat) -> Vec<u8> {
         let n = self.points.len();
-        let (cells, conn, offsets): (usize, Vec<i64>, Vec<i64>) = match &self.triangles {
-            None => (n, (0..n as i64).collect(), (1..=n as i64).collect()),
-            Some(t) => (
-                t.len(),
-                t.iter().flatten().map(|&i| i as i64).collect(),
-                (1..=t.len() as i64).map(|k| 3 * k).collect(),
-            ),
-        };
-        let (nverts, npolys) = if self.triangles.is_some() {
-            (0, cells)
-        } else {
-            (cells, 0)
-        };
+        let (cells, conn, offsets): (usize, Vec<i64>, Vec<i64>) =
+            match (&self.triangles, &self.polygons) {
+                (_, Some(p)) => (
+                    p.len(),
+                    p.iter().flatten().map(|&i| i as i64).collect(),
+                    p.iter()
+                        .scan(0i64, |end, f| {
+                            *end += f.len() as i64;
+                            Some(*end)
+                        })
+                        .collect(),
+                ),
+                (None, None) => (n, (0..n as i64).collect(), (1..=n as i64).collect()),
+                (Some(t), None) => (
+                    t.len(),
+                    t.iter().flatten().map(|&i| i as i64).collect(),
+                    (1..=t.len() as i64).map(|k| 3 * k).collect(),
+                ),
+            };
+        let polys = self.triangles.is_some() || self.polygons.is_some();
+        let (nverts, npolys) = if polys { (0, cells) } else { (cells, 0) };
         let mut xml = String::new();
         let header = match format {
             VtkFormat::Binary => " header_type=\"UInt64\"",
@@ -281,11 +291,7 @@ impl PolyData {
             }
             let _ = writeln!(xml, "</{tag}>");
         }
-        let cell_tag = if self.triangles.is_some() {
-            "Polys"
-        } else {
-            "Verts"
-        };
+        let cell_tag = if polys { "Polys" } else { "Verts" };
         let _ = writeln!(xml, "<{cell_tag}>");
         array(&mut xml, Some("connectivity"), 1, &Values::I64(conn));
         array(&mut xml, Some("offsets"), 1, &Values::I64(offsets));
@@ -334,6 +340,7 @@ fn beads_polydata(sim: &Simulation) -> PolyData {
         ],
         cell_data: Vec::new(),
         triangles: None,
+        polygons: None,
     }
 }
 
@@ -350,6 +357,7 @@ fn contacts_polydata(sim: &Simulation) -> PolyData {
         ],
         cell_data: Vec::new(),
         triangles: None,
+        polygons: None,
     }
 }
 
@@ -686,6 +694,7 @@ fn obstacles_polydata(obstacles: &[Obstacle], t: f64, extent: &Extent) -> PolyDa
         point_data: Vec::new(),
         cell_data: vec![Array::scalars("obstacle", index.into_iter())],
         triangles: Some(triangles),
+        polygons: None,
     }
 }
 
@@ -848,6 +857,180 @@ fn collection_entries(pvd: &str) -> Vec<(f64, String)> {
         .filter(|l| l.trim_start().starts_with("<DataSet"))
         .filter_map(|l| Some((attr(l, "timestep")?.parse().ok()?, attr(l, "file")?)))
         .collect()
+}
+
+// ------------------------------------------------------------------------------------------
+// Rigid bodies of any shape (issue 41)
+// ------------------------------------------------------------------------------------------
+
+fn v3a(a: [f64; 3]) -> Vec3 {
+    Vec3::new(a[0], a[1], a[2])
+}
+
+/// The bodies of a rigid scene as polygons: each body's tessellation (shape frame, computed
+/// once: polyhedra as their faces, curved shapes with [`crate::shape::CURVE_SEGMENTS`]
+/// segments) placed by its position and orientation; cell data: the body's index, its
+/// velocity and angular velocity.
+fn rigid_bodies_polydata(
+    scene: &crate::rigid_scene::RigidScene,
+    shapes: &[crate::shape::Tessellation],
+) -> PolyData {
+    let w = &scene.world;
+    let (x, q, v, om) = (
+        w.positions(),
+        w.orientations(),
+        w.velocities(),
+        w.angular_velocities(),
+    );
+    let mut points = Vec::new();
+    let mut polygons = Vec::new();
+    let (mut body, mut vel, mut ang) = (Vec::new(), Vec::new(), Vec::new());
+    for (i, t) in shapes.iter().enumerate() {
+        let base = points.len() as u32;
+        for p in &t.vertices {
+            let r = crate::shape::rotate(q[i], *p);
+            points.push(Vec3::new(r[0] + x[i][0], r[1] + x[i][1], r[2] + x[i][2]));
+        }
+        for f in &t.faces {
+            polygons.push(f.iter().map(|k| k + base).collect());
+            body.push(i as f64);
+            vel.push(v3a(v[i]));
+            ang.push(v3a(om[i]));
+        }
+    }
+    PolyData {
+        points,
+        point_data: Vec::new(),
+        cell_data: vec![
+            Array::scalars("body", body.into_iter()),
+            Array::vectors("velocity", vel.into_iter()),
+            Array::vectors("angular_velocity", ang.into_iter()),
+        ],
+        triangles: None,
+        polygons: Some(polygons),
+    }
+}
+
+/// The last step's contacts of a rigid scene as points (one per manifold point): the normal
+/// (from B to A), the force (the impulse in world axes over h, acting on A), the normal
+/// impulse r_N and the gap at the start of the step.
+fn rigid_contacts_polydata(scene: &crate::rigid_scene::RigidScene) -> PolyData {
+    let h = scene.world.settings().h;
+    let c = scene.world.contacts();
+    PolyData {
+        points: c.iter().map(|c| v3a(c.point)).collect(),
+        point_data: vec![
+            Array::vectors("normal", c.iter().map(|c| v3a(c.normal))),
+            Array::vectors(
+                "force",
+                c.iter().map(|c| v3a(c.world_impulse()) * (1.0 / h)),
+            ),
+            Array::scalars("normal_impulse", c.iter().map(|c| c.impulse[0])),
+            Array::scalars("gap", c.iter().map(|c| c.gap)),
+        ],
+        cell_data: Vec::new(),
+        triangles: None,
+        polygons: None,
+    }
+}
+
+/// Writes the frames of a rigid scene into a directory: `frames/bodies_KKKKKK.vtp` (each body
+/// as its shape's polygons), `frames/contacts_KKKKKK.vtp` (contact points, normals, forces)
+/// and the obstacles (`frames/obstacles_KKKKKK.vtp`, written again only when one moves), with
+/// the collections `bodies.pvd`, `contacts.pvd` and `obstacles.pvd`.
+#[derive(Debug)]
+pub struct RigidVtkWriter {
+    dir: PathBuf,
+    format: VtkFormat,
+    shapes: Vec<crate::shape::Tessellation>,
+    frames: Vec<FrameFiles>,
+    obstacles: Option<String>,
+}
+
+impl RigidVtkWriter {
+    /// A writer into `dir` (created) for `scene`: the bodies' shapes tessellated once here.
+    pub fn new(dir: &Path, scene: &crate::rigid_scene::RigidScene) -> io::Result<Self> {
+        fs::create_dir_all(dir.join("frames"))?;
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            format: VtkFormat::Binary,
+            shapes: scene.tessellations(),
+            frames: Vec::new(),
+            obstacles: None,
+        })
+    }
+
+    /// The same writer with `format`.
+    pub fn with_format(mut self, format: VtkFormat) -> Self {
+        self.format = format;
+        self
+    }
+
+    /// Writes the frame of the scene's current state.
+    pub fn frame(&mut self, scene: &crate::rigid_scene::RigidScene) -> io::Result<()> {
+        let k = scene.world.steps();
+        let b = format!("frames/bodies_{k:06}.vtp");
+        let c = format!("frames/contacts_{k:06}.vtp");
+        let bodies = rigid_bodies_polydata(scene, &self.shapes);
+        coulomb::atomic::write(self.dir.join(&b), bodies.to_vtp(self.format))?;
+        coulomb::atomic::write(
+            self.dir.join(&c),
+            rigid_contacts_polydata(scene).to_vtp(self.format),
+        )?;
+        let moving = scene.obstacles.iter().any(|o| o.motion != Motion::Fixed);
+        let o = match &self.obstacles {
+            Some(f) if !moving => f.clone(),
+            _ => {
+                let (mut lo, mut hi) = (
+                    Vec3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY),
+                    Vec3::new(f64::NEG_INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY),
+                );
+                for p in &bodies.points {
+                    lo = lo.min(*p);
+                    hi = hi.max(*p);
+                }
+                let extent = if lo.x.is_finite() {
+                    Extent { lo, hi }.grown(0.25)
+                } else {
+                    Extent {
+                        lo: Vec3::new(-1.0, -1.0, -1.0),
+                        hi: Vec3::new(1.0, 1.0, 1.0),
+                    }
+                };
+                let file = format!("frames/obstacles_{k:06}.vtp");
+                let poly = obstacles_polydata(&scene.obstacles, scene.world.time(), &extent);
+                coulomb::atomic::write(self.dir.join(&file), poly.to_vtp(self.format))?;
+                self.obstacles = Some(file.clone());
+                file
+            }
+        };
+        self.frames.push(FrameFiles {
+            time: scene.world.time(),
+            beads: b,
+            contacts: c,
+            obstacles: o,
+        });
+        for name in ["bodies.pvd", "contacts.pvd", "obstacles.pvd"] {
+            let mut s = String::from(
+                "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n",
+            );
+            for f in &self.frames {
+                let file = match name {
+                    "bodies.pvd" => &f.beads,
+                    "contacts.pvd" => &f.contacts,
+                    _ => &f.obstacles,
+                };
+                let _ = writeln!(
+                    s,
+                    "<DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{file}\"/>",
+                    f.time
+                );
+            }
+            s.push_str("</Collection>\n</VTKFile>\n");
+            coulomb::atomic::write(self.dir.join(name), s)?;
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]
@@ -1063,5 +1246,79 @@ mod tests {
         let steps: Vec<u64> = json.iter().map(|v| v["step"].as_u64().unwrap()).collect();
         assert_eq!(steps, [0, 1, 2, 3, 4, 5]);
         fs::remove_dir_all(&dir).ok();
+    }
+    #[test]
+    fn rigid_frames_hold_each_body_as_its_polygons() {
+        use crate::model::{BodySpec, ObstacleSpec, SceneModel};
+        use crate::shape::{BodyShape, IDENTITY};
+        let mut m = SceneModel::default();
+        m.step.h = 1e-3;
+        m.obstacles.push(ObstacleSpec::fixed(
+            "floor",
+            Shape::Plane {
+                point: Vec3::ZERO,
+                normal: Vec3::Z,
+            },
+        ));
+        let h = 0.5f64.sqrt();
+        m.bodies.push(BodySpec::new(
+            BodyShape::Cuboid {
+                half_extents: [0.1, 0.2, 0.05],
+            },
+            Vec3::new(1.0, 2.0, 0.05),
+            [h, 0.0, 0.0, h],
+            1000.0,
+        ));
+        m.bodies.push(BodySpec::new(
+            BodyShape::Cylinder {
+                radius: 0.05,
+                half_height: 0.1,
+            },
+            Vec3::new(0.0, 0.0, 0.5),
+            IDENTITY,
+            1000.0,
+        ));
+        let mut scene = crate::rigid_scene::RigidScene::new(&m).unwrap();
+        let dir = std::env::temp_dir().join(format!("coulomb-rigid-vtk-{}", std::process::id()));
+        let mut w = RigidVtkWriter::new(&dir, &scene)
+            .unwrap()
+            .with_format(VtkFormat::Ascii);
+        scene.step().unwrap();
+        w.frame(&scene).unwrap();
+        let text = fs::read_to_string(dir.join("frames/bodies_000001.vtp")).unwrap();
+        let cyl = BodyShape::Cylinder {
+            radius: 0.05,
+            half_height: 0.1,
+        }
+        .tessellation()
+        .unwrap();
+        let polys = 6 + cyl.faces.len();
+        assert!(
+            text.contains(&format!("NumberOfPolys=\"{polys}\"")),
+            "{text}"
+        );
+        // the box turned 90° about z: its x half-extent 0.1 now along y, so its corners lie
+        // at x = 1 ± 0.2, y = 2 ± 0.1
+        let x = scene.world.positions()[0];
+        let pts = &w.shapes[0].vertices;
+        let placed: Vec<[f64; 3]> = pts
+            .iter()
+            .map(|p| {
+                let r = crate::shape::rotate([h, 0.0, 0.0, h], *p);
+                [r[0] + x[0], r[1] + x[1], r[2] + x[2]]
+            })
+            .collect();
+        assert!(placed
+            .iter()
+            .all(|p| ((p[0] - 1.0).abs() - 0.2).abs() < 1e-6));
+        assert!(placed
+            .iter()
+            .all(|p| ((p[1] - 2.0).abs() - 0.1).abs() < 1e-6));
+        for f in ["bodies.pvd", "contacts.pvd", "obstacles.pvd"] {
+            assert!(dir.join(f).exists(), "{f}");
+        }
+        let contacts = fs::read_to_string(dir.join("frames/contacts_000001.vtp")).unwrap();
+        assert!(contacts.contains("Name=\"force\""));
+        let _ = fs::remove_dir_all(&dir);
     }
 }

@@ -15,8 +15,8 @@ use crate::import::{self, ImportError, Transform, TriMesh};
 use crate::math::Vec3;
 use crate::mesh::TriangleMesh;
 use crate::model::{
-    BuildChecks, MaterialPair, Materials, ObstacleSpec, SceneError, SceneModel, SphereBatch,
-    StepChoice, StepSettings,
+    BodyShape, BodySpec, BuildChecks, MaterialPair, Materials, ObstacleSpec, SceneError,
+    SceneModel, SphereBatch, StepChoice, StepSettings,
 };
 use crate::simulation::{Params, Simulation, SimulationError};
 use crate::world::{MeshSide, Motion, Shape, World};
@@ -317,7 +317,9 @@ pub struct PairSection {
     pub rolling_friction: Option<f64>,
 }
 
-/// `[[bodies]]`: a group of spheres, from exactly one of `spheres`, `file` or `fill`.
+/// `[[bodies]]`: a group of spheres, from exactly one of `spheres`, `file` or `fill`, or a
+/// group of bodies of one `shape` (any [`BodyShape`]: the same keys as the scene model) at
+/// `positions`, in `orientations`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BodiesSection {
@@ -345,6 +347,23 @@ pub struct BodiesSection {
     /// a generator
     #[serde(default)]
     pub fill: Option<FillSection>,
+    /// the shape of every body of the group (with `positions`)
+    #[serde(default)]
+    pub shape: Option<BodyShape>,
+    /// origins of the bodies' shape frames (m), one per body (with `shape`)
+    #[serde(default)]
+    pub positions: Option<Vec<[f64; 3]>>,
+    /// unit quaternions (w, x, y, z), one per body or one for all (default identity; with
+    /// `shape`)
+    #[serde(default)]
+    pub orientations: Option<Vec<[f64; 4]>>,
+    /// mass of each body (kg), instead of the density's (with `shape`)
+    #[serde(default)]
+    pub mass: Option<f64>,
+    /// inertia tensor about the centre of mass in the shape frame (kg m²), instead of the
+    /// shape's (with `shape`, not a sphere)
+    #[serde(default)]
+    pub inertia: Option<[[f64; 3]; 3]>,
 }
 
 /// A generated group: `count` spheres with radii from `sizes` placed in `region` (or in the
@@ -915,6 +934,8 @@ impl LoadedScene {
         }
         // bodies
         let mut bodies: Vec<BodyOut> = Vec::new();
+        // every group's bodies in file order: spheres (index into `bodies`) or shaped
+        let mut order: Vec<Result<usize, BodySpec>> = Vec::new();
         let mut fills = Vec::new();
         for (i, g) in f.bodies.iter().enumerate() {
             let p = vec![key("bodies"), Seg::Index(i)];
@@ -931,10 +952,32 @@ impl LoadedScene {
             if !fin3(&v0) || !fin3(&g.angular_velocity) {
                 return Err(self.invalid(&p, "velocity and angular_velocity must be finite"));
             }
-            let sources = [g.spheres.is_some(), g.file.is_some(), g.fill.is_some()];
+            let sources = [
+                g.spheres.is_some(),
+                g.file.is_some(),
+                g.fill.is_some(),
+                g.shape.is_some(),
+            ];
             if sources.iter().filter(|&&b| b).count() != 1 {
-                return Err(self.invalid(&p, "give exactly one of `spheres`, `file` and `fill`"));
+                return Err(self.invalid(
+                    &p,
+                    "give exactly one of `spheres`, `file`, `fill` and `shape`",
+                ));
             }
+            if g.shape.is_none() {
+                for k in ["positions", "orientations", "mass", "inertia"] {
+                    let given = match k {
+                        "positions" => g.positions.is_some(),
+                        "orientations" => g.orientations.is_some(),
+                        "mass" => g.mass.is_some(),
+                        _ => g.inertia.is_some(),
+                    };
+                    if given {
+                        return Err(self.invalid(&at(k), "only for a group with `shape`"));
+                    }
+                }
+            }
+            let first = bodies.len();
             let make =
                 |pos: Vec3, r: f64, v: Option<Vec3>, mat: Option<String>, rho: f64| BodyOut {
                     position: pos,
@@ -1041,7 +1084,14 @@ impl LoadedScene {
                         rho_group,
                     ));
                 }
+            } else if let Some(shape) = &g.shape {
+                order.extend(
+                    self.shaped(g, shape, &p, rho_group, v0)?
+                        .into_iter()
+                        .map(Err),
+                );
             }
+            order.extend((first..bodies.len()).map(Ok));
         }
         // obstacles
         let mut obstacles = Vec::new();
@@ -1129,12 +1179,29 @@ impl LoadedScene {
             for o in &mut obstacles {
                 o.material = DEFAULT_MATERIAL.to_string();
             }
+            for b in order.iter_mut().filter_map(|e| e.as_mut().err()) {
+                b.material = DEFAULT_MATERIAL.to_string();
+            }
         }
+        // with shaped bodies, every body is a body spec in file order (the rigid-body
+        // simulator's indices); else the spheres are batches (the sphere simulator's path)
+        let (specs, sphere_batches) = if order.iter().any(|e| e.is_err()) {
+            let specs = order
+                .into_iter()
+                .map(|e| match e {
+                    Ok(i) => sphere_spec(&bodies[i]),
+                    Err(spec) => spec,
+                })
+                .collect();
+            (specs, Vec::new())
+        } else {
+            (Vec::new(), batches(&bodies))
+        };
         let model = SceneModel {
             gravity: v3(f.gravity),
             materials,
-            bodies: Vec::new(),
-            sphere_batches: batches(&bodies),
+            bodies: specs,
+            sphere_batches,
             obstacles,
             step: StepSettings {
                 h: f.step.h,
@@ -1156,6 +1223,85 @@ impl LoadedScene {
             inlets,
             fills,
         })
+    }
+
+    /// The bodies of a `shape` group, validated (shape, positions, orientations, mass,
+    /// inertia), each error at its key.
+    fn shaped(
+        &self,
+        g: &BodiesSection,
+        shape: &BodyShape,
+        p: &[Seg],
+        density: f64,
+        v0: [f64; 3],
+    ) -> Result<Vec<BodySpec>, SceneFileError> {
+        let at = |k: &str| [p, &[key(k)]].concat();
+        shape
+            .validate()
+            .map_err(|e| self.invalid(&at("shape"), format!("{} refused: {e}", shape.kind())))?;
+        let Some(positions) = &g.positions else {
+            return Err(self.invalid(p, "a group with `shape` needs `positions`"));
+        };
+        let n = positions.len();
+        let orientations = g.orientations.clone().unwrap_or_default();
+        if !(orientations.len() <= 1 || orientations.len() == n) {
+            return Err(self.invalid(
+                &at("orientations"),
+                format!(
+                    "{} orientations for {n} bodies (one per body or one for all)",
+                    orientations.len()
+                ),
+            ));
+        }
+        for (k, q) in orientations.iter().enumerate() {
+            crate::shape::check_quaternion("orientation", *q).map_err(|e| {
+                self.invalid(
+                    &[&at("orientations")[..], &[Seg::Index(k)]].concat(),
+                    e.to_string(),
+                )
+            })?;
+        }
+        if let Some(m) = g.mass {
+            if !(m.is_finite() && m > 0.0) {
+                return Err(self.invalid(&at("mass"), format!("{m} must be positive")));
+            }
+        }
+        if g.inertia.is_some() && shape.is_sphere() {
+            return Err(self.invalid(
+                &at("inertia"),
+                "a sphere's inertia is 2/5 m R²: `inertia` is for other shapes",
+            ));
+        }
+        if g.fixed && (v0 != [0.0; 3] || g.angular_velocity != [0.0; 3]) {
+            return Err(self.invalid(p, "fixed bodies cannot have velocities"));
+        }
+        let mut out = Vec::with_capacity(n);
+        for (k, x) in positions.iter().enumerate() {
+            if !x.iter().all(|c| c.is_finite()) {
+                return Err(self.invalid(
+                    &[&at("positions")[..], &[Seg::Index(k)]].concat(),
+                    "must be finite",
+                ));
+            }
+            let orientation = match orientations.len() {
+                0 => crate::shape::IDENTITY,
+                1 => orientations[0],
+                _ => orientations[k],
+            };
+            out.push(BodySpec {
+                shape: shape.clone(),
+                position: v3(*x),
+                orientation,
+                velocity: v3(v0),
+                angular_velocity: v3(g.angular_velocity),
+                mass: g.mass,
+                density: g.mass.is_none().then_some(density),
+                inertia: g.inertia,
+                material: g.material.clone(),
+                fixed: g.fixed,
+            });
+        }
+        Ok(out)
     }
 
     fn check_step(&self) -> Result<(), SceneFileError> {
@@ -1364,6 +1510,19 @@ impl LoadedScene {
     }
 }
 
+/// A sphere of the built scene as a body spec of the scene model (mass given).
+fn sphere_spec(b: &BodyOut) -> BodySpec {
+    BodySpec {
+        mass: Some(b.mass),
+        density: None,
+        velocity: b.velocity,
+        angular_velocity: b.angular_velocity,
+        material: b.material.clone(),
+        fixed: b.fixed,
+        ..BodySpec::sphere(b.position, b.radius, 1.0)
+    }
+}
+
 /// The spheres as batches of the scene model: one per run of consecutive spheres of the same
 /// material and mobility, masses given (so that they are the file's to the bit).
 fn batches(bodies: &[BodyOut]) -> Vec<SphereBatch> {
@@ -1423,7 +1582,13 @@ impl BuiltScene {
             .sphere_batches
             .iter()
             .map(|b| b.positions.len())
-            .sum()
+            .sum::<usize>()
+            + self
+                .model
+                .bodies
+                .iter()
+                .filter(|b| b.shape.is_sphere())
+                .count()
     }
 }
 
@@ -1597,6 +1762,110 @@ mod tests {
             Shape::Sphere { inside: false, .. }
         ));
         assert!(world.materials.is_some());
+    }
+
+    #[test]
+    fn shaped_groups_become_body_specs_in_file_order() {
+        let text = r#"
+[materials.stone]
+density = 2000
+
+[[pairs]]
+materials = ["stone", "stone"]
+mu = 0.7
+
+[[bodies]]
+spheres = [[0, 0, 1, 0.1]]
+
+[[bodies]]
+material = "stone"
+shape = { kind = "cuboid", half_extents = [0.2, 0.1, 0.05] }
+positions = [[0, 0, 0.05], [0.5, 0, 0.05]]
+orientations = [[0.7071067811865476, 0, 0, 0.7071067811865476]]
+velocity = [1, 0, 0]
+
+[[bodies]]
+shape = { kind = "compound", parts = [
+  { shape = { kind = "capsule", radius = 0.05, half_height = 0.1 }, position = [0, 0, 0] },
+  { shape = { kind = "sphere", radius = 0.08 }, position = [0, 0.2, 0] },
+] }
+positions = [[2, 0, 1]]
+mass = 3.0
+"#;
+        let built = parse(text)
+            .unwrap()
+            .build(&BuildOptions::default())
+            .unwrap();
+        let m = &built.model;
+        assert!(m.has_shapes() && m.sphere_batches.is_empty());
+        let kinds: Vec<&str> = m.bodies.iter().map(|b| b.shape.kind()).collect();
+        assert_eq!(kinds, ["sphere", "cuboid", "cuboid", "compound"]);
+        assert_eq!(m.bodies[2].position, Vec3::new(0.5, 0.0, 0.05));
+        assert_eq!(m.bodies[2].orientation[3], std::f64::consts::FRAC_1_SQRT_2);
+        assert_eq!(m.bodies[1].density, Some(2000.0));
+        assert_eq!(m.bodies[1].velocity, Vec3::new(1.0, 0.0, 0.0));
+        assert_eq!((m.bodies[3].mass, m.bodies[3].density), (Some(3.0), None));
+        assert_eq!(m.bodies[1].material, "stone");
+        assert_eq!(built.sphere_count(), 1);
+        // the sphere simulator refuses the cuboids, saying where they go
+        let e = m.world().unwrap_err().to_string();
+        assert!(e.contains("body 1") && e.contains("cuboid"), "{e}");
+        // JSON: the same keys
+        let json = r#"{"bodies": [{"shape": {"kind": "cone", "radius": 0.1, "half_height": 0.2},
+            "positions": [[0, 0, 1]]}]}"#;
+        let j = LoadedScene::parse(Path::new("t.json"), json.into(), false)
+            .unwrap()
+            .build(&BuildOptions::default())
+            .unwrap();
+        assert_eq!(j.model.bodies[0].shape.kind(), "cone");
+    }
+
+    #[test]
+    fn bad_shaped_groups_are_refused_where_they_are() {
+        let build = |t: &str| {
+            parse(t)
+                .unwrap()
+                .build(&BuildOptions::default())
+                .unwrap_err()
+                .to_string()
+        };
+        let cube = "shape = { kind = \"cuboid\", half_extents = [1, 1, 1] }\n";
+        let ball = "shape = { kind = \"sphere\", radius = 1 }\n";
+        // a non-unit quaternion: refused at its line, not normalized
+        let e = build(&format!(
+            "[[bodies]]\n{cube}positions = [[0, 0, 1]]\norientations = [\n  [1, 0, 0, 0.1],\n]\n"
+        ));
+        assert!(
+            e.starts_with("t.toml:5:") && e.contains("orientations[0]") && e.contains("unit"),
+            "{e}"
+        );
+        // a coplanar hull: refused at the shape
+        let e = build("[[bodies]]\npositions = [[0, 0, 1]]\nshape = { kind = \"convex_hull\", points = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]] }\n");
+        assert!(e.starts_with("t.toml:3:") && e.contains("coplanar"), "{e}");
+        // an unknown shape key: a syntax error with its line
+        let e = parse("[[bodies]]\npositions = [[0, 0, 1]]\nshape = { kind = \"cuboid\", half_extent = [1, 1, 1] }\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("t.toml:3:") && e.contains("half_extent"),
+            "{e}"
+        );
+        // shape keys without a shape, two sources, missing positions, mismatched counts
+        let e = build("[[bodies]]\nspheres = [[0, 0, 1, 0.1]]\norientations = [[1, 0, 0, 0]]\n");
+        assert!(
+            e.contains("orientations") && e.contains("only for a group with `shape`"),
+            "{e}"
+        );
+        let e = build(&format!("[[bodies]]\nspheres = [[0, 0, 1, 0.1]]\n{ball}"));
+        assert!(e.contains("exactly one of"), "{e}");
+        let e = build(&format!("[[bodies]]\n{ball}"));
+        assert!(e.contains("needs `positions`"), "{e}");
+        let e = build(&format!("[[bodies]]\n{ball}positions = [[0, 0, 1], [0, 0, 3], [0, 0, 5]]\norientations = [[1, 0, 0, 0], [1, 0, 0, 0]]\n"));
+        assert!(e.contains("2 orientations for 3 bodies"), "{e}");
+        let e = build(&format!(
+            "[[bodies]]\n{ball}positions = [[0, 0, 1]]\ninertia = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]\n"
+        ));
+        assert!(e.contains("inertia"), "{e}");
     }
 
     #[test]

@@ -68,7 +68,7 @@ fn ordered<'py>(kw: &Bound<'py, PyDict>) -> PyResult<Vec<(String, Bound<'py, PyA
 /// theta, tol, method, max_sweeps, relaxation) and the default contact law (mu, restitution,
 /// rolling_friction: the law of every pair of materials not set by a pair). The others
 /// (warm_start, gap_closure) are returned, to be applied to the built parameters.
-fn apply_to_model<'py>(
+pub(crate) fn apply_to_model<'py>(
     model: &mut SceneModel,
     kw: &Bound<'py, PyDict>,
 ) -> PyResult<Vec<(String, Bound<'py, PyAny>)>> {

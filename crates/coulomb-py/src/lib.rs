@@ -9,6 +9,7 @@
 mod convert;
 mod errors;
 mod granular;
+mod rigid;
 mod scene;
 
 use coulomb::existence::{self, CheckSettings};
@@ -389,6 +390,8 @@ fn _coulomb(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fclib_write, m)?)?;
     m.add_class::<granular::PySimulation>()?;
     m.add_class::<granular::PyFeed>()?;
+    m.add_class::<rigid::PyRigidSimulation>()?;
+    m.add_function(wrap_pyfunction!(rigid::_scene_file_has_shapes, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -11,5 +11,6 @@ pub mod paper;
 pub mod simulate;
 #[cfg(feature = "mpi")]
 pub mod simulate_mpi;
+pub mod simulate_rigid;
 pub mod solve;
 pub mod validate;

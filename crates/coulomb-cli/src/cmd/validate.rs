@@ -244,6 +244,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         };
         section("Column collapse", c, &mut checks);
     }
+    checks.extend(coulomb_granular::rigid::validation::checks(args.quick)?);
     let failed = checks.iter().filter(|(_, c)| !c.pass()).count();
     let md = markdown(&checks, args.quick);
     if let Some(path) = &args.markdown {

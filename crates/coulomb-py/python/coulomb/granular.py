@@ -23,7 +23,9 @@ from . import _coulomb
 from ._errors import SceneError
 from ._problem import GlobalProblem, Problem
 
-__all__ = ["SCENES", "Motion", "Region", "Scene", "Simulation", "SimulationResult", "simulate"]
+__all__ = ["SCENES", "Motion", "Region", "Scene", "Simulation", "SimulationResult", "simulate",
+           "Sphere", "Cuboid", "Capsule", "Cylinder", "Cone", "ConvexHull", "ConvexPolyhedron",
+           "Compound"]
 
 #: the scenes of ``coulomb_granular::Scene``
 SCENES = ("box", "funnel", "vibrating-plate", "rotating-drum")
@@ -187,6 +189,125 @@ def _sizes(radius: Any) -> Dict[str, Any]:
     return {"kind": "mono", "radius": _real("radius", radius, positive=True)}
 
 
+# --------------------------------------------------------------------------------------------
+# Body shapes (coulomb_granular::shape::BodyShape): for Scene.add_body
+# --------------------------------------------------------------------------------------------
+
+class _Shape:
+    """A body shape in its shape frame; ``spec`` is its serde form (a dict with ``kind``).
+    Round shapes (capsule, cylinder, cone) have their axis along the shape frame's **y** axis
+    (parry3d's convention). Values are validated in Rust when the scene is built (degenerate
+    hulls, zero volume, aspect ratio above 1000: :class:`coulomb.SceneError`)."""
+
+    kind = ""
+
+    def __init__(self, **spec: Any) -> None:
+        self.spec: Dict[str, Any] = {"kind": self.kind, **spec}
+
+    def __repr__(self) -> str:
+        args = ", ".join(f"{k}={v!r}" for k, v in self.spec.items() if k != "kind")
+        return f"{type(self).__name__}({args})"
+
+
+class Sphere(_Shape):
+    """A ball of radius R."""
+    kind = "sphere"
+
+    def __init__(self, radius: float) -> None:
+        super().__init__(radius=_real("radius", radius))
+
+
+class Cuboid(_Shape):
+    """A box of half-extents (a, b, c) along the shape frame's x, y, z, centred."""
+    kind = "cuboid"
+
+    def __init__(self, half_extents: Sequence[float]) -> None:
+        super().__init__(half_extents=_vec3("half_extents", half_extents))
+
+
+class Capsule(_Shape):
+    """The points within ``radius`` of the segment from (0, −half_height, 0) to
+    (0, half_height, 0): axis along y."""
+    kind = "capsule"
+
+    def __init__(self, radius: float, half_height: float) -> None:
+        super().__init__(radius=_real("radius", radius),
+                         half_height=_real("half_height", half_height))
+
+
+class Cylinder(_Shape):
+    """A circular cylinder about the y axis, from y = −half_height to half_height."""
+    kind = "cylinder"
+
+    def __init__(self, radius: float, half_height: float) -> None:
+        super().__init__(radius=_real("radius", radius),
+                         half_height=_real("half_height", half_height))
+
+
+class Cone(_Shape):
+    """A circular cone about the y axis: base of ``radius`` at y = −half_height, apex at
+    y = half_height."""
+    kind = "cone"
+
+    def __init__(self, radius: float, half_height: float) -> None:
+        super().__init__(radius=_real("radius", radius),
+                         half_height=_real("half_height", half_height))
+
+
+class ConvexHull(_Shape):
+    """The convex hull of ``points`` ((n, 3), n ≥ 4, not coplanar)."""
+    kind = "convex_hull"
+
+    def __init__(self, points: Any) -> None:
+        super().__init__(points=_rows3("points", points).tolist())
+
+
+class ConvexPolyhedron(_Shape):
+    """A convex polyhedron: ``vertices`` (n, 3) and ``faces``, polygons of vertex indices
+    counter-clockwise seen from outside."""
+    kind = "convex_polyhedron"
+
+    def __init__(self, vertices: Any, faces: Sequence[Sequence[int]]) -> None:
+        super().__init__(vertices=_rows3("vertices", vertices).tolist(),
+                         faces=[[int(i) for i in f] for f in faces])
+
+
+def _quaternion(name: str, q: Any) -> List[float]:
+    try:
+        a = np.asarray(q, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be 4 numbers (w, x, y, z), got {q!r}") from None
+    if a.shape != (4,):
+        raise _arg_error(name, f"{name} must be 4 numbers (w, x, y, z), got shape {a.shape}")
+    return [float(x) for x in a]  # unit norm checked in Rust: refused, never normalized
+
+
+class Compound(_Shape):
+    """A union of convex parts: ``[(shape, position, orientation), ...]`` (orientation a
+    unit quaternion (w, x, y, z); parts are not compounds)."""
+    kind = "compound"
+
+    def __init__(self, parts: Sequence[Tuple[Any, ...]]) -> None:
+        out = []
+        for k, part in enumerate(parts):
+            if not isinstance(part, (tuple, list)) or len(part) not in (2, 3):
+                raise TypeError(f"parts[{k}] must be (shape, position[, orientation])")
+            shape, position = part[0], part[1]
+            orientation = part[2] if len(part) == 3 else (1.0, 0.0, 0.0, 0.0)
+            out.append({"shape": _shape_spec(shape), "position": _vec3("position", position),
+                        "orientation": _quaternion("orientation", orientation)})
+        super().__init__(parts=out)
+
+
+def _shape_spec(shape: Any) -> Dict[str, Any]:
+    if isinstance(shape, _Shape):
+        return dict(shape.spec)
+    if isinstance(shape, Mapping) and "kind" in shape:
+        return dict(shape)
+    raise TypeError("shape must be a coulomb.granular shape (Cuboid, Capsule, Cylinder, Cone, "
+                    f"ConvexHull, ConvexPolyhedron, Compound, Sphere), got {shape!r}")
+
+
 class Scene:
     """A granular scene of your own: spheres, obstacles (planes, boxes, cylinders, spheres,
     triangle meshes) with prescribed motions, gravity and materials with per-pair contact
@@ -212,6 +333,8 @@ class Scene:
         # (description, (positions, radii, velocities, angular velocities, masses))
         self._batches: List[Tuple[Dict[str, Any], Tuple[np.ndarray, ...]]] = []
         self._inlets: List[Dict[str, Any]] = []
+        # bodies of any shape (coulomb_granular::BodySpec dicts)
+        self._bodies: List[Dict[str, Any]] = []
 
     # -- materials and gravity --------------------------------------------------------------
 
@@ -305,6 +428,53 @@ class Scene:
             m = empty
         self._batches.append((desc, (pos.ravel(), r, vel, ang, m)))
         return self
+
+    def add_body(self, shape: Any, position: Sequence[float],
+                 orientation: Sequence[float] = (1, 0, 0, 0), velocity: Any = None,
+                 angular_velocity: Any = None, density: Optional[float] = 2500.0,
+                 material: str = "default", mass: Optional[float] = None,
+                 inertia: Any = None, fixed: bool = False) -> "Scene":
+        """Adds one body of any shape (:class:`Cuboid`, :class:`Capsule`, :class:`Cylinder`,
+        :class:`Cone`, :class:`ConvexHull`, :class:`ConvexPolyhedron`, :class:`Compound`,
+        :class:`Sphere`): the origin of its shape frame at ``position``, turned by the unit
+        quaternion ``orientation`` (w, x, y, z; refused when not of unit norm, never
+        normalized), with ``velocity`` (of the centre of mass) and ``angular_velocity``
+        (world frame). Mass and inertia from ``density`` (kg/m³), or ``mass`` (kg, a uniform
+        body of that mass); ``inertia`` (3 × 3, about the centre of mass, shape-frame axes)
+        replaces the shape's. A scene with any body that is not a sphere runs in the
+        rigid-body simulator (spheres become balls there)."""
+        body: Dict[str, Any] = {
+            "shape": _shape_spec(shape), "position": _vec3("position", position),
+            "orientation": _quaternion("orientation", orientation),
+            "velocity": _vec3("velocity", (0, 0, 0) if velocity is None else velocity),
+            "angular_velocity": _vec3("angular_velocity",
+                                      (0, 0, 0) if angular_velocity is None
+                                      else angular_velocity),
+            "material": self._use(material), "fixed": bool(fixed)}
+        if mass is not None:
+            body["mass"] = _real("mass", mass, positive=True)
+        else:
+            if density is None:
+                raise _arg_error("density", "give a density or a mass")
+            body["density"] = _real("density", density, positive=True)
+        if inertia is not None:
+            i = _array("inertia", inertia)
+            if i.shape != (3, 3):
+                raise _arg_error("inertia", f"inertia must be 3 x 3, got shape {i.shape}")
+            body["inertia"] = i.tolist()
+        self._bodies.append(body)
+        return self
+
+    @property
+    def body_count(self) -> int:
+        """Number of bodies added by :meth:`add_body`."""
+        return len(self._bodies)
+
+    @property
+    def has_shapes(self) -> bool:
+        """Whether some body is not a sphere (the scene then runs in the rigid-body
+        simulator)."""
+        return any(b["shape"]["kind"] != "sphere" for b in self._bodies)
 
     @property
     def sphere_count(self) -> int:
@@ -501,6 +671,7 @@ class Scene:
             "gravity": self._gravity,
             "materials": {"names": list(self._names), "default": dict(self._default_law),
                           "pairs": [dict(p) for p in self._pairs.values()]},
+            "bodies": self._bodies,
             "sphere_batches": [d for d, _ in self._batches],
             "obstacles": self._obstacles,
         }
@@ -538,6 +709,12 @@ class Simulation:
                  solver: Optional[Mapping[str, Any]] = None, **params: Any) -> None:
         if isinstance(scene, Scene):
             desc, batches, meshes = scene._parts()
+            if scene.has_shapes:
+                if scene._inlets or solver:
+                    raise _arg_error("scene", "inlets and solver= are for sphere-only scenes")
+                self._sim = _coulomb._RigidSimulation.from_scene(desc, batches, meshes,
+                                                                 dict(params))
+                return
             if scene._inlets:  # checked before the build
                 self._feed = _coulomb._Feed(desc, json.dumps(scene._inlets, allow_nan=False))
             self._sim = _coulomb._Simulation.from_scene(desc, batches, meshes, dict(params),
@@ -562,6 +739,10 @@ class Simulation:
         the file, line and key (:class:`coulomb.SceneError`; ``OSError`` when it cannot be
         read). The file's inlets pour as in ``coulomb simulate``."""
         sim = Simulation.__new__(Simulation)
+        if _coulomb._scene_file_has_shapes(os.fspath(path)):
+            sim._sim = _coulomb._RigidSimulation.from_file(
+                os.fspath(path), None if seed is None else int(seed), dict(params))
+            return sim
         sim._sim, sim._feed = _coulomb._Simulation.from_file(
             os.fspath(path), None if seed is None else int(seed), dict(params),
             dict(solver or {}))
@@ -585,8 +766,43 @@ class Simulation:
         return [self.step() for _ in range(int(steps))]
 
     @property
+    def is_rigid(self) -> bool:
+        """Whether the scene runs in the rigid-body simulator (some body is not a sphere)."""
+        return isinstance(self._sim, _coulomb._RigidSimulation)
+
+    @property
+    def body_positions(self) -> np.ndarray:
+        """Origins of the bodies' shape frames at t_k (sphere centres), shape (n, 3)."""
+        if self.is_rigid:
+            return self._sim.body_positions
+        return self._sim.positions
+
+    @property
+    def body_orientations(self) -> np.ndarray:
+        """Orientations (w, x, y, z) at t_k, shape (n, 4). The sphere simulator does not
+        track the spheres' rotation (only their angular velocities): in a sphere-only scene
+        every orientation is the identity (1, 0, 0, 0)."""
+        if self.is_rigid:
+            return self._sim.body_orientations
+        n = self._sim.positions.shape[0]
+        q = np.zeros((n, 4))
+        q[:, 0] = 1.0
+        return q
+
+    @property
+    def contacts(self) -> List[Dict[str, Any]]:
+        """The last step's contacts of a rigid-body scene (body ``a``, partner ``b``,
+        ``point``, ``normal`` from b to a, ``t1``, ``gap``, ``impulse`` (r_N, r_T1, r_T2))."""
+        if not self.is_rigid:
+            raise AttributeError("contacts are listed for rigid-body scenes")
+        return self._sim.contacts
+
+    @property
     def positions(self) -> np.ndarray:
-        """Sphere centres at t_k, shape (n, 3) (a copy)."""
+        """Sphere centres at t_k, shape (n, 3) (a copy); in a rigid-body scene, the origins
+        of the bodies' shape frames."""
+        if self.is_rigid:
+            return self._sim.body_positions
         return self._sim.positions
 
     @property

@@ -1,0 +1,220 @@
+//! `coulomb simulate SCENE.toml` for a scene file with bodies of other shapes than spheres
+//! (issue 41): the rigid-body simulator ([`coulomb_granular::rigid_scene::RigidScene`]), with
+//! the run options of the sphere path: `--steps` (or the file's), `--until-rest` (every body
+//! slower than `rest_speed`, linear and angular speed times the body's size, for 10 steps, at
+//! most `max_steps`), `--output` (VTK frames of the bodies as their shapes, contacts and
+//! obstacles every `--frames-every` steps; `stats.json`, `stats.csv`, `summary.json`),
+//! `--dump-fclib` (each step's problem (2.10) in FCLIB global form) and `--json`. Exit 1 when
+//! a step ended above its tolerance or `--until-rest` hit its cap.
+
+use crate::exit::Outcome;
+use crate::sim_args::Args;
+use anyhow::Context;
+use coulomb_granular::output::RigidVtkWriter;
+use coulomb_granular::rigid::RigidStatus;
+use coulomb_granular::rigid_scene::RigidScene;
+use coulomb_granular::scene_file::BuiltScene;
+use serde::Serialize;
+
+/// The summary of a rigid run (`summary.json`, `--json`).
+#[derive(Debug, Serialize)]
+struct RigidSummary {
+    scene: String,
+    bodies: usize,
+    steps: usize,
+    time: f64,
+    mean_contacts: f64,
+    mean_sweeps: f64,
+    max_error: f64,
+    not_converged_steps: usize,
+    max_penetration: f64,
+    at_rest: bool,
+    kinetic_energy: f64,
+}
+
+/// Runs the rigid scene of `scene` with the run settings `a` (the file's, completed by the
+/// command line: [`crate::scene_arg`]).
+pub fn run(a: &Args, scene: &BuiltScene) -> anyhow::Result<Outcome> {
+    let file = scene.path.display().to_string();
+    let mut rigid = RigidScene::new(&scene.model).with_context(|| file.clone())?;
+    if !scene.inlets.is_empty() {
+        anyhow::bail!(
+            "{file}: inlets pour spheres into sphere-only scenes; this scene has other shapes"
+        );
+    }
+    crate::interrupt::install().context("installing the SIGINT/SIGTERM handlers")?;
+    if let Some(dir) = &a.dump_fclib {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    let mut vtk = match &a.output {
+        Some(dir) => Some(
+            RigidVtkWriter::new(dir, &rigid)
+                .with_context(|| format!("cannot write into {}", dir.display()))?,
+        ),
+        None => None,
+    };
+    if let Some(dir) = &a.output {
+        let names = ["stats.csv", "stats.json", "summary.json"];
+        crate::outputs::check_in("--output", dir, &names)?;
+    }
+    if let Some(w) = vtk.as_mut() {
+        w.frame(&rigid).context("writing VTK frame")?;
+    }
+    let max_steps = if a.until_rest {
+        a.max_steps
+    } else {
+        a.steps.unwrap_or(200)
+    };
+    let sizes: Vec<f64> = rigid
+        .shapes
+        .iter()
+        .map(|s| {
+            let t = s.tessellation().unwrap_or_default();
+            t.vertices
+                .iter()
+                .map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt())
+                .fold(0.0, f64::max)
+        })
+        .collect();
+    let progress = !a.json && std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let mut still = 0;
+    let mut at_rest = false;
+    let mut interrupted = None;
+    for k in 0..max_steps {
+        let r = rigid
+            .step()
+            .with_context(|| format!("{file}: time step failed"))?;
+        if let (Some(dir), Some(p)) = (&a.dump_fclib, rigid.world.last_problem()) {
+            crate::cmd::simulate::dump_fclib(dir, k, p)?;
+        }
+        if let Some(w) = vtk.as_mut() {
+            if a.frames_every > 0 && (k + 1) % a.frames_every == 0 {
+                w.frame(&rigid).context("writing VTK frame")?;
+            }
+        }
+        if progress {
+            eprint!(
+                "\r{}: step {}/{max_steps}, {} contacts, {} sweeps, error {:.1e}   ",
+                scene.name,
+                k + 1,
+                r.contacts,
+                r.sweeps,
+                r.error
+            );
+        }
+        if a.until_rest {
+            let v = rigid.world.velocities();
+            let w = rigid.world.angular_velocities();
+            let fastest = v
+                .iter()
+                .zip(&w)
+                .zip(&sizes)
+                .map(|((v, w), s)| {
+                    let n = |x: &[f64; 3]| (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
+                    n(v) + n(w) * s
+                })
+                .fold(0.0, f64::max);
+            still = if fastest < a.rest_speed { still + 1 } else { 0 };
+            if still >= 10 {
+                at_rest = true;
+                break;
+            }
+        }
+        interrupted = crate::interrupt::received();
+        if interrupted.is_some() {
+            break;
+        }
+    }
+    if progress {
+        eprintln!();
+    }
+    let reports = &rigid.reports;
+    let n = reports.len().max(1) as f64;
+    let summary = RigidSummary {
+        scene: scene.name.clone(),
+        bodies: rigid.world.len(),
+        steps: reports.len(),
+        time: rigid.world.time(),
+        mean_contacts: reports.iter().map(|r| r.contacts as f64).sum::<f64>() / n,
+        mean_sweeps: reports.iter().map(|r| r.sweeps as f64).sum::<f64>() / n,
+        max_error: reports.iter().map(|r| r.error).fold(0.0, f64::max),
+        not_converged_steps: reports
+            .iter()
+            .filter(|r| r.status == RigidStatus::NotConverged)
+            .count(),
+        max_penetration: reports
+            .iter()
+            .map(|r| r.max_penetration)
+            .fold(0.0, f64::max),
+        at_rest,
+        kinetic_energy: rigid.world.kinetic_energy(),
+    };
+    if let Some(w) = vtk.as_mut() {
+        let written = a.frames_every > 0 && reports.len() % a.frames_every == 0;
+        if !written && !reports.is_empty() {
+            w.frame(&rigid).context("writing VTK frame")?;
+        }
+    }
+    if let Some(dir) = &a.output {
+        let mut csv = String::from(
+            "step,time,status,error,contacts,warm_started,sweeps,method,max_penetration,kinetic_energy\n",
+        );
+        for r in reports {
+            csv.push_str(&format!(
+                "{},{:.6},{},{:.6e},{},{},{},{},{:.6e},{:.9e}\n",
+                r.step,
+                r.time,
+                serde_json::to_value(r.status)?.as_str().unwrap_or(""),
+                r.error,
+                r.contacts,
+                r.warm_started,
+                r.sweeps,
+                r.method,
+                r.max_penetration,
+                r.kinetic_energy
+            ));
+        }
+        crate::outputs::write(&dir.join("stats.csv"), csv.as_bytes())?;
+        crate::outputs::write(
+            &dir.join("stats.json"),
+            crate::outputs::json(reports, true)?.as_bytes(),
+        )?;
+        crate::outputs::write(
+            &dir.join("summary.json"),
+            crate::outputs::json(&summary, true)?.as_bytes(),
+        )?;
+    }
+    if a.json {
+        println!("{}", crate::outputs::json(&summary, false)?);
+    } else {
+        println!(
+            "{}: {} bodies, {} steps ({:.4} s){}, {:.1} contacts/step, {:.1} sweeps/step, max error {:.2e}, {} / {} steps converged, max penetration {:.2e} m",
+            summary.scene,
+            summary.bodies,
+            summary.steps,
+            summary.time,
+            if at_rest { " (at rest)" } else { "" },
+            summary.mean_contacts,
+            summary.mean_sweeps,
+            summary.max_error,
+            summary.steps - summary.not_converged_steps,
+            summary.steps,
+            summary.max_penetration
+        );
+    }
+    if let Some(signal) = interrupted {
+        return Ok(Outcome::Interrupted(signal));
+    }
+    if summary.not_converged_steps > 0 {
+        eprintln!(
+            "{} step(s) ended above the tolerance {}",
+            summary.not_converged_steps, scene.model.step.tol
+        );
+        return Ok(Outcome::No);
+    }
+    if a.until_rest && !at_rest {
+        eprintln!("not at rest: --until-rest stopped at its step cap ({max_steps} steps)");
+        return Ok(Outcome::No);
+    }
+    Ok(Outcome::Success)
+}

@@ -1,0 +1,412 @@
+//! Rigid bodies of any convex shape (issue #41): Newton–Euler Moreau–Jean time stepping
+//! (2.5)–(2.7) of 6-dof bodies whose contacts come from parry3d's contact manifolds, each
+//! manifold point one Coulomb contact of the incremental problem (2.10).
+//!
+//! - [`body`]: the dynamics — unit-quaternion orientation, body-frame angular velocity,
+//!   the gyroscopic term by an implicit-midpoint free-rotation predictor, exponential-map
+//!   orientation update;
+//! - [`contacts`]: parry's BVH broad phase, contact manifolds, the contact frame
+//!   (normal from B to A, as the sphere code), activation and warm-start keys;
+//! - [`step`]: [`RigidWorld`] and its step: body-level nonsmooth Gauss–Seidel with the full
+//!   inertia (W_ii = J M⁻¹ Jᵀ), handed over to the library's solver on the step's global
+//!   problem when it stalls;
+//! - [`validation`]: the validation cases (incline, slide/topple, resting box, wall, pyramid).
+//!
+//! Quaternions are (w, x, y, z) in every public API; a non-unit (||q| − 1| > 1e-9) or
+//! non-finite one is refused, never normalized silently. docs/rigid.md has the details.
+
+pub use parry3d_f64 as parry;
+
+pub mod body;
+pub mod contacts;
+pub mod step;
+pub mod validation;
+
+pub use step::RigidWorld;
+
+use crate::world::Motion;
+use parry::shape::SharedShape;
+use serde::Serialize;
+
+/// Largest accepted deviation ||q| − 1| of a quaternion.
+pub const QUATERNION_TOLERANCE: f64 = 1e-9;
+
+/// Mass, centre of mass (shape frame) and inertia tensor about the centre of mass (shape
+/// frame axes) of a body.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct MassProperties {
+    /// mass m > 0
+    pub mass: f64,
+    /// centre of mass in the shape frame
+    pub local_com: [f64; 3],
+    /// inertia tensor about the centre of mass, shape-frame axes (symmetric positive definite)
+    pub inertia: [[f64; 3]; 3],
+}
+
+impl MassProperties {
+    /// The mass properties of `shape` with uniform `density` (kg/m³), from parry's
+    /// mass properties. Refuses a non-positive or non-finite density and a shape whose mass
+    /// or principal inertia is not positive (zero volume: degenerate hulls, half-spaces,
+    /// meshes).
+    pub fn from_shape(shape: &SharedShape, density: f64) -> Result<Self, RigidError> {
+        if !(density.is_finite() && density > 0.0) {
+            return Err(RigidError::Mass {
+                what: "shape".into(),
+                detail: format!("density {density} is not a finite positive number"),
+            });
+        }
+        let mp = shape.mass_properties(density);
+        let mass = mp.mass();
+        let principal = mp.principal_inertia();
+        let ok = mass.is_finite()
+            && mass > 0.0
+            && principal.is_finite()
+            && principal.min_element() > 0.0
+            && mp.local_com.is_finite();
+        if !ok {
+            return Err(RigidError::Mass {
+                what: format!("shape {:?}", shape.shape_type()),
+                detail: format!(
+                    "mass {mass} and principal inertia {principal:?}: zero volume or degenerate shape"
+                ),
+            });
+        }
+        let m = mp.reconstruct_inertia_matrix();
+        let cols = m.to_cols_array_2d();
+        let inertia = std::array::from_fn(|r| std::array::from_fn(|c| cols[c][r]));
+        Ok(Self {
+            mass,
+            local_com: mp.local_com.to_array(),
+            inertia,
+        })
+    }
+
+    /// Why these properties are not those of a body (mass or inertia not positive, inertia
+    /// not symmetric, triangle inequality of the principal moments violated, non-finite).
+    pub fn check(&self) -> Result<(), String> {
+        let i = &self.inertia;
+        if !(self.mass.is_finite() && self.mass > 0.0) {
+            return Err(format!(
+                "mass {} is not a finite positive number",
+                self.mass
+            ));
+        }
+        if !self.local_com.iter().all(|x| x.is_finite())
+            || !i.iter().flatten().all(|x| x.is_finite())
+        {
+            return Err("non-finite centre of mass or inertia".into());
+        }
+        let scale = (0..3).map(|k| i[k][k].abs()).fold(0.0, f64::max);
+        for r in 0..3 {
+            for c in 0..3 {
+                if (i[r][c] - i[c][r]).abs() > 1e-9 * scale {
+                    return Err(format!("inertia tensor {i:?} is not symmetric"));
+                }
+            }
+        }
+        let p = self.principal()?.0;
+        let min = p.iter().copied().fold(f64::INFINITY, f64::min);
+        if min.is_nan() || min <= 0.0 {
+            return Err(format!(
+                "inertia tensor {i:?} is not positive definite (principal moments {p:?})"
+            ));
+        }
+        Ok(())
+    }
+
+    /// The principal moments (I₁, I₂, I₃) and the rotation principal frame → shape frame.
+    pub(crate) fn principal(&self) -> Result<([f64; 3], parry::math::Rotation), String> {
+        use parry::math::{Matrix, Vector};
+        let i = &self.inertia;
+        let m = Matrix::from_cols(
+            Vector::new(i[0][0], i[1][0], i[2][0]),
+            Vector::new(i[0][1], i[1][1], i[2][1]),
+            Vector::new(i[0][2], i[1][2], i[2][2]),
+        );
+        let mp = parry::mass_properties::MassProperties::with_inertia_matrix(
+            Vector::from_array(self.local_com),
+            self.mass,
+            m,
+        );
+        let p = mp.principal_inertia();
+        if !p.is_finite() {
+            return Err(format!("inertia tensor {i:?}: no principal axes"));
+        }
+        // with_inertia_matrix drops negative eigenvalues to 0: check the trace too
+        let trace = i[0][0] + i[1][1] + i[2][2];
+        if trace.is_nan() || trace <= 0.0 || p.min_element() <= 1e-14 * trace {
+            return Err(format!(
+                "inertia tensor {i:?} is not positive definite (principal moments {p:?})"
+            ));
+        }
+        Ok((p.to_array(), mp.principal_inertia_local_frame.normalize()))
+    }
+}
+
+/// A body to simulate.
+#[derive(Debug, Clone)]
+pub struct RigidBodyDesc {
+    /// the shape, defined in the body's shape frame
+    pub shape: SharedShape,
+    /// mass properties (shape frame)
+    pub mass: MassProperties,
+    /// origin of the shape frame, world
+    pub position: [f64; 3],
+    /// unit quaternion (w, x, y, z): shape frame → world
+    pub orientation: [f64; 4],
+    /// velocity of the centre of mass, world frame
+    pub velocity: [f64; 3],
+    /// angular velocity, world frame (converted to the body frame inside)
+    pub angular_velocity: [f64; 3],
+    /// index into the world's [`crate::world::MaterialTable`]
+    pub material: u32,
+    /// a fixed body does not move (infinite mass)
+    pub fixed: bool,
+}
+
+/// An obstacle: a shape with a prescribed motion.
+#[derive(Debug, Clone)]
+pub struct RigidObstacle {
+    /// name (for messages)
+    pub name: String,
+    /// `HalfSpace` for planes, any convex shape, `TriMesh`, `HeightField`, compounds
+    pub shape: SharedShape,
+    /// origin of the shape frame at t = 0, world
+    pub position: [f64; 3],
+    /// unit quaternion (w, x, y, z): shape frame → world, at t = 0
+    pub orientation: [f64; 4],
+    /// prescribed motion, as for sphere obstacles (a rotation turns the shape about the
+    /// motion's axis through its centre)
+    pub motion: Motion,
+    /// index into the world's material table
+    pub material: u32,
+}
+
+/// Settings of the rigid-body time stepping.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RigidSettings {
+    /// time step h (s); default 1e-3
+    pub h: f64,
+    /// θ ∈ [0, 1] of the position update (2.7); default ½ (Siconos' mechanics default)
+    pub theta: f64,
+    /// gravity (m/s²); default (0, 0, −9.81)
+    pub gravity: [f64; 3],
+    /// tolerance on the error of docs/error.md of each step's problem; default 1e-8 (the
+    /// rigid-body tolerance of the benchmarks)
+    pub tolerance: f64,
+    /// cap on Gauss–Seidel sweeps per step; default 2 000
+    pub max_sweeps: usize,
+    /// Gauss–Seidel is judged stalled when its error has not halved over this many sweeps
+    /// (then the library's solver takes over); default 100
+    pub stall_window: usize,
+    /// hand a step that Gauss–Seidel leaves above the tolerance to `coulomb::solver` on
+    /// the step's global problem; default true
+    pub library_finish: bool,
+    /// settings of the library's solver (its `tol` is replaced by `tolerance`)
+    pub solver: coulomb::solver::Settings,
+    /// γ ∈ [0, 1] of the activation rule g + γ h min(u_N, 0) ≤ δ; default 1
+    pub activation_gamma: f64,
+    /// δ ≥ 0 of the activation rule (m); default 1e-8
+    pub activation_delta: f64,
+    /// largest penetration accepted between bodies (and bodies and obstacles) at the start
+    /// (m); default 1e-8
+    pub max_initial_penetration: f64,
+    /// warm start each contact from the impulse of the same manifold point (parry's
+    /// feature ids) at the previous step; default true
+    pub warm_start: bool,
+    /// keep each step's global problem ([`RigidWorld::last_problem`], `--dump-fclib`);
+    /// default true
+    pub keep_problem: bool,
+}
+
+impl Default for RigidSettings {
+    fn default() -> Self {
+        Self {
+            h: 1e-3,
+            theta: 0.5,
+            gravity: [0.0, 0.0, -crate::world::GRAVITY],
+            tolerance: 1e-8,
+            max_sweeps: 2_000,
+            stall_window: 100,
+            library_finish: true,
+            solver: coulomb::solver::Settings::default(),
+            activation_gamma: 1.0,
+            activation_delta: 1e-8,
+            max_initial_penetration: 1e-8,
+            warm_start: true,
+            keep_problem: true,
+        }
+    }
+}
+
+/// The other party of a rigid contact.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+#[serde(tag = "kind", content = "index", rename_all = "snake_case")]
+pub enum RigidPartner {
+    /// another body (index larger than the contact's `a`)
+    Body(usize),
+    /// an obstacle
+    Obstacle(usize),
+}
+
+/// One active contact of the last step: one point of a contact manifold.
+///
+/// Frame convention (the sphere code's): `normal` points from B towards A, so that
+/// u_N = n · (v_A(p) − v_B(p)) > 0 when they separate; the impulse acts on A (−r on B).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RigidContact {
+    /// body A
+    pub a: usize,
+    /// B
+    pub b: RigidPartner,
+    /// contact point (midway between the two surfaces), world
+    pub point: [f64; 3],
+    /// unit normal n, B → A
+    pub normal: [f64; 3],
+    /// first tangent t₁ (t₂ = n × t₁)
+    pub t1: [f64; 3],
+    /// gap at the start of the step (negative: penetration)
+    pub gap: f64,
+    /// impulse (r_N, r_T1, r_T2) of the step, local frame
+    pub impulse: [f64; 3],
+}
+
+impl RigidContact {
+    /// The impulse in world axes acting on A: r_N n + r_T1 t₁ + r_T2 t₂.
+    pub fn world_impulse(&self) -> [f64; 3] {
+        let n = self.normal;
+        let t1 = self.t1;
+        let t2 = [
+            n[1] * t1[2] - n[2] * t1[1],
+            n[2] * t1[0] - n[0] * t1[2],
+            n[0] * t1[1] - n[1] * t1[0],
+        ];
+        let r = self.impulse;
+        std::array::from_fn(|k| r[0] * n[k] + r[1] * t1[k] + r[2] * t2[k])
+    }
+}
+
+/// How a step's contact problem ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RigidStatus {
+    /// no active contact (free flight)
+    NoContact,
+    /// error on the stored problem ≤ tolerance
+    Converged,
+    /// error above the tolerance after Gauss–Seidel (and the library's solver, if enabled)
+    NotConverged,
+}
+
+/// Report of one step.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RigidStepReport {
+    /// step index k (from t_k to t_{k+1})
+    pub step: u64,
+    /// t_{k+1}
+    pub time: f64,
+    /// how the contact problem ended
+    pub status: RigidStatus,
+    /// error of docs/error.md of the returned (v, r) on the step's stored problem (0 without
+    /// contacts)
+    pub error: f64,
+    /// active contacts (manifold points)
+    pub contacts: usize,
+    /// contacts warm started from the previous step
+    pub warm_started: usize,
+    /// Gauss–Seidel sweeps
+    pub sweeps: usize,
+    /// "none", "nsgs" or "nsgs+library" (the library's solver finished the step)
+    pub method: &'static str,
+    /// wall-clock time of collision detection (s)
+    pub detection_seconds: f64,
+    /// wall-clock time of the contact solve (s)
+    pub solve_seconds: f64,
+    /// largest penetration max(0, −g) over the active contacts at t_k
+    pub max_penetration: f64,
+    /// kinetic energy at t_{k+1}
+    pub kinetic_energy: f64,
+    /// bodies whose free-rotation predictor did not converge to round-off (0 normally)
+    pub rotation_unconverged: usize,
+}
+
+/// Why a rigid world cannot be built or stepped.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RigidError {
+    /// a quaternion is not finite or not of unit length (never normalized silently)
+    #[error("{what}: orientation {q:?} (w, x, y, z) is not a finite unit quaternion (||q| - 1| must be <= 1e-9)")]
+    Quaternion {
+        /// "body 3", "obstacle 'floor'"
+        what: String,
+        /// the quaternion given
+        q: [f64; 4],
+    },
+    /// invalid mass properties or density
+    #[error("{what}: invalid mass properties: {detail}")]
+    Mass {
+        /// which body or shape
+        what: String,
+        /// what is wrong
+        detail: String,
+    },
+    /// a non-finite position or velocity
+    #[error("{what}: {field} {value:?} is not finite")]
+    NonFinite {
+        /// which body or obstacle
+        what: String,
+        /// which field
+        field: &'static str,
+        /// its value
+        value: [f64; 3],
+    },
+    /// a material index out of the table
+    #[error("{what}: material {material} is not in the material table ({count} materials)")]
+    Material {
+        /// which body or obstacle
+        what: String,
+        /// the index given
+        material: u32,
+        /// materials in the table
+        count: usize,
+    },
+    /// an invalid setting, material law or motion
+    #[error("invalid setting: {0}")]
+    Settings(String),
+    /// bodies interpenetrate at the start
+    #[error("{count} interpenetrating contact point(s) at the start, deepest {depth} m between body {a} and {b:?} (limit {limit} m)")]
+    Interpenetration {
+        /// contact points deeper than the limit
+        count: usize,
+        /// deepest penetration (m)
+        depth: f64,
+        /// body of the deepest one
+        a: usize,
+        /// its partner
+        b: RigidPartner,
+        /// the limit (`RigidSettings::max_initial_penetration`)
+        limit: f64,
+    },
+    /// parry has no contact-manifold algorithm for this pair of shapes
+    #[error("no contact manifold between body {a} ({shape_a}) and {b:?} ({shape_b})")]
+    Unsupported {
+        /// body A
+        a: usize,
+        /// its shape type
+        shape_a: String,
+        /// partner
+        b: RigidPartner,
+        /// its shape type
+        shape_b: String,
+    },
+    /// the step's problem could not be built or solved
+    #[error("step {step}: {detail}")]
+    Solve {
+        /// step index
+        step: u64,
+        /// what failed
+        detail: String,
+    },
+    /// positions or velocities became non-finite
+    #[error("non-finite state at step {0}")]
+    NonFiniteState(u64),
+}

@@ -1,0 +1,1166 @@
+//! [`RigidWorld`]: the Moreau–Jean time stepping (2.5)–(2.7) of rigid bodies, each step's
+//! incremental problem (2.10) in FCLIB convention
+//!
+//! ```text
+//!     M v = H r + f,     u = Hᵀ v + w,     (uⁱ, rⁱ) satisfy Coulomb's law (2.9),
+//! ```
+//!
+//! with, per moving body, the 6 dofs (v, Ω) (centre-of-mass velocity in world axes, angular
+//! velocity in the principal body frame, [`super::body`]), M = diag(m, m, m, I₁, I₂, I₃),
+//! f = (m (v_k + h g), I Ω_free) (Ω_free: the gyroscopic free-rotation predictor), and for
+//! each manifold point i with frame (t₀ = n, t₁, t₂) and lever arms a = p − x the column
+//! block of H holds (t_k, R_Aᵀ (a_A × t_k)) on A's dofs and −(t_k, R_Bᵀ (a_B × t_k)) on B's,
+//! so (Hᵀ v)_k = t_k · (v_A(p) − v_B(p)). w carries an obstacle's prescribed velocity
+//! (−t_k · V_B(p, t_{k+1})), Moreau's impact law on the normal row (ê u_{N,k},
+//! [`crate::assembly::impact_offset`]) and, for a pair at a positive gap g_k that gravity's
+//! look-ahead made active, the gap closure (1 − e) g_k / h (as the spheres'
+//! [`crate::assembly::gap_closure`]: no hovering).
+//!
+//! # Solver
+//! Body-level nonsmooth Gauss–Seidel ([`nsgs`]): one contact at a time with the others
+//! frozen, its 3 × 3 Delassus block W_ii = J_A M_A⁻¹ J_Aᵀ + J_B M_B⁻¹ J_Bᵀ (the full world
+//! inverse inertia R I⁻¹ Rᵀ inside), the one-contact law solved exactly by the library's
+//! `solve_contact_law`. The error of docs/error.md is evaluated exactly on the stored
+//! (M, H, f, w, μ) every few sweeps. On face contacts (4 coplanar points per face: W
+//! rank-deficient) Gauss–Seidel may stall: when its error has not halved over
+//! `stall_window` sweeps, or after `max_sweeps`, the step's global problem goes to
+//! `coulomb::solver::solve_with_guess` from Gauss–Seidel's iterate, the same hand-over as the
+//! sphere step's. The result with the smaller error on the stored problem is kept, and the
+//! step's [`RigidStatus`] says whether it is ≤ the tolerance.
+
+use super::body::{
+    free_rotation, integrate_orientation, rotation_from_wxyz, rotation_to_wxyz, BodyState,
+};
+use super::contacts::{ContactKey, ContactPoint, Detector, PlacedObstacle};
+use super::parry::math::{Pose, Rotation, Vector};
+use super::parry::shape::SharedShape;
+use super::{
+    RigidBodyDesc, RigidContact, RigidError, RigidObstacle, RigidPartner, RigidSettings,
+    RigidStatus, RigidStepReport, QUATERNION_TOLERANCE,
+};
+use crate::world::{MaterialTable, Motion};
+use coulomb::problem::GlobalProblem;
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+/// A world of rigid bodies and obstacles advanced by [`RigidWorld::step`].
+#[derive(Debug)]
+pub struct RigidWorld {
+    bodies: Vec<BodyState>,
+    shapes: Vec<SharedShape>,
+    obstacles: Vec<RigidObstacle>,
+    obstacle_base: Vec<Pose>,
+    materials: MaterialTable,
+    settings: RigidSettings,
+    gravity: Vector,
+    time: f64,
+    steps: u64,
+    contacts: Vec<RigidContact>,
+    last_problem: Option<GlobalProblem>,
+    previous: BTreeMap<ContactKey, Vector>,
+    detector: Detector,
+    /// block index of each body among the moving ones (None: fixed)
+    dof: Vec<Option<usize>>,
+}
+
+fn v3(a: [f64; 3]) -> Vector {
+    Vector::from_array(a)
+}
+
+fn math3(v: Vector) -> crate::math::Vec3 {
+    crate::math::Vec3::from_slice(&v.to_array())
+}
+
+/// Checks a (w, x, y, z) quaternion: finite and ||q| − 1| ≤ [`QUATERNION_TOLERANCE`].
+fn check_quaternion(what: &str, q: [f64; 4]) -> Result<Rotation, RigidError> {
+    let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if !(q.iter().all(|x| x.is_finite()) && (norm - 1.0).abs() <= QUATERNION_TOLERANCE) {
+        return Err(RigidError::Quaternion {
+            what: what.to_string(),
+            q,
+        });
+    }
+    Ok(rotation_from_wxyz(q))
+}
+
+fn check_finite(what: &str, field: &'static str, v: [f64; 3]) -> Result<(), RigidError> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(RigidError::NonFinite {
+            what: what.to_string(),
+            field,
+            value: v,
+        })
+    }
+}
+
+fn check_settings(s: &RigidSettings) -> Result<(), RigidError> {
+    let bad = |m: String| Err(RigidError::Settings(m));
+    if !(s.h.is_finite() && s.h > 0.0) {
+        return bad(format!("time step h = {} must be finite and positive", s.h));
+    }
+    if !(0.0..=1.0).contains(&s.theta) {
+        return bad(format!("theta = {} is not in [0, 1]", s.theta));
+    }
+    if !s.gravity.iter().all(|x| x.is_finite()) {
+        return bad(format!("gravity {:?} is not finite", s.gravity));
+    }
+    if !(s.tolerance.is_finite() && s.tolerance > 0.0) {
+        return bad(format!(
+            "tolerance = {} must be finite and positive",
+            s.tolerance
+        ));
+    }
+    if s.max_sweeps == 0 || s.stall_window == 0 {
+        return bad("max_sweeps and stall_window must be positive".into());
+    }
+    if !(0.0..=1.0).contains(&s.activation_gamma) {
+        return bad(format!(
+            "activation_gamma = {} is not in [0, 1]",
+            s.activation_gamma
+        ));
+    }
+    let nonneg = |x: f64| x.is_finite() && x >= 0.0;
+    if !nonneg(s.activation_delta) || !nonneg(s.max_initial_penetration) {
+        return bad(format!(
+            "activation_delta = {} and max_initial_penetration = {} must be finite and >= 0",
+            s.activation_delta, s.max_initial_penetration
+        ));
+    }
+    Ok(())
+}
+
+impl RigidWorld {
+    /// A world of `bodies` and `obstacles` at t = 0. Refuses, with a typed [`RigidError`]:
+    /// invalid settings or material table, non-unit or non-finite quaternions, invalid mass
+    /// properties, non-finite states, material indices out of the table, invalid motions, pairs
+    /// of shapes parry has no manifold for, and bodies interpenetrating (with each other or an
+    /// obstacle) deeper than `settings.max_initial_penetration` (count and depth).
+    pub fn new(
+        bodies: Vec<RigidBodyDesc>,
+        obstacles: Vec<RigidObstacle>,
+        materials: MaterialTable,
+        settings: RigidSettings,
+    ) -> Result<Self, RigidError> {
+        check_settings(&settings)?;
+        if materials.is_empty() {
+            return Err(RigidError::Settings("the material table is empty".into()));
+        }
+        materials
+            .check()
+            .map_err(|e| RigidError::Settings(format!("material table: {e}")))?;
+        let count = materials.len();
+        let mut states = Vec::with_capacity(bodies.len());
+        let mut shapes = Vec::with_capacity(bodies.len());
+        for (i, b) in bodies.into_iter().enumerate() {
+            let what = format!("body {i}");
+            let q_shape = check_quaternion(&what, b.orientation)?;
+            b.mass.check().map_err(|detail| RigidError::Mass {
+                what: what.clone(),
+                detail,
+            })?;
+            check_finite(&what, "position", b.position)?;
+            check_finite(&what, "velocity", b.velocity)?;
+            check_finite(&what, "angular velocity", b.angular_velocity)?;
+            if b.material as usize >= count {
+                return Err(RigidError::Material {
+                    what,
+                    material: b.material,
+                    count,
+                });
+            }
+            let (inertia, principal) = b.mass.principal().map_err(|detail| RigidError::Mass {
+                what: what.clone(),
+                detail,
+            })?;
+            let local_com = v3(b.mass.local_com);
+            let q = (q_shape * principal).normalize();
+            let x = v3(b.position) + q_shape * local_com;
+            let local_aabb = b.shape.compute_local_aabb();
+            let reach = [local_aabb.mins, local_aabb.maxs]
+                .iter()
+                .flat_map(|lo| {
+                    let hi = [local_aabb.mins, local_aabb.maxs];
+                    hi.into_iter().map(move |h| (*lo, h))
+                })
+                .map(|(a, c)| {
+                    let corner = Vector::new(a.x, c.y, if a.z > c.z { a.z } else { c.z });
+                    (corner - local_com).length()
+                })
+                .fold(0.0, f64::max)
+                .max(
+                    (local_aabb.maxs - local_com)
+                        .abs()
+                        .max((local_aabb.mins - local_com).abs())
+                        .length(),
+                );
+            let (v, omega) = if b.fixed {
+                (Vector::ZERO, Vector::ZERO)
+            } else {
+                (v3(b.velocity), q.conjugate() * v3(b.angular_velocity))
+            };
+            states.push(BodyState {
+                mass: b.mass.mass,
+                inertia,
+                local_com,
+                principal,
+                x,
+                q,
+                v,
+                omega,
+                material: b.material,
+                fixed: b.fixed,
+                reach,
+            });
+            shapes.push(b.shape);
+        }
+        let mut obstacle_base = Vec::with_capacity(obstacles.len());
+        for (o, ob) in obstacles.iter().enumerate() {
+            let what = format!("obstacle {o} ('{}')", ob.name);
+            let q = check_quaternion(&what, ob.orientation)?;
+            check_finite(&what, "position", ob.position)?;
+            ob.motion
+                .check()
+                .map_err(|e| RigidError::Settings(format!("{what}: {e}")))?;
+            if ob.material as usize >= count {
+                return Err(RigidError::Material {
+                    what,
+                    material: ob.material,
+                    count,
+                });
+            }
+            obstacle_base.push(Pose::from_parts(v3(ob.position), q));
+        }
+        let mut dof = Vec::with_capacity(states.len());
+        let mut moving = 0;
+        for b in &states {
+            dof.push((!b.fixed).then(|| {
+                moving += 1;
+                moving - 1
+            }));
+        }
+        let mut world = Self {
+            bodies: states,
+            shapes,
+            obstacles,
+            obstacle_base,
+            materials,
+            gravity: v3(settings.gravity),
+            settings,
+            time: 0.0,
+            steps: 0,
+            contacts: Vec::new(),
+            last_problem: None,
+            previous: BTreeMap::new(),
+            detector: Detector::default(),
+            dof,
+        };
+        world.check_overlaps()?;
+        Ok(world)
+    }
+
+    /// Refuses manifold points deeper than `max_initial_penetration` at t = 0.
+    fn check_overlaps(&mut self) -> Result<(), RigidError> {
+        let margins = vec![0.0; self.bodies.len()];
+        let placed = placed_obstacles(&self.obstacles, &self.obstacle_base, self.time);
+        let points = self
+            .detector
+            .detect(&self.bodies, &self.shapes, &placed, &margins)?;
+        let limit = self.settings.max_initial_penetration;
+        let deep: Vec<&ContactPoint> = points.iter().filter(|c| c.gap < -limit).collect();
+        if let Some(worst) = deep.iter().min_by(|x, y| x.gap.total_cmp(&y.gap)) {
+            return Err(RigidError::Interpenetration {
+                count: deep.len(),
+                depth: -worst.gap,
+                a: worst.a,
+                b: worst.b,
+                limit,
+            });
+        }
+        Ok(())
+    }
+
+    /// Time t_k.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+    /// Steps done k.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+    /// Number of bodies.
+    pub fn len(&self) -> usize {
+        self.bodies.len()
+    }
+    /// Whether there is no body.
+    pub fn is_empty(&self) -> bool {
+        self.bodies.is_empty()
+    }
+    /// The settings.
+    pub fn settings(&self) -> &RigidSettings {
+        &self.settings
+    }
+    /// Origins of the bodies' shape frames, world.
+    pub fn positions(&self) -> Vec<[f64; 3]> {
+        self.bodies
+            .iter()
+            .map(|b| b.shape_origin().to_array())
+            .collect()
+    }
+    /// Centres of mass, world.
+    pub fn centres_of_mass(&self) -> Vec<[f64; 3]> {
+        self.bodies.iter().map(|b| b.x.to_array()).collect()
+    }
+    /// Orientations of the shape frames (w, x, y, z).
+    pub fn orientations(&self) -> Vec<[f64; 4]> {
+        self.bodies
+            .iter()
+            .map(|b| rotation_to_wxyz(b.shape_rotation()))
+            .collect()
+    }
+    /// Velocities of the centres of mass, world.
+    pub fn velocities(&self) -> Vec<[f64; 3]> {
+        self.bodies.iter().map(|b| b.v.to_array()).collect()
+    }
+    /// Angular velocities, world frame.
+    pub fn angular_velocities(&self) -> Vec<[f64; 3]> {
+        self.bodies
+            .iter()
+            .map(|b| b.world_omega().to_array())
+            .collect()
+    }
+    /// Angular momenta about the centres of mass, world frame.
+    pub fn angular_momenta(&self) -> Vec<[f64; 3]> {
+        self.bodies
+            .iter()
+            .map(|b| b.angular_momentum().to_array())
+            .collect()
+    }
+    /// Total kinetic energy.
+    pub fn kinetic_energy(&self) -> f64 {
+        self.bodies.iter().map(BodyState::kinetic_energy).sum()
+    }
+    /// The last step's active contacts with their impulses.
+    pub fn contacts(&self) -> Vec<RigidContact> {
+        self.contacts.clone()
+    }
+    /// The last step's problem (2.10) in global form (None without contacts or with
+    /// `keep_problem` off), for `--dump-fclib`.
+    pub fn last_problem(&self) -> Option<&GlobalProblem> {
+        self.last_problem.as_ref()
+    }
+
+    /// How far body i may travel in one step (bound), plus δ: the broad phase's margin.
+    fn margins(&self, omega_free: &[Vector]) -> Vec<f64> {
+        let h = self.settings.h;
+        self.bodies
+            .iter()
+            .zip(omega_free)
+            .map(|(b, wf)| {
+                if b.fixed {
+                    return self.settings.activation_delta;
+                }
+                let v = b.v.length().max((b.v + h * self.gravity).length());
+                let w = b.omega.length().max(wf.length());
+                2.0 * h * (v + w * b.reach) + self.settings.activation_delta
+            })
+            .collect()
+    }
+
+    /// Largest speed of an obstacle's material points (bound), times h.
+    fn obstacle_margin(&self, o: usize) -> f64 {
+        let ob = &self.obstacles[o];
+        let speed = match &ob.motion {
+            Motion::Rotate { center, omega, .. } => {
+                let aabb = ob.shape.compute_aabb(&self.obstacle_base[o]);
+                let c = v3(center.to_array());
+                let d = [aabb.mins, aabb.maxs]
+                    .iter()
+                    .map(|p| (*p - c).length())
+                    .fold(0.0, f64::max);
+                if d.is_finite() {
+                    omega.abs() * d
+                } else {
+                    0.0
+                }
+            }
+            m => m.max_normal_speed(),
+        };
+        2.0 * self.settings.h * speed
+    }
+
+    /// One Moreau–Jean step from t_k to t_{k+1} = t_k + h:
+    /// 1. the free rotation Ω_free of every body (gyroscopic predictor, [`super::body`]);
+    /// 2. the manifold points of the pairs the broad phase finds, kept when active:
+    ///    g_k + γ h min(u_{N,k}, u_{N,free}, 0) ≤ δ;
+    /// 3. the problem (2.10) (module docs), solved by Gauss–Seidel and, if it stalls, the
+    ///    library's solver, warm started from the previous impulses of the same points;
+    /// 4. v_{k+1}, Ω_{k+1} from the solution, x_{k+1} = x_k + h((1 − θ) v_k + θ v_{k+1}) and
+    ///    q_{k+1} = q_k ⊗ exp(h ((1 − θ) Ω_k + θ Ω_{k+1}) / 2) (2.7).
+    pub fn step(&mut self) -> Result<RigidStepReport, RigidError> {
+        let k = self.steps;
+        let h = self.settings.h;
+        let theta = self.settings.theta;
+        let t_end = self.time + h;
+        // 1. free rotation
+        let mut rotation_unconverged = 0;
+        let omega_free: Vec<Vector> = self
+            .bodies
+            .iter()
+            .map(|b| {
+                if b.fixed {
+                    return Vector::ZERO;
+                }
+                let fr = free_rotation(b.inertia, b.omega, h);
+                if !fr.converged {
+                    rotation_unconverged += 1;
+                }
+                fr.omega
+            })
+            .collect();
+        // 2. contacts
+        let td = Instant::now();
+        let mut margins = self.margins(&omega_free);
+        let extra: f64 = (0..self.obstacles.len())
+            .map(|o| self.obstacle_margin(o))
+            .fold(0.0, f64::max);
+        if extra > 0.0 {
+            margins.iter_mut().for_each(|m| *m += extra);
+        }
+        let points = {
+            let placed = placed_obstacles(&self.obstacles, &self.obstacle_base, self.time);
+            self.detector
+                .detect(&self.bodies, &self.shapes, &placed, &margins)?
+        };
+        let detection_seconds = td.elapsed().as_secs_f64();
+        let ts = Instant::now();
+        let gamma = self.settings.activation_gamma;
+        let delta = self.settings.activation_delta;
+        let mut active = Vec::with_capacity(points.len());
+        let mut rows = Vec::with_capacity(points.len());
+        for c in points {
+            let (row, u_nk, u_free) = self.row(&c, &omega_free, t_end);
+            let u = u_nk.min(u_free).min(0.0);
+            if c.gap + gamma * h * u <= delta {
+                rows.push(row);
+                active.push(c);
+            }
+        }
+        let moving = self.dof.iter().filter(|d| d.is_some()).count();
+        let mut mass = vec![[0.0; 6]; moving];
+        let mut f = vec![[0.0; 6]; moving];
+        for (i, b) in self.bodies.iter().enumerate() {
+            if let Some(d) = self.dof[i] {
+                mass[d] = [
+                    b.mass,
+                    b.mass,
+                    b.mass,
+                    b.inertia[0],
+                    b.inertia[1],
+                    b.inertia[2],
+                ];
+                let p = b.mass * (b.v + h * self.gravity);
+                let l = Vector::from_array(b.inertia) * omega_free[i];
+                f[d] = [p.x, p.y, p.z, l.x, l.y, l.z];
+            }
+        }
+        let problem = nsgs::Problem::new(rows, mass, f)
+            .map_err(|detail| RigidError::Solve { step: k, detail })?;
+        let mut warm_started = 0;
+        let r0: Vec<f64> = active
+            .iter()
+            .flat_map(|c| {
+                let p = if self.settings.warm_start {
+                    self.previous.get(&c.key).copied()
+                } else {
+                    None
+                };
+                if p.is_some() {
+                    warm_started += 1;
+                }
+                let p = p.unwrap_or(Vector::ZERO);
+                [p.dot(c.normal), p.dot(c.t1), p.dot(c.t2)]
+            })
+            .collect();
+        let (r, v, status, error, sweeps, method) = if active.is_empty() {
+            self.last_problem = None;
+            let v = problem.velocities(&[]);
+            (Vec::new(), v, RigidStatus::NoContact, 0.0, 0, "none")
+        } else {
+            let s = &self.settings;
+            let sol = problem.solve(&r0, s.tolerance, s.max_sweeps, s.stall_window);
+            let mut best = (sol.r, sol.error, "nsgs");
+            let global = if s.library_finish && sol.error > s.tolerance || s.keep_problem {
+                Some(problem.to_global().map_err(|e| RigidError::Solve {
+                    step: k,
+                    detail: format!("global problem: {e}"),
+                })?)
+            } else {
+                None
+            };
+            if sol.error > s.tolerance && s.library_finish {
+                if let Some(g) = &global {
+                    if let Some((r_lib, err_lib)) = library_finish(g, &problem, &best.0, s) {
+                        if err_lib < best.1 || !best.1.is_finite() {
+                            best = (r_lib, err_lib, "nsgs+library");
+                        }
+                    }
+                }
+            }
+            self.last_problem = if s.keep_problem { global } else { None };
+            let (r, error, method) = best;
+            let v = problem.velocities(&r);
+            let status = if error <= s.tolerance {
+                RigidStatus::Converged
+            } else {
+                RigidStatus::NotConverged
+            };
+            (r, v, status, error, sol.sweeps, method)
+        };
+        if v.iter().flatten().any(|x| !x.is_finite()) || r.iter().any(|x| !x.is_finite()) {
+            return Err(RigidError::NonFiniteState(k));
+        }
+        let solve_seconds = ts.elapsed().as_secs_f64();
+        // 4. position update (2.7)
+        for (i, b) in self.bodies.iter_mut().enumerate() {
+            let Some(d) = self.dof[i] else {
+                continue;
+            };
+            let vn = Vector::new(v[d][0], v[d][1], v[d][2]);
+            let wn = Vector::new(v[d][3], v[d][4], v[d][5]);
+            b.x += h * ((1.0 - theta) * b.v + theta * vn);
+            b.q = integrate_orientation(b.q, h * ((1.0 - theta) * b.omega + theta * wn));
+            b.v = vn;
+            b.omega = wn;
+            if !(b.x.is_finite() && b.q.is_finite()) {
+                return Err(RigidError::NonFiniteState(k));
+            }
+        }
+        let max_penetration = active.iter().map(|c| (-c.gap).max(0.0)).fold(0.0, f64::max);
+        self.previous.clear();
+        self.contacts = active
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let ri = [r[3 * i], r[3 * i + 1], r[3 * i + 2]];
+                self.previous
+                    .insert(c.key, ri[0] * c.normal + ri[1] * c.t1 + ri[2] * c.t2);
+                RigidContact {
+                    a: c.a,
+                    b: c.b,
+                    point: c.point.to_array(),
+                    normal: c.normal.to_array(),
+                    t1: c.t1.to_array(),
+                    gap: c.gap,
+                    impulse: ri,
+                }
+            })
+            .collect();
+        self.time = t_end;
+        self.steps += 1;
+        Ok(RigidStepReport {
+            step: k,
+            time: self.time,
+            status,
+            error,
+            contacts: active.len(),
+            warm_started,
+            sweeps,
+            method,
+            detection_seconds,
+            solve_seconds,
+            max_penetration,
+            kinetic_energy: self.kinetic_energy(),
+            rotation_unconverged,
+        })
+    }
+
+    /// The row of manifold point `c` (Jacobians, w, μ), its normal velocity u_{N,k} at t_k
+    /// and u_{N,free} of the free motion (gravity and free rotation).
+    fn row(&self, c: &ContactPoint, omega_free: &[Vector], t_end: f64) -> (nsgs::Row, f64, f64) {
+        let h = self.settings.h;
+        let frame = [c.normal, c.t1, c.t2];
+        let a = &self.bodies[c.a];
+        let side = |b: &BodyState, sign: f64| -> [[f64; 6]; 3] {
+            let arm = c.point - b.x;
+            std::array::from_fn(|k| {
+                let t = frame[k];
+                let rot = b.q.conjugate() * arm.cross(t);
+                [
+                    sign * t.x,
+                    sign * t.y,
+                    sign * t.z,
+                    sign * rot.x,
+                    sign * rot.y,
+                    sign * rot.z,
+                ]
+            })
+        };
+        let free_point = |i: usize, b: &BodyState| -> Vector {
+            if b.fixed {
+                Vector::ZERO
+            } else {
+                (b.v + h * self.gravity) + (b.q * omega_free[i]).cross(c.point - b.x)
+            }
+        };
+        let ja = (!a.fixed).then(|| side(a, 1.0));
+        let va = a.point_velocity(c.point);
+        let (jb, vb, vb_free, v_end, mat_b) = match c.b {
+            RigidPartner::Body(j) => {
+                let b = &self.bodies[j];
+                (
+                    (!b.fixed).then(|| side(b, -1.0)),
+                    b.point_velocity(c.point),
+                    free_point(j, b),
+                    Vector::ZERO,
+                    b.material,
+                )
+            }
+            RigidPartner::Obstacle(o) => {
+                let ob = &self.obstacles[o];
+                let p = math3(c.point);
+                let vt = ob.motion.velocity_at(p, self.time);
+                let ve = ob.motion.velocity_at(p, t_end);
+                (
+                    None,
+                    v3(vt.to_array()),
+                    v3(ve.to_array()),
+                    v3(ve.to_array()),
+                    ob.material,
+                )
+            }
+        };
+        let u_nk = c.normal.dot(va - vb);
+        let u_free = c.normal.dot(free_point(c.a, a) - vb_free);
+        let law = self
+            .materials
+            .law(a.material, mat_b)
+            .unwrap_or_default_law();
+        let e = law.restitution;
+        let mut w = [-c.normal.dot(v_end), -c.t1.dot(v_end), -c.t2.dot(v_end)];
+        w[0] += crate::assembly::impact_offset(e, u_nk);
+        // gap closure of a pair that gravity's look-ahead made active (no hovering)
+        let g = self.gravity.length();
+        if c.gap > 0.0 && u_nk >= -2.0 * h * g {
+            w[0] += (1.0 - e).clamp(0.0, 1.0) * c.gap / h;
+        }
+        let row = nsgs::Row {
+            a: ja.map(|j| (self.dof[c.a].unwrap_or(0), j)),
+            b: match c.b {
+                RigidPartner::Body(j) => jb.map(|jj| (self.dof[j].unwrap_or(0), jj)),
+                RigidPartner::Obstacle(_) => None,
+            },
+            w,
+            mu: law.mu,
+        };
+        (row, u_nk, u_free)
+    }
+}
+
+/// A material law, with μ = 0, e = 0 when the pair is out of the table (cannot happen
+/// after [`RigidWorld::new`]'s checks).
+trait OrDefaultLaw {
+    fn unwrap_or_default_law(self) -> crate::world::ContactLaw;
+}
+
+impl OrDefaultLaw for Option<crate::world::ContactLaw> {
+    fn unwrap_or_default_law(self) -> crate::world::ContactLaw {
+        self.unwrap_or(crate::world::ContactLaw {
+            mu: 0.0,
+            restitution: 0.0,
+            rolling_friction: 0.0,
+        })
+    }
+}
+
+/// The obstacles at time t.
+fn placed_obstacles<'a>(
+    obstacles: &'a [RigidObstacle],
+    base: &[Pose],
+    t: f64,
+) -> Vec<PlacedObstacle<'a>> {
+    obstacles
+        .iter()
+        .zip(base)
+        .map(|(o, base)| PlacedObstacle {
+            shape: &o.shape,
+            pose: obstacle_pose(&o.motion, base, t),
+        })
+        .collect()
+}
+
+/// The pose at time t of an obstacle whose pose at t = 0 is `base`: translated by the
+/// motion's offset, or turned by the angle ω t about the motion's axis through its centre.
+pub fn obstacle_pose(motion: &Motion, base: &Pose, t: f64) -> Pose {
+    match motion {
+        Motion::Rotate {
+            center,
+            axis,
+            omega,
+        } => {
+            let c = v3(center.to_array());
+            let r = Rotation::from_axis_angle(v3(axis.to_array()).normalize(), omega * t);
+            Pose::from_parts(
+                c + r * (base.translation - c),
+                (r * base.rotation).normalize(),
+            )
+        }
+        m => Pose::from_parts(base.translation + v3(m.offset(t).to_array()), base.rotation),
+    }
+}
+
+/// The library's solver on the step's global problem from Gauss–Seidel's iterate `r`:
+/// (r, error on the stored problem) or None if it refused.
+fn library_finish(
+    global: &GlobalProblem,
+    problem: &nsgs::Problem,
+    r: &[f64],
+    s: &RigidSettings,
+) -> Option<(Vec<f64>, f64)> {
+    use coulomb::problem::Problem;
+    use coulomb::solver::{solve_with_guess, Guess};
+    let start = if r.iter().all(|x| x.is_finite()) {
+        r.to_vec()
+    } else {
+        vec![0.0; r.len()]
+    };
+    let v: Vec<f64> = problem.velocities(&start).into_iter().flatten().collect();
+    let guess = Guess {
+        r: start,
+        v: Some(v),
+    };
+    let settings = coulomb::solver::Settings {
+        tol: s.tolerance,
+        ..s.solver.clone()
+    };
+    let wrapped = Problem::Global(global.clone());
+    let sol = solve_with_guess(&wrapped, &settings, Some(&guess)).ok()?;
+    if sol.r.len() != r.len() || sol.r.iter().any(|x| !x.is_finite()) {
+        return None;
+    }
+    let err = problem.error(&sol.r);
+    Some((sol.r, err))
+}
+
+pub mod nsgs {
+    //! The body-level nonsmooth Gauss–Seidel of [`super::RigidWorld::step`] for bodies of
+    //! any inertia: per contact, J_A and J_B (3 × 6 each, rows (t_k, Rᵀ(a × t_k))), w_i, μ_i
+    //! and W_ii = J_A M_A⁻¹ J_Aᵀ + J_B M_B⁻¹ J_Bᵀ; M diagonal per body in the principal
+    //! frame. The error of docs/error.md is always evaluated on the stored
+    //! (M, H, f, w, μ): v = M⁻¹(f + H r) recomputed from r, u = Hᵀ v + w,
+    //! q = Hᵀ M⁻¹ f + w.
+
+    use coulomb::inner::pgs::{solve_contact, solve_contact_law, OneContact};
+    use coulomb::problem::{GlobalProblem, ProblemError};
+    use coulomb::sparse::CscMatrix;
+    use coulomb::{cone, law};
+
+    /// Exact error evaluations: every this many sweeps.
+    pub const CHECK_EVERY: usize = 5;
+
+    /// One contact: (body block, J) per side, w, μ.
+    #[derive(Debug, Clone, PartialEq)]
+    pub struct Row {
+        /// A's block index and J_A (None: A fixed)
+        pub a: Option<(usize, [[f64; 6]; 3])>,
+        /// B's block index and J_B (None: obstacle or fixed body)
+        pub b: Option<(usize, [[f64; 6]; 3])>,
+        /// w_i
+        pub w: [f64; 3],
+        /// μ_i
+        pub mu: f64,
+    }
+
+    /// The step problem in body-block form.
+    #[derive(Debug, Clone, PartialEq)]
+    pub struct Problem {
+        /// contacts
+        pub rows: Vec<Row>,
+        /// diagonal of M per moving body
+        pub mass: Vec<[f64; 6]>,
+        /// f per moving body
+        pub f: Vec<[f64; 6]>,
+        w_ii: Vec<[f64; 9]>,
+        w_inv: Vec<[f64; 9]>,
+        q_norm: f64,
+    }
+
+    /// Result of [`Problem::solve`].
+    #[derive(Debug, Clone, PartialEq)]
+    pub struct Solution {
+        /// r of lowest error met
+        pub r: Vec<f64>,
+        /// its error on the stored problem
+        pub error: f64,
+        /// sweeps done
+        pub sweeps: usize,
+    }
+
+    fn inv3(a: &[f64; 9]) -> Option<[f64; 9]> {
+        let det = a[0] * (a[4] * a[8] - a[5] * a[7]) - a[1] * (a[3] * a[8] - a[5] * a[6])
+            + a[2] * (a[3] * a[7] - a[4] * a[6]);
+        if !(det.is_finite() && det > 0.0) {
+            return None;
+        }
+        let d = 1.0 / det;
+        Some([
+            (a[4] * a[8] - a[5] * a[7]) * d,
+            (a[2] * a[7] - a[1] * a[8]) * d,
+            (a[1] * a[5] - a[2] * a[4]) * d,
+            (a[5] * a[6] - a[3] * a[8]) * d,
+            (a[0] * a[8] - a[2] * a[6]) * d,
+            (a[2] * a[3] - a[0] * a[5]) * d,
+            (a[3] * a[7] - a[4] * a[6]) * d,
+            (a[1] * a[6] - a[0] * a[7]) * d,
+            (a[0] * a[4] - a[1] * a[3]) * d,
+        ])
+    }
+
+    impl Problem {
+        /// The problem with its W_ii and their inverses; Err if a block is not positive
+        /// definite or a mass not positive.
+        pub fn new(rows: Vec<Row>, mass: Vec<[f64; 6]>, f: Vec<[f64; 6]>) -> Result<Self, String> {
+            if mass.iter().flatten().any(|m| !(m.is_finite() && *m > 0.0)) {
+                return Err("a mass or principal inertia is not positive".into());
+            }
+            let mut w_ii = Vec::with_capacity(rows.len());
+            let mut w_inv = Vec::with_capacity(rows.len());
+            for (i, row) in rows.iter().enumerate() {
+                let mut w = [0.0; 9];
+                for (blk, j) in row.a.iter().chain(row.b.iter()) {
+                    let m = mass
+                        .get(*blk)
+                        .ok_or(format!("contact {i}: no body {blk}"))?;
+                    for r in 0..3 {
+                        for c in 0..3 {
+                            w[3 * r + c] += (0..6).map(|d| j[r][d] * j[c][d] / m[d]).sum::<f64>();
+                        }
+                    }
+                }
+                let inv = inv3(&w).ok_or(format!(
+                    "contact {i}: its Delassus block W_ii is not positive definite"
+                ))?;
+                w_ii.push(w);
+                w_inv.push(inv);
+            }
+            let mut p = Self {
+                rows,
+                mass,
+                f,
+                w_ii,
+                w_inv,
+                q_norm: 0.0,
+            };
+            let v0 = p.velocities(&[]);
+            let q: Vec<f64> = (0..p.rows.len()).flat_map(|i| p.u(i, &v0)).collect();
+            p.q_norm = law::norm(&q);
+            Ok(p)
+        }
+
+        /// Number of contacts.
+        pub fn contacts(&self) -> usize {
+            self.rows.len()
+        }
+
+        /// v = M⁻¹ (f + H r) (r shorter than 3 · contacts: zeros).
+        pub fn velocities(&self, r: &[f64]) -> Vec<[f64; 6]> {
+            let mut p = self.f.clone();
+            for (i, row) in self.rows.iter().enumerate() {
+                if r.len() < 3 * i + 3 {
+                    break;
+                }
+                for (blk, j) in row.a.iter().chain(row.b.iter()) {
+                    for k in 0..3 {
+                        for d in 0..6 {
+                            p[*blk][d] += j[k][d] * r[3 * i + k];
+                        }
+                    }
+                }
+            }
+            for (pb, m) in p.iter_mut().zip(&self.mass) {
+                for d in 0..6 {
+                    pb[d] /= m[d];
+                }
+            }
+            p
+        }
+
+        /// u_i = J_A v_A + J_B v_B + w_i.
+        pub fn u(&self, i: usize, v: &[[f64; 6]]) -> [f64; 3] {
+            let row = &self.rows[i];
+            let mut u = row.w;
+            for (blk, j) in row.a.iter().chain(row.b.iter()) {
+                for k in 0..3 {
+                    u[k] += (0..6).map(|d| j[k][d] * v[*blk][d]).sum::<f64>();
+                }
+            }
+            u
+        }
+
+        /// The error of docs/error.md of r on the stored problem (v recomputed from r).
+        pub fn error(&self, r: &[f64]) -> f64 {
+            let v = self.velocities(r);
+            let u: Vec<f64> = (0..self.rows.len()).flat_map(|i| self.u(i, &v)).collect();
+            let mu: Vec<f64> = self.rows.iter().map(|r| r.mu).collect();
+            law::error_measure(3, &mu, r, &u, self.q_norm).error
+        }
+
+        /// Gauss–Seidel from r0 until the error is ≤ tol, `max_sweeps`, or a stall (the
+        /// error has not halved over `stall_window` sweeps); returns the iterate of lowest
+        /// error.
+        pub fn solve(
+            &self,
+            r0: &[f64],
+            tol: f64,
+            max_sweeps: usize,
+            stall_window: usize,
+        ) -> Solution {
+            let n = self.rows.len();
+            let mut r = if r0.len() == 3 * n && r0.iter().all(|x| x.is_finite()) {
+                r0.to_vec()
+            } else {
+                vec![0.0; 3 * n]
+            };
+            let mut v = self.velocities(&r);
+            let mut best = Solution {
+                error: self.error(&r),
+                r: r.clone(),
+                sweeps: 0,
+            };
+            if best.error <= tol {
+                return best;
+            }
+            let mut history: Vec<(usize, f64)> = Vec::new();
+            for sweep in 1..=max_sweeps {
+                for i in 0..n {
+                    self.update(i, &mut v, &mut r);
+                }
+                if sweep % CHECK_EVERY == 0 || sweep == max_sweeps || sweep == 1 {
+                    // exact evaluation on the stored problem (v from scratch)
+                    v = self.velocities(&r);
+                    let err = self.error(&r);
+                    best.sweeps = sweep;
+                    if err < best.error || !best.error.is_finite() {
+                        best.error = err;
+                        best.r.copy_from_slice(&r);
+                    }
+                    if err <= tol || !err.is_finite() {
+                        break;
+                    }
+                    history.push((sweep, err));
+                    let back = history
+                        .iter()
+                        .rev()
+                        .find(|(s, _)| *s + stall_window <= sweep)
+                        .map(|x| x.1);
+                    if let Some(old) = back {
+                        if err > 0.5 * old {
+                            break;
+                        }
+                    }
+                }
+            }
+            best
+        }
+
+        /// One Gauss–Seidel update of contact i (the others frozen), v kept = M⁻¹(f + H r).
+        fn update(&self, i: usize, v: &mut [[f64; 6]], r: &mut [f64]) {
+            let row = &self.rows[i];
+            let u = self.u(i, v);
+            let a = &self.w_ii[i];
+            let old = [r[3 * i], r[3 * i + 1], r[3 * i + 2]];
+            let mut c = u;
+            for k in 0..3 {
+                c[k] -= a[3 * k] * old[0] + a[3 * k + 1] * old[1] + a[3 * k + 2] * old[2];
+            }
+            let mut contact = OneContact {
+                a,
+                ainv: &self.w_inv[i],
+                d: 3,
+                mu: row.mu,
+                c,
+            };
+            let new = solve_contact_law(&contact, &old, &u).unwrap_or_else(|| {
+                contact.c[0] += row.mu * cone::tangent_norm(&u);
+                solve_contact(&contact, &old)
+            });
+            let delta = [new[0] - old[0], new[1] - old[1], new[2] - old[2]];
+            if delta.iter().all(|x| *x == 0.0) {
+                return;
+            }
+            for (blk, j) in row.a.iter().chain(row.b.iter()) {
+                let m = &self.mass[*blk];
+                for d in 0..6 {
+                    v[*blk][d] +=
+                        (j[0][d] * delta[0] + j[1][d] * delta[1] + j[2][d] * delta[2]) / m[d];
+                }
+            }
+            r[3 * i..3 * i + 3].copy_from_slice(&new);
+        }
+
+        /// The same problem as a library global problem (M diagonal, H sparse).
+        pub fn to_global(&self) -> Result<GlobalProblem, ProblemError> {
+            let n = 6 * self.mass.len();
+            let diag: Vec<f64> = self.mass.iter().flatten().copied().collect();
+            let idx: Vec<usize> = (0..n).collect();
+            let m = CscMatrix::from_triplets(n, n, &idx, &idx, &diag)
+                .map_err(|source| ProblemError::Sparse { what: "M", source })?;
+            let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+            for (i, row) in self.rows.iter().enumerate() {
+                for (blk, j) in row.a.iter().chain(row.b.iter()) {
+                    for (k, jk) in j.iter().enumerate() {
+                        for (d, x) in jk.iter().enumerate() {
+                            if *x != 0.0 {
+                                rows.push(6 * blk + d);
+                                cols.push(3 * i + k);
+                                vals.push(*x);
+                            }
+                        }
+                    }
+                }
+            }
+            let h = CscMatrix::from_triplets(n, 3 * self.rows.len(), &rows, &cols, &vals)
+                .map_err(|source| ProblemError::Sparse { what: "H", source })?;
+            let f: Vec<f64> = self.f.iter().flatten().copied().collect();
+            let w: Vec<f64> = self.rows.iter().flat_map(|r| r.w).collect();
+            let mu: Vec<f64> = self.rows.iter().map(|r| r.mu).collect();
+            GlobalProblem::new_unfactored(3, m, h, f, w, mu)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::validation::{cuboid, floor, one_material};
+    use super::*;
+
+    fn world(bodies: Vec<RigidBodyDesc>) -> Result<RigidWorld, RigidError> {
+        RigidWorld::new(
+            bodies,
+            vec![floor()],
+            one_material(0.5),
+            RigidSettings::default(),
+        )
+    }
+
+    #[test]
+    fn refuses_bad_quaternions_without_normalizing() {
+        let mut b = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
+        b.orientation = [1.0, 1e-4, 0.0, 0.0]; // |q| − 1 = 5e-9
+        let e = world(vec![b.clone()]).unwrap_err();
+        assert!(
+            matches!(e, RigidError::Quaternion { ref what, .. } if what == "body 0"),
+            "{e}"
+        );
+        b.orientation = [f64::NAN, 0.0, 0.0, 0.0];
+        assert!(matches!(
+            world(vec![b]).unwrap_err(),
+            RigidError::Quaternion { .. }
+        ));
+    }
+
+    #[test]
+    fn refuses_bad_mass_state_and_material() {
+        let good = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
+        let mut b = good.clone();
+        b.mass.mass = 0.0;
+        assert!(matches!(
+            world(vec![b]).unwrap_err(),
+            RigidError::Mass { .. }
+        ));
+        let mut b = good.clone();
+        b.mass.inertia[0][0] = -1.0;
+        assert!(matches!(
+            world(vec![b]).unwrap_err(),
+            RigidError::Mass { .. }
+        ));
+        let mut b = good.clone();
+        b.velocity[1] = f64::INFINITY;
+        assert!(matches!(
+            world(vec![b]).unwrap_err(),
+            RigidError::NonFinite {
+                field: "velocity",
+                ..
+            }
+        ));
+        let mut b = good.clone();
+        b.material = 3;
+        assert!(matches!(
+            world(vec![b]).unwrap_err(),
+            RigidError::Material { material: 3, .. }
+        ));
+        let s = super::super::parry::shape::SharedShape::cuboid(0.0, 0.1, 0.1);
+        assert!(MassPropertiesCheck::zero_volume(&s));
+    }
+
+    struct MassPropertiesCheck;
+    impl MassPropertiesCheck {
+        fn zero_volume(s: &SharedShape) -> bool {
+            matches!(
+                super::super::MassProperties::from_shape(s, 1000.0),
+                Err(RigidError::Mass { .. })
+            )
+        }
+    }
+
+    #[test]
+    fn refuses_interpenetrating_bodies_with_count_and_depth() {
+        let a = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
+        let b = cuboid([0.1; 3], 1000.0, [0.15, 0.0, 0.1]).unwrap();
+        match world(vec![a.clone(), b]).unwrap_err() {
+            RigidError::Interpenetration {
+                count, depth, a, b, ..
+            } => {
+                assert!(count >= 1);
+                assert!((depth - 0.05).abs() < 1e-9, "{depth}");
+                assert_eq!((a, b), (0, RigidPartner::Body(1)));
+            }
+            e => panic!("{e}"),
+        }
+        // sunk into the floor by 1 cm
+        let c = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.09]).unwrap();
+        match world(vec![c]).unwrap_err() {
+            RigidError::Interpenetration { depth, b, .. } => {
+                assert!((depth - 0.01).abs() < 1e-9, "{depth}");
+                assert_eq!(b, RigidPartner::Obstacle(0));
+            }
+            e => panic!("{e}"),
+        }
+        // touching is fine
+        assert!(world(vec![a]).is_ok());
+    }
+
+    #[test]
+    fn free_fall_is_exact_and_the_problem_is_kept() {
+        let b = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 1.0]).unwrap();
+        let mut w = world(vec![b]).unwrap();
+        let r = w.step().unwrap();
+        assert_eq!(r.status, RigidStatus::NoContact);
+        assert!(w.last_problem().is_none());
+        let g = crate::world::GRAVITY;
+        let h = w.settings().h;
+        assert!((w.velocities()[0][2] + g * h).abs() < 1e-15);
+        // θ = ½: x₁ = x₀ + h (v₀ + v₁)/2
+        assert!((w.positions()[0][2] - (1.0 - 0.5 * g * h * h)).abs() < 1e-15);
+        // dropped onto the floor, the step's global problem is stored
+        let b = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
+        let mut w = world(vec![b]).unwrap();
+        let r = w.step().unwrap();
+        assert_eq!(r.status, RigidStatus::Converged);
+        let p = w.last_problem().unwrap();
+        assert_eq!(p.contacts(), r.contacts);
+        assert_eq!(p.dofs(), 6);
+    }
+
+    #[test]
+    fn warm_start_matches_manifold_points_across_steps() {
+        let b = cuboid([0.1, 0.05, 0.05], 1000.0, [0.0, 0.0, 0.05]).unwrap();
+        let mut w = world(vec![b]).unwrap();
+        let first = w.step().unwrap();
+        let second = w.step().unwrap();
+        assert_eq!(first.warm_started, 0);
+        assert_eq!(second.warm_started, second.contacts);
+        assert_eq!(second.contacts, 4);
+    }
+}

@@ -1,0 +1,189 @@
+//! `coulomb_granular::rigid_scene::RigidScene` for Python: a scene with bodies of any shape
+//! (cuboids, capsules, cylinders, cones, convex hulls and polyhedra, compounds; spheres as
+//! balls), stepped by the rigid-body simulator with the GIL released.
+
+use crate::convert;
+use crate::scene::{model_from_parts, SceneArrays};
+use crate::PyProblem;
+use coulomb::problem::Problem;
+use coulomb_granular::rigid_scene::RigidScene;
+use coulomb_granular::scene_file::{BuildOptions, LoadedScene};
+use coulomb_granular::SceneModel;
+use numpy::{PyArray1, PyArrayMethods};
+use pyo3::exceptions::{PyRuntimeError, PyTypeError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// A simulation of rigid bodies of any shape (Newton–Euler Moreau–Jean, one problem (2.10)
+/// per step from parry3d's contact manifolds).
+#[pyclass(name = "_RigidSimulation", module = "coulomb._coulomb")]
+pub struct PyRigidSimulation {
+    scene: RigidScene,
+}
+
+fn rows<'py, const N: usize>(py: Python<'py>, v: &[[f64; N]]) -> Bound<'py, PyAny> {
+    let flat: Vec<f64> = v.iter().flatten().copied().collect();
+    let a = PyArray1::from_vec(py, flat);
+    a.reshape([v.len(), N])
+        .map(|a| a.into_any())
+        .unwrap_or_else(|_| PyArray1::<f64>::zeros(py, 0, false).into_any())
+}
+
+fn build(py: Python<'_>, model: SceneModel) -> PyResult<PyRigidSimulation> {
+    let scene = py
+        .detach(move || RigidScene::new(&model))
+        .map_err(|e| crate::errors::scene_error(py, &e))?;
+    Ok(PyRigidSimulation { scene })
+}
+
+#[pymethods]
+impl PyRigidSimulation {
+    /// A scene built in Python (as `_Simulation.from_scene`); `params` may set the step
+    /// settings h, theta, tol, max_sweeps and the default law mu, restitution.
+    #[staticmethod]
+    #[pyo3(signature = (json, batches, meshes, params))]
+    fn from_scene(
+        py: Python<'_>,
+        json: &str,
+        batches: &Bound<'_, PyList>,
+        meshes: &Bound<'_, PyList>,
+        params: &Bound<'_, PyDict>,
+    ) -> PyResult<Self> {
+        let arrays = SceneArrays::extract(batches, meshes)?;
+        let json = json.to_string();
+        let mut model = py
+            .detach(move || model_from_parts(&json, arrays))
+            .map_err(|e| e.into_py(py))?;
+        let rest = crate::granular::apply_to_model(&mut model, params)?;
+        if let Some((k, _)) = rest.first() {
+            return Err(PyTypeError::new_err(format!(
+                "'{k}' is not a parameter of rigid-body scenes (h, theta, tol, max_sweeps, mu, restitution)"
+            )));
+        }
+        build(py, model)
+    }
+
+    /// The scene of a scene file with shaped bodies; `params` as for `from_scene`.
+    #[staticmethod]
+    #[pyo3(signature = (path, seed, params))]
+    fn from_file(
+        py: Python<'_>,
+        path: PathBuf,
+        seed: Option<u64>,
+        params: &Bound<'_, PyDict>,
+    ) -> PyResult<Self> {
+        let file_err = |e| crate::errors::scene_file_error(py, &e);
+        let loaded = py.detach(|| LoadedScene::load(&path)).map_err(file_err)?;
+        let opts = BuildOptions {
+            seed,
+            max_fill: None,
+        };
+        let mut built = py.detach(|| loaded.build(&opts)).map_err(file_err)?;
+        let rest = crate::granular::apply_to_model(&mut built.model, params)?;
+        if let Some((k, _)) = rest.first() {
+            return Err(PyTypeError::new_err(format!(
+                "'{k}' is not a parameter of rigid-body scenes"
+            )));
+        }
+        build(py, built.model)
+    }
+
+    /// One time step; its report (`coulomb_granular::rigid::RigidStepReport`) as a dict.
+    fn step<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let scene = &mut self.scene;
+        let r = py
+            .detach(move || scene.step())
+            .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        let json = serde_json::to_value(&r)
+            .map_err(|e| PyRuntimeError::new_err(format!("cannot serialize the report: {e}")))?;
+        convert::json_to_py(py, &json)
+    }
+
+    /// `n` steps at once (GIL released); their reports.
+    fn run<'py>(&mut self, py: Python<'py>, n: usize) -> PyResult<Bound<'py, PyList>> {
+        let scene = &mut self.scene;
+        let reports = py
+            .detach(move || (0..n).map(|_| scene.step()).collect::<Result<Vec<_>, _>>())
+            .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        let out = PyList::empty(py);
+        for r in reports {
+            let json = serde_json::to_value(&r)
+                .map_err(|e| PyRuntimeError::new_err(format!("cannot serialize: {e}")))?;
+            out.append(convert::json_to_py(py, &json)?)?;
+        }
+        Ok(out)
+    }
+
+    /// Origins of the bodies' shape frames, (n, 3).
+    #[getter]
+    fn body_positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        rows(py, &self.scene.world.positions())
+    }
+
+    /// Orientations (w, x, y, z), (n, 4).
+    #[getter]
+    fn body_orientations<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        rows(py, &self.scene.world.orientations())
+    }
+
+    /// Velocities of the centres of mass, (n, 3).
+    #[getter]
+    fn velocities<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        rows(py, &self.scene.world.velocities())
+    }
+
+    /// Angular velocities (world frame), (n, 3).
+    #[getter]
+    fn angular_velocities<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        rows(py, &self.scene.world.angular_velocities())
+    }
+
+    /// The last step's contacts (`RigidContact`: a, b, point, normal, t1, gap, impulse).
+    #[getter]
+    fn contacts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let json = serde_json::to_value(self.scene.world.contacts())
+            .map_err(|e| PyRuntimeError::new_err(format!("cannot serialize: {e}")))?;
+        convert::json_to_py(py, &json)
+    }
+
+    /// t_k (s).
+    #[getter]
+    fn time(&self) -> f64 {
+        self.scene.world.time()
+    }
+
+    /// Steps taken.
+    #[getter]
+    fn steps_done(&self) -> u64 {
+        self.scene.world.steps()
+    }
+
+    /// Number of bodies.
+    fn __len__(&self) -> usize {
+        self.scene.world.len()
+    }
+
+    /// The last step's problem (2.10) in global form, or None.
+    #[getter]
+    fn last_problem(&self) -> Option<PyProblem> {
+        self.scene.world.last_problem().map(|p| PyProblem {
+            inner: Arc::new(Problem::Global(p.clone())),
+        })
+    }
+}
+
+/// Whether the scene file at `path` has bodies of another shape than the sphere (then it
+/// runs in the rigid-body simulator).
+#[pyfunction]
+pub fn _scene_file_has_shapes(py: Python<'_>, path: PathBuf) -> PyResult<bool> {
+    let loaded = py
+        .detach(|| LoadedScene::load(&path))
+        .map_err(|e| crate::errors::scene_file_error(py, &e))?;
+    Ok(loaded
+        .file
+        .bodies
+        .iter()
+        .any(|g| g.shape.as_ref().is_some_and(|s| !s.is_sphere())))
+}

@@ -1163,4 +1163,53 @@ mod tests {
         assert_eq!(second.warm_started, second.contacts);
         assert_eq!(second.contacts, 4);
     }
+
+    #[test]
+    fn a_stalled_step_is_handed_to_the_library_on_the_global_problem() {
+        // one sweep only: Gauss–Seidel cannot reach 1e-8 on the 4-corner face contact
+        let b = cuboid([0.1, 0.05, 0.05], 1000.0, [0.0, 0.0, 0.05]).unwrap();
+        let settings = RigidSettings {
+            max_sweeps: 1,
+            ..RigidSettings::default()
+        };
+        let mut w = RigidWorld::new(vec![b], vec![floor()], one_material(0.5), settings).unwrap();
+        let r = w.step().unwrap();
+        assert_eq!(r.method, "nsgs+library", "{r:?}");
+        assert_eq!(r.status, RigidStatus::Converged, "{r:?}");
+        assert!(r.error <= 1e-8);
+        // the reported error is that of the stored global problem
+        let p = w.last_problem().unwrap();
+        let rr: Vec<f64> = w.contacts().iter().flat_map(|c| c.impulse).collect();
+        let mut hr = p.f.clone();
+        p.h.gemv_acc(1.0, &rr, &mut hr);
+        let v: Vec<f64> = hr.iter().zip(p.m.diagonal()).map(|(x, m)| x / m).collect();
+        let u = p.velocity(&v);
+        let q_norm = {
+            let minv_f: Vec<f64> = p.f.iter().zip(p.m.diagonal()).map(|(x, m)| x / m).collect();
+            coulomb::law::norm(&p.velocity(&minv_f))
+        };
+        let e = coulomb::law::error_measure(3, &p.mu, &rr, &u, q_norm).error;
+        assert!((e - r.error).abs() <= 1e-12, "{e} vs {}", r.error);
+    }
+
+    #[test]
+    fn same_input_same_bits() {
+        let run = || {
+            let (bodies, obstacles) = super::super::validation::rock_pile(20, 3).unwrap();
+            let mut w = RigidWorld::new(
+                bodies,
+                obstacles,
+                one_material(0.5),
+                RigidSettings::default(),
+            )
+            .unwrap();
+            for _ in 0..150 {
+                w.step().unwrap();
+            }
+            (w.positions(), w.orientations(), w.contacts().len())
+        };
+        let (a, b) = (run(), run());
+        assert!(a.2 > 0);
+        assert_eq!(a, b);
+    }
 }

@@ -709,3 +709,114 @@ mod shape_tests {
         }
     }
 }
+
+/// A pile of `n` random convex rocks (hulls of 12 points, size 4–6 cm, ρ = 2500, seeded
+/// ChaCha8) on a grid of about four layers above the floor inside four walls (half-spaces): the bodies, the
+/// obstacles. For the benchmark `scripts/bench_rigid_pile.sh`.
+pub fn rock_pile(
+    n: usize,
+    seed: u64,
+) -> Result<(Vec<RigidBodyDesc>, Vec<RigidObstacle>), RigidError> {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    // about 4 layers: a pile, not a single layer
+    let side = (n as f64 / 4.0).sqrt().ceil().max(1.0) as usize;
+    let pitch = 0.14;
+    let mut bodies = Vec::with_capacity(n);
+    for k in 0..n {
+        let size = rng.random_range(0.04..0.06);
+        let points: Vec<Vector> = (0..12)
+            .map(|_| {
+                let d = Vector::new(
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                );
+                d.normalize_or_zero() * size * rng.random_range(0.7..1.0)
+            })
+            .collect();
+        let shape = SharedShape::convex_hull(&points).ok_or_else(|| RigidError::Mass {
+            what: format!("rock {k}"),
+            detail: "degenerate hull".into(),
+        })?;
+        let mass = MassProperties::from_shape(&shape, 2500.0)?;
+        let (i, j, l) = (k % side, (k / side) % side, k / (side * side));
+        bodies.push(RigidBodyDesc {
+            shape,
+            mass,
+            position: [
+                (i as f64 + 0.5) * pitch,
+                (j as f64 + 0.5) * pitch,
+                0.1 + l as f64 * pitch,
+            ],
+            orientation: [1.0, 0.0, 0.0, 0.0],
+            velocity: [0.0; 3],
+            angular_velocity: [0.0; 3],
+            material: 0,
+            fixed: false,
+        });
+    }
+    let width = side as f64 * pitch;
+    let wall = |name: &str, normal: Vector, at: [f64; 3]| RigidObstacle {
+        name: name.into(),
+        shape: SharedShape::halfspace(normal),
+        position: at,
+        orientation: [1.0, 0.0, 0.0, 0.0],
+        motion: Motion::Fixed,
+        material: 0,
+    };
+    let obstacles = vec![
+        floor(),
+        wall("x-", Vector::X, [0.0; 3]),
+        wall("x+", -Vector::X, [width, 0.0, 0.0]),
+        wall("y-", Vector::Y, [0.0; 3]),
+        wall("y+", -Vector::Y, [0.0, width, 0.0]),
+    ];
+    Ok((bodies, obstacles))
+}
+
+#[cfg(test)]
+mod bench {
+    use super::*;
+
+    /// The rock-pile benchmark (scripts/bench_rigid_pile.sh sets RIGID_PILE_ROCKS and
+    /// RIGID_PILE_STEPS): time per step, sweeps per step, share of collision detection.
+    #[test]
+    #[ignore = "benchmark: scripts/bench_rigid_pile.sh"]
+    fn rigid_pile_benchmark() {
+        let var = |k: &str, d: usize| {
+            std::env::var(k)
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(d)
+        };
+        let (n, steps) = (var("RIGID_PILE_ROCKS", 200), var("RIGID_PILE_STEPS", 300));
+        let (bodies, obstacles) = rock_pile(n, 1).unwrap();
+        let settings = RigidSettings {
+            tolerance: 1e-4,
+            ..RigidSettings::default()
+        };
+        let mut w = RigidWorld::new(bodies, obstacles, one_material(0.5), settings).unwrap();
+        let (mut total, mut detect, mut sweeps, mut contacts, mut bad, mut lib) =
+            (0.0, 0.0, 0, 0, 0, 0);
+        let t0 = std::time::Instant::now();
+        for _ in 0..steps {
+            let r = w.step().unwrap();
+            detect += r.detection_seconds;
+            sweeps += r.sweeps;
+            contacts += r.contacts;
+            bad += usize::from(r.status == RigidStatus::NotConverged);
+            lib += usize::from(r.method == "nsgs+library");
+        }
+        total += t0.elapsed().as_secs_f64();
+        let s = steps as f64;
+        println!(
+            "rocks {n}, steps {steps}, tol 1e-4: {:.3} ms/step, detection {:.1} %, {:.1} sweeps/step, {:.0} contacts/step, {bad} steps not converged, {lib} handed to the library, kinetic energy at the end {:.3e} J",
+            1e3 * total / s,
+            100.0 * detect / total,
+            sweeps as f64 / s,
+            contacts as f64 / s,
+            w.kinetic_energy()
+        );
+    }
+}

@@ -35,6 +35,7 @@ pub mod contact;
 pub mod distributed;
 pub mod generate;
 pub mod import;
+pub mod laws;
 pub mod math;
 pub mod mesh;
 pub mod model;

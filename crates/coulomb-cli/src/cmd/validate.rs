@@ -15,8 +15,8 @@ pub struct Args {
     /// write the report (Markdown) to this file, e.g. docs/validation.md
     #[arg(long)]
     pub markdown: Option<PathBuf>,
-    /// skip the long checks (settled bed, drum, column collapse, 600-bead box at rest; shorter
-    /// energy runs)
+    /// skip the long checks (settled bed, drum, column collapse, 600-bead box at rest, the
+    /// Janssen, Beverloo and angle-of-repose laws; shorter energy runs)
     #[arg(long)]
     pub quick: bool,
     /// print one JSON array of checks
@@ -243,6 +243,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             not_converged: col.not_converged,
         };
         section("Column collapse", c, &mut checks);
+    }
+    // the granular laws, from the scene files of examples/scenes/validation/
+    for (s, c) in coulomb_granular::laws::checks(!args.quick)? {
+        section(&s, c, &mut checks);
     }
     let failed = checks.iter().filter(|(_, c)| !c.pass()).count();
     let md = markdown(&checks, args.quick);

@@ -47,6 +47,7 @@ pub mod run;
 pub mod scene;
 pub mod scene_file;
 pub mod simulation;
+pub mod tunnelling;
 pub mod validation;
 pub mod world;
 

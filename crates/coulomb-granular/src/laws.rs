@@ -243,23 +243,24 @@ pub fn incline() -> Result<Vec<Check>, LawError> {
     Ok(out)
 }
 
-/// Bulk density of the spheres between heights `z0` and `z1` (kg/m³ of the cross-section
-/// `area`): the slope of the mass of the spheres whose centre lies below z, over that range.
-fn bulk_density(sim: &Simulation, area: f64, z0: f64, z1: f64) -> f64 {
-    let pts: Vec<(f64, f64)> = (0..=20)
-        .map(|k| {
-            let z = z0 + (z1 - z0) * k as f64 / 20.0;
-            let m: f64 = sim
-                .world
-                .bodies
-                .iter()
-                .filter(|b| b.position.z < z)
-                .map(|b| b.mass)
-                .sum();
-            (z, m)
-        })
+/// Bulk density of the packing of the spheres (kg/m³ of the cross-section `area`): the mass
+/// of the spheres whose centres lie between the heights below which 20 % and 70 % of the
+/// centres lie, over `area` times that height difference. Quantiles keep a few spheres above
+/// the packing (bouncing, rolling on its top) from counting as part of it.
+fn bulk_density(sim: &Simulation, area: f64) -> f64 {
+    let mut z: Vec<(f64, f64)> = sim
+        .world
+        .bodies
+        .iter()
+        .map(|b| (b.position.z, b.mass))
         .collect();
-    line_fit(&pts).map_or(f64::NAN, |(_, s)| s / area)
+    if z.len() < 10 {
+        return f64::NAN;
+    }
+    z.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (i, j) = (z.len() / 5, z.len() * 7 / 10);
+    let mass: f64 = z[i..j].iter().map(|p| p.1).sum();
+    mass / (area * (z[j].0 - z[i].0))
 }
 
 /// The largest z + R of the spheres (the top of the packing).
@@ -279,7 +280,7 @@ fn top(sim: &Simulation) -> f64 {
 /// carried across the plane z = z_j is F(z_j) = g M(z_j) − Σ_{wall contacts above z_j} f_z,
 /// M(z_j) the mass of the beads above. Janssen's model gives F = g M_s (1 − e^{−M / M_s}),
 /// M_s = ρ_b A λ, λ = R / (2 μ_w K) with K = σ_wall / σ_zz; M_s is fitted (least squares,
-/// golden section on log M_s), ρ_b measured in the middle of the column, and K measured as
+/// golden section on log M_s), ρ_b measured in the column ([`bulk_density`]), and K measured as
 /// (Σ wall normal force) / (Σ over the slabs of 2 π R Δz F(z_mid) / A). The check: the
 /// fitted λ against R / (2 μ_w K), within 20 %.
 pub fn janssen() -> Result<Vec<Check>, LawError> {
@@ -370,7 +371,7 @@ pub fn janssen() -> Result<Vec<Check>, LawError> {
         }
     }
     let m_s = (0.5 * (a + b)).exp();
-    let rho_b = bulk_density(&run.sim, area, 0.25 * z_top, 0.75 * z_top);
+    let rho_b = bulk_density(&run.sim, area);
     let lambda_fit = m_s / (rho_b * area);
     // K from the slabs below the top two (the free surface) and above the first (the foot)
     let (mut wall_n, mut vertical) = (0.0, 0.0);
@@ -404,7 +405,7 @@ pub fn janssen() -> Result<Vec<Check>, LawError> {
 }
 
 /// Beverloo's law (examples/scenes/validation/beverloo.toml). The beads settle in the closed
-/// silo (speeds < 0.05 m/s, at most 400 steps); ρ_b is measured in the middle of the packing.
+/// silo (speeds < 0.05 m/s, at most 400 steps); ρ_b is measured in the packing ([`bulk_density`]).
 /// From that state, for D = 5 d, 6 d, 7 d (d the mean diameter), a centred orifice of
 /// diameter D is opened and the discharged mass (beads below the base) is recorded each
 /// step; W is the slope of its least-squares line over 0.1 … 0.4 s after opening. Fitting
@@ -420,13 +421,7 @@ pub fn beverloo() -> Result<Vec<Check>, LawError> {
     let d = 2.0 * run.sim.world.bodies.iter().map(|b| b.radius).sum::<f64>()
         / run.sim.world.bodies.len() as f64;
     let area = std::f64::consts::PI * radius * radius;
-    let z_top = top(&run.sim);
-    let rho_b = bulk_density(
-        &run.sim,
-        area,
-        base.z + 0.25 * (z_top - base.z),
-        base.z + 0.75 * (z_top - base.z),
-    );
+    let rho_b = bulk_density(&run.sim, area);
     let g = run.sim.world.gravity.norm();
     let h = run.sim.params.h;
     let total: f64 = run.sim.world.bodies.iter().map(|b| b.mass).sum();

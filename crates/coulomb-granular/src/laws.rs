@@ -137,12 +137,21 @@ impl Run {
         Ok(())
     }
 
-    /// Steps until every sphere moves slower than `speed` (m/s), at most `cap` steps;
-    /// whether it came to rest.
-    fn settle(&mut self, speed: f64, cap: usize) -> Result<bool, LawError> {
-        for _ in 0..cap {
+    /// Steps for at least `min_time` (s), then until every sphere has moved slower than
+    /// `speed` (m/s) for 10 consecutive steps, at most `cap` steps in all; whether it came
+    /// to rest. (Spheres released at rest move slower than g h after one step: the minimum
+    /// time lets them fall first.)
+    fn settle(&mut self, speed: f64, min_time: f64, cap: usize) -> Result<bool, LawError> {
+        let min_steps = (min_time / self.sim.params.h).ceil() as usize;
+        let mut calm = 0;
+        for k in 0..cap {
             self.step()?;
-            if self.sim.max_speed() < speed {
+            calm = if self.sim.max_speed() < speed {
+                calm + 1
+            } else {
+                0
+            };
+            if k + 1 >= min_steps && calm >= 10 {
                 return Ok(true);
             }
         }
@@ -273,7 +282,7 @@ fn top(sim: &Simulation) -> f64 {
 }
 
 /// Janssen's saturation (examples/scenes/validation/janssen.toml). The beads settle in the
-/// tube (speeds < 0.05 m/s, at most 400 steps), then the tube rises at 2 mm/s for 80 steps so
+/// tube (at least 0.5 s, then until speeds < 0.05 m/s for 10 steps; at most 600 steps), then the tube rises at 2 mm/s for 80 steps so
 /// that the beads slide along it: the wall friction is fully mobilised upwards, as in the
 /// experiments of Ovarlez, Fond & Clément (Phys. Rev. E 67, 060302, 2003). Over the last 30
 /// steps the contact forces f = r / h are averaged and, at heights z_j every 2 cm, the load
@@ -293,7 +302,7 @@ pub fn janssen() -> Result<Vec<Check>, LawError> {
     let wall_material = run.scene.model.obstacles[tube].material.clone();
     let grain_material = run.scene.model.sphere_batches[0].material.clone();
     let mu_w = law_of(&run.scene.model, &grain_material, &wall_material).mu;
-    let settled = run.settle(0.05, 400)?;
+    let settled = run.settle(0.05, 0.5, 600)?;
     // the tube rises at v from now on: d(t) = v t from a base moved back by v t₀, so that it
     // does not jump
     let v = Vec3::new(0.0, 0.0, 0.002);
@@ -386,7 +395,7 @@ pub fn janssen() -> Result<Vec<Check>, LawError> {
     let note = if settled {
         ""
     } else {
-        " (NOT settled in 400 steps)"
+        " (NOT settled in 600 steps)"
     };
     Ok(vec![Check {
         name: format!(
@@ -405,7 +414,7 @@ pub fn janssen() -> Result<Vec<Check>, LawError> {
 }
 
 /// Beverloo's law (examples/scenes/validation/beverloo.toml). The beads settle in the closed
-/// silo (speeds < 0.05 m/s, at most 400 steps); ρ_b is measured in the packing ([`bulk_density`]).
+/// silo (at least 0.5 s, then until speeds < 0.05 m/s for 10 steps; at most 600 steps); ρ_b is measured in the packing ([`bulk_density`]).
 /// From that state, for D = 5 d, 6 d, 7 d (d the mean diameter), a centred orifice of
 /// diameter D is opened and the discharged mass (beads below the base) is recorded each
 /// step; W is the slope of its least-squares line over 0.1 … 0.4 s after opening. Fitting
@@ -417,7 +426,7 @@ pub fn beverloo() -> Result<Vec<Check>, LawError> {
     let Shape::Cylinder { base, radius, .. } = run.sim.world.obstacles[silo].shape else {
         return Err(run.setup("the obstacle 'silo' is not a cylinder"));
     };
-    let settled = run.settle(0.05, 400)?;
+    let settled = run.settle(0.05, 0.5, 600)?;
     let d = 2.0 * run.sim.world.bodies.iter().map(|b| b.radius).sum::<f64>()
         / run.sim.world.bodies.len() as f64;
     let area = std::f64::consts::PI * radius * radius;
@@ -497,7 +506,7 @@ pub fn beverloo() -> Result<Vec<Check>, LawError> {
 
 /// The angle of repose (examples/scenes/validation/repose.toml): the beads of the inlet are
 /// poured onto the floor, then the run continues until every bead moves slower than
-/// 0.02 m/s (at most 1 000 steps more). The heap's surface is the highest z + R in rings of
+/// 0.02 m/s for 10 consecutive steps (at most 1 000 steps more). The heap's surface is the highest z + R in rings of
 /// width d about the pour axis; its slope is the least-squares line of that height against
 /// the ring's radius over 25 … 75 % of the heap's radius (the radius holding 95 % of the
 /// beads). Range 20° … 40°: the heaps of monosized spheres with sliding and rolling friction
@@ -514,7 +523,7 @@ pub fn repose() -> Result<Vec<Check>, LawError> {
         .fold(0.0_f64, f64::max);
     let h = run.sim.params.h;
     run.steps((pour_end / h).ceil() as usize + 1)?;
-    let rest = run.settle(0.02, 1000)?;
+    let rest = run.settle(0.02, 0.0, 1000)?;
     let bodies = &run.sim.world.bodies;
     if bodies.len() < 100 {
         return Err(run.setup(format!("only {} beads poured", bodies.len())));

@@ -154,7 +154,13 @@ fn simulate(args: sim_args::Args) -> anyhow::Result<Outcome> {
             anyhow::bail!("--restart and scene files run in one process, not distributed");
         }
         if args.restart.is_some() {
-            return cmd::simulate::restart(args.clone());
+            return match args.scene.as_deref() {
+                None => cmd::simulate::restart(args.clone()),
+                Some(s) if scene_arg::is_scene_file(s) => scene_arg::restart(&args),
+                Some(s) => anyhow::bail!(
+                    "--restart takes the scene from the checkpoint: give no scene name ('{s}'), or the run's scene file"
+                ),
+            };
         }
         if args.scene.as_deref().is_some_and(scene_arg::is_scene_file) {
             return scene_arg::run(&args);

@@ -130,6 +130,29 @@ fn check_step(h: f64, scene: &BuiltScene) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Refuses a time step with which a sphere, at the largest initial speed of the scene's
+/// spheres and inlets, could cross a thin wall or a solid obstacle within one step
+/// ([`coulomb_granular::tunnelling`]), and warns above half of that.
+fn check_travel(h: f64, scene: &BuiltScene, world: &World, file: &str) -> anyhow::Result<()> {
+    let (mut speed, mut r_min) = coulomb_granular::tunnelling::speed_and_radius(world);
+    for i in &scene.inlets {
+        let v = i.inlet.velocity;
+        speed = speed.max((v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt());
+        r_min = r_min.min(i.inlet.sizes.min_radius());
+    }
+    if !r_min.is_finite() {
+        return Ok(());
+    }
+    match coulomb_granular::tunnelling::worst(world, h, speed, r_min) {
+        Some(t) if t.ratio() > 1.0 => bail!("{file}: [step] h = {h} is too large: {t}"),
+        Some(t) if t.ratio() > 0.5 => {
+            eprintln!("warning: {file}: [step] h = {h}: a sphere moves {:.0} % of what crosses obstacle '{}' in one step; {t}", 100.0 * t.ratio(), t.obstacle);
+            Ok(())
+        }
+        _ => Ok(()),
+    }
+}
+
 /// The world of `scene` with its initial overlaps relaxed by at most `sweeps` sweeps of
 /// [`resolve_overlaps`], then checked as usual (an overlap left is refused, with its count).
 fn relaxed(scene: &BuiltScene, sweeps: usize, file: &str) -> anyhow::Result<World> {
@@ -194,6 +217,7 @@ pub fn run(args: &Args) -> anyhow::Result<Outcome> {
     }
     let a = file_args(args, &scene);
     check_step(a.dt, &scene)?;
+    check_travel(a.dt, &scene, &world, file)?;
     if a.outer == coulomb::OuterKind::Fused && a.inner != coulomb::InnerKind::Pgs {
         bail!("--outer fused needs --inner pgs");
     }
@@ -205,6 +229,41 @@ pub fn run(args: &Args) -> anyhow::Result<Outcome> {
     };
     let name = inlets.scene.name.clone();
     crate::cmd::simulate::steps(&a, sim, &name, false, &mut inlets)
+}
+
+/// `coulomb simulate SCENE.toml --restart FILE`: the run stored in FILE continued as
+/// [`crate::cmd::simulate::restart`] does, with the inlets of the scene file pouring. An
+/// inlet's emissions are a pure function of (seed, emission index, time) and of the bodies
+/// present ([`coulomb_granular::generate::Inlet`]), so the continued run is the uninterrupted
+/// one to the bit. The file must be the stored run's: its gravity and obstacles are compared
+/// with the checkpoint's, and a difference is refused (status 2).
+pub fn restart(args: &Args) -> anyhow::Result<Outcome> {
+    let file = args.scene.as_deref().unwrap_or_default();
+    let Some(checkpoint) = args.restart.as_deref() else {
+        bail!("--restart needs a checkpoint file");
+    };
+    let sim = Simulation::load_checkpoint(checkpoint)
+        .with_context(|| format!("cannot restart from {}", checkpoint.display()))?;
+    let mut scene = LoadedScene::load(Path::new(file))?.build(&BuildOptions::default())?;
+    let unchecked = BuildChecks {
+        overlaps: false,
+        containment: false,
+        ..BuildChecks::default()
+    };
+    let (world, _) = scene.build(&unchecked)?;
+    if world.gravity != sim.world.gravity || world.obstacles != sim.world.obstacles {
+        bail!(
+            "{file} is not the scene of the checkpoint {}: its gravity or obstacles differ",
+            checkpoint.display()
+        );
+    }
+    let mut inlets = Inlets {
+        scene: &mut scene,
+        poured: 0,
+        skipped: 0,
+    };
+    let name = inlets.scene.name.clone();
+    crate::cmd::simulate::steps(args, sim, &name, true, &mut inlets)
 }
 
 /// The inlets of a scene file, driven after each step: the spheres they owe for

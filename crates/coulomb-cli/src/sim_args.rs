@@ -20,9 +20,9 @@ pub enum Method {
     Library,
 }
 
-/// The options that a checkpoint fixes (the scene and the parameters): refused with --restart.
-const RESTART_CONFLICTS: [&str; 26] = [
-    "scene",
+/// The options that a checkpoint fixes (the parameters): refused with --restart. A scene is
+/// refused too, unless it is the scene file of the stored run (its inlets continue).
+const RESTART_CONFLICTS: [&str; 25] = [
     "beads",
     "mu",
     "rolling_friction",
@@ -54,7 +54,8 @@ const RESTART_CONFLICTS: [&str; 26] = [
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
     /// scene: box, funnel, vibrating-plate, rotating-drum, or a scene file ending in .toml or
-    /// .json (docs/granular.md, "Scene files"; examples in examples/scenes); none with --restart
+    /// .json (docs/granular.md, "Scene files"; examples in examples/scenes); with --restart,
+    /// none or the scene file of the stored run (whose inlets then keep pouring)
     #[arg(required_unless_present = "restart")]
     pub scene: Option<String>,
     /// number of beads
@@ -171,7 +172,7 @@ pub struct Args {
     /// continue the run stored in this checkpoint file (written by --checkpoint-every or by
     /// Python's save_checkpoint): the scene, its state and every parameter come from the file,
     /// --steps counts the steps to add to the stored ones, and the stats files of --output
-    /// continue those found there
+    /// continue those found there; give the run's scene file too to keep its inlets pouring
     #[arg(long, conflicts_with_all = RESTART_CONFLICTS)]
     pub restart: Option<PathBuf>,
     /// write each step's problem as an FCLIB global file into this folder

@@ -122,3 +122,56 @@ fn bad_restarts_are_refused() {
     assert_eq!(v["beads"], 10);
     std::fs::remove_dir_all(&root).ok();
 }
+
+/// A scene file with an inlet (examples/scenes/silo.toml, its fill capped at 60 beads; the
+/// inlet pours 100 beads/s): 20 steps with checkpoints, then continued for 10 steps from the
+/// checkpoint with the scene file given, whose inlet keeps pouring, ends as the uninterrupted
+/// 30-step run to the bit; a scene file that is not the stored run's is refused.
+#[test]
+fn restart_with_its_scene_file_keeps_the_inlets_pouring() {
+    let root = temp_dir("checkpoint-inlet");
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenes");
+    let silo = scenes.join("silo.toml");
+    let s = silo.to_str().unwrap();
+    let (a, c) = (root.join("a"), root.join("c"));
+    let run = [s, "--beads", "60", "--checkpoint-every", "10"];
+    simulate(&[&run[..], &["--steps", "20"]].concat(), &a);
+    simulate(&[&run[..], &["--steps", "30"]].concat(), &c);
+    let beads = |dir: &Path| common::read_json(&dir.join("summary.json"))["beads"].clone();
+    let at_20 = beads(&a).as_u64().unwrap();
+    let ckpt = a.join("checkpoint.h5");
+    let k = ckpt.to_str().unwrap();
+    simulate(
+        &[
+            s,
+            "--restart",
+            k,
+            "--steps",
+            "10",
+            "--checkpoint-every",
+            "10",
+        ],
+        &a,
+    );
+    // the inlet poured during the continued steps, as in the uninterrupted run
+    assert!(beads(&a).as_u64().unwrap() > at_20);
+    assert_eq!(beads(&a), beads(&c));
+    let read = |p: &Path| std::fs::read(p).unwrap();
+    assert_eq!(read(&ckpt), read(&c.join("checkpoint.h5")));
+    let f = "frames/beads_000030.vtp";
+    assert_eq!(read(&a.join(f)), read(&c.join(f)), "{f}");
+    assert_eq!(stats_numbers(&a), stats_numbers(&c));
+    // another scene's file is refused, nothing run
+    let chute = scenes.join("chute.toml");
+    let r = coulomb(&[
+        "simulate",
+        chute.to_str().unwrap(),
+        "--restart",
+        c.join("checkpoint.h5").to_str().unwrap(),
+        "--steps",
+        "1",
+    ]);
+    assert_eq!(r.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("is not the scene of the checkpoint"));
+    std::fs::remove_dir_all(&root).ok();
+}

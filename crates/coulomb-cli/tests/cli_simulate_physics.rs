@@ -94,6 +94,10 @@ fn validate_quick_passes_and_writes_markdown() {
     ok(&out);
     let text = std::fs::read_to_string(&md).unwrap();
     assert!(text.contains("| incline 30° μ = 0.3 rolling: acceleration |"));
+    // the granular laws built from scene files: the incline only in quick mode
+    assert!(text.contains("## Granular laws: incline (scene file)"));
+    assert!(text.contains("examples/scenes/validation/incline.toml: glass ball"));
+    assert!(!text.contains("Janssen"));
     assert!(!text.contains("**no**"), "{text}");
 }
 

@@ -126,6 +126,14 @@ fn bad_scene_files_exit_2_with_the_place_and_write_nothing() {
             "bodys",
         ),
         ("empty.toml", "seed = 1\n", "empty.toml", "no sphere"),
+        // 3 m/s × 10 ms = 3 cm in one step, more than the radius 1 cm: the thin plate is
+        // crossed (tunnelling)
+        (
+            "fast.toml",
+            "[step]\nh = 0.01\n[[obstacles]]\nname = \"plate\"\nshape = { kind = \"rectangle\", center = [0, 0, 0], normal = [0, 0, 1], u = [1, 0, 0], half_u = 1, half_v = 1 }\n[[bodies]]\nvelocity = [0, 0, -3]\nspheres = [[0, 0, 0.5, 0.01]]\n",
+            "fast.toml",
+            "can cross obstacle 'plate' in one step",
+        ),
     ];
     for (name, text, place, what) in cases {
         let path = dir.join(name);

@@ -35,6 +35,7 @@ pub mod contact;
 pub mod distributed;
 pub mod generate;
 pub mod import;
+pub mod laws;
 pub mod math;
 pub mod mesh;
 pub mod model;
@@ -49,6 +50,7 @@ pub mod scene;
 pub mod scene_file;
 pub mod shape;
 pub mod simulation;
+pub mod tunnelling;
 pub mod validation;
 pub mod world;
 

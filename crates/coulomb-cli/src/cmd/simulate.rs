@@ -124,11 +124,20 @@ pub(crate) fn steps(
     let mut monitor = RestMonitor::default();
     let mut at_rest = false;
     let mut interrupted = None;
+    // a sphere fast enough to cross a thin wall within one step is reported once
+    let mut warned_travel = false;
     while sim.steps_done < stop.max_steps() {
         let t0 = sim.time;
         let s = sim.step().context("time step failed")?;
         let t1 = sim.time;
         hook.after_step(&mut sim, t0, t1)?;
+        if !warned_travel {
+            let (v, r) = coulomb_granular::tunnelling::speed_and_radius(&sim.world);
+            if let Err(t) = coulomb_granular::tunnelling::check(&sim.world, sim.params.h, v, r) {
+                eprintln!("warning: step {}: {t}", sim.steps_done);
+                warned_travel = true;
+            }
+        }
         pb.set_message(format!(
             "{} contacts, {} subproblems, {:.1} ms, err {:.1e}",
             s.contacts, s.subproblems, s.solve_ms, s.error

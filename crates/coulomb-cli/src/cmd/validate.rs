@@ -15,8 +15,8 @@ pub struct Args {
     /// write the report (Markdown) to this file, e.g. docs/validation.md
     #[arg(long)]
     pub markdown: Option<PathBuf>,
-    /// skip the long checks (settled bed, drum, column collapse, 600-bead box at rest; shorter
-    /// energy runs)
+    /// skip the long checks (settled bed, drum, column collapse, 600-bead box at rest, the
+    /// Janssen, Beverloo and angle-of-repose laws; shorter energy runs)
     #[arg(long)]
     pub quick: bool,
     /// print one JSON array of checks
@@ -245,6 +245,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         section("Column collapse", c, &mut checks);
     }
     checks.extend(coulomb_granular::rigid::validation::checks(args.quick)?);
+    // the granular laws, from the scene files of examples/scenes/validation/
+    for (s, c) in coulomb_granular::laws::checks(!args.quick)? {
+        section(&s, c, &mut checks);
+    }
     let failed = checks.iter().filter(|(_, c)| !c.pass()).count();
     let md = markdown(&checks, args.quick);
     if let Some(path) = &args.markdown {

@@ -27,15 +27,16 @@
 //! interior. The matrix is factored once per step ([`Setup`]): by a sparse LU on the block
 //! pattern of W; or, for a global problem with few degrees of freedom (rigid bodies), through
 //! its Schur complement on M; or, for a local problem whose W has low rank, through the
-//! skeleton of W ([`crate::skeleton`]), each solve refined on W as stored and redone by the
+//! skeleton of W ([`crate::linalg::skeleton`]), each solve refined on W as stored and redone by the
 //! sparse LU when the refinement falls short. The iterate of lowest error (docs/error.md, W
 //! as stored) is returned.
 
 use crate::deadline::Deadline;
-use crate::newton::JacobianPattern;
+use crate::linalg::blocks::{apply_blocks, invert_small};
+use crate::linalg::pattern_lu::{JacobianPattern, PatternLu};
 use crate::problem::{GlobalProblem, LocalProblem};
 use crate::settings::BarrierParams;
-use crate::skeleton::Skeleton;
+use crate::linalg::skeleton::Skeleton;
 
 /// The two constants that shape the path of one run of [`solve`] (the policy tries several:
 /// [`BarrierParams::paths`]).
@@ -263,7 +264,7 @@ pub enum LinearKind {
         /// the size of M
         dofs: usize,
     },
-    /// dense LU of A + R G⁻¹ C for the skeleton W ≈ C A⁻¹ R of [`crate::skeleton`]
+    /// dense LU of A + R G⁻¹ C for the skeleton W ≈ C A⁻¹ R of [`crate::linalg::skeleton`]
     Skeleton {
         /// the size of A
         rank: usize,
@@ -766,7 +767,7 @@ impl NewtonSystem {
         &self,
         p: &LocalProblem,
         sk: &Skeleton,
-        f: &crate::skeleton::SkeletonLu,
+        f: &crate::linalg::skeleton::SkeletonLu,
         b: &[f64],
         rhs: &mut [f64],
     ) -> Option<()> {
@@ -827,7 +828,7 @@ impl NewtonSystem {
     }
 
     /// The sparse LU of W + G + shift · I on the pattern, the shift raised until it succeeds.
-    fn sparse_factor(&mut self, pattern: &JacobianPattern) -> Option<crate::newton::PatternLu> {
+    fn sparse_factor(&mut self, pattern: &JacobianPattern) -> Option<PatternLu> {
         loop {
             if let Some(lu) = pattern.factor(&self.vals_shifted(pattern, self.shift)) {
                 return Some(lu);
@@ -876,7 +877,7 @@ impl NewtonSystem {
                 }
             }
         }
-        let lu = crate::dense::Lu::new(k, crate::dense::parallelism(n, self.dense_parallel_dim))?;
+        let lu = crate::linalg::dense::Lu::new(k, crate::linalg::dense::parallelism(n, self.dense_parallel_dim))?;
         Some(Factor::Schur(ginv, lu))
     }
 
@@ -920,7 +921,7 @@ fn schur_apply(
     d: usize,
     g: &GlobalProblem,
     ginv: &[f64],
-    lu: &crate::dense::Lu,
+    lu: &crate::linalg::dense::Lu,
     rhs: &mut [f64],
 ) -> Option<()> {
     let mut z = vec![0.0; rhs.len()];
@@ -938,59 +939,11 @@ fn schur_apply(
 /// The factorization of one step's Newton matrix W + G.
 enum Factor {
     /// sparse LU of W + G (+ shift) on the block pattern of W
-    Sparse(Box<crate::newton::PatternLu>),
+    Sparse(Box<PatternLu>),
     /// G⁻¹ and the dense LU of M + H G⁻¹ Hᵀ
-    Schur(Vec<f64>, crate::dense::Lu),
-    /// G⁻¹ and the dense LU of A + R G⁻¹ C ([`crate::skeleton`])
-    Skeleton(crate::skeleton::SkeletonLu),
-}
-
-/// out = blockdiag(blocks) x (row-major d × d blocks).
-pub(crate) fn apply_blocks(d: usize, blocks: &[f64], x: &[f64], out: &mut [f64]) {
-    for ((blk, xi), oi) in blocks.chunks(d * d).zip(x.chunks(d)).zip(out.chunks_mut(d)) {
-        for a in 0..d {
-            oi[a] = (0..d).map(|b| blk[a * d + b] * xi[b]).sum();
-        }
-    }
-}
-
-/// The inverse of a 2 × 2 or 3 × 3 row-major matrix by cofactors; None if its determinant
-/// vanishes (or underflows) or is not finite.
-pub(crate) fn invert_small(d: usize, a: &[f64], inv: &mut [f64]) -> Option<()> {
-    let scale = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    if d == 2 {
-        let det = a[0] * a[3] - a[1] * a[2];
-        if det.is_nan() || det.abs() <= f64::MIN_POSITIVE * scale * scale || !det.is_finite() {
-            return None;
-        }
-        inv.copy_from_slice(&[a[3] / det, -a[1] / det, -a[2] / det, a[0] / det]);
-        return Some(());
-    }
-    let c = |r: usize, k: usize| a[r * 3 + k];
-    let cof = [
-        c(1, 1) * c(2, 2) - c(1, 2) * c(2, 1),
-        c(1, 2) * c(2, 0) - c(1, 0) * c(2, 2),
-        c(1, 0) * c(2, 1) - c(1, 1) * c(2, 0),
-    ];
-    let det = c(0, 0) * cof[0] + c(0, 1) * cof[1] + c(0, 2) * cof[2];
-    if det.is_nan() || det.abs() <= f64::MIN_POSITIVE * scale * scale * scale || !det.is_finite() {
-        return None;
-    }
-    let adj = [
-        cof[0],
-        c(0, 2) * c(2, 1) - c(0, 1) * c(2, 2),
-        c(0, 1) * c(1, 2) - c(0, 2) * c(1, 1),
-        cof[1],
-        c(0, 0) * c(2, 2) - c(0, 2) * c(2, 0),
-        c(0, 2) * c(1, 0) - c(0, 0) * c(1, 2),
-        cof[2],
-        c(0, 1) * c(2, 0) - c(0, 0) * c(2, 1),
-        c(0, 0) * c(1, 1) - c(0, 1) * c(1, 0),
-    ];
-    for k in 0..9 {
-        inv[k] = adj[k] / det;
-    }
-    Some(())
+    Schur(Vec<f64>, crate::linalg::dense::Lu),
+    /// G⁻¹ and the dense LU of A + R G⁻¹ C ([`crate::linalg::skeleton`])
+    Skeleton(crate::linalg::skeleton::SkeletonLu),
 }
 
 /// x ← (T C)⁻¹ x = (μ (x₀ − t̂ᵀx̄), x̄) for one contact.
@@ -1099,7 +1052,7 @@ mod tests {
         };
         for seed in 0..12 {
             for skew in [0.0, 1e-3] {
-                let p = crate::levenberg::tests::problem(8, seed, 0.0, skew);
+                let p = crate::test_problems::problem(8, seed, 0.0, skew);
                 runs += 1;
                 for (k, bp) in [no_skeleton, params].iter().enumerate() {
                     let setup = Setup::new(&p, None, bp, Deadline::NEVER).unwrap();
@@ -1144,7 +1097,7 @@ mod tests {
         // `settle_steps` steps in a row cut below `settle_alpha`, with the lowest error ≤
         // `settle_below`, end a run (status Stalled) with its best point, judged on the
         // stored W; with `settle_below` = 0 the same run goes on to the tolerance
-        let p = crate::levenberg::tests::problem(8, 3, 0.0, 1e-3);
+        let p = crate::test_problems::problem(8, 3, 0.0, 1e-3);
         let base = BarrierParams::default();
         let run = |bp: &BarrierParams| {
             let setup = Setup::new(&p, None, bp, Deadline::NEVER).unwrap();
@@ -1176,7 +1129,7 @@ mod tests {
         // with an antisymmetric part in W (the skeleton then only approximates W, the solves
         // are refined on W as stored) the same too
         for skew in [0.0, 1e-4] {
-            let p = crate::levenberg::tests::problem(8, 5, 0.0, skew);
+            let p = crate::test_problems::problem(8, 5, 0.0, skew);
             let params = BarrierParams::default();
             let deadline = Deadline::NEVER;
             let skeleton = Setup::new(&p, None, &params, deadline).unwrap();
@@ -1189,7 +1142,7 @@ mod tests {
             assert_eq!(sparse.kind(), LinearKind::SparseLu);
             assert!(Setup::structured(&p, None, &no_skeleton, deadline).is_none());
             // a setup used on another problem takes no step
-            let other = crate::levenberg::tests::problem(5, 5, 0.0, skew);
+            let other = crate::test_problems::problem(5, 5, 0.0, skew);
             for setup in [&skeleton, &sparse] {
                 let (_, rep) =
                     solve_with(&other, setup, 0.0, 3, &params, params.paths[0], deadline);
@@ -1219,7 +1172,7 @@ mod tests {
             ..base
         };
         for skew in [0.3, 0.1] {
-            let p = crate::levenberg::tests::problem(8, 2, 0.0, skew);
+            let p = crate::test_problems::problem(8, 2, 0.0, skew);
             let setup = Setup::new(&p, None, &base, deadline).unwrap();
             assert!(matches!(setup.kind(), LinearKind::Skeleton { .. }));
             let run =
@@ -1244,14 +1197,14 @@ mod tests {
         // a global problem (M = 2I, n = m/4) and its Delassus form: the same iterates whether
         // the Newton systems are solved on M + H G⁻¹ Hᵀ or on W + G
         let (m, n) = (24, 6);
-        let lp = crate::levenberg::tests::problem(8, 5, 0.0, 0.0);
+        let lp = crate::test_problems::problem(8, 5, 0.0, 0.0);
         let h: Vec<f64> = (0..n * m)
             .map(|k| ((k * 7919) % 23) as f64 / 11.0 - 1.0)
             .collect();
         let g = GlobalProblem::new(
             3,
-            crate::sparse::CscMatrix::identity(n, 2.0),
-            crate::sparse::CscMatrix::from_dense(n, m, &h),
+            crate::linalg::sparse::CscMatrix::identity(n, 2.0),
+            crate::linalg::sparse::CscMatrix::from_dense(n, m, &h),
             vec![0.3; n],
             lp.q.clone(),
             lp.mu.clone(),
@@ -1297,7 +1250,7 @@ mod tests {
         // d = 2 (the Lorentz cone of R²): W = AᵀA + I/10 with A of m/2 rows, 6 contacts
         let mut reached = 0;
         for seed in 0..8u64 {
-            let mut next = crate::levenberg::tests::uniform(seed, 3);
+            let mut next = crate::test_problems::uniform(seed, 3);
             let (contacts, m) = (6, 12);
             let a: Vec<f64> = (0..m / 2 * m).map(|_| next()).collect();
             let w: Vec<f64> = (0..m * m)
@@ -1309,7 +1262,7 @@ mod tests {
                 .collect();
             let p = LocalProblem::new(
                 2,
-                crate::sparse::CscMatrix::from_dense(m, m, &w),
+                crate::linalg::sparse::CscMatrix::from_dense(m, m, &w),
                 (0..m).map(|_| next()).collect(),
                 (0..contacts).map(|_| 0.2 + 0.8 * next().abs()).collect(),
             )
@@ -1326,7 +1279,7 @@ mod tests {
 
     #[test]
     fn a_frictionless_contact_or_an_empty_problem_takes_no_step() {
-        let mut p = crate::levenberg::tests::problem(3, 1, 0.1, 0.0);
+        let mut p = crate::test_problems::problem(3, 1, 0.1, 0.0);
         p.mu[1] = 0.0;
         let (r, rep) = run_default(&p);
         assert_eq!(rep.status, BarrierStatus::NotApplicable);

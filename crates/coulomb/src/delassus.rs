@@ -10,7 +10,7 @@
 /// found it.
 pub use crate::mass::{MassError, MassFactor};
 use crate::problem::{GlobalProblem, LocalProblem, ProblemError};
-use crate::sparse::CscMatrix;
+use crate::linalg::sparse::CscMatrix;
 
 /// The Delassus operator x ↦ W x = Hᵀ M⁻¹ H x, without forming W.
 pub struct DelassusOperator<'a> {

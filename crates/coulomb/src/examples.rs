@@ -15,7 +15,7 @@
 //! contact point; an obstacle B with prescribed velocity contributes to w only.
 
 use crate::problem::{GlobalProblem, ProblemError};
-use crate::sparse::CscMatrix;
+use crate::linalg::sparse::CscMatrix;
 
 /// Standard gravity used by the multi-body examples (pointing down, −y).
 pub const GRAVITY: f64 = 9.81;

@@ -255,7 +255,7 @@ pub struct NewtonParams {
 /// freedom as contact unknowns (at most `max_schur_dofs`: rigid bodies touching at several
 /// points per face, where W is rank-deficient and the Newton systems are of the size of M),
 /// or of a local problem with at most `max_skeleton_unknowns` contact unknowns whose W has a
-/// skeleton of rank ≤ min(`max_schur_dofs`, `skeleton_rank_ratio` · m) ([`crate::skeleton`]),
+/// skeleton of rank ≤ min(`max_schur_dofs`, `skeleton_rank_ratio` · m) ([`crate::linalg::skeleton`]),
 /// before the main
 /// method. A try runs the method along each path of `paths` in turn (at most
 /// [`Settings::barrier_steps`] Newton steps each), finishes a run with the
@@ -310,14 +310,14 @@ pub struct BarrierParams {
     /// the policy's try needs it; ≥ 1. Also the largest rank of the skeleton of a local W
     pub max_schur_dofs: usize,
     /// the dense LU factorizations of these Newton systems (Schur complement, skeleton, and
-    /// the method of multipliers' J, [`crate::dense`]) run on all threads from this size on,
+    /// the method of multipliers' J, [`crate::linalg::dense`]) run on all threads from this size on,
     /// on one thread below it; ≥ 1. Measured (`cargo bench -p coulomb --bench dense_lu`, 2
     /// cores), all threads / one: 4.8× the time at n = 100, 2.3× at 384, 1.13× at 1 000,
     /// 0.93× at 1 500, 0.78× at 3 000
     pub dense_parallel_dim: usize,
     /// a local problem with at most this many contact unknowns is probed for a skeleton
     /// W ≈ W[:, P] W[P, P]⁻¹ W[P, :] of rank ≤ min(`max_schur_dofs`, `skeleton_rank_ratio` · m)
-    /// ([`crate::skeleton`]; cost ≤ m · rank² flops); if it has one, its Newton systems are
+    /// ([`crate::linalg::skeleton`]; cost ≤ m · rank² flops); if it has one, its Newton systems are
     /// solved through it (dense LU of the size of the rank) and the policy's try runs on it
     pub max_skeleton_unknowns: usize,
     /// see `max_skeleton_unknowns`; in (0, 1]. A pile of rigid bodies has rank W ≤ 6 per body;
@@ -664,8 +664,8 @@ pub struct MultiplierParams {
     /// (docs/rigid.md)
     pub starts: usize,
     /// on a local problem the stage runs on the velocity form of W's skeleton C A⁻¹ R
-    /// ([`crate::skeleton`]), symmetric or not, and only where
-    /// [`crate::skeleton::Skeleton::residual`] ≤ `skeleton_residual` · tol (W = C A⁻¹ R holds
+    /// ([`crate::linalg::skeleton`]), symmetric or not, and only where
+    /// [`crate::linalg::skeleton::Skeleton::residual`] ≤ `skeleton_residual` · tol (W = C A⁻¹ R holds
     /// to rounding when rank W equals the skeleton's rank: the stage then solves the stored
     /// W's law; else it could not reach tol on it); ≥ 0
     pub skeleton_residual: f64,

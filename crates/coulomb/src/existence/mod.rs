@@ -64,7 +64,7 @@ mod criteria;
 mod margin;
 
 use crate::problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
-use crate::sparse::CscMatrix;
+use crate::linalg::sparse::CscMatrix;
 use clarabel::algebra as ca;
 use clarabel::solver::{self as cs, IPSolver};
 use criteria::run_all_with;

@@ -28,7 +28,7 @@ use crate::delassus::DelassusOperator;
 use crate::law::norm;
 use crate::natural_map::dual_residual_shifted;
 use crate::settings::{ApgdParams, RayParams};
-use crate::sparse::{BlockCsr, CscMatrix};
+use crate::linalg::sparse::{BlockCsr, CscMatrix};
 
 /// A symmetric positive semi-definite operator x ↦ W x.
 pub trait LinearOperator {

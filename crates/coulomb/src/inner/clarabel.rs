@@ -5,7 +5,7 @@
 use super::polish::polish_dual;
 use super::{InnerLimits, InnerProblem, InnerReport, InnerStatus};
 use crate::natural_map::dual_natural_residual;
-use crate::sparse::CscMatrix;
+use crate::linalg::sparse::CscMatrix;
 use clarabel::algebra::CscMatrix as ClarabelCsc;
 use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
 use std::time::Instant;

@@ -45,7 +45,7 @@ use crate::deadline::Deadline;
 use crate::natural_map::{natural_map, push_d_times, push_identity_minus_d};
 use crate::newton::{drive, SemismoothMap};
 use crate::problem::GlobalProblem;
-use crate::sparse::CscMatrix;
+use crate::linalg::sparse::CscMatrix;
 use clarabel::algebra::CscMatrix as ClarabelCsc;
 use clarabel::solver::{DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
 

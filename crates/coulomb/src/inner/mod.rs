@@ -18,7 +18,7 @@ pub(crate) mod polish;
 
 pub use crate::deadline::Deadline;
 use crate::settings::RayParams;
-use crate::sparse::CscMatrix;
+use crate::linalg::sparse::CscMatrix;
 
 /// The dual inner problem (4.7): min over r ∈ L = ∏ K_{μⁱ} of ½ rᵀ W r + bᵀ r.
 #[derive(Debug, Clone, Copy)]

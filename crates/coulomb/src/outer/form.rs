@@ -19,7 +19,7 @@ use crate::delassus::Delassus;
 use crate::evaluation;
 use crate::law;
 use crate::problem::{GlobalProblem, LocalProblem};
-use crate::sparse::CscMatrix;
+use crate::linalg::sparse::CscMatrix;
 use std::borrow::Cow;
 use std::sync::OnceLock;
 

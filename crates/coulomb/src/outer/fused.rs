@@ -7,7 +7,7 @@ use super::anderson::Anderson;
 use crate::cone;
 use crate::inner::pgs::{sweep, PgsSolver};
 use crate::inner::{InnerLimits, InnerReport, InnerStatus};
-use crate::sparse::CscMatrix;
+use crate::linalg::sparse::CscMatrix;
 
 /// Sweeps over which [`solve_fused`] measures its rate when asked to give up early.
 pub const GIVE_UP_WINDOW: usize = 10;
@@ -216,7 +216,7 @@ mod tests {
         // other than the one of its r
         let (mut plain_total, mut mixed_total, mut both) = (0, 0, 0);
         for seed in 0..8 {
-            let mut p = crate::levenberg::tests::problem(8, seed, 0.01, 0.0);
+            let mut p = crate::test_problems::problem(8, seed, 0.01, 0.0);
             p.q.iter_mut().step_by(3).for_each(|x| *x -= 0.5);
             let (plain, plain_res, plain_err) = run(&p, 0);
             let (mixed, mixed_res, mixed_err) = run(&p, ANDERSON_PERIOD);

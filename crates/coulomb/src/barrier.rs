@@ -34,9 +34,9 @@
 use crate::deadline::Deadline;
 use crate::linalg::blocks::{apply_blocks, invert_small};
 use crate::linalg::pattern_lu::{JacobianPattern, PatternLu};
+use crate::linalg::skeleton::Skeleton;
 use crate::problem::{GlobalProblem, LocalProblem};
 use crate::settings::BarrierParams;
-use crate::linalg::skeleton::Skeleton;
 
 /// The two constants that shape the path of one run of [`solve`] (the policy tries several:
 /// [`BarrierParams::paths`]).
@@ -877,7 +877,10 @@ impl NewtonSystem {
                 }
             }
         }
-        let lu = crate::linalg::dense::Lu::new(k, crate::linalg::dense::parallelism(n, self.dense_parallel_dim))?;
+        let lu = crate::linalg::dense::Lu::new(
+            k,
+            crate::linalg::dense::parallelism(n, self.dense_parallel_dim),
+        )?;
         Some(Factor::Schur(ginv, lu))
     }
 

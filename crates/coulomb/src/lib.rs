@@ -72,8 +72,8 @@ pub use linalg::{dense, skeleton, sparse};
 /// The outer iteration's pieces, at their former path (`coulomb::fixed_point`).
 pub use outer::fixed_point;
 
+pub use linalg::sparse::CscMatrix;
 pub use outer::{solve, solve_with_guess, Solver};
 pub use problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
 pub use settings::{InnerKind, Method, OuterKind, Settings};
 pub use solution::{Guess, Solution, SolveError, Status};
-pub use linalg::sparse::CscMatrix;

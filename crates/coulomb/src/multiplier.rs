@@ -46,10 +46,10 @@
 use rayon::prelude::*;
 
 use crate::deadline::Deadline;
+use crate::linalg::sparse::CscMatrix;
 use crate::mass::MassFactor;
 use crate::problem::GlobalProblem;
 use crate::settings::MultiplierParams;
-use crate::linalg::sparse::CscMatrix;
 
 /// The largest n [`solve`] takes: its Newton systems are dense n × n (8 n² bytes, O(n³)
 /// flops per step; the default's stage stays at or below

@@ -25,12 +25,12 @@
 //! problems (3.15) and (4.7) in [`crate::inner::ipm`].
 
 use crate::deadline::Deadline;
-use crate::natural_map::de_saxce_map;
-use crate::problem::LocalProblem;
 use crate::linalg::normal::{Normal, NormalPattern};
 use crate::linalg::pattern_lu::JacobianPattern;
 /// At its former path: the size from which the sparse factorizations run on all threads.
 pub use crate::linalg::pattern_lu::SPARSE_PARALLEL_DIM;
+use crate::natural_map::de_saxce_map;
+use crate::problem::LocalProblem;
 
 /// Consecutive slow steps (‖G‖ reduced by less than 1 − [`SLOW_RATIO`]) after which
 /// [`polish`] gives up.
@@ -486,8 +486,8 @@ pub fn polish_with(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::natural_map::{push_d_times, push_identity_minus_d};
     use crate::linalg::sparse::CscMatrix;
+    use crate::natural_map::{push_d_times, push_identity_minus_d};
 
     #[test]
     fn least_squares_reaches_a_solution_nearby_and_never_raises_the_error() {

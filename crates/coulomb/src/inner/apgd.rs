@@ -26,9 +26,9 @@ use super::{InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus};
 use crate::cone;
 use crate::delassus::DelassusOperator;
 use crate::law::norm;
+use crate::linalg::sparse::{BlockCsr, CscMatrix};
 use crate::natural_map::dual_residual_shifted;
 use crate::settings::{ApgdParams, RayParams};
-use crate::linalg::sparse::{BlockCsr, CscMatrix};
 
 /// A symmetric positive semi-definite operator x ↦ W x.
 pub trait LinearOperator {

@@ -4,8 +4,8 @@
 
 use super::polish::polish_dual;
 use super::{InnerLimits, InnerProblem, InnerReport, InnerStatus};
-use crate::natural_map::dual_natural_residual;
 use crate::linalg::sparse::CscMatrix;
+use crate::natural_map::dual_natural_residual;
 use clarabel::algebra::CscMatrix as ClarabelCsc;
 use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
 use std::time::Instant;

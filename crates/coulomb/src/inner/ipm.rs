@@ -42,10 +42,10 @@ pub(crate) use super::clarabel::{solve_dual_qp, triplets_to_clarabel, QpSetup};
 use super::polish::{polish_rule, shifted_lu_solve};
 use super::{InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus};
 use crate::deadline::Deadline;
+use crate::linalg::sparse::CscMatrix;
 use crate::natural_map::{natural_map, push_d_times, push_identity_minus_d};
 use crate::newton::{drive, SemismoothMap};
 use crate::problem::GlobalProblem;
-use crate::linalg::sparse::CscMatrix;
 use clarabel::algebra::CscMatrix as ClarabelCsc;
 use clarabel::solver::{DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
 

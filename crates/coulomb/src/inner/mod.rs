@@ -17,8 +17,8 @@ pub mod pgs;
 pub(crate) mod polish;
 
 pub use crate::deadline::Deadline;
-use crate::settings::RayParams;
 use crate::linalg::sparse::CscMatrix;
+use crate::settings::RayParams;
 
 /// The dual inner problem (4.7): min over r ∈ L = ∏ K_{μⁱ} of ½ rᵀ W r + bᵀ r.
 #[derive(Debug, Clone, Copy)]

@@ -42,8 +42,8 @@ use super::contact::matvec;
 pub use super::contact::{solve_contact, solve_contact_law, DiagonalBlocks, OneContact};
 use super::{InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus};
 use crate::cone;
-use crate::natural_map::dual_residual;
 use crate::linalg::sparse::CscMatrix;
+use crate::natural_map::dual_residual;
 
 /// Projected block Gauss–Seidel on (4.7) with exact one-contact solves, set up for one
 /// (d, W): the diagonal blocks Wᵢᵢ and their inverses are extracted by [`PgsSolver::new`].

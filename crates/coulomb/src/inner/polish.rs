@@ -3,8 +3,8 @@
 
 use super::InnerProblem;
 use crate::deadline::Deadline;
-use crate::natural_map::{natural_map, push_d_times, push_identity_minus_d};
 use crate::linalg::pattern_lu::sparse_lu_solve;
+use crate::natural_map::{natural_map, push_d_times, push_identity_minus_d};
 use crate::newton::{drive, NewtonRule, SemismoothMap};
 
 /// The natural map F(r) = r − P_L(r − (W r + b)) of (4.7), its Jacobian I − D + D W

@@ -6,8 +6,8 @@
 //! the polish of the inner interior point ([`crate::inner::ipm`]) and, for its pattern, the
 //! normal equations of Levenberg–Marquardt ([`super::normal`]).
 
-use crate::problem::LocalProblem;
 use crate::linalg::sparse::CscMatrix;
+use crate::problem::LocalProblem;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu, SymbolicLu};

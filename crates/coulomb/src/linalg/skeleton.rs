@@ -287,7 +287,10 @@ impl Skeleton {
         Some(SkeletonLu {
             rank,
             ginv,
-            lu: crate::linalg::dense::Lu::new(k, crate::linalg::dense::parallelism(rank, parallel_dim))?,
+            lu: crate::linalg::dense::Lu::new(
+                k,
+                crate::linalg::dense::parallelism(rank, parallel_dim),
+            )?,
         })
     }
 }

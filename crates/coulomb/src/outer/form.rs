@@ -18,8 +18,8 @@
 use crate::delassus::Delassus;
 use crate::evaluation;
 use crate::law;
-use crate::problem::{GlobalProblem, LocalProblem};
 use crate::linalg::sparse::CscMatrix;
+use crate::problem::{GlobalProblem, LocalProblem};
 use std::borrow::Cow;
 use std::sync::OnceLock;
 

@@ -31,11 +31,11 @@ use crate::delassus::Delassus;
 use crate::inner::{
     apgd::ApgdSolver, faceted::FacetedSolver, ipm::IpmSolver, pgs::PgsSolver, InnerSolver,
 };
+use crate::linalg::sparse::CscMatrix;
 use crate::plan::{Plan, Rigid, StepKind, Structure};
 use crate::problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
 use crate::settings::{InnerKind, InnerParams, OuterKind, Settings};
 use crate::solution::{Guess, OuterRecord, Solution, SolveError, Status};
-use crate::linalg::sparse::CscMatrix;
 use form::{Form, Stored};
 use stage::{Best, Stage};
 use std::borrow::Cow;

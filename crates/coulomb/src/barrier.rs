@@ -36,7 +36,187 @@ use crate::linalg::blocks::{apply_blocks, invert_small};
 use crate::linalg::pattern_lu::{JacobianPattern, PatternLu};
 use crate::linalg::skeleton::Skeleton;
 use crate::problem::{GlobalProblem, LocalProblem};
-use crate::settings::BarrierParams;
+
+/// The default of [`BarrierParams::max_work`] (docs/solver-core.md: how it was calibrated).
+pub const BARRIER_MAX_WORK: usize = 150;
+
+/// Parameters of the interior-point method on Coulomb's law ([`crate::barrier`]) and of its
+/// try in the default policy ([`crate::Solver::solve`]): after the warm-up of a cold solve
+/// (no guess) with every μ > 0 of a global problem with at most half as many degrees of
+/// freedom as contact unknowns (at most `max_schur_dofs`: rigid bodies touching at several
+/// points per face, where W is rank-deficient and the Newton systems are of the size of M),
+/// or of a local problem with at most `max_skeleton_unknowns` contact unknowns whose W has a
+/// skeleton of rank ≤ min(`max_schur_dofs`, `skeleton_rank_ratio` · m) ([`crate::linalg::skeleton`]),
+/// before the main
+/// method. A try runs the method along each path of `paths` in turn (at most
+/// [`crate::settings::Settings::barrier_steps`] Newton steps each), finishes a run with the
+/// Levenberg–Marquardt end game when its error is ≤ [`crate::levenberg::LmParams::start`], keeps the best point
+/// and stops once it converges (or is within `handover` · tol where the method of multipliers
+/// follows) or has spent its work budget `max_work` (Newton and LM steps: a budget in work, so
+/// that the same input takes the same path on any machine and under any load).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct BarrierParams {
+    /// a run stops when its lowest error has not improved for this many steps; ≥ 1
+    pub stall_steps: usize,
+    /// once its lowest error is ≤ `settle_below`, a run stops after this many steps in a row
+    /// cut below `settle_alpha` of the Newton step (jammed near the end of its path, where
+    /// the try's Levenberg–Marquardt finish, [`crate::levenberg::LmParams::start`], usually ends it in a few
+    /// steps; docs/rigid.md); ≥ 1
+    pub settle_steps: usize,
+    /// see `settle_steps`; ≥ 0 (0: never)
+    pub settle_below: f64,
+    /// see `settle_steps`; in (0, 1)
+    pub settle_alpha: f64,
+    /// fraction of the step to the boundary of the cones that is taken; in (0, 1)
+    pub boundary_fraction: f64,
+    /// (smoothing, recentring) of the runs of a try, in order: on hard rigid problems the
+    /// method is sensitive to them and different runs end at different points
+    pub paths: [PathParams; 4],
+    /// the start b = T ũ(r₀) is moved into the interior of L with this margin, relative to
+    /// its largest entry; > 0
+    pub start_margin: f64,
+    /// … and by at least this multiple of ‖q‖/√contacts; > 0
+    pub start_floor: f64,
+    /// a try takes at most this many steps in all (the interior point's Newton steps and
+    /// its LM finishes' steps, each a factorization): no new run or finish starts once they
+    /// are spent, and a run or finish gets at most what is left; ≥ 1. It replaced a share
+    /// of the time left (0.5) so that the path does not depend on the machine's speed or
+    /// load; calibrated on the corpus (docs/solver-core.md)
+    pub max_work: usize,
+    /// the LM finish of a run of the try stops when its lowest error has not dropped below
+    /// [`crate::levenberg::LmParams::stall_gain`] times its value this many segments earlier (the try's own
+    /// [`crate::levenberg::LmParams::stall_segments`]); ≥ 1
+    pub lm_stall_segments: usize,
+    /// where the method of multipliers follows the try ([`crate::settings::MultiplierParams`]), the try ends
+    /// after a run whose end point has an error ≤ `handover` · tol (from such points the
+    /// multipliers converge in a few Newton steps, where the LM finish crawls); ≥ 0 (0: the
+    /// try ends only at the tolerance). Measured with `lm_stall_segments` = 2 against 6 and
+    /// no handover, on the 720 box files of corpus seeds 1–5 (docs/rigid.md): 718 solved in
+    /// 10 s either way, the five files that waited for the end of the try's share (5.0 s)
+    /// solved in 1.2–3.2 s
+    pub handover: f64,
+    /// a global problem with at most this many degrees of freedom (and fewer than contact
+    /// unknowns) has its Newton systems solved on M + H G⁻¹ Hᵀ (dense LU) instead of W + G;
+    /// the policy's try needs it; ≥ 1. Also the largest rank of the skeleton of a local W
+    pub max_schur_dofs: usize,
+    /// the dense LU factorizations of these Newton systems (Schur complement, skeleton, and
+    /// the method of multipliers' J, [`crate::linalg::dense`]) run on all threads from this size on,
+    /// on one thread below it; ≥ 1. Measured (`cargo bench -p coulomb --bench dense_lu`, 2
+    /// cores), all threads / one: 4.8× the time at n = 100, 2.3× at 384, 1.13× at 1 000,
+    /// 0.93× at 1 500, 0.78× at 3 000
+    pub dense_parallel_dim: usize,
+    /// a local problem with at most this many contact unknowns is probed for a skeleton
+    /// W ≈ W[:, P] W[P, P]⁻¹ W[P, :] of rank ≤ min(`max_schur_dofs`, `skeleton_rank_ratio` · m)
+    /// ([`crate::linalg::skeleton`]; cost ≤ m · rank² flops); if it has one, its Newton systems are
+    /// solved through it (dense LU of the size of the rank) and the policy's try runs on it
+    pub max_skeleton_unknowns: usize,
+    /// see `max_skeleton_unknowns`; in (0, 1]. A pile of rigid bodies has rank W ≤ 6 per body;
+    /// Siconos' RockPile_tob1 (463 contacts, m = 1 389) has rank 743 = 0.535 m: with 0.5 its
+    /// local form had no skeleton and was not solved in 60 s, with 0.6 the method of
+    /// multipliers solves it in 18 s (docs/rigid.md)
+    pub skeleton_rank_ratio: f64,
+    /// the pivoting of the skeleton stops when every remaining diagonal entry of
+    /// ½(W + Wᵀ) is ≤ this multiple of max Wᵢᵢ (its numerical rank); in (0, 1)
+    pub rank_tol: f64,
+    /// a solve through the skeleton is refined on W as stored at most this many times …
+    pub refine_steps: usize,
+    /// … until its residual (max norm) is ≤ this multiple of the right-hand side's; else the
+    /// step is solved by the sparse LU of W + G; > 0
+    pub refine_tol: f64,
+    /// after this many steps in a row solved by the sparse LU that way, a run no longer tries
+    /// the skeleton (every solve of a W with a large antisymmetric part falls back); ≥ 1
+    pub skeleton_strikes: usize,
+}
+
+impl Default for BarrierParams {
+    fn default() -> Self {
+        Self {
+            stall_steps: 30,
+            settle_steps: 5,
+            settle_below: 1e-6,
+            settle_alpha: 0.1,
+            boundary_fraction: 0.99,
+            paths: [
+                PathParams {
+                    smoothing: 0.1,
+                    recentre: 0.05,
+                },
+                PathParams {
+                    smoothing: 0.1,
+                    recentre: 0.0,
+                },
+                PathParams {
+                    smoothing: 0.3,
+                    recentre: 0.0,
+                },
+                PathParams {
+                    smoothing: 0.03,
+                    recentre: 0.0,
+                },
+            ],
+            start_margin: 1e-2,
+            start_floor: 1e-3,
+            max_work: BARRIER_MAX_WORK,
+            lm_stall_segments: 2,
+            handover: 10.0,
+            max_schur_dofs: 1500,
+            dense_parallel_dim: 1500,
+            max_skeleton_unknowns: 4000,
+            skeleton_rank_ratio: 0.6,
+            rank_tol: 1e-10,
+            refine_steps: 4,
+            refine_tol: 1e-10,
+            skeleton_strikes: 3,
+        }
+    }
+}
+
+impl BarrierParams {
+    pub(crate) fn validate(&self) -> Result<(), String> {
+        let fraction = |x: f64| x.is_finite() && x > 0.0 && x < 1.0;
+        let positive = |x: f64| x.is_finite() && x > 0.0;
+        if self.stall_steps == 0
+            || self.settle_steps == 0
+            || self.max_schur_dofs == 0
+            || self.dense_parallel_dim == 0
+            || self.skeleton_strikes == 0
+            || self.lm_stall_segments == 0
+            || self.max_work == 0
+        {
+            return Err(
+                "tuning.barrier: stall_steps, settle_steps, max_schur_dofs, \
+                 dense_parallel_dim, skeleton_strikes, lm_stall_segments and max_work must be ≥ 1"
+                    .into(),
+            );
+        }
+        let paths_ok = self.paths.iter().all(|p| {
+            p.smoothing.is_finite()
+                && p.smoothing >= 0.0
+                && p.recentre.is_finite()
+                && (0.0..1.0).contains(&p.recentre)
+        });
+        let ok = fraction(self.boundary_fraction)
+            && paths_ok
+            && self.settle_below.is_finite()
+            && self.settle_below >= 0.0
+            && fraction(self.settle_alpha)
+            && positive(self.start_margin)
+            && positive(self.start_floor)
+            && self.handover.is_finite()
+            && self.handover >= 0.0
+            && fraction(self.rank_tol)
+            && positive(self.skeleton_rank_ratio)
+            && self.skeleton_rank_ratio <= 1.0
+            && positive(self.refine_tol);
+        if !ok {
+            return Err(format!(
+                "tuning.barrier: a parameter is out of range: {self:?}"
+            ));
+        }
+        Ok(())
+    }
+}
 
 /// The two constants that shape the path of one run of [`solve`] (the policy tries several:
 /// [`BarrierParams::paths`]).
@@ -1075,7 +1255,7 @@ mod tests {
                             recomputed <= bp.settle_below,
                             "seed {seed} skew {skew}: {recomputed}"
                         );
-                        let lm = crate::settings::LmParams::default();
+                        let lm = crate::levenberg::LmParams::default();
                         crate::levenberg::solve(&p, &mut r, 1e-8, &lm, Deadline::NEVER);
                         finished += usize::from(p.error(&r).error <= 1e-8);
                     } else {

@@ -35,8 +35,133 @@
 use crate::deadline::Deadline;
 use crate::linalg::normal::{Normal, NormalPattern};
 use crate::linalg::pattern_lu::JacobianPattern;
-use crate::problem::LocalProblem;
-use crate::settings::LmParams;
+use crate::problem::{projected, LocalProblem};
+
+/// Parameters of the Levenberg–Marquardt end game on the Alart–Curnier map
+/// ([`crate::levenberg`]), the finish for rigid, rank-deficient problems on which the
+/// semismooth Newton end game stops at a stationary point (docs/rigid.md). A stage runs it
+/// from its best iterate once the Newton end game has spent its whole budget
+/// ([`crate::settings::Settings::newton_steps`]) without converging, the fixed point stagnates (see
+/// [`crate::newton::NewtonParams::stagnation`]) and the error is ≤ `start`, and again whenever the error has dropped below `retry` times
+/// the lowest error of the previous run; `max_steps = 0` turns it off.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct LmParams {
+    /// cap on LM steps (factorizations of JᵀJ + λI) of all runs of a stage; 0: no LM end game
+    pub max_steps: usize,
+    /// the end game starts only from an error (docs/error.md) ≤ this: from higher errors it
+    /// stalled on every corpus file where it was tried (docs/rigid.md); ≥ 0
+    pub start: f64,
+    /// a run stops (stalled) when its lowest error has not dropped below `stall_gain` times
+    /// its value `stall_segments` segments earlier; ≥ 1
+    pub stall_segments: usize,
+    /// see `stall_segments`; in (0, 1]
+    pub stall_gain: f64,
+    /// the end game runs again once the error is below `retry` times the lowest error of its
+    /// previous run; in (0, 1]
+    pub retry: f64,
+    /// a run that does not converge replaces the stage's iterate only if it lowered the error
+    /// to at most `keep_gain` times its starting value; in (0, 1]
+    pub keep_gain: f64,
+    /// LM steps per segment; a segment that does not lower the error to `segment_gain` times
+    /// its starting value is followed by an escape; ≥ 1
+    pub segment_steps: usize,
+    /// see `segment_steps`; in (0, 1]
+    pub segment_gain: f64,
+    /// a segment's `segment_steps` count from its first taken step (the rejected steps that
+    /// open it only raise the damping factor, ×4 each); this many rejected steps in a row end
+    /// a segment on their own; ≥ 1
+    pub max_rejections: usize,
+    /// a watchdog escape takes this many LM steps whatever the merit says (non-monotone;
+    /// the best r is kept); 0: no watchdog, every escape switches ρ
+    pub watchdog_steps: usize,
+    /// watchdog escapes between two switches of ρ (the escapes cycle: this many watchdogs,
+    /// then one switch)
+    pub watchdogs_per_switch: usize,
+    /// ρᵢ = factor / ‖Wᵢᵢ‖_F, the factor taken in turn from this list at each switch; each
+    /// factor > 0 (the first one is used first)
+    pub rho_factors: [f64; 7],
+    /// first damping factor c: λ = c · min(‖Φ‖ / ‖r‖, 1); > 0
+    pub damping: f64,
+    /// the damping factor is never lowered below this; > 0
+    pub damping_floor: f64,
+    /// damping factor after a watchdog escape; > 0
+    pub escape_damping: f64,
+    /// a step is accepted when ‖Φ‖ decreases and (actual / predicted decrease of ‖Φ‖²) is
+    /// above this; in [0, 1)
+    pub accept_ratio: f64,
+    /// skip the end game when JᵀJ has more stored entries than this (memory and time of its
+    /// Cholesky factorization); ≥ 1
+    pub max_normal_nonzeros: usize,
+}
+
+impl Default for LmParams {
+    fn default() -> Self {
+        Self {
+            max_steps: 400,
+            start: 2e-5,
+            stall_segments: 6,
+            stall_gain: 0.5,
+            retry: 0.1,
+            keep_gain: 0.5,
+            segment_steps: 8,
+            segment_gain: 0.7,
+            max_rejections: 12,
+            watchdog_steps: 2,
+            watchdogs_per_switch: 1,
+            rho_factors: [1.0, 0.1, 10.0, 0.3, 3.0, 0.03, 30.0],
+            damping: 1e-2,
+            damping_floor: 1e-8,
+            escape_damping: 1e-6,
+            accept_ratio: 1e-4,
+            max_normal_nonzeros: 40_000_000,
+        }
+    }
+}
+
+impl LmParams {
+    pub(crate) fn validate(&self) -> Result<(), String> {
+        let positive = |x: f64| x.is_finite() && x > 0.0;
+        if self.segment_steps == 0
+            || self.stall_segments == 0
+            || self.max_rejections == 0
+            || self.max_normal_nonzeros == 0
+        {
+            return Err(
+                "tuning.lm: segment_steps, stall_segments, max_rejections and max_normal_nonzeros must be ≥ 1"
+                    .into(),
+            );
+        }
+        let fraction = |x: f64| positive(x) && x <= 1.0;
+        if ![
+            self.segment_gain,
+            self.stall_gain,
+            self.retry,
+            self.keep_gain,
+        ]
+        .into_iter()
+        .all(fraction)
+        {
+            return Err(
+                "tuning.lm: segment_gain, stall_gain, retry, keep_gain must be in (0, 1]".into(),
+            );
+        }
+        if !(self.rho_factors.iter().all(|&f| positive(f))
+            && positive(self.damping)
+            && positive(self.damping_floor)
+            && positive(self.escape_damping))
+        {
+            return Err("tuning.lm: rho factors and damping factors must be positive".into());
+        }
+        if !(self.start.is_finite() && self.start >= 0.0) {
+            return Err("tuning.lm.start must be finite and ≥ 0".into());
+        }
+        if !(self.accept_ratio.is_finite() && (0.0..1.0).contains(&self.accept_ratio)) {
+            return Err("tuning.lm.accept_ratio must be in [0, 1)".into());
+        }
+        Ok(())
+    }
+}
 
 /// Why [`solve`] stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -124,13 +249,6 @@ pub(crate) fn alart_curnier(
         }
     }
     crate::law::norm(g)
-}
-
-/// x projected onto L = Π K_μᵢ.
-pub(crate) fn projected(p: &LocalProblem, x: &[f64]) -> Vec<f64> {
-    let mut y = x.to_vec();
-    crate::cone::project_product(p.dim, &p.mu, &mut y);
-    y
 }
 
 /// ρᵢ = 1 / ‖Wᵢᵢ‖_F (1 where the diagonal block is zero or not finite).
@@ -486,48 +604,5 @@ mod tests {
         let past = Deadline::from(std::time::Instant::now());
         let out = solve(&p, &mut r, 0.0, &LmParams::default(), past);
         assert_eq!((out.status, out.steps), (LmStatus::TimeLimit, 0));
-    }
-
-    /// A stage whose fixed point crawls (one APGD iteration per inner solve) and whose Newton
-    /// budget is one step: without the LM end game it ends at its iteration cap; with it, it
-    /// converges, and the reported error is the one recomputed from r on the stored W. A run
-    /// that converges without spending its Newton budget is unchanged.
-    #[test]
-    fn a_stage_hands_its_stall_to_the_lm_end_game() {
-        use crate::settings::{InnerKind, OuterKind, Settings};
-        let crawl = Settings {
-            max_inner: 1,
-            newton_steps: 1,
-            newton_start: 1.0,
-            max_outer: 60,
-            ..Settings::method(InnerKind::Apgd, OuterKind::FixedPoint)
-        };
-        let mut crawl = crawl;
-        crawl.tuning.lm.start = 1.0;
-        let mut off = crawl.clone();
-        off.tuning.lm.max_steps = 0;
-        let p = problem(6, 2811, 0.0, 0.0);
-        let prob = crate::Problem::Local(p.clone());
-        let without = crate::solve(&prob, &off).unwrap();
-        assert_eq!(without.status, crate::Status::MaxIterations);
-        let with = crate::solve(&prob, &crawl).unwrap();
-        let err = p.error(&with.r).error;
-        assert_eq!(with.status, crate::Status::Converged);
-        assert!(
-            err <= crawl.tol && with.error == err,
-            "{err:.3e} vs {:.3e}",
-            with.error
-        );
-        let p = problem(6, 2902, 0.0, 0.0);
-        let prob = crate::Problem::Local(p);
-        let (a, b) = (
-            crate::solve(&prob, &off).unwrap(),
-            crate::solve(&prob, &crawl).unwrap(),
-        );
-        assert_eq!(a.status, crate::Status::Converged);
-        assert_eq!(
-            (a.status, a.outer_iterations, a.inner_iterations, &a.r),
-            (b.status, b.outer_iterations, b.inner_iterations, &b.r)
-        );
     }
 }

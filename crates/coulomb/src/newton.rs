@@ -32,6 +32,73 @@ pub use crate::linalg::pattern_lu::SPARSE_PARALLEL_DIM;
 use crate::natural_map::de_saxce_map;
 use crate::problem::LocalProblem;
 
+/// Parameters of the semismooth Newton end game ([`crate::outer::newton`]); the budget and
+/// the starting level are [`crate::settings::Settings::newton_steps`] and [`crate::settings::Settings::newton_start`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct NewtonParams {
+    /// Newton steps one end-game try may take (all tries of a stage share
+    /// [`crate::settings::Settings::newton_steps`])
+    pub try_steps: usize,
+    /// a failed try is tried again once the error is below this fraction of the error it
+    /// started from
+    pub retry: f64,
+    /// outer iterations without a new lowest error after which the fixed point counts as
+    /// stagnating (the end game is then tried again whatever its gate)
+    pub stagnation: usize,
+    /// a new lowest error counts as progress only below this fraction of the previous lowest
+    pub stagnation_gain: f64,
+    /// the natural map is driven below this fraction of tol · ‖q‖
+    pub target_fraction: f64,
+    /// first shift of a step: λ = `lambda_factor` · min(‖G‖/‖q‖, 1e-2) · max diag(W)
+    /// (see [`crate::newton::LAMBDA_FACTOR`])
+    pub lambda_factor: f64,
+    /// a try stops after this many consecutive slow steps (see [`crate::newton::SLOW_STEPS`]); ≥ 1
+    pub slow_steps: usize,
+    /// a step with ‖G⁺‖ > `slow_ratio` ‖G‖ is slow (see [`crate::newton::SLOW_RATIO`]); in (0, 1]
+    pub slow_ratio: f64,
+    /// the first shift λ uses min(‖G‖/‖q‖, `shift_ratio_cap`) (see `lambda_factor`); > 0
+    pub shift_ratio_cap: f64,
+    /// directions (shifts λ) tried per step before the step counts as giving no descent; ≥ 1
+    pub shift_tries: usize,
+    /// after a direction without descent λ ← max(`shift_growth` · λ, `shift_floor` · max diag(W));
+    /// > 1
+    pub shift_growth: f64,
+    /// see `shift_growth`; > 0
+    pub shift_floor: f64,
+    /// line search on the step δ: t = 1, then up to this many halvings of t
+    pub halvings: usize,
+    /// a trial point r + t δ is accepted when ‖G(r + t δ)‖ < ‖G(r)‖ and
+    /// ‖G(r + t δ)‖ ≤ (1 − `sufficient_decrease` · t) ‖G(r)‖ (Armijo); in [0, 1)
+    pub sufficient_decrease: f64,
+    /// on a non-symmetric W, a try whose error fell to at most this fraction of the error it
+    /// started from is followed by another try from its point (above it the end game stops
+    /// and the fixed point goes on); in (0, 1]
+    pub continue_gain: f64,
+}
+
+impl Default for NewtonParams {
+    fn default() -> Self {
+        NewtonParams {
+            try_steps: 15,
+            retry: 0.1,
+            stagnation: 3,
+            stagnation_gain: 0.5,
+            target_fraction: 0.5,
+            lambda_factor: LAMBDA_FACTOR,
+            slow_steps: SLOW_STEPS,
+            slow_ratio: SLOW_RATIO,
+            shift_ratio_cap: 1e-2,
+            shift_tries: 4,
+            shift_growth: 100.0,
+            shift_floor: 1e-10,
+            halvings: 10,
+            sufficient_decrease: 1e-4,
+            continue_gain: 0.5,
+        }
+    }
+}
+
 /// Consecutive slow steps (‖G‖ reduced by less than 1 − [`SLOW_RATIO`]) after which
 /// [`polish`] gives up.
 pub const SLOW_STEPS: usize = 4;
@@ -408,7 +475,7 @@ pub fn polish(
     max_steps: usize,
     deadline: Deadline,
 ) -> NewtonReport {
-    let params = crate::settings::Tuning::default().newton;
+    let params = NewtonParams::default();
     polish_with(p, r, target, max_steps, deadline, &params)
 }
 
@@ -422,7 +489,7 @@ pub fn polish_with(
     target: f64,
     max_steps: usize,
     deadline: Deadline,
-    params: &crate::settings::NewtonParams,
+    params: &NewtonParams,
 ) -> NewtonReport {
     let (d, m) = (p.dim, r.len());
     if !p.fits(r) {
@@ -510,14 +577,14 @@ mod tests {
         // than the start and its error is the one reported
         let q = crate::test_problems::problem(6, 2811, 0.0, 1e-3);
         let mut r = vec![0.1; 18];
-        let start = q.error(&crate::levenberg::projected(&q, &r)).error;
+        let start = q.error(&crate::problem::projected(&q, &r)).error;
         let rep = least_squares(&q, &mut r, 1e-12, 5, 2, NONZEROS, Deadline::NEVER);
         assert!(
             rep.residual <= start && rep.residual == q.error(&r).error,
             "{rep:?}"
         );
         // every returned point lies in the cones: it is its own projection
-        assert_eq!(r, crate::levenberg::projected(&q, &r));
+        assert_eq!(r, crate::problem::projected(&q, &r));
         // sizes that disagree: no step
         let rep = least_squares(&q, &mut [0.0; 5], 1e-8, 5, 2, NONZEROS, Deadline::NEVER);
         assert_eq!(rep.status, NewtonStatus::NoDescent);
@@ -526,7 +593,7 @@ mod tests {
         let mut r = vec![0.1; 18];
         let rep = least_squares(&q, &mut r, 1e-12, 5, 2, 10, Deadline::NEVER);
         assert_eq!((rep.status, rep.steps), (NewtonStatus::NoDescent, 0));
-        assert_eq!(r, crate::levenberg::projected(&q, &[0.1; 18]));
+        assert_eq!(r, crate::problem::projected(&q, &[0.1; 18]));
         assert_eq!(rep.residual, q.error(&r).error);
     }
 

@@ -501,6 +501,13 @@ impl GlobalProblem {
     }
 }
 
+/// x projected onto L = Π K_μᵢ.
+pub(crate) fn projected(p: &LocalProblem, x: &[f64]) -> Vec<f64> {
+    let mut y = x.to_vec();
+    crate::cone::project_product(p.dim, &p.mu, &mut y);
+    y
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -184,7 +184,7 @@ pub fn solve(
             x.copy_from_slice(r);
         }
         solved = solved || phi <= inner_target;
-        let y = crate::levenberg::projected(p, &x);
+        let y = crate::problem::projected(p, &x);
         error = p.error(&y).error;
         if error < best_err {
             best_err = error;

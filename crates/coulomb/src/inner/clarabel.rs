@@ -204,7 +204,7 @@ pub(crate) fn solve_dual_qp(
         let residual = if raw == SolverStatus::Solved || stalled {
             polish_dual(problem, r, polish, limits.deadline)
         } else {
-            dual_natural_residual(problem, r)
+            dual_natural_residual(problem.dim, problem.mu, problem.w, problem.b, r)
         };
         report.residual = residual;
         if stalled && residual <= limits.tol {

@@ -780,7 +780,9 @@ mod tests {
         let rep = IpmSolver::new().solve(&p, &limits(), &mut polished);
         assert_eq!(rep.status, InnerStatus::Solved);
         assert!(rep.residual < 1e-14, "{rep:?}");
-        assert!((dual_natural_residual(&p, &polished) - rep.residual).abs() < 1e-15);
-        assert!(dual_natural_residual(&p, &plain) >= rep.residual);
+        assert!(
+            (dual_natural_residual(p.dim, p.mu, p.w, p.b, &polished) - rep.residual).abs() < 1e-15
+        );
+        assert!(dual_natural_residual(p.dim, p.mu, p.w, p.b, &plain) >= rep.residual);
     }
 }

@@ -7,6 +7,7 @@
 //! - [`blocks`]: products with and inverses of the small d × d blocks of one contact;
 //! - [`pattern_lu`]: the sparse LU of the Newton systems on the block pattern of W;
 //! - [`normal`]: the normal equations JᵀJ + λ I of Levenberg–Marquardt (sparse Cholesky);
+//! - [`vector`]: the overflow-safe Euclidean norm (re-exported as [`crate::law::norm`]);
 //! - [`skeleton`]: the skeleton W ≈ C A⁻¹ R of a rank-deficient W and the
 //!   Sherman–Morrison–Woodbury solves through it.
 
@@ -16,3 +17,4 @@ pub mod normal;
 pub mod pattern_lu;
 pub mod skeleton;
 pub mod sparse;
+pub mod vector;

@@ -12,13 +12,8 @@ use crate::linalg::sparse::CscMatrix;
 /// Sweeps over which [`solve_fused`] measures its rate when asked to give up early.
 pub const GIVE_UP_WINDOW: usize = 10;
 
-/// Sweeps between two Anderson steps of [`solve_fused`] (the default of
-/// [`crate::settings::InnerParams::gs_anderson_period`]; 0: no mixing).
-pub const ANDERSON_PERIOD: usize = 4;
-
-/// Memory of the Anderson mixing of [`solve_fused`] (the default of
-/// [`crate::settings::InnerParams::gs_anderson_memory`]).
-pub const ANDERSON_MEMORY: usize = 5;
+/// The defaults of the fused method's Anderson mixing, at their former path.
+pub use crate::inner::pgs::{ANDERSON_MEMORY, ANDERSON_PERIOD};
 
 /// Anderson mixing of the sweeps: type II on the map G = (`period` sweeps), x_{k+1} =
 /// P_L(Anderson(x_k, G(x_k))) ([`Anderson::next_projected`]), taken only where its error

@@ -1224,4 +1224,47 @@ mod tests {
         // the case the rule is for occurs in this family (15 of the 80 solves)
         assert!(replaced > 0, "no solve ended above its lowest error");
     }
+
+    /// A stage whose fixed point crawls (one APGD iteration per inner solve) and whose Newton
+    /// budget is one step: without the LM end game it ends at its iteration cap; with it, it
+    /// converges, and the reported error is the one recomputed from r on the stored W. A run
+    /// that converges without spending its Newton budget is unchanged.
+    #[test]
+    fn a_stage_hands_its_stall_to_the_lm_end_game() {
+        use crate::settings::{InnerKind, OuterKind, Settings};
+        let crawl = Settings {
+            max_inner: 1,
+            newton_steps: 1,
+            newton_start: 1.0,
+            max_outer: 60,
+            ..Settings::method(InnerKind::Apgd, OuterKind::FixedPoint)
+        };
+        let mut crawl = crawl;
+        crawl.tuning.lm.start = 1.0;
+        let mut off = crawl.clone();
+        off.tuning.lm.max_steps = 0;
+        let p = crate::test_problems::problem(6, 2811, 0.0, 0.0);
+        let prob = crate::Problem::Local(p.clone());
+        let without = crate::solve(&prob, &off).unwrap();
+        assert_eq!(without.status, crate::Status::MaxIterations);
+        let with = crate::solve(&prob, &crawl).unwrap();
+        let err = p.error(&with.r).error;
+        assert_eq!(with.status, crate::Status::Converged);
+        assert!(
+            err <= crawl.tol && with.error == err,
+            "{err:.3e} vs {:.3e}",
+            with.error
+        );
+        let p = crate::test_problems::problem(6, 2902, 0.0, 0.0);
+        let prob = crate::Problem::Local(p);
+        let (a, b) = (
+            crate::solve(&prob, &off).unwrap(),
+            crate::solve(&prob, &crawl).unwrap(),
+        );
+        assert_eq!(a.status, crate::Status::Converged);
+        assert_eq!(
+            (a.status, a.outer_iterations, a.inner_iterations, &a.r),
+            (b.status, b.outer_iterations, b.inner_iterations, &b.r)
+        );
+    }
 }

@@ -1,6 +1,6 @@
 //! The normal equations (JᵀJ + λ I) δ = −JᵀΦ of the Levenberg–Marquardt steps
 //! ([`crate::levenberg`], [`crate::newton::least_squares`]): the block pattern of JᵀJ from the
-//! pattern of J ([`super::pattern_lu::JacobianPattern`]), its symbolic Cholesky factorization
+//! pattern of J (`pattern_lu::JacobianPattern`), its symbolic Cholesky factorization
 //! computed once per run, and a numeric Cholesky per step.
 
 use super::pattern_lu::JacobianPattern;

@@ -1,7 +1,7 @@
 //! The patterned sparse LU of the Newton systems on the block pattern of W: the pattern of
 //! J + λ I (every d × d block (i, j) with i = j or with a nonzero of W in block (i, j)) with its
-//! symbolic LU computed once, numeric LUs on it ([`PatternLu`]), and a one-off sparse LU of
-//! summed triplets ([`sparse_lu_solve`]). Used by semismooth Newton ([`crate::newton`]), the
+//! symbolic LU computed once, numeric LUs on it (`PatternLu`), and a one-off sparse LU of
+//! summed triplets (`sparse_lu_solve`). Used by semismooth Newton ([`crate::newton`]), the
 //! interior point on the law ([`crate::barrier`]), the proximal point ([`crate::proximal`]),
 //! the polish of the inner interior point ([`crate::inner::ipm`]) and, for its pattern, the
 //! normal equations of Levenberg–Marquardt ([`super::normal`]).

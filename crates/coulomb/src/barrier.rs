@@ -27,15 +27,196 @@
 //! interior. The matrix is factored once per step ([`Setup`]): by a sparse LU on the block
 //! pattern of W; or, for a global problem with few degrees of freedom (rigid bodies), through
 //! its Schur complement on M; or, for a local problem whose W has low rank, through the
-//! skeleton of W ([`crate::skeleton`]), each solve refined on W as stored and redone by the
+//! skeleton of W ([`crate::linalg::skeleton`]), each solve refined on W as stored and redone by the
 //! sparse LU when the refinement falls short. The iterate of lowest error (docs/error.md, W
 //! as stored) is returned.
 
 use crate::deadline::Deadline;
-use crate::newton::JacobianPattern;
+use crate::linalg::blocks::{apply_blocks, invert_small};
+use crate::linalg::pattern_lu::{JacobianPattern, PatternLu};
+use crate::linalg::skeleton::Skeleton;
 use crate::problem::{GlobalProblem, LocalProblem};
-use crate::settings::BarrierParams;
-use crate::skeleton::Skeleton;
+
+/// The default of [`BarrierParams::max_work`] (docs/solver-core.md: how it was calibrated).
+pub const BARRIER_MAX_WORK: usize = 150;
+
+/// Parameters of the interior-point method on Coulomb's law ([`crate::barrier`]) and of its
+/// try in the default policy ([`crate::Solver::solve`]): after the warm-up of a cold solve
+/// (no guess) with every μ > 0 of a global problem with at most half as many degrees of
+/// freedom as contact unknowns (at most `max_schur_dofs`: rigid bodies touching at several
+/// points per face, where W is rank-deficient and the Newton systems are of the size of M),
+/// or of a local problem with at most `max_skeleton_unknowns` contact unknowns whose W has a
+/// skeleton of rank ≤ min(`max_schur_dofs`, `skeleton_rank_ratio` · m) ([`crate::linalg::skeleton`]),
+/// before the main
+/// method. A try runs the method along each path of `paths` in turn (at most
+/// [`crate::settings::Settings::barrier_steps`] Newton steps each), finishes a run with the
+/// Levenberg–Marquardt end game when its error is ≤ [`crate::levenberg::LmParams::start`], keeps the best point
+/// and stops once it converges (or is within `handover` · tol where the method of multipliers
+/// follows) or has spent its work budget `max_work` (Newton and LM steps: a budget in work, so
+/// that the same input takes the same path on any machine and under any load).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct BarrierParams {
+    /// a run stops when its lowest error has not improved for this many steps; ≥ 1
+    pub stall_steps: usize,
+    /// once its lowest error is ≤ `settle_below`, a run stops after this many steps in a row
+    /// cut below `settle_alpha` of the Newton step (jammed near the end of its path, where
+    /// the try's Levenberg–Marquardt finish, [`crate::levenberg::LmParams::start`], usually ends it in a few
+    /// steps; docs/rigid.md); ≥ 1
+    pub settle_steps: usize,
+    /// see `settle_steps`; ≥ 0 (0: never)
+    pub settle_below: f64,
+    /// see `settle_steps`; in (0, 1)
+    pub settle_alpha: f64,
+    /// fraction of the step to the boundary of the cones that is taken; in (0, 1)
+    pub boundary_fraction: f64,
+    /// (smoothing, recentring) of the runs of a try, in order: on hard rigid problems the
+    /// method is sensitive to them and different runs end at different points
+    pub paths: [PathParams; 4],
+    /// the start b = T ũ(r₀) is moved into the interior of L with this margin, relative to
+    /// its largest entry; > 0
+    pub start_margin: f64,
+    /// … and by at least this multiple of ‖q‖/√contacts; > 0
+    pub start_floor: f64,
+    /// a try takes at most this many steps in all (the interior point's Newton steps and
+    /// its LM finishes' steps, each a factorization): no new run or finish starts once they
+    /// are spent, and a run or finish gets at most what is left; ≥ 1. It replaced a share
+    /// of the time left (0.5) so that the path does not depend on the machine's speed or
+    /// load; calibrated on the corpus (docs/solver-core.md)
+    pub max_work: usize,
+    /// the LM finish of a run of the try stops when its lowest error has not dropped below
+    /// [`crate::levenberg::LmParams::stall_gain`] times its value this many segments earlier (the try's own
+    /// [`crate::levenberg::LmParams::stall_segments`]); ≥ 1
+    pub lm_stall_segments: usize,
+    /// where the method of multipliers follows the try ([`crate::settings::MultiplierParams`]), the try ends
+    /// after a run whose end point has an error ≤ `handover` · tol (from such points the
+    /// multipliers converge in a few Newton steps, where the LM finish crawls); ≥ 0 (0: the
+    /// try ends only at the tolerance). Measured with `lm_stall_segments` = 2 against 6 and
+    /// no handover, on the 720 box files of corpus seeds 1–5 (docs/rigid.md): 718 solved in
+    /// 10 s either way, the five files that waited for the end of the try's share (5.0 s)
+    /// solved in 1.2–3.2 s
+    pub handover: f64,
+    /// a global problem with at most this many degrees of freedom (and fewer than contact
+    /// unknowns) has its Newton systems solved on M + H G⁻¹ Hᵀ (dense LU) instead of W + G;
+    /// the policy's try needs it; ≥ 1. Also the largest rank of the skeleton of a local W
+    pub max_schur_dofs: usize,
+    /// the dense LU factorizations of these Newton systems (Schur complement, skeleton, and
+    /// the method of multipliers' J, [`crate::linalg::dense`]) run on all threads from this size on,
+    /// on one thread below it; ≥ 1. Measured (`cargo bench -p coulomb --bench dense_lu`, 2
+    /// cores), all threads / one: 4.8× the time at n = 100, 2.3× at 384, 1.13× at 1 000,
+    /// 0.93× at 1 500, 0.78× at 3 000
+    pub dense_parallel_dim: usize,
+    /// a local problem with at most this many contact unknowns is probed for a skeleton
+    /// W ≈ W[:, P] W[P, P]⁻¹ W[P, :] of rank ≤ min(`max_schur_dofs`, `skeleton_rank_ratio` · m)
+    /// ([`crate::linalg::skeleton`]; cost ≤ m · rank² flops); if it has one, its Newton systems are
+    /// solved through it (dense LU of the size of the rank) and the policy's try runs on it
+    pub max_skeleton_unknowns: usize,
+    /// see `max_skeleton_unknowns`; in (0, 1]. A pile of rigid bodies has rank W ≤ 6 per body;
+    /// Siconos' RockPile_tob1 (463 contacts, m = 1 389) has rank 743 = 0.535 m: with 0.5 its
+    /// local form had no skeleton and was not solved in 60 s, with 0.6 the method of
+    /// multipliers solves it in 18 s (docs/rigid.md)
+    pub skeleton_rank_ratio: f64,
+    /// the pivoting of the skeleton stops when every remaining diagonal entry of
+    /// ½(W + Wᵀ) is ≤ this multiple of max Wᵢᵢ (its numerical rank); in (0, 1)
+    pub rank_tol: f64,
+    /// a solve through the skeleton is refined on W as stored at most this many times …
+    pub refine_steps: usize,
+    /// … until its residual (max norm) is ≤ this multiple of the right-hand side's; else the
+    /// step is solved by the sparse LU of W + G; > 0
+    pub refine_tol: f64,
+    /// after this many steps in a row solved by the sparse LU that way, a run no longer tries
+    /// the skeleton (every solve of a W with a large antisymmetric part falls back); ≥ 1
+    pub skeleton_strikes: usize,
+}
+
+impl Default for BarrierParams {
+    fn default() -> Self {
+        Self {
+            stall_steps: 30,
+            settle_steps: 5,
+            settle_below: 1e-6,
+            settle_alpha: 0.1,
+            boundary_fraction: 0.99,
+            paths: [
+                PathParams {
+                    smoothing: 0.1,
+                    recentre: 0.05,
+                },
+                PathParams {
+                    smoothing: 0.1,
+                    recentre: 0.0,
+                },
+                PathParams {
+                    smoothing: 0.3,
+                    recentre: 0.0,
+                },
+                PathParams {
+                    smoothing: 0.03,
+                    recentre: 0.0,
+                },
+            ],
+            start_margin: 1e-2,
+            start_floor: 1e-3,
+            max_work: BARRIER_MAX_WORK,
+            lm_stall_segments: 2,
+            handover: 10.0,
+            max_schur_dofs: 1500,
+            dense_parallel_dim: 1500,
+            max_skeleton_unknowns: 4000,
+            skeleton_rank_ratio: 0.6,
+            rank_tol: 1e-10,
+            refine_steps: 4,
+            refine_tol: 1e-10,
+            skeleton_strikes: 3,
+        }
+    }
+}
+
+impl BarrierParams {
+    pub(crate) fn validate(&self) -> Result<(), String> {
+        let fraction = |x: f64| x.is_finite() && x > 0.0 && x < 1.0;
+        let positive = |x: f64| x.is_finite() && x > 0.0;
+        if self.stall_steps == 0
+            || self.settle_steps == 0
+            || self.max_schur_dofs == 0
+            || self.dense_parallel_dim == 0
+            || self.skeleton_strikes == 0
+            || self.lm_stall_segments == 0
+            || self.max_work == 0
+        {
+            return Err(
+                "tuning.barrier: stall_steps, settle_steps, max_schur_dofs, \
+                 dense_parallel_dim, skeleton_strikes, lm_stall_segments and max_work must be ≥ 1"
+                    .into(),
+            );
+        }
+        let paths_ok = self.paths.iter().all(|p| {
+            p.smoothing.is_finite()
+                && p.smoothing >= 0.0
+                && p.recentre.is_finite()
+                && (0.0..1.0).contains(&p.recentre)
+        });
+        let ok = fraction(self.boundary_fraction)
+            && paths_ok
+            && self.settle_below.is_finite()
+            && self.settle_below >= 0.0
+            && fraction(self.settle_alpha)
+            && positive(self.start_margin)
+            && positive(self.start_floor)
+            && self.handover.is_finite()
+            && self.handover >= 0.0
+            && fraction(self.rank_tol)
+            && positive(self.skeleton_rank_ratio)
+            && self.skeleton_rank_ratio <= 1.0
+            && positive(self.refine_tol);
+        if !ok {
+            return Err(format!(
+                "tuning.barrier: a parameter is out of range: {self:?}"
+            ));
+        }
+        Ok(())
+    }
+}
 
 /// The two constants that shape the path of one run of [`solve`] (the policy tries several:
 /// [`BarrierParams::paths`]).
@@ -263,7 +444,7 @@ pub enum LinearKind {
         /// the size of M
         dofs: usize,
     },
-    /// dense LU of A + R G⁻¹ C for the skeleton W ≈ C A⁻¹ R of [`crate::skeleton`]
+    /// dense LU of A + R G⁻¹ C for the skeleton W ≈ C A⁻¹ R of [`crate::linalg::skeleton`]
     Skeleton {
         /// the size of A
         rank: usize,
@@ -766,7 +947,7 @@ impl NewtonSystem {
         &self,
         p: &LocalProblem,
         sk: &Skeleton,
-        f: &crate::skeleton::SkeletonLu,
+        f: &crate::linalg::skeleton::SkeletonLu,
         b: &[f64],
         rhs: &mut [f64],
     ) -> Option<()> {
@@ -827,7 +1008,7 @@ impl NewtonSystem {
     }
 
     /// The sparse LU of W + G + shift · I on the pattern, the shift raised until it succeeds.
-    fn sparse_factor(&mut self, pattern: &JacobianPattern) -> Option<crate::newton::PatternLu> {
+    fn sparse_factor(&mut self, pattern: &JacobianPattern) -> Option<PatternLu> {
         loop {
             if let Some(lu) = pattern.factor(&self.vals_shifted(pattern, self.shift)) {
                 return Some(lu);
@@ -876,7 +1057,10 @@ impl NewtonSystem {
                 }
             }
         }
-        let lu = crate::dense::Lu::new(k, crate::dense::parallelism(n, self.dense_parallel_dim))?;
+        let lu = crate::linalg::dense::Lu::new(
+            k,
+            crate::linalg::dense::parallelism(n, self.dense_parallel_dim),
+        )?;
         Some(Factor::Schur(ginv, lu))
     }
 
@@ -920,7 +1104,7 @@ fn schur_apply(
     d: usize,
     g: &GlobalProblem,
     ginv: &[f64],
-    lu: &crate::dense::Lu,
+    lu: &crate::linalg::dense::Lu,
     rhs: &mut [f64],
 ) -> Option<()> {
     let mut z = vec![0.0; rhs.len()];
@@ -938,59 +1122,11 @@ fn schur_apply(
 /// The factorization of one step's Newton matrix W + G.
 enum Factor {
     /// sparse LU of W + G (+ shift) on the block pattern of W
-    Sparse(Box<crate::newton::PatternLu>),
+    Sparse(Box<PatternLu>),
     /// G⁻¹ and the dense LU of M + H G⁻¹ Hᵀ
-    Schur(Vec<f64>, crate::dense::Lu),
-    /// G⁻¹ and the dense LU of A + R G⁻¹ C ([`crate::skeleton`])
-    Skeleton(crate::skeleton::SkeletonLu),
-}
-
-/// out = blockdiag(blocks) x (row-major d × d blocks).
-pub(crate) fn apply_blocks(d: usize, blocks: &[f64], x: &[f64], out: &mut [f64]) {
-    for ((blk, xi), oi) in blocks.chunks(d * d).zip(x.chunks(d)).zip(out.chunks_mut(d)) {
-        for a in 0..d {
-            oi[a] = (0..d).map(|b| blk[a * d + b] * xi[b]).sum();
-        }
-    }
-}
-
-/// The inverse of a 2 × 2 or 3 × 3 row-major matrix by cofactors; None if its determinant
-/// vanishes (or underflows) or is not finite.
-pub(crate) fn invert_small(d: usize, a: &[f64], inv: &mut [f64]) -> Option<()> {
-    let scale = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    if d == 2 {
-        let det = a[0] * a[3] - a[1] * a[2];
-        if det.is_nan() || det.abs() <= f64::MIN_POSITIVE * scale * scale || !det.is_finite() {
-            return None;
-        }
-        inv.copy_from_slice(&[a[3] / det, -a[1] / det, -a[2] / det, a[0] / det]);
-        return Some(());
-    }
-    let c = |r: usize, k: usize| a[r * 3 + k];
-    let cof = [
-        c(1, 1) * c(2, 2) - c(1, 2) * c(2, 1),
-        c(1, 2) * c(2, 0) - c(1, 0) * c(2, 2),
-        c(1, 0) * c(2, 1) - c(1, 1) * c(2, 0),
-    ];
-    let det = c(0, 0) * cof[0] + c(0, 1) * cof[1] + c(0, 2) * cof[2];
-    if det.is_nan() || det.abs() <= f64::MIN_POSITIVE * scale * scale * scale || !det.is_finite() {
-        return None;
-    }
-    let adj = [
-        cof[0],
-        c(0, 2) * c(2, 1) - c(0, 1) * c(2, 2),
-        c(0, 1) * c(1, 2) - c(0, 2) * c(1, 1),
-        cof[1],
-        c(0, 0) * c(2, 2) - c(0, 2) * c(2, 0),
-        c(0, 2) * c(1, 0) - c(0, 0) * c(1, 2),
-        cof[2],
-        c(0, 1) * c(2, 0) - c(0, 0) * c(2, 1),
-        c(0, 0) * c(1, 1) - c(0, 1) * c(1, 0),
-    ];
-    for k in 0..9 {
-        inv[k] = adj[k] / det;
-    }
-    Some(())
+    Schur(Vec<f64>, crate::linalg::dense::Lu),
+    /// G⁻¹ and the dense LU of A + R G⁻¹ C ([`crate::linalg::skeleton`])
+    Skeleton(crate::linalg::skeleton::SkeletonLu),
 }
 
 /// x ← (T C)⁻¹ x = (μ (x₀ − t̂ᵀx̄), x̄) for one contact.
@@ -1099,7 +1235,7 @@ mod tests {
         };
         for seed in 0..12 {
             for skew in [0.0, 1e-3] {
-                let p = crate::levenberg::tests::problem(8, seed, 0.0, skew);
+                let p = crate::test_problems::problem(8, seed, 0.0, skew);
                 runs += 1;
                 for (k, bp) in [no_skeleton, params].iter().enumerate() {
                     let setup = Setup::new(&p, None, bp, Deadline::NEVER).unwrap();
@@ -1119,7 +1255,7 @@ mod tests {
                             recomputed <= bp.settle_below,
                             "seed {seed} skew {skew}: {recomputed}"
                         );
-                        let lm = crate::settings::LmParams::default();
+                        let lm = crate::levenberg::LmParams::default();
                         crate::levenberg::solve(&p, &mut r, 1e-8, &lm, Deadline::NEVER);
                         finished += usize::from(p.error(&r).error <= 1e-8);
                     } else {
@@ -1144,7 +1280,7 @@ mod tests {
         // `settle_steps` steps in a row cut below `settle_alpha`, with the lowest error ≤
         // `settle_below`, end a run (status Stalled) with its best point, judged on the
         // stored W; with `settle_below` = 0 the same run goes on to the tolerance
-        let p = crate::levenberg::tests::problem(8, 3, 0.0, 1e-3);
+        let p = crate::test_problems::problem(8, 3, 0.0, 1e-3);
         let base = BarrierParams::default();
         let run = |bp: &BarrierParams| {
             let setup = Setup::new(&p, None, bp, Deadline::NEVER).unwrap();
@@ -1176,7 +1312,7 @@ mod tests {
         // with an antisymmetric part in W (the skeleton then only approximates W, the solves
         // are refined on W as stored) the same too
         for skew in [0.0, 1e-4] {
-            let p = crate::levenberg::tests::problem(8, 5, 0.0, skew);
+            let p = crate::test_problems::problem(8, 5, 0.0, skew);
             let params = BarrierParams::default();
             let deadline = Deadline::NEVER;
             let skeleton = Setup::new(&p, None, &params, deadline).unwrap();
@@ -1189,7 +1325,7 @@ mod tests {
             assert_eq!(sparse.kind(), LinearKind::SparseLu);
             assert!(Setup::structured(&p, None, &no_skeleton, deadline).is_none());
             // a setup used on another problem takes no step
-            let other = crate::levenberg::tests::problem(5, 5, 0.0, skew);
+            let other = crate::test_problems::problem(5, 5, 0.0, skew);
             for setup in [&skeleton, &sparse] {
                 let (_, rep) =
                     solve_with(&other, setup, 0.0, 3, &params, params.paths[0], deadline);
@@ -1219,7 +1355,7 @@ mod tests {
             ..base
         };
         for skew in [0.3, 0.1] {
-            let p = crate::levenberg::tests::problem(8, 2, 0.0, skew);
+            let p = crate::test_problems::problem(8, 2, 0.0, skew);
             let setup = Setup::new(&p, None, &base, deadline).unwrap();
             assert!(matches!(setup.kind(), LinearKind::Skeleton { .. }));
             let run =
@@ -1244,14 +1380,14 @@ mod tests {
         // a global problem (M = 2I, n = m/4) and its Delassus form: the same iterates whether
         // the Newton systems are solved on M + H G⁻¹ Hᵀ or on W + G
         let (m, n) = (24, 6);
-        let lp = crate::levenberg::tests::problem(8, 5, 0.0, 0.0);
+        let lp = crate::test_problems::problem(8, 5, 0.0, 0.0);
         let h: Vec<f64> = (0..n * m)
             .map(|k| ((k * 7919) % 23) as f64 / 11.0 - 1.0)
             .collect();
         let g = GlobalProblem::new(
             3,
-            crate::sparse::CscMatrix::identity(n, 2.0),
-            crate::sparse::CscMatrix::from_dense(n, m, &h),
+            crate::linalg::sparse::CscMatrix::identity(n, 2.0),
+            crate::linalg::sparse::CscMatrix::from_dense(n, m, &h),
             vec![0.3; n],
             lp.q.clone(),
             lp.mu.clone(),
@@ -1297,7 +1433,7 @@ mod tests {
         // d = 2 (the Lorentz cone of R²): W = AᵀA + I/10 with A of m/2 rows, 6 contacts
         let mut reached = 0;
         for seed in 0..8u64 {
-            let mut next = crate::levenberg::tests::uniform(seed, 3);
+            let mut next = crate::test_problems::uniform(seed, 3);
             let (contacts, m) = (6, 12);
             let a: Vec<f64> = (0..m / 2 * m).map(|_| next()).collect();
             let w: Vec<f64> = (0..m * m)
@@ -1309,7 +1445,7 @@ mod tests {
                 .collect();
             let p = LocalProblem::new(
                 2,
-                crate::sparse::CscMatrix::from_dense(m, m, &w),
+                crate::linalg::sparse::CscMatrix::from_dense(m, m, &w),
                 (0..m).map(|_| next()).collect(),
                 (0..contacts).map(|_| 0.2 + 0.8 * next().abs()).collect(),
             )
@@ -1326,7 +1462,7 @@ mod tests {
 
     #[test]
     fn a_frictionless_contact_or_an_empty_problem_takes_no_step() {
-        let mut p = crate::levenberg::tests::problem(3, 1, 0.1, 0.0);
+        let mut p = crate::test_problems::problem(3, 1, 0.1, 0.0);
         p.mu[1] = 0.0;
         let (r, rep) = run_default(&p);
         assert_eq!(rep.status, BarrierStatus::NotApplicable);

@@ -6,11 +6,11 @@
 //! mesh), so a block-diagonal M costs a few small dense factorizations and M⁻¹ H keeps the
 //! sparsity of H. Large blocks use faer's sparse supernodal Cholesky; M⁻¹ is never formed.
 
+use crate::linalg::sparse::CscMatrix;
 /// The factorization of M has its own module; re-exported here, where callers have always
 /// found it.
 pub use crate::mass::{MassError, MassFactor};
 use crate::problem::{GlobalProblem, LocalProblem, ProblemError};
-use crate::sparse::CscMatrix;
 
 /// The Delassus operator x ↦ W x = Hᵀ M⁻¹ H x, without forming W.
 pub struct DelassusOperator<'a> {

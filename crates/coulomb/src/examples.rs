@@ -14,8 +14,8 @@
 //! velocity is u = (nᵀ(V_A − V_B), tᵀ(V_A − V_B)) where V_X is the velocity of body X at the
 //! contact point; an obstacle B with prescribed velocity contributes to w only.
 
+use crate::linalg::sparse::CscMatrix;
 use crate::problem::{GlobalProblem, ProblemError};
-use crate::sparse::CscMatrix;
 
 /// Standard gravity used by the multi-body examples (pointing down, −y).
 pub const GRAVITY: f64 = 9.81;

@@ -33,13 +33,135 @@
 //! on the stored problem sees.
 
 use crate::deadline::Deadline;
-use crate::newton::JacobianPattern;
-use crate::problem::LocalProblem;
-use crate::settings::LmParams;
-use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, SymbolicCholesky};
-use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::Side;
+use crate::linalg::normal::{Normal, NormalPattern};
+use crate::linalg::pattern_lu::JacobianPattern;
+use crate::problem::{projected, LocalProblem};
+
+/// Parameters of the Levenberg–Marquardt end game on the Alart–Curnier map
+/// ([`crate::levenberg`]), the finish for rigid, rank-deficient problems on which the
+/// semismooth Newton end game stops at a stationary point (docs/rigid.md). A stage runs it
+/// from its best iterate once the Newton end game has spent its whole budget
+/// ([`crate::settings::Settings::newton_steps`]) without converging, the fixed point stagnates (see
+/// [`crate::newton::NewtonParams::stagnation`]) and the error is ≤ `start`, and again whenever the error has dropped below `retry` times
+/// the lowest error of the previous run; `max_steps = 0` turns it off.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct LmParams {
+    /// cap on LM steps (factorizations of JᵀJ + λI) of all runs of a stage; 0: no LM end game
+    pub max_steps: usize,
+    /// the end game starts only from an error (docs/error.md) ≤ this: from higher errors it
+    /// stalled on every corpus file where it was tried (docs/rigid.md); ≥ 0
+    pub start: f64,
+    /// a run stops (stalled) when its lowest error has not dropped below `stall_gain` times
+    /// its value `stall_segments` segments earlier; ≥ 1
+    pub stall_segments: usize,
+    /// see `stall_segments`; in (0, 1]
+    pub stall_gain: f64,
+    /// the end game runs again once the error is below `retry` times the lowest error of its
+    /// previous run; in (0, 1]
+    pub retry: f64,
+    /// a run that does not converge replaces the stage's iterate only if it lowered the error
+    /// to at most `keep_gain` times its starting value; in (0, 1]
+    pub keep_gain: f64,
+    /// LM steps per segment; a segment that does not lower the error to `segment_gain` times
+    /// its starting value is followed by an escape; ≥ 1
+    pub segment_steps: usize,
+    /// see `segment_steps`; in (0, 1]
+    pub segment_gain: f64,
+    /// a segment's `segment_steps` count from its first taken step (the rejected steps that
+    /// open it only raise the damping factor, ×4 each); this many rejected steps in a row end
+    /// a segment on their own; ≥ 1
+    pub max_rejections: usize,
+    /// a watchdog escape takes this many LM steps whatever the merit says (non-monotone;
+    /// the best r is kept); 0: no watchdog, every escape switches ρ
+    pub watchdog_steps: usize,
+    /// watchdog escapes between two switches of ρ (the escapes cycle: this many watchdogs,
+    /// then one switch)
+    pub watchdogs_per_switch: usize,
+    /// ρᵢ = factor / ‖Wᵢᵢ‖_F, the factor taken in turn from this list at each switch; each
+    /// factor > 0 (the first one is used first)
+    pub rho_factors: [f64; 7],
+    /// first damping factor c: λ = c · min(‖Φ‖ / ‖r‖, 1); > 0
+    pub damping: f64,
+    /// the damping factor is never lowered below this; > 0
+    pub damping_floor: f64,
+    /// damping factor after a watchdog escape; > 0
+    pub escape_damping: f64,
+    /// a step is accepted when ‖Φ‖ decreases and (actual / predicted decrease of ‖Φ‖²) is
+    /// above this; in [0, 1)
+    pub accept_ratio: f64,
+    /// skip the end game when JᵀJ has more stored entries than this (memory and time of its
+    /// Cholesky factorization); ≥ 1
+    pub max_normal_nonzeros: usize,
+}
+
+impl Default for LmParams {
+    fn default() -> Self {
+        Self {
+            max_steps: 400,
+            start: 2e-5,
+            stall_segments: 6,
+            stall_gain: 0.5,
+            retry: 0.1,
+            keep_gain: 0.5,
+            segment_steps: 8,
+            segment_gain: 0.7,
+            max_rejections: 12,
+            watchdog_steps: 2,
+            watchdogs_per_switch: 1,
+            rho_factors: [1.0, 0.1, 10.0, 0.3, 3.0, 0.03, 30.0],
+            damping: 1e-2,
+            damping_floor: 1e-8,
+            escape_damping: 1e-6,
+            accept_ratio: 1e-4,
+            max_normal_nonzeros: 40_000_000,
+        }
+    }
+}
+
+impl LmParams {
+    pub(crate) fn validate(&self) -> Result<(), String> {
+        let positive = |x: f64| x.is_finite() && x > 0.0;
+        if self.segment_steps == 0
+            || self.stall_segments == 0
+            || self.max_rejections == 0
+            || self.max_normal_nonzeros == 0
+        {
+            return Err(
+                "tuning.lm: segment_steps, stall_segments, max_rejections and max_normal_nonzeros must be ≥ 1"
+                    .into(),
+            );
+        }
+        let fraction = |x: f64| positive(x) && x <= 1.0;
+        if ![
+            self.segment_gain,
+            self.stall_gain,
+            self.retry,
+            self.keep_gain,
+        ]
+        .into_iter()
+        .all(fraction)
+        {
+            return Err(
+                "tuning.lm: segment_gain, stall_gain, retry, keep_gain must be in (0, 1]".into(),
+            );
+        }
+        if !(self.rho_factors.iter().all(|&f| positive(f))
+            && positive(self.damping)
+            && positive(self.damping_floor)
+            && positive(self.escape_damping))
+        {
+            return Err("tuning.lm: rho factors and damping factors must be positive".into());
+        }
+        if !(self.start.is_finite() && self.start >= 0.0) {
+            return Err("tuning.lm.start must be finite and ≥ 0".into());
+        }
+        if !(self.accept_ratio.is_finite() && (0.0..1.0).contains(&self.accept_ratio)) {
+            return Err("tuning.lm.accept_ratio must be in [0, 1)".into());
+        }
+        Ok(())
+    }
+}
 
 /// Why [`solve`] stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -127,173 +249,6 @@ pub(crate) fn alart_curnier(
         }
     }
     crate::law::norm(g)
-}
-
-/// The pattern of JᵀJ (every d × d block (a, b) such that block columns a and b of J share a
-/// block row) and its symbolic Cholesky factorization, computed once per run.
-pub(crate) struct NormalPattern {
-    col_ptr: Vec<usize>,
-    row_idx: Vec<usize>,
-    symbolic: SymbolicCholesky<usize>,
-    /// the numeric factorizations' parallelism ([`crate::newton::SPARSE_PARALLEL_DIM`])
-    par: faer::Par,
-}
-
-impl NormalPattern {
-    pub(crate) fn new(jac: &JacobianPattern, dim: usize, max_nonzeros: usize) -> Option<Self> {
-        let contacts = jac.neighbors.len();
-        // rows[k]: the block columns of J with a block in block row k
-        let mut rows: Vec<Vec<usize>> = vec![Vec::new(); contacts];
-        for (b, nb) in jac.neighbors.iter().enumerate() {
-            for &k in nb {
-                rows[k].push(b);
-            }
-        }
-        let mut blocks: Vec<Vec<usize>> = Vec::with_capacity(contacts);
-        let mut total = 0usize;
-        let mut mark = vec![usize::MAX; contacts];
-        for (b, nb) in jac.neighbors.iter().enumerate() {
-            let mut list = Vec::new();
-            for &k in nb {
-                for &a in &rows[k] {
-                    if mark[a] != b {
-                        mark[a] = b;
-                        list.push(a);
-                    }
-                }
-            }
-            list.sort_unstable();
-            total = total.saturating_add(list.len() * dim * dim);
-            if total > max_nonzeros {
-                return None;
-            }
-            blocks.push(list);
-        }
-        let m = contacts * dim;
-        let mut col_ptr = Vec::with_capacity(m + 1);
-        let mut row_idx = Vec::with_capacity(total);
-        col_ptr.push(0);
-        for j in 0..m {
-            for &a in &blocks[j / dim] {
-                row_idx.extend(a * dim..(a + 1) * dim);
-            }
-            col_ptr.push(row_idx.len());
-        }
-        let sym = SymbolicSparseColMatRef::new_checked(m, m, &col_ptr, None, &row_idx);
-        let symbolic =
-            factorize_symbolic_cholesky(sym, Side::Lower, Default::default(), Default::default())
-                .ok()?;
-        Some(Self {
-            col_ptr,
-            row_idx,
-            symbolic,
-            par: crate::newton::sparse_parallelism(m),
-        })
-    }
-}
-
-/// J (values on `jac`'s pattern, column-major) with its row-major copy, and JᵀJ + λI.
-pub(crate) struct Normal<'p> {
-    jac: &'p JacobianPattern,
-    pattern: NormalPattern,
-    /// J by rows: for each row, (column, value)
-    row_ptr: Vec<usize>,
-    row_entries: Vec<(usize, f64)>,
-    acc: Vec<f64>,
-    values: Vec<f64>,
-}
-
-impl<'p> Normal<'p> {
-    pub(crate) fn new(jac: &'p JacobianPattern, pattern: NormalPattern, m: usize) -> Self {
-        Self {
-            jac,
-            pattern,
-            row_ptr: vec![0; m + 1],
-            row_entries: Vec::new(),
-            acc: vec![0.0; m],
-            values: Vec::new(),
-        }
-    }
-
-    /// Solves (JᵀJ + λI) δ = −JᵀΦ for J given by its values `jv` on the pattern; None if the
-    /// Cholesky factorization fails or δ is not finite.
-    pub(crate) fn direction(&mut self, jv: &[f64], lambda: f64, phi: &[f64]) -> Option<Vec<f64>> {
-        let m = phi.len();
-        let (cp, ri) = (&self.jac.col_ptr, &self.jac.row_idx);
-        // J by rows
-        self.row_ptr.iter_mut().for_each(|x| *x = 0);
-        for &i in ri.iter() {
-            self.row_ptr[i + 1] += 1;
-        }
-        for i in 0..m {
-            self.row_ptr[i + 1] += self.row_ptr[i];
-        }
-        self.row_entries.clear();
-        self.row_entries.resize(ri.len(), (0, 0.0));
-        let mut next = self.row_ptr.clone();
-        for c in 0..m {
-            for k in cp[c]..cp[c + 1] {
-                let i = ri[k];
-                self.row_entries[next[i]] = (c, jv[k]);
-                next[i] += 1;
-            }
-        }
-        // JᵀJ + λI on its pattern, column by column
-        self.values.clear();
-        for c in 0..m {
-            for k in cp[c]..cp[c + 1] {
-                let (row, v) = (ri[k], jv[k]);
-                for &(i, w) in &self.row_entries[self.row_ptr[row]..self.row_ptr[row + 1]] {
-                    self.acc[i] += v * w;
-                }
-            }
-            self.acc[c] += lambda;
-            let (np, nr) = (&self.pattern.col_ptr, &self.pattern.row_idx);
-            for &i in &nr[np[c]..np[c + 1]] {
-                self.values.push(self.acc[i]);
-                self.acc[i] = 0.0;
-            }
-        }
-        // −JᵀΦ
-        let mut delta: Vec<f64> = (0..m)
-            .map(|c| -(cp[c]..cp[c + 1]).map(|k| jv[k] * phi[ri[k]]).sum::<f64>())
-            .collect();
-        let (np, nr) = (&self.pattern.col_ptr, &self.pattern.row_idx);
-        let sym = SymbolicSparseColMatRef::new_checked(m, m, np, None, nr);
-        let mat = SparseColMatRef::new(sym, &self.values);
-        let (symbolic, par) = (&self.pattern.symbolic, self.pattern.par);
-        let mut l_values = vec![0.0; symbolic.len_val()];
-        let scratch = StackReq::any_of(&[
-            symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
-            symbolic.solve_in_place_scratch::<f64>(1, par),
-        ]);
-        let mut mem = MemBuffer::try_new(scratch).ok()?;
-        let llt = symbolic
-            .factorize_numeric_llt(
-                &mut l_values,
-                mat,
-                Side::Lower,
-                Default::default(),
-                par,
-                MemStack::new(&mut mem),
-                Default::default(),
-            )
-            .ok()?;
-        llt.solve_in_place_with_conj(
-            faer::Conj::No,
-            faer::MatMut::from_column_major_slice_mut(&mut delta, m, 1),
-            par,
-            MemStack::new(&mut mem),
-        );
-        delta.iter().all(|x| x.is_finite()).then_some(delta)
-    }
-}
-
-/// x projected onto L = Π K_μᵢ.
-pub(crate) fn projected(p: &LocalProblem, x: &[f64]) -> Vec<f64> {
-    let mut y = x.to_vec();
-    crate::cone::project_product(p.dim, &p.mu, &mut y);
-    y
 }
 
 /// ρᵢ = 1 / ‖Wᵢᵢ‖_F (1 where the diagonal block is zero or not finite).
@@ -517,45 +472,9 @@ pub fn solve(
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
     use super::*;
-    use crate::sparse::CscMatrix;
-
-    /// Deterministic pseudo-random numbers in [−1, 1) (a linear congruential generator; the
-    /// stream is fixed by `seed` and `salt`), for the tests' problem builders.
-    pub(crate) fn uniform(seed: u64, salt: u64) -> impl FnMut() -> f64 {
-        let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(salt);
-        move || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        }
-    }
-
-    /// A deterministic pseudo-random local problem: W = AᵀA (+ `delta` I), A with m/2 rows
-    /// (rank-deficient when δ = 0), μ in [0.3, 1]; `skew` adds a small antisymmetric part to W
-    /// (as stored in real files).
-    pub(crate) fn problem(contacts: usize, seed: u64, delta: f64, skew: f64) -> LocalProblem {
-        let mut next = uniform(seed, 1);
-        let m = 3 * contacts;
-        let k = m / 2;
-        let a: Vec<f64> = (0..k * m).map(|_| next()).collect();
-        let mut w = vec![0.0; m * m];
-        for i in 0..m {
-            for j in 0..m {
-                w[i * m + j] = (0..k).map(|l| a[l * m + i] * a[l * m + j]).sum::<f64>()
-                    + if i == j { delta } else { 0.0 }
-                    + skew * (i as f64 - j as f64) / m as f64;
-            }
-        }
-        LocalProblem {
-            dim: 3,
-            w: CscMatrix::from_dense(m, m, &w),
-            q: (0..m).map(|_| next()).collect(),
-            mu: (0..contacts).map(|_| 0.3 + 0.7 * next().abs()).collect(),
-        }
-    }
+    use crate::test_problems::problem;
 
     #[test]
     fn levenberg_marquardt_solves_a_regular_problem_from_zero() {
@@ -685,48 +604,5 @@ pub(crate) mod tests {
         let past = Deadline::from(std::time::Instant::now());
         let out = solve(&p, &mut r, 0.0, &LmParams::default(), past);
         assert_eq!((out.status, out.steps), (LmStatus::TimeLimit, 0));
-    }
-
-    /// A stage whose fixed point crawls (one APGD iteration per inner solve) and whose Newton
-    /// budget is one step: without the LM end game it ends at its iteration cap; with it, it
-    /// converges, and the reported error is the one recomputed from r on the stored W. A run
-    /// that converges without spending its Newton budget is unchanged.
-    #[test]
-    fn a_stage_hands_its_stall_to_the_lm_end_game() {
-        use crate::settings::{InnerKind, OuterKind, Settings};
-        let crawl = Settings {
-            max_inner: 1,
-            newton_steps: 1,
-            newton_start: 1.0,
-            max_outer: 60,
-            ..Settings::method(InnerKind::Apgd, OuterKind::FixedPoint)
-        };
-        let mut crawl = crawl;
-        crawl.tuning.lm.start = 1.0;
-        let mut off = crawl.clone();
-        off.tuning.lm.max_steps = 0;
-        let p = problem(6, 2811, 0.0, 0.0);
-        let prob = crate::Problem::Local(p.clone());
-        let without = crate::solve(&prob, &off).unwrap();
-        assert_eq!(without.status, crate::Status::MaxIterations);
-        let with = crate::solve(&prob, &crawl).unwrap();
-        let err = p.error(&with.r).error;
-        assert_eq!(with.status, crate::Status::Converged);
-        assert!(
-            err <= crawl.tol && with.error == err,
-            "{err:.3e} vs {:.3e}",
-            with.error
-        );
-        let p = problem(6, 2902, 0.0, 0.0);
-        let prob = crate::Problem::Local(p);
-        let (a, b) = (
-            crate::solve(&prob, &off).unwrap(),
-            crate::solve(&prob, &crawl).unwrap(),
-        );
-        assert_eq!(a.status, crate::Status::Converged);
-        assert_eq!(
-            (a.status, a.outer_iterations, a.inner_iterations, &a.r),
-            (b.status, b.outer_iterations, b.inner_iterations, &b.r)
-        );
     }
 }

@@ -9,6 +9,8 @@
 //!   Coulomb's law (2.9) and the error measure results are reported in;
 //! - [`mass`]: the block Cholesky factorization of M, with its own [`mass::MassError`];
 //! - [`delassus`]: W = Hᵀ M⁻¹ H and q = Hᵀ M⁻¹ f + w;
+//! - [`linalg`]: the linear algebra of every method — sparse and dense storage and LU, the
+//!   small blocks, the patterned sparse LU, the normal equations, the skeleton of W;
 //! - [`settings`] and [`solution`]: the typed [`Settings`] (with [`Settings::paper`], the
 //!   paper's algorithm, and the [`settings::Tuning`] constants), the [`Method`] names, the
 //!   [`Solution`], its [`Status`] and the [`SolveError`];
@@ -41,7 +43,6 @@ pub mod barrier;
 pub mod cone;
 pub mod deadline;
 pub mod delassus;
-pub mod dense;
 pub mod evaluation;
 pub mod examples;
 pub mod existence;
@@ -49,6 +50,7 @@ pub mod fclib;
 pub mod inner;
 pub mod law;
 pub mod levenberg;
+pub mod linalg;
 pub mod mass;
 pub mod multiplier;
 pub mod natural_map;
@@ -58,16 +60,20 @@ pub mod plan;
 pub mod problem;
 pub mod proximal;
 pub mod settings;
-pub mod skeleton;
 pub mod solution;
 pub mod solver;
-pub mod sparse;
+#[cfg(test)]
+pub(crate) mod test_problems;
+
+/// The linear algebra at its former paths (`coulomb::sparse`, `coulomb::dense`,
+/// `coulomb::skeleton`).
+pub use linalg::{dense, skeleton, sparse};
 
 /// The outer iteration's pieces, at their former path (`coulomb::fixed_point`).
 pub use outer::fixed_point;
 
+pub use linalg::sparse::CscMatrix;
 pub use outer::{solve, solve_with_guess, Solver};
 pub use problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
 pub use settings::{InnerKind, Method, OuterKind, Settings};
 pub use solution::{Guess, Solution, SolveError, Status};
-pub use sparse::CscMatrix;

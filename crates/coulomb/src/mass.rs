@@ -7,7 +7,7 @@
 //! mesh), so a block-diagonal M costs a few small dense factorizations and M⁻¹ H keeps the
 //! sparsity of H. Large blocks use faer's sparse supernodal Cholesky; M⁻¹ is never formed.
 
-use crate::sparse::CscMatrix;
+use crate::linalg::sparse::CscMatrix;
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Llt, Lu, SymbolicLlt, SymbolicLu};
 use faer::sparse::{SparseColMat, Triplet};

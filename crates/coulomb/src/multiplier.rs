@@ -46,10 +46,10 @@
 use rayon::prelude::*;
 
 use crate::deadline::Deadline;
+use crate::linalg::sparse::CscMatrix;
 use crate::mass::MassFactor;
 use crate::problem::GlobalProblem;
 use crate::settings::MultiplierParams;
-use crate::sparse::CscMatrix;
 
 /// The largest n [`solve`] takes: its Newton systems are dense n × n (8 n² bytes, O(n³)
 /// flops per step; the default's stage stays at or below
@@ -109,11 +109,11 @@ struct Shared<'a> {
 /// deadline. `mass` is the factor of p's M; `w_mean` the mean of the diagonal of the W
 /// whose law is solved (ρ = [`MultiplierParams::rho_factor`] / `w_mean`); `judge` returns
 /// (error, balance residual) of an r on the problem as stored (it may be another form of the
-/// same law: a local problem whose W has the skeleton p, [`crate::skeleton`]). With `hu`,
+/// same law: a local problem whose W has the skeleton p, [`crate::linalg::skeleton`]). With `hu`,
 /// u = `hu`ᵀ v + w instead of Hᵀ v + w (a skeleton W ≈ C A⁻¹ R of a W that is not
 /// symmetric: H = R, `hu` = Cᵀ); `mass` is then a factor of the symmetric part of M, used
 /// for the start v only. `par`: the parallelism of the dense LU of each Newton step
-/// ([`crate::dense::parallelism`]).
+/// ([`crate::linalg::dense::parallelism`]).
 #[allow(clippy::too_many_arguments)]
 pub fn solve(
     p: &GlobalProblem,
@@ -364,7 +364,7 @@ struct Run {
     jm: faer::Mat<f64>,
     /// the LU of J at an earlier point of the current Newton run (its chord steps,
     /// [`MultiplierParams::chord_ratio`])
-    lu: Option<crate::dense::Lu>,
+    lu: Option<crate::linalg::dense::Lu>,
     /// Hᵢ Bᵢ of one contact (the assembly's work space)
     hb: Vec<f64>,
     dv: Vec<f64>,
@@ -500,7 +500,7 @@ impl Run {
                 jm = faer::Mat::zeros(p.dofs(), p.dofs());
             }
             assemble(p, s, &self.blocks, &mut jm, &mut self.hb);
-            let Some(lu) = crate::dense::Lu::new(jm, s.par) else {
+            let Some(lu) = crate::linalg::dense::Lu::new(jm, s.par) else {
                 break;
             };
             self.dv.iter_mut().zip(&g.g).for_each(|(x, gi)| *x = -gi);

@@ -24,6 +24,8 @@
 //! ([`dual_natural_residual`]). `InnerLimits::tol` is compared with the solver's own one.
 
 use crate::cone;
+use crate::linalg::sparse::CscMatrix;
+use crate::linalg::vector::norm;
 
 /// The natural-map residual of one contact: eᵢ = r − P_{K_μ}(r − ũ) with ũ = (u_N + μ‖u_T‖, u_T).
 /// Returns ‖eᵢ‖²; eᵢ = 0 exactly when (u, r) satisfies (2.9) (Lemma 3.1).
@@ -258,12 +260,18 @@ fn dual_residual_parts(
 }
 
 /// Relative natural-map residual ‖r − P_L(r − (W r + b))‖ / max(1, ‖b‖) of (4.7).
-pub(crate) fn dual_natural_residual(problem: &crate::inner::InnerProblem<'_>, r: &[f64]) -> f64 {
+pub(crate) fn dual_natural_residual(
+    dim: usize,
+    mu: &[f64],
+    w: &CscMatrix,
+    b: &[f64],
+    r: &[f64],
+) -> f64 {
     let m = r.len();
-    let mut u = problem.b.to_vec();
-    problem.w.gemv_acc(1.0, r, &mut u);
+    let mut u = b.to_vec();
+    w.gemv_acc(1.0, r, &mut u);
     let mut f = vec![0.0; m];
-    let mut jac = vec![0.0; problem.mu.len() * problem.dim * problem.dim];
-    natural_map(problem.dim, problem.mu, r, &u, &mut f, &mut jac);
-    crate::law::norm(&f) / crate::law::norm(problem.b).max(1.0)
+    let mut jac = vec![0.0; mu.len() * dim * dim];
+    natural_map(dim, mu, r, &u, &mut f, &mut jac);
+    norm(&f) / norm(b).max(1.0)
 }

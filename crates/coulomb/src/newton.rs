@@ -25,217 +25,77 @@
 //! problems (3.15) and (4.7) in [`crate::inner::ipm`].
 
 use crate::deadline::Deadline;
+use crate::linalg::normal::{Normal, NormalPattern};
+use crate::linalg::pattern_lu::JacobianPattern;
+/// At its former path: the size from which the sparse factorizations run on all threads.
+pub use crate::linalg::pattern_lu::SPARSE_PARALLEL_DIM;
 use crate::natural_map::de_saxce_map;
 use crate::problem::LocalProblem;
-use crate::sparse::CscMatrix;
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::lu::{factorize_symbolic_lu, LuRef, NumericLu, SymbolicLu};
-use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 
-/// Solves J x = rhs for a square sparse J given as summed triplets, by faer's sparse LU.
-/// None if the factorization fails or the solution is not finite.
-pub(crate) fn sparse_lu_solve(
-    n: usize,
-    rows: &[usize],
-    cols: &[usize],
-    vals: &[f64],
-    rhs: &mut [f64],
-) -> Option<()> {
-    let csc = CscMatrix::from_triplets(n, n, rows, cols, vals).ok()?;
-    let trip: Vec<faer::sparse::Triplet<usize, usize, f64>> = csc
-        .triplets()
-        .map(|(i, j, v)| faer::sparse::Triplet::new(i, j, v))
-        .collect();
-    let mat = faer::sparse::SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip).ok()?;
-    let lu = mat.sp_lu().ok()?;
-    lu.solve_in_place(faer::MatMut::from_column_major_slice_mut(rhs, n, 1));
-    rhs.iter().all(|x| x.is_finite()).then_some(())
+/// Parameters of the semismooth Newton end game ([`crate::outer::newton`]); the budget and
+/// the starting level are [`crate::settings::Settings::newton_steps`] and [`crate::settings::Settings::newton_start`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct NewtonParams {
+    /// Newton steps one end-game try may take (all tries of a stage share
+    /// [`crate::settings::Settings::newton_steps`])
+    pub try_steps: usize,
+    /// a failed try is tried again once the error is below this fraction of the error it
+    /// started from
+    pub retry: f64,
+    /// outer iterations without a new lowest error after which the fixed point counts as
+    /// stagnating (the end game is then tried again whatever its gate)
+    pub stagnation: usize,
+    /// a new lowest error counts as progress only below this fraction of the previous lowest
+    pub stagnation_gain: f64,
+    /// the natural map is driven below this fraction of tol · ‖q‖
+    pub target_fraction: f64,
+    /// first shift of a step: λ = `lambda_factor` · min(‖G‖/‖q‖, 1e-2) · max diag(W)
+    /// (see [`crate::newton::LAMBDA_FACTOR`])
+    pub lambda_factor: f64,
+    /// a try stops after this many consecutive slow steps (see [`crate::newton::SLOW_STEPS`]); ≥ 1
+    pub slow_steps: usize,
+    /// a step with ‖G⁺‖ > `slow_ratio` ‖G‖ is slow (see [`crate::newton::SLOW_RATIO`]); in (0, 1]
+    pub slow_ratio: f64,
+    /// the first shift λ uses min(‖G‖/‖q‖, `shift_ratio_cap`) (see `lambda_factor`); > 0
+    pub shift_ratio_cap: f64,
+    /// directions (shifts λ) tried per step before the step counts as giving no descent; ≥ 1
+    pub shift_tries: usize,
+    /// after a direction without descent λ ← max(`shift_growth` · λ, `shift_floor` · max diag(W));
+    /// > 1
+    pub shift_growth: f64,
+    /// see `shift_growth`; > 0
+    pub shift_floor: f64,
+    /// line search on the step δ: t = 1, then up to this many halvings of t
+    pub halvings: usize,
+    /// a trial point r + t δ is accepted when ‖G(r + t δ)‖ < ‖G(r)‖ and
+    /// ‖G(r + t δ)‖ ≤ (1 − `sufficient_decrease` · t) ‖G(r)‖ (Armijo); in [0, 1)
+    pub sufficient_decrease: f64,
+    /// on a non-symmetric W, a try whose error fell to at most this fraction of the error it
+    /// started from is followed by another try from its point (above it the end game stops
+    /// and the fixed point goes on); in (0, 1]
+    pub continue_gain: f64,
 }
 
-/// The sparsity pattern of J + λ I: every d × d block (i, j) with i = j or with a nonzero of
-/// W in block (i, j), and its symbolic LU factorization, computed once per [`polish`] call
-/// (the values change at every step, the pattern does not). Also the pattern of the
-/// Alart–Curnier Jacobian of [`crate::levenberg`] (same blocks), which needs no LU.
-pub(crate) struct JacobianPattern {
-    dim: usize,
-    pub(crate) col_ptr: Vec<usize>,
-    pub(crate) row_idx: Vec<usize>,
-    /// for each contact (block column), the contacts of its block rows, ascending
-    pub(crate) neighbors: Vec<Vec<usize>>,
-    /// position of each diagonal entry in `row_idx`
-    diagonal: Vec<usize>,
-    /// None when built by [`JacobianPattern::without_lu`]
-    symbolic: Option<std::sync::Arc<SymbolicLu<usize>>>,
-    /// the numeric factorizations' parallelism ([`SPARSE_PARALLEL_DIM`])
-    par: faer::Par,
-}
-
-/// The sparse factorizations of the Newton and Levenberg–Marquardt systems (LU of J on
-/// the block pattern of J, Cholesky of JᵀJ + λI) run on all threads from this many unknowns on,
-/// on one thread below: faer's supernodal factorizations spend more on synchronising their
-/// threads than they gain on the small supernodes of such problems. Measured on 2 cores
-/// (docs/bench.md, "Threads"): the box files of the corpus (m ≤ 2 000) take 0.75× the time
-/// with this and the dense LU on one thread; a 5 000-bead granular file (m = 21 183) the
-/// same time either way.
-pub const SPARSE_PARALLEL_DIM: usize = 20_000;
-/// The parallelism of a sparse factorization of n unknowns ([`SPARSE_PARALLEL_DIM`]).
-pub(crate) fn sparse_parallelism(n: usize) -> faer::Par {
-    crate::dense::parallelism(n, SPARSE_PARALLEL_DIM)
-}
-
-/// A numeric LU of J on a [`JacobianPattern`] (its symbolic factorization shared).
-pub(crate) struct PatternLu {
-    symbolic: std::sync::Arc<SymbolicLu<usize>>,
-    numeric: NumericLu<usize, f64>,
-    par: faer::Par,
-}
-
-impl PatternLu {
-    /// x = J⁻¹ rhs in place; false (nothing changed) if the length of `rhs` is not J's size.
-    pub(crate) fn solve_in_place(&self, rhs: &mut [f64]) -> bool {
-        let n = self.symbolic.nrows();
-        if rhs.len() != n {
-            return false;
+impl Default for NewtonParams {
+    fn default() -> Self {
+        NewtonParams {
+            try_steps: 15,
+            retry: 0.1,
+            stagnation: 3,
+            stagnation_gain: 0.5,
+            target_fraction: 0.5,
+            lambda_factor: LAMBDA_FACTOR,
+            slow_steps: SLOW_STEPS,
+            slow_ratio: SLOW_RATIO,
+            shift_ratio_cap: 1e-2,
+            shift_tries: 4,
+            shift_growth: 100.0,
+            shift_floor: 1e-10,
+            halvings: 10,
+            sufficient_decrease: 1e-4,
+            continue_gain: 0.5,
         }
-        let scratch = self.symbolic.solve_in_place_scratch::<f64>(1, self.par);
-        LuRef::new_unchecked(&self.symbolic, &self.numeric).solve_in_place_with_conj(
-            faer::Conj::No,
-            faer::MatMut::from_column_major_slice_mut(rhs, n, 1),
-            self.par,
-            MemStack::new(&mut MemBuffer::new(scratch)),
-        );
-        true
-    }
-}
-
-impl JacobianPattern {
-    pub(crate) fn new(p: &LocalProblem) -> Option<Self> {
-        let mut pattern = Self::without_lu(p);
-        let sym = SymbolicSparseColMatRef::new_checked(
-            pattern.col_ptr.len() - 1,
-            pattern.col_ptr.len() - 1,
-            &pattern.col_ptr,
-            None,
-            &pattern.row_idx,
-        );
-        pattern.symbolic = Some(std::sync::Arc::new(
-            factorize_symbolic_lu(sym, Default::default()).ok()?,
-        ));
-        Some(pattern)
-    }
-
-    /// The pattern alone (no symbolic LU; [`JacobianPattern::solve`] then fails).
-    pub(crate) fn without_lu(p: &LocalProblem) -> Self {
-        let d = p.dim;
-        let contacts = p.mu.len();
-        let mut neighbors: Vec<Vec<usize>> = (0..contacts).map(|c| vec![c]).collect();
-        for (i, j, _) in p.w.triplets() {
-            neighbors[j / d].push(i / d);
-        }
-        for n in &mut neighbors {
-            n.sort_unstable();
-            n.dedup();
-        }
-        let m = contacts * d;
-        let mut col_ptr = Vec::with_capacity(m + 1);
-        let mut row_idx = Vec::new();
-        let mut diagonal = vec![0; m];
-        col_ptr.push(0);
-        for j in 0..m {
-            for &ci in &neighbors[j / d] {
-                for a in 0..d {
-                    if ci * d + a == j {
-                        diagonal[j] = row_idx.len();
-                    }
-                    row_idx.push(ci * d + a);
-                }
-            }
-            col_ptr.push(row_idx.len());
-        }
-        Self {
-            dim: d,
-            col_ptr,
-            row_idx,
-            neighbors,
-            diagonal,
-            symbolic: None,
-            par: sparse_parallelism(p.q.len()),
-        }
-    }
-
-    /// The values of J = I − D + B W on the pattern (B = D A), column by column.
-    pub(crate) fn fill(
-        &self,
-        p: &LocalProblem,
-        dblocks: &[f64],
-        blocks: &[f64],
-        wcol: &mut [f64],
-        vals: &mut Vec<f64>,
-    ) {
-        let d = self.dim;
-        vals.clear();
-        for j in 0..p.w.ncols {
-            let (cj, b) = (j / d, j % d);
-            for k in p.w.col_ptr[j]..p.w.col_ptr[j + 1] {
-                wcol[p.w.row_idx[k]] += p.w.values[k];
-            }
-            for &ci in &self.neighbors[cj] {
-                let bl = &blocks[ci * d * d..(ci + 1) * d * d];
-                let dl = &dblocks[ci * d * d..(ci + 1) * d * d];
-                for a in 0..d {
-                    let mut v: f64 = (0..d).map(|k| bl[a * d + k] * wcol[ci * d + k]).sum();
-                    if ci == cj {
-                        v += if a == b { 1.0 } else { 0.0 } - dl[a * d + b];
-                    }
-                    vals.push(v);
-                }
-            }
-            for k in p.w.col_ptr[j]..p.w.col_ptr[j + 1] {
-                wcol[p.w.row_idx[k]] = 0.0;
-            }
-        }
-    }
-
-    pub(crate) fn shift_diagonal(&self, vals: &mut [f64], lambda: f64) {
-        for &k in &self.diagonal {
-            vals[k] += lambda;
-        }
-    }
-
-    /// The LU of the matrix with these values on the pattern, from the cached symbolic
-    /// factorization; None if it fails.
-    pub(crate) fn factor(&self, vals: &[f64]) -> Option<PatternLu> {
-        let n = self.col_ptr.len() - 1;
-        let symbolic = self.symbolic.clone()?;
-        if vals.len() != self.row_idx.len() {
-            return None;
-        }
-        let sym = SymbolicSparseColMatRef::new_checked(n, n, &self.col_ptr, None, &self.row_idx);
-        let mat = SparseColMatRef::new(sym, vals);
-        let mut numeric = NumericLu::new();
-        let scratch = symbolic.factorize_numeric_lu_scratch::<f64>(self.par, Default::default());
-        symbolic
-            .factorize_numeric_lu(
-                &mut numeric,
-                mat,
-                self.par,
-                MemStack::new(&mut MemBuffer::try_new(scratch).ok()?),
-                Default::default(),
-            )
-            .ok()?;
-        Some(PatternLu {
-            symbolic,
-            numeric,
-            par: self.par,
-        })
-    }
-
-    /// Solves (J + λ I) x = rhs in place by LU with the cached symbolic factorization; None
-    /// if the factorization fails or x is not finite.
-    pub(crate) fn solve(&self, vals: &[f64], rhs: &mut [f64]) -> Option<()> {
-        let lu = self.factor(vals)?;
-        (lu.solve_in_place(rhs) && rhs.iter().all(|x| x.is_finite())).then_some(())
     }
 }
 
@@ -532,10 +392,10 @@ pub fn least_squares(
         return report;
     }
     let jac = JacobianPattern::without_lu(p);
-    let Some(normal) = crate::levenberg::NormalPattern::new(&jac, d, max_normal_nonzeros) else {
+    let Some(normal) = NormalPattern::new(&jac, d, max_normal_nonzeros) else {
         return report;
     };
-    let mut normal = crate::levenberg::Normal::new(&jac, normal, m);
+    let mut normal = Normal::new(&jac, normal, m);
     let (mut g, mut dblocks, mut blocks) = (vec![0.0; m], vec![0.0; m * d], vec![0.0; m * d]);
     let (mut wcol, mut jv) = (vec![0.0; m], Vec::new());
     let mut lambda = 1e-8;
@@ -615,7 +475,7 @@ pub fn polish(
     max_steps: usize,
     deadline: Deadline,
 ) -> NewtonReport {
-    let params = crate::settings::Tuning::default().newton;
+    let params = NewtonParams::default();
     polish_with(p, r, target, max_steps, deadline, &params)
 }
 
@@ -629,7 +489,7 @@ pub fn polish_with(
     target: f64,
     max_steps: usize,
     deadline: Deadline,
-    params: &crate::settings::NewtonParams,
+    params: &NewtonParams,
 ) -> NewtonReport {
     let (d, m) = (p.dim, r.len());
     if !p.fits(r) {
@@ -693,8 +553,8 @@ pub fn polish_with(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::linalg::sparse::CscMatrix;
     use crate::natural_map::{push_d_times, push_identity_minus_d};
-    use crate::sparse::CscMatrix;
 
     #[test]
     fn least_squares_reaches_a_solution_nearby_and_never_raises_the_error() {
@@ -715,16 +575,16 @@ mod tests {
         assert_eq!(rep.residual, p.error(&r).error);
         // rank-deficient, W not symmetric: whatever it reaches, the returned r is no worse
         // than the start and its error is the one reported
-        let q = crate::levenberg::tests::problem(6, 2811, 0.0, 1e-3);
+        let q = crate::test_problems::problem(6, 2811, 0.0, 1e-3);
         let mut r = vec![0.1; 18];
-        let start = q.error(&crate::levenberg::projected(&q, &r)).error;
+        let start = q.error(&crate::problem::projected(&q, &r)).error;
         let rep = least_squares(&q, &mut r, 1e-12, 5, 2, NONZEROS, Deadline::NEVER);
         assert!(
             rep.residual <= start && rep.residual == q.error(&r).error,
             "{rep:?}"
         );
         // every returned point lies in the cones: it is its own projection
-        assert_eq!(r, crate::levenberg::projected(&q, &r));
+        assert_eq!(r, crate::problem::projected(&q, &r));
         // sizes that disagree: no step
         let rep = least_squares(&q, &mut [0.0; 5], 1e-8, 5, 2, NONZEROS, Deadline::NEVER);
         assert_eq!(rep.status, NewtonStatus::NoDescent);
@@ -733,7 +593,7 @@ mod tests {
         let mut r = vec![0.1; 18];
         let rep = least_squares(&q, &mut r, 1e-12, 5, 2, 10, Deadline::NEVER);
         assert_eq!((rep.status, rep.steps), (NewtonStatus::NoDescent, 0));
-        assert_eq!(r, crate::levenberg::projected(&q, &[0.1; 18]));
+        assert_eq!(r, crate::problem::projected(&q, &[0.1; 18]));
         assert_eq!(rep.residual, q.error(&r).error);
     }
 

@@ -16,7 +16,7 @@
 //! Every contact block is ordered normal first, uⁱ = (u_N, u_T), rⁱ = (r_N, r_T), so the
 //! paper's eⁱ is the first basis vector of the block.
 
-use crate::sparse::{CscMatrix, SparseError};
+use crate::linalg::sparse::{CscMatrix, SparseError};
 use thiserror::Error;
 
 /// Relative asymmetry max|A − Aᵀ| / max|A| above which a W or M is reported as not symmetric
@@ -283,7 +283,7 @@ fn check_psd(what: &'static str, dim: usize, a: &CscMatrix) -> Result<(), Proble
         }
     }
     let ones = vec![1.0; n];
-    crate::sparse::shifted_cholesky_succeeds(a, &ones, tau).map_err(|detail| {
+    crate::linalg::sparse::shifted_cholesky_succeeds(a, &ones, tau).map_err(|detail| {
         ProblemError::NotPositiveSemidefinite {
             what,
             detail: format!("½({what} + {what}ᵀ) has a negative eigenvalue ({detail})"),
@@ -499,6 +499,13 @@ impl GlobalProblem {
         }
         crate::law::relative_norm(&res, &self.f)
     }
+}
+
+/// x projected onto L = Π K_μᵢ.
+pub(crate) fn projected(p: &LocalProblem, x: &[f64]) -> Vec<f64> {
+    let mut y = x.to_vec();
+    crate::cone::project_product(p.dim, &p.mu, &mut y);
+    y
 }
 
 #[cfg(test)]

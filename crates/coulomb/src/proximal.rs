@@ -20,7 +20,7 @@
 //! Every iterate is judged as its projection onto L = Π K_μᵢ, and the best one is returned.
 
 use crate::deadline::Deadline;
-use crate::newton::JacobianPattern;
+use crate::linalg::pattern_lu::JacobianPattern;
 use crate::problem::LocalProblem;
 use crate::settings::ProxParams;
 
@@ -184,7 +184,7 @@ pub fn solve(
             x.copy_from_slice(r);
         }
         solved = solved || phi <= inner_target;
-        let y = crate::levenberg::projected(p, &x);
+        let y = crate::problem::projected(p, &x);
         error = p.error(&y).error;
         if error < best_err {
             best_err = error;
@@ -220,7 +220,7 @@ pub fn solve(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::levenberg::tests::problem;
+    use crate::test_problems::problem;
 
     #[test]
     fn the_proximal_point_solves_a_rank_deficient_problem_and_reports_the_stored_error() {

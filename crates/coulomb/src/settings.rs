@@ -13,6 +13,11 @@
 //! - [`Settings::newton_start`]: an error level (of `docs/error.md`) below which the Newton end
 //!   game is tried; not a stopping test.
 
+pub use crate::barrier::{BarrierParams, BARRIER_MAX_WORK};
+pub use crate::inner::apgd::ApgdParams;
+pub use crate::inner::RayParams;
+pub use crate::levenberg::LmParams;
+pub use crate::newton::NewtonParams;
 use std::fmt;
 use std::str::FromStr;
 use std::time::Duration;
@@ -204,312 +209,6 @@ pub struct AndersonParams {
     pub memory: usize,
 }
 
-/// Parameters of the semismooth Newton end game ([`crate::outer::newton`]); the budget and
-/// the starting level are [`Settings::newton_steps`] and [`Settings::newton_start`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct NewtonParams {
-    /// Newton steps one end-game try may take (all tries of a stage share
-    /// [`Settings::newton_steps`])
-    pub try_steps: usize,
-    /// a failed try is tried again once the error is below this fraction of the error it
-    /// started from
-    pub retry: f64,
-    /// outer iterations without a new lowest error after which the fixed point counts as
-    /// stagnating (the end game is then tried again whatever its gate)
-    pub stagnation: usize,
-    /// a new lowest error counts as progress only below this fraction of the previous lowest
-    pub stagnation_gain: f64,
-    /// the natural map is driven below this fraction of tol · ‖q‖
-    pub target_fraction: f64,
-    /// first shift of a step: λ = `lambda_factor` · min(‖G‖/‖q‖, 1e-2) · max diag(W)
-    /// (see [`crate::newton::LAMBDA_FACTOR`])
-    pub lambda_factor: f64,
-    /// a try stops after this many consecutive slow steps (see [`crate::newton::SLOW_STEPS`]); ≥ 1
-    pub slow_steps: usize,
-    /// a step with ‖G⁺‖ > `slow_ratio` ‖G‖ is slow (see [`crate::newton::SLOW_RATIO`]); in (0, 1]
-    pub slow_ratio: f64,
-    /// the first shift λ uses min(‖G‖/‖q‖, `shift_ratio_cap`) (see `lambda_factor`); > 0
-    pub shift_ratio_cap: f64,
-    /// directions (shifts λ) tried per step before the step counts as giving no descent; ≥ 1
-    pub shift_tries: usize,
-    /// after a direction without descent λ ← max(`shift_growth` · λ, `shift_floor` · max diag(W));
-    /// > 1
-    pub shift_growth: f64,
-    /// see `shift_growth`; > 0
-    pub shift_floor: f64,
-    /// line search on the step δ: t = 1, then up to this many halvings of t
-    pub halvings: usize,
-    /// a trial point r + t δ is accepted when ‖G(r + t δ)‖ < ‖G(r)‖ and
-    /// ‖G(r + t δ)‖ ≤ (1 − `sufficient_decrease` · t) ‖G(r)‖ (Armijo); in [0, 1)
-    pub sufficient_decrease: f64,
-    /// on a non-symmetric W, a try whose error fell to at most this fraction of the error it
-    /// started from is followed by another try from its point (above it the end game stops
-    /// and the fixed point goes on); in (0, 1]
-    pub continue_gain: f64,
-}
-
-/// Parameters of the interior-point method on Coulomb's law ([`crate::barrier`]) and of its
-/// try in the default policy ([`crate::Solver::solve`]): after the warm-up of a cold solve
-/// (no guess) with every μ > 0 of a global problem with at most half as many degrees of
-/// freedom as contact unknowns (at most `max_schur_dofs`: rigid bodies touching at several
-/// points per face, where W is rank-deficient and the Newton systems are of the size of M),
-/// or of a local problem with at most `max_skeleton_unknowns` contact unknowns whose W has a
-/// skeleton of rank ≤ min(`max_schur_dofs`, `skeleton_rank_ratio` · m) ([`crate::skeleton`]),
-/// before the main
-/// method. A try runs the method along each path of `paths` in turn (at most
-/// [`Settings::barrier_steps`] Newton steps each), finishes a run with the
-/// Levenberg–Marquardt end game when its error is ≤ [`LmParams::start`], keeps the best point
-/// and stops once it converges (or is within `handover` · tol where the method of multipliers
-/// follows) or has spent its work budget `max_work` (Newton and LM steps: a budget in work, so
-/// that the same input takes the same path on any machine and under any load).
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct BarrierParams {
-    /// a run stops when its lowest error has not improved for this many steps; ≥ 1
-    pub stall_steps: usize,
-    /// once its lowest error is ≤ `settle_below`, a run stops after this many steps in a row
-    /// cut below `settle_alpha` of the Newton step (jammed near the end of its path, where
-    /// the try's Levenberg–Marquardt finish, [`LmParams::start`], usually ends it in a few
-    /// steps; docs/rigid.md); ≥ 1
-    pub settle_steps: usize,
-    /// see `settle_steps`; ≥ 0 (0: never)
-    pub settle_below: f64,
-    /// see `settle_steps`; in (0, 1)
-    pub settle_alpha: f64,
-    /// fraction of the step to the boundary of the cones that is taken; in (0, 1)
-    pub boundary_fraction: f64,
-    /// (smoothing, recentring) of the runs of a try, in order: on hard rigid problems the
-    /// method is sensitive to them and different runs end at different points
-    pub paths: [crate::barrier::PathParams; 4],
-    /// the start b = T ũ(r₀) is moved into the interior of L with this margin, relative to
-    /// its largest entry; > 0
-    pub start_margin: f64,
-    /// … and by at least this multiple of ‖q‖/√contacts; > 0
-    pub start_floor: f64,
-    /// a try takes at most this many steps in all (the interior point's Newton steps and
-    /// its LM finishes' steps, each a factorization): no new run or finish starts once they
-    /// are spent, and a run or finish gets at most what is left; ≥ 1. It replaced a share
-    /// of the time left (0.5) so that the path does not depend on the machine's speed or
-    /// load; calibrated on the corpus (docs/solver-core.md)
-    pub max_work: usize,
-    /// the LM finish of a run of the try stops when its lowest error has not dropped below
-    /// [`LmParams::stall_gain`] times its value this many segments earlier (the try's own
-    /// [`LmParams::stall_segments`]); ≥ 1
-    pub lm_stall_segments: usize,
-    /// where the method of multipliers follows the try ([`MultiplierParams`]), the try ends
-    /// after a run whose end point has an error ≤ `handover` · tol (from such points the
-    /// multipliers converge in a few Newton steps, where the LM finish crawls); ≥ 0 (0: the
-    /// try ends only at the tolerance). Measured with `lm_stall_segments` = 2 against 6 and
-    /// no handover, on the 720 box files of corpus seeds 1–5 (docs/rigid.md): 718 solved in
-    /// 10 s either way, the five files that waited for the end of the try's share (5.0 s)
-    /// solved in 1.2–3.2 s
-    pub handover: f64,
-    /// a global problem with at most this many degrees of freedom (and fewer than contact
-    /// unknowns) has its Newton systems solved on M + H G⁻¹ Hᵀ (dense LU) instead of W + G;
-    /// the policy's try needs it; ≥ 1. Also the largest rank of the skeleton of a local W
-    pub max_schur_dofs: usize,
-    /// the dense LU factorizations of these Newton systems (Schur complement, skeleton, and
-    /// the method of multipliers' J, [`crate::dense`]) run on all threads from this size on,
-    /// on one thread below it; ≥ 1. Measured (`cargo bench -p coulomb --bench dense_lu`, 2
-    /// cores), all threads / one: 4.8× the time at n = 100, 2.3× at 384, 1.13× at 1 000,
-    /// 0.93× at 1 500, 0.78× at 3 000
-    pub dense_parallel_dim: usize,
-    /// a local problem with at most this many contact unknowns is probed for a skeleton
-    /// W ≈ W[:, P] W[P, P]⁻¹ W[P, :] of rank ≤ min(`max_schur_dofs`, `skeleton_rank_ratio` · m)
-    /// ([`crate::skeleton`]; cost ≤ m · rank² flops); if it has one, its Newton systems are
-    /// solved through it (dense LU of the size of the rank) and the policy's try runs on it
-    pub max_skeleton_unknowns: usize,
-    /// see `max_skeleton_unknowns`; in (0, 1]. A pile of rigid bodies has rank W ≤ 6 per body;
-    /// Siconos' RockPile_tob1 (463 contacts, m = 1 389) has rank 743 = 0.535 m: with 0.5 its
-    /// local form had no skeleton and was not solved in 60 s, with 0.6 the method of
-    /// multipliers solves it in 18 s (docs/rigid.md)
-    pub skeleton_rank_ratio: f64,
-    /// the pivoting of the skeleton stops when every remaining diagonal entry of
-    /// ½(W + Wᵀ) is ≤ this multiple of max Wᵢᵢ (its numerical rank); in (0, 1)
-    pub rank_tol: f64,
-    /// a solve through the skeleton is refined on W as stored at most this many times …
-    pub refine_steps: usize,
-    /// … until its residual (max norm) is ≤ this multiple of the right-hand side's; else the
-    /// step is solved by the sparse LU of W + G; > 0
-    pub refine_tol: f64,
-    /// after this many steps in a row solved by the sparse LU that way, a run no longer tries
-    /// the skeleton (every solve of a W with a large antisymmetric part falls back); ≥ 1
-    pub skeleton_strikes: usize,
-}
-
-impl Default for BarrierParams {
-    fn default() -> Self {
-        use crate::barrier::PathParams;
-        Self {
-            stall_steps: 30,
-            settle_steps: 5,
-            settle_below: 1e-6,
-            settle_alpha: 0.1,
-            boundary_fraction: 0.99,
-            paths: [
-                PathParams {
-                    smoothing: 0.1,
-                    recentre: 0.05,
-                },
-                PathParams {
-                    smoothing: 0.1,
-                    recentre: 0.0,
-                },
-                PathParams {
-                    smoothing: 0.3,
-                    recentre: 0.0,
-                },
-                PathParams {
-                    smoothing: 0.03,
-                    recentre: 0.0,
-                },
-            ],
-            start_margin: 1e-2,
-            start_floor: 1e-3,
-            max_work: BARRIER_MAX_WORK,
-            lm_stall_segments: 2,
-            handover: 10.0,
-            max_schur_dofs: 1500,
-            dense_parallel_dim: 1500,
-            max_skeleton_unknowns: 4000,
-            skeleton_rank_ratio: 0.6,
-            rank_tol: 1e-10,
-            refine_steps: 4,
-            refine_tol: 1e-10,
-            skeleton_strikes: 3,
-        }
-    }
-}
-
-impl BarrierParams {
-    fn validate(&self) -> Result<(), String> {
-        let fraction = |x: f64| x.is_finite() && x > 0.0 && x < 1.0;
-        let positive = |x: f64| x.is_finite() && x > 0.0;
-        if self.stall_steps == 0
-            || self.settle_steps == 0
-            || self.max_schur_dofs == 0
-            || self.dense_parallel_dim == 0
-            || self.skeleton_strikes == 0
-            || self.lm_stall_segments == 0
-            || self.max_work == 0
-        {
-            return Err(
-                "tuning.barrier: stall_steps, settle_steps, max_schur_dofs, \
-                 dense_parallel_dim, skeleton_strikes, lm_stall_segments and max_work must be ≥ 1"
-                    .into(),
-            );
-        }
-        let paths_ok = self.paths.iter().all(|p| {
-            p.smoothing.is_finite()
-                && p.smoothing >= 0.0
-                && p.recentre.is_finite()
-                && (0.0..1.0).contains(&p.recentre)
-        });
-        let ok = fraction(self.boundary_fraction)
-            && paths_ok
-            && self.settle_below.is_finite()
-            && self.settle_below >= 0.0
-            && fraction(self.settle_alpha)
-            && positive(self.start_margin)
-            && positive(self.start_floor)
-            && self.handover.is_finite()
-            && self.handover >= 0.0
-            && fraction(self.rank_tol)
-            && positive(self.skeleton_rank_ratio)
-            && self.skeleton_rank_ratio <= 1.0
-            && positive(self.refine_tol);
-        if !ok {
-            return Err(format!(
-                "tuning.barrier: a parameter is out of range: {self:?}"
-            ));
-        }
-        Ok(())
-    }
-}
-
-/// Parameters of the Levenberg–Marquardt end game on the Alart–Curnier map
-/// ([`crate::levenberg`]), the finish for rigid, rank-deficient problems on which the
-/// semismooth Newton end game stops at a stationary point (docs/rigid.md). A stage runs it
-/// from its best iterate once the Newton end game has spent its whole budget
-/// ([`Settings::newton_steps`]) without converging, the fixed point stagnates (see
-/// [`NewtonParams::stagnation`]) and the error is ≤ `start`, and again whenever the error has dropped below `retry` times
-/// the lowest error of the previous run; `max_steps = 0` turns it off.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct LmParams {
-    /// cap on LM steps (factorizations of JᵀJ + λI) of all runs of a stage; 0: no LM end game
-    pub max_steps: usize,
-    /// the end game starts only from an error (docs/error.md) ≤ this: from higher errors it
-    /// stalled on every corpus file where it was tried (docs/rigid.md); ≥ 0
-    pub start: f64,
-    /// a run stops (stalled) when its lowest error has not dropped below `stall_gain` times
-    /// its value `stall_segments` segments earlier; ≥ 1
-    pub stall_segments: usize,
-    /// see `stall_segments`; in (0, 1]
-    pub stall_gain: f64,
-    /// the end game runs again once the error is below `retry` times the lowest error of its
-    /// previous run; in (0, 1]
-    pub retry: f64,
-    /// a run that does not converge replaces the stage's iterate only if it lowered the error
-    /// to at most `keep_gain` times its starting value; in (0, 1]
-    pub keep_gain: f64,
-    /// LM steps per segment; a segment that does not lower the error to `segment_gain` times
-    /// its starting value is followed by an escape; ≥ 1
-    pub segment_steps: usize,
-    /// see `segment_steps`; in (0, 1]
-    pub segment_gain: f64,
-    /// a segment's `segment_steps` count from its first taken step (the rejected steps that
-    /// open it only raise the damping factor, ×4 each); this many rejected steps in a row end
-    /// a segment on their own; ≥ 1
-    pub max_rejections: usize,
-    /// a watchdog escape takes this many LM steps whatever the merit says (non-monotone;
-    /// the best r is kept); 0: no watchdog, every escape switches ρ
-    pub watchdog_steps: usize,
-    /// watchdog escapes between two switches of ρ (the escapes cycle: this many watchdogs,
-    /// then one switch)
-    pub watchdogs_per_switch: usize,
-    /// ρᵢ = factor / ‖Wᵢᵢ‖_F, the factor taken in turn from this list at each switch; each
-    /// factor > 0 (the first one is used first)
-    pub rho_factors: [f64; 7],
-    /// first damping factor c: λ = c · min(‖Φ‖ / ‖r‖, 1); > 0
-    pub damping: f64,
-    /// the damping factor is never lowered below this; > 0
-    pub damping_floor: f64,
-    /// damping factor after a watchdog escape; > 0
-    pub escape_damping: f64,
-    /// a step is accepted when ‖Φ‖ decreases and (actual / predicted decrease of ‖Φ‖²) is
-    /// above this; in [0, 1)
-    pub accept_ratio: f64,
-    /// skip the end game when JᵀJ has more stored entries than this (memory and time of its
-    /// Cholesky factorization); ≥ 1
-    pub max_normal_nonzeros: usize,
-}
-
-impl Default for LmParams {
-    fn default() -> Self {
-        Self {
-            max_steps: 400,
-            start: 2e-5,
-            stall_segments: 6,
-            stall_gain: 0.5,
-            retry: 0.1,
-            keep_gain: 0.5,
-            segment_steps: 8,
-            segment_gain: 0.7,
-            max_rejections: 12,
-            watchdog_steps: 2,
-            watchdogs_per_switch: 1,
-            rho_factors: [1.0, 0.1, 10.0, 0.3, 3.0, 0.03, 30.0],
-            damping: 1e-2,
-            damping_floor: 1e-8,
-            escape_damping: 1e-6,
-            accept_ratio: 1e-4,
-            max_normal_nonzeros: 40_000_000,
-        }
-    }
-}
-
 /// The proximal-point end game ([`crate::proximal`]) of a stage. It runs (a) after a Newton
 /// try of the end game that did not converge, from an error ≤ `try_start`, with a budget of
 /// `max_steps` Newton steps (`capped_max_steps` after an inner solve at its iteration cap),
@@ -664,8 +363,8 @@ pub struct MultiplierParams {
     /// (docs/rigid.md)
     pub starts: usize,
     /// on a local problem the stage runs on the velocity form of W's skeleton C A⁻¹ R
-    /// ([`crate::skeleton`]), symmetric or not, and only where
-    /// [`crate::skeleton::Skeleton::residual`] ≤ `skeleton_residual` · tol (W = C A⁻¹ R holds
+    /// ([`crate::linalg::skeleton`]), symmetric or not, and only where
+    /// [`crate::linalg::skeleton::Skeleton::residual`] ≤ `skeleton_residual` · tol (W = C A⁻¹ R holds
     /// to rounding when rank W equals the skeleton's rank: the stage then solves the stored
     /// W's law; else it could not reach tol on it); ≥ 0
     pub skeleton_residual: f64,
@@ -829,108 +528,6 @@ impl ProxParams {
     }
 }
 
-impl LmParams {
-    fn validate(&self) -> Result<(), String> {
-        let positive = |x: f64| x.is_finite() && x > 0.0;
-        if self.segment_steps == 0
-            || self.stall_segments == 0
-            || self.max_rejections == 0
-            || self.max_normal_nonzeros == 0
-        {
-            return Err(
-                "tuning.lm: segment_steps, stall_segments, max_rejections and max_normal_nonzeros must be ≥ 1"
-                    .into(),
-            );
-        }
-        let fraction = |x: f64| positive(x) && x <= 1.0;
-        if ![
-            self.segment_gain,
-            self.stall_gain,
-            self.retry,
-            self.keep_gain,
-        ]
-        .into_iter()
-        .all(fraction)
-        {
-            return Err(
-                "tuning.lm: segment_gain, stall_gain, retry, keep_gain must be in (0, 1]".into(),
-            );
-        }
-        if !(self.rho_factors.iter().all(|&f| positive(f))
-            && positive(self.damping)
-            && positive(self.damping_floor)
-            && positive(self.escape_damping))
-        {
-            return Err("tuning.lm: rho factors and damping factors must be positive".into());
-        }
-        if !(self.start.is_finite() && self.start >= 0.0) {
-            return Err("tuning.lm.start must be finite and ≥ 0".into());
-        }
-        if !(self.accept_ratio.is_finite() && (0.0..1.0).contains(&self.accept_ratio)) {
-            return Err("tuning.lm.accept_ratio must be in [0, 1)".into());
-        }
-        Ok(())
-    }
-}
-
-/// Thresholds of the test that an iterate r of (4.7) is a ray certifying that (4.7) is
-/// unbounded below, so that the primal (3.15) is infeasible (C̄(s) = ∅): with d = r/‖r‖,
-/// ‖W d‖ ≤ `residual` · ‖W‖ and bᵀd ≤ −`descent` · ‖b‖ (see [`crate::inner::unbounded_ray`]).
-/// Used by the outer stage after each inner solve, by projected Gauss–Seidel and by APGD.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct RayParams {
-    /// bound on ‖W d‖ / ‖W‖ (d in the recession directions: W d ≈ 0); > 0
-    pub residual: f64,
-    /// bound on −bᵀd / ‖b‖ (d a descent direction of the objective ½ rᵀW r + bᵀr); > 0
-    pub descent: f64,
-}
-
-impl Default for RayParams {
-    fn default() -> Self {
-        Self {
-            residual: 1e-7,
-            descent: 1e-3,
-        }
-    }
-}
-
-/// Parameters of APGD's step-size control on (4.7) ([`crate::inner::apgd`]): L estimates
-/// λ_max(W), the step is 1/L.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct ApgdParams {
-    /// L is kept ≥ `lip_floor` · L₀ (L₀ the power-iteration estimate); in (0, 1]
-    pub lip_floor: f64,
-    /// after each accepted step L ← max(`lip_decay` · L, floor); in (0, 1]
-    pub lip_decay: f64,
-    /// backtracking: while (x⁺ − y)ᵀW(x⁺ − y) > ‖x⁺ − y‖²/step (+ rounding slack),
-    /// L ← max(`backtrack_growth` · L, `backtrack_margin` · (x⁺ − y)ᵀW(x⁺ − y)/‖x⁺ − y‖²); > 1
-    pub backtrack_growth: f64,
-    /// see `backtrack_growth`; ≥ 1
-    pub backtrack_margin: f64,
-    /// the backtracking test allows `backtrack_slack` · ‖x⁺ − y‖ ‖W x⁺‖ of rounding; ≥ 0
-    pub backtrack_slack: f64,
-    /// at most this many trial steps per iteration (the last is taken); ≥ 1
-    pub backtrack_tries: usize,
-    /// the infeasible-ray test ([`RayParams`]) runs every `ray_period` iterations; ≥ 1
-    pub ray_period: usize,
-}
-
-impl Default for ApgdParams {
-    fn default() -> Self {
-        Self {
-            lip_floor: 1e-3,
-            lip_decay: 0.97,
-            backtrack_growth: 2.0,
-            backtrack_margin: 1.1,
-            backtrack_slack: 1e-12,
-            backtrack_tries: 60,
-            ray_period: 64,
-        }
-    }
-}
-
 /// Parameters of the inner solvers of (4.7): the constants each has always used, as
 /// defaults. A [`crate::Solver`] builds its inner solvers with them.
 ///
@@ -1033,23 +630,7 @@ impl Default for Tuning {
             balance_stalls: 3,
             unbounded_ratio: UNBOUNDED_RATIO,
             anderson: AndersonParams { memory: 5 },
-            newton: NewtonParams {
-                try_steps: 15,
-                retry: 0.1,
-                stagnation: 3,
-                stagnation_gain: 0.5,
-                target_fraction: 0.5,
-                lambda_factor: crate::newton::LAMBDA_FACTOR,
-                slow_steps: crate::newton::SLOW_STEPS,
-                slow_ratio: crate::newton::SLOW_RATIO,
-                shift_ratio_cap: 1e-2,
-                shift_tries: 4,
-                shift_growth: 100.0,
-                shift_floor: 1e-10,
-                halvings: 10,
-                sufficient_decrease: 1e-4,
-                continue_gain: 0.5,
-            },
+            newton: NewtonParams::default(),
             lm: LmParams::default(),
             prox: ProxParams::default(),
             multiplier: MultiplierParams::default(),
@@ -1146,9 +727,6 @@ impl Tuning {
 /// divergent iterates (a singular diagonal block regularized by 1e-8, Painlevé without a
 /// solution) reach 1e7 and more. The default of [`Tuning::unbounded_ratio`].
 pub const UNBOUNDED_RATIO: f64 = 1e6;
-
-/// The default of [`BarrierParams::max_work`] (docs/solver-core.md: how it was calibrated).
-pub const BARRIER_MAX_WORK: usize = 150;
 
 /// The default of [`MultiplierParams::max_factorizations`] (docs/solver-core.md).
 pub const MULTIPLIER_MAX_FACTORIZATIONS: usize = 2000;

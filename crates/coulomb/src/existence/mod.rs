@@ -63,8 +63,8 @@
 mod criteria;
 mod margin;
 
+use crate::linalg::sparse::CscMatrix;
 use crate::problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
-use crate::sparse::CscMatrix;
 use clarabel::algebra as ca;
 use clarabel::solver::{self as cs, IPSolver};
 use criteria::run_all_with;

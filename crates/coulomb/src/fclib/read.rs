@@ -5,8 +5,8 @@
 
 use super::error::{FclibError, FclibErrorKind};
 use super::{FclibFile, Info, ReadOptions, StoredSolution};
+use crate::linalg::sparse::CscMatrix;
 use crate::problem::{GlobalProblem, LocalProblem, Problem};
-use crate::sparse::CscMatrix;
 use hdf5_pure::{DType, Dataset, FormatError};
 
 /// Upper bound on the bytes one dataset may declare: `max(4 × file size, 256 MiB)`. A dataset

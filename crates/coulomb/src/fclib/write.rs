@@ -2,8 +2,8 @@
 
 use super::error::{FclibError, FclibErrorKind};
 use super::{FclibFile, IndexWidth, Info, Storage, StoredSolution, WriteOptions};
+use crate::linalg::sparse::CscMatrix;
 use crate::problem::Problem;
-use crate::sparse::CscMatrix;
 use hdf5_pure::{FileBuilder, GroupBuilder};
 
 /// Integer arrays in the requested width.

@@ -22,13 +22,48 @@
 //! blocks are mostly nonzero) and for the matrix-free Delassus operator x ↦ Hᵀ M⁻¹ H x
 //! ([`DelassusOperator`]).
 
-use super::{InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus};
+use super::{InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus, RayParams};
 use crate::cone;
 use crate::delassus::DelassusOperator;
 use crate::law::norm;
+use crate::linalg::sparse::{BlockCsr, CscMatrix};
 use crate::natural_map::dual_residual_shifted;
-use crate::settings::{ApgdParams, RayParams};
-use crate::sparse::{BlockCsr, CscMatrix};
+
+/// Parameters of APGD's step-size control on (4.7) ([`crate::inner::apgd`]): L estimates
+/// λ_max(W), the step is 1/L.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct ApgdParams {
+    /// L is kept ≥ `lip_floor` · L₀ (L₀ the power-iteration estimate); in (0, 1]
+    pub lip_floor: f64,
+    /// after each accepted step L ← max(`lip_decay` · L, floor); in (0, 1]
+    pub lip_decay: f64,
+    /// backtracking: while (x⁺ − y)ᵀW(x⁺ − y) > ‖x⁺ − y‖²/step (+ rounding slack),
+    /// L ← max(`backtrack_growth` · L, `backtrack_margin` · (x⁺ − y)ᵀW(x⁺ − y)/‖x⁺ − y‖²); > 1
+    pub backtrack_growth: f64,
+    /// see `backtrack_growth`; ≥ 1
+    pub backtrack_margin: f64,
+    /// the backtracking test allows `backtrack_slack` · ‖x⁺ − y‖ ‖W x⁺‖ of rounding; ≥ 0
+    pub backtrack_slack: f64,
+    /// at most this many trial steps per iteration (the last is taken); ≥ 1
+    pub backtrack_tries: usize,
+    /// the infeasible-ray test ([`crate::inner::RayParams`]) runs every `ray_period` iterations; ≥ 1
+    pub ray_period: usize,
+}
+
+impl Default for ApgdParams {
+    fn default() -> Self {
+        Self {
+            lip_floor: 1e-3,
+            lip_decay: 0.97,
+            backtrack_growth: 2.0,
+            backtrack_margin: 1.1,
+            backtrack_slack: 1e-12,
+            backtrack_tries: 60,
+            ray_period: 64,
+        }
+    }
+}
 
 /// A symmetric positive semi-definite operator x ↦ W x.
 pub trait LinearOperator {

@@ -4,8 +4,8 @@
 
 use super::polish::polish_dual;
 use super::{InnerLimits, InnerProblem, InnerReport, InnerStatus};
+use crate::linalg::sparse::CscMatrix;
 use crate::natural_map::dual_natural_residual;
-use crate::sparse::CscMatrix;
 use clarabel::algebra::CscMatrix as ClarabelCsc;
 use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
 use std::time::Instant;
@@ -204,7 +204,7 @@ pub(crate) fn solve_dual_qp(
         let residual = if raw == SolverStatus::Solved || stalled {
             polish_dual(problem, r, polish, limits.deadline)
         } else {
-            dual_natural_residual(problem, r)
+            dual_natural_residual(problem.dim, problem.mu, problem.w, problem.b, r)
         };
         report.residual = residual;
         if stalled && residual <= limits.tol {

@@ -17,7 +17,7 @@
 //! μ = 0 (the half-line) and μ = ∞ (the half-space) have their own closed forms.
 
 use crate::cone;
-use crate::sparse::CscMatrix;
+use crate::linalg::sparse::CscMatrix;
 
 // Tolerances of the one-contact solves. They run once per contact and sweep (projected
 // Gauss–Seidel, the fused method), so they stay `const`s here rather than fields of

@@ -159,7 +159,7 @@ fn pyramid_constraints(
 mod tests {
     use super::*;
     use crate::inner::InnerStatus;
-    use crate::sparse::CscMatrix;
+    use crate::linalg::sparse::CscMatrix;
 
     fn limits() -> InnerLimits {
         InnerLimits {

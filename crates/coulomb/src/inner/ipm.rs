@@ -42,10 +42,10 @@ pub(crate) use super::clarabel::{solve_dual_qp, triplets_to_clarabel, QpSetup};
 use super::polish::{polish_rule, shifted_lu_solve};
 use super::{InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus};
 use crate::deadline::Deadline;
+use crate::linalg::sparse::CscMatrix;
 use crate::natural_map::{natural_map, push_d_times, push_identity_minus_d};
 use crate::newton::{drive, SemismoothMap};
 use crate::problem::GlobalProblem;
-use crate::sparse::CscMatrix;
 use clarabel::algebra::CscMatrix as ClarabelCsc;
 use clarabel::solver::{DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
 
@@ -780,7 +780,9 @@ mod tests {
         let rep = IpmSolver::new().solve(&p, &limits(), &mut polished);
         assert_eq!(rep.status, InnerStatus::Solved);
         assert!(rep.residual < 1e-14, "{rep:?}");
-        assert!((dual_natural_residual(&p, &polished) - rep.residual).abs() < 1e-15);
-        assert!(dual_natural_residual(&p, &plain) >= rep.residual);
+        assert!(
+            (dual_natural_residual(p.dim, p.mu, p.w, p.b, &polished) - rep.residual).abs() < 1e-15
+        );
+        assert!(dual_natural_residual(p.dim, p.mu, p.w, p.b, &plain) >= rep.residual);
     }
 }

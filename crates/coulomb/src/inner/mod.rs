@@ -17,8 +17,29 @@ pub mod pgs;
 pub(crate) mod polish;
 
 pub use crate::deadline::Deadline;
-use crate::settings::RayParams;
-use crate::sparse::CscMatrix;
+use crate::linalg::sparse::CscMatrix;
+
+/// Thresholds of the test that an iterate r of (4.7) is a ray certifying that (4.7) is
+/// unbounded below, so that the primal (3.15) is infeasible (C̄(s) = ∅): with d = r/‖r‖,
+/// ‖W d‖ ≤ `residual` · ‖W‖ and bᵀd ≤ −`descent` · ‖b‖ (see [`crate::inner::unbounded_ray`]).
+/// Used by the outer stage after each inner solve, by projected Gauss–Seidel and by APGD.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct RayParams {
+    /// bound on ‖W d‖ / ‖W‖ (d in the recession directions: W d ≈ 0); > 0
+    pub residual: f64,
+    /// bound on −bᵀd / ‖b‖ (d a descent direction of the objective ½ rᵀW r + bᵀr); > 0
+    pub descent: f64,
+}
+
+impl Default for RayParams {
+    fn default() -> Self {
+        Self {
+            residual: 1e-7,
+            descent: 1e-3,
+        }
+    }
+}
 
 /// The dual inner problem (4.7): min over r ∈ L = ∏ K_{μⁱ} of ½ rᵀ W r + bᵀ r.
 #[derive(Debug, Clone, Copy)]

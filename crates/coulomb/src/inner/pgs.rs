@@ -42,8 +42,16 @@ use super::contact::matvec;
 pub use super::contact::{solve_contact, solve_contact_law, DiagonalBlocks, OneContact};
 use super::{InnerLimits, InnerProblem, InnerReport, InnerSolver, InnerStatus};
 use crate::cone;
+use crate::linalg::sparse::CscMatrix;
 use crate::natural_map::dual_residual;
-use crate::sparse::CscMatrix;
+
+/// Sweeps between two Anderson steps of [`crate::outer::fused::solve_fused`] (the default of
+/// [`crate::settings::InnerParams::gs_anderson_period`]; 0: no mixing).
+pub const ANDERSON_PERIOD: usize = 4;
+
+/// Memory of the Anderson mixing of [`crate::outer::fused::solve_fused`] (the default of
+/// [`crate::settings::InnerParams::gs_anderson_memory`]).
+pub const ANDERSON_MEMORY: usize = 5;
 
 /// Projected block Gauss–Seidel on (4.7) with exact one-contact solves, set up for one
 /// (d, W): the diagonal blocks Wᵢᵢ and their inverses are extracted by [`PgsSolver::new`].
@@ -53,12 +61,12 @@ pub struct PgsSolver {
     pub refresh: usize,
     /// thresholds of the infeasible-ray test, run at each refresh
     /// ([`crate::settings::InnerParams::infeasible_ray`])
-    pub ray: crate::settings::RayParams,
+    pub ray: super::RayParams,
     /// fused iteration ([`crate::outer::fused`]) only: sweeps between two Anderson steps
-    /// (0: none; default [`crate::outer::fused::ANDERSON_PERIOD`])
+    /// (0: none; default [`ANDERSON_PERIOD`])
     pub anderson_period: usize,
     /// fused iteration only: memory of its Anderson mixing (≥ 1; default
-    /// [`crate::outer::fused::ANDERSON_MEMORY`])
+    /// [`ANDERSON_MEMORY`])
     pub anderson_memory: usize,
     blocks: DiagonalBlocks,
     /// maintained u = W r + b
@@ -71,9 +79,9 @@ impl PgsSolver {
     pub fn new(dim: usize, w: &CscMatrix) -> Self {
         Self {
             refresh: REFRESH,
-            ray: crate::settings::RayParams::default(),
-            anderson_period: crate::outer::fused::ANDERSON_PERIOD,
-            anderson_memory: crate::outer::fused::ANDERSON_MEMORY,
+            ray: super::RayParams::default(),
+            anderson_period: ANDERSON_PERIOD,
+            anderson_memory: ANDERSON_MEMORY,
             blocks: DiagonalBlocks::new(dim, w),
             u: Vec::new(),
         }

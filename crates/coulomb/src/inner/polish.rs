@@ -3,8 +3,9 @@
 
 use super::InnerProblem;
 use crate::deadline::Deadline;
+use crate::linalg::pattern_lu::sparse_lu_solve;
 use crate::natural_map::{natural_map, push_d_times, push_identity_minus_d};
-use crate::newton::{drive, sparse_lu_solve, NewtonRule, SemismoothMap};
+use crate::newton::{drive, NewtonRule, SemismoothMap};
 
 /// The natural map F(r) = r − P_L(r − (W r + b)) of (4.7), its Jacobian I − D + D W
 /// (D = ∂P_L) assembled as triplets for faer's sparse LU.

@@ -18,8 +18,8 @@
 use crate::delassus::Delassus;
 use crate::evaluation;
 use crate::law;
+use crate::linalg::sparse::CscMatrix;
 use crate::problem::{GlobalProblem, LocalProblem};
-use crate::sparse::CscMatrix;
 use std::borrow::Cow;
 use std::sync::OnceLock;
 

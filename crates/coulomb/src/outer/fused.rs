@@ -7,18 +7,13 @@ use super::anderson::Anderson;
 use crate::cone;
 use crate::inner::pgs::{sweep, PgsSolver};
 use crate::inner::{InnerLimits, InnerReport, InnerStatus};
-use crate::sparse::CscMatrix;
+use crate::linalg::sparse::CscMatrix;
 
 /// Sweeps over which [`solve_fused`] measures its rate when asked to give up early.
 pub const GIVE_UP_WINDOW: usize = 10;
 
-/// Sweeps between two Anderson steps of [`solve_fused`] (the default of
-/// [`crate::settings::InnerParams::gs_anderson_period`]; 0: no mixing).
-pub const ANDERSON_PERIOD: usize = 4;
-
-/// Memory of the Anderson mixing of [`solve_fused`] (the default of
-/// [`crate::settings::InnerParams::gs_anderson_memory`]).
-pub const ANDERSON_MEMORY: usize = 5;
+/// The defaults of the fused method's Anderson mixing, at their former path.
+pub use crate::inner::pgs::{ANDERSON_MEMORY, ANDERSON_PERIOD};
 
 /// Anderson mixing of the sweeps: type II on the map G = (`period` sweeps), x_{k+1} =
 /// P_L(Anderson(x_k, G(x_k))) ([`Anderson::next_projected`]), taken only where its error
@@ -216,7 +211,7 @@ mod tests {
         // other than the one of its r
         let (mut plain_total, mut mixed_total, mut both) = (0, 0, 0);
         for seed in 0..8 {
-            let mut p = crate::levenberg::tests::problem(8, seed, 0.01, 0.0);
+            let mut p = crate::test_problems::problem(8, seed, 0.01, 0.0);
             p.q.iter_mut().step_by(3).for_each(|x| *x -= 0.5);
             let (plain, plain_res, plain_err) = run(&p, 0);
             let (mixed, mixed_res, mixed_err) = run(&p, ANDERSON_PERIOD);

@@ -31,11 +31,11 @@ use crate::delassus::Delassus;
 use crate::inner::{
     apgd::ApgdSolver, faceted::FacetedSolver, ipm::IpmSolver, pgs::PgsSolver, InnerSolver,
 };
+use crate::linalg::sparse::CscMatrix;
 use crate::plan::{Plan, Rigid, StepKind, Structure};
 use crate::problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
 use crate::settings::{InnerKind, InnerParams, OuterKind, Settings};
 use crate::solution::{Guess, OuterRecord, Solution, SolveError, Status};
-use crate::sparse::CscMatrix;
 use form::{Form, Stored};
 use stage::{Best, Stage};
 use std::borrow::Cow;
@@ -600,30 +600,30 @@ impl Solver<'_> {
             }
     }
 
-    /// The skeleton W ≈ C A⁻¹ R of the local problem `p` ([`crate::skeleton`]) of rank at
+    /// The skeleton W ≈ C A⁻¹ R of the local problem `p` ([`crate::linalg::skeleton`]) of rank at
     /// most min([`crate::settings::BarrierParams::max_schur_dofs`],
     /// [`crate::settings::BarrierParams::skeleton_rank_ratio`] · m), when it reproduces W
     /// (symmetric or not) within [`crate::settings::MultiplierParams::skeleton_residual`] · tol
-    /// ([`crate::skeleton::Skeleton::residual`]); None otherwise or when `deadline` passes.
+    /// ([`crate::linalg::skeleton::Skeleton::residual`]); None otherwise or when `deadline` passes.
     #[cfg(test)]
     fn exact_skeleton(
         &self,
         p: &LocalProblem,
         deadline: Deadline,
-    ) -> Option<crate::skeleton::Skeleton> {
+    ) -> Option<crate::linalg::skeleton::Skeleton> {
         let bp = &self.settings.tuning.barrier;
         let m = p.q.len();
         let max_rank = bp
             .max_schur_dofs
             .min((bp.skeleton_rank_ratio * m as f64) as usize);
         let skeleton =
-            crate::skeleton::Skeleton::new(&p.w, p.dim, max_rank, bp.rank_tol, deadline)?;
+            crate::linalg::skeleton::Skeleton::new(&p.w, p.dim, max_rank, bp.rank_tol, deadline)?;
         self.reproduces(&skeleton, p).then_some(skeleton)
     }
 
     /// Whether `skeleton` reproduces the W of `p` within
     /// [`crate::settings::MultiplierParams::skeleton_residual`] · tol.
-    fn reproduces(&self, skeleton: &crate::skeleton::Skeleton, p: &LocalProblem) -> bool {
+    fn reproduces(&self, skeleton: &crate::linalg::skeleton::Skeleton, p: &LocalProblem) -> bool {
         let (mp, bp) = (
             &self.settings.tuning.multiplier,
             &self.settings.tuning.barrier,
@@ -644,7 +644,7 @@ impl Solver<'_> {
     /// freedom and at most half as many as contact unknowns (rigid bodies touching at several
     /// points per face), or a local one whose W has a skeleton W ≈ C A⁻¹ R of rank at most
     /// that and [`crate::settings::BarrierParams::skeleton_rank_ratio`] · m
-    /// ([`crate::skeleton`]) equal to W within
+    /// ([`crate::linalg::skeleton`]) equal to W within
     /// [`crate::settings::MultiplierParams::skeleton_residual`] · tol (W symmetric or not:
     /// the method then runs on the velocity form A v = R r, u = C v + q; a W whose
     /// antisymmetric part is not of W's rank, as the corpus' nonsym class, has no such
@@ -712,7 +712,7 @@ impl Solver<'_> {
                 starts.push(end);
             }
         }
-        let par = crate::dense::parallelism(g.m.nrows, bp.dense_parallel_dim);
+        let par = crate::linalg::dense::parallelism(g.m.nrows, bp.dense_parallel_dim);
         let diag = local.w.diagonal();
         let w_mean = diag.iter().sum::<f64>() / diag.len().max(1) as f64;
         let form = &self.form;
@@ -780,7 +780,7 @@ type Ran = (Solution, Option<Best>);
 /// through (None for a global problem: the Schur complement).
 struct Ends {
     points: Vec<Vec<f64>>,
-    skeleton: Option<crate::skeleton::Skeleton>,
+    skeleton: Option<crate::linalg::skeleton::Skeleton>,
 }
 
 /// The warm-up try: at most `warmup_sweeps` fused Gauss–Seidel sweeps, one outer iteration,
@@ -977,7 +977,7 @@ mod tests {
     /// The random problems of the LM tests (W = AᵀA + 0.05 I) with q pushing into contact
     /// and μ = 2 at every contact: the successive approximations often oscillate there.
     fn random_local(n: usize, seed: u64) -> LocalProblem {
-        let mut p = crate::levenberg::tests::problem(n, seed, 0.05, 0.0);
+        let mut p = crate::test_problems::problem(n, seed, 0.05, 0.0);
         p.q.iter_mut().step_by(3).for_each(|x| *x -= 0.5);
         p.mu = vec![2.0; n];
         p
@@ -991,7 +991,7 @@ mod tests {
         // W = AᵀA + 0.05 I (full rank) there is no skeleton and no try.
         for seed in 0..3 {
             for skew in [0.0, 1e-3] {
-                let p = crate::levenberg::tests::problem(8, seed, 0.0, skew);
+                let p = crate::test_problems::problem(8, seed, 0.0, skew);
                 let settings = Settings {
                     warmup_sweeps: 0,
                     time_limit: None,
@@ -1007,7 +1007,7 @@ mod tests {
                     sol.error
                 );
                 assert_eq!(sol.converged(), recomputed <= settings.tol);
-                let full = crate::levenberg::tests::problem(8, seed, 0.05, skew);
+                let full = crate::test_problems::problem(8, seed, 0.05, skew);
                 let capped = Settings {
                     max_outer: 2,
                     ..settings.clone()
@@ -1036,9 +1036,9 @@ mod tests {
         // balance residual recomputed from (v, r)
         let mut solved = 0;
         for seed in 0..8u64 {
-            let lp = crate::levenberg::tests::problem(8, seed, 0.0, 0.0);
+            let lp = crate::test_problems::problem(8, seed, 0.0, 0.0);
             let (m, n) = (24, 6);
-            let mut next = crate::levenberg::tests::uniform(seed, 7);
+            let mut next = crate::test_problems::uniform(seed, 7);
             let h: Vec<f64> = (0..n * m).map(|_| next()).collect();
             let g = GlobalProblem::new(
                 3,
@@ -1097,9 +1097,9 @@ mod tests {
         // non-symmetric M) too; W = AᵀA plus an antisymmetric part outside W's range
         // passes the first test but has no exact skeleton; the stage turned off applies
         // nowhere
-        let lp = crate::levenberg::tests::problem(8, 1, 0.0, 0.0);
+        let lp = crate::test_problems::problem(8, 1, 0.0, 0.0);
         let global = |n: usize| {
-            let mut next = crate::levenberg::tests::uniform(1, 7);
+            let mut next = crate::test_problems::uniform(1, 7);
             let h: Vec<f64> = (0..n * 24).map(|_| next()).collect();
             Problem::Global(
                 GlobalProblem::new(
@@ -1113,11 +1113,11 @@ mod tests {
                 .unwrap(),
             )
         };
-        let skewed = crate::levenberg::tests::problem(8, 1, 0.0, 1e-3);
+        let skewed = crate::test_problems::problem(8, 1, 0.0, 1e-3);
         let nonsym = {
             // W = Aᵀ N A, A = the rows of lp's W's factor: take N = I + 0.1 K (K antisymmetric)
             let (m, k) = (24, 12);
-            let mut next = crate::levenberg::tests::uniform(5, 3);
+            let mut next = crate::test_problems::uniform(5, 3);
             let a: Vec<f64> = (0..k * m).map(|_| next()).collect();
             let n: Vec<f64> = (0..k * k)
                 .map(|t| {
@@ -1223,5 +1223,48 @@ mod tests {
         }
         // the case the rule is for occurs in this family (15 of the 80 solves)
         assert!(replaced > 0, "no solve ended above its lowest error");
+    }
+
+    /// A stage whose fixed point crawls (one APGD iteration per inner solve) and whose Newton
+    /// budget is one step: without the LM end game it ends at its iteration cap; with it, it
+    /// converges, and the reported error is the one recomputed from r on the stored W. A run
+    /// that converges without spending its Newton budget is unchanged.
+    #[test]
+    fn a_stage_hands_its_stall_to_the_lm_end_game() {
+        use crate::settings::{InnerKind, OuterKind, Settings};
+        let crawl = Settings {
+            max_inner: 1,
+            newton_steps: 1,
+            newton_start: 1.0,
+            max_outer: 60,
+            ..Settings::method(InnerKind::Apgd, OuterKind::FixedPoint)
+        };
+        let mut crawl = crawl;
+        crawl.tuning.lm.start = 1.0;
+        let mut off = crawl.clone();
+        off.tuning.lm.max_steps = 0;
+        let p = crate::test_problems::problem(6, 2811, 0.0, 0.0);
+        let prob = crate::Problem::Local(p.clone());
+        let without = crate::solve(&prob, &off).unwrap();
+        assert_eq!(without.status, crate::Status::MaxIterations);
+        let with = crate::solve(&prob, &crawl).unwrap();
+        let err = p.error(&with.r).error;
+        assert_eq!(with.status, crate::Status::Converged);
+        assert!(
+            err <= crawl.tol && with.error == err,
+            "{err:.3e} vs {:.3e}",
+            with.error
+        );
+        let p = crate::test_problems::problem(6, 2902, 0.0, 0.0);
+        let prob = crate::Problem::Local(p);
+        let (a, b) = (
+            crate::solve(&prob, &off).unwrap(),
+            crate::solve(&prob, &crawl).unwrap(),
+        );
+        assert_eq!(a.status, crate::Status::Converged);
+        assert_eq!(
+            (a.status, a.outer_iterations, a.inner_iterations, &a.r),
+            (b.status, b.outer_iterations, b.inner_iterations, &b.r)
+        );
     }
 }

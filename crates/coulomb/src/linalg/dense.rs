@@ -1,6 +1,6 @@
 //! Dense LU factorizations with partial pivoting of the small Newton systems of rigid
 //! problems — the Schur complement M + H G⁻¹ Hᵀ ([`crate::barrier`]), A + R G⁻¹ C of a skeleton
-//! ([`crate::skeleton`]), J = M + H B Hᵀ of the method of multipliers ([`crate::multiplier`]) —
+//! ([`crate::linalg::skeleton`]), J = M + H B Hᵀ of the method of multipliers ([`crate::multiplier`]) —
 //! on as many threads as their size pays for.
 //!
 //! faer's `PartialPivLu` always runs on faer's global parallelism; this type calls faer's

@@ -25,7 +25,7 @@
 //! pivoted partial Cholesky of a sparse matrix that stops at its numerical rank.
 
 use crate::deadline::Deadline;
-use crate::sparse::CscMatrix;
+use crate::linalg::sparse::CscMatrix;
 
 /// The skeleton C A⁻¹ R of W on the pivots P (module docs).
 pub struct Skeleton {
@@ -49,7 +49,7 @@ pub struct SkeletonLu {
     rank: usize,
     /// G⁻¹ by blocks (row-major d × d)
     ginv: Vec<f64>,
-    lu: crate::dense::Lu,
+    lu: crate::linalg::dense::Lu,
 }
 
 impl Skeleton {
@@ -183,14 +183,14 @@ impl Skeleton {
     /// ‖W x − C A⁻¹ R x‖∞ / ‖W x‖∞ (0 when W = C A⁻¹ R, which holds when rank W = k and A
     /// is regular, symmetric or not). None when A is singular to working precision or `w` is
     /// not the matrix of the skeleton. Cost: one dense LU of A (k³ · ⅔ flops, on all threads
-    /// when k ≥ `parallel_dim`, [`crate::dense::parallelism`]) and four products.
+    /// when k ≥ `parallel_dim`, [`crate::linalg::dense::parallelism`]) and four products.
     pub fn residual(&self, w: &CscMatrix, parallel_dim: usize) -> Option<f64> {
         let (m, k) = (self.unknowns(), self.rank());
         if w.nrows != m || w.ncols != m {
             return None;
         }
-        let par = crate::dense::parallelism(k, parallel_dim);
-        let lu = crate::dense::Lu::new(self.a.clone(), par)?;
+        let par = crate::linalg::dense::parallelism(k, parallel_dim);
+        let lu = crate::linalg::dense::Lu::new(self.a.clone(), par)?;
         let mut worst = 0.0f64;
         for probe in 0..2 {
             // an irregular probe: no structure of W's rows can cancel it
@@ -252,7 +252,7 @@ impl Skeleton {
 
     /// The factored G + C A⁻¹ R for the block-diagonal regular G given by the row-major
     /// d × d blocks of G⁻¹; None if A + R G⁻¹ C has a non-finite entry. Its dense LU runs
-    /// on all threads when the rank is ≥ `parallel_dim`, else on one ([`crate::dense`]).
+    /// on all threads when the rank is ≥ `parallel_dim`, else on one ([`crate::linalg::dense`]).
     pub fn factor(&self, ginv: &[f64], parallel_dim: usize) -> Option<SkeletonLu> {
         let d = self.dim;
         if ginv.len() != self.unknowns() * d {
@@ -287,7 +287,10 @@ impl Skeleton {
         Some(SkeletonLu {
             rank,
             ginv,
-            lu: crate::dense::Lu::new(k, crate::dense::parallelism(rank, parallel_dim))?,
+            lu: crate::linalg::dense::Lu::new(
+                k,
+                crate::linalg::dense::parallelism(rank, parallel_dim),
+            )?,
         })
     }
 }
@@ -303,7 +306,7 @@ impl Skeleton {
             return None;
         }
         let mut z = vec![0.0; rhs.len()];
-        crate::barrier::apply_blocks(d, &f.ginv, rhs, &mut z);
+        crate::linalg::blocks::apply_blocks(d, &f.ginv, rhs, &mut z);
         let mut y = vec![0.0; k];
         for (j, &zj) in z.iter().enumerate() {
             for u in s.r_ptr[j]..s.r_ptr[j + 1] {
@@ -328,7 +331,7 @@ impl Skeleton {
 /// out = z − blockdiag(blocks) x.
 fn apply_blocks_sub(d: usize, blocks: &[f64], x: &[f64], z: &[f64], out: &mut [f64]) {
     let mut tmp = vec![0.0; x.len()];
-    crate::barrier::apply_blocks(d, blocks, x, &mut tmp);
+    crate::linalg::blocks::apply_blocks(d, blocks, x, &mut tmp);
     for ((o, zi), ti) in out.iter_mut().zip(z).zip(&tmp) {
         *o = zi - ti;
     }
@@ -337,7 +340,7 @@ fn apply_blocks_sub(d: usize, blocks: &[f64], x: &[f64], z: &[f64], out: &mut [f
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::levenberg::tests::uniform;
+    use crate::test_problems::uniform;
 
     /// W = Bᵀ B + δ K (B: k × m, K antisymmetric on the pattern): rank k symmetric part.
     fn low_rank(m: usize, k: usize, asym: f64, seed: u64) -> CscMatrix {
@@ -376,7 +379,7 @@ mod tests {
     fn inverse(d: usize, g: &[f64]) -> Vec<f64> {
         let mut inv = vec![0.0; g.len()];
         for (blk, out) in g.chunks(d * d).zip(inv.chunks_mut(d * d)) {
-            crate::barrier::invert_small(d, blk, out).expect("regular block");
+            crate::linalg::blocks::invert_small(d, blk, out).expect("regular block");
         }
         inv
     }
@@ -385,7 +388,7 @@ mod tests {
         let mut r = b.to_vec();
         w.gemv_acc(-1.0, x, &mut r);
         let mut gx = vec![0.0; x.len()];
-        crate::barrier::apply_blocks(d, g, x, &mut gx);
+        crate::linalg::blocks::apply_blocks(d, g, x, &mut gx);
         r.iter()
             .zip(&gx)
             .map(|(a, c)| (a - c).abs())

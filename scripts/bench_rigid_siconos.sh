@@ -54,7 +54,9 @@ print(f'{sys.argv[5]:<18} {"coulomb":<8} {s["bodies"]:>6} {s["steps"]:>6} {s["me
       f'{d["max_displacement"]:>14.2e} {ms:>12.1f} {s["not_converged_steps"]:>8} (1e-8)')
 EOF
   "$py" scripts/siconos_rigid.py "$scene" --steps "$n" --tol "$tol" --itermax "$itermax" \
-    2> "$tmp/$name.siconos.log" > "$tmp/$name.siconos.json" || { tail "$tmp/$name.siconos.log"; exit 1; }
+    2> "$tmp/$name.siconos.log" > "$tmp/$name.siconos.out" || { tail "$tmp/$name.siconos.log"; exit 1; }
+  # Siconos prints notes on stdout too: the JSON is the last line
+  tail -1 "$tmp/$name.siconos.out" > "$tmp/$name.siconos.json"
   "$py" - "$tmp/$name.siconos.json" "$name" <<'EOF'
 import json, sys
 s = json.load(open(sys.argv[1]))

@@ -185,7 +185,7 @@ def incline(theta_deg=30.0, mu=0.3):
     (HERE / "incline.toml").write_text(text)
 
 
-def wall_impact(courses=5, bricks=6, speed=6.0):
+def wall_impact(courses=5, bricks=4, speed=6.0):
     # the geometry of `coulomb validate`'s wall-impact check (rigid/validation.rs,
     # brick_wall + impact_sphere): bricks 0.2 x 0.1 x 0.05 m (2000 kg/m^3) side by side
     # without joints, odd courses shifted by half a brick with one brick less; a steel ball

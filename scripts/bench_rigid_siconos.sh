@@ -15,7 +15,7 @@
 # Needs /usr/bin/python3 with python3-siconos, python3-h5py, python3-scipy (Debian packages);
 # the coulomb side needs only numpy (scripts/rigid_frames.py reads its VTK frames).
 # coulomb's time per step is the wall-clock time of the whole `coulomb simulate` (loading,
-# two VTK frames) over N; Siconos's is that of its computeOneStep + nextStep only.
+# two VTK frames) over N; Siconos's that of its time-step loop (not its setup).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 n=${1:-50}

@@ -4,7 +4,7 @@ on a plane floor) in Siconos 4.4 (siconos.mechanics with Bullet contact detectio
 Moreau–Jean time stepping, the one-step problem solved by Siconos's NSGS), for the side-by-side
 comparison of scripts/bench_rigid_siconos.sh. Prints one JSON object: bodies, steps, mean
 active contacts per step, the largest displacement of a body's centre between the first and
-the last step (the rest state), seconds per step (computeOneStep and nextStep only), and the
+the last step (the rest state), seconds per step (the runner's time-step loop: computeOneStep, nextStep, two HDF5 outputs; not the setup), and the
 largest NSGS residual.
 
 Needs /usr/bin/python3 with python3-siconos, python3-h5py and python3-scipy (Debian:

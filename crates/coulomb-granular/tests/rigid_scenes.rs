@@ -30,6 +30,7 @@ fn every_shipped_rigid_scene_parses_builds_and_runs_two_steps() {
         "incline",
         "kapla-tower",
         "rock-pile",
+        "wall-impact",
     ] {
         assert!(stems.iter().any(|s| s == want), "{want} missing: {stems:?}");
     }

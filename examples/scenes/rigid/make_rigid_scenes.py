@@ -1,6 +1,7 @@
 """Writes the rigid-body scene files of this folder (issue 41): a running-bond brick wall, a
 cube pyramid, a Kapla tower, 500 random convex rocks poured into a box, capsules in a
-hopper, a block on an incline. Deterministic (numpy's default_rng with fixed seeds); run
+hopper, a block on an incline, a wall hit by
+a steel ball. Deterministic (numpy's default_rng with fixed seeds); run
 `python3 make_rigid_scenes.py` here to rewrite them. Quaternions are (w, x, y, z), written
 with 17 significant digits so that their norm is 1 to round-off (files refuse a quaternion
 whose norm differs from 1 by more than 1e-9)."""
@@ -184,6 +185,29 @@ def incline(theta_deg=30.0, mu=0.3):
     (HERE / "incline.toml").write_text(text)
 
 
+def wall_impact(courses=5, bricks=4, speed=6.0):
+    # the geometry of `coulomb validate`'s wall-impact check (rigid/validation.rs,
+    # brick_wall + impact_sphere): bricks 0.2 x 0.1 x 0.05 m (2000 kg/m^3) side by side
+    # without joints, odd courses shifted by half a brick with one brick less; a steel ball
+    # (r = 0.08 m, 7800 kg/m^3) 2 cm in front of the wall at mid-length, thrown at it
+    full = []
+    for c in range(courses):
+        n = bricks - 1 if c % 2 else bricks
+        full += [[0.2 * i + (0.1 if c % 2 else 0.0), 0.0, 0.025 + 0.05 * c] for i in range(n)]
+    xs = [p[0] for p in full]
+    r = 0.08
+    ball = [0.5 * (min(xs) + max(xs)), -0.05 - r - 0.02, 0.125]
+    text = header(f"A running-bond wall of {courses} courses ({len(full)} bricks 0.2 x 0.1 x 0.05 m, "
+                  f"2000 kg/m^3) hit by a steel ball (r = 8 cm, 7800 kg/m^3) at {speed} m/s; "
+                  "mu = 0.7. The wall collapses.", 1e-3, 400, 0.7)
+    text += floor()
+    text += group('{ kind = "cuboid", half_extents = [0.1, 0.05, 0.025] }', full,
+                  extra="density = 2000\n")
+    text += group(f'{{ kind = "sphere", radius = {r} }}', [ball],
+                  extra=f"density = 7800\nvelocity = {vec([0.0, speed, 0.0])}\n")
+    (HERE / "wall-impact.toml").write_text(text)
+
+
 if __name__ == "__main__":
     brick_wall()
     cube_pyramid()
@@ -191,3 +215,4 @@ if __name__ == "__main__":
     rock_pile()
     capsule_hopper()
     incline()
+    wall_impact()

@@ -104,7 +104,7 @@ def run(scene, steps, tol, itermax):
     bodies = scene["bodies"]
     fd, out = tempfile.mkstemp(suffix=".hdf5", prefix="siconos_rigid_")
     os.close(fd)
-    stats = {"contacts": [], "seconds": [], "residual": 0.0, "not_converged": 0}
+    stats = {"contacts": [], "loaded": [], "seconds": [], "residual": 0.0, "not_converged": 0}
     try:
         with MechanicsHdf5Runner(mode="w", io_filename=out, verbose=False) as io:
             shapes = {}
@@ -145,6 +145,12 @@ def run(scene, steps, tol, itermax):
             sim = io._simulation
             osnspb = sim.oneStepNSProblem(sk.SICONOS_OSNSP_TS_VELOCITY)
             stats["contacts"].append(osnspb.getSizeOutput() // 3)
+            # contacts carrying load: r_N > 1e-6 max r_N (coulomb's `loaded_contacts`)
+            fc = sk.cast_FrictionContact(osnspb)
+            z = np.array(fc.z()).ravel() if osnspb.getSizeOutput() else np.zeros(0)
+            rn = z[0::3]
+            top = rn.max() if rn.size else 0.0
+            stats["loaded"].append(int(np.count_nonzero(rn > 1e-6 * top)) if top > 0 else 0)
             so = osnspb.numericsSolverOptions()
             residual = so.dparam[sn.SICONOS_DPARAM_RESIDU]
             stats["residual"] = max(stats["residual"], residual)
@@ -171,6 +177,7 @@ def run(scene, steps, tol, itermax):
         "bodies": len(bodies),
         "steps": len(stats["seconds"]),
         "mean_contacts": sum(stats["contacts"]) / n,
+        "mean_loaded_contacts": sum(stats["loaded"]) / n,
         "max_displacement": max(moved) if moved else 0.0,
         "seconds_per_step": sum(stats["seconds"]) / n,
         "max_residual": stats["residual"],

@@ -37,7 +37,7 @@ pub enum Outcome {
     /// some unreadable: the table or JSON array names them)
     BadInput,
     /// status 130 (SIGINT) or 143 (SIGTERM): stopped cleanly by a signal, outputs written
-    Interrupted(crate::interrupt::Signal),
+    Interrupted(Signal),
 }
 
 impl Outcome {
@@ -49,6 +49,33 @@ impl Outcome {
             Outcome::Inconclusive => ExitCode::from(3),
             Outcome::BadInput => ExitCode::from(BAD_INPUT),
             Outcome::Interrupted(signal) => ExitCode::from(signal.exit_status()),
+        }
+    }
+}
+
+/// A signal that stops a run cleanly.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Signal {
+    /// SIGINT (Ctrl-C): exit status 130
+    Int,
+    /// SIGTERM: exit status 143
+    Term,
+}
+
+impl Signal {
+    /// The signal's name, as reported in summaries (`SIGINT`, `SIGTERM`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Signal::Int => "SIGINT",
+            Signal::Term => "SIGTERM",
+        }
+    }
+
+    /// The exit status: 128 + the signal's number.
+    pub fn exit_status(self) -> u8 {
+        match self {
+            Signal::Int => 128 + signal_hook::consts::SIGINT as u8,
+            Signal::Term => 128 + signal_hook::consts::SIGTERM as u8,
         }
     }
 }
@@ -84,21 +111,20 @@ fn refused(e: &(dyn std::error::Error + 'static)) -> bool {
 
 /// The exit status of a failed command: 2 when an output path was refused (a device, FIFO,
 /// socket, directory or dangling link: [`coulomb::atomic::Refused`], found through the
-/// I/O errors that carry it), else 4 when an output could not be written, else 2.
-pub fn status_of(e: &anyhow::Error) -> u8 {
-    use crate::cmd::bench::{plot::PlotError, BenchError};
-    // the write errors below carry their io::Error as `source`, so it is a link of the chain;
-    // an io::Error's own `source()` skips its payload, hence `refusal` on each link
+/// I/O errors that carry it), else 4 when an output could not be written ([`WriteFailed`], or
+/// a link of the chain for which `write_error` says so: the commands' own write errors, such
+/// as `bench`'s, which this module does not know), else 2.
+pub fn status_of(
+    e: &anyhow::Error,
+    write_error: fn(&(dyn std::error::Error + 'static)) -> bool,
+) -> u8 {
+    // the write errors carry their io::Error as `source`, so it is a link of the chain; an
+    // io::Error's own `source()` skips its payload, hence `refusal` on each link
     if e.chain().any(refused) {
         return BAD_INPUT;
     }
     let write_failed = |c: &(dyn std::error::Error + 'static)| {
-        c.downcast_ref::<WriteFailed>().is_some()
-            || matches!(
-                c.downcast_ref::<BenchError>(),
-                Some(BenchError::Write { .. })
-            )
-            || matches!(c.downcast_ref::<PlotError>(), Some(PlotError::Write { .. }))
+        c.downcast_ref::<WriteFailed>().is_some() || write_error(c)
     };
     if e.chain().any(write_failed) {
         WRITE_FAILED

@@ -14,32 +14,7 @@ use crate::exit::Outcome;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, OnceLock};
 
-/// A signal that stops a run cleanly.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Signal {
-    /// SIGINT (Ctrl-C): exit status 130
-    Int,
-    /// SIGTERM: exit status 143
-    Term,
-}
-
-impl Signal {
-    /// The signal's name, as reported in summaries (`SIGINT`, `SIGTERM`).
-    pub fn name(self) -> &'static str {
-        match self {
-            Signal::Int => "SIGINT",
-            Signal::Term => "SIGTERM",
-        }
-    }
-
-    /// The exit status: 128 + the signal's number.
-    pub fn exit_status(self) -> u8 {
-        match self {
-            Signal::Int => 128 + signal_hook::consts::SIGINT as u8,
-            Signal::Term => 128 + signal_hook::consts::SIGTERM as u8,
-        }
-    }
-}
+pub use crate::exit::Signal;
 
 /// The flags set by the handlers.
 struct Flags {

@@ -129,7 +129,7 @@ fn main() -> ExitCode {
     match result {
         Ok(outcome) => outcome.code(),
         Err(e) => {
-            let status = exit::status_of(&e);
+            let status = exit::status_of(&e, cmd::bench::is_write_error);
             if json {
                 let obj = serde_json::json!({
                     "error": format!("{e:#}"),

@@ -113,6 +113,11 @@ impl Vec3 {
     /// (Rodrigues' formula v cos a + (k × v) sin a + k (k·v)(1 − cos a)).
     pub fn rotated(self, axis: Vec3, angle: f64) -> Vec3 {
         let (s, c) = angle.sin_cos();
+        self.rotated_sc(axis, s, c)
+    }
+    /// [`Vec3::rotated`] by the angle whose sine and cosine are (s, c) (computed once for
+    /// several vectors; −s for the inverse rotation: the sine is odd to the bit).
+    pub fn rotated_sc(self, axis: Vec3, s: f64, c: f64) -> Vec3 {
         self * c + axis.cross(self) * s + axis * (axis.dot(self) * (1.0 - c))
     }
     /// Component-wise minimum.

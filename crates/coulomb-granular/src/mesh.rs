@@ -109,6 +109,12 @@ struct Inner {
     closure: Option<MeshError>,
     /// radius of the bounding sphere about the origin of the mesh frame
     max_norm: f64,
+    /// each triangle's unit normal, outward for a closed mesh ([`TriangleMesh::face_normal`]),
+    /// computed once: the queries of every step read it
+    normals: Vec<Vec3>,
+    /// the last answer of [`TriangleMesh::max_distance_from_axis`] (key: the bits of c and
+    /// the axis)
+    axis_distance: std::sync::Mutex<Option<([u64; 6], f64)>>,
 }
 
 impl PartialEq for TriangleMesh {
@@ -201,6 +207,13 @@ impl TriangleMesh {
         };
         let max_norm = vertices.iter().map(|v| v.norm()).fold(0.0, f64::max);
         let bvh = Bvh::build(&vertices, &tris);
+        let normals = tris
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| vertices[i as usize]);
+                (b - a).cross(c - a).normalized_or(Vec3::Z) * orientation.unwrap_or(1.0)
+            })
+            .collect();
         Ok(Self {
             inner: Arc::new(Inner {
                 vertices,
@@ -209,6 +222,8 @@ impl TriangleMesh {
                 orientation,
                 closure,
                 max_norm,
+                normals,
+                axis_distance: std::sync::Mutex::new(None),
             }),
         })
     }
@@ -224,6 +239,32 @@ impl TriangleMesh {
     /// Largest distance of a vertex from the origin of the mesh frame.
     pub fn max_norm(&self) -> f64 {
         self.inner.max_norm
+    }
+    /// The largest distance of a vertex from the line through c along the unit vector
+    /// `axis` (the largest distance of any point of the surface: the distance to a line is
+    /// convex). The last answer is kept: a rotating obstacle asks it every step.
+    pub fn max_distance_from_axis(&self, c: Vec3, axis: Vec3) -> f64 {
+        let key = [c.x, c.y, c.z, axis.x, axis.y, axis.z].map(f64::to_bits);
+        if let Ok(last) = self.inner.axis_distance.lock() {
+            if let Some((k, d)) = *last {
+                if k == key {
+                    return d;
+                }
+            }
+        }
+        let d = self
+            .inner
+            .vertices
+            .iter()
+            .map(|v| {
+                let r = *v - c;
+                (r - axis * r.dot(axis)).norm()
+            })
+            .fold(0.0, f64::max);
+        if let Ok(mut last) = self.inner.axis_distance.lock() {
+            *last = Some((key, d));
+        }
+        d
     }
     /// Bounding box (lo, hi) of the vertices.
     pub fn bounds(&self) -> (Vec3, Vec3) {
@@ -242,9 +283,7 @@ impl TriangleMesh {
     /// The outward unit normal of triangle `t` (for a closed mesh; the winding normal of an
     /// open one).
     pub fn face_normal(&self, t: usize) -> Vec3 {
-        let [a, b, c] = self.corners(t);
-        let n = (b - a).cross(c - a).normalized_or(Vec3::Z);
-        n * self.inner.orientation.unwrap_or(1.0)
+        self.inner.normals.get(t).copied().unwrap_or(Vec3::Z)
     }
     fn corners(&self, t: usize) -> [Vec3; 3] {
         self.inner.triangles[t].map(|i| self.inner.vertices[i as usize])
@@ -289,9 +328,50 @@ impl TriangleMesh {
     /// in increasing triangle order: (triangle, closest point p, region).
     pub fn near(&self, x: Vec3, radius: f64, reach: f64, out: &mut Vec<(u32, Vec3, Region)>) {
         out.clear();
+        self.near_each(x, radius, reach, |t, p, region| out.push((t, p, region)));
+    }
+
+    /// [`TriangleMesh::near`], each candidate handed to `found` in increasing triangle order.
+    /// The per-query lists live in a scratch buffer of the calling thread (every bead queries
+    /// the mesh once or twice a step: allocating them per query cost about a quarter of the
+    /// query, docs/granular.md "A mesh obstacle against the analytic one").
+    pub fn near_each(
+        &self,
+        x: Vec3,
+        radius: f64,
+        reach: f64,
+        mut found: impl FnMut(u32, Vec3, Region),
+    ) {
+        thread_local! {
+            static SCRATCH: std::cell::RefCell<NearScratch> =
+                std::cell::RefCell::new(NearScratch::default());
+        }
+        SCRATCH.with(|cell| match cell.try_borrow_mut() {
+            Ok(mut scratch) => {
+                self.near_into(x, radius, reach, &mut scratch);
+                for &(t, p, region) in &scratch.out {
+                    found(t, p, region);
+                }
+            }
+            // a query from inside `found` (not done by this crate): its own buffers
+            Err(_) => {
+                let mut scratch = NearScratch::default();
+                self.near_into(x, radius, reach, &mut scratch);
+                for &(t, p, region) in &scratch.out {
+                    found(t, p, region);
+                }
+            }
+        });
+    }
+
+    /// The query of [`TriangleMesh::near`] into `scratch.out` (its other lists are scratch).
+    fn near_into(&self, x: Vec3, radius: f64, reach: f64, scratch: &mut NearScratch) {
+        let NearScratch { cand, normals, out } = scratch;
+        cand.clear();
+        normals.clear();
+        out.clear();
         let r = radius + reach.max(0.0);
         let (qlo, qhi) = (x - Vec3::new(r, r, r), x + Vec3::new(r, r, r));
-        let mut cand: Vec<(u32, Vec3, Region, f64)> = Vec::new();
         self.inner.bvh.visit(
             |lo, hi| boxes_overlap(lo, hi, qlo, qhi),
             |t| {
@@ -305,17 +385,14 @@ impl TriangleMesh {
         );
         cand.sort_unstable_by_key(|c| c.0);
         // the direction of each candidate's contact normal (face: the face's normal)
-        let normals: Vec<Vec3> = cand
-            .iter()
-            .map(|&(t, p, region, _)| {
-                let n = self.face_normal(t as usize);
-                match region {
-                    Region::Face if (x - p).dot(n) < 0.0 => -n,
-                    Region::Face => n,
-                    _ => (x - p).normalized_or(n),
-                }
-            })
-            .collect();
+        normals.extend(cand.iter().map(|&(t, p, region, _)| {
+            let n = self.face_normal(t as usize);
+            match region {
+                Region::Face if (x - p).dot(n) < 0.0 => -n,
+                Region::Face => n,
+                _ => (x - p).normalized_or(n),
+            }
+        }));
         let eps = 1e-12 * (1.0 + radius);
         for (k, &(t, p, region, gap)) in cand.iter().enumerate() {
             let tri = self.inner.triangles[t as usize];
@@ -351,6 +428,17 @@ impl TriangleMesh {
     pub fn orientation(&self) -> Option<f64> {
         self.inner.orientation
     }
+}
+
+/// The lists of one [`TriangleMesh::near`] query, kept per thread between queries.
+#[derive(Default)]
+struct NearScratch {
+    /// (triangle, closest point, region, gap) within reach
+    cand: Vec<(u32, Vec3, Region, f64)>,
+    /// the contact normal direction of each candidate
+    normals: Vec<Vec3>,
+    /// the candidates that survive the duplicate rule
+    out: Vec<(u32, Vec3, Region)>,
 }
 
 /// None when every undirected edge is used by exactly two triangles in opposite directions.
@@ -492,7 +580,20 @@ struct Node {
 
 impl Bvh {
     const LEAF: usize = 4;
+    /// bins per axis of the surface-area split
+    const BINS: usize = 16;
+    /// below this depth nodes split by surface area, from it on at the median (which halves
+    /// the triangles, so the depth stays ≤ 48 + ⌈log2 T⌉ + 1 < 96: the stack of `visit`)
+    const SAH_DEPTH: usize = 48;
 
+    /// The hierarchy of the triangles' boxes. A node splits where the binned surface-area
+    /// heuristic is lowest (Σ over the two sides of box area × triangles, 16 bins of the
+    /// centroids per axis): it separates the parts of a mesh that a median split along the
+    /// longest axis mixes, such as a drum's end caps (fans of slivers from the centre) and
+    /// its side, whose mixed boxes would cover the drum's interior and make every bead
+    /// there descend deep (docs/granular.md, "A mesh obstacle against the analytic one").
+    /// Falls back to the median split when no binned split separates the centroids or below
+    /// [`Bvh::SAH_DEPTH`]. The queries' results do not depend on the hierarchy's shape.
     fn build(vertices: &[Vec3], tris: &[[u32; 3]]) -> Self {
         let boxes: Vec<(Vec3, Vec3)> = tris
             .iter()
@@ -501,6 +602,8 @@ impl Bvh {
                 (a.min(b).min(c), a.max(b).max(c))
             })
             .collect();
+        // doubled centroids l + h (the split keys)
+        let cent: Vec<Vec3> = boxes.iter().map(|&(l, h)| l + h).collect();
         let mut order: Vec<u32> = (0..tris.len() as u32).collect();
         let mut nodes = vec![Node {
             lo: Vec3::ZERO,
@@ -508,9 +611,10 @@ impl Bvh {
             start: 0,
             count: 0,
         }];
-        // explicit stack of (node, range) to build without recursion
-        let mut stack = vec![(0usize, 0usize, tris.len())];
-        while let Some((node, s, e)) = stack.pop() {
+        let mut scratch: Vec<u32> = Vec::new();
+        // explicit stack of (node, range, depth) to build without recursion
+        let mut stack = vec![(0usize, 0usize, tris.len(), 0usize)];
+        while let Some((node, s, e, depth)) = stack.pop() {
             let (mut lo, mut hi) = boxes[order[s] as usize];
             let (mut clo, mut chi) = (lo + hi, lo + hi);
             for &t in &order[s..e] {
@@ -527,37 +631,136 @@ impl Bvh {
                 nodes[node].count = (e - s) as u32;
                 continue;
             }
-            let ext = chi - clo;
-            let axis = if ext.x >= ext.y && ext.x >= ext.z {
-                0
-            } else if ext.y >= ext.z {
-                1
+            let split = if depth < Self::SAH_DEPTH {
+                Self::sah_split(&boxes, &cent, &order[s..e], clo, chi)
             } else {
-                2
+                None
             };
-            let mid = (s + e) / 2;
-            let key = |t: &u32| {
-                let (l, h) = boxes[*t as usize];
-                (l + h).get(axis)
+            let mid = match split {
+                Some((axis, k)) => {
+                    // stable partition of the range: bins < k to the left
+                    let (a, b) = (clo.get(axis), chi.get(axis));
+                    scratch.clear();
+                    let mut left = s;
+                    for i in s..e {
+                        let t = order[i];
+                        if Self::bin_of(cent[t as usize].get(axis), a, b) < k {
+                            order[left] = t;
+                            left += 1;
+                        } else {
+                            scratch.push(t);
+                        }
+                    }
+                    order[left..e].copy_from_slice(&scratch);
+                    left
+                }
+                None => {
+                    let ext = chi - clo;
+                    let axis = if ext.x >= ext.y && ext.x >= ext.z {
+                        0
+                    } else if ext.y >= ext.z {
+                        1
+                    } else {
+                        2
+                    };
+                    let mid = (s + e) / 2;
+                    let key = |t: &u32| cent[*t as usize].get(axis);
+                    order[s..e].select_nth_unstable_by(mid - s, |a, b| {
+                        key(a).total_cmp(&key(b)).then(a.cmp(b))
+                    });
+                    mid
+                }
             };
-            order[s..e]
-                .select_nth_unstable_by(mid - s, |a, b| key(a).total_cmp(&key(b)).then(a.cmp(b)));
             let left = nodes.len();
             nodes.push(nodes[node]);
             nodes.push(nodes[node]);
             nodes[node].start = left as u32;
             nodes[node].count = 0;
-            stack.push((left, s, mid));
-            stack.push((left + 1, mid, e));
+            stack.push((left, s, mid, depth + 1));
+            stack.push((left + 1, mid, e, depth + 1));
         }
         Self { nodes, order }
     }
 
+    /// The bin (0..BINS) of a (doubled) centroid coordinate c within the bounds [a, b] of
+    /// the node's centroids along the split axis.
+    fn bin_of(c: f64, a: f64, b: f64) -> usize {
+        let f = (c - a) / (b - a) * Self::BINS as f64;
+        (f.max(0.0) as usize).min(Self::BINS - 1)
+    }
+
+    /// The (axis, first bin of the right side) of the lowest surface-area cost, None when no
+    /// binned split has triangles on both sides. Ties go to the lower axis, then the lower bin.
+    fn sah_split(
+        boxes: &[(Vec3, Vec3)],
+        cent: &[Vec3],
+        range: &[u32],
+        clo: Vec3,
+        chi: Vec3,
+    ) -> Option<(usize, usize)> {
+        let area = |lo: Vec3, hi: Vec3| {
+            let d = hi - lo;
+            d.x * d.y + d.y * d.z + d.z * d.x
+        };
+        let mut best: Option<(f64, usize, usize)> = None;
+        for axis in 0..3 {
+            let (a, b) = (clo.get(axis), chi.get(axis));
+            if b - a <= 0.0 {
+                continue;
+            }
+            let mut bins = [(0usize, Vec3::ZERO, Vec3::ZERO); Self::BINS];
+            for &t in range {
+                let (l, h) = boxes[t as usize];
+                let bin = &mut bins[Self::bin_of(cent[t as usize].get(axis), a, b)];
+                if bin.0 == 0 {
+                    (bin.1, bin.2) = (l, h);
+                } else {
+                    (bin.1, bin.2) = (bin.1.min(l), bin.2.max(h));
+                }
+                bin.0 += 1;
+            }
+            // right-side sweeps: cost of bins k.. for every k
+            let mut right = [(0usize, 0.0f64); Self::BINS];
+            let mut acc: Option<(Vec3, Vec3)> = None;
+            let mut n = 0;
+            for k in (0..Self::BINS).rev() {
+                let (c, l, h) = bins[k];
+                if c > 0 {
+                    n += c;
+                    acc = Some(acc.map_or((l, h), |(a, b)| (a.min(l), b.max(h))));
+                }
+                right[k] = (n, acc.map_or(0.0, |(a, b)| area(a, b)));
+            }
+            let mut acc: Option<(Vec3, Vec3)> = None;
+            let mut n = 0;
+            for k in 1..Self::BINS {
+                let (c, l, h) = bins[k - 1];
+                if c > 0 {
+                    n += c;
+                    acc = Some(acc.map_or((l, h), |(a, b)| (a.min(l), b.max(h))));
+                }
+                let (nr, ar) = right[k];
+                if n == 0 || nr == 0 {
+                    continue;
+                }
+                let cost = acc.map_or(0.0, |(a, b)| area(a, b)) * n as f64 + ar * nr as f64;
+                if best.is_none_or(|(c, _, _)| cost < c) {
+                    best = Some((cost, axis, k));
+                }
+            }
+        }
+        best.map(|(_, axis, k)| (axis, k))
+    }
+
     /// Calls `leaf` on every triangle of the leaves whose boxes pass `test`.
     fn visit(&self, test: impl Fn(Vec3, Vec3) -> bool, mut leaf: impl FnMut(u32)) {
-        let mut stack = vec![0usize];
-        // depth ≤ log2(T) + 1; the stack never exceeds 2 depth entries
-        while let Some(i) = stack.pop() {
+        // the depth is below 96 (`Bvh::build`) and a depth-first descent holds at most
+        // depth + 1 nodes: a fixed stack, no allocation
+        let mut stack = [0u32; 128];
+        let mut len = 1;
+        while len > 0 {
+            len -= 1;
+            let i = stack[len] as usize;
             let Some(n) = self.nodes.get(i) else { continue };
             if !test(n.lo, n.hi) {
                 continue;
@@ -567,9 +770,10 @@ impl Bvh {
                 for &t in &self.order[s..s + n.count as usize] {
                     leaf(t);
                 }
-            } else {
-                stack.push(n.start as usize + 1);
-                stack.push(n.start as usize);
+            } else if len + 2 <= stack.len() {
+                stack[len] = n.start + 1;
+                stack[len + 1] = n.start;
+                len += 2;
             }
         }
     }

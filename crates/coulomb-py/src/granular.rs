@@ -499,6 +499,13 @@ impl PySimulation {
             .map_err(|e| crate::errors::checkpoint_error(py, e))
     }
 
+    /// Whether `other` has this simulation's gravity and obstacles (the check that a scene
+    /// given to `load_checkpoint` for its inlets is the stored run's).
+    fn same_setup(&self, other: &PySimulation) -> bool {
+        self.sim.world.gravity == other.sim.world.gravity
+            && self.sim.world.obstacles == other.sim.world.obstacles
+    }
+
     /// The simulation stored in the checkpoint file `path`; stepping it gives the same bits as
     /// stepping the saved one.
     #[staticmethod]

@@ -114,3 +114,36 @@ def test_simulate_frames_are_valid_vtk_with_the_positions(tmp_path):
     root, blob = _vtp(out / "frames" / "beads_000010.vtp")
     xyz = _array(root.find("PolyData/Piece/Points/DataArray"), blob).reshape(-1, 3)
     assert np.array_equal(xyz, last.positions)
+
+
+def test_restart_with_its_scene_keeps_the_inlets_pouring(tmp_path):
+    from coulomb.granular import Region, Scene
+
+    def scene(material="sand"):
+        s = Scene().add_box([0, 0, 0], [1, 1, 2], open_top=True)
+        s.add_inlet(Region.box([0.2, 0.2, 1.0], [0.8, 0.8, 1.3]), 100.0, radius=0.03,
+                    material=material, end=0.5, velocity=[0, 0, -0.5], seed=4)
+        return s
+
+    straight = Simulation(scene())
+    straight.run(24)
+    first = Simulation(scene())
+    first.run(12)
+    path = tmp_path / "pour.h5"
+    first.save_checkpoint(path)
+    at_save = len(first.radii)
+    # without the scene the loaded run pours nothing more
+    bare = Simulation.load_checkpoint(path)
+    bare.run(12)
+    assert len(bare.radii) == at_save
+    # with it the inlet goes on pouring, to the bit of the uninterrupted run
+    again = Simulation.load_checkpoint(path, scene=scene())
+    again.run(12)
+    assert len(again.radii) > at_save
+    for name in ("positions", "velocities", "radii"):
+        assert np.array_equal(getattr(again, name), getattr(straight, name)), name
+    # another scene (here: other obstacles) is refused
+    other = Scene().add_box([0, 0, 0], [1, 1, 3], open_top=True)
+    other.add_inlet(Region.box([0.2, 0.2, 1.0], [0.8, 0.8, 1.3]), 100.0, radius=0.03)
+    with pytest.raises(ValueError, match="not the scene of the checkpoint"):
+        Simulation.load_checkpoint(path, scene=other)

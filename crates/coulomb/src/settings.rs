@@ -584,8 +584,9 @@ impl Default for InnerParams {
     }
 }
 
-/// Every tuning constant of the outer loop, in one place. The defaults are those the solver
-/// has always used; they are not meant to be changed per problem.
+/// Every tuning constant of the outer loop, in one place; not meant to be changed per problem.
+/// What each field does, its range and how its default was measured (or that it was not
+/// recorded): docs/tuning.md.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Tuning {

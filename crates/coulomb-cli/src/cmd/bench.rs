@@ -27,7 +27,7 @@ mod record;
 mod solvers;
 
 use crate::exit::Outcome;
-use crate::interrupt::Signal;
+use crate::exit::Signal;
 use record::{Criteria, ProblemInfo, Record, Run, RunSummary};
 use serde::Serialize;
 use solvers::SolverSpec;
@@ -575,6 +575,18 @@ fn machine() -> Machine {
             .ok()
             .map(|d| d.as_secs()),
     }
+}
+
+/// Whether `e` is one of `bench`'s own write failures (the JSON or the SVG profile could not
+/// be written): exit status 4 ([`crate::exit::status_of`]).
+pub fn is_write_error(e: &(dyn std::error::Error + 'static)) -> bool {
+    matches!(
+        e.downcast_ref::<BenchError>(),
+        Some(BenchError::Write { .. })
+    ) || matches!(
+        e.downcast_ref::<plot::PlotError>(),
+        Some(plot::PlotError::Write { .. })
+    )
 }
 
 /// The JSON document: metadata, then `records` (one per (problem, solver) pair, the array the

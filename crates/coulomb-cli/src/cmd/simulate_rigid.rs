@@ -24,6 +24,8 @@ struct RigidSummary {
     steps: usize,
     time: f64,
     mean_contacts: f64,
+    /// mean over the steps of the contacts carrying load (r_N > 10⁻⁶ max r_N)
+    mean_loaded_contacts: f64,
     mean_sweeps: f64,
     max_error: f64,
     not_converged_steps: usize,
@@ -136,6 +138,11 @@ pub fn run(a: &Args, scene: &BuiltScene) -> anyhow::Result<Outcome> {
         steps: reports.len(),
         time: rigid.world.time(),
         mean_contacts: reports.iter().map(|r| r.contacts as f64).sum::<f64>() / n,
+        mean_loaded_contacts: reports
+            .iter()
+            .map(|r| r.loaded_contacts as f64)
+            .sum::<f64>()
+            / n,
         mean_sweeps: reports.iter().map(|r| r.sweeps as f64).sum::<f64>() / n,
         max_error: reports.iter().map(|r| r.error).fold(0.0, f64::max),
         not_converged_steps: reports
@@ -157,16 +164,17 @@ pub fn run(a: &Args, scene: &BuiltScene) -> anyhow::Result<Outcome> {
     }
     if let Some(dir) = &a.output {
         let mut csv = String::from(
-            "step,time,status,error,contacts,warm_started,sweeps,method,max_penetration,kinetic_energy\n",
+            "step,time,status,error,contacts,loaded_contacts,warm_started,sweeps,method,max_penetration,kinetic_energy\n",
         );
         for r in reports {
             csv.push_str(&format!(
-                "{},{:.6},{},{:.6e},{},{},{},{},{:.6e},{:.9e}\n",
+                "{},{:.6},{},{:.6e},{},{},{},{},{},{:.6e},{:.9e}\n",
                 r.step,
                 r.time,
                 serde_json::to_value(r.status)?.as_str().unwrap_or(""),
                 r.error,
                 r.contacts,
+                r.loaded_contacts,
                 r.warm_started,
                 r.sweeps,
                 r.method,

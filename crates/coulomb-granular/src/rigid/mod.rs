@@ -310,8 +310,12 @@ pub struct RigidStepReport {
     /// error of docs/error.md of the returned (v, r) on the step's stored problem (0 without
     /// contacts)
     pub error: f64,
-    /// active contacts (manifold points)
+    /// active contacts (manifold points, the look-ahead ones included: every row of the
+    /// step's problem)
     pub contacts: usize,
+    /// contacts that carry load: normal impulse r_N > 10⁻⁶ max r_N of the step (what a
+    /// side-by-side with another engine compares, whose activation rule differs)
+    pub loaded_contacts: usize,
     /// contacts warm started from the previous step
     pub warm_started: usize,
     /// Gauss–Seidel sweeps

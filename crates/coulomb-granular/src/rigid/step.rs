@@ -538,6 +538,12 @@ impl RigidWorld {
             }
         }
         let max_penetration = active.iter().map(|c| (-c.gap).max(0.0)).fold(0.0, f64::max);
+        let max_rn = r.iter().step_by(3).copied().fold(0.0, f64::max);
+        let loaded_contacts = r
+            .iter()
+            .step_by(3)
+            .filter(|&&rn| max_rn > 0.0 && rn > 1e-6 * max_rn)
+            .count();
         self.previous.clear();
         self.contacts = active
             .iter()
@@ -565,6 +571,7 @@ impl RigidWorld {
             status,
             error,
             contacts: active.len(),
+            loaded_contacts,
             warm_started,
             sweeps,
             method,

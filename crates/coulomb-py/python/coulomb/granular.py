@@ -877,19 +877,47 @@ class Simulation:
         parameters and solver settings, time, step count, warm-start impulses, last contacts)
         into the HDF5 file ``path``, atomically (a complete file replaces an existing one or
         nothing does). :meth:`load_checkpoint` continues it to the bit; ``coulomb simulate
-        --restart path`` continues it from the command line. A scene's inlets are not stored:
-        a loaded simulation pours nothing more."""
+        --restart path`` continues it from the command line. A scene's inlets are not stored
+        in the file: give the scene to :meth:`load_checkpoint` (``scene=``) and they keep
+        pouring."""
         self._sim.save_checkpoint(os.fspath(path))
 
     @staticmethod
-    def load_checkpoint(path: Union[str, "os.PathLike[str]"]) -> "Simulation":
+    def load_checkpoint(path: Union[str, "os.PathLike[str]"],
+                        scene: Union[Scene, str, "os.PathLike[str]", None] = None
+                        ) -> "Simulation":
         """The simulation stored in the checkpoint file ``path`` (written by
         :meth:`save_checkpoint` or ``coulomb simulate --checkpoint-every``): stepping it gives
         the same numbers as stepping the saved one. Raises :class:`coulomb.CheckpointError`
         for a file of another format version, a damaged or truncated one, and ``OSError`` when
-        it cannot be read."""
+        it cannot be read.
+
+        ``scene``: the :class:`Scene` or scene file (``.toml``/``.json``) the stored run was
+        built from, when it has inlets: they go on pouring after each step as in the
+        uninterrupted run (an inlet's emissions depend only on its seed, the time and the
+        spheres present, so the continued run is the uninterrupted one to the bit, as
+        ``coulomb simulate SCENE.toml --restart FILE``). The scene is built to read its
+        inlets and compared with the checkpoint: another gravity or other obstacles raise
+        ``ValueError``."""
         sim = Simulation.__new__(Simulation)
         sim._sim = _coulomb._Simulation.load_checkpoint(os.fspath(path))
+        if scene is None:
+            return sim
+        if isinstance(scene, Scene):
+            if scene.has_shapes:
+                raise _arg_error("scene", "checkpoints hold sphere scenes only")
+            probe = Simulation(scene)
+        elif isinstance(scene, (str, os.PathLike)):
+            probe = Simulation.from_file(scene)
+            if probe.is_rigid:
+                raise _arg_error("scene", "checkpoints hold sphere scenes only")
+        else:
+            raise TypeError(f"scene must be a coulomb.granular.Scene or a scene file, got "
+                            f"{type(scene).__name__}")
+        if not sim._sim.same_setup(probe._sim):
+            raise ValueError(f"the scene given is not the scene of the checkpoint "
+                             f"{os.fspath(path)}: its gravity or obstacles differ")
+        sim._feed = probe._feed
         return sim
 
 

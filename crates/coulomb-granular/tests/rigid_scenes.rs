@@ -25,6 +25,7 @@ fn every_shipped_rigid_scene_parses_builds_and_runs_two_steps() {
         .collect();
     for want in [
         "brick-wall",
+        "brick-wall-touching",
         "capsule-hopper",
         "cube-pyramid",
         "incline",

@@ -1,7 +1,7 @@
-"""Writes the rigid-body scene files of this folder (issue 41): a running-bond brick wall, a
-cube pyramid, a Kapla tower, 500 random convex rocks poured into a box, capsules in a
-hopper, a block on an incline, a wall hit by
-a steel ball. Deterministic (numpy's default_rng with fixed seeds); run
+"""Writes the rigid-body scene files of this folder (issue 41): a running-bond brick wall (with
+1 mm joints, and touching), a cube pyramid, a Kapla tower, 500 random convex rocks poured into
+a box, capsules in a hopper, a block on an incline, a wall hit by a steel ball. Deterministic
+(numpy's default_rng with fixed seeds); run
 `python3 make_rigid_scenes.py` here to rewrite them. Quaternions are (w, x, y, z), written
 with 17 significant digits so that their norm is 1 to round-off (files refuse a quaternion
 whose norm differs from 1 by more than 1e-9)."""
@@ -54,26 +54,27 @@ def random_quaternion(rng):
     return q / np.linalg.norm(q)
 
 
-def brick_wall(courses=10, bricks=6):
-    # brick 0.2 x 0.1 x 0.05 m (half 0.1, 0.05, 0.025), dry joints of 1 mm between the
-    # bricks of a course; odd courses start and end with a half brick: the running bond
+def brick_wall(courses=10, bricks=6, joint=0.001, name="brick-wall.toml"):
+    # brick 0.2 x 0.1 x 0.05 m (half 0.1, 0.05, 0.025), dry joints of `joint` (1 mm) between
+    # the bricks of a course; odd courses start and end with a half brick: the running bond
     full, half = [], []
-    p = 0.201
+    p = 0.2 + joint
     for c in range(courses):
         z = 0.025 + 0.05 * c
         if c % 2 == 0:
             full += [[0.1 + p * i, 0.0, z] for i in range(bricks)]
         else:
-            half += [[0.05, 0.0, z], [p * bricks - 0.001 - 0.05, 0.0, z]]
-            full += [[0.1 + 0.001 + 0.1 + p * i, 0.0, z] for i in range(bricks - 1)]
+            half += [[0.05, 0.0, z], [p * bricks - joint - 0.05, 0.0, z]]
+            full += [[0.1 + joint + 0.1 + p * i, 0.0, z] for i in range(bricks - 1)]
+    joints = f"dry joints of {joint * 1e3:g} mm" if joint > 0 else "touching, no joints"
     text = header(f"A running-bond brick wall: {courses} courses of {bricks} bricks "
-                  "(0.2 x 0.1 x 0.05 m, 1800 kg/m^3, dry joints of 1 mm) on the floor, mu = 0.7.", 1e-3, 1000, 0.7)
+                  f"(0.2 x 0.1 x 0.05 m, 1800 kg/m^3, {joints}) on the floor, mu = 0.7.", 1e-3, 1000, 0.7)
     text += "[materials.brick]\ndensity = 1800\n\n" + floor()
     text += group('{ kind = "cuboid", half_extents = [0.1, 0.05, 0.025] }', full,
                   extra='material = "brick"\n')
     text += group('{ kind = "cuboid", half_extents = [0.05, 0.05, 0.025] }', half,
                   extra='material = "brick"\n')
-    (HERE / "brick-wall.toml").write_text(text)
+    (HERE / name).write_text(text)
 
 
 def cube_pyramid(layers=5, a=0.1):
@@ -210,6 +211,7 @@ def wall_impact(courses=5, bricks=4, speed=6.0):
 
 if __name__ == "__main__":
     brick_wall()
+    brick_wall(joint=0.0, name="brick-wall-touching.toml")
     cube_pyramid()
     kapla_tower()
     rock_pile()

@@ -819,30 +819,37 @@ impl VtkWriter {
     }
 
     fn write_collections(&self) -> io::Result<()> {
-        for name in ["beads.pvd", "contacts.pvd", "obstacles.pvd"] {
-            let mut s = String::from(
-                "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n",
-            );
-            for f in &self.frames {
-                let file = match name {
-                    "beads.pvd" => &f.beads,
-                    "contacts.pvd" => &f.contacts,
-                    _ => &f.obstacles,
-                };
-                if file.is_empty() {
-                    continue;
-                }
-                let _ = writeln!(
-                    s,
-                    "<DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{file}\"/>",
-                    f.time
-                );
-            }
-            s.push_str("</Collection>\n</VTKFile>\n");
-            coulomb::atomic::write(self.dir.join(name), s)?;
-        }
-        Ok(())
+        write_collections(&self.dir, "beads.pvd", &self.frames)
     }
+}
+
+/// The three .pvd collections of a run's frames in `dir`: `bodies` (the beads' or bodies'
+/// files), contacts.pvd and obstacles.pvd, one `<DataSet …/>` per frame that has the file,
+/// each written atomically.
+fn write_collections(dir: &Path, bodies: &str, frames: &[FrameFiles]) -> io::Result<()> {
+    for name in [bodies, "contacts.pvd", "obstacles.pvd"] {
+        let mut s = String::from(
+            "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n",
+        );
+        for f in frames {
+            let file = match name {
+                "contacts.pvd" => &f.contacts,
+                "obstacles.pvd" => &f.obstacles,
+                _ => &f.beads,
+            };
+            if file.is_empty() {
+                continue;
+            }
+            let _ = writeln!(
+                s,
+                "<DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{file}\"/>",
+                f.time
+            );
+        }
+        s.push_str("</Collection>\n</VTKFile>\n");
+        coulomb::atomic::write(dir.join(name), s)?;
+    }
+    Ok(())
 }
 
 /// The (timestep, file) entries of a .pvd collection written by [`VtkWriter`] (one
@@ -1010,26 +1017,7 @@ impl RigidVtkWriter {
             contacts: c,
             obstacles: o,
         });
-        for name in ["bodies.pvd", "contacts.pvd", "obstacles.pvd"] {
-            let mut s = String::from(
-                "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n",
-            );
-            for f in &self.frames {
-                let file = match name {
-                    "bodies.pvd" => &f.beads,
-                    "contacts.pvd" => &f.contacts,
-                    _ => &f.obstacles,
-                };
-                let _ = writeln!(
-                    s,
-                    "<DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{file}\"/>",
-                    f.time
-                );
-            }
-            s.push_str("</Collection>\n</VTKFile>\n");
-            coulomb::atomic::write(self.dir.join(name), s)?;
-        }
-        Ok(())
+        write_collections(&self.dir, "bodies.pvd", &self.frames)
     }
 }
 

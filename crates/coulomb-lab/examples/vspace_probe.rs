@@ -1,7 +1,7 @@
 //! Probe (experiment, issue #11 item 4): the proximal point on r solved in the velocity
 //! space of a global problem (augmented Lagrangian on v).
 //!
-//! `cargo run --release --example vspace_probe -- FILE.hdf5 [WARM_SECONDS] [LIMIT_SECONDS]`
+//! `cargo run --release -p coulomb-lab --example vspace_probe -- FILE.hdf5 [WARM_SECONDS] [LIMIT_SECONDS]`
 //!
 //! The probe that led to [`coulomb::multiplier`] (docs/rigid.md, "the method of multipliers
 //! in the velocities"). Start: r = 0 (WARM_SECONDS = 0) or the default solver's point after

@@ -1,7 +1,7 @@
 //! Probe (experiment, issue #11 item 4; results in docs/rigid.md): end games for rigid,
 //! rank-deficient problems, started from the default solver's iterate.
 //!
-//! `cargo run --release --example rigid_probe -- FILE METHOD [WARM_SECONDS] [LIMIT_SECONDS]`
+//! `cargo run --release -p coulomb-lab --example rigid_probe -- FILE METHOD [WARM_SECONDS] [LIMIT_SECONDS]`
 //! (or `-- search`)
 //!
 //! The start point is `coulomb::solve` with the default settings (tol `WARM_TOL`, default

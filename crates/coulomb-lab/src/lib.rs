@@ -1,0 +1,13 @@
+//! The research harness of coulomb, kept out of the library crate (issue #42, item 7): the
+//! library holds what a user of it calls; the experiments that chose its methods live here.
+//!
+//! - `examples/rigid_probe.rs`: the methods tried on the rigid (rank-deficient) problems —
+//!   Levenberg–Marquardt variants, continuation in μ, ADMM, the interior point on the law,
+//!   Newton on s = F(s) — each on one FCLIB file (docs/rigid.md, "Reproducing");
+//!   `cargo run --release -p coulomb-lab --example rigid_probe -- FILE METHOD [WARM_S] [LIMIT_S]`.
+//! - `examples/vspace_probe.rs`: the method of multipliers in the velocities that became
+//!   `coulomb::multiplier` (docs/rigid.md);
+//!   `cargo run --release -p coulomb-lab --example vspace_probe -- FILE.hdf5 [WARM_S] [LIMIT_S]`.
+//!
+//! Still in the CLI crate, not moved yet: the engines of `coulomb corpus`, `coulomb paper` and
+//! `coulomb bench` (they use the CLI's argument, output and progress modules).

@@ -148,10 +148,8 @@ fn main() -> ExitCode {
 fn simulate(args: sim_args::Args) -> anyhow::Result<Outcome> {
     threads::with_threads(args.threads, || {
         #[cfg(feature = "mpi")]
-        if (args.restart.is_some() || args.scene.as_deref().is_some_and(scene_arg::is_scene_file))
-            && (args.mpi || sim_args::under_launcher())
-        {
-            anyhow::bail!("--restart and scene files run in one process, not distributed");
+        if args.restart.is_some() && (args.mpi || sim_args::under_launcher()) {
+            anyhow::bail!("--restart runs in one process, not distributed");
         }
         if args.restart.is_some() {
             return match args.scene.as_deref() {

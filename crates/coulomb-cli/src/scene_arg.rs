@@ -201,6 +201,10 @@ pub fn run(args: &Args) -> anyhow::Result<Outcome> {
     };
     let mut scene = loaded.build(&opts)?;
     if scene.model.has_shapes() {
+        #[cfg(feature = "mpi")]
+        if args.mpi || crate::sim_args::under_launcher() {
+            bail!("{file}: scenes with bodies of other shapes than spheres run in one process, not distributed");
+        }
         if args.resolve_overlaps.is_some() || args.checkpoint_every > 0 {
             bail!(
                 "{file}: --resolve-overlaps and --checkpoint-every are for sphere-only scenes; this scene has bodies of other shapes"
@@ -220,6 +224,17 @@ pub fn run(args: &Args) -> anyhow::Result<Outcome> {
     check_travel(a.dt, &scene, &world, file)?;
     if a.outer == coulomb::OuterKind::Fused && a.inner != coulomb::InnerKind::Pgs {
         bail!("--outer fused needs --inner pgs");
+    }
+    #[cfg(feature = "mpi")]
+    if a.mpi || crate::sim_args::under_launcher() {
+        if !scene.inlets.is_empty() {
+            bail!("{file}: a scene with inlets runs in one process, not distributed");
+        }
+        if a.checkpoint_every > 0 {
+            bail!("--checkpoint-every is not supported by distributed runs");
+        }
+        // per-pair materials and rolling resistance are refused by the distributed step
+        return crate::cmd::simulate_mpi::run_world(&a, world, &scene.name);
     }
     let sim = Simulation::new(world, a.params()).context("invalid simulation parameters")?;
     let mut inlets = Inlets {

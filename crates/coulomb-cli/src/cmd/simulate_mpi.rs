@@ -1,6 +1,7 @@
 //! `coulomb simulate` distributed over MPI (feature `mpi`): started by `mpirun -np K coulomb
 //! simulate …` or `srun -n K coulomb simulate …`, or with `--mpi`. Every rank builds the same
-//! scene, keeps its slab of beads and steps with the others
+//! scene (built-in, or a scene file without inlets, per-pair materials or rolling
+//! resistance), keeps its slab of beads and steps with the others
 //! ([`coulomb_granular::distributed`], docs/distributed.md); rank 0 prints the summary and
 //! writes stats.csv, stats.json (the statistics of `coulomb simulate`), summary.json and
 //! distributed.json (per step: sweeps, communication time, ghosts, interface contacts,
@@ -18,6 +19,17 @@ use coulomb_granular::{Scene, StepStats, Stop, Summary};
 /// Runs `coulomb simulate` on the ranks of MPI_COMM_WORLD. Exit status 1 on every rank when
 /// `--until-rest` stopped at its step cap without reaching rest (as in one process).
 pub fn run(args: Args, scene: Scene) -> anyhow::Result<Outcome> {
+    let world = scene.build_with(args.beads, args.seed, &args.layout()?);
+    run_world(&args, world, scene.name())
+}
+
+/// Runs the world `world` (every rank builds the same: a built-in scene or a scene file)
+/// distributed on the ranks of MPI_COMM_WORLD, `name` its scene's name in the outputs.
+pub fn run_world(
+    args: &Args,
+    world: coulomb_granular::World,
+    name: &str,
+) -> anyhow::Result<Outcome> {
     if args.dump_fclib.is_some() {
         bail!("--dump-fclib is not available in a distributed run");
     }
@@ -30,7 +42,7 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<Outcome> {
     let comm = Comm::new(universe.world());
     let rank = comm.rank();
     let stop = args.stop();
-    let world = scene.build_with(args.beads, args.seed, &args.layout()?);
+    let beads = world.bodies.len();
     let mut sim = DistributedSimulation::new(comm, world, args.params())
         .context("invalid simulation parameters")?;
     sim.rebalance_every = args.rebalance_every;
@@ -58,12 +70,7 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<Outcome> {
     frame(&mut sim, &mut vtk)?;
     let start_energy = sim.energy();
     let pb = progress(stop.max_steps(), args.json || rank != 0);
-    pb.set_prefix(format!(
-        "{} {} on {} ranks",
-        scene.name(),
-        args.beads,
-        sim.comm.size()
-    ));
+    pb.set_prefix(format!("{name} {beads} on {} ranks", sim.comm.size()));
     let mut stats: Vec<DistributedStats> = Vec::new();
     let (mut calm, mut at_rest) = (0usize, false);
     while sim.steps_done < stop.max_steps() {
@@ -111,8 +118,7 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<Outcome> {
         });
     }
     let steps: Vec<StepStats> = stats.iter().map(|s| s.step.clone()).collect();
-    let summary =
-        Summary::from_stats(scene.name(), args.beads, &steps, at_rest).stopped_by(&stop, None);
+    let summary = Summary::from_stats(name, beads, &steps, at_rest).stopped_by(&stop, None);
     let n = stats.len().max(1) as f64;
     let mean = |f: fn(&DistributedStats) -> f64| stats.iter().map(f).sum::<f64>() / n;
     let (step_ms, comm_ms, sweeps) = (

@@ -22,6 +22,21 @@ fn mpirun(np: usize, args: &[&str]) -> std::process::Output {
         .expect("bash runs scripts/mpirun-local.sh")
 }
 
+/// The 2-rank summary `two` against the one-process `one`: every one of `steps` steps solved
+/// to the tolerance 1e-4 on the global error of docs/error.md, and the same physics
+/// statistically (mean contacts within 3 %, final energy within 1 %).
+fn matches_one_process(two: &serde_json::Value, one: &serde_json::Value, steps: u64) {
+    assert_eq!(two["ranks"], 2, "{two}");
+    assert_eq!(two["converged_steps"], steps, "{two}");
+    assert!(two["max_error"].as_f64().unwrap() <= 1e-4, "{two}");
+    let rel = |k: &str| {
+        let (a, b) = (two[k].as_f64().unwrap(), one[k].as_f64().unwrap());
+        (a - b).abs() / b.abs()
+    };
+    assert!(rel("mean_contacts") < 0.03, "{two}\n{one}");
+    assert!(rel("end_energy") < 0.01, "{two}\n{one}");
+}
+
 #[test]
 fn distributed_two_ranks_match_one_process() {
     let dir = temp_dir("mpi-two");
@@ -42,18 +57,8 @@ fn distributed_two_ranks_match_one_process() {
     args.extend(["--output", &out_s]);
     let two = stdout_json(&mpirun(2, &args));
     let one = stdout_json(&common::coulomb(&common));
-    assert_eq!(two["ranks"], 2);
     assert_eq!(two["steps"], 60);
-    // every step solved to the tolerance 1e-4 on the global error of docs/error.md
-    assert_eq!(two["converged_steps"], 60, "{two}");
-    assert!(two["max_error"].as_f64().unwrap() <= 1e-4, "{two}");
-    // the same physics as one process, statistically
-    let rel = |k: &str| {
-        let (a, b) = (two[k].as_f64().unwrap(), one[k].as_f64().unwrap());
-        (a - b).abs() / b.abs()
-    };
-    assert!(rel("mean_contacts") < 0.03, "{two}\n{one}");
-    assert!(rel("end_energy") < 0.01, "{two}\n{one}");
+    matches_one_process(&two, &one, 60);
     // the position correction leaves no penetration above its trigger (1e-3 R)
     assert!(
         two["end_max_penetration"].as_f64().unwrap() <= 1e-3 * 0.05,
@@ -174,16 +179,8 @@ fn distributed_scene_files_run_or_say_why_not() {
     let common = ["simulate", &bx, "--steps", "40", "--json"];
     let two = stdout_json(&mpirun(2, &common));
     let one = stdout_json(&common::coulomb(&common));
-    assert_eq!(two["ranks"], 2, "{two}");
     assert_eq!(two["beads"], one["beads"], "{two}\n{one}");
-    assert_eq!(two["converged_steps"], 40, "{two}");
-    assert!(two["max_error"].as_f64().unwrap() <= 1e-4, "{two}");
-    let rel = |k: &str| {
-        let (a, b) = (two[k].as_f64().unwrap(), one[k].as_f64().unwrap());
-        (a - b).abs() / b.abs()
-    };
-    assert!(rel("mean_contacts") < 0.03, "{two}\n{one}");
-    assert!(rel("end_energy") < 0.01, "{two}\n{one}");
+    matches_one_process(&two, &one, 40);
     for (file, why) in [
         ("silo.toml", "inlets"),
         // rolling resistance and per-pair materials: "not supported by the distributed step"

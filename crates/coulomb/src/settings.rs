@@ -682,6 +682,7 @@ impl Tuning {
             || self.balance_stalls == 0
             || self.anderson.memory == 0
             || self.newton.try_steps == 0
+            || self.newton.stagnation == 0
             || self.inner.apgd_power_iterations == 0
             || self.inner.gs_refresh == 0
             || self.inner.gs_anderson_memory == 0
@@ -912,6 +913,14 @@ impl Settings {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_zero_stagnation_window_is_refused() {
+        let mut s = Settings::default();
+        assert!(s.validate().is_ok());
+        s.tuning.newton.stagnation = 0;
+        assert!(s.validate().is_err());
+    }
 
     #[test]
     fn method_names_round_trip() {

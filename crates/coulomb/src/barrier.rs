@@ -62,7 +62,7 @@ pub struct BarrierParams {
     /// once its lowest error is ≤ `settle_below`, a run stops after this many steps in a row
     /// cut below `settle_alpha` of the Newton step (jammed near the end of its path, where
     /// the try's Levenberg–Marquardt finish, [`crate::levenberg::LmParams::start`], usually ends it in a few
-    /// steps; docs/rigid.md); ≥ 1
+    /// steps); ≥ 1 (docs/tuning.md, `tuning.barrier`)
     pub settle_steps: usize,
     /// see `settle_steps`; ≥ 0 (0: never)
     pub settle_below: f64,
@@ -80,9 +80,9 @@ pub struct BarrierParams {
     pub start_floor: f64,
     /// a try takes at most this many steps in all (the interior point's Newton steps and
     /// its LM finishes' steps, each a factorization): no new run or finish starts once they
-    /// are spent, and a run or finish gets at most what is left; ≥ 1. It replaced a share
-    /// of the time left (0.5) so that the path does not depend on the machine's speed or
-    /// load; calibrated on the corpus (docs/solver-core.md)
+    /// are spent, and a run or finish gets at most what is left: a budget in work so that
+    /// the path does not depend on the machine's speed or load; ≥ 1
+    /// (docs/tuning.md, `tuning.barrier`)
     pub max_work: usize,
     /// the LM finish of a run of the try stops when its lowest error has not dropped below
     /// [`crate::levenberg::LmParams::stall_gain`] times its value this many segments earlier (the try's own
@@ -91,10 +91,7 @@ pub struct BarrierParams {
     /// where the method of multipliers follows the try ([`crate::settings::MultiplierParams`]), the try ends
     /// after a run whose end point has an error ≤ `handover` · tol (from such points the
     /// multipliers converge in a few Newton steps, where the LM finish crawls); ≥ 0 (0: the
-    /// try ends only at the tolerance). Measured with `lm_stall_segments` = 2 against 6 and
-    /// no handover, on the 720 box files of corpus seeds 1–5 (docs/rigid.md): 718 solved in
-    /// 10 s either way, the five files that waited for the end of the try's share (5.0 s)
-    /// solved in 1.2–3.2 s
+    /// try ends only at the tolerance) (docs/tuning.md, `tuning.barrier`)
     pub handover: f64,
     /// a global problem with at most this many degrees of freedom (and fewer than contact
     /// unknowns) has its Newton systems solved on M + H G⁻¹ Hᵀ (dense LU) instead of W + G;
@@ -102,19 +99,15 @@ pub struct BarrierParams {
     pub max_schur_dofs: usize,
     /// the dense LU factorizations of these Newton systems (Schur complement, skeleton, and
     /// the method of multipliers' J, [`crate::linalg::dense`]) run on all threads from this size on,
-    /// on one thread below it; ≥ 1. Measured (`cargo bench -p coulomb --bench dense_lu`, 2
-    /// cores), all threads / one: 4.8× the time at n = 100, 2.3× at 384, 1.13× at 1 000,
-    /// 0.93× at 1 500, 0.78× at 3 000
+    /// on one thread below it; ≥ 1 (docs/tuning.md, `tuning.barrier`)
     pub dense_parallel_dim: usize,
     /// a local problem with at most this many contact unknowns is probed for a skeleton
     /// W ≈ W[:, P] W[P, P]⁻¹ W[P, :] of rank ≤ min(`max_schur_dofs`, `skeleton_rank_ratio` · m)
     /// ([`crate::linalg::skeleton`]; cost ≤ m · rank² flops); if it has one, its Newton systems are
     /// solved through it (dense LU of the size of the rank) and the policy's try runs on it
     pub max_skeleton_unknowns: usize,
-    /// see `max_skeleton_unknowns`; in (0, 1]. A pile of rigid bodies has rank W ≤ 6 per body;
-    /// Siconos' RockPile_tob1 (463 contacts, m = 1 389) has rank 743 = 0.535 m: with 0.5 its
-    /// local form had no skeleton and was not solved in 60 s, with 0.6 the method of
-    /// multipliers solves it in 18 s (docs/rigid.md)
+    /// see `max_skeleton_unknowns`; in (0, 1]. A pile of rigid bodies has rank W ≤ 6 per body
+    /// (docs/tuning.md, `tuning.barrier`)
     pub skeleton_rank_ratio: f64,
     /// the pivoting of the skeleton stops when every remaining diagonal entry of
     /// ½(W + Wᵀ) is ≤ this multiple of max Wᵢᵢ (its numerical rank); in (0, 1)

@@ -49,8 +49,8 @@ use crate::problem::{projected, LocalProblem};
 pub struct LmParams {
     /// cap on LM steps (factorizations of JᵀJ + λI) of all runs of a stage; 0: no LM end game
     pub max_steps: usize,
-    /// the end game starts only from an error (docs/error.md) ≤ this: from higher errors it
-    /// stalled on every corpus file where it was tried (docs/rigid.md); ≥ 0
+    /// the end game starts only from an error (docs/error.md) ≤ this; ≥ 0
+    /// (docs/tuning.md, `tuning.lm`)
     pub start: f64,
     /// a run stops (stalled) when its lowest error has not dropped below `stall_gain` times
     /// its value `stall_segments` segments earlier; ≥ 1

@@ -105,7 +105,7 @@ pub const SLOW_STEPS: usize = 4;
 
 /// The first shift of a step is λ = `LAMBDA_FACTOR` · (‖G‖ / ‖q‖) · max diag(W): small enough
 /// to keep the quadratic convergence of the exact step where J is regular, large enough to
-/// give a direction where it is singular (tuned on the FCLIB problems of ../shared/fclib).
+/// give a direction where it is singular (docs/tuning.md, `tuning.newton`).
 pub const LAMBDA_FACTOR: f64 = 1e-2;
 
 /// A step with ‖G⁺‖ > `SLOW_RATIO` ‖G‖ counts as slow.

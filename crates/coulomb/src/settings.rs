@@ -235,20 +235,16 @@ pub struct ProxParams {
     pub inner_ratio: f64,
     /// a run stops after this many proximal steps in a row without a lower error; ≥ 1
     pub stall_steps: usize,
-    /// (b) starts only from an error ≤ this (LM's best point); ≥ 0. From 1e-4 it also ran,
-    /// in vain, where LM stalls at 1e-5 … 1e-4 (boxes--wall-10x5-mu1-rest of the corpus), and
-    /// took the time the main method needed to converge there (docs/rigid.md)
+    /// (b) starts only from an error ≤ this (LM's best point); ≥ 0 (docs/tuning.md, `tuning.prox`)
     pub start: f64,
     /// (a) starts only from an error ≤ this (LM's own start, [`LmParams::start`]); ≥ 0
     pub try_start: f64,
     /// a run takes at most this many Newton steps (sparse LU factorizations of J) in all its
-    /// proximal steps; ≥ 1. It replaced a share of the time left (0.1 for (a), what LM left
-    /// of its half for (b)), so that the path does not depend on the machine's speed or
-    /// load; calibrated on the corpus (docs/solver-core.md)
+    /// proximal steps, a budget in work so that the path does not depend on the machine's
+    /// speed or load; ≥ 1 (docs/tuning.md, `tuning.prox`)
     pub max_steps: usize,
     /// the budget of (a) after an inner solve that hit its iteration cap (the fixed point does
-    /// not solve its subproblems: the granular drums of the corpus; it replaced a share of
-    /// 0.5 of the time left); ≥ 1
+    /// not solve its subproblems); ≥ 1 (docs/tuning.md, `tuning.prox`)
     pub capped_max_steps: usize,
     /// (a) runs again once the error is below `retry` times the lowest error of its previous
     /// run; in (0, 1]
@@ -285,19 +281,14 @@ impl Default for ProxParams {
 pub struct MultiplierParams {
     /// cap on outer (multiplier) steps per run; 0: no such stage
     pub max_steps: usize,
-    /// ρᵢ = `rho_factor` / w̄, w̄ the mean of trace(Wᵢᵢ)/d; > 0. Measured on the box files of
-    /// corpus seeds 1 and 2 from the default's point after 3 s (docs/rigid.md): 100 converges
-    /// on 4 of 7 unsolved files, 300 on 5, 1000 on none (Newton on G fails)
+    /// ρᵢ = `rho_factor` / w̄, w̄ the mean of trace(Wᵢᵢ)/d; > 0
+    /// (docs/tuning.md, `tuning.multiplier`)
     pub rho_factor: f64,
     /// Newton steps per outer step; ≥ 1
     pub newton_steps: usize,
     /// a Newton run also stops after this many steps in a row that each lowered ‖G‖ by less
     /// than the factor `slow_ratio` (a damped crawl: the outer step goes on from where it
-    /// stands, [`MultiplierParams::reject_growth`]); ≥ 1. Measured on the 26 box files of
-    /// corpus seeds 1–3 on which the stage runs longest (docs/rigid.md): 60 % of the Newton
-    /// steps were in runs that missed their target, most of them crawling to the cap of 50;
-    /// with 4, 24 of them solved in 10 s instead of 23, in 92 s instead of 117 (2: 96 s, 3:
-    /// 100 s)
+    /// stands, [`MultiplierParams::reject_growth`]); ≥ 1 (docs/tuning.md, `tuning.multiplier`)
     pub slow_steps: usize,
     /// see `slow_steps`; in (0, 1]
     pub slow_ratio: f64,
@@ -305,8 +296,7 @@ pub struct MultiplierParams {
     /// Newton run (a chord step: two triangular solves instead of an LU of size n); it is
     /// taken if ‖G‖ falls to at most `chord_ratio` times its value, else J is factored at
     /// the current v; at most `newton_steps` chord steps per Newton run; in [0, 1) (0: every
-    /// step factors J). Measured on the 720 box files of corpus seeds 1–5 (docs/rigid.md):
-    /// 0.5 solves 718 of them in 10 s, every step factored 716–717
+    /// step factors J) (docs/tuning.md, `tuning.multiplier`)
     pub chord_ratio: f64,
     /// halvings of the backtracking search on ‖G‖ before a Newton run gives up; ≥ 1
     pub halvings: usize,
@@ -318,11 +308,7 @@ pub struct MultiplierParams {
     /// an outer step whose Newton run did not reach its target and whose r has an error above
     /// `reject_growth` times the current one is taken again from the same multipliers with
     /// every ρᵢ multiplied by `penalty_cut`; ≥ 1. With 1 an unsolved step is kept only when
-    /// its error is at most the current one. Measured on RockPile_tob1 (docs/rigid.md): with
-    /// 10, steps whose Newton run crawled were kept while the error rose by 1–20 % per step,
-    /// for over 100 outer steps (8.4e-4 → 2.6e-2) at an unchanged ρ; with 1 the run cuts ρ instead and the
-    /// file is solved in 5.9 s instead of 8.9 s, the 720 box files and the gyro class of
-    /// seeds 1–5 as before or better
+    /// its error is at most the current one (docs/tuning.md, `tuning.multiplier`)
     pub reject_growth: f64,
     /// see `reject_growth`; in (0, 1)
     pub penalty_cut: f64,
@@ -333,13 +319,11 @@ pub struct MultiplierParams {
     /// after an outer step whose Newton run reached its target in at most this many steps
     /// that factored J (its chord steps not counted, `chord_ratio`), every ρᵢ grows by
     /// `penalty_growth`, up to `penalty_cap` times its first value (the
-    /// proximal point converges faster as ρ grows: Rockafellar 1976). Measured on 16 box
-    /// files that the fixed ρ left unsolved in 10 s (corpus seeds 1–3; docs/rigid.md): 3, 4
-    /// and 6 solve 9, 10 and 9 of them in single runs (4's extra file was not solved in its
-    /// full corpus run); the fixed ρ none
+    /// proximal point converges faster as ρ grows: Rockafellar 1976)
+    /// (docs/tuning.md, `tuning.multiplier`)
     pub easy_newton_steps: usize,
-    /// see `easy_newton_steps`; ≥ 1 (1: ρ never grows above its first value). 1.5 (cap 100)
-    /// and 2 (cap 1000) measured: 10 and 8 of those 16 solved (easy ≤ 4)
+    /// see `easy_newton_steps`; ≥ 1 (1: ρ never grows above its first value)
+    /// (docs/tuning.md, `tuning.multiplier`)
     pub penalty_growth: f64,
     /// see `easy_newton_steps`; ≥ 1
     pub penalty_cap: f64,
@@ -350,17 +334,13 @@ pub struct MultiplierParams {
     pub stall_gain: f64,
     /// the stage factors J at most this many times in all its runs (chord steps not
     /// counted); its runs take their steps in lock-step rounds and the budget is checked
-    /// between rounds; ≥ 1. It replaced a share of the time left (0.85; measured then on the
-    /// box files of corpus seeds 4–5 against 0.6: 863 of 864 solved in 10 s against 1 147 of
-    /// 1 152, docs/rigid.md), so that the path does not depend on the machine's speed or
-    /// load; calibrated on the corpus (docs/solver-core.md)
+    /// between rounds, a budget in work so that the path does not depend on the machine's
+    /// speed or load; ≥ 1 (docs/tuning.md, `tuning.multiplier`)
     pub max_factorizations: usize,
     /// the stage runs the method from at most this many starts at once, the best point of
     /// the interior-point try and the end points of its other runs
-    /// ([`crate::multiplier::solve_from`]); ≥ 1 (1: from the best point only). Measured on
-    /// the 7 box files of corpus seeds 1–3 the stage left unsolved in 10 s from the best
-    /// point alone: from each end point in turn, 4 of them converge from another start
-    /// (docs/rigid.md)
+    /// ([`crate::multiplier::solve_from`]); ≥ 1 (1: from the best point only)
+    /// (docs/tuning.md, `tuning.multiplier`)
     pub starts: usize,
     /// on a local problem the stage runs on the velocity form of W's skeleton C A⁻¹ R
     /// ([`crate::linalg::skeleton`]), symmetric or not, and only where
@@ -371,26 +351,22 @@ pub struct MultiplierParams {
     /// where the stage ends unconverged at an error (max with the balance residual) ≤
     /// `finish_below` · tol, at most `finish_steps` Levenberg–Marquardt steps on the natural
     /// map itself follow from its point ([`crate::newton::least_squares`]: sparse, for at most
-    /// `finish_max_unknowns` contact unknowns), kept where they lower the error. Found on
-    /// Siconos' RockPile_tob1, whose runs all crawl at 1.0e-8 … 1.3e-8 (docs/rigid.md): from
-    /// there one such step reaches 8.8e-9, the floor of that point's active set; ≥ 0
+    /// `finish_max_unknowns` contact unknowns), kept where they lower the error; ≥ 0
+    /// (docs/tuning.md, `tuning.multiplier`)
     pub finish_below: f64,
     /// see `finish_below`; 0: no finish
     pub finish_steps: usize,
     /// the finish stops after this many steps in a row that each leave more than 90 % of the
     /// error (the floor of the point's active set: [`crate::newton::least_squares`]); 0: no
-    /// such stop. Measured on the box files of corpus seeds 3–4 (docs/rigid.md): of 18
-    /// finishes, 9 converged, 8 of them in one step, one in two; 7 others crawled by 1–8 % per
-    /// step for 0.18–0.56 s each (two more found no descent)
+    /// such stop (docs/tuning.md, `tuning.multiplier`)
     pub finish_slow_steps: usize,
     /// see `finish_below`
     pub finish_max_unknowns: usize,
     /// the finish is also tried while the stage runs ([`crate::multiplier::solve_from`]):
     /// on a run whose lowest merit falls to at most `finish_crawl` · tol and below this
     /// factor times the merit from which that run last tried it, at most `finish_attempts`
-    /// times per stage (a step costs sparse Cholesky factorizations of JᵀJ + λνI: 8 steps
-    /// take 40 ms on RockPile_tob1, whose runs reach 1.4e-8 and then spend tens of outer steps between
-    /// 1.0e-8 and 1.7e-8; the finish from 1.4e-8 converges); in (0, 1]
+    /// times per stage (a step costs sparse Cholesky factorizations of JᵀJ + λνI); in (0, 1]
+    /// (docs/tuning.md, `tuning.multiplier`)
     pub finish_gain: f64,
     /// see `finish_gain`; ≥ 0
     pub finish_crawl: f64,
@@ -725,9 +701,8 @@ impl Tuning {
 }
 
 /// Impulses with ‖W‖ ‖r‖ above this multiple of max(‖q‖, ‖u‖) count as unbounded
-/// ([`crate::Status::Unbounded`]): for a bounded solution W r = u − q is of the order of the data;
-/// divergent iterates (a singular diagonal block regularized by 1e-8, Painlevé without a
-/// solution) reach 1e7 and more. The default of [`Tuning::unbounded_ratio`].
+/// ([`crate::Status::Unbounded`]): for a bounded solution W r = u − q is of the order of the
+/// data (docs/tuning.md, `Tuning`). The default of [`Tuning::unbounded_ratio`].
 pub const UNBOUNDED_RATIO: f64 = 1e6;
 
 /// The default of [`MultiplierParams::max_factorizations`] (docs/solver-core.md).

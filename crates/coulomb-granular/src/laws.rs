@@ -282,16 +282,19 @@ fn top(sim: &Simulation) -> f64 {
 }
 
 /// Janssen's saturation (examples/scenes/validation/janssen.toml). The beads settle in the
-/// tube (at least 0.5 s, then until speeds < 0.05 m/s for 10 steps; at most 600 steps), then the tube rises at 2 mm/s for 80 steps so
-/// that the beads slide along it: the wall friction is fully mobilised upwards, as in the
-/// experiments of Ovarlez, Fond & Clément (Phys. Rev. E 67, 060302, 2003). Over the last 30
-/// steps the contact forces f = r / h are averaged and, at heights z_j every 2 cm, the load
-/// carried across the plane z = z_j is F(z_j) = g M(z_j) − Σ_{wall contacts above z_j} f_z,
-/// M(z_j) the mass of the beads above. Janssen's model gives F = g M_s (1 − e^{−M / M_s}),
-/// M_s = ρ_b A λ, λ = R / (2 μ_w K) with K = σ_wall / σ_zz; M_s is fitted (least squares,
-/// golden section on log M_s), ρ_b measured in the column ([`bulk_density`]), and K measured as
-/// (Σ wall normal force) / (Σ over the slabs of 2 π R Δz F(z_mid) / A). The check: the
-/// fitted λ against R / (2 μ_w K), within 20 %.
+/// tube (at least 0.5 s, then until speeds < 0.05 m/s for 10 steps; at most 600 steps), then
+/// the tube rises at 2 mm/s for 80 steps so that the beads slide along it and the wall
+/// friction is mobilised upwards, as in the experiments of Ovarlez, Fond & Clément (Phys. Rev.
+/// E 67, 060302, 2003). Over the last 30 steps the contact forces f = r / h are averaged and,
+/// at heights z_j every 2 cm, the load carried across the plane z = z_j is
+/// F(z_j) = g M(z_j) − Σ_{wall contacts above z_j} f_z, M(z_j) the mass of the beads above.
+/// Janssen's model (wall shear τ = μ σ_wall, σ_wall = K σ_zz, both ratios constant with
+/// depth) gives F = g M_s (1 − e^{−M / M_s}), M_s = ρ_b A λ, λ = R / (2 μ K); M_s is fitted
+/// (least squares, golden section on log M_s), ρ_b measured in the column ([`bulk_density`]),
+/// K measured as (Σ wall normal force) / (Σ over the slabs of 2 π R Δz F(z_mid) / A), and μ
+/// as the mobilised wall friction (Σ wall f_z) / (Σ wall f_N): beads that roll along the wall
+/// carry less than the Coulomb coefficient μ_w (about 85 % of it here, docs/granular.md). The
+/// check: the fitted λ against R / (2 μ K), within 20 %; the name also gives R / (2 μ_w K).
 pub fn janssen() -> Result<Vec<Check>, LawError> {
     let mut run = Run::new("janssen", JANSSEN, |_| {})?;
     let tube = run.obstacle("tube")?;
@@ -391,7 +394,8 @@ pub fn janssen() -> Result<Vec<Check>, LawError> {
     }
     let k = wall_n / vertical;
     let mobilised = lift.iter().sum::<f64>() / normal.iter().sum::<f64>();
-    let lambda_j = radius / (2.0 * mu_w * k);
+    let lambda_j = radius / (2.0 * mobilised * k);
+    let lambda_nominal = radius / (2.0 * mu_w * k);
     let note = if settled {
         ""
     } else {
@@ -399,7 +403,7 @@ pub fn janssen() -> Result<Vec<Check>, LawError> {
     };
     Ok(vec![Check {
         name: format!(
-            "{}: {} beads, tube R = {radius} m lifted at 2 mm/s, μ_w = {mu_w}: Janssen length λ fitted to the load across each height (column {z_top:.3} m, ρ_b = {rho_b:.0} kg/m³, floor load {:.2} of the weight, fitted saturation load {:.2} of it) against R / (2 μ_w K), K = {k:.3} measured (wall friction mobilised: F_t / F_n = {mobilised:.3}){note}; tolerance 20 %",
+            "{}: {} beads, tube R = {radius} m lifted at 2 mm/s, μ_w = {mu_w}: Janssen length λ fitted to the load across each height (column {z_top:.3} m, ρ_b = {rho_b:.0} kg/m³, floor load {:.2} of the weight, fitted saturation load {:.2} of it) against R / (2 μ K) with K = {k:.3} and the mobilised wall friction μ = F_z / F_N = {mobilised:.3} measured (with μ_w: R / (2 μ_w K) = {lambda_nominal:.4} m){note}; tolerance 20 %",
             JANSSEN.0,
             run.sim.world.bodies.len(),
             base_load / (g * total),
@@ -613,7 +617,7 @@ mod tests {
     }
 
     #[test]
-    #[ignore = "a benchmark of the physics (minutes in release): run by `coulomb validate`"]
+    #[ignore = "a benchmark of the physics (about 10 minutes in release): run by `coulomb validate`"]
     fn beverloo_fit_is_in_range() {
         let cs = beverloo().unwrap();
         eprintln!("{cs:#?}");
@@ -621,7 +625,7 @@ mod tests {
     }
 
     #[test]
-    #[ignore = "a benchmark of the physics (a minute in release): run by `coulomb validate`"]
+    #[ignore = "a benchmark of the physics (about 3 minutes in release): run by `coulomb validate`"]
     fn repose_angle_is_in_range() {
         let cs = repose().unwrap();
         eprintln!("{cs:#?}");

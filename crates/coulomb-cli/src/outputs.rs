@@ -75,7 +75,7 @@ pub fn write(path: &Path, bytes: &[u8]) -> Result<(), WriteFailed> {
     Ok(())
 }
 
-/// Writes an FCLIB file atomically (see [`write`]).
+/// Writes an FCLIB file atomically (see [`write()`]).
 pub fn write_fclib(path: &Path, file: &coulomb::fclib::FclibFile) -> anyhow::Result<()> {
     let bytes = coulomb::fclib::to_bytes(file, &Default::default())?;
     write(path, &bytes)?;

@@ -485,8 +485,8 @@ pub fn detect_with(
 /// [`detect_with`] with the largest speed v_max = max |v| + R|ω| of the broad phase's margin
 /// δ + 2 v_max h γ (sphere–obstacle pairs: + γ h (h |g| + V_B), the look-ahead by gravity
 /// and the obstacle's largest normal speed) given: a part of a larger system (a rank's subdomain in
-/// [`crate::distributed`]) passes the whole system's v_max, so that its margin, and with it
-/// the obstacle contacts it finds, are those of one process.
+/// `crate::distributed`, feature `mpi`) passes the whole system's v_max, so that its margin,
+/// and with it the obstacle contacts it finds, are those of one process.
 pub fn detect_with_speed(
     world: &World,
     t: f64,

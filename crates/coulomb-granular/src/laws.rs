@@ -290,7 +290,7 @@ fn top(sim: &Simulation) -> f64 {
 /// F(z_j) = g M(z_j) − Σ_{wall contacts above z_j} f_z, M(z_j) the mass of the beads above.
 /// Janssen's model (wall shear τ = μ σ_wall, σ_wall = K σ_zz, both ratios constant with
 /// depth) gives F = g M_s (1 − e^{−M / M_s}), M_s = ρ_b A λ, λ = R / (2 μ K); M_s is fitted
-/// (least squares, golden section on log M_s), ρ_b measured in the column ([`bulk_density`]),
+/// (least squares, golden section on log M_s), ρ_b measured in the column (`bulk_density`),
 /// K measured as (Σ wall normal force) / (Σ over the slabs of 2 π R Δz F(z_mid) / A), and μ
 /// as the mobilised wall friction (Σ wall f_z) / (Σ wall f_N): beads that roll along the wall
 /// carry less than the Coulomb coefficient μ_w (about 85 % of it here, docs/granular.md). The
@@ -418,7 +418,7 @@ pub fn janssen() -> Result<Vec<Check>, LawError> {
 }
 
 /// Beverloo's law (examples/scenes/validation/beverloo.toml). The beads settle in the closed
-/// silo (at least 0.5 s, then until speeds < 0.05 m/s for 10 steps; at most 600 steps); ρ_b is measured in the packing ([`bulk_density`]).
+/// silo (at least 0.5 s, then until speeds < 0.05 m/s for 10 steps; at most 600 steps); ρ_b is measured in the packing (`bulk_density`).
 /// From that state, for D = 5 d, 6 d, 7 d (d the mean diameter), a centred orifice of
 /// diameter D is opened and the discharged mass (beads below the base) is recorded each
 /// step; W is the slope of its least-squares line over 0.1 … 0.4 s after opening. Fitting

@@ -36,13 +36,13 @@
 //! exactly in the three common cases — take-off (c_N ≥ 0), stick without rotation
 //! (x = −W₆⁻¹c inside both cones, W₆⁻¹ computed once per step) and stick with rolling
 //! (u = 0, ‖y‖ = μ_r r_N: the ball-constrained QP on the Schur complement, see
-//! [`solve_stick_roll`]) — and otherwise by alternating the exact one-contact solve of (2.9)
+//! `solve_stick_roll`) — and otherwise by alternating the exact one-contact solve of (2.9)
 //! of `coulomb::inner::pgs::solve_contact_law` (y frozen) and the exact minimizer over the ball
-//! (r frozen; the rolling block of W is β I₃ for spheres), at most [`LOCAL`] times (the global
-//! sweeps refine the rest). Sweeps from the second on are over-relaxed ([`RELAXATION`], with
+//! (r frozen; the rolling block of W is β I₃ for spheres), at most `LOCAL` times (the global
+//! sweeps refine the rest). Sweeps from the second on are over-relaxed (`RELAXATION`, with
 //! a projection back onto the cones; ω halved when the error stops falling), and a step whose
-//! plain sweeps do not halve the error in [`WINDOW`] sweeps continues in random order with
-//! exact blocks ([`STALLED_RELAXATION`]). It stops when the error below is ≤ tol, else with a
+//! plain sweeps do not halve the error in `WINDOW` sweeps continues in random order with
+//! exact blocks (`STALLED_RELAXATION`). It stops when the error below is ≤ tol, else with a
 //! typed status
 //! after `Settings::max_inner` sweeps or `Settings::time_limit`.
 //!

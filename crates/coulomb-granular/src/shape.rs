@@ -133,7 +133,7 @@ pub enum ShapeError {
     /// a number is NaN or infinite
     #[error("{what} is not finite")]
     NonFinite {
-        /// which number ("radius", "points[3]")
+        /// which number (`"radius"`, `"points[3]"`)
         what: String,
     },
     /// a length that must be positive is not

@@ -21,7 +21,7 @@
 //! the user is asked to remove the link or name the target.
 //!
 //! The destination is checked before a long run ([`check_writable`]) and again at write time
-//! ([`write`], [`replace`]), the second time just before the rename, so the window in which
+//! ([`write()`], [`replace`]), the second time just before the rename, so the window in which
 //! another process could put a device in its place is the rename itself.
 
 use std::fmt;
@@ -148,7 +148,7 @@ impl From<Refused> for std::io::Error {
     }
 }
 
-/// The [`Refused`] inside `e`, when `e` is a refusal of [`write`], [`replace`],
+/// The [`Refused`] inside `e`, when `e` is a refusal of [`write()`], [`replace`],
 /// [`check_writable`] or [`destination`].
 pub fn refusal(e: &std::io::Error) -> Option<&Refused> {
     e.get_ref()
@@ -259,7 +259,7 @@ pub fn write(path: impl AsRef<Path>, bytes: impl AsRef<[u8]>) -> std::io::Result
 
 /// Renames `tmp`, a finished file written by someone else (e.g. a plotting backend) next to
 /// `path`'s [`destination`], over that destination after flushing it to disk; the same
-/// refusals as [`write`]. On error `tmp` is left for the caller to remove.
+/// refusals as [`write()`]. On error `tmp` is left for the caller to remove.
 pub fn replace(tmp: &Path, path: &Path) -> std::io::Result<()> {
     let dest = destination(path)?;
     std::fs::File::open(tmp)?.sync_all()?;

@@ -2,7 +2,7 @@
 //! problems (issue #11 item 4; measurements in docs/rigid.md).
 //!
 //! With a factor ρᵢ > 0 per contact, Coulomb's law (2.9) at contact i holds exactly when the
-//! Alart–Curnier map (the paper's reference [3]) vanishes:
+//! Alart–Curnier map (the paper's reference \[3\]) vanishes:
 //!
 //! ```text
 //!     Φⁱ_ρ(r) = rⁱ − P_μ(yⁱ),     yⁱ = rⁱ − ρᵢ uⁱ,     u = W r + q,

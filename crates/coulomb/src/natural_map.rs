@@ -11,17 +11,17 @@
 //! (3.14), the zero of r − P_L(r − (W r + b)). Everything that evaluates these maps or their
 //! generalized Jacobians lives here: the error measure of `docs/error.md`
 //! ([`contact_residual_sq`], used by [`crate::law`]), the stopping measures of the inner
-//! solvers ([`dual_residual`], [`dual_residual_shifted`], [`dual_natural_residual`]), and the
+//! solvers (`dual_residual`, `dual_residual_shifted`, `dual_natural_residual`), and the
 //! Newton systems of [`crate::newton`] and of the interior-point polish
-//! ([`natural_map`], [`de_saxce_map`], [`projection_jacobian`], [`push_d_times`],
-//! [`push_identity_minus_d`]).
+//! (`natural_map`, `de_saxce_map`, [`projection_jacobian`], `push_d_times`,
+//! `push_identity_minus_d`).
 //!
 //! # Normalisations
 //! One map, three documented scalings of its norm: the error of `docs/error.md` divides by
 //! max(‖q‖, ‖r‖, ‖u‖) ([`crate::law::error_measure`]); the first-order inner solvers (PGS,
-//! APGD) stop on ‖r − P_L(r − ũ)‖ / max(‖b‖, ‖r‖, ‖ũ‖) ([`dual_residual`], the same rule
+//! APGD) stop on ‖r − P_L(r − ũ)‖ / max(‖b‖, ‖r‖, ‖ũ‖) (`dual_residual`, the same rule
 //! with b in the place of q); the interior-point polish on ‖·‖ / max(1, ‖b‖)
-//! ([`dual_natural_residual`]). `InnerLimits::tol` is compared with the solver's own one.
+//! (`dual_natural_residual`). `InnerLimits::tol` is compared with the solver's own one.
 
 use crate::cone;
 use crate::linalg::sparse::CscMatrix;

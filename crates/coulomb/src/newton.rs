@@ -462,7 +462,7 @@ pub fn least_squares(
 }
 
 /// Semismooth Newton on G(r) = r − P_L(r − ũ(W r + q)) from `r` (overwritten by the best
-/// iterate), by [`drive`]: at most `max_steps` steps, each a direction from (J + λ I) δ = −G
+/// iterate), by `drive`: at most `max_steps` steps, each a direction from (J + λ I) δ = −G
 /// ([`LAMBDA_FACTOR`], up to 4 shifts) followed by a backtracking line search that accepts the
 /// first t ∈ {1, ½, ¼, …} (≥ 2⁻¹⁰) with ‖G(r + t δ)‖ ≤ (1 − 10⁻⁴ t) ‖G(r)‖. Stops once
 /// ‖G‖ ≤ `target`, when no step decreases ‖G‖, after [`SLOW_STEPS`] slow steps in a row, or

@@ -1,7 +1,7 @@
 //! `coulomb corpus`: writes a test corpus that nobody tunes on (issue #11, item 3) — FCLIB files
 //! named `CLASS--NAME.hdf5` and a `manifest.json` describing each of them.
 //!
-//! Classes (see [`Class`]):
+//! Classes (see [`ClassName`]):
 //! - `granular`: steps of coulomb's own Moreau–Jean simulations (box, funnel, rotating drum,
 //!   vibrating plate; each step solved by body-level Gauss–Seidel, not by the solver under
 //!   test), in the global form (M, H, f, w) and the local form (W, q) of (2.10);

@@ -58,7 +58,7 @@ pub struct Table1Args {
     /// seed of the initial arrangement
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// folder for the per-step statistics of each run (box_<beads>_<inner>/stats.csv)
+    /// folder for the per-step statistics of each run (`box_<beads>_<inner>/stats.csv`)
     #[arg(long)]
     pub output: Option<PathBuf>,
     /// write the table as Markdown into this file

@@ -33,8 +33,8 @@
 //! never panics (the HDF5 crate is `hdf5-pure`, pure Rust; see `docs/hdf5-crates.md`).
 //!
 //! # Writing
-//! [`write`] writes what Siconos writes: CSC storage (`nz = -1`), int32 indices, `m`, `n`,
-//! `nz`, `nzmax`, `spacedim` as int32[1], fixed-length strings for info. [`write_with`]
+//! [`write()`] writes what Siconos writes: CSC storage (`nz = -1`), int32 indices, `m`, `n`,
+//! `nz`, `nzmax`, `spacedim` as `int32[1]`, fixed-length strings for info. [`write_with`]
 //! takes [`WriteOptions`] for CSR or triplet storage and int64 indices. h5py (libhdf5)
 //! reads the files.
 
@@ -116,7 +116,7 @@ pub enum Storage {
 }
 
 /// Integer width of the index arrays `p` and `i` when writing (`m`, `n`, `nz`, `nzmax`,
-/// `spacedim` are always int32[1], as FCLIB specifies).
+/// `spacedim` are always `int32[1]`, as FCLIB specifies).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum IndexWidth {
     /// int32 (what Siconos writes)

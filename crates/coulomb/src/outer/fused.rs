@@ -90,6 +90,8 @@ impl SweepMixing {
 /// `give_up`, it also stops (status `MaxIterations`) as soon as the rate of the last
 /// [`GIVE_UP_WINDOW`] sweeps, extrapolated over the sweeps left, cannot reach `limits.tol`.
 /// Returns the report; `r` holds the warm start on entry and the result on exit.
+///
+/// [`solve_contact_law`]: crate::inner::contact::solve_contact_law
 #[allow(clippy::too_many_arguments)]
 pub fn solve_fused(
     solver: &mut PgsSolver,

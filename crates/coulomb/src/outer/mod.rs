@@ -1,6 +1,6 @@
 //! The outer method of §3.3 and the policy around it.
 //!
-//! The paper's algorithm is the loop of [`stage`]: s ← F(s) with F(s)ⁱ = ‖ũ_Tⁱ(s)‖ (3.19),
+//! The paper's algorithm is the loop of `stage`: s ← F(s) with F(s)ⁱ = ‖ũ_Tⁱ(s)‖ (3.19),
 //! each F(s) the solution of the SOC-QP (3.15)/(4.7) by an inner solver ([`crate::inner`]),
 //! stopped by the error of `docs/error.md` (and, if asked, by rule (6.1)). Its pieces, one
 //! file each: [`fixed_point`] (F, the shift b = q + E s, rule (6.1), the update rule),
@@ -11,7 +11,7 @@
 //! Gauss–Seidel sweeps on Coulomb's law, on a cold solve of a rigid problem the interior
 //! point and the method of multipliers, then the main method, then the fallback method when
 //! the main one stops without converging; every status is decided on the problem as stored
-//! ([`form`]).
+//! (`form`).
 //!
 //! The setup/solve split: [`Solver::new`] checks the settings and builds the Delassus form of
 //! a global problem (W = Hᵀ M⁻¹ H, q = Hᵀ M⁻¹ f + w, the factorization of M) once;
@@ -840,7 +840,7 @@ pub fn solve(problem: &Problem, settings: &Settings) -> Result<Solution, SolveEr
 }
 
 /// Solves the incremental problem (2.10), warm-started from `guess` when given: a
-/// [`Solver`] set up for this one solve (see [`stage`] for the loop and [`newton`] for the
+/// [`Solver`] set up for this one solve (see `stage` for the loop and [`newton`] for the
 /// end game).
 pub fn solve_with_guess(
     problem: &Problem,

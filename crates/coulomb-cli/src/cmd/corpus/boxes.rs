@@ -12,7 +12,7 @@
 //!
 //! The `gyro` class: the same scenes with the gyroscopic term ω × J ω of the Newton–Euler
 //! equations linearized in the time step (a Moreau–Jean step with θ = 1): its Jacobian
-//! G(ω) = [ω]× J − [J ω]× enters the iteration matrix, M̂ = M + h G(ω⁻) on each box's rotational
+//! G(ω) = \[ω\]× J − \[J ω\]× enters the iteration matrix, M̂ = M + h G(ω⁻) on each box's rotational
 //! block, and f = M̂ v⁻ − h ω⁻ × J ω⁻ + h (m_b g, 0). M̂ is not symmetric, so neither is
 //! W = Hᵀ M̂⁻¹ H, but W has the rank of a symmetric W (6 per box): the asymmetry of real FCLIB
 //! files from rigid-body codes (Siconos' RockPile_tob1: rank 743 of 1 389, relative asymmetry
@@ -183,7 +183,7 @@ fn layout(scene: &str, rng: &mut Rng) -> Vec<Cuboid> {
     out
 }
 
-/// The cross-product matrix [a]×: [a]× x = a × x.
+/// The cross-product matrix \[a\]×: \[a\]× x = a × x.
 fn cross_matrix(a: [f64; 3]) -> [[f64; 3]; 3] {
     [[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]]
 }

@@ -8,13 +8,13 @@
 # OUT/bench.json and OUT/table.md (scripts/side_by_side_table.py).
 #
 #   scripts/heaps_side_by_side.sh [OUT] [BEADS] [STEP] [SOLVERS]
-#       defaults: heaps-out "500 1000 2000" 150 pgs+anderson
+#       defaults: heaps-out "500 1000 2000" 150 default,pgs+anderson
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${1:-heaps-out}
 BEADS=${2:-"500 1000 2000"}
 STEP=${3:-150}
-SOLVERS=${4:-pgs+anderson}
+SOLVERS=${4:-default,pgs+anderson}
 cargo build --release -q -p coulomb-cli
 mkdir -p "$OUT/files"
 for n in $BEADS; do

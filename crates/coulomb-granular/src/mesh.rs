@@ -351,20 +351,18 @@ impl TriangleMesh {
             static SCRATCH: std::cell::RefCell<NearScratch> =
                 std::cell::RefCell::new(NearScratch::default());
         }
-        SCRATCH.with(|cell| match cell.try_borrow_mut() {
-            Ok(mut scratch) => {
-                self.near_into(x, radius, reach, &mut scratch);
-                for &(t, p, region) in &scratch.out {
-                    found(t, p, region);
-                }
-            }
-            // a query from inside `found` (not done by this crate): its own buffers
-            Err(_) => {
-                let mut scratch = NearScratch::default();
-                self.near_into(x, radius, reach, &mut scratch);
-                for &(t, p, region) in &scratch.out {
-                    found(t, p, region);
-                }
+        SCRATCH.with(|cell| {
+            let mut shared = cell.try_borrow_mut().ok();
+            // a query from inside `found` (not done by this crate) finds the thread's buffers
+            // borrowed: it gets its own
+            let mut own = None;
+            let scratch = match shared.as_deref_mut() {
+                Some(s) => s,
+                None => own.insert(NearScratch::default()),
+            };
+            self.near_into(x, radius, reach, scratch);
+            for &(t, p, region) in &scratch.out {
+                found(t, p, region);
             }
         });
     }
@@ -886,6 +884,27 @@ mod tests {
         let (p, r) = closest_on_triangle(Vec3::new(-1.0, 0.5, 0.0), a, b, c);
         assert_eq!(r, Region::Edge(2));
         assert!((p - Vec3::new(0.0, 0.5, 0.0)).norm() < 1e-15);
+    }
+
+    #[test]
+    fn a_query_from_inside_a_query_gets_the_same_contacts() {
+        let m = mesh(cylinder_mesh(1.0, 0.0, 2.0, 40));
+        let (x, y) = (Vec3::new(0.95, 0.0, 1.0), Vec3::new(0.0, -0.97, 0.02));
+        let mut outer = Vec::new();
+        let mut inner = Vec::new();
+        m.near_each(x, 0.1, 0.0, |t, p, r| {
+            outer.push((t, p, r));
+            if outer.len() == 1 {
+                // the thread's buffers are borrowed by the outer query here
+                m.near_each(y, 0.1, 0.0, |t, p, r| inner.push((t, p, r)));
+            }
+        });
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        m.near(x, 0.1, 0.0, &mut a);
+        m.near(y, 0.1, 0.0, &mut b);
+        assert!(!a.is_empty() && !b.is_empty());
+        assert_eq!(outer, a);
+        assert_eq!(inner, b);
     }
 
     #[test]

@@ -36,10 +36,14 @@ impl Check {
             not_converged: 0,
         }
     }
-    /// |measured − expected| ≤ tolerance, and every step converged.
+    /// |measured − expected| ≤ tolerance with all three finite (an expectation that came out
+    /// infinite, e.g. a Janssen length over a wall that carries no friction, never passes),
+    /// and every step converged.
     pub fn pass(&self) -> bool {
         (self.measured - self.expected).abs() <= self.tolerance
             && self.measured.is_finite()
+            && self.expected.is_finite()
+            && self.tolerance.is_finite()
             && self.not_converged == 0
     }
 }
@@ -805,6 +809,21 @@ pub struct ColumnResult {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_check_passes_only_on_finite_values_within_tolerance() {
+        let c = |e: f64, m: f64, t: f64| Check::new("c".into(), e, m, t, "m");
+        assert!(c(1.0, 1.05, 0.1).pass());
+        assert!(!c(1.0, 1.2, 0.1).pass());
+        assert!(!c(1.0, f64::NAN, 0.1).pass());
+        assert!(!c(f64::NAN, 1.0, 0.1).pass());
+        // an expectation of ∞ with a tolerance relative to it (∞) is no pass
+        assert!(!c(f64::INFINITY, 1.0, f64::INFINITY).pass());
+        assert!(!c(1.0, 1.0, f64::INFINITY).pass());
+        let mut late = c(1.0, 1.0, 0.1);
+        late.not_converged = 1;
+        assert!(!late.pass());
+    }
 
     #[test]
     fn solid_fraction_of_known_arrangements() {

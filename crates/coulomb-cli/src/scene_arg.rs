@@ -205,9 +205,9 @@ pub fn run(args: &Args) -> anyhow::Result<Outcome> {
         if args.mpi || crate::sim_args::under_launcher() {
             bail!("{file}: scenes with bodies of other shapes than spheres run in one process, not distributed");
         }
-        if args.resolve_overlaps.is_some() || args.checkpoint_every > 0 {
+        if args.resolve_overlaps.is_some() {
             bail!(
-                "{file}: --resolve-overlaps and --checkpoint-every are for sphere-only scenes; this scene has bodies of other shapes"
+                "{file}: --resolve-overlaps is for sphere-only scenes; this scene has bodies of other shapes"
             );
         }
         return crate::cmd::simulate_rigid::run(&file_args(args, &scene), &scene);
@@ -257,6 +257,10 @@ pub fn restart(args: &Args) -> anyhow::Result<Outcome> {
     let Some(checkpoint) = args.restart.as_deref() else {
         bail!("--restart needs a checkpoint file");
     };
+    if crate::cmd::simulate_rigid::is_rigid_checkpoint(checkpoint) {
+        let scene = LoadedScene::load(Path::new(file))?.build(&BuildOptions::default())?;
+        return crate::cmd::simulate_rigid::restart(args, checkpoint, Some(&scene));
+    }
     let sim = Simulation::load_checkpoint(checkpoint)
         .with_context(|| format!("cannot restart from {}", checkpoint.display()))?;
     let mut scene = LoadedScene::load(Path::new(file))?.build(&BuildOptions::default())?;

@@ -1,7 +1,8 @@
 //! `coulomb simulate SCENE.toml` with bodies of other shapes (issue 41): the shipped incline
 //! runs in the rigid-body simulator with VTK frames of the bodies as polygons, stats and the
 //! steps' problems in FCLIB; a non-unit quaternion or a degenerate hull exits with status 2
-//! naming the file, line and key.
+//! naming the file, line and key; a run with `--checkpoint-every` continued by `--restart`
+//! ends in the state of the uninterrupted run to the bit.
 
 mod common;
 use common::{coulomb, ok, temp_dir};
@@ -80,4 +81,56 @@ fn bad_shapes_exit_2_with_file_line_and_key() {
             "{err}"
         );
     }
+}
+
+/// The columns of a rigid stats.csv that do not depend on the clock, row by row (all of them:
+/// the rigid stats carry no timing column).
+fn rigid_stats(dir: &std::path::Path) -> Vec<String> {
+    let csv = std::fs::read_to_string(dir.join("stats.csv")).unwrap();
+    csv.lines().map(str::to_string).collect()
+}
+
+#[test]
+fn a_rigid_run_restarts_to_the_bit() {
+    let root = temp_dir("rigid-restart");
+    let (a, c) = (root.join("a"), root.join("c"));
+    let run = |extra: &[&str], out: &std::path::Path| {
+        let mut args = vec!["simulate"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&[
+            "--frames-every",
+            "5",
+            "--checkpoint-every",
+            "5",
+            "--output",
+            out.to_str().unwrap(),
+        ]);
+        ok(&coulomb(&args));
+    };
+    let wall = scene("wall-impact.toml");
+    run(&[&wall, "--steps", "10"], &a);
+    run(&[&wall, "--steps", "20"], &c);
+    let ckpt = a.join("checkpoint.h5");
+    // without the scene file, then with it (its inlets, none here, would continue)
+    run(&["--restart", ckpt.to_str().unwrap(), "--steps", "5"], &a);
+    run(
+        &[&wall, "--restart", ckpt.to_str().unwrap(), "--steps", "5"],
+        &a,
+    );
+    let read = |p: &std::path::Path| std::fs::read(p).unwrap();
+    assert_eq!(read(&ckpt), read(&c.join("checkpoint.h5")));
+    for f in ["frames/bodies_000020.vtp", "frames/contacts_000020.vtp"] {
+        assert_eq!(read(&a.join(f)), read(&c.join(f)), "{f}");
+    }
+    assert_eq!(rigid_stats(&a), rigid_stats(&c));
+    assert_eq!(rigid_stats(&a).len(), 21);
+    // another scene file is refused
+    let o = coulomb(&[
+        "simulate",
+        &scene("incline.toml"),
+        "--restart",
+        ckpt.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("not the scene of the checkpoint"));
 }

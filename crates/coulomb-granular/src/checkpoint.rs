@@ -172,7 +172,7 @@ struct Flags {
 
 /// One stored dataset's values.
 #[derive(Debug, Clone, PartialEq)]
-enum Data {
+pub(crate) enum Data {
     F64(Vec<f64>),
     I64(Vec<i64>),
     U8(Vec<u8>),
@@ -181,9 +181,9 @@ enum Data {
 
 /// Column of a dataset: the number of values per row (1: a vector, 3: an (n, 3) array, 0: a
 /// scalar string).
-type Entry = (&'static str, usize, Data);
+pub(crate) type Entry = (&'static str, usize, Data);
 
-fn crc_of(entries: &[Entry]) -> u32 {
+pub(crate) fn crc_of(entries: &[Entry]) -> u32 {
     let mut h = crc32fast::Hasher::new();
     for (path, _, data) in entries {
         h.update(path.as_bytes());
@@ -201,7 +201,7 @@ fn flat3(it: impl Iterator<Item = Vec3>) -> Vec<f64> {
     it.flat_map(|v| v.to_array()).collect()
 }
 
-fn index(i: usize) -> i64 {
+pub(crate) fn index(i: usize) -> i64 {
     i64::try_from(i).unwrap_or(i64::MAX)
 }
 
@@ -243,7 +243,7 @@ fn push_keys(e: &mut Vec<Entry>, group: &'static [&'static str; 4], keys: KeyCol
 }
 
 /// A JSON document of `value` that reads back equal to it (else the state is not storable).
-fn json_of<T>(what: &str, value: &T) -> Result<String, CheckpointError>
+pub(crate) fn json_of<T>(what: &str, value: &T) -> Result<String, CheckpointError>
 where
     T: Serialize + for<'de> Deserialize<'de> + PartialEq,
 {
@@ -436,10 +436,19 @@ fn entries(sim: &Simulation) -> Result<Vec<Entry>, CheckpointError> {
 
 /// The checkpoint of `sim` as the bytes of an HDF5 file, with `version` as its format version.
 fn encode(sim: &Simulation, version: i64) -> Result<Vec<u8>, CheckpointError> {
-    let entries = entries(sim)?;
-    let crc = crc_of(&entries);
+    encode_entries(FORMAT_NAME, version, &entries(sim)?)
+}
+
+/// The bytes of an HDF5 file holding `entries` (grouped by their first path component) with
+/// the root attributes `format`, `format_version`, `coulomb_version` and `crc32`.
+pub(crate) fn encode_entries(
+    format: &str,
+    version: i64,
+    entries: &[Entry],
+) -> Result<Vec<u8>, CheckpointError> {
+    let crc = crc_of(entries);
     let mut file = FileBuilder::new();
-    file.set_attr("format", AttrValue::AsciiString(FORMAT_NAME.into()));
+    file.set_attr("format", AttrValue::AsciiString(format.into()));
     file.set_attr("format_version", AttrValue::I64(version));
     file.set_attr(
         "coulomb_version",
@@ -487,14 +496,18 @@ fn encode(sim: &Simulation, version: i64) -> Result<Vec<u8>, CheckpointError> {
 }
 
 /// Reads the datasets of a checkpoint file, checking types and shapes.
-struct Reader<'a> {
+pub(crate) struct Reader<'a> {
     file: hdf5_pure::File,
     path: &'a Path,
     limit: u64,
 }
 
 impl Reader<'_> {
-    fn corrupt(&self, location: &str, detail: impl std::fmt::Display) -> CheckpointError {
+    pub(crate) fn corrupt(
+        &self,
+        location: &str,
+        detail: impl std::fmt::Display,
+    ) -> CheckpointError {
         CheckpointError::Corrupt {
             path: self.path.to_path_buf(),
             location: format!("/{location}"),
@@ -502,7 +515,11 @@ impl Reader<'_> {
         }
     }
 
-    fn invalid(&self, location: &str, detail: impl std::fmt::Display) -> CheckpointError {
+    pub(crate) fn invalid(
+        &self,
+        location: &str,
+        detail: impl std::fmt::Display,
+    ) -> CheckpointError {
         CheckpointError::Invalid {
             path: self.path.to_path_buf(),
             location: format!("/{location}"),
@@ -591,9 +608,9 @@ impl Reader<'_> {
 }
 
 /// Pops the next entry's values.
-struct Cursor<'a, 'b> {
-    r: &'a Reader<'b>,
-    entries: std::vec::IntoIter<Entry>,
+pub(crate) struct Cursor<'a, 'b> {
+    pub(crate) r: &'a Reader<'b>,
+    pub(crate) entries: std::vec::IntoIter<Entry>,
 }
 
 impl Cursor<'_, '_> {
@@ -603,33 +620,33 @@ impl Cursor<'_, '_> {
             .map(|(p, _, d)| (p, d))
             .ok_or_else(|| self.r.corrupt("", "missing dataset"))
     }
-    fn f64s(&mut self) -> Result<(&'static str, Vec<f64>), CheckpointError> {
+    pub(crate) fn f64s(&mut self) -> Result<(&'static str, Vec<f64>), CheckpointError> {
         match self.next()? {
             (p, Data::F64(v)) => Ok((p, v)),
             (p, _) => Err(self.r.corrupt(p, "expected float64 values")),
         }
     }
-    fn f64_scalar(&mut self) -> Result<f64, CheckpointError> {
+    pub(crate) fn f64_scalar(&mut self) -> Result<f64, CheckpointError> {
         let (p, v) = self.f64s()?;
         match v.as_slice() {
             [x] => Ok(*x),
             _ => Err(self.r.corrupt(p, format!("{} values, expected 1", v.len()))),
         }
     }
-    fn i64s(&mut self) -> Result<(&'static str, Vec<i64>), CheckpointError> {
+    pub(crate) fn i64s(&mut self) -> Result<(&'static str, Vec<i64>), CheckpointError> {
         match self.next()? {
             (p, Data::I64(v)) => Ok((p, v)),
             (p, _) => Err(self.r.corrupt(p, "expected int64 values")),
         }
     }
-    fn u8s(&mut self) -> Result<(&'static str, Vec<u8>), CheckpointError> {
+    pub(crate) fn u8s(&mut self) -> Result<(&'static str, Vec<u8>), CheckpointError> {
         match self.next()? {
             (p, Data::U8(v)) => Ok((p, v)),
             (p, _) => Err(self.r.corrupt(p, "expected uint8 values")),
         }
     }
     /// n points of an (n, 3) dataset
-    fn points(&mut self, n: usize) -> Result<Vec<Vec3>, CheckpointError> {
+    pub(crate) fn points(&mut self, n: usize) -> Result<Vec<Vec3>, CheckpointError> {
         let (p, v) = self.f64s()?;
         if v.len() != 3 * n {
             return Err(self
@@ -641,11 +658,11 @@ impl Cursor<'_, '_> {
             .collect())
     }
     /// n rows of an (n, 3) dataset as triples
-    fn triples(&mut self, n: usize) -> Result<Vec<[f64; 3]>, CheckpointError> {
+    pub(crate) fn triples(&mut self, n: usize) -> Result<Vec<[f64; 3]>, CheckpointError> {
         Ok(self.points(n)?.into_iter().map(Vec3::to_array).collect())
     }
     /// n values of an (n,) float dataset
-    fn column(&mut self, n: usize) -> Result<Vec<f64>, CheckpointError> {
+    pub(crate) fn column(&mut self, n: usize) -> Result<Vec<f64>, CheckpointError> {
         let (p, v) = self.f64s()?;
         if v.len() != n {
             return Err(self.r.invalid(p, format!("{} rows, expected {n}", v.len())));
@@ -716,7 +733,7 @@ impl Cursor<'_, '_> {
         }
         Ok(keys)
     }
-    fn json<T: for<'de> Deserialize<'de>>(&mut self) -> Result<T, CheckpointError> {
+    pub(crate) fn json<T: for<'de> Deserialize<'de>>(&mut self) -> Result<T, CheckpointError> {
         match self.next()? {
             (p, Data::Str(s)) => {
                 serde_json::from_str(&s).map_err(|e| self.r.invalid(p, format!("JSON: {e}")))
@@ -728,6 +745,16 @@ impl Cursor<'_, '_> {
 
 /// The simulation stored in `bytes` (the contents of the file at `path`, named in errors).
 fn decode(path: &Path, bytes: Vec<u8>) -> Result<Simulation, CheckpointError> {
+    open(path, bytes, decode_file)
+}
+
+/// `read` applied to the HDF5 file of `bytes` (the contents of the file at `path`, named in
+/// errors); a file that is not HDF5, or on which the HDF5 reader fails, is an error.
+pub(crate) fn open<T>(
+    path: &Path,
+    bytes: Vec<u8>,
+    read: impl FnOnce(&Reader<'_>) -> Result<T, CheckpointError>,
+) -> Result<T, CheckpointError> {
     if !hdf5_pure::is_hdf5_bytes(&bytes) {
         return Err(CheckpointError::NotHdf5 {
             path: path.to_path_buf(),
@@ -755,7 +782,7 @@ fn decode(path: &Path, bytes: Vec<u8>) -> Result<Simulation, CheckpointError> {
         }
     };
     let r = Reader { file, path, limit };
-    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| decode_file(&r))) {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| read(&r))) {
         Ok(res) => res,
         Err(_) => Err(r.corrupt("", "the HDF5 reader failed on this file")),
     }
@@ -778,43 +805,47 @@ fn attr_int(v: Option<&AttrValue>) -> Option<i64> {
     }
 }
 
-fn decode_file(r: &Reader<'_>) -> Result<Simulation, CheckpointError> {
+/// The datasets of `layout` (paths, columns and types; the values are ignored) read from the
+/// file of `r`, after checking its root attributes: `format` must be `format`, `format_version`
+/// `version`, and the CRC-32 of the datasets read the `crc32` attribute.
+pub(crate) fn read_checked(
+    r: &Reader<'_>,
+    format: &str,
+    version: i64,
+    layout: &[Entry],
+) -> Result<Vec<Entry>, CheckpointError> {
     let path = r.path;
     let attrs = r
         .file
         .root()
         .attrs()
         .map_err(|e| r.corrupt("", format!("root attributes: {e}")))?;
-    let format = attr_string(attrs.get("format"));
-    if format.as_deref() != Some(FORMAT_NAME) {
+    let found = attr_string(attrs.get("format"));
+    if found.as_deref() != Some(format) {
         return Err(CheckpointError::WrongFormat {
             path: path.to_path_buf(),
-            detail: match format {
-                Some(f) => format!("format attribute {f:?}, expected {FORMAT_NAME:?}"),
+            detail: match found {
+                Some(f) => format!("format attribute {f:?}, expected {format:?}"),
                 None => "no format attribute".into(),
             },
         });
     }
     let writer = attr_string(attrs.get("coulomb_version")).unwrap_or_else(|| "?".into());
-    let version = attr_int(attrs.get("format_version"))
+    let found = attr_int(attrs.get("format_version"))
         .ok_or_else(|| r.corrupt("", "no integer format_version attribute"))?;
-    if version != FORMAT_VERSION {
+    if found != version {
         return Err(CheckpointError::Version {
             path: path.to_path_buf(),
-            found: version,
-            expected: FORMAT_VERSION,
+            found,
+            expected: version,
             writer,
         });
     }
     let stored = attr_int(attrs.get("crc32"))
         .and_then(|x| u32::try_from(x).ok())
         .ok_or_else(|| r.corrupt("", "no crc32 attribute"))?;
-    // the datasets, in the writer's order (the types come from an empty state's entries)
-    let layout = Simulation::new(World::new(), Params::default())
-        .map_err(|e| r.corrupt("", format!("internal layout: {e}")))
-        .and_then(|empty| entries(&empty))?;
     let mut read = Vec::with_capacity(layout.len());
-    for (p, cols, want) in &layout {
+    for (p, cols, want) in layout {
         read.push(r.read(p, *cols, want)?);
     }
     let computed = crc_of(&read);
@@ -825,6 +856,32 @@ fn decode_file(r: &Reader<'_>) -> Result<Simulation, CheckpointError> {
             computed,
         });
     }
+    Ok(read)
+}
+
+/// The `format` attribute of the HDF5 file at `path` (`None`: not HDF5, unreadable, or
+/// without one): tells a sphere checkpoint ([`FORMAT_NAME`]) from a rigid one
+/// ([`crate::rigid_checkpoint::FORMAT_NAME`]).
+pub fn format_of(path: impl AsRef<Path>) -> Option<String> {
+    let bytes = std::fs::read(path.as_ref()).ok()?;
+    open(path.as_ref(), bytes, |r| {
+        let attrs = r
+            .file
+            .root()
+            .attrs()
+            .map_err(|e| r.corrupt("", e.to_string()))?;
+        Ok(attr_string(attrs.get("format")))
+    })
+    .ok()
+    .flatten()
+}
+
+fn decode_file(r: &Reader<'_>) -> Result<Simulation, CheckpointError> {
+    // the datasets, in the writer's order (the types come from an empty state's entries)
+    let layout = Simulation::new(World::new(), Params::default())
+        .map_err(|e| r.corrupt("", format!("internal layout: {e}")))
+        .and_then(|empty| entries(&empty))?;
+    let read = read_checked(r, FORMAT_NAME, FORMAT_VERSION, &layout)?;
     let mut c = Cursor {
         r,
         entries: read.into_iter(),

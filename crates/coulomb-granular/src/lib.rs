@@ -43,6 +43,7 @@ pub mod nsgs;
 pub mod output;
 pub mod projection;
 pub mod rigid;
+pub mod rigid_checkpoint;
 pub mod rigid_scene;
 pub mod rolling;
 pub mod run;

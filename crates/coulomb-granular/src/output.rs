@@ -738,30 +738,7 @@ impl VtkWriter {
     /// frames before step `first_step` that `beads.pvd` lists are kept, later ones dropped.
     pub fn resume(dir: &Path, first_step: usize) -> io::Result<Self> {
         let mut w = Self::new(dir)?;
-        let listed = |name: &str| -> Vec<(f64, String)> {
-            fs::read_to_string(dir.join(name))
-                .map(|s| collection_entries(&s))
-                .unwrap_or_default()
-        };
-        let contacts = listed("contacts.pvd");
-        let obstacles = listed("obstacles.pvd");
-        for (k, (time, beads)) in listed("beads.pvd").into_iter().enumerate() {
-            let step = beads
-                .rsplit('_')
-                .next()
-                .and_then(|s| s.trim_end_matches(".vtp").parse::<usize>().ok());
-            if step.is_none_or(|s| s >= first_step) {
-                continue;
-            }
-            let file =
-                |list: &[(f64, String)]| list.get(k).map(|x| x.1.clone()).unwrap_or_default();
-            w.frames.push(FrameFiles {
-                time,
-                beads,
-                contacts: file(&contacts),
-                obstacles: file(&obstacles),
-            });
-        }
+        w.frames = frames_before(dir, "beads.pvd", first_step);
         Ok(w)
     }
 
@@ -821,6 +798,37 @@ impl VtkWriter {
     fn write_collections(&self) -> io::Result<()> {
         write_collections(&self.dir, "beads.pvd", &self.frames)
     }
+}
+
+/// The frames of the collections in `dir` (`bodies`, contacts.pvd, obstacles.pvd) whose
+/// bodies file is of a step before `first_step` (a restarted run keeps them; missing or
+/// unreadable collections give none).
+fn frames_before(dir: &Path, bodies: &str, first_step: usize) -> Vec<FrameFiles> {
+    let listed = |name: &str| -> Vec<(f64, String)> {
+        fs::read_to_string(dir.join(name))
+            .map(|s| collection_entries(&s))
+            .unwrap_or_default()
+    };
+    let contacts = listed("contacts.pvd");
+    let obstacles = listed("obstacles.pvd");
+    let mut frames = Vec::new();
+    for (k, (time, beads)) in listed(bodies).into_iter().enumerate() {
+        let step = beads
+            .rsplit('_')
+            .next()
+            .and_then(|s| s.trim_end_matches(".vtp").parse::<usize>().ok());
+        if step.is_none_or(|s| s >= first_step) {
+            continue;
+        }
+        let file = |list: &[(f64, String)]| list.get(k).map(|x| x.1.clone()).unwrap_or_default();
+        frames.push(FrameFiles {
+            time,
+            beads,
+            contacts: file(&contacts),
+            obstacles: file(&obstacles),
+        });
+    }
+    frames
 }
 
 /// The three .pvd collections of a run's frames in `dir`: `bodies` (the beads' or bodies'
@@ -965,6 +973,19 @@ impl RigidVtkWriter {
             frames: Vec::new(),
             obstacles: None,
         })
+    }
+
+    /// A writer into `dir` for `scene` that continues the collections found there (a
+    /// restarted run): the frames before step `first_step` that `bodies.pvd` lists are kept,
+    /// later ones dropped.
+    pub fn resume(
+        dir: &Path,
+        scene: &crate::rigid_scene::RigidScene,
+        first_step: usize,
+    ) -> io::Result<Self> {
+        let mut w = Self::new(dir, scene)?;
+        w.frames = frames_before(dir, "bodies.pvd", first_step);
+        Ok(w)
     }
 
     /// The same writer with `format`.

@@ -41,6 +41,9 @@ pub struct RigidScene {
     pub obstacle_of: Vec<usize>,
     /// the reports of the steps taken
     pub reports: Vec<RigidStepReport>,
+    /// the model the scene was built from (stored by its checkpoints,
+    /// [`crate::rigid_checkpoint`])
+    pub model: SceneModel,
 }
 
 fn arr(v: Vec3) -> [f64; 3] {
@@ -333,6 +336,7 @@ impl RigidScene {
             obstacles,
             obstacle_of,
             reports: Vec::new(),
+            model: model.clone(),
         })
     }
 

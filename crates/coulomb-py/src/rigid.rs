@@ -172,6 +172,42 @@ impl PyRigidSimulation {
             inner: Arc::new(Problem::Global(p.clone())),
         })
     }
+
+    /// Writes the scene's full state into the HDF5 checkpoint file `path`, atomically
+    /// (`coulomb_granular::rigid_checkpoint`).
+    fn save_checkpoint(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        let scene = &self.scene;
+        py.detach(|| scene.save_checkpoint(&path))
+            .map_err(|e| crate::errors::checkpoint_error(py, e))
+    }
+
+    /// The scene stored in the rigid checkpoint file `path`; stepping it gives the same bits
+    /// as stepping the saved one.
+    #[staticmethod]
+    fn load_checkpoint(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        py.detach(|| RigidScene::load_checkpoint(&path))
+            .map(|scene| Self { scene })
+            .map_err(|e| crate::errors::checkpoint_error(py, e))
+    }
+
+    /// Whether `other` was built from the same scene (bodies at t = 0, obstacles, materials,
+    /// gravity; the step settings, which the checkpoint holds, may differ).
+    fn same_setup(&self, other: &Self) -> bool {
+        let step = self.scene.model.step.clone();
+        SceneModel {
+            step,
+            ..other.scene.model.clone()
+        } == self.scene.model
+    }
+}
+
+/// Whether the file at `path` is a rigid-scene checkpoint (not a sphere one).
+#[pyfunction]
+pub fn _checkpoint_is_rigid(py: Python<'_>, path: PathBuf) -> bool {
+    py.detach(|| {
+        coulomb_granular::checkpoint::format_of(&path).as_deref()
+            == Some(coulomb_granular::rigid_checkpoint::FORMAT_NAME)
+    })
 }
 
 /// Whether the scene file at `path` has bodies of another shape than the sphere (then it

@@ -102,3 +102,31 @@ def test_the_readme_brick_wall_runs_and_stands():
     sim = env["sim"]
     assert sim.body_positions.shape == (22, 3) and sim.body_orientations.shape == (22, 4)
     assert sim.body_positions[:, 2].min() > 0.0249
+
+
+def test_a_rigid_checkpoint_continues_to_the_bit(tmp_path):
+    rng = np.random.default_rng(5)
+    scene = Scene().set_default_law(mu=0.5, restitution=0.0).add_plane((0, 0, 0), (0, 0, 1))
+    scene.add_body(Cuboid((0.05, 0.04, 0.03)), (0, 0, 0.1), angular_velocity=(1, 2, 0))
+    scene.add_body(ConvexHull(rng.normal(size=(10, 3)) * 0.05), (0.3, 0, 0.2))
+    scene.add_body(Compound([(Cuboid((0.03, 0.03, 0.03)), (0, 0, 0)),
+                             (Capsule(0.02, 0.04), (0, 0.06, 0), (1, 0, 0, 0))]), (-0.3, 0, 0.15))
+    a = Simulation(scene, h=2e-3, tol=1e-8)
+    a.run(60)
+    path = tmp_path / "rigid.h5"
+    a.save_checkpoint(path)
+    b = Simulation.load_checkpoint(path)
+    c = Simulation.load_checkpoint(path, scene=scene)
+    assert b.is_rigid and b.steps_done == 60
+    ra, rb, rc = a.run(60), b.run(60), c.run(60)
+    assert [r["error"] for r in ra] == [r["error"] for r in rb] == [r["error"] for r in rc]
+    for s in (b, c):
+        assert np.array_equal(a.body_positions, s.body_positions)
+        assert np.array_equal(a.body_orientations, s.body_orientations)
+    other = Scene().add_plane((0, 0, 0), (0, 0, 1)).add_body(Cuboid((0.1, 0.1, 0.1)), (0, 0, 1))
+    with pytest.raises(ValueError, match="not the scene of the checkpoint"):
+        Simulation.load_checkpoint(path, scene=other)
+    damaged = tmp_path / "damaged.h5"
+    damaged.write_bytes(path.read_bytes()[:-200])
+    with pytest.raises(coulomb.CheckpointError):
+        Simulation.load_checkpoint(damaged)

@@ -18,8 +18,17 @@ pub const CHECKPOINT_FILE: &str = "checkpoint.h5";
 /// not be written (exit status 4). Called every `--checkpoint-every` steps, at the end of a
 /// run, and meant for the interrupt path too.
 pub fn write_checkpoint(dir: &Path, sim: &Simulation) -> anyhow::Result<()> {
+    save_checkpoint(dir, |path| sim.save_checkpoint(path))
+}
+
+/// `save` applied to `dir/checkpoint.h5`, its failure an output that could not be written
+/// (exit status 4): [`write_checkpoint`] for any kind of run (spheres, rigid bodies).
+pub fn save_checkpoint(
+    dir: &Path,
+    save: impl FnOnce(&Path) -> Result<(), CheckpointError>,
+) -> anyhow::Result<()> {
     let path = dir.join(CHECKPOINT_FILE);
-    sim.save_checkpoint(&path).map_err(|e| {
+    save(&path).map_err(|e| {
         let source = match e {
             CheckpointError::Io { source, .. } => source,
             other => std::io::Error::other(other.to_string()),
@@ -56,6 +65,9 @@ pub fn restart(args: Args) -> anyhow::Result<Outcome> {
     let Some(file) = args.restart.clone() else {
         bail!("--restart needs a checkpoint file");
     };
+    if crate::cmd::simulate_rigid::is_rigid_checkpoint(&file) {
+        return crate::cmd::simulate_rigid::restart(&args, &file, None);
+    }
     let sim = Simulation::load_checkpoint(&file)
         .with_context(|| format!("cannot restart from {}", file.display()))?;
     steps(&args, sim, "restart", true, &mut NoHook)

@@ -4,8 +4,9 @@
 //! slower than `rest_speed`, linear and angular speed times the body's size, for 10 steps, at
 //! most `max_steps`), `--output` (VTK frames of the bodies as their shapes, contacts and
 //! obstacles every `--frames-every` steps; `stats.json`, `stats.csv`, `summary.json`),
-//! `--dump-fclib` (each step's problem (2.10) in FCLIB global form) and `--json`. Exit 1 when
-//! a step ended above its tolerance or `--until-rest` hit its cap.
+//! `--dump-fclib` (each step's problem (2.10) in FCLIB global form), `--checkpoint-every`
+//! and `--restart` (a rigid checkpoint, [`coulomb_granular::rigid_checkpoint`]) and `--json`.
+//! Exit 1 when a step ended above its tolerance or `--until-rest` hit its cap.
 
 use crate::exit::Outcome;
 use crate::sim_args::Args;
@@ -15,6 +16,7 @@ use coulomb_granular::rigid::RigidStatus;
 use coulomb_granular::rigid_scene::RigidScene;
 use coulomb_granular::scene_file::BuiltScene;
 use serde::Serialize;
+use std::path::Path;
 
 /// The summary of a rigid run (`summary.json`, `--json`).
 #[derive(Debug, Serialize)]
@@ -38,20 +40,84 @@ struct RigidSummary {
 /// command line: [`crate::scene_arg`]).
 pub fn run(a: &Args, scene: &BuiltScene) -> anyhow::Result<Outcome> {
     let file = scene.path.display().to_string();
-    let mut rigid = RigidScene::new(&scene.model).with_context(|| file.clone())?;
+    let rigid = RigidScene::new(&scene.model).with_context(|| file.clone())?;
     if !scene.inlets.is_empty() {
         anyhow::bail!(
             "{file}: inlets pour spheres into sphere-only scenes; this scene has other shapes"
         );
     }
+    steps(a, rigid, &scene.name, false)
+}
+
+/// Whether `path` is a rigid-scene checkpoint ([`coulomb_granular::rigid_checkpoint`]), not
+/// a sphere one.
+pub fn is_rigid_checkpoint(path: &Path) -> bool {
+    coulomb_granular::checkpoint::format_of(path).as_deref()
+        == Some(coulomb_granular::rigid_checkpoint::FORMAT_NAME)
+}
+
+/// `coulomb simulate [SCENE.toml] --restart FILE` for a rigid checkpoint: the scene stored in
+/// FILE continued for `--steps` more steps (or `--until-rest`), the outputs of `--output`
+/// continuing those found there. With the scene file, it must be the stored run's (the same
+/// model; status 2 otherwise).
+pub fn restart(a: &Args, checkpoint: &Path, scene: Option<&BuiltScene>) -> anyhow::Result<Outcome> {
+    let rigid = RigidScene::load_checkpoint(checkpoint)
+        .with_context(|| format!("cannot restart from {}", checkpoint.display()))?;
+    let name = match scene {
+        Some(s) => {
+            if s.model != rigid.model || !s.inlets.is_empty() {
+                anyhow::bail!(
+                    "{} is not the scene of the checkpoint {}: its bodies, obstacles or settings differ",
+                    s.path.display(),
+                    checkpoint.display()
+                );
+            }
+            s.name.clone()
+        }
+        None => "restart".to_string(),
+    };
+    steps(a, rigid, &name, true)
+}
+
+/// Rows of `dir/stats.csv` and `dir/stats.json` (a run's earlier statistics) of steps before
+/// `first`: what a restarted run keeps.
+fn stats_before(dir: &Path, first: u64) -> (Vec<String>, Vec<serde_json::Value>) {
+    let before = |k: Option<u64>| k.is_some_and(|k| k < first);
+    let csv = std::fs::read_to_string(dir.join("stats.csv"))
+        .map(|t| {
+            t.lines()
+                .skip(1)
+                .filter(|l| before(l.split(',').next().and_then(|k| k.parse().ok())))
+                .map(str::to_string)
+                .collect()
+        })
+        .unwrap_or_default();
+    let json = std::fs::read_to_string(dir.join("stats.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<Vec<serde_json::Value>>(&t).ok())
+        .unwrap_or_default()
+        .into_iter()
+        .filter(|v| before(v.get("step").and_then(|k| k.as_u64())))
+        .collect();
+    (csv, json)
+}
+
+/// The time steps of `rigid` (new, or loaded by a restart when `restarted`) and their
+/// outputs.
+fn steps(a: &Args, mut rigid: RigidScene, name: &str, restarted: bool) -> anyhow::Result<Outcome> {
     crate::interrupt::install().context("installing the SIGINT/SIGTERM handlers")?;
     if let Some(dir) = &a.dump_fclib {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
+    let first = rigid.world.steps();
     let mut vtk = match &a.output {
         Some(dir) => Some(
-            RigidVtkWriter::new(dir, &rigid)
-                .with_context(|| format!("cannot write into {}", dir.display()))?,
+            if restarted {
+                RigidVtkWriter::resume(dir, &rigid, first as usize)
+            } else {
+                RigidVtkWriter::new(dir, &rigid)
+            }
+            .with_context(|| format!("cannot write into {}", dir.display()))?,
         ),
         None => None,
     };
@@ -62,11 +128,12 @@ pub fn run(a: &Args, scene: &BuiltScene) -> anyhow::Result<Outcome> {
     if let Some(w) = vtk.as_mut() {
         w.frame(&rigid).context("writing VTK frame")?;
     }
-    let max_steps = if a.until_rest {
+    let more = if a.until_rest {
         a.max_steps
     } else {
         a.steps.unwrap_or(200)
     };
+    let max_steps = (first as usize).saturating_add(more);
     let sizes: Vec<f64> = rigid
         .shapes
         .iter()
@@ -82,10 +149,11 @@ pub fn run(a: &Args, scene: &BuiltScene) -> anyhow::Result<Outcome> {
     let mut still = 0;
     let mut at_rest = false;
     let mut interrupted = None;
-    for k in 0..max_steps {
+    while (rigid.world.steps() as usize) < max_steps {
+        let k = rigid.world.steps() as usize;
         let r = rigid
             .step()
-            .with_context(|| format!("{file}: time step failed"))?;
+            .with_context(|| format!("{name}: time step failed"))?;
         if let (Some(dir), Some(p)) = (&a.dump_fclib, rigid.world.last_problem()) {
             crate::cmd::simulate::dump_fclib(dir, k, p)?;
         }
@@ -94,10 +162,14 @@ pub fn run(a: &Args, scene: &BuiltScene) -> anyhow::Result<Outcome> {
                 w.frame(&rigid).context("writing VTK frame")?;
             }
         }
+        if let Some(dir) = &a.output {
+            if a.checkpoint_every > 0 && (k + 1) % a.checkpoint_every == 0 {
+                crate::cmd::simulate::save_checkpoint(dir, |p| rigid.save_checkpoint(p))?;
+            }
+        }
         if progress {
             eprint!(
-                "\r{}: step {}/{max_steps}, {} contacts, {} sweeps, error {:.1e}   ",
-                scene.name,
+                "\r{name}: step {}/{max_steps}, {} contacts, {} sweeps, error {:.1e}   ",
                 k + 1,
                 r.contacts,
                 r.sweeps,
@@ -133,7 +205,7 @@ pub fn run(a: &Args, scene: &BuiltScene) -> anyhow::Result<Outcome> {
     let reports = &rigid.reports;
     let n = reports.len().max(1) as f64;
     let summary = RigidSummary {
-        scene: scene.name.clone(),
+        scene: name.to_string(),
         bodies: rigid.world.len(),
         steps: reports.len(),
         time: rigid.world.time(),
@@ -157,15 +229,24 @@ pub fn run(a: &Args, scene: &BuiltScene) -> anyhow::Result<Outcome> {
         kinetic_energy: rigid.world.kinetic_energy(),
     };
     if let Some(w) = vtk.as_mut() {
-        let written = a.frames_every > 0 && reports.len() % a.frames_every == 0;
+        let written = a.frames_every > 0 && rigid.world.steps() as usize % a.frames_every == 0;
         if !written && !reports.is_empty() {
             w.frame(&rigid).context("writing VTK frame")?;
         }
     }
     if let Some(dir) = &a.output {
+        let (old_csv, mut old_json) = if restarted {
+            stats_before(dir, first)
+        } else {
+            Default::default()
+        };
         let mut csv = String::from(
             "step,time,status,error,contacts,loaded_contacts,warm_started,sweeps,method,max_penetration,kinetic_energy\n",
         );
+        for row in old_csv {
+            csv.push_str(&row);
+            csv.push('\n');
+        }
         for r in reports {
             csv.push_str(&format!(
                 "{},{:.6},{},{:.6e},{},{},{},{},{},{:.6e},{:.9e}\n",
@@ -183,10 +264,21 @@ pub fn run(a: &Args, scene: &BuiltScene) -> anyhow::Result<Outcome> {
             ));
         }
         crate::outputs::write(&dir.join("stats.csv"), csv.as_bytes())?;
+        for r in reports {
+            old_json.push(serde_json::to_value(r)?);
+        }
         crate::outputs::write(
             &dir.join("stats.json"),
-            crate::outputs::json(reports, true)?.as_bytes(),
+            crate::outputs::json(&old_json, true)?.as_bytes(),
         )?;
+        // the end state, unless the last step just wrote it; an interrupted run always
+        // leaves one, to be resumed with --restart
+        let written = !reports.is_empty()
+            && a.checkpoint_every > 0
+            && rigid.world.steps() as usize % a.checkpoint_every == 0;
+        if (a.checkpoint_every > 0 || interrupted.is_some()) && !written {
+            crate::cmd::simulate::save_checkpoint(dir, |p| rigid.save_checkpoint(p))?;
+        }
         crate::outputs::write(
             &dir.join("summary.json"),
             crate::outputs::json(&summary, true)?.as_bytes(),
@@ -211,12 +303,21 @@ pub fn run(a: &Args, scene: &BuiltScene) -> anyhow::Result<Outcome> {
         );
     }
     if let Some(signal) = interrupted {
+        match &a.output {
+            Some(dir) => eprintln!(
+                "interrupted by {} after {} steps: frames, stats.csv, stats.json, summary.json and checkpoint.h5 (resume with --restart) in {} cover those steps",
+                signal.name(),
+                rigid.world.steps(),
+                dir.display()
+            ),
+            None => eprintln!("interrupted by {} after {} steps", signal.name(), rigid.world.steps()),
+        }
         return Ok(Outcome::Interrupted(signal));
     }
     if summary.not_converged_steps > 0 {
         eprintln!(
             "{} step(s) ended above the tolerance {}",
-            summary.not_converged_steps, scene.model.step.tol
+            summary.not_converged_steps, rigid.model.step.tol
         );
         return Ok(Outcome::No);
     }

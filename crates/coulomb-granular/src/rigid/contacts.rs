@@ -84,7 +84,7 @@ impl std::fmt::Debug for Detector {
     }
 }
 
-#[derive(Default)]
+#[derive(Default, serde::Serialize, serde::Deserialize)]
 struct PairCache {
     manifolds: Vec<ContactManifold<(), ()>>,
     workspace: Option<ContactManifoldsWorkspace>,
@@ -105,7 +105,54 @@ pub fn tangent_frame(n: Vector) -> (Vector, Vector) {
     (t1, t2)
 }
 
+/// The pair caches of a [`Detector`] as serde sees them (a checkpoint's `/json/detector`):
+/// each pair with parry's manifolds (points, normals, feature ids: parry starts the next
+/// step's GJK from the stored normal and updates the stored points when the pose barely
+/// moved) and parry's workspace of composite shapes.
+#[derive(serde::Serialize)]
+struct DetectorView<'a> {
+    pairs: Vec<(&'a (usize, RigidPartner), &'a PairCache)>,
+}
+
+#[derive(serde::Deserialize)]
+struct DetectorOwned {
+    pairs: Vec<((usize, RigidPartner), PairCache)>,
+}
+
 impl Detector {
+    /// The pair caches as a JSON document (floats round-trip exactly); `Err` when some value
+    /// JSON cannot hold.
+    pub(crate) fn to_json(&self) -> Result<String, String> {
+        let view = DetectorView {
+            pairs: self.pairs.iter().collect(),
+        };
+        serde_json::to_string(&view).map_err(|e| e.to_string())
+    }
+
+    /// The detector whose pair caches [`Detector::to_json`] wrote; every pair's body indices
+    /// must be below `bodies` and its obstacle indices below `obstacles`.
+    pub(crate) fn from_json(json: &str, bodies: usize, obstacles: usize) -> Result<Self, String> {
+        let owned: DetectorOwned = serde_json::from_str(json).map_err(|e| e.to_string())?;
+        let mut pairs = BTreeMap::new();
+        for ((a, b), cache) in owned.pairs {
+            let ok = a < bodies
+                && match b {
+                    RigidPartner::Body(j) => a < j && j < bodies,
+                    RigidPartner::Obstacle(o) => o < obstacles,
+                };
+            if !ok {
+                return Err(format!("pair ({a}, {b:?}) out of range"));
+            }
+            if pairs.insert((a, b), cache).is_some() {
+                return Err(format!("pair ({a}, {b:?}) twice"));
+            }
+        }
+        Ok(Self {
+            pairs,
+            bvh_workspace: BvhWorkspace::default(),
+        })
+    }
+
     /// The manifold points of every pair whose shapes are closer than the sum of their
     /// margins (`margins[i]`: how far body i may travel in the step, 0 for a fixed body), at
     /// the bodies' current poses and the obstacles' `obstacles`, sorted by key. Pairs of two

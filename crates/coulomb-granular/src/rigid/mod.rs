@@ -240,7 +240,9 @@ impl Default for RigidSettings {
 }
 
 /// The other party of a rigid contact.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, serde::Deserialize,
+)]
 #[serde(tag = "kind", content = "index", rename_all = "snake_case")]
 pub enum RigidPartner {
     /// another body (index larger than the contact's `a`)
@@ -253,7 +255,7 @@ pub enum RigidPartner {
 ///
 /// Frame convention (the sphere code's): `normal` points from B towards A, so that
 /// u_N = n · (v_A(p) − v_B(p)) > 0 when they separate; the impulse acts on A (−r on B).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 pub struct RigidContact {
     /// body A
     pub a: usize,

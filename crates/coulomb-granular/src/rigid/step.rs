@@ -63,6 +63,29 @@ pub struct RigidWorld {
     dof: Vec<Option<usize>>,
 }
 
+/// The state a [`RigidWorld`] carries between steps ([`RigidWorld::state`]).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct RigidState {
+    /// t_k
+    pub time: f64,
+    /// k
+    pub steps: u64,
+    /// x: centres of mass, world
+    pub x: Vec<[f64; 3]>,
+    /// q: principal frame → world, (w, x, y, z)
+    pub q: Vec<[f64; 4]>,
+    /// v, world
+    pub v: Vec<[f64; 3]>,
+    /// Ω, principal (body) frame
+    pub omega: Vec<[f64; 3]>,
+    /// the last step's impulses by contact key (world axes), the next step's warm start
+    pub previous: Vec<(ContactKey, [f64; 3])>,
+    /// the last step's contacts (read by the outputs)
+    pub contacts: Vec<RigidContact>,
+    /// the detector's pair caches, JSON ([`Detector::to_json`])
+    pub detector: String,
+}
+
 fn v3(a: [f64; 3]) -> Vector {
     Vector::from_array(a)
 }
@@ -278,6 +301,97 @@ impl RigidWorld {
                 limit,
             });
         }
+        Ok(())
+    }
+
+    /// What the world carries from step k to step k + 1 besides what it is built from (a
+    /// checkpoint's state, [`crate::rigid_checkpoint`]); `Err` when the detector's caches
+    /// cannot be written as JSON.
+    pub(crate) fn state(&self) -> Result<RigidState, String> {
+        let b = &self.bodies;
+        Ok(RigidState {
+            time: self.time,
+            steps: self.steps,
+            x: b.iter().map(|b| b.x.to_array()).collect(),
+            q: b.iter().map(|b| rotation_to_wxyz(b.q)).collect(),
+            v: b.iter().map(|b| b.v.to_array()).collect(),
+            omega: b.iter().map(|b| b.omega.to_array()).collect(),
+            previous: self
+                .previous
+                .iter()
+                .map(|(k, r)| (*k, r.to_array()))
+                .collect(),
+            contacts: self.contacts.clone(),
+            detector: self.detector.to_json()?,
+        })
+    }
+
+    /// Replaces the world's state at t_0 by `s` (taken by [`RigidWorld::state`] from a world
+    /// built from the same bodies, obstacles and settings). Refuses, leaving the world
+    /// unchanged: row counts other than the world's, non-finite values, quaternions that are
+    /// not unit to [`QUATERNION_TOLERANCE`], a fixed body that moved, contact keys or pairs
+    /// out of range.
+    pub(crate) fn restore(&mut self, s: RigidState) -> Result<(), String> {
+        let n = self.bodies.len();
+        let no = self.obstacles.len();
+        if [s.x.len(), s.q.len(), s.v.len(), s.omega.len()] != [n; 4] {
+            return Err(format!(
+                "{}, {}, {} and {} body rows for {n} bodies",
+                s.x.len(),
+                s.q.len(),
+                s.v.len(),
+                s.omega.len()
+            ));
+        }
+        if !(s.time.is_finite() && s.time >= 0.0) {
+            return Err(format!("time {}", s.time));
+        }
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        for i in 0..n {
+            if !(finite(&s.x[i]) && finite(&s.v[i]) && finite(&s.omega[i])) {
+                return Err(format!("body {i}: a non-finite position or velocity"));
+            }
+            let q = check_quaternion(&format!("body {i}"), s.q[i]).map_err(|e| e.to_string())?;
+            let b = &self.bodies[i];
+            let moved =
+                v3(s.x[i]) != b.x || q != b.q || s.v[i] != [0.0; 3] || s.omega[i] != [0.0; 3];
+            if b.fixed && moved {
+                return Err(format!("body {i} is fixed but its stored state moved"));
+            }
+        }
+        let partner_ok = |a: usize, p: RigidPartner| {
+            a < n
+                && match p {
+                    RigidPartner::Body(j) => a < j && j < n,
+                    RigidPartner::Obstacle(o) => o < no,
+                }
+        };
+        if let Some((k, _)) = s
+            .previous
+            .iter()
+            .find(|(k, r)| !partner_ok(k.0, k.1) || !finite(r))
+        {
+            return Err(format!(
+                "warm start of pair ({}, {:?}) out of range or not finite",
+                k.0, k.1
+            ));
+        }
+        if let Some(c) = s.contacts.iter().find(|c| !partner_ok(c.a, c.b)) {
+            return Err(format!("contact of pair ({}, {:?}) out of range", c.a, c.b));
+        }
+        let detector = Detector::from_json(&s.detector, n, no)?;
+        for (i, b) in self.bodies.iter_mut().enumerate() {
+            b.x = v3(s.x[i]);
+            b.q = rotation_from_wxyz(s.q[i]);
+            b.v = v3(s.v[i]);
+            b.omega = v3(s.omega[i]);
+        }
+        self.time = s.time;
+        self.steps = s.steps;
+        self.previous = s.previous.into_iter().map(|(k, r)| (k, v3(r))).collect();
+        self.contacts = s.contacts;
+        self.detector = detector;
+        self.last_problem = None;
         Ok(())
     }
 

@@ -879,7 +879,9 @@ class Simulation:
         nothing does). :meth:`load_checkpoint` continues it to the bit; ``coulomb simulate
         --restart path`` continues it from the command line. A scene's inlets are not stored
         in the file: give the scene to :meth:`load_checkpoint` (``scene=``) and they keep
-        pouring."""
+        pouring. A scene with bodies of other shapes (the rigid-body simulator) stores its
+        scene model, the bodies' states, the warm start and the contact detector's caches
+        (docs/granular.md, "Checkpoint and restart")."""
         self._sim.save_checkpoint(os.fspath(path))
 
     @staticmethod
@@ -898,8 +900,26 @@ class Simulation:
         spheres present, so the continued run is the uninterrupted one to the bit, as
         ``coulomb simulate SCENE.toml --restart FILE``). The scene is built to read its
         inlets and compared with the checkpoint: another gravity or other obstacles raise
-        ``ValueError``."""
+        ``ValueError``. A rigid checkpoint (bodies of other shapes) holds its whole scene and
+        step settings; a ``scene`` given with it must have the same bodies, obstacles,
+        materials and gravity (else ``ValueError``)."""
         sim = Simulation.__new__(Simulation)
+        if _coulomb._checkpoint_is_rigid(os.fspath(path)):
+            sim._sim = _coulomb._RigidSimulation.load_checkpoint(os.fspath(path))
+            if scene is None:
+                return sim
+            if isinstance(scene, Scene):
+                probe = Simulation(scene) if scene.has_shapes else None
+            elif isinstance(scene, (str, os.PathLike)):
+                probe = Simulation.from_file(scene)
+            else:
+                raise TypeError(f"scene must be a coulomb.granular.Scene or a scene file, got "
+                                f"{type(scene).__name__}")
+            if probe is None or not probe.is_rigid or not sim._sim.same_setup(probe._sim):
+                raise ValueError(f"the scene given is not the scene of the checkpoint "
+                                 f"{os.fspath(path)}: its bodies, obstacles, materials or gravity "
+                                 f"differ")
+            return sim
         sim._sim = _coulomb._Simulation.load_checkpoint(os.fspath(path))
         if scene is None:
             return sim

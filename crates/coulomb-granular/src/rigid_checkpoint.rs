@@ -1,0 +1,441 @@
+//! Checkpoint and restart of a rigid-body scene ([`RigidScene`]): the state the Moreau–Jean
+//! step (2.7)–(2.10) of [`crate::rigid::RigidWorld`] carries from t_k to t_{k+1}, in one HDF5
+//! file written atomically, so that running 2K steps and running K steps, saving, loading and
+//! running K more give the same bits (test `restart_gives_the_same_bits`).
+//!
+//! # What is stored
+//! - the scene model the world was built from (`/json/model`: bodies with their shapes,
+//!   materials, obstacles and motions, gravity, step settings); loading rebuilds the world
+//!   from it, so the shapes, mass properties and obstacles are those of the original run;
+//! - t_k and k (`/state/…`);
+//! - per body the centre of mass x, the orientation q of its principal frame (w, x, y, z),
+//!   v and the body-frame Ω (`/bodies/…`, numeric, bit for bit);
+//! - the last step's impulses by contact key, the next step's warm start (`/warm_start/…`);
+//! - the detector's pair caches (`/json/detector`, through parry3d's serde support): parry
+//!   starts a pair's next GJK from its stored normal and, when the pose barely moved, updates
+//!   the stored manifold points instead of recomputing them, so without them the continued
+//!   run would differ in the last bits;
+//! - the last step's contacts (`/json/contacts`, read by the outputs only).
+//!
+//! Not stored: the step reports and the last step's problem (reports of the steps already
+//! taken). A sphere-only scene has its own checkpoint ([`crate::checkpoint`]); the `format`
+//! attribute tells them apart ([`crate::checkpoint::format_of`]).
+//!
+//! # Layout and integrity
+//! Root attributes as in [`crate::checkpoint`] with `format` = [`FORMAT_NAME`] and
+//! `format_version` = [`FORMAT_VERSION`]; the same checks on reading (format, version, types
+//! and shapes, CRC-32), and the stored state checked against the rebuilt world (row counts,
+//! finite values, unit quaternions, fixed bodies at rest, indices in range): any failure is a
+//! [`CheckpointError`] and no scene is returned.
+//!
+//! | dataset | type | shape |
+//! |---|---|---|
+//! | `/state/time` | f64 | (1,) |
+//! | `/state/steps_done` | i64 | (1,) |
+//! | `/bodies/position`, `velocity`, `angular_velocity` | f64 | (n, 3) |
+//! | `/bodies/orientation` | f64 | (n, 4) |
+//! | `/warm_start/key` | i64 (body A, partner kind 0 body / 1 obstacle, partner index, sub-shape A, sub-shape B, feature A, feature B, rank) | (m, 8) |
+//! | `/warm_start/impulse` | f64, world axes | (m, 3) |
+//! | `/json/model`, `/json/contacts`, `/json/detector` | UTF-8 string | scalar |
+
+use crate::checkpoint::{
+    encode_entries, index, json_of, open, read_checked, CheckpointError, Cursor, Data, Entry,
+    Reader,
+};
+use crate::model::SceneModel;
+use crate::rigid::contacts::ContactKey;
+use crate::rigid::step::RigidState;
+use crate::rigid::{RigidContact, RigidPartner};
+use crate::rigid_scene::RigidScene;
+use std::path::Path;
+
+/// The `format` attribute of a rigid-scene checkpoint.
+pub const FORMAT_NAME: &str = "coulomb-rigid-checkpoint";
+/// The `format_version` attribute; files of another version are refused.
+pub const FORMAT_VERSION: i64 = 1;
+
+/// Columns of `/warm_start/key`.
+const KEY_COLUMNS: usize = 8;
+
+fn flat<const N: usize>(rows: &[[f64; N]]) -> Vec<f64> {
+    rows.iter().flatten().copied().collect()
+}
+
+/// The datasets of a checkpoint of `state` built from `model`, in their fixed order.
+fn entries(model: &SceneModel, state: &RigidState) -> Result<Vec<Entry>, CheckpointError> {
+    let mut keys = Vec::with_capacity(KEY_COLUMNS * state.previous.len());
+    for ((a, b, s1, s2, f1, f2, rank), _) in &state.previous {
+        let (kind, j) = match b {
+            RigidPartner::Body(j) => (0, *j),
+            RigidPartner::Obstacle(o) => (1, *o),
+        };
+        keys.extend([index(*a), kind, index(j)]);
+        keys.extend([s1, s2, f1, f2, rank].map(|x| i64::from(*x)));
+    }
+    let impulses: Vec<[f64; 3]> = state.previous.iter().map(|(_, r)| *r).collect();
+    let contacts = serde_json::to_string(&state.contacts)
+        .map_err(|e| CheckpointError::Unrepresentable(format!("the contacts: {e}")))?;
+    Ok(vec![
+        ("state/time", 1, Data::F64(vec![state.time])),
+        (
+            "state/steps_done",
+            1,
+            Data::I64(vec![i64::try_from(state.steps).unwrap_or(i64::MAX)]),
+        ),
+        ("bodies/position", 3, Data::F64(flat(&state.x))),
+        ("bodies/orientation", 4, Data::F64(flat(&state.q))),
+        ("bodies/velocity", 3, Data::F64(flat(&state.v))),
+        ("bodies/angular_velocity", 3, Data::F64(flat(&state.omega))),
+        ("warm_start/key", KEY_COLUMNS, Data::I64(keys)),
+        ("warm_start/impulse", 3, Data::F64(flat(&impulses))),
+        (
+            "json/model",
+            0,
+            Data::Str(json_of("the scene model", model)?),
+        ),
+        ("json/contacts", 0, Data::Str(contacts)),
+        ("json/detector", 0, Data::Str(state.detector.clone())),
+    ])
+}
+
+/// `values` as rows of `N`, `n` of them when given.
+fn rows<const N: usize>(
+    r: &Reader<'_>,
+    path: &str,
+    values: Vec<f64>,
+    n: Option<usize>,
+) -> Result<Vec<[f64; N]>, CheckpointError> {
+    if values.len() % N != 0 || n.is_some_and(|n| values.len() != N * n) {
+        return Err(r.invalid(
+            path,
+            format!("{} values, expected {N} per body", values.len()),
+        ));
+    }
+    Ok(values
+        .chunks_exact(N)
+        .map(|c| std::array::from_fn(|k| c[k]))
+        .collect())
+}
+
+/// The warm-start keys of `/warm_start/key`, each a valid key shape (indices ≥ 0 and within
+/// u32 where the key holds u32; the ranges are checked against the world on restore).
+fn keys(r: &Reader<'_>, raw: &[i64]) -> Result<Vec<ContactKey>, CheckpointError> {
+    let path = "warm_start/key";
+    let mut out = Vec::with_capacity(raw.len() / KEY_COLUMNS);
+    for (i, k) in raw.chunks_exact(KEY_COLUMNS).enumerate() {
+        let bad = || r.invalid(path, format!("row {i}: {k:?}"));
+        let us = |x: i64| usize::try_from(x).map_err(|_| bad());
+        let u32_of = |x: i64| u32::try_from(x).map_err(|_| bad());
+        let b = match k[1] {
+            0 => RigidPartner::Body(us(k[2])?),
+            1 => RigidPartner::Obstacle(us(k[2])?),
+            _ => return Err(bad()),
+        };
+        out.push((
+            us(k[0])?,
+            b,
+            u32_of(k[3])?,
+            u32_of(k[4])?,
+            u32_of(k[5])?,
+            u32_of(k[6])?,
+            u32_of(k[7])?,
+        ));
+    }
+    if !out.windows(2).all(|w| w[0] < w[1]) {
+        return Err(r.invalid(path, "keys not sorted and unique"));
+    }
+    Ok(out)
+}
+
+/// The layout of a checkpoint (paths, columns, types).
+fn layout() -> Result<Vec<Entry>, CheckpointError> {
+    let empty = RigidState {
+        time: 0.0,
+        steps: 0,
+        x: Vec::new(),
+        q: Vec::new(),
+        v: Vec::new(),
+        omega: Vec::new(),
+        previous: Vec::new(),
+        contacts: Vec::new(),
+        detector: String::new(),
+    };
+    entries(&SceneModel::default(), &empty)
+}
+
+fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
+    let read = read_checked(r, FORMAT_NAME, FORMAT_VERSION, &layout()?)?;
+    let mut c = Cursor {
+        r,
+        entries: read.into_iter(),
+    };
+    let time = c.f64_scalar()?;
+    let (sp, steps) = c.i64s()?;
+    let steps = match steps.as_slice() {
+        [k] => u64::try_from(*k).map_err(|_| r.invalid(sp, format!("{k} steps")))?,
+        _ => return Err(r.invalid(sp, "expected one value")),
+    };
+    let (pp, x) = c.f64s()?;
+    let x: Vec<[f64; 3]> = rows(r, pp, x, None)?;
+    let n = Some(x.len());
+    let (p, q) = c.f64s()?;
+    let q: Vec<[f64; 4]> = rows(r, p, q, n)?;
+    let (p, v) = c.f64s()?;
+    let v: Vec<[f64; 3]> = rows(r, p, v, n)?;
+    let (p, omega) = c.f64s()?;
+    let omega: Vec<[f64; 3]> = rows(r, p, omega, n)?;
+    let (_, raw) = c.i64s()?;
+    let keys = keys(r, &raw)?;
+    let (p, imp) = c.f64s()?;
+    let imp: Vec<[f64; 3]> = rows(r, p, imp, Some(keys.len()))?;
+    let model: SceneModel = c.json()?;
+    let contacts: Vec<RigidContact> = c.json()?;
+    let (dp, detector) = match c.entries.next() {
+        Some((p, _, Data::Str(s))) => (p, s),
+        _ => return Err(r.corrupt("json/detector", "expected a string")),
+    };
+    let mut scene = RigidScene::new(&model)
+        .map_err(|e| r.invalid("json/model", format!("the stored scene: {e}")))?;
+    let state = RigidState {
+        time,
+        steps,
+        x,
+        q,
+        v,
+        omega,
+        previous: keys.into_iter().zip(imp).collect(),
+        contacts,
+        detector,
+    };
+    scene.world.restore(state).map_err(|e| r.invalid(dp, e))?;
+    Ok(scene)
+}
+
+impl RigidScene {
+    /// The checkpoint of this scene as the bytes of an HDF5 file (module
+    /// [`crate::rigid_checkpoint`]).
+    pub fn checkpoint_bytes(&self) -> Result<Vec<u8>, CheckpointError> {
+        let state = self
+            .world
+            .state()
+            .map_err(|e| CheckpointError::Unrepresentable(format!("the detector's caches: {e}")))?;
+        encode_entries(FORMAT_NAME, FORMAT_VERSION, &entries(&self.model, &state)?)
+    }
+
+    /// The scene stored in the bytes of a rigid checkpoint; `name` names it in errors.
+    pub fn from_checkpoint_bytes(
+        name: impl AsRef<Path>,
+        bytes: Vec<u8>,
+    ) -> Result<RigidScene, CheckpointError> {
+        open(name.as_ref(), bytes, decode_file)
+    }
+
+    /// Writes the full state of the scene into the HDF5 file `path`, atomically (an existing
+    /// file is replaced only by a complete one; a path that is not a regular file is refused
+    /// by [`coulomb::atomic::write`]).
+    pub fn save_checkpoint(&self, path: impl AsRef<Path>) -> Result<(), CheckpointError> {
+        let path = path.as_ref();
+        let bytes = self.checkpoint_bytes()?;
+        coulomb::atomic::write(path, bytes).map_err(|source| CheckpointError::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+    }
+
+    /// The scene stored by [`RigidScene::save_checkpoint`] in `path`: stepping it gives the
+    /// same bits as stepping the saved one. A sphere checkpoint, another format version, a
+    /// damaged file or a state the rebuilt world refuses give a [`CheckpointError`].
+    pub fn load_checkpoint(path: impl AsRef<Path>) -> Result<RigidScene, CheckpointError> {
+        let path = path.as_ref();
+        let bytes = std::fs::read(path).map_err(|source| CheckpointError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_checkpoint_bytes(path, bytes)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene_file::LoadedScene;
+
+    fn scene(toml: &str) -> RigidScene {
+        let loaded = LoadedScene::parse(Path::new("mixed.toml"), toml.to_string(), true)
+            .expect("scene file");
+        let built = loaded.build(&Default::default()).expect("build");
+        RigidScene::new(&built.model).expect("rigid scene")
+    }
+
+    /// Bodies of several shapes (cuboid, convex hull, compound of a cuboid and a capsule,
+    /// sphere) falling onto a floor and a ramp of two triangles (a mesh), so that the pair
+    /// caches hold convex and composite manifolds and composite workspaces.
+    const MIXED: &str = r#"
+        [step]
+        h = 0.005
+        tol = 1e-8
+
+        [default_pair]
+        mu = 0.4
+
+        [[obstacles]]
+        name = "floor"
+        shape = { kind = "plane", point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }
+
+        [[obstacles]]
+        name = "ramp"
+        [obstacles.shape]
+        kind = "rectangle"
+        center = [0.0, 0.3, 0.05]
+        normal = [0.0, -0.2425356250363330, 0.9701425001453319]
+        u = [1.0, 0.0, 0.0]
+        half_u = 0.4
+        half_v = 0.1
+
+        [[bodies]]
+        shape = { kind = "cuboid", half_extents = [0.05, 0.04, 0.03] }
+        positions = [[0.0, 0.0, 0.05], [0.0, 0.3, 0.2]]
+
+        [[bodies]]
+        shape = { kind = "convex_hull", points = [[0.0, 0.0, 0.0], [0.08, 0.0, 0.0], [0.0, 0.07, 0.0], [0.0, 0.0, 0.06], [0.05, 0.05, 0.05]] }
+        positions = [[0.2, 0.0, 0.15]]
+        orientations = [[0.9238795325112867, 0.0, 0.3826834323650898, 0.0]]
+
+        [[bodies]]
+        positions = [[-0.2, 0.0, 0.08]]
+        angular_velocity = [0.0, 3.0, 1.0]
+        [bodies.shape]
+        kind = "compound"
+        parts = [
+            { shape = { kind = "cuboid", half_extents = [0.03, 0.03, 0.03] }, position = [0.0, 0.0, 0.0] },
+            { shape = { kind = "capsule", radius = 0.02, half_height = 0.04 }, position = [0.0, 0.06, 0.0] },
+        ]
+
+        [[bodies]]
+        shape = { kind = "sphere", radius = 0.03 }
+        positions = [[0.0, 0.0, 0.2]]
+        velocity = [0.5, 0.0, 0.0]
+    "#;
+
+    /// Positions, orientations, velocities and angular velocities, as bits.
+    fn snapshot(s: &RigidScene) -> Vec<u64> {
+        let w = &s.world;
+        let mut bits: Vec<u64> = w
+            .positions()
+            .iter()
+            .flatten()
+            .map(|x| x.to_bits())
+            .collect();
+        bits.extend(w.orientations().iter().flatten().map(|x| x.to_bits()));
+        bits.extend(w.velocities().iter().flatten().map(|x| x.to_bits()));
+        bits.extend(w.angular_velocities().iter().flatten().map(|x| x.to_bits()));
+        bits
+    }
+
+    #[test]
+    fn restart_gives_the_same_bits() {
+        let mut a = scene(MIXED);
+        for _ in 0..40 {
+            a.step().expect("step");
+        }
+        let bytes = a.checkpoint_bytes().expect("checkpoint");
+        let mut b = RigidScene::from_checkpoint_bytes("mixed.h5", bytes).expect("load");
+        assert_eq!(b.world.time(), a.world.time());
+        assert_eq!(b.world.steps(), a.world.steps());
+        assert_eq!(snapshot(&b), snapshot(&a));
+        assert_eq!(b.world.contacts(), a.world.contacts());
+        assert!(!a.world.contacts().is_empty(), "the bodies touch something");
+        for _ in 0..40 {
+            let ra = a.step().expect("step a");
+            let rb = b.step().expect("step b");
+            assert_eq!(ra.contacts, rb.contacts);
+            assert_eq!(ra.sweeps, rb.sweeps);
+            assert_eq!(ra.error.to_bits(), rb.error.to_bits());
+        }
+        assert_eq!(snapshot(&b), snapshot(&a));
+        assert_eq!(b.world.contacts(), a.world.contacts());
+    }
+
+    #[test]
+    fn the_shipped_wall_restarts_to_the_bit() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../examples/scenes/rigid/brick-wall.toml"
+        );
+        let loaded = LoadedScene::load(Path::new(path)).expect("load");
+        let built = loaded.build(&Default::default()).expect("build");
+        let mut a = RigidScene::new(&built.model).expect("scene");
+        for _ in 0..5 {
+            a.step().expect("step");
+        }
+        let mut b =
+            RigidScene::from_checkpoint_bytes("wall.h5", a.checkpoint_bytes().expect("save"))
+                .expect("load");
+        for _ in 0..5 {
+            a.step().expect("step a");
+            b.step().expect("step b");
+        }
+        assert_eq!(snapshot(&b), snapshot(&a));
+    }
+
+    #[test]
+    fn damaged_or_foreign_files_are_refused_with_a_reason() {
+        let mut a = scene(MIXED);
+        a.step().expect("step");
+        let bytes = a.checkpoint_bytes().expect("checkpoint");
+        // truncated
+        let e = RigidScene::from_checkpoint_bytes("t.h5", bytes[..bytes.len() / 2].to_vec())
+            .expect_err("truncated");
+        assert!(
+            matches!(
+                e,
+                CheckpointError::Corrupt { .. } | CheckpointError::Checksum { .. }
+            ),
+            "{e}"
+        );
+        // not HDF5
+        let e = RigidScene::from_checkpoint_bytes("x.h5", b"not hdf5".to_vec()).expect_err("text");
+        assert!(matches!(e, CheckpointError::NotHdf5 { .. }), "{e}");
+        // a sphere checkpoint is another format
+        let sim =
+            crate::Simulation::new(crate::World::new(), crate::Params::default()).expect("empty");
+        let e = RigidScene::from_checkpoint_bytes("s.h5", sim.checkpoint_bytes().expect("s"))
+            .expect_err("sphere file");
+        assert!(matches!(e, CheckpointError::WrongFormat { .. }), "{e}");
+        // and a rigid one is not a sphere checkpoint
+        let e = crate::Simulation::from_checkpoint_bytes("r.h5", bytes.clone())
+            .expect_err("rigid file");
+        assert!(matches!(e, CheckpointError::WrongFormat { .. }), "{e}");
+        // a flipped byte in the data fails the checksum or the structure, never loads
+        let mut flipped = 0;
+        for at in (bytes.len() / 3..bytes.len()).step_by(97).take(40) {
+            let mut b = bytes.clone();
+            b[at] ^= 0x5a;
+            if RigidScene::from_checkpoint_bytes("f.h5", b).is_err() {
+                flipped += 1;
+            }
+        }
+        assert!(flipped > 0);
+    }
+
+    #[test]
+    fn a_state_that_does_not_fit_the_world_is_refused() {
+        let mut a = scene(MIXED);
+        a.step().expect("step");
+        let good = a.world.state().expect("state");
+        let mut w = scene(MIXED).world;
+        let mut s = good.clone();
+        s.x.pop();
+        assert!(w.restore(s).unwrap_err().contains("body rows"));
+        let mut s = good.clone();
+        s.q[0] = [2.0, 0.0, 0.0, 0.0];
+        assert!(w.restore(s).is_err());
+        let mut s = good.clone();
+        s.v[1][0] = f64::NAN;
+        assert!(w.restore(s).unwrap_err().contains("non-finite"));
+        let mut s = good.clone();
+        s.detector = "{\"pairs\": [[[0, {\"kind\": \"body\", \"index\": 99}], {\"manifolds\": [], \"workspace\": null}]]}".into();
+        assert!(w.restore(s).unwrap_err().contains("out of range"));
+        assert!(w.restore(good).is_ok());
+    }
+}

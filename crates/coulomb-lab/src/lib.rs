@@ -1,6 +1,14 @@
 //! The research harness of coulomb, kept out of the library crate (issue #42, item 7): the
 //! library holds what a user of it calls; the experiments that chose its methods live here.
 //!
+//! Modules:
+//! - [`outputs`]: how every file of `coulomb` is written (paths checked before a run, atomic
+//!   replacement, JSON without −0.0), shared with the CLI;
+//! - [`progress`]: the progress report an engine gives while it runs time steps, shown as
+//!   its caller decides;
+//! - [`threads`]: the worker-thread pool of the parallel runs.
+//!
+//! Examples:
 //! - `examples/rigid_probe.rs`: the methods tried on the rigid (rank-deficient) problems —
 //!   Levenberg–Marquardt variants, continuation in μ, ADMM, the interior point on the law,
 //!   Newton on s = F(s) — each on one FCLIB file (docs/rigid.md, "Reproducing");
@@ -10,4 +18,8 @@
 //!   `cargo run --release -p coulomb-lab --example vspace_probe -- FILE.hdf5 [WARM_S] [LIMIT_S]`.
 //!
 //! Still in the CLI crate, not moved yet: the engines of `coulomb corpus`, `coulomb paper` and
-//! `coulomb bench` (they use the CLI's argument, output and progress modules).
+//! `coulomb bench`.
+
+pub mod outputs;
+pub mod progress;
+pub mod threads;

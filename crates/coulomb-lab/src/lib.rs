@@ -1,7 +1,13 @@
 //! The research harness of coulomb, kept out of the library crate (issue #42, item 7): the
-//! library holds what a user of it calls; the experiments that chose its methods live here.
+//! library holds what a user of it calls; the experiments that chose its methods, and the
+//! engines of the CLI's research subcommands, live here. Those subcommands stay in the CLI,
+//! thin: they parse their arguments into the plain option structs of these modules, show the
+//! progress, print and choose the exit status.
 //!
 //! Modules:
+//! - [`corpus`]: the test corpus — the problem generators of each class (granular steps,
+//!   stacked rigid boxes, gyroscopic boxes, non-symmetric W, the Painlevé rod, random
+//!   problems), the rank of W and its asymmetry, the FCLIB files and `manifest.json`;
 //! - [`outputs`]: how every file of `coulomb` is written (paths checked before a run, atomic
 //!   replacement, JSON without −0.0), shared with the CLI;
 //! - [`progress`]: the progress report an engine gives while it runs time steps, shown as
@@ -17,9 +23,9 @@
 //!   `coulomb::multiplier` (docs/rigid.md);
 //!   `cargo run --release -p coulomb-lab --example vspace_probe -- FILE.hdf5 [WARM_S] [LIMIT_S]`.
 //!
-//! Still in the CLI crate, not moved yet: the engines of `coulomb corpus`, `coulomb paper` and
-//! `coulomb bench`.
+//! Still in the CLI crate, not moved yet: the engines of `coulomb paper` and `coulomb bench`.
 
+pub mod corpus;
 pub mod outputs;
 pub mod progress;
 pub mod threads;

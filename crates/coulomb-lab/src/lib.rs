@@ -8,6 +8,9 @@
 //! - [`corpus`]: the test corpus — the problem generators of each class (granular steps,
 //!   stacked rigid boxes, gyroscopic boxes, non-symmetric W, the Painlevé rod, random
 //!   problems), the rank of W and its asymmetry, the FCLIB files and `manifest.json`;
+//! - [`bench`](mod@bench): solvers side by side on FCLIB collections — timed cold-start
+//!   solves, their records judged by one rule, the Dolan–Moré performance profile, the table,
+//!   the JSON and the SVG of the profile;
 //! - [`outputs`]: how every file of `coulomb` is written (paths checked before a run, atomic
 //!   replacement, JSON without −0.0), shared with the CLI;
 //! - [`progress`]: the progress report an engine gives while it runs time steps, shown as
@@ -23,8 +26,9 @@
 //!   `coulomb::multiplier` (docs/rigid.md);
 //!   `cargo run --release -p coulomb-lab --example vspace_probe -- FILE.hdf5 [WARM_S] [LIMIT_S]`.
 //!
-//! Still in the CLI crate, not moved yet: the engines of `coulomb paper` and `coulomb bench`.
+//! Still in the CLI crate, not moved yet: the engine of `coulomb paper`.
 
+pub mod bench;
 pub mod corpus;
 pub mod outputs;
 pub mod progress;

@@ -139,7 +139,7 @@ def main():
       f"other jobs; release build, default solver (`Settings::default()`), tol 1e-8, time "
       f"limit {a.time_limit} s per file, one run per file (times are single cold-start solves).")
     p()
-    p("The corpus (`crates/coulomb-cli/src/cmd/corpus*`; files `CLASS--NAME.hdf5` plus "
+    p("The corpus (`crates/coulomb-lab/src/corpus*`; files `CLASS--NAME.hdf5` plus "
       "`manifest.json`, generated deterministically, never committed) has six classes:")
     p()
     p("- **granular**: steps of coulomb's own Moreau–Jean simulations (`box`, `funnel`, "

@@ -86,14 +86,7 @@ pub const BAD_INPUT: u8 = 2;
 pub const WRITE_FAILED: u8 = 4;
 
 /// An output that could not be written (the destination is untouched): exit status 4.
-#[derive(Debug, thiserror::Error)]
-#[error("cannot write {path}: {source}")]
-pub struct WriteFailed {
-    /// the destination
-    pub path: String,
-    /// the OS error
-    pub source: std::io::Error,
-}
+pub use coulomb_lab::outputs::WriteFailed;
 
 /// Whether `e` is (or wraps, as the payload of an [`std::io::Error`]) a refusal of
 /// [`coulomb::atomic`]: the output path exists and is not a regular file.

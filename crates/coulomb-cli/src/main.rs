@@ -6,15 +6,14 @@ mod existence_json;
 mod exit;
 mod interrupt;
 mod method;
-mod outputs;
 mod progress;
 mod read;
 mod scene_arg;
 mod sim_args;
-mod threads;
 mod values;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
+use coulomb_lab::{outputs, threads};
 use exit::Outcome;
 use std::process::ExitCode;
 

@@ -2,7 +2,8 @@
 //! `--outer` parse into [`coulomb::InnerKind`] / [`coulomb::OuterKind`] through their
 //! `FromStr` (one spelling for the CLI, the Python bindings and the reports), with clap's list
 //! of possible values in `--help` and in the error of a bad value; and the solver settings of
-//! the time-stepping commands (`simulate`, `paper`, `corpus`), built on the library's presets.
+//! `simulate`, built on the library's presets (those of `paper`:
+//! [`coulomb_lab::paper::paper_settings`]).
 
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use coulomb::{InnerKind, Method, OuterKind, Settings};
@@ -58,41 +59,14 @@ pub fn time_stepping_settings(
     }
 }
 
-/// The paper's algorithm ([`Settings::paper`]) with `inner`, stopped by rule (6.1) with
-/// ε = `fp_tol` (when > 0) or after `max_outer` subproblems.
-pub fn paper_settings(inner: InnerKind, tol: f64, fp_tol: f64, max_outer: usize) -> Settings {
-    Settings {
-        tol,
-        max_outer,
-        fixed_point_tol: (fp_tol > 0.0).then_some(fp_tol),
-        ..Settings::paper(inner)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn presets_are_the_former_hand_built_settings() {
-        // what simulate and paper built by hand before the library had presets
-        let inner = InnerKind::Apgd;
-        let by_hand = Settings {
-            tol: 1e-4,
-            max_outer: 20,
-            max_inner: 250,
-            fixed_point_tol: Some(0.01),
-            inner_tol_factor: 1e-6,
-            outer: OuterKind::FixedPoint,
-            newton_steps: 0,
-            ..Settings::method(inner, OuterKind::Anderson)
-        };
-        assert_eq!(paper_settings(inner, 1e-4, 0.01, 20), by_hand);
-        let ipm = paper_settings(InnerKind::Ipm, 1e-4, 0.0, 20);
-        assert_eq!(
-            (ipm.max_inner, ipm.fixed_point_tol),
-            (Settings::default().max_inner, None)
-        );
+        // what simulate built by hand before the library had presets (paper's:
+        // coulomb_lab::paper's tests)
         let sim = time_stepping_settings(InnerKind::Pgs, 1e-4, 0.0, 20, None);
         assert_eq!(
             sim,

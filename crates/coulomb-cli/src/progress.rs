@@ -81,6 +81,22 @@ impl Progress {
     }
 }
 
+/// The progress report of the engines of `coulomb_lab` (`paper`'s runs) is this one.
+impl coulomb_lab::progress::Steps for Progress {
+    fn set_prefix(&self, prefix: String) {
+        Progress::set_prefix(self, prefix);
+    }
+    fn set_message(&self, message: String) {
+        Progress::set_message(self, message);
+    }
+    fn inc(&self, delta: u64) {
+        Progress::inc(self, delta);
+    }
+    fn finish_and_clear(&self) {
+        Progress::finish_and_clear(self);
+    }
+}
+
 /// Plain progress lines: `PREFIX: step K/N, MESSAGE (T s)`, at most one per `every`.
 struct Plain {
     len: usize,

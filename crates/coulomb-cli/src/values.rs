@@ -125,6 +125,30 @@ pub fn beads(s: &str) -> Result<usize, String> {
     Ok(n)
 }
 
+/// One of the names of `all` (`name` of each, with its help `about` when given), parsed back
+/// into its value: clap's list of possible values in `--help` and in the error of a bad value,
+/// for the plain enums of `coulomb_lab` (which do not depend on clap).
+pub fn one_of<T: Copy + Send + Sync + 'static>(
+    all: &'static [T],
+    name: fn(T) -> &'static str,
+    about: Option<fn(T) -> &'static str>,
+) -> impl clap::builder::TypedValueParser<Value = T> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    PossibleValuesParser::new(all.iter().map(move |&t| {
+        let v = PossibleValue::new(name(t));
+        match about {
+            Some(about) => v.help(about(t)),
+            None => v,
+        }
+    }))
+    .try_map(move |s| {
+        all.iter()
+            .copied()
+            .find(|&t| name(t) == s)
+            .ok_or("not one of the listed names")
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,10 +1,10 @@
-//! `coulomb paper scaling --accurate`: time per step against the number of beads with every
+//! The accurate scaling study (`coulomb paper scaling --accurate`): time per step against the number of beads with every
 //! step solved to err ≤ tol (docs/error.md) by body-level nonsmooth Gauss–Seidel
 //! (coulomb_granular::nsgs), the physics of `coulomb simulate`, for each thread count.
 //! Table: time per step and per contact, sweeps, steps converged, peak memory; also whether
 //! the runs with different thread counts ended in bitwise the same state.
 
-use crate::progress::bar as progress;
+use crate::progress::NewSteps;
 use crate::threads::with_threads;
 use anyhow::{bail, Context};
 use coulomb::InnerKind;
@@ -15,55 +15,42 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// Arguments of `coulomb paper scaling`.
-#[derive(clap::Args, Debug)]
-pub struct ScalingArgs {
+/// Options of [`super::scaling`] (`coulomb paper scaling`'s arguments).
+#[derive(Debug, Clone)]
+pub struct Scaling {
     /// bead counts
-    #[arg(long, value_delimiter = ',', default_values_t = vec![150usize, 300, 600, 1200, 2500, 5000, 10000], value_parser = crate::values::beads)]
     pub beads: Vec<usize>,
     /// untimed steps first (the beads land and the contacts form)
-    #[arg(long, default_value_t = 50, value_parser = crate::values::count0)]
     pub settle: usize,
     /// timed steps after the settling ones
-    #[arg(long, default_value_t = 50, value_parser = crate::values::count)]
     pub window: usize,
     /// inner solver (the paper's tolerance: (6.1) with ε = 0.01, ≤ 20 subproblems)
-    #[arg(long, default_value_t = InnerKind::Apgd, value_parser = crate::method::inner())]
     pub inner: InnerKind,
     /// seed
-    #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// SVG file; the data go beside it as JSON (same name, .json)
-    #[arg(long, default_value = "scaling.svg")]
     pub svg: PathBuf,
     /// also write the table as Markdown into this file
-    #[arg(long)]
     pub markdown: Option<PathBuf>,
     /// accurate mode: every step solved to err ≤ --tol by body-level Gauss–Seidel (the
     /// physics of `coulomb simulate`), once per --threads value; see docs/scaling.md
-    #[arg(long)]
     pub accurate: bool,
     /// accurate mode: tolerance on the error of docs/error.md at every step
-    #[arg(long, default_value_t = 1e-4, value_parser = crate::values::positive)]
     pub tol: f64,
     /// accurate mode: thread counts to run each size with (default: 1 and all cores)
-    #[arg(long, value_delimiter = ',', value_parser = crate::values::threads)]
     pub threads: Vec<usize>,
     /// accurate mode: cap on Gauss–Seidel sweeps per step
-    #[arg(long, default_value_t = 20_000, value_parser = crate::values::count)]
     pub max_sweeps: usize,
     /// accurate mode: box layout — `spread` (default: the calibrated floor, the partial top
     /// layer spread over it at random) or `calibrated` (the partial top layer fills the
     /// first rows, as in the paper runs); see docs/scaling.md, "Scene sizing"
-    #[arg(long, value_enum, default_value_t = Layout::Spread)]
     pub layout: Layout,
     /// accurate mode: over-relaxation ω ∈ [1, 2) of the Gauss–Seidel updates
-    #[arg(long, default_value_t = 1.5, value_parser = crate::values::relaxation)]
     pub relaxation: f64,
 }
 
 /// The box layout of the accurate study.
-#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Layout {
     /// the calibrated floor with the partial top layer spread over it at random
@@ -75,6 +62,25 @@ pub enum Layout {
 }
 
 impl Layout {
+    /// Every layout.
+    pub const ALL: [Layout; 2] = [Layout::Spread, Layout::Calibrated];
+
+    /// The layout's name (as in the table and the data).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Layout::Spread => "spread",
+            Layout::Calibrated => "calibrated",
+        }
+    }
+
+    /// What the layout is, in a few words.
+    pub fn about(self) -> &'static str {
+        match self {
+            Layout::Spread => "the calibrated floor with the partial top layer spread over it at random (`Scene::box_spread`): the same heap structure at every N",
+            Layout::Calibrated => "the calibrated layout of the paper runs (`Scene::Box`): the partial top layer fills the first rows, a two-layer strip whose width grows as √N",
+        }
+    }
+
     fn build(self, beads: usize, seed: u64) -> coulomb_granular::World {
         match self {
             Layout::Spread => Scene::box_spread(beads, seed),
@@ -181,13 +187,18 @@ pub fn accurate_params(tol: f64, max_sweeps: usize, relaxation: f64) -> Params {
     }
 }
 
-fn run_one(beads: usize, threads: usize, a: &ScalingArgs) -> anyhow::Result<AccuratePoint> {
+fn run_one(
+    beads: usize,
+    threads: usize,
+    a: &Scaling,
+    bars: NewSteps<'_>,
+) -> anyhow::Result<AccuratePoint> {
     let label = format!("{beads} beads, {threads} thread(s)");
     let params = accurate_params(a.tol, a.max_sweeps, a.relaxation);
     with_threads(Some(threads), || {
         let mut sim = Simulation::new(a.layout.build(beads, a.seed), params)?;
         let total = a.settle + a.window;
-        let pb = progress(total, false);
+        let pb = bars(total);
         pb.set_prefix(label.clone());
         let mut rows = Vec::new();
         let mut converged_all = 0;
@@ -263,8 +274,8 @@ fn run_one(beads: usize, threads: usize, a: &ScalingArgs) -> anyhow::Result<Accu
     })
 }
 
-/// Runs the accurate scaling study.
-pub fn run(a: &ScalingArgs) -> anyhow::Result<()> {
+/// Runs the accurate scaling study; the table goes to `show`.
+pub fn run(a: &Scaling, bars: NewSteps<'_>, show: &mut dyn FnMut(&str)) -> anyhow::Result<()> {
     if a.beads.is_empty() || a.beads.iter().any(|&b| b == 0 || b > 1_000_000) {
         bail!("--beads must list bead counts in 1..=1000000");
     }
@@ -295,7 +306,7 @@ pub fn run(a: &ScalingArgs) -> anyhow::Result<()> {
     let started = Instant::now();
     for &b in &beads {
         for &t in &threads {
-            let p = run_one(b, t, a)?;
+            let p = run_one(b, t, a, bars)?;
             eprintln!(
                 "{b} beads, {t} thread(s): {:.0} contacts, {:.0} sweeps, {:.2} ms/step, {:.2} µs/contact, {}/{} converged, max err {:.1e}, peak RSS {:.0} MiB ({:.0} s so far)",
                 p.contacts,
@@ -312,7 +323,7 @@ pub fn run(a: &ScalingArgs) -> anyhow::Result<()> {
         }
     }
     let md = table(a, &beads, &threads, cores, &points);
-    print!("{md}");
+    show(&md);
     if let Some(path) = &a.markdown {
         crate::outputs::write(path, md.as_bytes())?;
     }
@@ -327,7 +338,7 @@ fn opt(x: Option<f64>) -> String {
 }
 
 fn table(
-    a: &ScalingArgs,
+    a: &Scaling,
     beads: &[usize],
     threads: &[usize],
     cores: usize,
@@ -349,10 +360,10 @@ fn table(
         a.window,
         a.tol,
         a.relaxation,
-        layout_name(a.layout),
+        a.layout.as_str(),
         a.seed,
         coulomb_granular::scene::BOX_LAYERS,
-        layout_name(a.layout),
+        a.layout.as_str(),
         a.tol,
         a.settle,
         a.settle + a.window,
@@ -400,13 +411,6 @@ fn table(
         );
     }
     md
-}
-
-fn layout_name(l: Layout) -> &'static str {
-    match l {
-        Layout::Spread => "spread",
-        Layout::Calibrated => "calibrated",
-    }
 }
 
 /// Log–log plot of µs per contact per step against beads, one line per thread count.

@@ -1,4 +1,5 @@
-//! Every file `coulomb` writes goes through here: paths are checked before a long run starts
+//! Every file `coulomb` writes goes through here (the CLI's commands and the engines of this
+//! crate alike): paths are checked before a long run starts
 //! ([`check`]), an output that is one of the run's inputs is refused, files are replaced
 //! atomically ([`coulomb::atomic::write`]: temporary file in the same folder, then rename, so a
 //! failed write never truncates anything), and replacing an existing file is said on stderr.
@@ -6,9 +7,19 @@
 //! Decision: an existing output file is replaced (no `--force`), with a note on stderr
 //! (`note: replacing existing FILE`); an input of the same run is never replaced.
 
-use crate::exit::WriteFailed;
 use anyhow::bail;
 use std::path::{Path, PathBuf};
+
+/// An output that could not be written (the destination is untouched): the CLI's exit
+/// status 4.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot write {path}: {source}")]
+pub struct WriteFailed {
+    /// the destination
+    pub path: String,
+    /// the OS error
+    pub source: std::io::Error,
+}
 
 /// Whether `a` and `b` name the same existing file (same device and inode on Unix; same
 /// canonical path elsewhere). False when either does not exist.
@@ -33,7 +44,7 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
 /// Checks an output path before the work starts: not one of `inputs`, not a directory,
 /// device, FIFO, socket or dangling symbolic link ([`coulomb::atomic::destination`]: the
 /// message then starts with "output path refused"), and a file can be created in its folder
-/// now. `what` names the option (`--output`). Exit status 2 (see `crate::exit`).
+/// now. `what` names the option (`--output`). The CLI's exit status 2.
 pub fn check(what: &str, path: &Path, inputs: &[&Path]) -> anyhow::Result<()> {
     for input in inputs {
         if same_file(path, input) {

@@ -158,7 +158,7 @@ fn add_jmj(j: &[[f64; 6]; 3], minv: &[f64; 6], out: &mut [f64; 9]) {
 
 /// Inverse of a symmetric positive definite 3 × 3 matrix by cofactors; `None` unless the
 /// leading minors are positive (relative to the diagonal) and the result finite.
-fn invert_spd(a: &[f64; 9]) -> Option<[f64; 9]> {
+pub fn invert_spd(a: &[f64; 9]) -> Option<[f64; 9]> {
     let scale = a[0].abs() + a[4].abs() + a[8].abs();
     let m2 = a[0] * a[4] - a[1] * a[3];
     let c00 = a[4] * a[8] - a[5] * a[7];

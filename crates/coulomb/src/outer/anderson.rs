@@ -1,6 +1,7 @@
 //! Safeguarded Anderson mixing on the outer variable s (§3.3): an acceleration of the
 //! successive approximation s ← F(s) of (3.19).
 
+use crate::linalg::dense::least_squares;
 /// Safeguarded Anderson mixing (type II) on g(s) = F(s) − s, with memory `m`:
 ///
 /// ```text
@@ -87,67 +88,6 @@ impl Anderson {
         self.dg.clear();
         self.df.clear();
     }
-}
-
-/// Ridge added to the normal equations of [`least_squares`], relative to their trace (a
-/// numerical safeguard of a k × k solve, k ≤ memory, not a tuning parameter).
-const RIDGE: f64 = 1e-10;
-
-/// A pivot of at most this fraction of the trace makes [`least_squares`] give up (the
-/// differences are numerically dependent; the step is then the plain fixed point).
-const PIVOT: f64 = 1e-14;
-
-/// γ = argmin ‖g − Σ γⱼ aⱼ‖ by the normal equations with a small ridge (k ≤ 10 columns);
-/// None if the system is singular or the coefficients are huge.
-fn least_squares(a: &[Vec<f64>], g: &[f64]) -> Option<Vec<f64>> {
-    let k = a.len();
-    if k == 0 {
-        return Some(Vec::new());
-    }
-    let dot = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>();
-    let mut n = vec![0.0; k * k];
-    let mut rhs = vec![0.0; k];
-    for i in 0..k {
-        for j in 0..=i {
-            let v = dot(&a[i], &a[j]);
-            n[i * k + j] = v;
-            n[j * k + i] = v;
-        }
-        rhs[i] = dot(&a[i], g);
-    }
-    let trace: f64 = (0..k).map(|i| n[i * k + i]).sum();
-    if trace.is_nan() || trace <= 0.0 {
-        return None;
-    }
-    for i in 0..k {
-        n[i * k + i] += RIDGE * trace;
-    }
-    // Gaussian elimination with partial pivoting
-    for c in 0..k {
-        let p = (c..k).max_by(|&x, &y| n[x * k + c].abs().total_cmp(&n[y * k + c].abs()))?;
-        if n[p * k + c].abs() <= PIVOT * trace {
-            return None;
-        }
-        if p != c {
-            for j in 0..k {
-                n.swap(c * k + j, p * k + j);
-            }
-            rhs.swap(c, p);
-        }
-        for row in c + 1..k {
-            let f = n[row * k + c] / n[c * k + c];
-            for j in c..k {
-                n[row * k + j] -= f * n[c * k + j];
-            }
-            rhs[row] -= f * rhs[c];
-        }
-    }
-    let mut x = vec![0.0; k];
-    for c in (0..k).rev() {
-        let s: f64 = (c + 1..k).map(|j| n[c * k + j] * x[j]).sum();
-        x[c] = (rhs[c] - s) / n[c * k + c];
-    }
-    (x.iter().all(|v| v.is_finite() && v.abs() < 1e4)).then_some(x)
 }
 
 #[cfg(test)]

@@ -56,7 +56,9 @@ use crate::contact::{candidate_pairs, detect_with_speed, Contact, Partner};
 use crate::math::Vec3;
 use crate::nsgs::StepProblem;
 use crate::projection::project;
-use crate::simulation::{Params, Simulation, SimulationError, StepMethod, StepStats};
+use crate::simulation::{
+    check_spheres, Params, Simulation, SimulationError, StepMethod, StepStats,
+};
 use crate::world::{Obstacle, Sphere, World};
 use serde::Serialize;
 use slab::{bin_of, quantile_bounds, Slabs, HISTOGRAM_BINS};
@@ -73,6 +75,11 @@ const WARM_WORDS: usize = 5;
 const PROJECTION_ROUNDS: usize = 4;
 /// Sweeps between two exact recomputations of v from r.
 const REFRESH: usize = 16;
+
+/// The beads of a distributed run's initial state, handed to the callback one at a time in
+/// global id order; called once per pass of [`DistributedSimulation::from_stream`], giving the
+/// same sequence every time.
+pub type BeadStream<'a> = dyn Fn(&mut dyn FnMut(Sphere)) + 'a;
 
 /// Statistics of one distributed step: the [`StepStats`] of a single-process step (reduced
 /// over the ranks) and the decomposition's own numbers.
@@ -163,15 +170,53 @@ pub struct DistributedSimulation {
     rmax: f64,
     rmin: f64,
     total: usize,
+    held_at_build: usize,
 }
 
 impl DistributedSimulation {
     /// A distributed simulation of `world` (the same world on every rank, e.g. built from the
-    /// same scene and seed): parameters checked as by [`Simulation::new`], rank r first keeps
-    /// beads r N/P … (r+1) N/P − 1, then the slabs are placed at the quantiles and the beads
-    /// migrate to their owners.
+    /// same scene and seed): as [`Self::from_stream`] with the world's beads, except that
+    /// every rank holds all N beads until it returns ([`Self::held_at_build`] = N).
     pub fn new(comm: Comm, world: World, params: Params) -> Result<Self, SimulationError> {
-        if world.materials.is_some() {
+        let World {
+            bodies,
+            obstacles,
+            gravity,
+            materials,
+        } = world;
+        let skeleton = World {
+            bodies: Vec::new(),
+            obstacles,
+            gravity,
+            materials,
+        };
+        let total = bodies.len();
+        let mut sim = Self::from_stream(comm, skeleton, params, &|emit| {
+            for b in &bodies {
+                emit(b.clone());
+            }
+        })?;
+        sim.held_at_build = total.max(sim.held_at_build);
+        Ok(sim)
+    }
+
+    /// A distributed simulation of the world `skeleton` (obstacles, gravity; its beads
+    /// ignored) with the beads handed out by `beads`, in global id order, the same sequence
+    /// on every rank and at every call (e.g. [`crate::Scene::for_each_bead`]). Parameters
+    /// and beads are checked as by [`Simulation::new`] (every rank sees every bead, so all
+    /// return the same error). Three passes over the beads, none holding them: (1) count,
+    /// checks, the extent along x and y (the slabs go along the wider one) and the radii;
+    /// (2) a histogram of [`HISTOGRAM_BINS`] bins along the slab axis, from which every rank
+    /// computes the same bounds at the bead-count quantiles ([`quantile_bounds`]); (3) each
+    /// rank keeps the beads of its slab. Memory per rank: its part, about N / ranks beads
+    /// ([`Self::held_at_build`]). The state is that of [`Self::new`] on the built world.
+    pub fn from_stream(
+        comm: Comm,
+        skeleton: World,
+        params: Params,
+        beads: &BeadStream<'_>,
+    ) -> Result<Self, SimulationError> {
+        if skeleton.materials.is_some() {
             // per-pair contact laws are not carried by the subdomain exchange
             return Err(SimulationError::Parameter(
                 "per-pair materials are not supported by the distributed step (use one process)"
@@ -186,48 +231,81 @@ impl DistributedSimulation {
                 params.rolling_friction
             )));
         }
-        let sim = Simulation::new(world, params)?;
+        let skeleton = World {
+            bodies: Vec::new(),
+            ..skeleton
+        };
+        let sim = Simulation::new(skeleton, params)?;
         let Simulation { world, params, .. } = sim;
         let (rank, size) = (comm.rank(), comm.size());
-        let n = world.bodies.len();
         let max_sweeps = match params.method {
             StepMethod::Nsgs(s) => s.max_sweeps,
             StepMethod::Library => 20_000,
         };
-        let spread = |f: fn(&Sphere) -> f64| {
-            let (lo, hi) = world
-                .bodies
-                .iter()
-                .map(f)
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| {
-                    (l.min(x), h.max(x))
-                });
-            hi - lo
-        };
-        let axis = if spread(|b| b.position.y) > spread(|b| b.position.x) {
-            1
+
+        // pass 1: count, checks, extents, radii
+        let mut n = 0usize;
+        let mut bad: Option<SimulationError> = None;
+        let mut ext = [
+            (f64::INFINITY, f64::NEG_INFINITY),
+            (f64::INFINITY, f64::NEG_INFINITY),
+        ];
+        let (mut rmax, mut rmin) = (0.0f64, f64::INFINITY);
+        beads(&mut |b: Sphere| {
+            if bad.is_none() {
+                if let Err(e) = check_spheres(std::slice::from_ref(&b), n, 1) {
+                    bad = Some(e);
+                }
+            }
+            for (d, x) in [b.position.x, b.position.y].into_iter().enumerate() {
+                ext[d] = (ext[d].0.min(x), ext[d].1.max(x));
+            }
+            rmax = rmax.max(b.radius);
+            rmin = rmin.min(b.radius);
+            n += 1;
+        });
+        if let Some(e) = bad {
+            return Err(e);
+        }
+        let axis = usize::from(ext[1].1 - ext[1].0 > ext[0].1 - ext[0].0);
+        let coord = |p: Vec3| if axis == 1 { p.y } else { p.x };
+
+        // pass 2: the bead-count histogram along the axis, the same on every rank
+        let slabs = if size > 1 {
+            let (lo, hi) = if n > 0 { ext[axis] } else { (0.0, 0.0) };
+            let mut counts = vec![0.0; HISTOGRAM_BINS];
+            beads(&mut |b: Sphere| counts[bin_of(coord(b.position), lo, hi)] += 1.0);
+            Slabs::from_inner(&quantile_bounds(&counts, lo, hi, size))
         } else {
-            0
+            Slabs::from_inner(&[])
         };
-        let rmax = world.bodies.iter().map(|b| b.radius).fold(0.0, f64::max);
-        let rmin = world
-            .bodies
-            .iter()
-            .map(|b| b.radius)
-            .fold(f64::INFINITY, f64::min);
-        let (lo, hi) = (rank * n / size, (rank + 1) * n / size);
-        let beads: Vec<(usize, Sphere)> = (lo..hi).map(|i| (i, world.bodies[i].clone())).collect();
-        let mut sim = Self {
+
+        // pass 3: this rank's beads, in global id order
+        let mut mine: Vec<(usize, Sphere)> = Vec::new();
+        let mut gid = 0usize;
+        beads(&mut |b: Sphere| {
+            if slabs.owner(coord(b.position)) == rank {
+                mine.push((gid, b));
+            }
+            gid += 1;
+        });
+        if gid != n {
+            return Err(SimulationError::Parameter(format!(
+                "the bead stream gave {gid} beads after {n}: it must give the same beads at every pass"
+            )));
+        }
+        Ok(Self {
             comm,
             params,
             time: 0.0,
             steps_done: 0,
             rebalance_every: 20,
             max_sweeps,
-            forces: vec![Vec3::ZERO; beads.len()],
-            beads,
+            forces: vec![Vec3::ZERO; mine.len()],
+            held_at_build: mine.len(),
+            beads: mine,
             contacts: Vec::new(),
-            slabs: Slabs::from_inner(&vec![0.0; size - 1]),
+            slabs,
             axis,
             obstacles: world.obstacles,
             gravity: world.gravity,
@@ -236,10 +314,13 @@ impl DistributedSimulation {
             rmax,
             rmin,
             total: n,
-        };
-        sim.rebalance();
-        sim.migrate();
-        Ok(sim)
+        })
+    }
+
+    /// Most beads this rank held at once while the simulation was built: its part for
+    /// [`Self::from_stream`], all N for [`Self::new`].
+    pub fn held_at_build(&self) -> usize {
+        self.held_at_build
     }
 
     /// Total number of beads.

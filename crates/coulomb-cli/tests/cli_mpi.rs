@@ -26,7 +26,17 @@ fn mpirun(np: usize, args: &[&str]) -> std::process::Output {
 /// to the tolerance 1e-4 on the global error of docs/error.md, and the same physics
 /// statistically (mean contacts within 3 %, final energy within 1 %).
 fn matches_one_process(two: &serde_json::Value, one: &serde_json::Value, steps: u64) {
-    assert_eq!(two["ranks"], 2, "{two}");
+    matches_one_process_on(2, two, one, steps);
+}
+
+/// [`matches_one_process`] for a run on `ranks` ranks.
+fn matches_one_process_on(
+    ranks: usize,
+    two: &serde_json::Value,
+    one: &serde_json::Value,
+    steps: u64,
+) {
+    assert_eq!(two["ranks"], ranks, "{two}");
     assert_eq!(two["converged_steps"], steps, "{two}");
     assert!(two["max_error"].as_f64().unwrap() <= 1e-4, "{two}");
     let rel = |k: &str| {
@@ -110,6 +120,39 @@ fn distributed_two_ranks_match_one_process() {
         points += n;
     }
     assert_eq!(points, 300);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Four ranks (two of them with two neighbours each, point-to-point exchanges both ways) and
+/// a rebalance every 10 steps: the same physics as one process, every step to the tolerance,
+/// and no migration needing the all-to-all fallback on this settling heap.
+#[test]
+fn distributed_four_ranks_match_one_process() {
+    let dir = temp_dir("mpi-four");
+    let out = dir.join("run");
+    let out_s = out.to_string_lossy().into_owned();
+    let common = [
+        "simulate", "box", "--beads", "800", "--steps", "40", "--json",
+    ];
+    let mut args: Vec<&str> = common.to_vec();
+    args.extend([
+        "--rebalance-every",
+        "10",
+        "--frames-every",
+        "0",
+        "--output",
+        &out_s,
+    ]);
+    let four = stdout_json(&mpirun(4, &args));
+    let one = stdout_json(&common::coulomb(&common));
+    matches_one_process_on(4, &four, &one, 40);
+    let dist = read_json(&out.join("distributed.json"));
+    for d in dist.as_array().unwrap() {
+        assert_eq!(d["ranks"], 4);
+        assert!(d["ghosts"].as_u64().unwrap() > 0, "{d}");
+        assert!(d["imbalance"].as_f64().unwrap() <= 1.15, "{d}");
+        assert_eq!(d["migration_all_to_all"], false, "{d}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 

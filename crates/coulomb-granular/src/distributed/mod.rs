@@ -1,15 +1,25 @@
 //! Distributed Moreau–Jean time stepping over MPI (feature `mpi`; design and measurements in
 //! docs/distributed.md).
 //!
+//! * **Building.** [`DistributedSimulation::from_stream`] takes the beads one at a time in
+//!   global id order (a built-in scene draws them again at each pass,
+//!   [`crate::Scene::for_each_bead`]): every rank sees every bead but keeps only those of its
+//!   slab, so that memory per rank is ∝ N / ranks from the start; [`DistributedSimulation::new`]
+//!   does the same from a whole world (a scene file, built on every rank).
 //! * **Decomposition.** Slabs along the wider horizontal axis of the initial bead cloud
 //!   ([`slab`]): rank r owns the beads whose coordinate lies in its slab, the inner bounds at
-//!   bead-count quantiles of a histogram reduced over all ranks, recomputed every
+//!   bead-count quantiles of a histogram (at the start from the streamed beads, the same on
+//!   every rank; later reduced over all ranks), recomputed every
 //!   [`DistributedSimulation::rebalance_every`] steps (the heap spreads as it settles). Beads
 //!   that leave a slab migrate to their new owner at the start of every step, with the warm
-//!   start impulses of the contacts they own.
+//!   start impulses of the contacts they own: point to point with the adjacent slabs, or by
+//!   one all-to-all exchange when some bead goes farther (after a rebalance).
 //! * **Ghosts.** Each rank receives copies of the beads of other ranks within a halo
 //!   2 R_max + margin of its slab, the margin of the broad phase (δ_k + 2 v_max h γ); every pair
 //!   that can be active at this step then has both beads on the rank owning its lower-id bead.
+//!   Ghost beads and, in the sweeps, their velocities and impulses travel point to point
+//!   (`MPI_Isend`/`MPI_Irecv`) between neighbouring slabs only ([`Slabs::neighbours`]: the
+//!   slabs within the halo of each other), never through an all-to-all.
 //! * **Contacts.** Detected on owned + ghost beads (ordered by global id, so that a contact has
 //!   the same frame as on one process); contact (A, B) with id A < id B, and every contact with an
 //!   obstacle, is owned by the owner of A. Interface contacts are those with a ghost B.
@@ -107,6 +117,9 @@ pub struct DistributedStats {
     pub interface_contacts: usize,
     /// beads that changed rank at the start of the step
     pub migrated: usize,
+    /// whether that migration went by one all-to-all exchange (some bead went beyond the
+    /// adjacent slab) instead of point to point with the adjacent ranks
+    pub migration_all_to_all: bool,
     /// most beads owned by one rank divided by the mean
     pub imbalance: f64,
 }
@@ -120,6 +133,8 @@ struct Ghosts {
     send: Vec<Vec<usize>>,
     /// recv[r]: ghost indices received from rank r, in order
     recv: Vec<Vec<usize>>,
+    /// the ranks this rank exchanges ghosts with ([`Slabs::neighbours`]), ascending
+    peers: Vec<usize>,
 }
 
 /// The beads a rank works on in a step: owned and ghost, in global id order.
@@ -171,6 +186,8 @@ pub struct DistributedSimulation {
     rmin: f64,
     total: usize,
     held_at_build: usize,
+    /// whether the last migration went by all-to-all
+    migrated_all_to_all: bool,
 }
 
 impl DistributedSimulation {
@@ -314,6 +331,7 @@ impl DistributedSimulation {
             rmax,
             rmin,
             total: n,
+            migrated_all_to_all: false,
         })
     }
 
@@ -368,19 +386,28 @@ impl DistributedSimulation {
     }
 
     /// Sends every owned bead outside this rank's slab to its owner, with the warm-start
-    /// impulses of the contacts it owns; returns the number of beads sent.
+    /// impulses of the contacts it owns; returns the number of beads sent. Point to point with
+    /// the adjacent slabs (r ± 1) when every bead on every rank goes to one of those (a flag
+    /// reduced over the ranks decides); otherwise, e.g. after a rebalance moved the bounds
+    /// far, one personalised all-to-all exchange.
     pub fn migrate(&mut self) -> usize {
         let (me, size) = (self.comm.rank(), self.comm.size());
         if size == 1 {
             return 0;
         }
         let mut leaving: HashMap<usize, usize> = HashMap::new();
+        let mut far = 0.0;
         for (gid, b) in &self.beads {
             let dest = self.slabs.owner(self.coord(b.position));
             if dest != me {
                 leaving.insert(*gid, dest);
+                if dest.abs_diff(me) > 1 {
+                    far = 1.0;
+                }
             }
         }
+        let mut any_far = [far];
+        self.comm.max(&mut any_far);
         let mut warm_of: HashMap<usize, Vec<(Partner, [f64; 3])>> = HashMap::new();
         if !leaving.is_empty() {
             let keys: Vec<(usize, Partner)> = self
@@ -420,7 +447,15 @@ impl DistributedSimulation {
                 }
             }
         }
-        let recv = self.comm.exchange(&send);
+        self.migrated_all_to_all = any_far[0] > 0.0;
+        let recv = if self.migrated_all_to_all {
+            self.comm.exchange(&send)
+        } else {
+            let adjacent: Vec<usize> = (me.saturating_sub(1)..(me + 2).min(size))
+                .filter(|&r| r != me)
+                .collect();
+            self.comm.exchange_peers(&adjacent, &send)
+        };
         for buf in recv {
             let mut at = 0;
             while at + BEAD_WORDS <= buf.len() {
@@ -458,6 +493,7 @@ impl DistributedSimulation {
             beads: Vec::new(),
             send: vec![Vec::new(); size],
             recv: vec![Vec::new(); size],
+            peers: self.slabs.neighbours(me, halo),
         };
         if size == 1 {
             return g;
@@ -472,7 +508,7 @@ impl DistributedSimulation {
                 g.send[r].push(i);
             }
         }
-        let recv = self.comm.exchange(&bufs);
+        let recv = self.comm.exchange_peers(&g.peers, &bufs);
         let mut list = Vec::new();
         for (r, buf) in recv.iter().enumerate() {
             for (k, rec) in buf.chunks_exact(BEAD_WORDS).enumerate() {
@@ -555,7 +591,7 @@ impl DistributedSimulation {
             })
             .collect();
         let lens: Vec<usize> = ghosts.send.iter().map(|s| 6 * s.len()).collect();
-        let recv = self.comm.exchange_known(&send, &lens);
+        let recv = self.comm.exchange_peers_known(&ghosts.peers, &send, &lens);
         for (r, buf) in recv.iter().enumerate() {
             for (k, &oi) in ghosts.send[r].iter().enumerate() {
                 let l = local.of_owned[oi];
@@ -588,7 +624,7 @@ impl DistributedSimulation {
             })
             .collect();
         let lens: Vec<usize> = ghosts.recv.iter().map(|s| 6 * s.len()).collect();
-        let recv = self.comm.exchange_known(&send, &lens);
+        let recv = self.comm.exchange_peers_known(&ghosts.peers, &send, &lens);
         for (r, buf) in recv.iter().enumerate() {
             for (k, &gi) in ghosts.recv[r].iter().enumerate() {
                 let Some(&l) = local.of_ghost.get(gi) else {
@@ -1015,6 +1051,7 @@ impl DistributedSimulation {
             ghosts: counts[3] as usize,
             interface_contacts: counts[4] as usize,
             migrated: counts[5] as usize,
+            migration_all_to_all: self.migrated_all_to_all,
             imbalance: maxes[5] * size as f64 / self.total.max(1) as f64,
         })
     }

@@ -306,3 +306,52 @@ fn distributed_more_ranks_than_beads() {
         / one["end_energy"].as_f64().unwrap().abs();
     assert!(rel < 1e-3, "{four}\n{one}");
 }
+
+/// `--grid 2x2` on 4 ranks: balanced cells (each holds N/4 beads within 2 % while building),
+/// the same physics as one process, every step to the tolerance, and fewer ghosts than 4 slabs
+/// on this square floor (the interfaces are shorter); a grid whose cells do not match the
+/// ranks is refused with status 2 and says why.
+#[test]
+fn distributed_grid_2x2_matches_one_process() {
+    let dir = temp_dir("mpi-grid");
+    let common = [
+        "simulate", "box", "--beads", "800", "--steps", "30", "--json",
+    ];
+    let one = stdout_json(&common::coulomb(&common));
+    let mut ghosts = Vec::new();
+    for grid in [None, Some("2x2")] {
+        let out = dir.join(grid.unwrap_or("slabs"));
+        let out_s = out.to_string_lossy().into_owned();
+        let mut args: Vec<&str> = common.to_vec();
+        args.extend(["--frames-every", "0", "--output", &out_s]);
+        if let Some(g) = grid {
+            args.extend(["--grid", g]);
+        }
+        let four = stdout_json(&mpirun(4, &args));
+        matches_one_process_on(4, &four, &one, 30);
+        for m in four["per_rank"].as_array().unwrap() {
+            let held = m["held_at_build"].as_u64().unwrap();
+            assert!(held.abs_diff(200) <= 9, "{grid:?}: {m}");
+        }
+        let dist = read_json(&out.join("distributed.json"));
+        let dist = dist.as_array().unwrap();
+        ghosts.push(dist[0]["ghosts"].as_u64().unwrap());
+        for d in dist {
+            assert!(d["imbalance"].as_f64().unwrap() <= 1.15, "{grid:?}: {d}");
+        }
+    }
+    assert!(
+        ghosts[1] < ghosts[0],
+        "ghosts at step 0, slabs / 2x2: {ghosts:?}"
+    );
+    let out = mpirun(
+        4,
+        &[
+            "simulate", "box", "--beads", "50", "--steps", "1", "--grid", "3x1",
+        ],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("3 × 1 grid has 3 cells for 4 ranks"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

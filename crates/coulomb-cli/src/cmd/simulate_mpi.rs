@@ -83,13 +83,16 @@ fn run_source(args: &Args, source: Source, name: &str) -> anyhow::Result<Outcome
     let rank = comm.rank();
     let stop = args.stop();
     let built = match source {
-        Source::World(world) => DistributedSimulation::new(comm, world, args.params()),
+        Source::World(world) => {
+            DistributedSimulation::new_on(comm, world, args.params(), args.grid)
+        }
         Source::Scene(scene, layout) => {
             let (n, seed) = (args.beads, args.seed);
-            DistributedSimulation::from_stream(
+            DistributedSimulation::from_stream_on(
                 comm,
                 scene.skeleton(seed, &layout),
                 args.params(),
+                args.grid,
                 &|emit| scene.for_each_bead(n, seed, &layout, emit),
             )
         }

@@ -53,6 +53,7 @@
 //!   `coulomb simulate` (same JSON), plus the communication time ([`DistributedStats`]).
 
 mod comm;
+pub mod grid;
 pub mod output;
 pub mod slab;
 pub mod subdomain;
@@ -70,8 +71,9 @@ use crate::simulation::{
     check_spheres, Params, Simulation, SimulationError, StepMethod, StepStats,
 };
 use crate::world::{Obstacle, Sphere, World};
+use grid::Grid;
 use serde::Serialize;
-use slab::{bin_of, quantile_bounds, Slabs, HISTOGRAM_BINS};
+use slab::HISTOGRAM_BINS;
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
 use subdomain::{error_sums, impulses, max_entry, sweep, velocities};
@@ -174,10 +176,8 @@ pub struct DistributedSimulation {
     pub forces: Vec<Vec3>,
     /// the owned contacts of the last step with their impulses, in global ids
     pub contacts: Vec<Contact>,
-    /// the slab bounds
-    pub slabs: Slabs,
-    /// 0: slabs along x, 1: along y
-    pub axis: usize,
+    /// the decomposition: slabs (p × 1) or a p₁ × p₂ grid of cells
+    pub grid: Grid,
     obstacles: Vec<Obstacle>,
     gravity: Vec3,
     warm: HashMap<(usize, Partner), [f64; 3]>,
@@ -195,6 +195,16 @@ impl DistributedSimulation {
     /// same scene and seed): as [`Self::from_stream`] with the world's beads, except that
     /// every rank holds all N beads until it returns ([`Self::held_at_build`] = N).
     pub fn new(comm: Comm, world: World, params: Params) -> Result<Self, SimulationError> {
+        Self::new_on(comm, world, params, None)
+    }
+
+    /// [`Self::new`] on the decomposition `grid` ([`Self::from_stream_on`]).
+    pub fn new_on(
+        comm: Comm,
+        world: World,
+        params: Params,
+        grid: Option<[usize; 2]>,
+    ) -> Result<Self, SimulationError> {
         let World {
             bodies,
             obstacles,
@@ -208,7 +218,7 @@ impl DistributedSimulation {
             materials,
         };
         let total = bodies.len();
-        let mut sim = Self::from_stream(comm, skeleton, params, &|emit| {
+        let mut sim = Self::from_stream_on(comm, skeleton, params, grid, &|emit| {
             for b in &bodies {
                 emit(b.clone());
             }
@@ -233,6 +243,29 @@ impl DistributedSimulation {
         params: Params,
         beads: &BeadStream<'_>,
     ) -> Result<Self, SimulationError> {
+        Self::from_stream_on(comm, skeleton, params, None, beads)
+    }
+
+    /// [`Self::from_stream`] on the decomposition `grid`: None for slabs along the wider
+    /// horizontal axis, `Some([px, py])` for a px × py grid of cells, px slabs along x each cut
+    /// into py cells along y at its own bead-count quantiles (one more pass over the beads);
+    /// px py must be the number of ranks (error otherwise).
+    pub fn from_stream_on(
+        comm: Comm,
+        skeleton: World,
+        params: Params,
+        grid: Option<[usize; 2]>,
+        beads: &BeadStream<'_>,
+    ) -> Result<Self, SimulationError> {
+        if let Some([px, py]) = grid {
+            if px.checked_mul(py) != Some(comm.size()) || px == 0 {
+                return Err(SimulationError::Parameter(format!(
+                    "a {px} × {py} grid has {} cells for {} ranks: px py must be the number of ranks",
+                    px.saturating_mul(py),
+                    comm.size()
+                )));
+            }
+        }
         if skeleton.materials.is_some() {
             // per-pair contact laws are not carried by the subdomain exchange
             return Err(SimulationError::Parameter(
@@ -284,24 +317,38 @@ impl DistributedSimulation {
         if let Some(e) = bad {
             return Err(e);
         }
-        let axis = usize::from(ext[1].1 - ext[1].0 > ext[0].1 - ext[0].0);
-        let coord = |p: Vec3| if axis == 1 { p.y } else { p.x };
-
-        // pass 2: the bead-count histogram along the axis, the same on every rank
-        let slabs = if size > 1 {
-            let (lo, hi) = if n > 0 { ext[axis] } else { (0.0, 0.0) };
-            let mut counts = vec![0.0; HISTOGRAM_BINS];
-            beads(&mut |b: Sphere| counts[bin_of(coord(b.position), lo, hi)] += 1.0);
-            Slabs::from_inner(&quantile_bounds(&counts, lo, hi, size))
-        } else {
-            Slabs::from_inner(&[])
+        let (axes, parts) = match grid {
+            Some(g) => ([0, 1], g),
+            None => {
+                // slabs along the wider axis
+                let a = usize::from(ext[1].1 - ext[1].0 > ext[0].1 - ext[0].0);
+                ([a, 1 - a], [size, 1])
+            }
         };
+        let range = |a: usize| if n > 0 { ext[a] } else { (0.0, 0.0) };
+        let ranges = [range(axes[0]), range(axes[1])];
+
+        // pass 2: the bead-count histogram along the first axis, the same on every rank;
+        // pass 2b (grid): each slab's histogram along the second axis
+        let mut grid = Grid::unbalanced(axes, parts);
+        if size > 1 {
+            let mut outer = vec![0.0; HISTOGRAM_BINS];
+            beads(&mut |b: Sphere| outer[grid.outer_bin(b.position, ranges[0])] += 1.0);
+            grid = Grid::balanced(axes, parts, ranges, &outer, &[]);
+            if parts[1] > 1 {
+                let mut inner = vec![vec![0.0; HISTOGRAM_BINS]; parts[0]];
+                beads(&mut |b: Sphere| {
+                    inner[grid.slab_of(b.position)][grid.inner_bin(b.position, ranges[1])] += 1.0
+                });
+                grid = Grid::balanced(axes, parts, ranges, &outer, &inner);
+            }
+        }
 
         // pass 3: this rank's beads, in global id order
         let mut mine: Vec<(usize, Sphere)> = Vec::new();
         let mut gid = 0usize;
         beads(&mut |b: Sphere| {
-            if slabs.owner(coord(b.position)) == rank {
+            if grid.owner(b.position) == rank {
                 mine.push((gid, b));
             }
             gid += 1;
@@ -322,8 +369,7 @@ impl DistributedSimulation {
             held_at_build: mine.len(),
             beads: mine,
             contacts: Vec::new(),
-            slabs,
-            axis,
+            grid,
             obstacles: world.obstacles,
             gravity: world.gravity,
             warm: HashMap::new(),
@@ -346,43 +392,57 @@ impl DistributedSimulation {
         self.total
     }
 
-    fn coord(&self, p: Vec3) -> f64 {
-        if self.axis == 1 {
-            p.y
-        } else {
-            p.x
-        }
-    }
-
-    /// Places the slab bounds at the bead-count quantiles of the current positions: the
-    /// range [lo, hi] reduced (max), a histogram of [`HISTOGRAM_BINS`] bins reduced (sum), the
-    /// same bounds computed on every rank ([`quantile_bounds`]). Beads move at the next
+    /// Places the bounds at the bead-count quantiles of the current positions: the ranges
+    /// along both axes reduced (max), a histogram of [`HISTOGRAM_BINS`] bins along the first
+    /// axis reduced (sum), and for a grid each slab's histogram along the second axis reduced
+    /// (sum); every rank computes the same bounds ([`Grid::balanced`]). Beads move at the next
     /// [`Self::migrate`].
     pub fn rebalance(&mut self) {
         let size = self.comm.size();
         if size == 1 {
             return;
         }
-        let mut range = [f64::NEG_INFINITY, f64::NEG_INFINITY];
+        let (axes, parts) = (self.grid.axes, self.grid.parts());
+        let along = |p: Vec3, a: usize| if a == 0 { p.x } else { p.y };
+        let mut range = [f64::NEG_INFINITY; 4];
         for (_, b) in &self.beads {
-            let x = self.coord(b.position);
-            if x.is_finite() {
-                range[0] = range[0].max(-x);
-                range[1] = range[1].max(x);
+            for (k, &a) in axes.iter().enumerate() {
+                let x = along(b.position, a);
+                if x.is_finite() {
+                    range[2 * k] = range[2 * k].max(-x);
+                    range[2 * k + 1] = range[2 * k + 1].max(x);
+                }
             }
         }
         self.comm.max(&mut range);
-        let (lo, hi) = if range[1].is_finite() {
-            (-range[0], range[1])
-        } else {
-            (0.0, 0.0)
+        let span = |k: usize| {
+            if range[2 * k + 1].is_finite() {
+                (-range[2 * k], range[2 * k + 1])
+            } else {
+                (0.0, 0.0)
+            }
         };
-        let mut counts = vec![0.0; HISTOGRAM_BINS];
+        let ranges = [span(0), span(1)];
+        let mut outer = vec![0.0; HISTOGRAM_BINS];
         for (_, b) in &self.beads {
-            counts[bin_of(self.coord(b.position), lo, hi)] += 1.0;
+            outer[self.grid.outer_bin(b.position, ranges[0])] += 1.0;
         }
-        self.comm.sum(&mut counts);
-        self.slabs = Slabs::from_inner(&quantile_bounds(&counts, lo, hi, size));
+        self.comm.sum(&mut outer);
+        let mut grid = Grid::balanced(axes, parts, ranges, &outer, &[]);
+        if parts[1] > 1 {
+            let mut flat = vec![0.0; parts[0] * HISTOGRAM_BINS];
+            for (_, b) in &self.beads {
+                let i = grid.slab_of(b.position);
+                flat[i * HISTOGRAM_BINS + grid.inner_bin(b.position, ranges[1])] += 1.0;
+            }
+            self.comm.sum(&mut flat);
+            let inner: Vec<Vec<f64>> = flat
+                .chunks_exact(HISTOGRAM_BINS)
+                .map(<[f64]>::to_vec)
+                .collect();
+            grid = Grid::balanced(axes, parts, ranges, &outer, &inner);
+        }
+        self.grid = grid;
     }
 
     /// Sends every owned bead outside this rank's slab to its owner, with the warm-start
@@ -395,13 +455,15 @@ impl DistributedSimulation {
         if size == 1 {
             return 0;
         }
+        // the cells touching this one (slabs: r ± 1)
+        let adjacent = self.grid.neighbours(me, 0.0);
         let mut leaving: HashMap<usize, usize> = HashMap::new();
         let mut far = 0.0;
         for (gid, b) in &self.beads {
-            let dest = self.slabs.owner(self.coord(b.position));
+            let dest = self.grid.owner(b.position);
             if dest != me {
                 leaving.insert(*gid, dest);
-                if dest.abs_diff(me) > 1 {
+                if !adjacent.contains(&dest) {
                     far = 1.0;
                 }
             }
@@ -451,9 +513,6 @@ impl DistributedSimulation {
         let recv = if self.migrated_all_to_all {
             self.comm.exchange(&send)
         } else {
-            let adjacent: Vec<usize> = (me.saturating_sub(1)..(me + 2).min(size))
-                .filter(|&r| r != me)
-                .collect();
             self.comm.exchange_peers(&adjacent, &send)
         };
         for buf in recv {
@@ -486,23 +545,36 @@ impl DistributedSimulation {
         leaving.len()
     }
 
-    /// Copies of the beads of other ranks within `halo` of this rank's slab.
-    fn exchange_ghosts(&mut self, halo: f64) -> Ghosts {
+    /// Copies of the beads of other ranks within `halo` of this rank's cell. `moved`: the
+    /// beads may have left their cells since the last migration (the position correction
+    /// after the θ-method): the farthest any lies outside its cell is reduced (max) and the
+    /// ranks talk to the neighbours within halo + that distance, so that every ghost target
+    /// is among them.
+    fn exchange_ghosts(&mut self, halo: f64, moved: bool) -> Ghosts {
         let (me, size) = (self.comm.rank(), self.comm.size());
         let mut g = Ghosts {
             beads: Vec::new(),
             send: vec![Vec::new(); size],
             recv: vec![Vec::new(); size],
-            peers: self.slabs.neighbours(me, halo),
+            peers: Vec::new(),
         };
         if size == 1 {
             return g;
         }
+        let mut out = [0.0];
+        if moved {
+            out[0] = self
+                .beads
+                .iter()
+                .map(|(_, b)| self.grid.outside(me, b.position))
+                .fold(0.0, f64::max);
+            self.comm.max(&mut out);
+        }
+        g.peers = self.grid.neighbours(me, halo + out[0]);
         let mut bufs = vec![Vec::new(); size];
         let mut targets = Vec::new();
         for (i, (gid, b)) in self.beads.iter().enumerate() {
-            self.slabs
-                .ghost_targets(me, self.coord(b.position), halo, &mut targets);
+            self.grid.ghost_targets(me, b.position, halo, &mut targets);
             for &r in &targets {
                 pack_bead(&mut bufs[r], *gid, b);
                 g.send[r].push(i);
@@ -765,7 +837,8 @@ impl DistributedSimulation {
         let delta = self.activation_threshold();
         let gamma = self.params.activation.gamma;
         let margin = delta.max(self.params.activation.delta) + 2.0 * head[0] * h * gamma + 1e-12;
-        let ghosts = self.exchange_ghosts(2.0 * self.rmax + margin + 1e-9);
+        // every owned bead is in its cell (just migrated)
+        let ghosts = self.exchange_ghosts(2.0 * self.rmax + margin + 1e-9, false);
         let local = self.local(&ghosts);
 
         // the owned contacts, in global id order (the local order is the global one); the
@@ -957,7 +1030,7 @@ impl DistributedSimulation {
         let (mut touching, mut pen_sum, mut pen_max);
         let mut round = 0;
         loop {
-            let ghosts = self.exchange_ghosts(2.0 * self.rmax + 0.05 * self.rmin + 1e-9);
+            let ghosts = self.exchange_ghosts(2.0 * self.rmax + 0.05 * self.rmin + 1e-9, true);
             let mut local = self.local(&ghosts);
             (touching, pen_sum, pen_max) = self.owned_penetrations(&local);
             let mut worst = [pen_max];

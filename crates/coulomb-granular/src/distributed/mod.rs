@@ -7,19 +7,20 @@
 //!   slab, so that memory per rank is ∝ N / ranks from the start; [`DistributedSimulation::new`]
 //!   does the same from a whole world (a scene file, built on every rank).
 //! * **Decomposition.** Slabs along the wider horizontal axis of the initial bead cloud
-//!   ([`slab`]): rank r owns the beads whose coordinate lies in its slab, the inner bounds at
-//!   bead-count quantiles of a histogram (at the start from the streamed beads, the same on
+//!   ([`slab`]), or a px × py grid of cells ([`grid`]: slabs along x, each cut along y at its
+//!   own quantiles): rank r owns the beads whose coordinates lie in its slab or cell, the bounds
+//!   at bead-count quantiles of histograms (at the start from the streamed beads, the same on
 //!   every rank; later reduced over all ranks), recomputed every
 //!   [`DistributedSimulation::rebalance_every`] steps (the heap spreads as it settles). Beads
 //!   that leave a slab migrate to their new owner at the start of every step, with the warm
-//!   start impulses of the contacts they own: point to point with the adjacent slabs, or by
-//!   one all-to-all exchange when some bead goes farther (after a rebalance).
+//!   start impulses of the contacts they own: point to point with the adjacent slabs or cells,
+//!   or by one all-to-all exchange when some bead goes farther (after a rebalance).
 //! * **Ghosts.** Each rank receives copies of the beads of other ranks within a halo
 //!   2 R_max + margin of its slab, the margin of the broad phase (δ_k + 2 v_max h γ); every pair
 //!   that can be active at this step then has both beads on the rank owning its lower-id bead.
 //!   Ghost beads and, in the sweeps, their velocities and impulses travel point to point
-//!   (`MPI_Isend`/`MPI_Irecv`) between neighbouring slabs only ([`Slabs::neighbours`]: the
-//!   slabs within the halo of each other), never through an all-to-all.
+//!   (`MPI_Isend`/`MPI_Irecv`) between neighbouring subdomains only ([`Grid::neighbours`]:
+//!   those within the halo of each other), never through an all-to-all.
 //! * **Contacts.** Detected on owned + ghost beads (ordered by global id, so that a contact has
 //!   the same frame as on one process); contact (A, B) with id A < id B, and every contact with an
 //!   obstacle, is owned by the owner of A. Interface contacts are those with a ghost B.
@@ -135,7 +136,7 @@ struct Ghosts {
     send: Vec<Vec<usize>>,
     /// recv[r]: ghost indices received from rank r, in order
     recv: Vec<Vec<usize>>,
-    /// the ranks this rank exchanges ghosts with ([`Slabs::neighbours`]), ascending
+    /// the ranks this rank exchanges ghosts with ([`Grid::neighbours`]), ascending
     peers: Vec<usize>,
 }
 
@@ -234,7 +235,7 @@ impl DistributedSimulation {
     /// return the same error). Three passes over the beads, none holding them: (1) count,
     /// checks, the extent along x and y (the slabs go along the wider one) and the radii;
     /// (2) a histogram of [`HISTOGRAM_BINS`] bins along the slab axis, from which every rank
-    /// computes the same bounds at the bead-count quantiles ([`quantile_bounds`]); (3) each
+    /// computes the same bounds at the bead-count quantiles ([`slab::quantile_bounds`]); (3) each
     /// rank keeps the beads of its slab. Memory per rank: its part, about N / ranks beads
     /// ([`Self::held_at_build`]). The state is that of [`Self::new`] on the built world.
     pub fn from_stream(
@@ -445,11 +446,11 @@ impl DistributedSimulation {
         self.grid = grid;
     }
 
-    /// Sends every owned bead outside this rank's slab to its owner, with the warm-start
-    /// impulses of the contacts it owns; returns the number of beads sent. Point to point with
-    /// the adjacent slabs (r ± 1) when every bead on every rank goes to one of those (a flag
-    /// reduced over the ranks decides); otherwise, e.g. after a rebalance moved the bounds
-    /// far, one personalised all-to-all exchange.
+    /// Sends every owned bead outside this rank's slab or cell to its owner, with the
+    /// warm-start impulses of the contacts it owns; returns the number of beads sent. Point to
+    /// point with the subdomains touching this one (slabs: r ± 1) when every bead on every
+    /// rank goes to one of those (a flag reduced over the ranks decides); otherwise, e.g. after
+    /// a rebalance moved the bounds far, one personalised all-to-all exchange.
     pub fn migrate(&mut self) -> usize {
         let (me, size) = (self.comm.rank(), self.comm.size());
         if size == 1 {

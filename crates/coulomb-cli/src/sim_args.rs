@@ -189,6 +189,11 @@ pub struct Args {
     #[cfg(feature = "mpi")]
     #[arg(long, default_value_t = 20, value_parser = crate::values::count0)]
     pub rebalance_every: usize,
+    /// distributed run: a PXxPY grid of subdomains (PX along x, PY along y, PX·PY = ranks)
+    /// instead of slabs along the wider axis, e.g. --grid 2x2 on 4 ranks
+    #[cfg(feature = "mpi")]
+    #[arg(long, value_parser = crate::values::grid, value_name = "PXxPY")]
+    pub grid: Option<[usize; 2]>,
 }
 
 impl Args {

@@ -90,6 +90,16 @@ pub fn count0(s: &str) -> Result<usize, String> {
     usize::try_from(whole(s)?).map_err(|_| "is too large".into())
 }
 
+/// A grid of subdomains `PXxPY` (two counts ≥ 1, e.g. `2x2`).
+#[cfg(feature = "mpi")]
+pub fn grid(s: &str) -> Result<[usize; 2], String> {
+    let (a, b) = s
+        .trim()
+        .split_once(['x', 'X', '×'])
+        .ok_or_else(|| "must be PXxPY, e.g. 2x2".to_string())?;
+    Ok([count(a)?, count(b)?])
+}
+
 /// An over-relaxation factor ω ∈ [1, 2).
 pub fn relaxation(s: &str) -> Result<f64, String> {
     let x: f64 = s

@@ -163,28 +163,67 @@ impl Scene {
     /// gravity −9.81 e_z, the step settings of `coulomb simulate`. `layout` is used by the
     /// `box` scene only.
     pub fn model(self, beads: usize, seed: u64, layout: &BoxLayout) -> SceneModel {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let mut model = SceneModel::default();
-        let obstacles = &mut model.obstacles;
         let mut spheres = Vec::with_capacity(beads);
+        let region = self.geometry(layout, &mut model.obstacles);
+        region.fill(beads, seed, &mut |b| spheres.push(b));
+        model.sphere_batches.push(SphereBatch {
+            positions: spheres.iter().map(|b| b.position).collect(),
+            radii: vec![BEAD_RADIUS],
+            velocities: spheres.iter().map(|b| b.velocity).collect(),
+            density: Some(BEAD_DENSITY),
+            ..SphereBatch::default()
+        });
+        model
+    }
+
+    /// The world of [`Scene::build_with`] without its beads: obstacles and gravity.
+    pub fn skeleton(self, seed: u64, layout: &BoxLayout) -> World {
+        self.build_with(0, seed, layout)
+    }
+
+    /// Hands the beads of [`Scene::build_with`] (`beads`, `seed`, `layout`) to `emit` one at
+    /// a time in their order (global id 0, 1, …), each exactly the sphere of the built world,
+    /// without holding them: a rank of a distributed run keeps its part only
+    /// ([`crate::distributed`]). The lattice is drawn again on every call (O(N) time, O(1)
+    /// memory).
+    pub fn for_each_bead(
+        self,
+        beads: usize,
+        seed: u64,
+        layout: &BoxLayout,
+        emit: &mut dyn FnMut(Sphere),
+    ) {
+        let mut obstacles = Vec::new();
+        self.geometry(layout, &mut obstacles)
+            .fill(beads, seed, emit);
+    }
+
+    /// The obstacles of this scene (appended to `obstacles`) and the region its beads fill.
+    fn geometry(self, layout: &BoxLayout, obstacles: &mut Vec<ObstacleSpec>) -> Region {
         let r = BEAD_RADIUS;
+        // the loose lattice of every scene but the box: spacing 2.5 R, first layer 1.25 R up
+        let loose = |lo: Vec3, hi: Vec3| Lattice {
+            lo,
+            hi,
+            pitch: 2.5 * r,
+            layer_pitch: 2.5 * r,
+            base: 1.25 * r,
+        };
         match self {
             Scene::Box => {
                 let l = layout;
                 add_box(obstacles, l.side_x, l.side_y);
-                fill_lattice(
-                    &mut spheres,
-                    &mut rng,
-                    beads,
-                    Lattice {
+                Region {
+                    lattice: Lattice {
                         lo: Vec3::new(0.0, 0.0, 0.0),
                         hi: Vec3::new(l.side_x, l.side_y, f64::INFINITY),
                         pitch: l.pitch,
                         layer_pitch: l.layer_pitch,
                         base: l.base,
                     },
-                    |_| true,
-                );
+                    keep: Keep::All,
+                }
             }
             Scene::VibratingPlate => {
                 add_box(obstacles, BOX_SIDE, BOX_SIDE);
@@ -196,14 +235,13 @@ impl Scene {
                         frequency: 3.0,
                     };
                 }
-                fill(
-                    &mut spheres,
-                    &mut rng,
-                    beads,
-                    Vec3::new(0.0, 0.0, 0.03),
-                    Vec3::new(BOX_SIDE, BOX_SIDE, f64::INFINITY),
-                    |_| true,
-                );
+                Region {
+                    lattice: loose(
+                        Vec3::new(0.0, 0.0, 0.03),
+                        Vec3::new(BOX_SIDE, BOX_SIDE, f64::INFINITY),
+                    ),
+                    keep: Keep::All,
+                }
             }
             Scene::Funnel => {
                 // floor and walls of a large bin; two inclined plates (45°) forming a V with a
@@ -234,15 +272,18 @@ impl Scene {
                 }
                 let x0 = 0.5 * lx - 0.5 * slot - 2.0 * half * a.cos();
                 let x1 = 0.5 * lx + 0.5 * slot + 2.0 * half * a.cos();
-                let (xm, sl) = (0.5 * lx, 0.5 * slot);
-                fill(
-                    &mut spheres,
-                    &mut rng,
-                    beads,
-                    Vec3::new(x0, 0.0, zb + 2.0 * r),
-                    Vec3::new(x1, ly, f64::INFINITY),
-                    move |p| p.z - zb - 2.0 * r > (p.x - xm).abs() - sl,
-                );
+                Region {
+                    lattice: loose(
+                        Vec3::new(x0, 0.0, zb + 2.0 * r),
+                        Vec3::new(x1, ly, f64::INFINITY),
+                    ),
+                    keep: Keep::AboveV {
+                        z: zb,
+                        lift: 2.0 * r,
+                        x: 0.5 * lx,
+                        half_slot: 0.5 * slot,
+                    },
+                }
             }
             Scene::RotatingDrum => {
                 let (rd, len) = (0.6, 0.5);
@@ -273,26 +314,62 @@ impl Scene {
                         material: DEFAULT_MATERIAL.into(),
                     });
                 }
-                fill(
-                    &mut spheres,
-                    &mut rng,
-                    beads,
-                    Vec3::new(-rd, 0.0, 0.0),
-                    Vec3::new(rd, len, 2.0 * rd),
-                    move |p| {
-                        (Vec3::new(p.x, 0.0, p.z) - Vec3::new(0.0, 0.0, rd)).norm() < rd - 1.2 * r
+                Region {
+                    lattice: loose(Vec3::new(-rd, 0.0, 0.0), Vec3::new(rd, len, 2.0 * rd)),
+                    keep: Keep::InsideDrum {
+                        axis_z: rd,
+                        radius: rd - 1.2 * r,
                     },
-                );
+                }
             }
         }
-        model.sphere_batches.push(SphereBatch {
-            positions: spheres.iter().map(|b| b.position).collect(),
-            radii: vec![r],
-            velocities: spheres.iter().map(|b| b.velocity).collect(),
-            density: Some(BEAD_DENSITY),
-            ..SphereBatch::default()
-        });
-        model
+    }
+}
+
+/// Where the beads of a built-in scene go: the sites of `lattice` where `keep` holds.
+struct Region {
+    lattice: Lattice,
+    keep: Keep,
+}
+
+/// Which lattice sites a built-in scene keeps.
+enum Keep {
+    /// every site
+    All,
+    /// above the V of the funnel: site z − `z` − `lift` > |site x − `x`| − `half_slot`
+    AboveV {
+        z: f64,
+        lift: f64,
+        x: f64,
+        half_slot: f64,
+    },
+    /// within `radius` of the drum's axis (parallel to y through (0, ·, `axis_z`))
+    InsideDrum { axis_z: f64, radius: f64 },
+}
+
+impl Keep {
+    /// Whether the site p is kept.
+    fn holds(&self, p: Vec3) -> bool {
+        match *self {
+            Keep::All => true,
+            Keep::AboveV {
+                z,
+                lift,
+                x,
+                half_slot,
+            } => p.z - z - lift > (p.x - x).abs() - half_slot,
+            Keep::InsideDrum { axis_z, radius } => {
+                (Vec3::new(p.x, 0.0, p.z) - Vec3::new(0.0, 0.0, axis_z)).norm() < radius
+            }
+        }
+    }
+}
+
+impl Region {
+    /// The `beads` beads of the region, drawn from `seed` (ChaCha8), handed to `emit` in order.
+    fn fill(&self, beads: usize, seed: u64, emit: &mut dyn FnMut(Sphere)) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        fill_lattice(&mut rng, beads, &self.lattice, |p| self.keep.holds(p), emit);
     }
 }
 
@@ -310,28 +387,6 @@ fn add_box(obstacles: &mut Vec<ObstacleSpec>, lx: f64, ly: f64) {
     }
 }
 
-/// Places `n` beads on a loose cubic lattice (spacing 2.5 R, jitter ±0.2 R, random initial
-/// velocities of ±0.1 m/s) in the box [lo, hi] filling layers bottom up, keeping the sites
-/// where `inside` holds.
-fn fill(
-    spheres: &mut Vec<Sphere>,
-    rng: &mut ChaCha8Rng,
-    n: usize,
-    lo: Vec3,
-    hi: Vec3,
-    inside: impl Fn(Vec3) -> bool,
-) {
-    let r = BEAD_RADIUS;
-    let lattice = Lattice {
-        lo,
-        hi,
-        pitch: 2.5 * r,
-        layer_pitch: 2.5 * r,
-        base: 1.25 * r,
-    };
-    fill_lattice(spheres, rng, n, lattice, inside)
-}
-
 /// Sites of a loose initial arrangement in the box [lo, hi].
 pub(crate) struct Lattice {
     pub(crate) lo: Vec3,
@@ -343,15 +398,16 @@ pub(crate) struct Lattice {
 }
 
 /// Places `n` beads on the sites of `lattice` (jitter ±0.2 R, random initial velocities of
-/// ±0.1 m/s), layer by layer bottom up, keeping the sites where `inside` holds.
+/// ±0.1 m/s, mass of a glass ball of [`BEAD_DENSITY`]), layer by layer bottom up, keeping the
+/// sites where `inside` holds; each bead is handed to `emit` as it is placed.
 pub(crate) fn fill_lattice(
-    spheres: &mut Vec<Sphere>,
     rng: &mut ChaCha8Rng,
     n: usize,
-    lattice: Lattice,
+    lattice: &Lattice,
     inside: impl Fn(Vec3) -> bool,
+    emit: &mut dyn FnMut(Sphere),
 ) {
-    let Lattice {
+    let &Lattice {
         lo,
         hi,
         pitch: s,
@@ -359,7 +415,8 @@ pub(crate) fn fill_lattice(
         base,
     } = lattice;
     let r = BEAD_RADIUS;
-    let mass = BEAD_DENSITY * 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
+    // the mass of `SceneModel::world` for a batch of this density
+    let mass = crate::model::ball_mass(BEAD_DENSITY, r);
     let nx = (((hi.x - lo.x) - 2.5 * r) / s).floor().max(0.0) as usize + 1;
     let ny = (((hi.y - lo.y) - 2.5 * r) / s).floor().max(0.0) as usize + 1;
     let nz_max = if hi.z.is_finite() {
@@ -388,7 +445,7 @@ pub(crate) fn fill_lattice(
                 let mut b = Sphere::new(p, r, mass);
                 let mut v = || rng.random_range(-0.1..0.1);
                 b.velocity = Vec3::new(v(), v(), v());
-                spheres.push(b);
+                emit(b);
                 placed += 1;
             }
         }
@@ -428,6 +485,25 @@ mod tests {
                 contacts.len()
             );
             assert_eq!(Scene::from_name(scene.name()), Some(scene));
+        }
+    }
+
+    /// The streamed beads are those of the built world, in order, bit for bit; the skeleton
+    /// has its obstacles and no bead.
+    #[test]
+    fn streamed_beads_are_the_built_ones() {
+        for scene in Scene::ALL {
+            for (n, seed) in [(0usize, 1u64), (1, 2), (257, 7)] {
+                let layout = BoxLayout::for_beads(n);
+                let world = scene.build_with(n, seed, &layout);
+                let mut streamed = Vec::new();
+                scene.for_each_bead(n, seed, &layout, &mut |b| streamed.push(b));
+                assert_eq!(streamed, world.bodies, "{scene:?} {n}");
+                let skeleton = scene.skeleton(seed, &layout);
+                assert!(skeleton.bodies.is_empty());
+                assert_eq!(skeleton.obstacles, world.obstacles, "{scene:?} {n}");
+                assert_eq!(skeleton.gravity, world.gravity);
+            }
         }
     }
 

@@ -693,7 +693,7 @@ impl Simulation {
 
 /// Checks spheres (numbered from `first`): positive finite radius and mass, finite state,
 /// material index below `materials`.
-fn check_spheres(
+pub(crate) fn check_spheres(
     spheres: &[crate::world::Sphere],
     first: usize,
     materials: usize,

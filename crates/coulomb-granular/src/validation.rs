@@ -714,11 +714,11 @@ pub fn column_world(beads: usize, r0: f64) -> World {
         },
     ));
     let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(1);
+    let mut bodies = Vec::with_capacity(beads);
     crate::scene::fill_lattice(
-        &mut world.bodies,
         &mut rng,
         beads,
-        crate::scene::Lattice {
+        &crate::scene::Lattice {
             lo: Vec3::new(-r0, -r0, 0.0),
             hi: Vec3::new(r0, r0, f64::INFINITY),
             pitch: 2.5 * r,
@@ -726,7 +726,9 @@ pub fn column_world(beads: usize, r0: f64) -> World {
             base: 1.25 * r,
         },
         |x| (x.x * x.x + x.y * x.y).sqrt() <= r0 - 1.2 * r,
+        &mut |b| bodies.push(b),
     );
+    world.bodies = bodies;
     world
 }
 

@@ -1,11 +1,14 @@
 //! `coulomb simulate` distributed over MPI (feature `mpi`): started by `mpirun -np K coulomb
-//! simulate …` or `srun -n K coulomb simulate …`, or with `--mpi`. Every rank builds the same
-//! scene (built-in, or a scene file without inlets, per-pair materials or rolling
-//! resistance), keeps its slab of beads and steps with the others
-//! ([`coulomb_granular::distributed`], docs/distributed.md); rank 0 prints the summary and
-//! writes stats.csv, stats.json (the statistics of `coulomb simulate`), summary.json and
-//! distributed.json (per step: sweeps, communication time, ghosts, interface contacts,
-//! migration, imbalance); every rank writes its VTK pieces, rank 0 the .pvtp/.pvd collections.
+//! simulate …` or `srun -n K coulomb simulate …`, or with `--mpi`. A built-in scene is
+//! streamed: every rank draws the same beads one at a time and keeps only those of its slab
+//! (memory per rank ∝ N / ranks, [`DistributedSimulation::from_stream`]); a scene file
+//! (without inlets, per-pair materials or rolling resistance) is built whole on every rank,
+//! which then keeps its slab. The ranks step together ([`coulomb_granular::distributed`],
+//! docs/distributed.md); rank 0 prints the summary and writes stats.csv, stats.json (the
+//! statistics of `coulomb simulate`), summary.json, distributed.json (per step: sweeps,
+//! communication time, ghosts, interface contacts, migration, imbalance) and ranks.json (per
+//! rank: beads held while building, owned at the start and at the end, peak resident memory);
+//! every rank writes its VTK pieces, rank 0 the .pvtp/.pvd collections.
 
 use crate::exit::Outcome;
 use crate::progress::bar as progress;
@@ -14,22 +17,59 @@ use anyhow::{bail, Context};
 use coulomb_granular::distributed::output::DistributedVtk;
 use coulomb_granular::distributed::{Comm, DistributedSimulation, DistributedStats};
 use coulomb_granular::output::write_stats;
+use coulomb_granular::scene::BoxLayout;
 use coulomb_granular::{Scene, StepStats, Stop, Summary};
 
-/// Runs `coulomb simulate` on the ranks of MPI_COMM_WORLD. Exit status 1 on every rank when
-/// `--until-rest` stopped at its step cap without reaching rest (as in one process).
+/// Runs `coulomb simulate` of a built-in scene on the ranks of MPI_COMM_WORLD, each rank
+/// holding only its part of the beads. Exit status 1 on every rank when `--until-rest`
+/// stopped at its step cap without reaching rest (as in one process).
 pub fn run(args: Args, scene: Scene) -> anyhow::Result<Outcome> {
-    let world = scene.build_with(args.beads, args.seed, &args.layout()?);
-    run_world(&args, world, scene.name())
+    let layout = args.layout()?;
+    run_source(&args, Source::Scene(scene, layout), scene.name())
 }
 
-/// Runs the world `world` (every rank builds the same: a built-in scene or a scene file)
-/// distributed on the ranks of MPI_COMM_WORLD, `name` its scene's name in the outputs.
+/// Runs the world `world` (every rank builds the same, e.g. from a scene file) distributed
+/// on the ranks of MPI_COMM_WORLD, `name` its scene's name in the outputs.
 pub fn run_world(
     args: &Args,
     world: coulomb_granular::World,
     name: &str,
 ) -> anyhow::Result<Outcome> {
+    run_source(args, Source::World(world), name)
+}
+
+/// Where the beads of a distributed run come from.
+enum Source {
+    /// a whole world, the same on every rank
+    World(coulomb_granular::World),
+    /// a built-in scene, streamed (`Args::beads`, `Args::seed`, this layout)
+    Scene(Scene, BoxLayout),
+}
+
+/// Peak resident memory of this process (VmHWM of /proc/self/status, KiB); None where the
+/// file or the line is missing (not Linux).
+fn peak_rss_kib() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
+}
+
+/// The memory numbers of one rank (ranks.json and the JSON summary).
+#[derive(Debug, Clone, serde::Serialize)]
+struct RankMemory {
+    rank: usize,
+    /// most beads held at once while building the simulation
+    held_at_build: usize,
+    /// beads owned after building
+    beads_start: usize,
+    /// beads owned at the end of the run
+    beads_end: usize,
+    /// peak resident memory at the end of the run (MiB; null where unknown)
+    peak_rss_mib: Option<f64>,
+}
+
+/// Runs the beads of `source` distributed on the ranks of MPI_COMM_WORLD.
+fn run_source(args: &Args, source: Source, name: &str) -> anyhow::Result<Outcome> {
     if args.dump_fclib.is_some() {
         bail!("--dump-fclib is not available in a distributed run");
     }
@@ -42,9 +82,24 @@ pub fn run_world(
     let comm = Comm::new(universe.world());
     let rank = comm.rank();
     let stop = args.stop();
-    let beads = world.bodies.len();
-    let mut sim = DistributedSimulation::new(comm, world, args.params())
-        .context("invalid simulation parameters")?;
+    let built = match source {
+        Source::World(world) => {
+            DistributedSimulation::new_on(comm, world, args.params(), args.grid)
+        }
+        Source::Scene(scene, layout) => {
+            let (n, seed) = (args.beads, args.seed);
+            DistributedSimulation::from_stream_on(
+                comm,
+                scene.skeleton(seed, &layout),
+                args.params(),
+                args.grid,
+                &|emit| scene.for_each_bead(n, seed, &layout, emit),
+            )
+        }
+    };
+    let mut sim = built.context("invalid simulation parameters")?;
+    let beads = sim.total_beads();
+    let beads_start = sim.beads.len();
     sim.rebalance_every = args.rebalance_every;
     let mut vtk = match &args.output {
         Some(dir) => Some(
@@ -107,6 +162,27 @@ pub fn run_world(
     }
     let end_energy = sim.energy();
     let ranks = sim.comm.size();
+    // per rank: beads held while building, owned at the start and the end, peak RSS (−1:
+    // unknown), gathered by a sum of vectors zero but for each rank's own entries
+    let mut mem = vec![0.0; 4 * ranks];
+    mem[4 * rank..4 * rank + 4].copy_from_slice(&[
+        sim.held_at_build() as f64,
+        beads_start as f64,
+        sim.beads.len() as f64,
+        peak_rss_kib().map_or(-1.0, |k| k as f64),
+    ]);
+    sim.comm.sum(&mut mem);
+    let per_rank: Vec<RankMemory> = mem
+        .chunks_exact(4)
+        .enumerate()
+        .map(|(r, m)| RankMemory {
+            rank: r,
+            held_at_build: m[0] as usize,
+            beads_start: m[1] as usize,
+            beads_end: m[2] as usize,
+            peak_rss_mib: (m[3] >= 0.0).then(|| m[3] / 1024.0),
+        })
+        .collect();
     if rank != 0 {
         // the status of rank 0 (which says why), so that the launcher reports it whichever
         // rank it looks at
@@ -137,6 +213,10 @@ pub fn run_world(
             &dir.join("distributed.json"),
             crate::outputs::json(&stats, true)?.as_bytes(),
         )?;
+        crate::outputs::write(
+            &dir.join("ranks.json"),
+            crate::outputs::json(&per_rank, true)?.as_bytes(),
+        )?;
     }
     if args.json {
         let extra = serde_json::json!({
@@ -144,6 +224,7 @@ pub fn run_world(
             "mean_sweeps": sweeps,
             "mean_step_ms": step_ms,
             "mean_comm_ms": comm_ms,
+            "per_rank": per_rank,
         });
         let extra = extra.as_object().cloned().unwrap_or_default();
         let obj = crate::sim_args::summary_json(&summary, start_energy, end_energy, extra);
@@ -168,6 +249,22 @@ pub fn run_world(
             summary.max_penetration,
             summary.end_mean_penetration,
             summary.end_max_penetration
+        );
+        let mem: Vec<String> = per_rank
+            .iter()
+            .map(|m| match m.peak_rss_mib {
+                Some(x) => format!("{x:.0}"),
+                None => "?".into(),
+            })
+            .collect();
+        let held: Vec<String> = per_rank
+            .iter()
+            .map(|m| m.held_at_build.to_string())
+            .collect();
+        println!(
+            "per rank: peak resident memory {} MiB, beads held while building {}",
+            mem.join(" / "),
+            held.join(" / ")
         );
     }
     Ok(crate::interrupt::simulation_outcome(

@@ -1,5 +1,7 @@
 //! The few MPI operations the distributed step uses, on `f64` buffers, each timed so that the
-//! communication time of a step can be reported ([`Comm::seconds`]).
+//! communication time of a step can be reported ([`Comm::seconds`]): point-to-point
+//! exchanges with given peers (nonblocking sends and receives), the personalised all-to-all
+//! exchange (migration beyond the adjacent slabs, gathering) and reductions.
 
 use mpi::collective::SystemOperation;
 use mpi::datatype::{Partition, PartitionMut};
@@ -108,6 +110,97 @@ impl Comm {
             .collect()
     }
 
+    /// Point-to-point exchange with the ranks `peers` (each of which lists this rank among its
+    /// own peers): `send[r]` goes to rank r (empty for a rank not in `peers`); returns what
+    /// each rank sent here (empty from the others). The sizes go first, one word each way per
+    /// peer, then the nonempty buffers; every send and receive is nonblocking
+    /// (`MPI_Isend`/`MPI_Irecv`), all posted before any is waited for.
+    pub fn exchange_peers(&mut self, peers: &[usize], send: &[Vec<f64>]) -> Vec<Vec<f64>> {
+        let t = Instant::now();
+        let out: Vec<u64> = peers.iter().map(|&p| send[p].len() as u64).collect();
+        let mut got = vec![0u64; peers.len()];
+        let world = &self.world;
+        mpi::request::scope(|scope| {
+            let mut pending = Vec::with_capacity(2 * peers.len());
+            for (&p, n) in peers.iter().zip(got.iter_mut()) {
+                let from = world.process_at_rank(rank_of(p));
+                pending.push(from.immediate_receive_into_with_tag(scope, n, SIZE_TAG));
+            }
+            for (&p, n) in peers.iter().zip(&out) {
+                let to = world.process_at_rank(rank_of(p));
+                pending.push(to.immediate_send_with_tag(scope, n, SIZE_TAG));
+            }
+            for r in pending {
+                r.wait();
+            }
+        });
+        self.messages += 2 * peers.len() as u64;
+        self.bytes += 8 * peers.len() as u64;
+        let mut recv_len = vec![0usize; self.size];
+        for (&p, &n) in peers.iter().zip(&got) {
+            recv_len[p] = usize::try_from(n).unwrap_or(usize::MAX);
+        }
+        let out = self.peers_counted(peers, send, &recv_len);
+        self.seconds += t.elapsed().as_secs_f64();
+        out
+    }
+
+    /// Point-to-point exchange with the ranks `peers` whose receive sizes are known
+    /// (`recv_len[r]` values from rank r, 0 for a rank not in `peers`): the nonempty buffers
+    /// only, nonblocking as [`Self::exchange_peers`].
+    pub fn exchange_peers_known(
+        &mut self,
+        peers: &[usize],
+        send: &[Vec<f64>],
+        recv_len: &[usize],
+    ) -> Vec<Vec<f64>> {
+        let t = Instant::now();
+        let out = self.peers_counted(peers, send, recv_len);
+        self.seconds += t.elapsed().as_secs_f64();
+        out
+    }
+
+    fn peers_counted(
+        &mut self,
+        peers: &[usize],
+        send: &[Vec<f64>],
+        recv_len: &[usize],
+    ) -> Vec<Vec<f64>> {
+        let mut recv: Vec<Vec<f64>> = vec![Vec::new(); self.size];
+        for &p in peers {
+            recv[p] = vec![0.0; recv_len[p]];
+        }
+        let world = &self.world;
+        let (mut messages, mut bytes) = (0u64, 0u64);
+        mpi::request::scope(|scope| {
+            let mut pending = Vec::with_capacity(2 * peers.len());
+            for (p, buf) in recv.iter_mut().enumerate() {
+                if !buf.is_empty() {
+                    let from = world.process_at_rank(rank_of(p));
+                    pending.push(from.immediate_receive_into_with_tag(
+                        scope,
+                        &mut buf[..],
+                        DATA_TAG,
+                    ));
+                }
+            }
+            for &p in peers {
+                if !send[p].is_empty() {
+                    let to = world.process_at_rank(rank_of(p));
+                    pending.push(to.immediate_send_with_tag(scope, &send[p][..], DATA_TAG));
+                    messages += 1;
+                    bytes += 8 * send[p].len() as u64;
+                }
+            }
+            for r in pending {
+                r.wait();
+            }
+        });
+        self.messages += messages;
+        self.bytes += bytes;
+        recv
+    }
+
     /// Element-wise sum over the ranks, in place.
     pub fn sum(&mut self, x: &mut [f64]) {
         self.reduce(x, SystemOperation::sum());
@@ -128,6 +221,16 @@ impl Comm {
     pub fn barrier(&self) {
         self.world.barrier();
     }
+}
+
+/// Tag of the size messages of [`Comm::exchange_peers`].
+const SIZE_TAG: mpi::Tag = 1;
+/// Tag of the data messages of the point-to-point exchanges.
+const DATA_TAG: mpi::Tag = 2;
+
+/// The MPI rank of rank index `r` (ranks are below 2³¹: `MPI_Comm_size` is an int).
+fn rank_of(r: usize) -> mpi::Rank {
+    mpi::Rank::try_from(r).unwrap_or(mpi::Rank::MAX)
 }
 
 /// An MPI count (buffers here are far below 2³¹ entries; larger ones saturate and the

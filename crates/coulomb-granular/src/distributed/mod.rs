@@ -1,15 +1,26 @@
 //! Distributed Moreau–Jean time stepping over MPI (feature `mpi`; design and measurements in
 //! docs/distributed.md).
 //!
+//! * **Building.** [`DistributedSimulation::from_stream`] takes the beads one at a time in
+//!   global id order (a built-in scene draws them again at each pass,
+//!   [`crate::Scene::for_each_bead`]): every rank sees every bead but keeps only those of its
+//!   slab, so that memory per rank is ∝ N / ranks from the start; [`DistributedSimulation::new`]
+//!   does the same from a whole world (a scene file, built on every rank).
 //! * **Decomposition.** Slabs along the wider horizontal axis of the initial bead cloud
-//!   ([`slab`]): rank r owns the beads whose coordinate lies in its slab, the inner bounds at
-//!   bead-count quantiles of a histogram reduced over all ranks, recomputed every
+//!   ([`slab`]), or a px × py grid of cells ([`grid`]: slabs along x, each cut along y at its
+//!   own quantiles): rank r owns the beads whose coordinates lie in its slab or cell, the bounds
+//!   at bead-count quantiles of histograms (at the start from the streamed beads, the same on
+//!   every rank; later reduced over all ranks), recomputed every
 //!   [`DistributedSimulation::rebalance_every`] steps (the heap spreads as it settles). Beads
 //!   that leave a slab migrate to their new owner at the start of every step, with the warm
-//!   start impulses of the contacts they own.
+//!   start impulses of the contacts they own: point to point with the adjacent slabs or cells,
+//!   or by one all-to-all exchange when some bead goes farther (after a rebalance).
 //! * **Ghosts.** Each rank receives copies of the beads of other ranks within a halo
 //!   2 R_max + margin of its slab, the margin of the broad phase (δ_k + 2 v_max h γ); every pair
 //!   that can be active at this step then has both beads on the rank owning its lower-id bead.
+//!   Ghost beads and, in the sweeps, their velocities and impulses travel point to point
+//!   (`MPI_Isend`/`MPI_Irecv`) between neighbouring subdomains only ([`Grid::neighbours`]:
+//!   those within the halo of each other), never through an all-to-all.
 //! * **Contacts.** Detected on owned + ghost beads (ordered by global id, so that a contact has
 //!   the same frame as on one process); contact (A, B) with id A < id B, and every contact with an
 //!   obstacle, is owned by the owner of A. Interface contacts are those with a ghost B.
@@ -43,6 +54,7 @@
 //!   `coulomb simulate` (same JSON), plus the communication time ([`DistributedStats`]).
 
 mod comm;
+pub mod grid;
 pub mod output;
 pub mod slab;
 pub mod subdomain;
@@ -56,10 +68,13 @@ use crate::contact::{candidate_pairs, detect_with_speed, Contact, Partner};
 use crate::math::Vec3;
 use crate::nsgs::StepProblem;
 use crate::projection::project;
-use crate::simulation::{Params, Simulation, SimulationError, StepMethod, StepStats};
+use crate::simulation::{
+    check_spheres, Params, Simulation, SimulationError, StepMethod, StepStats,
+};
 use crate::world::{Obstacle, Sphere, World};
+use grid::Grid;
 use serde::Serialize;
-use slab::{bin_of, quantile_bounds, Slabs, HISTOGRAM_BINS};
+use slab::HISTOGRAM_BINS;
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
 use subdomain::{error_sums, impulses, max_entry, sweep, velocities};
@@ -73,6 +88,11 @@ const WARM_WORDS: usize = 5;
 const PROJECTION_ROUNDS: usize = 4;
 /// Sweeps between two exact recomputations of v from r.
 const REFRESH: usize = 16;
+
+/// The beads of a distributed run's initial state, handed to the callback one at a time in
+/// global id order; called once per pass of [`DistributedSimulation::from_stream`], giving the
+/// same sequence every time.
+pub type BeadStream<'a> = dyn Fn(&mut dyn FnMut(Sphere)) + 'a;
 
 /// Statistics of one distributed step: the [`StepStats`] of a single-process step (reduced
 /// over the ranks) and the decomposition's own numbers.
@@ -100,6 +120,9 @@ pub struct DistributedStats {
     pub interface_contacts: usize,
     /// beads that changed rank at the start of the step
     pub migrated: usize,
+    /// whether that migration went by one all-to-all exchange (some bead went beyond the
+    /// adjacent slab) instead of point to point with the adjacent ranks
+    pub migration_all_to_all: bool,
     /// most beads owned by one rank divided by the mean
     pub imbalance: f64,
 }
@@ -113,6 +136,8 @@ struct Ghosts {
     send: Vec<Vec<usize>>,
     /// recv[r]: ghost indices received from rank r, in order
     recv: Vec<Vec<usize>>,
+    /// the ranks this rank exchanges ghosts with ([`Grid::neighbours`]), ascending
+    peers: Vec<usize>,
 }
 
 /// The beads a rank works on in a step: owned and ghost, in global id order.
@@ -152,10 +177,8 @@ pub struct DistributedSimulation {
     pub forces: Vec<Vec3>,
     /// the owned contacts of the last step with their impulses, in global ids
     pub contacts: Vec<Contact>,
-    /// the slab bounds
-    pub slabs: Slabs,
-    /// 0: slabs along x, 1: along y
-    pub axis: usize,
+    /// the decomposition: slabs (p × 1) or a p₁ × p₂ grid of cells
+    pub grid: Grid,
     obstacles: Vec<Obstacle>,
     gravity: Vec3,
     warm: HashMap<(usize, Partner), [f64; 3]>,
@@ -163,15 +186,88 @@ pub struct DistributedSimulation {
     rmax: f64,
     rmin: f64,
     total: usize,
+    held_at_build: usize,
+    /// whether the last migration went by all-to-all
+    migrated_all_to_all: bool,
 }
 
 impl DistributedSimulation {
     /// A distributed simulation of `world` (the same world on every rank, e.g. built from the
-    /// same scene and seed): parameters checked as by [`Simulation::new`], rank r first keeps
-    /// beads r N/P … (r+1) N/P − 1, then the slabs are placed at the quantiles and the beads
-    /// migrate to their owners.
+    /// same scene and seed): as [`Self::from_stream`] with the world's beads, except that
+    /// every rank holds all N beads until it returns ([`Self::held_at_build`] = N).
     pub fn new(comm: Comm, world: World, params: Params) -> Result<Self, SimulationError> {
-        if world.materials.is_some() {
+        Self::new_on(comm, world, params, None)
+    }
+
+    /// [`Self::new`] on the decomposition `grid` ([`Self::from_stream_on`]).
+    pub fn new_on(
+        comm: Comm,
+        world: World,
+        params: Params,
+        grid: Option<[usize; 2]>,
+    ) -> Result<Self, SimulationError> {
+        let World {
+            bodies,
+            obstacles,
+            gravity,
+            materials,
+        } = world;
+        let skeleton = World {
+            bodies: Vec::new(),
+            obstacles,
+            gravity,
+            materials,
+        };
+        let total = bodies.len();
+        let mut sim = Self::from_stream_on(comm, skeleton, params, grid, &|emit| {
+            for b in &bodies {
+                emit(b.clone());
+            }
+        })?;
+        sim.held_at_build = total.max(sim.held_at_build);
+        Ok(sim)
+    }
+
+    /// A distributed simulation of the world `skeleton` (obstacles, gravity; its beads
+    /// ignored) with the beads handed out by `beads`, in global id order, the same sequence
+    /// on every rank and at every call (e.g. [`crate::Scene::for_each_bead`]). Parameters
+    /// and beads are checked as by [`Simulation::new`] (every rank sees every bead, so all
+    /// return the same error). Three passes over the beads, none holding them: (1) count,
+    /// checks, the extent along x and y (the slabs go along the wider one) and the radii;
+    /// (2) a histogram of [`HISTOGRAM_BINS`] bins along the slab axis, from which every rank
+    /// computes the same bounds at the bead-count quantiles ([`slab::quantile_bounds`]); (3) each
+    /// rank keeps the beads of its slab. Memory per rank: its part, about N / ranks beads
+    /// ([`Self::held_at_build`]). The state is that of [`Self::new`] on the built world.
+    pub fn from_stream(
+        comm: Comm,
+        skeleton: World,
+        params: Params,
+        beads: &BeadStream<'_>,
+    ) -> Result<Self, SimulationError> {
+        Self::from_stream_on(comm, skeleton, params, None, beads)
+    }
+
+    /// [`Self::from_stream`] on the decomposition `grid`: None for slabs along the wider
+    /// horizontal axis, `Some([px, py])` for a px × py grid of cells, px slabs along x each cut
+    /// into py cells along y at its own bead-count quantiles (one more pass over the beads);
+    /// px py must be the number of ranks (error otherwise).
+    pub fn from_stream_on(
+        comm: Comm,
+        skeleton: World,
+        params: Params,
+        grid: Option<[usize; 2]>,
+        beads: &BeadStream<'_>,
+    ) -> Result<Self, SimulationError> {
+        if let Some([px, py]) = grid {
+            if px.checked_mul(py) != Some(comm.size()) || px == 0 {
+                return Err(SimulationError::Parameter(format!(
+                    "a {px} × {py} grid has {} cells for {} ranks: px py must be the number of ranks",
+                    px.saturating_mul(py),
+                    comm.size()
+                )));
+            }
+        }
+        if skeleton.materials.is_some() {
             // per-pair contact laws are not carried by the subdomain exchange
             return Err(SimulationError::Parameter(
                 "per-pair materials are not supported by the distributed step (use one process)"
@@ -186,49 +282,95 @@ impl DistributedSimulation {
                 params.rolling_friction
             )));
         }
-        let sim = Simulation::new(world, params)?;
+        let skeleton = World {
+            bodies: Vec::new(),
+            ..skeleton
+        };
+        let sim = Simulation::new(skeleton, params)?;
         let Simulation { world, params, .. } = sim;
         let (rank, size) = (comm.rank(), comm.size());
-        let n = world.bodies.len();
         let max_sweeps = match params.method {
             StepMethod::Nsgs(s) => s.max_sweeps,
             StepMethod::Library => 20_000,
         };
-        let spread = |f: fn(&Sphere) -> f64| {
-            let (lo, hi) = world
-                .bodies
-                .iter()
-                .map(f)
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| {
-                    (l.min(x), h.max(x))
+
+        // pass 1: count, checks, extents, radii
+        let mut n = 0usize;
+        let mut bad: Option<SimulationError> = None;
+        let mut ext = [
+            (f64::INFINITY, f64::NEG_INFINITY),
+            (f64::INFINITY, f64::NEG_INFINITY),
+        ];
+        let (mut rmax, mut rmin) = (0.0f64, f64::INFINITY);
+        beads(&mut |b: Sphere| {
+            if bad.is_none() {
+                if let Err(e) = check_spheres(std::slice::from_ref(&b), n, 1) {
+                    bad = Some(e);
+                }
+            }
+            for (d, x) in [b.position.x, b.position.y].into_iter().enumerate() {
+                ext[d] = (ext[d].0.min(x), ext[d].1.max(x));
+            }
+            rmax = rmax.max(b.radius);
+            rmin = rmin.min(b.radius);
+            n += 1;
+        });
+        if let Some(e) = bad {
+            return Err(e);
+        }
+        let (axes, parts) = match grid {
+            Some(g) => ([0, 1], g),
+            None => {
+                // slabs along the wider axis
+                let a = usize::from(ext[1].1 - ext[1].0 > ext[0].1 - ext[0].0);
+                ([a, 1 - a], [size, 1])
+            }
+        };
+        let range = |a: usize| if n > 0 { ext[a] } else { (0.0, 0.0) };
+        let ranges = [range(axes[0]), range(axes[1])];
+
+        // pass 2: the bead-count histogram along the first axis, the same on every rank;
+        // pass 2b (grid): each slab's histogram along the second axis
+        let mut grid = Grid::unbalanced(axes, parts);
+        if size > 1 {
+            let mut outer = vec![0.0; HISTOGRAM_BINS];
+            beads(&mut |b: Sphere| outer[grid.outer_bin(b.position, ranges[0])] += 1.0);
+            grid = Grid::balanced(axes, parts, ranges, &outer, &[]);
+            if parts[1] > 1 {
+                let mut inner = vec![vec![0.0; HISTOGRAM_BINS]; parts[0]];
+                beads(&mut |b: Sphere| {
+                    inner[grid.slab_of(b.position)][grid.inner_bin(b.position, ranges[1])] += 1.0
                 });
-            hi - lo
-        };
-        let axis = if spread(|b| b.position.y) > spread(|b| b.position.x) {
-            1
-        } else {
-            0
-        };
-        let rmax = world.bodies.iter().map(|b| b.radius).fold(0.0, f64::max);
-        let rmin = world
-            .bodies
-            .iter()
-            .map(|b| b.radius)
-            .fold(f64::INFINITY, f64::min);
-        let (lo, hi) = (rank * n / size, (rank + 1) * n / size);
-        let beads: Vec<(usize, Sphere)> = (lo..hi).map(|i| (i, world.bodies[i].clone())).collect();
-        let mut sim = Self {
+                grid = Grid::balanced(axes, parts, ranges, &outer, &inner);
+            }
+        }
+
+        // pass 3: this rank's beads, in global id order
+        let mut mine: Vec<(usize, Sphere)> = Vec::new();
+        let mut gid = 0usize;
+        beads(&mut |b: Sphere| {
+            if grid.owner(b.position) == rank {
+                mine.push((gid, b));
+            }
+            gid += 1;
+        });
+        if gid != n {
+            return Err(SimulationError::Parameter(format!(
+                "the bead stream gave {gid} beads after {n}: it must give the same beads at every pass"
+            )));
+        }
+        Ok(Self {
             comm,
             params,
             time: 0.0,
             steps_done: 0,
             rebalance_every: 20,
             max_sweeps,
-            forces: vec![Vec3::ZERO; beads.len()],
-            beads,
+            forces: vec![Vec3::ZERO; mine.len()],
+            held_at_build: mine.len(),
+            beads: mine,
             contacts: Vec::new(),
-            slabs: Slabs::from_inner(&vec![0.0; size - 1]),
-            axis,
+            grid,
             obstacles: world.obstacles,
             gravity: world.gravity,
             warm: HashMap::new(),
@@ -236,10 +378,14 @@ impl DistributedSimulation {
             rmax,
             rmin,
             total: n,
-        };
-        sim.rebalance();
-        sim.migrate();
-        Ok(sim)
+            migrated_all_to_all: false,
+        })
+    }
+
+    /// Most beads this rank held at once while the simulation was built: its part for
+    /// [`Self::from_stream`], all N for [`Self::new`].
+    pub fn held_at_build(&self) -> usize {
+        self.held_at_build
     }
 
     /// Total number of beads.
@@ -247,59 +393,84 @@ impl DistributedSimulation {
         self.total
     }
 
-    fn coord(&self, p: Vec3) -> f64 {
-        if self.axis == 1 {
-            p.y
-        } else {
-            p.x
-        }
-    }
-
-    /// Places the slab bounds at the bead-count quantiles of the current positions: the
-    /// range [lo, hi] reduced (max), a histogram of [`HISTOGRAM_BINS`] bins reduced (sum), the
-    /// same bounds computed on every rank ([`quantile_bounds`]). Beads move at the next
+    /// Places the bounds at the bead-count quantiles of the current positions: the ranges
+    /// along both axes reduced (max), a histogram of [`HISTOGRAM_BINS`] bins along the first
+    /// axis reduced (sum), and for a grid each slab's histogram along the second axis reduced
+    /// (sum); every rank computes the same bounds ([`Grid::balanced`]). Beads move at the next
     /// [`Self::migrate`].
     pub fn rebalance(&mut self) {
         let size = self.comm.size();
         if size == 1 {
             return;
         }
-        let mut range = [f64::NEG_INFINITY, f64::NEG_INFINITY];
+        let (axes, parts) = (self.grid.axes, self.grid.parts());
+        let along = |p: Vec3, a: usize| if a == 0 { p.x } else { p.y };
+        let mut range = [f64::NEG_INFINITY; 4];
         for (_, b) in &self.beads {
-            let x = self.coord(b.position);
-            if x.is_finite() {
-                range[0] = range[0].max(-x);
-                range[1] = range[1].max(x);
+            for (k, &a) in axes.iter().enumerate() {
+                let x = along(b.position, a);
+                if x.is_finite() {
+                    range[2 * k] = range[2 * k].max(-x);
+                    range[2 * k + 1] = range[2 * k + 1].max(x);
+                }
             }
         }
         self.comm.max(&mut range);
-        let (lo, hi) = if range[1].is_finite() {
-            (-range[0], range[1])
-        } else {
-            (0.0, 0.0)
+        let span = |k: usize| {
+            if range[2 * k + 1].is_finite() {
+                (-range[2 * k], range[2 * k + 1])
+            } else {
+                (0.0, 0.0)
+            }
         };
-        let mut counts = vec![0.0; HISTOGRAM_BINS];
+        let ranges = [span(0), span(1)];
+        let mut outer = vec![0.0; HISTOGRAM_BINS];
         for (_, b) in &self.beads {
-            counts[bin_of(self.coord(b.position), lo, hi)] += 1.0;
+            outer[self.grid.outer_bin(b.position, ranges[0])] += 1.0;
         }
-        self.comm.sum(&mut counts);
-        self.slabs = Slabs::from_inner(&quantile_bounds(&counts, lo, hi, size));
+        self.comm.sum(&mut outer);
+        let mut grid = Grid::balanced(axes, parts, ranges, &outer, &[]);
+        if parts[1] > 1 {
+            let mut flat = vec![0.0; parts[0] * HISTOGRAM_BINS];
+            for (_, b) in &self.beads {
+                let i = grid.slab_of(b.position);
+                flat[i * HISTOGRAM_BINS + grid.inner_bin(b.position, ranges[1])] += 1.0;
+            }
+            self.comm.sum(&mut flat);
+            let inner: Vec<Vec<f64>> = flat
+                .chunks_exact(HISTOGRAM_BINS)
+                .map(<[f64]>::to_vec)
+                .collect();
+            grid = Grid::balanced(axes, parts, ranges, &outer, &inner);
+        }
+        self.grid = grid;
     }
 
-    /// Sends every owned bead outside this rank's slab to its owner, with the warm-start
-    /// impulses of the contacts it owns; returns the number of beads sent.
+    /// Sends every owned bead outside this rank's slab or cell to its owner, with the
+    /// warm-start impulses of the contacts it owns; returns the number of beads sent. Point to
+    /// point with the subdomains touching this one (slabs: r ± 1) when every bead on every
+    /// rank goes to one of those (a flag reduced over the ranks decides); otherwise, e.g. after
+    /// a rebalance moved the bounds far, one personalised all-to-all exchange.
     pub fn migrate(&mut self) -> usize {
         let (me, size) = (self.comm.rank(), self.comm.size());
         if size == 1 {
             return 0;
         }
+        // the cells touching this one (slabs: r ± 1)
+        let adjacent = self.grid.neighbours(me, 0.0);
         let mut leaving: HashMap<usize, usize> = HashMap::new();
+        let mut far = 0.0;
         for (gid, b) in &self.beads {
-            let dest = self.slabs.owner(self.coord(b.position));
+            let dest = self.grid.owner(b.position);
             if dest != me {
                 leaving.insert(*gid, dest);
+                if !adjacent.contains(&dest) {
+                    far = 1.0;
+                }
             }
         }
+        let mut any_far = [far];
+        self.comm.max(&mut any_far);
         let mut warm_of: HashMap<usize, Vec<(Partner, [f64; 3])>> = HashMap::new();
         if !leaving.is_empty() {
             let keys: Vec<(usize, Partner)> = self
@@ -339,7 +510,12 @@ impl DistributedSimulation {
                 }
             }
         }
-        let recv = self.comm.exchange(&send);
+        self.migrated_all_to_all = any_far[0] > 0.0;
+        let recv = if self.migrated_all_to_all {
+            self.comm.exchange(&send)
+        } else {
+            self.comm.exchange_peers(&adjacent, &send)
+        };
         for buf in recv {
             let mut at = 0;
             while at + BEAD_WORDS <= buf.len() {
@@ -370,28 +546,42 @@ impl DistributedSimulation {
         leaving.len()
     }
 
-    /// Copies of the beads of other ranks within `halo` of this rank's slab.
-    fn exchange_ghosts(&mut self, halo: f64) -> Ghosts {
+    /// Copies of the beads of other ranks within `halo` of this rank's cell. `moved`: the
+    /// beads may have left their cells since the last migration (the position correction
+    /// after the θ-method): the farthest any lies outside its cell is reduced (max) and the
+    /// ranks talk to the neighbours within halo + that distance, so that every ghost target
+    /// is among them.
+    fn exchange_ghosts(&mut self, halo: f64, moved: bool) -> Ghosts {
         let (me, size) = (self.comm.rank(), self.comm.size());
         let mut g = Ghosts {
             beads: Vec::new(),
             send: vec![Vec::new(); size],
             recv: vec![Vec::new(); size],
+            peers: Vec::new(),
         };
         if size == 1 {
             return g;
         }
+        let mut out = [0.0];
+        if moved {
+            out[0] = self
+                .beads
+                .iter()
+                .map(|(_, b)| self.grid.outside(me, b.position))
+                .fold(0.0, f64::max);
+            self.comm.max(&mut out);
+        }
+        g.peers = self.grid.neighbours(me, halo + out[0]);
         let mut bufs = vec![Vec::new(); size];
         let mut targets = Vec::new();
         for (i, (gid, b)) in self.beads.iter().enumerate() {
-            self.slabs
-                .ghost_targets(me, self.coord(b.position), halo, &mut targets);
+            self.grid.ghost_targets(me, b.position, halo, &mut targets);
             for &r in &targets {
                 pack_bead(&mut bufs[r], *gid, b);
                 g.send[r].push(i);
             }
         }
-        let recv = self.comm.exchange(&bufs);
+        let recv = self.comm.exchange_peers(&g.peers, &bufs);
         let mut list = Vec::new();
         for (r, buf) in recv.iter().enumerate() {
             for (k, rec) in buf.chunks_exact(BEAD_WORDS).enumerate() {
@@ -474,7 +664,7 @@ impl DistributedSimulation {
             })
             .collect();
         let lens: Vec<usize> = ghosts.send.iter().map(|s| 6 * s.len()).collect();
-        let recv = self.comm.exchange_known(&send, &lens);
+        let recv = self.comm.exchange_peers_known(&ghosts.peers, &send, &lens);
         for (r, buf) in recv.iter().enumerate() {
             for (k, &oi) in ghosts.send[r].iter().enumerate() {
                 let l = local.of_owned[oi];
@@ -507,7 +697,7 @@ impl DistributedSimulation {
             })
             .collect();
         let lens: Vec<usize> = ghosts.recv.iter().map(|s| 6 * s.len()).collect();
-        let recv = self.comm.exchange_known(&send, &lens);
+        let recv = self.comm.exchange_peers_known(&ghosts.peers, &send, &lens);
         for (r, buf) in recv.iter().enumerate() {
             for (k, &gi) in ghosts.recv[r].iter().enumerate() {
                 let Some(&l) = local.of_ghost.get(gi) else {
@@ -648,7 +838,8 @@ impl DistributedSimulation {
         let delta = self.activation_threshold();
         let gamma = self.params.activation.gamma;
         let margin = delta.max(self.params.activation.delta) + 2.0 * head[0] * h * gamma + 1e-12;
-        let ghosts = self.exchange_ghosts(2.0 * self.rmax + margin + 1e-9);
+        // every owned bead is in its cell (just migrated)
+        let ghosts = self.exchange_ghosts(2.0 * self.rmax + margin + 1e-9, false);
         let local = self.local(&ghosts);
 
         // the owned contacts, in global id order (the local order is the global one); the
@@ -840,7 +1031,7 @@ impl DistributedSimulation {
         let (mut touching, mut pen_sum, mut pen_max);
         let mut round = 0;
         loop {
-            let ghosts = self.exchange_ghosts(2.0 * self.rmax + 0.05 * self.rmin + 1e-9);
+            let ghosts = self.exchange_ghosts(2.0 * self.rmax + 0.05 * self.rmin + 1e-9, true);
             let mut local = self.local(&ghosts);
             (touching, pen_sum, pen_max) = self.owned_penetrations(&local);
             let mut worst = [pen_max];
@@ -934,6 +1125,7 @@ impl DistributedSimulation {
             ghosts: counts[3] as usize,
             interface_contacts: counts[4] as usize,
             migrated: counts[5] as usize,
+            migration_all_to_all: self.migrated_all_to_all,
             imbalance: maxes[5] * size as f64 / self.total.max(1) as f64,
         })
     }

@@ -64,6 +64,33 @@ impl Slabs {
             }
         }
     }
+
+    /// The ranks other than `me` that can exchange ghosts with `me` for this `halo`: r < s
+    /// are neighbours when b_s ≤ b_{r+1} + halo (with a relative slack of 10⁻⁶ against
+    /// rounding), the same test on both sides, so the relation is symmetric and contains
+    /// every pair that [`Self::ghost_targets`] links in either direction (a bead x of slab s
+    /// goes to r < s when x < b_{r+1} + halo, where b_s ≤ x; to r > s when x ≥ b_r − halo, where
+    /// x < b_{s+1}). Ascending; walks outwards from `me`.
+    pub fn neighbours(&self, me: usize, halo: f64) -> Vec<usize> {
+        let p = self.len();
+        let reach = halo + 1e-6 * halo.abs() + 1e-12;
+        let near = |r: usize, s: usize| {
+            let (lo, hi) = (self.bounds[r + 1], self.bounds[s]);
+            hi <= lo + reach + 1e-6 * (lo.abs() + hi.abs())
+        };
+        let mut out = Vec::new();
+        let mut r = me;
+        while r > 0 && near(r - 1, me) {
+            r -= 1;
+        }
+        out.extend(r..me);
+        let mut s = me + 1;
+        while s < p && near(me, s) {
+            out.push(s);
+            s += 1;
+        }
+        out
+    }
 }
 
 /// Inner bounds at the bead-count quantiles k N / P (k = 1 … P − 1) of a histogram of
@@ -134,6 +161,30 @@ mod tests {
         assert_eq!(t, vec![1, 2]);
         s.ghost_targets(3, 10.0, 0.1, &mut t);
         assert!(t.is_empty());
+        // neighbours: symmetric, and every ghost target among them
+        assert_eq!(s.neighbours(1, 0.1), vec![0, 2]);
+        assert_eq!(s.neighbours(0, 1.6), vec![1, 2]);
+        assert_eq!(s.neighbours(3, 1.6), vec![1, 2]);
+        assert_eq!(s.neighbours(0, 0.5), vec![1]);
+        for halo in [0.0, 0.1, 0.99, 1.0, 1.01, 2.5] {
+            for me in 0..4 {
+                let near = s.neighbours(me, halo);
+                for &o in &near {
+                    assert!(s.neighbours(o, halo).contains(&me), "{me} {o} {halo}");
+                }
+                for k in 0..=400 {
+                    let x = -0.5 + k as f64 * 0.0125;
+                    if s.owner(x) != me {
+                        continue;
+                    }
+                    s.ghost_targets(me, x, halo, &mut t);
+                    assert!(t.iter().all(|o| near.contains(o)), "{me} {x} {halo}: {t:?}");
+                }
+            }
+        }
+        // empty slabs (equal bounds) are neighbours of each other
+        let e = Slabs::from_inner(&[1.0, 1.0, 1.0]);
+        assert_eq!(e.neighbours(1, 0.0), vec![0, 2, 3]);
     }
 
     #[test]

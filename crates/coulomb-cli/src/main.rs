@@ -147,6 +147,12 @@ fn main() -> ExitCode {
 fn simulate(args: sim_args::Args) -> anyhow::Result<Outcome> {
     threads::with_threads(args.threads, || {
         #[cfg(feature = "mpi")]
+        if args.grid.is_some() && !(args.mpi || sim_args::under_launcher()) {
+            anyhow::bail!(
+                "--grid applies to distributed runs (under mpirun/srun, or with --mpi); this run is one process"
+            );
+        }
+        #[cfg(feature = "mpi")]
         if args.restart.is_some() && (args.mpi || sim_args::under_launcher()) {
             anyhow::bail!("--restart runs in one process, not distributed");
         }

@@ -310,7 +310,7 @@ fn distributed_more_ranks_than_beads() {
 /// `--grid 2x2` on 4 ranks: balanced cells (each holds N/4 beads within 2 % while building),
 /// the same physics as one process, every step to the tolerance, and fewer ghosts than 4 slabs
 /// on this square floor (the interfaces are shorter); a grid whose cells do not match the
-/// ranks is refused with status 2 and says why.
+/// ranks, or a grid in a one-process run, is refused with status 2 and says why.
 #[test]
 fn distributed_grid_2x2_matches_one_process() {
     let dir = temp_dir("mpi-grid");
@@ -353,5 +353,12 @@ fn distributed_grid_2x2_matches_one_process() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("3 × 1 grid has 3 cells for 4 ranks"), "{err}");
+    // in one process --grid means nothing: refused, not ignored
+    let out = common::coulomb(&[
+        "simulate", "box", "--beads", "50", "--steps", "1", "--grid", "2x2",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("--grid applies to distributed runs"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -1032,12 +1032,7 @@ impl Simulation {
     /// temporary file renamed over `path`; an existing checkpoint is replaced only by a
     /// complete one). See [`crate::checkpoint`] for what is stored.
     pub fn save_checkpoint(&self, path: impl AsRef<Path>) -> Result<(), CheckpointError> {
-        let path = path.as_ref();
-        let bytes = self.checkpoint_bytes()?;
-        coulomb::atomic::write(path, bytes).map_err(|source| CheckpointError::Io {
-            path: path.to_path_buf(),
-            source,
-        })
+        write_file(path.as_ref(), self.checkpoint_bytes()?)
     }
 
     /// The simulation stored by [`Simulation::save_checkpoint`] in `path`: stepping it gives
@@ -1045,12 +1040,25 @@ impl Simulation {
     /// truncated file, or out-of-range values give a [`CheckpointError`] and no simulation.
     pub fn load_checkpoint(path: impl AsRef<Path>) -> Result<Simulation, CheckpointError> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|source| CheckpointError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        decode(path, bytes)
+        decode(path, read_file(path)?)
     }
+}
+
+/// Writes `bytes` to `path` atomically ([`coulomb::atomic::write`]: a temporary file renamed
+/// over `path`; a path that is not a regular file is refused).
+pub(crate) fn write_file(path: &Path, bytes: Vec<u8>) -> Result<(), CheckpointError> {
+    coulomb::atomic::write(path, bytes).map_err(|source| CheckpointError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// The bytes of the file at `path`.
+pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, CheckpointError> {
+    std::fs::read(path).map_err(|source| CheckpointError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 #[cfg(test)]

@@ -51,7 +51,15 @@ pub fn write_stats(dir: &Path, stats: &[StepStats]) -> io::Result<()> {
 /// for the steps before `first_step` are kept, this run's `stats` follow. Files that are
 /// missing or unreadable contribute no rows.
 pub fn write_stats_continued(dir: &Path, first_step: usize, stats: &[StepStats]) -> io::Result<()> {
-    let before = |step: Option<u64>| step.is_some_and(|k| k < first_step as u64);
+    let (csv_rows, json_rows) = stats_rows_before(dir, first_step as u64);
+    write_stats_after(dir, csv_rows, json_rows, stats)
+}
+
+/// The rows of `dir/stats.csv` (without its header) and of `dir/stats.json` whose step is
+/// before `first_step`: what a run restarted at `first_step` keeps of the files already there
+/// (sphere and rigid runs alike; missing or unreadable files give no rows).
+pub fn stats_rows_before(dir: &Path, first_step: u64) -> (Vec<String>, Vec<serde_json::Value>) {
+    let before = |step: Option<u64>| step.is_some_and(|k| k < first_step);
     let csv_rows: Vec<String> = fs::read_to_string(dir.join("stats.csv"))
         .map(|text| {
             text.lines()
@@ -68,7 +76,7 @@ pub fn write_stats_continued(dir: &Path, first_step: usize, stats: &[StepStats])
         .into_iter()
         .filter(|v| before(v.get("step").and_then(|k| k.as_u64())))
         .collect();
-    write_stats_after(dir, csv_rows, json_rows, stats)
+    (csv_rows, json_rows)
 }
 
 fn write_stats_after(

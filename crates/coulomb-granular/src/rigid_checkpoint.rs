@@ -39,8 +39,8 @@
 //! | `/json/model`, `/json/contacts`, `/json/detector` | UTF-8 string | scalar |
 
 use crate::checkpoint::{
-    encode_entries, index, json_of, open, read_checked, CheckpointError, Cursor, Data, Entry,
-    Reader,
+    encode_entries, index, json_of, open, read_checked, read_file, write_file, CheckpointError,
+    Cursor, Data, Entry, Reader,
 };
 use crate::model::SceneModel;
 use crate::rigid::contacts::ContactKey;
@@ -234,12 +234,7 @@ impl RigidScene {
     /// file is replaced only by a complete one; a path that is not a regular file is refused
     /// by [`coulomb::atomic::write`]).
     pub fn save_checkpoint(&self, path: impl AsRef<Path>) -> Result<(), CheckpointError> {
-        let path = path.as_ref();
-        let bytes = self.checkpoint_bytes()?;
-        coulomb::atomic::write(path, bytes).map_err(|source| CheckpointError::Io {
-            path: path.to_path_buf(),
-            source,
-        })
+        write_file(path.as_ref(), self.checkpoint_bytes()?)
     }
 
     /// The scene stored by [`RigidScene::save_checkpoint`] in `path`: stepping it gives the
@@ -247,11 +242,7 @@ impl RigidScene {
     /// damaged file or a state the rebuilt world refuses give a [`CheckpointError`].
     pub fn load_checkpoint(path: impl AsRef<Path>) -> Result<RigidScene, CheckpointError> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|source| CheckpointError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        Self::from_checkpoint_bytes(path, bytes)
+        Self::from_checkpoint_bytes(path, read_file(path)?)
     }
 }
 

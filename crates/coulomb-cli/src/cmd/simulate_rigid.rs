@@ -79,29 +79,6 @@ pub fn restart(a: &Args, checkpoint: &Path, scene: Option<&BuiltScene>) -> anyho
     steps(a, rigid, &name, true)
 }
 
-/// Rows of `dir/stats.csv` and `dir/stats.json` (a run's earlier statistics) of steps before
-/// `first`: what a restarted run keeps.
-fn stats_before(dir: &Path, first: u64) -> (Vec<String>, Vec<serde_json::Value>) {
-    let before = |k: Option<u64>| k.is_some_and(|k| k < first);
-    let csv = std::fs::read_to_string(dir.join("stats.csv"))
-        .map(|t| {
-            t.lines()
-                .skip(1)
-                .filter(|l| before(l.split(',').next().and_then(|k| k.parse().ok())))
-                .map(str::to_string)
-                .collect()
-        })
-        .unwrap_or_default();
-    let json = std::fs::read_to_string(dir.join("stats.json"))
-        .ok()
-        .and_then(|t| serde_json::from_str::<Vec<serde_json::Value>>(&t).ok())
-        .unwrap_or_default()
-        .into_iter()
-        .filter(|v| before(v.get("step").and_then(|k| k.as_u64())))
-        .collect();
-    (csv, json)
-}
-
 /// The time steps of `rigid` (new, or loaded by a restart when `restarted`) and their
 /// outputs.
 fn steps(a: &Args, mut rigid: RigidScene, name: &str, restarted: bool) -> anyhow::Result<Outcome> {
@@ -236,7 +213,7 @@ fn steps(a: &Args, mut rigid: RigidScene, name: &str, restarted: bool) -> anyhow
     }
     if let Some(dir) = &a.output {
         let (old_csv, mut old_json) = if restarted {
-            stats_before(dir, first)
+            coulomb_granular::output::stats_rows_before(dir, first)
         } else {
             Default::default()
         };

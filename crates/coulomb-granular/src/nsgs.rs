@@ -542,7 +542,9 @@ pub struct UpdateSums {
     pub change_sq: f64,
 }
 
-impl UpdateSums {
+impl std::ops::Add for UpdateSums {
+    type Output = Self;
+    /// The componentwise sum of two sums.
     fn add(mut self, o: UpdateSums) -> Self {
         self.residual_sq += o.residual_sq;
         self.r_sq += o.r_sq;
@@ -744,14 +746,12 @@ fn for_colour(
             .zip(rs.par_chunks_mut(chunk))
             .map(|(i, r)| f(i, r))
             .collect();
-        parts
-            .into_iter()
-            .fold(UpdateSums::default(), UpdateSums::add)
+        parts.into_iter().fold(UpdateSums::default(), |a, b| a + b)
     } else {
         ids.chunks(chunk)
             .zip(rs.chunks_mut(chunk))
             .map(|(i, r)| f(i, r))
-            .fold(UpdateSums::default(), UpdateSums::add)
+            .fold(UpdateSums::default(), |a, b| a + b)
     }
 }
 
@@ -791,11 +791,11 @@ impl State<'_> {
                     // SAFETY: within one colour no other update touches spheres a, b ≠ a
                     let va = unsafe { &mut *v.at(row.a) };
                     let b = row.b.map(|j| (&p.inv_mass[j], unsafe { &mut *v.at(j) }));
-                    s = s.add(update_contact(row, &p.inv_mass[row.a], va, b, r, omega));
+                    s = s + update_contact(row, &p.inv_mass[row.a], va, b, r, omega);
                 }
                 s
             });
-            total = total.add(sums);
+            total = total + sums;
         }
         total
     }
@@ -895,9 +895,7 @@ impl State<'_> {
                 s
             })
             .collect();
-        let s = parts
-            .into_iter()
-            .fold(UpdateSums::default(), UpdateSums::add);
+        let s = parts.into_iter().fold(UpdateSums::default(), |a, b| a + b);
         // the plain sums are exact unless some square overflows: then the library's scaled
         // evaluation (sequential) on the flattened vectors
         const LIMIT: f64 = 1e150;

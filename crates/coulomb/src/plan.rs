@@ -207,23 +207,23 @@ impl fmt::Display for Structure {
 /// 4. main, from the caller's point (not the warm-up's);
 /// 5. fallback ([`Settings::fallback`]), when main stops on a cap, a stall or a failure.
 pub fn choose(s: &Structure, settings: &Settings, cold: bool) -> Plan {
-    let t = &settings.tuning;
+    let t = &settings.params.tuning;
     let mut steps = Vec::new();
-    if settings.warmup_sweeps > 0 {
+    if settings.params.warmup_sweeps > 0 {
         steps.push(Step {
             kind: StepKind::Warmup,
             method: Some(Method::new(crate::InnerKind::Pgs, crate::OuterKind::Fused)),
-            budget: Budget::Sweeps(settings.warmup_sweeps),
+            budget: Budget::Sweeps(settings.params.warmup_sweeps),
             start: Start::Caller,
         });
     }
     let rigid = s.rigid != Rigid::No;
-    if cold && rigid && settings.barrier_steps > 0 && s.mu_positive && s.contacts > 0 {
+    if cold && rigid && settings.params.barrier_steps > 0 && s.mu_positive && s.contacts > 0 {
         steps.push(Step {
             kind: StepKind::InteriorPoint,
             method: None,
             budget: Budget::Steps {
-                per_run: settings.barrier_steps,
+                per_run: settings.params.barrier_steps,
                 total: t.barrier.max_work,
             },
             start: Start::Cold,
@@ -243,7 +243,7 @@ pub fn choose(s: &Structure, settings: &Settings, cold: bool) -> Plan {
     let iterations = Budget::Iterations {
         outer: settings.max_outer,
         inner: settings.max_inner,
-        newton: settings.newton_steps,
+        newton: settings.params.newton_steps,
     };
     steps.push(Step {
         kind: StepKind::Main,

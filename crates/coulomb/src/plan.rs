@@ -197,10 +197,10 @@ impl fmt::Display for Structure {
 /// given (the rigid-body steps run only then). The steps, in order, each present when its
 /// setting turns it on:
 ///
-/// 1. warm-up ([`Settings::warmup_sweeps`] > 0);
-/// 2. interior point ([`Settings::barrier_steps`] > 0, cold, every μ finite and > 0, and
-///    [`Rigid::Schur`] or [`Rigid::SkeletonProbe`]; it runs only if its Newton systems have
-///    a Schur complement or a skeleton);
+/// 1. warm-up ([`crate::MethodParams::warmup_sweeps`] > 0);
+/// 2. interior point ([`crate::MethodParams::barrier_steps`] > 0, cold, every μ finite
+///    and > 0, and [`Rigid::Schur`] or [`Rigid::SkeletonProbe`]; it runs only if its Newton
+///    systems have a Schur complement or a skeleton);
 /// 3. multipliers (after the interior point, when it did not converge,
 ///    [`crate::settings::MultiplierParams::max_steps`] > 0; on a local problem only if W's
 ///    skeleton reproduces it);

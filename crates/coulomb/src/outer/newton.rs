@@ -1,5 +1,5 @@
 //! The Newton end game of a stage: once the error of `docs/error.md` is ≤
-//! [`crate::Settings::newton_start`], semismooth Newton steps on the natural map of (3.9)
+//! [`crate::MethodParams::newton_start`], semismooth Newton steps on the natural map of (3.9)
 //! for all contacts ([`crate::newton::polish`]) are tried from r; they are kept if they lower
 //! the error (one history record per kept try; s then restarts from F at the new r).
 //!
@@ -8,7 +8,7 @@
 //! its iteration cap, or when the fixed point stagnates
 //! ([`crate::settings::NewtonParams::stagnation`] iterations without a new lowest error); a
 //! try takes at most [`crate::settings::NewtonParams::try_steps`] steps and all tries of a
-//! stage at most [`crate::Settings::newton_steps`], so that the iteration is deterministic.
+//! stage at most [`crate::MethodParams::newton_steps`], so that the iteration is deterministic.
 //!
 //! A try that did not converge at err ≤ [`crate::settings::ProxParams::try_start`] hands its
 //! best point to the proximal point ([`crate::proximal`]) with a budget of Newton steps of its

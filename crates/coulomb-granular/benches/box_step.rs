@@ -4,7 +4,7 @@
 //! ambient rayon pool: `RAYON_NUM_THREADS=1` for one thread). Run: `cargo bench -p
 //! coulomb-granular` (or `--bench box_step -- nsgs_10000`).
 
-use coulomb::solver::{InnerKind, OuterKind, Settings};
+use coulomb::solver::{InnerKind, MethodParams, OuterKind, Settings};
 use coulomb_granular::{NsgsSettings, Params, Scene, Simulation, StepMethod};
 use criterion::{criterion_group, criterion_main, Criterion};
 
@@ -17,11 +17,14 @@ fn paper_params(inner: InnerKind) -> Params {
             tol: 1e-4,
             max_outer: 20,
             max_inner: 250,
-            fixed_point_tol: Some(0.01),
-            inner_tol_factor: 1e-6,
             fallback: None,
-            warmup_sweeps: 0,
-            barrier_steps: 0,
+            params: MethodParams {
+                fixed_point_tol: Some(0.01),
+                inner_tol_factor: 1e-6,
+                warmup_sweeps: 0,
+                barrier_steps: 0,
+                ..MethodParams::default()
+            },
             ..Settings::default()
         },
         // the paper's time stepping (Siconos' activation, no position correction)

@@ -2,7 +2,7 @@
 //! docs/granular.md, "Solver settings in simulations"). Run:
 //! `cargo run --release -p coulomb-granular --example step_methods -- BEADS STEPS`.
 
-use coulomb::solver::{InnerKind, OuterKind, Settings};
+use coulomb::solver::{InnerKind, Method, OuterKind, Settings};
 use coulomb_granular::{Params, Scene, Simulation};
 fn main() {
     let a: Vec<String> = std::env::args().collect();
@@ -18,9 +18,8 @@ fn main() {
             "apgd+fp",
             Settings {
                 tol: 1e-4,
-                inner_tol_factor: 1e-6,
                 max_outer: 20,
-                ..Settings::method(InnerKind::Apgd, OuterKind::FixedPoint)
+                ..Settings::time_stepping(Method::new(InnerKind::Apgd, OuterKind::FixedPoint))
             },
         ),
         (

@@ -54,7 +54,7 @@ use crate::world::{
     ContactLaw, MaterialTable, MeshSide, Motion, Obstacle, Shape, Sphere, World, GRAVITY,
 };
 use crate::Activation;
-use coulomb::{InnerKind, Method, OuterKind, Settings};
+use coulomb::{InnerKind, Method, MethodParams, OuterKind, Settings};
 use serde::{Deserialize, Serialize};
 
 /// The name of the material that always exists.
@@ -394,7 +394,10 @@ impl StepSettings {
         let solver = Settings {
             tol: self.tol,
             max_outer: 20,
-            fixed_point_tol: None,
+            params: MethodParams {
+                fixed_point_tol: None,
+                ..d.params
+            },
             outer: OuterKind::Fused,
             fallback: Some((InnerKind::Apgd, OuterKind::Anderson)),
             ..d

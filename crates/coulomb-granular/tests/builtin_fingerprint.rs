@@ -5,7 +5,7 @@
 //! scenes of `scene.rs` and the global μ, e of `Params`) before the scene model was written.
 //! Hard-coding them is deliberate: this is a regression test against that implementation.
 
-use coulomb::{InnerKind, Method, OuterKind, Settings};
+use coulomb::{InnerKind, Method, MethodParams, OuterKind, Settings};
 use coulomb_granular::{
     Activation, NsgsSettings, Params, Projection, Scene, Simulation, StepMethod,
 };
@@ -16,7 +16,10 @@ fn cli_params() -> Params {
     let solver = Settings {
         tol: 1e-4,
         max_outer: 20,
-        fixed_point_tol: None,
+        params: MethodParams {
+            fixed_point_tol: None,
+            ..d.params
+        },
         outer: OuterKind::Fused,
         fallback: Some((InnerKind::Apgd, OuterKind::Anderson)),
         ..d

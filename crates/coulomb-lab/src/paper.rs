@@ -117,12 +117,13 @@ fn paper_params(inner: InnerKind, mu: f64, tol: f64, fp_tol: f64, max_outer: usi
 /// The paper's algorithm ([`Settings::paper`]) with `inner`, stopped by rule (6.1) with
 /// ε = `fp_tol` (when > 0) or after `max_outer` subproblems.
 pub fn paper_settings(inner: InnerKind, tol: f64, fp_tol: f64, max_outer: usize) -> Settings {
-    Settings {
+    let mut s = Settings {
         tol,
         max_outer,
-        fixed_point_tol: (fp_tol > 0.0).then_some(fp_tol),
         ..Settings::paper(inner)
-    }
+    };
+    s.params.fixed_point_tol = (fp_tol > 0.0).then_some(fp_tol);
+    s
 }
 
 /// `path` with its extension replaced by `ext`.
@@ -804,20 +805,20 @@ mod tests {
     fn paper_settings_are_the_former_hand_built_settings() {
         // what paper built by hand before the library had presets
         let inner = InnerKind::Apgd;
-        let by_hand = Settings {
+        let mut by_hand = Settings {
             tol: 1e-4,
             max_outer: 20,
             max_inner: 250,
-            fixed_point_tol: Some(0.01),
-            inner_tol_factor: 1e-6,
             outer: OuterKind::FixedPoint,
-            newton_steps: 0,
             ..Settings::method(inner, OuterKind::Anderson)
         };
+        by_hand.params.fixed_point_tol = Some(0.01);
+        by_hand.params.inner_tol_factor = 1e-6;
+        by_hand.params.newton_steps = 0;
         assert_eq!(paper_settings(inner, 1e-4, 0.01, 20), by_hand);
         let ipm = paper_settings(InnerKind::Ipm, 1e-4, 0.0, 20);
         assert_eq!(
-            (ipm.max_inner, ipm.fixed_point_tol),
+            (ipm.max_inner, ipm.params.fixed_point_tol),
             (Settings::default().max_inner, None)
         );
     }

@@ -151,8 +151,11 @@ fn parse_outer(py: Python<'_>, field: &str, s: &str) -> PyResult<OuterKind> {
     parse_name(py, field, s)
 }
 
-/// The names accepted by [`settings_from_kwargs`], in the order of [`Settings`]' fields
-/// (plus `method`, a shorthand for [`Settings::method`]).
+/// The names accepted by [`settings_from_kwargs`]: the fields of [`Settings`] and of its
+/// method parameters [`Settings::params`] (`warmup_sweeps`, `barrier_steps`,
+/// `fixed_point_tol`, `facets`, `inner_tol_factor`, `newton_steps`, `newton_start`) by
+/// their own names, in the order of the settings' JSON (plus `method`, a shorthand for
+/// [`Settings::method`]; [`coulomb::settings::Tuning`] is not reached).
 pub const SETTINGS_NAMES: &[&str] = &[
     "tol",
     "inner",
@@ -170,7 +173,8 @@ pub const SETTINGS_NAMES: &[&str] = &[
     "newton_start",
 ];
 
-/// The library's [`Settings`] as a dict (seconds for the time limit, `None` for unset options).
+/// The library's [`Settings`] as a flat dict, the method parameters among the other fields
+/// (seconds for the time limit, `None` for unset options).
 pub fn settings_to_dict<'py>(py: Python<'py>, s: &Settings) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("tol", s.tol)?;
@@ -180,16 +184,16 @@ pub fn settings_to_dict<'py>(py: Python<'py>, s: &Settings) -> PyResult<Bound<'p
         "fallback",
         s.fallback.map(|(i, o)| (inner_name(i), outer_name(o))),
     )?;
-    d.set_item("warmup_sweeps", s.warmup_sweeps)?;
-    d.set_item("barrier_steps", s.barrier_steps)?;
+    d.set_item("warmup_sweeps", s.params.warmup_sweeps)?;
+    d.set_item("barrier_steps", s.params.barrier_steps)?;
     d.set_item("max_outer", s.max_outer)?;
     d.set_item("max_inner", s.max_inner)?;
     d.set_item("time_limit", s.time_limit.map(|t| t.as_secs_f64()))?;
-    d.set_item("fixed_point_tol", s.fixed_point_tol)?;
-    d.set_item("facets", s.facets)?;
-    d.set_item("inner_tol_factor", s.inner_tol_factor)?;
-    d.set_item("newton_steps", s.newton_steps)?;
-    d.set_item("newton_start", s.newton_start)?;
+    d.set_item("fixed_point_tol", s.params.fixed_point_tol)?;
+    d.set_item("facets", s.params.facets)?;
+    d.set_item("inner_tol_factor", s.params.inner_tol_factor)?;
+    d.set_item("newton_steps", s.params.newton_steps)?;
+    d.set_item("newton_start", s.params.newton_start)?;
     Ok(d)
 }
 
@@ -261,8 +265,8 @@ pub fn settings_from_kwargs(
                     Some(method_pair(py, "fallback", &v)?)
                 }
             }
-            "warmup_sweeps" => s.warmup_sweeps = count(py, "warmup_sweeps", &v)?,
-            "barrier_steps" => s.barrier_steps = count(py, "barrier_steps", &v)?,
+            "warmup_sweeps" => s.params.warmup_sweeps = count(py, "warmup_sweeps", &v)?,
+            "barrier_steps" => s.params.barrier_steps = count(py, "barrier_steps", &v)?,
             "max_outer" => s.max_outer = count(py, "max_outer", &v)?,
             "max_inner" => s.max_inner = count(py, "max_inner", &v)?,
             "time_limit" => {
@@ -281,16 +285,16 @@ pub fn settings_from_kwargs(
                 }
             }
             "fixed_point_tol" => {
-                s.fixed_point_tol = if v.is_none() {
+                s.params.fixed_point_tol = if v.is_none() {
                     None
                 } else {
                     Some(real("fixed_point_tol", &v)?)
                 }
             }
-            "facets" => s.facets = count(py, "facets", &v)?,
-            "inner_tol_factor" => s.inner_tol_factor = real("inner_tol_factor", &v)?,
-            "newton_steps" => s.newton_steps = count(py, "newton_steps", &v)?,
-            "newton_start" => s.newton_start = real("newton_start", &v)?,
+            "facets" => s.params.facets = count(py, "facets", &v)?,
+            "inner_tol_factor" => s.params.inner_tol_factor = real("inner_tol_factor", &v)?,
+            "newton_steps" => s.params.newton_steps = count(py, "newton_steps", &v)?,
+            "newton_start" => s.params.newton_start = real("newton_start", &v)?,
             other => {
                 return Err(PyTypeError::new_err(format!(
                     "{func}() got an unexpected keyword argument '{other}' (settings: method, {})",

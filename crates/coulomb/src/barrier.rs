@@ -49,7 +49,7 @@ pub const BARRIER_MAX_WORK: usize = 150;
 /// skeleton of rank ≤ min(`max_schur_dofs`, `skeleton_rank_ratio` · m) ([`crate::linalg::skeleton`]),
 /// before the main
 /// method. A try runs the method along each path of `paths` in turn (at most
-/// [`crate::settings::Settings::barrier_steps`] Newton steps each), finishes a run with the
+/// [`crate::settings::MethodParams::barrier_steps`] Newton steps each), finishes a run with the
 /// Levenberg–Marquardt end game when its error is ≤ [`crate::levenberg::LmParams::start`], keeps the best point
 /// and stops once it converges (or is within `handover` · tol where the method of multipliers
 /// follows) or has spent its work budget `max_work` (Newton and LM steps: a budget in work, so

@@ -41,7 +41,7 @@ use crate::problem::{projected, LocalProblem};
 /// ([`crate::levenberg`]), the finish for rigid, rank-deficient problems on which the
 /// semismooth Newton end game stops at a stationary point (docs/rigid.md). A stage runs it
 /// from its best iterate once the Newton end game has spent its whole budget
-/// ([`crate::settings::Settings::newton_steps`]) without converging, the fixed point stagnates (see
+/// ([`crate::settings::MethodParams::newton_steps`]) without converging, the fixed point stagnates (see
 /// [`crate::newton::NewtonParams::stagnation`]) and the error is ≤ `start`, and again whenever the error has dropped below `retry` times
 /// the lowest error of the previous run; `max_steps = 0` turns it off.
 #[derive(Debug, Clone, Copy, PartialEq)]

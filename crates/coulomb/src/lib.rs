@@ -75,5 +75,5 @@ pub use outer::fixed_point;
 pub use linalg::sparse::CscMatrix;
 pub use outer::{solve, solve_with_guess, Solver};
 pub use problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
-pub use settings::{InnerKind, Method, OuterKind, Settings};
+pub use settings::{InnerKind, Method, MethodParams, OuterKind, Settings};
 pub use solution::{Guess, Solution, SolveError, Status};

@@ -33,12 +33,13 @@ use crate::natural_map::de_saxce_map;
 use crate::problem::LocalProblem;
 
 /// Parameters of the semismooth Newton end game ([`crate::outer::newton`]); the budget and
-/// the starting level are [`crate::settings::Settings::newton_steps`] and [`crate::settings::Settings::newton_start`].
+/// the starting level are [`crate::settings::MethodParams::newton_steps`] and
+/// [`crate::settings::MethodParams::newton_start`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct NewtonParams {
     /// Newton steps one end-game try may take (all tries of a stage share
-    /// [`crate::settings::Settings::newton_steps`])
+    /// [`crate::settings::MethodParams::newton_steps`])
     pub try_steps: usize,
     /// a failed try is tried again once the error is below this fraction of the error it
     /// started from

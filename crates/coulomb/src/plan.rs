@@ -197,33 +197,33 @@ impl fmt::Display for Structure {
 /// given (the rigid-body steps run only then). The steps, in order, each present when its
 /// setting turns it on:
 ///
-/// 1. warm-up ([`Settings::warmup_sweeps`] > 0);
-/// 2. interior point ([`Settings::barrier_steps`] > 0, cold, every μ finite and > 0, and
-///    [`Rigid::Schur`] or [`Rigid::SkeletonProbe`]; it runs only if its Newton systems have
-///    a Schur complement or a skeleton);
+/// 1. warm-up ([`crate::MethodParams::warmup_sweeps`] > 0);
+/// 2. interior point ([`crate::MethodParams::barrier_steps`] > 0, cold, every μ finite
+///    and > 0, and [`Rigid::Schur`] or [`Rigid::SkeletonProbe`]; it runs only if its Newton
+///    systems have a Schur complement or a skeleton);
 /// 3. multipliers (after the interior point, when it did not converge,
 ///    [`crate::settings::MultiplierParams::max_steps`] > 0; on a local problem only if W's
 ///    skeleton reproduces it);
 /// 4. main, from the caller's point (not the warm-up's);
 /// 5. fallback ([`Settings::fallback`]), when main stops on a cap, a stall or a failure.
 pub fn choose(s: &Structure, settings: &Settings, cold: bool) -> Plan {
-    let t = &settings.tuning;
+    let t = &settings.params.tuning;
     let mut steps = Vec::new();
-    if settings.warmup_sweeps > 0 {
+    if settings.params.warmup_sweeps > 0 {
         steps.push(Step {
             kind: StepKind::Warmup,
             method: Some(Method::new(crate::InnerKind::Pgs, crate::OuterKind::Fused)),
-            budget: Budget::Sweeps(settings.warmup_sweeps),
+            budget: Budget::Sweeps(settings.params.warmup_sweeps),
             start: Start::Caller,
         });
     }
     let rigid = s.rigid != Rigid::No;
-    if cold && rigid && settings.barrier_steps > 0 && s.mu_positive && s.contacts > 0 {
+    if cold && rigid && settings.params.barrier_steps > 0 && s.mu_positive && s.contacts > 0 {
         steps.push(Step {
             kind: StepKind::InteriorPoint,
             method: None,
             budget: Budget::Steps {
-                per_run: settings.barrier_steps,
+                per_run: settings.params.barrier_steps,
                 total: t.barrier.max_work,
             },
             start: Start::Cold,
@@ -243,7 +243,7 @@ pub fn choose(s: &Structure, settings: &Settings, cold: bool) -> Plan {
     let iterations = Budget::Iterations {
         outer: settings.max_outer,
         inner: settings.max_inner,
-        newton: settings.newton_steps,
+        newton: settings.params.newton_steps,
     };
     steps.push(Step {
         kind: StepKind::Main,

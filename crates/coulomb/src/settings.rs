@@ -1,17 +1,20 @@
-//! What a solve is asked to do: the method (an inner solver of F(s) and an outer iteration on
-//! s, §3.3 and §6 of the paper), the stopping tolerance and caps, and every tuning constant of
-//! the outer loop in one typed, documented [`Tuning`] struct.
+//! What a solve is asked to do. [`Settings`] holds what a user changes: the method (an inner
+//! solver of F(s) and an outer iteration on s, §3.3 and §6 of the paper, and a fallback), the
+//! stopping tolerance, the iteration and time limits and a cancel request. One level down,
+//! [`MethodParams`] holds the method's parameters (warm-up and interior-point tries, inner
+//! tolerance, Newton end game, rule (6.1), facets) and every tuning constant of the outer loop
+//! in one typed, documented [`Tuning`] struct.
 //!
 //! # One meaning per tolerance
 //! - [`Settings::tol`]: the bound on the error of `docs/error.md` of the returned r (and on
 //!   the balance residual of a global problem); the only tolerance a status is decided by.
-//! - [`Settings::fixed_point_tol`]: ε of the paper's rule (6.1), an extra stopping test on
+//! - [`MethodParams::fixed_point_tol`]: ε of the paper's rule (6.1), an extra stopping test on
 //!   ‖F(s) − s‖ / (n (‖s‖ + 1)); it never makes a solve "converged".
 //! - The inner tolerance (see [`Tuning::inner_tol`]): the tolerance handed to an inner solver
 //!   in [`crate::inner::InnerLimits::tol`], on that solver's own relative optimality measure;
 //!   it is derived from `tol` and the error of the current outer iterate, never set directly.
-//! - [`Settings::newton_start`]: an error level (of `docs/error.md`) below which the Newton end
-//!   game is tried; not a stopping test.
+//! - [`MethodParams::newton_start`]: an error level (of `docs/error.md`) below which the
+//!   Newton end game is tried; not a stopping test.
 
 pub use crate::barrier::{BarrierParams, BARRIER_MAX_WORK};
 pub use crate::inner::apgd::ApgdParams;
@@ -628,7 +631,7 @@ impl Tuning {
         if cold_or_frictionless {
             floor
         } else {
-            (settings.inner_tol_factor * error)
+            (settings.params.inner_tol_factor * error)
                 .min(self.inner_tol_ceiling)
                 .max(floor)
         }
@@ -718,24 +721,14 @@ pub const PROX_CAPPED_MAX_STEPS: usize = 200;
 /// progressing (see [`Settings::fallback`]). The default of [`Tuning::stall_window`].
 pub const STALL_WINDOW: usize = 25;
 
-/// Typed settings with defaults suited to rigid-body problems: a warm-up of at most 50
-/// Gauss–Seidel sweeps on Coulomb's law, then APGD inside Anderson-mixed fixed-point
-/// iterations, a semismooth Newton end game on the whole law once the error is
-/// ≤ [`Settings::newton_start`] (1e-3), and fused Gauss–Seidel as fallback when the first
-/// stage stalls. [`Settings::paper`] is the paper's algorithm.
-#[derive(Debug, Clone, PartialEq)]
+/// The parameters of the method, one level below the choices a user makes in [`Settings`]:
+/// the warm-up and interior-point tries before the main method, the inner tolerance, the
+/// Newton end game, the paper's rule (6.1), the faceted cone, and every tuning constant of
+/// the outer loop ([`Tuning`]). The defaults suit rigid-body problems; what each field does,
+/// its range and how its default was chosen: docs/tuning.md.
+#[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct Settings {
-    /// tolerance on the reported error (docs/error.md); also on the balance residual
-    pub tol: f64,
-    /// inner solver
-    pub inner: InnerKind,
-    /// outer iteration
-    pub outer: OuterKind,
-    /// a second (inner, outer) method, warm-started from the first one's r, run when the first
-    /// stops without converging (iteration cap, inner failure, or stalled: the error no longer
-    /// halves over [`Tuning::stall_window`] outer iterations); the time limit covers both
-    pub fallback: Option<(InnerKind, OuterKind)>,
+pub struct MethodParams {
     /// quick first try: at most this many Gauss–Seidel sweeps on Coulomb's law itself
     /// before the main method (0: none); small problems are solved there, and otherwise the
     /// main method starts from the caller's point as if the try had not happened
@@ -744,6 +737,68 @@ pub struct Settings {
     /// a cold solve of a rigid problem (policy and parameters: [`Tuning::barrier`]): at
     /// most this many Newton steps per run; 0 turns it off
     pub barrier_steps: usize,
+    /// ε of the paper's stopping rule (6.1) ‖F(s) − s‖ / (n (‖s‖ + 1)) ≤ ε, used as an
+    /// additional internal stopping test when set (the reported status still requires err ≤ tol)
+    pub fixed_point_tol: Option<f64>,
+    /// number of facets of the pyramid replacing each K_μ (faceted inner solver, d = 3)
+    pub facets: usize,
+    /// the inner tolerance is `inner_tol_factor` × (error of the previous outer iterate),
+    /// kept between [`Tuning::inner_tol_floor`] · tol and [`Tuning::inner_tol_ceiling`]
+    pub inner_tol_factor: f64,
+    /// end game: once the error is ≤ [`MethodParams::newton_start`], semismooth Newton steps
+    /// on the natural map of the whole law ([`crate::newton::polish`]) are tried after an
+    /// outer iteration and kept if they lower the error; this many steps at most per stage;
+    /// 0 turns it off
+    pub newton_steps: usize,
+    /// error (docs/error.md) below which the Newton end game is tried
+    pub newton_start: f64,
+    /// the tuning constants of the outer loop
+    pub tuning: Tuning,
+}
+
+impl Default for MethodParams {
+    fn default() -> Self {
+        Self {
+            warmup_sweeps: 50,
+            barrier_steps: 150,
+            fixed_point_tol: None,
+            facets: 8,
+            inner_tol_factor: 0.1,
+            newton_steps: 30,
+            newton_start: 1e-3,
+            tuning: Tuning::default(),
+        }
+    }
+}
+
+/// Typed settings: what a user changes — the tolerance, the method (main and fallback), the
+/// iteration and time limits, a cancel request — with the method's parameters one level down
+/// in [`Settings::params`]. The defaults suit rigid-body problems: a warm-up of at most 50
+/// Gauss–Seidel sweeps on Coulomb's law, then APGD inside Anderson-mixed fixed-point
+/// iterations, a semismooth Newton end game on the whole law once the error is
+/// ≤ [`MethodParams::newton_start`] (1e-3), and fused Gauss–Seidel as fallback when the first
+/// stage stalls. [`Settings::paper`] is the paper's algorithm.
+///
+/// With the `serde` feature its JSON keeps every field of [`MethodParams`] at the top level,
+/// next to `tol` and the limits, in the order of the layout before the parameters moved down
+/// (a sphere checkpoint's `/json/solver` is this JSON).
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(
+    feature = "serde",
+    serde(from = "SettingsRecord", into = "SettingsRecord")
+)]
+pub struct Settings {
+    /// tolerance on the reported error (docs/error.md); also on the balance residual
+    pub tol: f64,
+    /// inner solver of the main method
+    pub inner: InnerKind,
+    /// outer iteration of the main method
+    pub outer: OuterKind,
+    /// a second (inner, outer) method, warm-started from the first one's r, run when the first
+    /// stops without converging (iteration cap, inner failure, or stalled: the error no longer
+    /// halves over [`Tuning::stall_window`] outer iterations); the time limit covers both
+    pub fallback: Option<(InnerKind, OuterKind)>,
     /// cap on outer iterations (subproblems)
     pub max_outer: usize,
     /// cap on iterations of each inner solve
@@ -753,26 +808,10 @@ pub struct Settings {
     pub time_limit: Option<Duration>,
     /// a request to stop early from outside the solve (e.g. a signal handler; None: none),
     /// read wherever the time limit is: the solve then ends with
-    /// [`crate::Status::Interrupted`] and its best iterate
-    #[cfg_attr(feature = "serde", serde(skip))]
+    /// [`crate::Status::Interrupted`] and its best iterate; not serialized
     pub cancel: Option<crate::deadline::Cancel>,
-    /// ε of the paper's stopping rule (6.1) ‖F(s) − s‖ / (n (‖s‖ + 1)) ≤ ε, used as an
-    /// additional internal stopping test when set (the reported status still requires err ≤ tol)
-    pub fixed_point_tol: Option<f64>,
-    /// number of facets of the pyramid replacing each K_μ (faceted inner solver, d = 3)
-    pub facets: usize,
-    /// the inner tolerance is `inner_tol_factor` × (error of the previous outer iterate),
-    /// kept between [`Tuning::inner_tol_floor`] · tol and [`Tuning::inner_tol_ceiling`]
-    pub inner_tol_factor: f64,
-    /// end game: once the error is ≤ [`Settings::newton_start`], semismooth Newton steps on
-    /// the natural map of the whole law ([`crate::newton::polish`]) are tried after an outer
-    /// iteration and kept if they lower the error; this many steps at most per stage; 0 turns
-    /// it off
-    pub newton_steps: usize,
-    /// error (docs/error.md) below which the Newton end game is tried
-    pub newton_start: f64,
-    /// the tuning constants of the outer loop
-    pub tuning: Tuning,
+    /// the parameters of the method: its tries, end game and tuning constants
+    pub params: MethodParams,
 }
 
 impl Default for Settings {
@@ -782,18 +821,84 @@ impl Default for Settings {
             inner: InnerKind::Apgd,
             outer: OuterKind::Anderson,
             fallback: Some((InnerKind::Pgs, OuterKind::Fused)),
-            warmup_sweeps: 50,
-            barrier_steps: 150,
             max_outer: 200,
             max_inner: 10_000,
             time_limit: Some(Duration::from_secs(60)),
             cancel: None,
-            fixed_point_tol: None,
-            facets: 8,
-            inner_tol_factor: 0.1,
-            newton_steps: 30,
-            newton_start: 1e-3,
-            tuning: Tuning::default(),
+            params: MethodParams::default(),
+        }
+    }
+}
+
+/// The JSON layout of [`Settings`]: the fields of [`MethodParams`] at the top level, in the
+/// order the fields had before they moved into [`Settings::params`], so that stored settings
+/// read and write unchanged. [`Settings::cancel`] is not stored (read back as None).
+#[cfg(feature = "serde")]
+#[derive(serde::Serialize, serde::Deserialize)]
+struct SettingsRecord {
+    tol: f64,
+    inner: InnerKind,
+    outer: OuterKind,
+    fallback: Option<(InnerKind, OuterKind)>,
+    warmup_sweeps: usize,
+    barrier_steps: usize,
+    max_outer: usize,
+    max_inner: usize,
+    time_limit: Option<Duration>,
+    fixed_point_tol: Option<f64>,
+    facets: usize,
+    inner_tol_factor: f64,
+    newton_steps: usize,
+    newton_start: f64,
+    tuning: Tuning,
+}
+
+#[cfg(feature = "serde")]
+impl From<Settings> for SettingsRecord {
+    fn from(s: Settings) -> Self {
+        let p = s.params;
+        Self {
+            tol: s.tol,
+            inner: s.inner,
+            outer: s.outer,
+            fallback: s.fallback,
+            warmup_sweeps: p.warmup_sweeps,
+            barrier_steps: p.barrier_steps,
+            max_outer: s.max_outer,
+            max_inner: s.max_inner,
+            time_limit: s.time_limit,
+            fixed_point_tol: p.fixed_point_tol,
+            facets: p.facets,
+            inner_tol_factor: p.inner_tol_factor,
+            newton_steps: p.newton_steps,
+            newton_start: p.newton_start,
+            tuning: p.tuning,
+        }
+    }
+}
+
+#[cfg(feature = "serde")]
+impl From<SettingsRecord> for Settings {
+    fn from(r: SettingsRecord) -> Self {
+        Self {
+            tol: r.tol,
+            inner: r.inner,
+            outer: r.outer,
+            fallback: r.fallback,
+            max_outer: r.max_outer,
+            max_inner: r.max_inner,
+            time_limit: r.time_limit,
+            cancel: None,
+            params: MethodParams {
+                warmup_sweeps: r.warmup_sweeps,
+                barrier_steps: r.barrier_steps,
+                fixed_point_tol: r.fixed_point_tol,
+                facets: r.facets,
+                inner_tol_factor: r.inner_tol_factor,
+                newton_steps: r.newton_steps,
+                newton_start: r.newton_start,
+                tuning: r.tuning,
+            },
         }
     }
 }
@@ -809,8 +914,11 @@ impl Settings {
             inner,
             outer,
             fallback: None,
-            warmup_sweeps: 0,
-            barrier_steps: 0,
+            params: MethodParams {
+                warmup_sweeps: 0,
+                barrier_steps: 0,
+                ..MethodParams::default()
+            },
             ..Self::default()
         }
     }
@@ -819,27 +927,23 @@ impl Settings {
     /// s ← F(s), each subproblem (3.15)/(4.7) solved accurately (inner tolerance 1e-6 × the
     /// current error, down to the floor), no warm-up, no fallback, no Newton end game; the
     /// iterative inner solvers capped at [`PAPER_MAX_INNER`] iterations as in Table 1. Set
-    /// [`Settings::fixed_point_tol`] to stop by rule (6.1) as the paper does.
+    /// [`MethodParams::fixed_point_tol`] to stop by rule (6.1) as the paper does.
     pub fn paper(inner: InnerKind) -> Self {
-        Self {
-            max_inner: if matches!(inner, InnerKind::Apgd | InnerKind::Pgs) {
-                PAPER_MAX_INNER
-            } else {
-                Self::default().max_inner
-            },
-            newton_steps: 0,
-            ..Self::time_stepping(Method::new(inner, OuterKind::FixedPoint))
+        let mut s = Self::time_stepping(Method::new(inner, OuterKind::FixedPoint));
+        if matches!(inner, InnerKind::Apgd | InnerKind::Pgs) {
+            s.max_inner = PAPER_MAX_INNER;
         }
+        s.params.newton_steps = 0;
+        s
     }
 
     /// `method` alone, each subproblem solved accurately (inner tolerance 1e-6 × the current
     /// error, down to the floor): the preset of time stepping, where the loose rule (6.1)
     /// often stops the outer loop after one subproblem, whose accuracy is then the step's.
     pub fn time_stepping(method: Method) -> Self {
-        Self {
-            inner_tol_factor: 1e-6,
-            ..Self::method(method.inner, method.outer)
-        }
+        let mut s = Self::method(method.inner, method.outer);
+        s.params.inner_tol_factor = 1e-6;
+        s
     }
 
     /// The (inner, outer) pair of the main method.
@@ -856,19 +960,17 @@ impl Settings {
         if self.max_outer == 0 || self.max_inner == 0 {
             return bad("max_outer and max_inner must be at least 1");
         }
-        if self.inner_tol_factor.is_nan()
-            || self.inner_tol_factor <= 0.0
-            || self.inner_tol_factor > 1.0
-        {
+        let p = &self.params;
+        if p.inner_tol_factor.is_nan() || p.inner_tol_factor <= 0.0 || p.inner_tol_factor > 1.0 {
             return bad("inner_tol_factor must be in (0, 1]");
         }
-        if self.fixed_point_tol.is_some_and(|e| e.is_nan() || e <= 0.0) {
+        if p.fixed_point_tol.is_some_and(|e| e.is_nan() || e <= 0.0) {
             return bad("fixed_point_tol must be positive");
         }
-        if self.newton_start.is_nan() || self.newton_start < 0.0 {
+        if p.newton_start.is_nan() || p.newton_start < 0.0 {
             return bad("newton_start must be nonnegative");
         }
-        if self.facets < 3 {
+        if p.facets < 3 {
             return bad("facets must be at least 3");
         }
         if !self.main_method().is_valid() {
@@ -879,7 +981,7 @@ impl Settings {
                 return bad("the fused outer iteration needs the pgs inner solver (fallback)");
             }
         }
-        self.tuning
+        p.tuning
             .validate()
             .map_err(crate::solution::SolveError::Settings)
     }
@@ -893,7 +995,7 @@ mod tests {
     fn a_zero_stagnation_window_is_refused() {
         let mut s = Settings::default();
         assert!(s.validate().is_ok());
-        s.tuning.newton.stagnation = 0;
+        s.params.tuning.newton.stagnation = 0;
         assert!(s.validate().is_err());
     }
 
@@ -923,15 +1025,15 @@ mod tests {
             let p = Settings::paper(inner);
             p.validate().unwrap();
             assert_eq!(
-                (p.outer, p.fallback, p.newton_steps),
+                (p.outer, p.fallback, p.params.newton_steps),
                 (OuterKind::FixedPoint, None, 0)
             );
         }
         let mut s = Settings::default();
-        s.tuning.newton.retry = 0.0;
+        s.params.tuning.newton.retry = 0.0;
         assert!(s.validate().is_err());
         let mut s = Settings::default();
-        s.tuning.anderson.memory = 0;
+        s.params.tuning.anderson.memory = 0;
         assert!(s.validate().is_err());
         let refused: [fn(&mut Tuning); 50] = [
             |t| t.multiplier.newton_steps = 0,
@@ -987,7 +1089,7 @@ mod tests {
         ];
         for spoil in refused {
             let mut s = Settings::default();
-            spoil(&mut s.tuning);
+            spoil(&mut s.params.tuning);
             assert!(s.validate().is_err());
         }
         assert!(Settings::method(InnerKind::Apgd, OuterKind::Fused)
@@ -998,7 +1100,7 @@ mod tests {
     #[test]
     fn inner_tolerance_stays_between_floor_and_ceiling() {
         let s = Settings::default();
-        let t = s.tuning;
+        let t = s.params.tuning;
         assert_eq!(t.inner_tol(&s, 1.0, false), 1e-2);
         assert_eq!(t.inner_tol(&s, 1e-20, false), 0.2 * s.tol);
         assert_eq!(t.inner_tol(&s, 1e-4, true), 0.2 * s.tol);

@@ -26,7 +26,7 @@ pub enum Status {
     InnerInfeasible,
     /// the iterates became non-finite
     NumericalError,
-    /// the paper's rule (6.1) held (`Settings::fixed_point_tol`) but the error is above tol
+    /// the paper's rule (6.1) held (`MethodParams::fixed_point_tol`) but the error is above tol
     FixedPointRule,
     /// the error is ≤ tol only because r is unbounded: ‖W‖ ‖r‖ >
     /// [`crate::settings::Tuning::unbounded_ratio`] · max(‖q‖, ‖u‖), so the scale

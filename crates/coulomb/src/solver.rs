@@ -9,6 +9,7 @@
 
 pub use crate::outer::{solve, solve_with_guess, Solver};
 pub use crate::settings::{
-    InnerKind, InnerParams, Method, OuterKind, Settings, Tuning, STALL_WINDOW, UNBOUNDED_RATIO,
+    InnerKind, InnerParams, Method, MethodParams, OuterKind, Settings, Tuning, STALL_WINDOW,
+    UNBOUNDED_RATIO,
 };
 pub use crate::solution::{Guess, OuterRecord, Solution, SolveError, Status};

@@ -192,11 +192,11 @@ fn reliability_time_limits_beyond_instant_do_not_panic() {
         }
     }
     // a zero limit is a limit, not a panic
-    let s = Settings {
+    let mut s = Settings {
         time_limit: Some(Duration::ZERO),
-        warmup_sweeps: 0,
         ..Settings::default()
     };
+    s.params.warmup_sweeps = 0;
     let sol = solver::solve(&p, &s).unwrap();
     assert!(
         matches!(sol.status, Status::Converged | Status::TimeLimit),

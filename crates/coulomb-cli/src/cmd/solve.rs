@@ -93,14 +93,14 @@ pub fn settings(args: &Args) -> anyhow::Result<Settings> {
     if args.inner.is_some() || args.outer.is_some() {
         // an explicit method runs alone
         s.fallback = None;
-        s.warmup_sweeps = 0;
-        s.barrier_steps = 0;
+        s.params.warmup_sweeps = 0;
+        s.params.barrier_steps = 0;
     }
     if let Some(n) = args.max_outer {
         s.max_outer = n;
     }
     if let Some(n) = args.barrier_steps {
-        s.barrier_steps = n;
+        s.params.barrier_steps = n;
     }
     if let Some(t) = args.time_limit {
         let checked = crate::values::time_limit(&t.to_string())

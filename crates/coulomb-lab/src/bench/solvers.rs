@@ -6,7 +6,7 @@
 //! form, no separate outer loop) is accepted too but is not in the default list; the library
 //! rejects `+fused` with other inner solvers, which the benchmark records as a `solve_error`.
 
-use coulomb::{InnerKind, Method, OuterKind, Settings};
+use coulomb::{InnerKind, Method, MethodParams, OuterKind, Settings};
 use std::time::Duration;
 
 /// One benchmarked solver: an inner solver and an outer iteration.
@@ -82,15 +82,18 @@ impl SolverSpec {
             } else {
                 None
             },
-            warmup_sweeps: if self.fallback {
-                Settings::default().warmup_sweeps
-            } else {
-                0
-            },
-            barrier_steps: if self.fallback {
-                Settings::default().barrier_steps
-            } else {
-                0
+            params: MethodParams {
+                warmup_sweeps: if self.fallback {
+                    MethodParams::default().warmup_sweeps
+                } else {
+                    0
+                },
+                barrier_steps: if self.fallback {
+                    MethodParams::default().barrier_steps
+                } else {
+                    0
+                },
+                ..Default::default()
             },
             ..Default::default()
         }

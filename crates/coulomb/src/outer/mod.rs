@@ -34,7 +34,7 @@ use crate::inner::{
 use crate::linalg::sparse::CscMatrix;
 use crate::plan::{Plan, Rigid, StepKind, Structure};
 use crate::problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
-use crate::settings::{InnerKind, InnerParams, OuterKind, Settings};
+use crate::settings::{InnerKind, InnerParams, MethodParams, OuterKind, Settings};
 use crate::solution::{Guess, OuterRecord, Solution, SolveError, Status};
 use form::{Form, Stored};
 use stage::{Best, Stage};
@@ -45,7 +45,7 @@ use std::time::Instant;
 fn structure_of(form: &Form<'_>, settings: &Settings) -> Structure {
     let local = form.local();
     let m = local.q.len();
-    let bp = &settings.tuning.barrier;
+    let bp = &settings.params.tuning.barrier;
     let (dofs, rigid) = match &form.stored {
         Stored::Global(g, _) => {
             let n = g.m.nrows;
@@ -111,8 +111,8 @@ impl InnerSolvers {
         Self {
             qp: [None, None, None, None],
             fused: None,
-            facets: settings.facets,
-            params: settings.tuning.inner,
+            facets: settings.params.facets,
+            params: settings.params.tuning.inner,
         }
     }
 
@@ -202,7 +202,7 @@ impl<'a> Solver<'a> {
 
     fn with_stored(stored: Stored<'a>, settings: Settings) -> Result<Self, SolveError> {
         settings.validate()?;
-        let form = Form::new(stored, settings.tuning.unbounded_ratio);
+        let form = Form::new(stored, settings.params.tuning.unbounded_ratio);
         Ok(Self {
             structure: structure_of(&form, &settings),
             form,
@@ -231,12 +231,12 @@ impl<'a> Solver<'a> {
     /// Replaces the settings (checked); the set-up data are kept.
     pub fn set_settings(&mut self, settings: Settings) -> Result<(), SolveError> {
         settings.validate()?;
-        if settings.facets != self.settings.facets
-            || settings.tuning.inner != self.settings.tuning.inner
+        if settings.params.facets != self.settings.params.facets
+            || settings.params.tuning.inner != self.settings.params.tuning.inner
         {
             self.solvers = InnerSolvers::new(&settings);
         }
-        self.form.unbounded_ratio = settings.tuning.unbounded_ratio;
+        self.form.unbounded_ratio = settings.params.tuning.unbounded_ratio;
         self.structure = structure_of(&self.form, &settings);
         self.settings = settings;
         Ok(())
@@ -456,9 +456,9 @@ impl Solver<'_> {
     /// ([`crate::barrier::Setup::structured`]).
     fn barrier_try(&mut self, deadline: Deadline) -> Result<Option<(Ran, Ends)>, SolveError> {
         let settings = &self.settings;
-        let (bp, lm) = (settings.tuning.barrier, settings.tuning.lm);
+        let (bp, lm) = (settings.params.tuning.barrier, settings.params.tuning.lm);
         let local = self.form.local();
-        let target = settings.tuning.newton.target_fraction * settings.tol;
+        let target = settings.params.tuning.newton.target_fraction * settings.tol;
         let global = match &self.form.stored {
             Stored::Global(g, _) => Some(&**g),
             Stored::Local(_) => None,
@@ -487,7 +487,7 @@ impl Solver<'_> {
                 local,
                 &setup,
                 target,
-                settings.barrier_steps.min(bp.max_work - steps),
+                settings.params.barrier_steps.min(bp.max_work - steps),
                 &bp,
                 path,
                 deadline,
@@ -565,7 +565,10 @@ impl Solver<'_> {
     /// not).
     fn multipliers_apply(&self) -> bool {
         let settings = &self.settings;
-        let (mp, bp) = (settings.tuning.multiplier, settings.tuning.barrier);
+        let (mp, bp) = (
+            settings.params.tuning.multiplier,
+            settings.params.tuning.barrier,
+        );
         let local = self.form.local();
         let m = local.q.len();
         if mp.max_steps == 0 || !local.mu.iter().all(|mu| mu.is_finite()) {
@@ -588,8 +591,8 @@ impl Solver<'_> {
     /// [`crate::settings::BarrierParams::handover`] · tol).
     fn multipliers_follow(&self, setup: &crate::barrier::Setup<'_>) -> bool {
         let settings = &self.settings;
-        let limit = settings.tuning.multiplier.skeleton_residual * settings.tol;
-        let parallel_dim = settings.tuning.barrier.dense_parallel_dim;
+        let limit = settings.params.tuning.multiplier.skeleton_residual * settings.tol;
+        let parallel_dim = settings.params.tuning.barrier.dense_parallel_dim;
         self.multipliers_apply()
             && match (&self.form.stored, setup.skeleton()) {
                 (Stored::Global(..), _) => true,
@@ -611,7 +614,7 @@ impl Solver<'_> {
         p: &LocalProblem,
         deadline: Deadline,
     ) -> Option<crate::linalg::skeleton::Skeleton> {
-        let bp = &self.settings.tuning.barrier;
+        let bp = &self.settings.params.tuning.barrier;
         let m = p.q.len();
         let max_rank = bp
             .max_schur_dofs
@@ -625,8 +628,8 @@ impl Solver<'_> {
     /// [`crate::settings::MultiplierParams::skeleton_residual`] · tol.
     fn reproduces(&self, skeleton: &crate::linalg::skeleton::Skeleton, p: &LocalProblem) -> bool {
         let (mp, bp) = (
-            &self.settings.tuning.multiplier,
-            &self.settings.tuning.barrier,
+            &self.settings.params.tuning.multiplier,
+            &self.settings.params.tuning.barrier,
         );
         skeleton
             .residual(&p.w, bp.dense_parallel_dim)
@@ -661,8 +664,8 @@ impl Solver<'_> {
             return Ok(None);
         }
         let settings = &self.settings;
-        let mp = settings.tuning.multiplier;
-        let bp = settings.tuning.barrier;
+        let mp = settings.params.tuning.multiplier;
+        let bp = settings.params.tuning.barrier;
         let local = self.form.local();
         let m = local.q.len();
         let skeleton_form;
@@ -725,7 +728,7 @@ impl Solver<'_> {
                 settings.tol,
                 mp.finish_steps,
                 mp.finish_slow_steps,
-                settings.tuning.lm.max_normal_nonzeros,
+                settings.params.tuning.lm.max_normal_nonzeros,
                 until,
             )
         };
@@ -791,8 +794,11 @@ fn warmup_settings(settings: &Settings) -> Settings {
         outer: OuterKind::Fused,
         fallback: None,
         max_outer: 1,
-        max_inner: settings.warmup_sweeps,
-        newton_steps: 0,
+        max_inner: settings.params.warmup_sweeps,
+        params: MethodParams {
+            newton_steps: 0,
+            ..settings.params
+        },
         ..settings.clone()
     }
 }
@@ -992,11 +998,11 @@ mod tests {
         for seed in 0..3 {
             for skew in [0.0, 1e-3] {
                 let p = crate::test_problems::problem(8, seed, 0.0, skew);
-                let settings = Settings {
-                    warmup_sweeps: 0,
+                let mut settings = Settings {
                     time_limit: None,
                     ..Settings::default()
                 };
+                settings.params.warmup_sweeps = 0;
                 let sol = solve(&Problem::Local(p.clone()), &settings).unwrap();
                 assert_eq!(sol.history[0].step, StepKind::InteriorPoint, "seed {seed}");
                 assert_eq!(barrier_records(&sol), 1, "seed {seed} skew {skew}");
@@ -1050,11 +1056,11 @@ mod tests {
             )
             .unwrap();
             let problem = Problem::Global(g.clone());
-            let settings = Settings {
-                warmup_sweeps: 0,
+            let mut settings = Settings {
                 time_limit: None,
                 ..Settings::default()
             };
+            settings.params.warmup_sweeps = 0;
             let sol = solve(&problem, &settings).unwrap();
             assert_eq!(sol.history[0].step, StepKind::InteriorPoint, "seed {seed}");
             // the try's record, and the method of multipliers' (also without a fixed-point
@@ -1066,10 +1072,8 @@ mod tests {
                 assert_eq!(sol.history[1].step, StepKind::Multipliers, "seed {seed}");
             }
             solved += usize::from(sol.converged() && sol.history.len() == 1);
-            let off = Settings {
-                barrier_steps: 0,
-                ..settings.clone()
-            };
+            let mut off = settings.clone();
+            off.params.barrier_steps = 0;
             assert_eq!(barrier_records(&solve(&problem, &off).unwrap()), 0);
             let v = sol.v.clone().unwrap();
             // ‖q‖ of the Delassus form q = Hᵀ M⁻¹ f + w (M = I), as docs/error.md scales it
@@ -1142,16 +1146,8 @@ mod tests {
         };
         assert!(nonsym.w.asymmetry() > 1e-3);
         let on = Settings::default();
-        let off = Settings {
-            tuning: crate::settings::Tuning {
-                multiplier: crate::settings::MultiplierParams {
-                    max_steps: 0,
-                    ..Default::default()
-                },
-                ..Default::default()
-            },
-            ..Settings::default()
-        };
+        let mut off = Settings::default();
+        off.params.tuning.multiplier.max_steps = 0;
         for (problem, applies, exact) in [
             (global(6), true, false),
             (global(18), false, false),
@@ -1170,7 +1166,7 @@ mod tests {
                 let found = solver.exact_skeleton(p, Deadline::NEVER);
                 assert_eq!(found.is_some(), exact, "asymmetry {:e}", p.w.asymmetry());
                 // the try hands over to the stage only where the stage will run
-                let bp = on.tuning.barrier;
+                let bp = on.params.tuning.barrier;
                 let setup = crate::barrier::Setup::structured(p, None, &bp, Deadline::NEVER)
                     .expect("rank m/2: a skeleton");
                 assert_eq!(solver.multipliers_follow(&setup), exact);
@@ -1232,17 +1228,16 @@ mod tests {
     #[test]
     fn a_stage_hands_its_stall_to_the_lm_end_game() {
         use crate::settings::{InnerKind, OuterKind, Settings};
-        let crawl = Settings {
+        let mut crawl = Settings {
             max_inner: 1,
-            newton_steps: 1,
-            newton_start: 1.0,
             max_outer: 60,
             ..Settings::method(InnerKind::Apgd, OuterKind::FixedPoint)
         };
-        let mut crawl = crawl;
-        crawl.tuning.lm.start = 1.0;
+        crawl.params.newton_steps = 1;
+        crawl.params.newton_start = 1.0;
+        crawl.params.tuning.lm.start = 1.0;
         let mut off = crawl.clone();
-        off.tuning.lm.max_steps = 0;
+        off.params.tuning.lm.max_steps = 0;
         let p = crate::test_problems::problem(6, 2811, 0.0, 0.0);
         let prob = crate::Problem::Local(p.clone());
         let without = crate::solve(&prob, &off).unwrap();

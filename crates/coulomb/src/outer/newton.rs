@@ -1,5 +1,5 @@
 //! The Newton end game of a stage: once the error of `docs/error.md` is ≤
-//! [`crate::Settings::newton_start`], semismooth Newton steps on the natural map of (3.9)
+//! [`crate::MethodParams::newton_start`], semismooth Newton steps on the natural map of (3.9)
 //! for all contacts ([`crate::newton::polish`]) are tried from r; they are kept if they lower
 //! the error (one history record per kept try; s then restarts from F at the new r).
 //!
@@ -8,7 +8,7 @@
 //! its iteration cap, or when the fixed point stagnates
 //! ([`crate::settings::NewtonParams::stagnation`] iterations without a new lowest error); a
 //! try takes at most [`crate::settings::NewtonParams::try_steps`] steps and all tries of a
-//! stage at most [`crate::Settings::newton_steps`], so that the iteration is deterministic.
+//! stage at most [`crate::MethodParams::newton_steps`], so that the iteration is deterministic.
 //!
 //! A try that did not converge at err ≤ [`crate::settings::ProxParams::try_start`] hands its
 //! best point to the proximal point ([`crate::proximal`]) with a budget of Newton steps of its
@@ -112,17 +112,17 @@ impl EndGame {
         at: Iterate<'_>,
         report: &InnerReport,
     ) -> Option<(usize, Option<Improved>)> {
-        let (tol, p) = (settings.tol, settings.tuning.newton);
+        let (tol, p) = (settings.tol, settings.params.tuning.newton);
         let gate_open = at.verdict.error <= self.gate
             || report.status == InnerStatus::MaxIterations
             || stagnating(at.history, &p);
-        if settings.newton_steps == 0
-            || at.verdict.error > settings.newton_start
+        if settings.params.newton_steps == 0
+            || at.verdict.error > settings.params.newton_start
             || at.verdict.converged(tol)
         {
             return None;
         }
-        if self.used >= settings.newton_steps {
+        if self.used >= settings.params.newton_steps {
             // the Newton budget is spent: only the Levenberg–Marquardt end game, behind its gate
             if at.verdict.error > self.lm_gate || !stagnating(at.history, &p) {
                 return None;
@@ -135,14 +135,14 @@ impl EndGame {
         let local = form.local();
         let mut spent = 0;
         let mut best: Option<Improved> = None;
-        while self.used < settings.newton_steps {
+        while self.used < settings.params.newton_steps {
             let (r, error, fs) = at.or_best(&best);
             let mut trial = r.to_vec();
             let nr = crate::newton::polish_with(
                 local,
                 &mut trial,
                 p.target_fraction * tol * form.q_norm,
-                p.try_steps.min(settings.newton_steps - self.used),
+                p.try_steps.min(settings.params.newton_steps - self.used),
                 deadline,
                 &p,
             );
@@ -192,7 +192,7 @@ impl EndGame {
                 converged = best.as_ref().is_some_and(|b| b.verdict.converged(tol));
             }
         }
-        if self.used >= settings.newton_steps && !converged && stagnating(at.history, &p) {
+        if self.used >= settings.params.newton_steps && !converged && stagnating(at.history, &p) {
             if let Some((steps, improved)) = self.levenberg(form, settings, deadline, &at, &best) {
                 spent += steps;
                 best = improved.or(best);
@@ -214,7 +214,7 @@ impl EndGame {
         at: &Iterate<'_>,
         best: &Option<Improved>,
     ) -> Option<(usize, Option<Improved>)> {
-        let (tol, mut lm) = (settings.tol, settings.tuning.lm);
+        let (tol, mut lm) = (settings.tol, settings.params.tuning.lm);
         if self.lm_used >= lm.max_steps || deadline.passed() {
             return None;
         }
@@ -227,12 +227,12 @@ impl EndGame {
         }
         let local = form.local();
         let mut trial = r.to_vec();
-        let target = settings.tuning.newton.target_fraction * tol;
+        let target = settings.params.tuning.newton.target_fraction * tol;
         let mut report = crate::levenberg::solve(local, &mut trial, target, &lm, deadline);
         let lm_steps = report.steps;
         // a stalled LM hands its best point to the proximal point (its own budget of Newton
         // steps, [`crate::settings::ProxParams::max_steps`])
-        let prox = &settings.tuning.prox;
+        let prox = &settings.params.tuning.prox;
         let stalled = matches!(
             report.status,
             crate::levenberg::LmStatus::Stalled | crate::levenberg::LmStatus::MaxSteps
@@ -283,7 +283,7 @@ impl EndGame {
         best: &Option<Improved>,
         inner: &InnerReport,
     ) -> Option<(usize, Option<Improved>)> {
-        let (tol, prox) = (settings.tol, &settings.tuning.prox);
+        let (tol, prox) = (settings.tol, &settings.params.tuning.prox);
         let (r, error, fs) = at.or_best(best);
         if prox.max_outer == 0
             || error > prox.try_start
@@ -303,14 +303,15 @@ impl EndGame {
             ..*prox
         };
         let mut trial = r.to_vec();
-        let target = settings.tuning.newton.target_fraction * tol;
+        let target = settings.params.tuning.newton.target_fraction * tol;
         let report = crate::proximal::solve(form.local(), &mut trial, target, &budget, deadline);
         self.prox_gate = prox.retry * report.error.min(error);
         let candidate = form.verdict(&trial);
         // as for LM: a small gain is lost again once the fixed point goes on; a result on a
         // ray of diverging r is not kept
         let kept = candidate.converged(tol)
-            || (candidate.error <= settings.tuning.lm.keep_gain * error && !candidate.unbounded);
+            || (candidate.error <= settings.params.tuning.lm.keep_gain * error
+                && !candidate.unbounded);
         let moved = report.steps > 0 && kept;
         let improved =
             moved.then(|| Improved::after(form, trial, candidate, fs, best, report.steps));

@@ -126,7 +126,7 @@ impl<'f, 'a> Stage<'f, 'a> {
             r,
             s,
             b: Vec::with_capacity(local.q.len()),
-            update: OuterUpdate::with_params(settings.outer, &settings.tuning.anderson),
+            update: OuterUpdate::with_params(settings.outer, &settings.params.tuning.anderson),
             history: Vec::new(),
             inner_total: 0,
             verdict,
@@ -189,9 +189,11 @@ impl<'f, 'a> Stage<'f, 'a> {
         // tolerance would never tighten through warm starts, so they solve to the final one.
         let cold = matches!(settings.inner, InnerKind::Ipm | InnerKind::Faceted);
         let limits = InnerLimits {
-            tol: settings
-                .tuning
-                .inner_tol(settings, self.verdict.error, cold || self.frictionless),
+            tol: settings.params.tuning.inner_tol(
+                settings,
+                self.verdict.error,
+                cold || self.frictionless,
+            ),
             max_iterations: settings.max_inner,
             deadline: self.deadline,
         };
@@ -199,7 +201,7 @@ impl<'f, 'a> Stage<'f, 'a> {
         let report = match (&form.stored, settings.inner, settings.outer) {
             (_, _, OuterKind::Fused) => {
                 let limits = InnerLimits {
-                    tol: settings.tuning.fused_tol_fraction * settings.tol,
+                    tol: settings.params.tuning.fused_tol_fraction * settings.tol,
                     ..limits
                 };
                 let (w, q) = (&local.w, &local.q);
@@ -247,7 +249,7 @@ impl<'f, 'a> Stage<'f, 'a> {
             &wr,
             &self.b,
             self.form.w_scale,
-            &self.settings.tuning.inner.infeasible_ray,
+            &self.settings.params.tuning.inner.infeasible_ray,
         ) {
             report.status = InnerStatus::Infeasible;
         }
@@ -281,7 +283,7 @@ impl<'f, 'a> Stage<'f, 'a> {
         let converged = self.verdict.converged(tol);
         if self.verdict.error <= tol && !converged && !self.verdict.spurious(tol) {
             self.balance_stalls += 1;
-            if self.balance_stalls >= settings.tuning.balance_stalls {
+            if self.balance_stalls >= settings.params.tuning.balance_stalls {
                 return Some(Status::BalanceResidual);
             }
         }
@@ -292,7 +294,10 @@ impl<'f, 'a> Stage<'f, 'a> {
             }
         }
         let rule = self.history.last().map_or(f64::INFINITY, |h| h.rule_6_1);
-        if settings.fixed_point_tol.is_some_and(|eps| rule <= eps)
+        if settings
+            .params
+            .fixed_point_tol
+            .is_some_and(|eps| rule <= eps)
             && !converged
             && !self.frictionless
         {
@@ -304,7 +309,7 @@ impl<'f, 'a> Stage<'f, 'a> {
     /// Whether the lowest error of the last [`crate::settings::Tuning::stall_window`]
     /// iterations is above half the lowest one before them.
     fn stalled(&self) -> bool {
-        let window = self.settings.tuning.stall_window;
+        let window = self.settings.params.tuning.stall_window;
         let n = self.history.len();
         if n <= window {
             return false;
@@ -337,7 +342,8 @@ impl<'f, 'a> Stage<'f, 'a> {
         self.history.extend(better.records);
         self.s = better.fs;
         self.remember_best();
-        self.update = OuterUpdate::with_params(self.settings.outer, &self.settings.tuning.anderson);
+        self.update =
+            OuterUpdate::with_params(self.settings.outer, &self.settings.params.tuning.anderson);
         true
     }
 

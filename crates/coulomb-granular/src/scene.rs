@@ -185,7 +185,7 @@ impl Scene {
     /// Hands the beads of [`Scene::build_with`] (`beads`, `seed`, `layout`) to `emit` one at
     /// a time in their order (global id 0, 1, …), each exactly the sphere of the built world,
     /// without holding them: a rank of a distributed run keeps its part only
-    /// ([`crate::distributed`]). The lattice is drawn again on every call (O(N) time, O(1)
+    /// (module `distributed`, feature `mpi`). The lattice is drawn again on every call (O(N) time, O(1)
     /// memory).
     pub fn for_each_bead(
         self,

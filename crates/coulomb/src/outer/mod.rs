@@ -10,8 +10,10 @@
 //! The policy ([`Solver::solve`]) is the plan of [`crate::plan`]: an optional warm-up of
 //! Gauss–Seidel sweeps on Coulomb's law, on a cold solve of a rigid problem the interior
 //! point and the method of multipliers, then the main method, then the fallback method when
-//! the main one stops without converging; every status is decided on the problem as stored
-//! (`form`).
+//! the main one stops without converging. Each step is a `method::Method` (the fixed-point
+//! stage in `stage`, the interior point and the multipliers in `rigid`) returning one
+//! `method::Outcome`; `method::checkpoint` alone decides whether the solve stops after a
+//! step; every status is decided on the problem as stored (`form`).
 //!
 //! The setup/solve split: [`Solver::new`] checks the settings and builds the Delassus form of
 //! a global problem (W = Hᵀ M⁻¹ H, q = Hᵀ M⁻¹ f + w, the factorization of M) once;

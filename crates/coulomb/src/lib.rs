@@ -21,6 +21,7 @@
 //!   ([`outer::fixed_point`]), Anderson mixing, the fused Gauss–Seidel, the Newton end game —
 //!   the policy around it (warm-up, fallback) and the set-up/solve split [`Solver`];
 //! - [`newton`]: semismooth Newton on the natural map of the whole law (the end game's steps);
+//! - `line_search`: the one Armijo search of the Newton-type methods;
 //! - [`levenberg`]: Levenberg–Marquardt on the Alart–Curnier map, the end game for rigid,
 //!   rank-deficient problems after the Newton end game has spent its budget;
 //! - [`multiplier`]: the proximal point on r solved in the velocities (method of
@@ -51,6 +52,7 @@ pub mod inner;
 pub mod law;
 pub mod levenberg;
 pub mod linalg;
+pub(crate) mod line_search;
 pub mod mass;
 pub mod multiplier;
 pub mod natural_map;

@@ -47,6 +47,7 @@ use rayon::prelude::*;
 
 use crate::deadline::Deadline;
 use crate::linalg::sparse::CscMatrix;
+use crate::line_search::{armijo, Search};
 use crate::mass::MassFactor;
 use crate::problem::GlobalProblem;
 use crate::settings::MultiplierParams;
@@ -513,25 +514,26 @@ impl Run {
             if !solved || self.dv.iter().any(|x| !x.is_finite()) {
                 break;
             }
-            let mut t = 1.0;
-            let mut accepted = false;
-            for _ in 0..params.halvings {
-                for ((vt, v), dv) in self.vt.iter_mut().zip(&self.v).zip(&self.dv) {
-                    *vt = v + t * dv;
-                }
-                self.trial.evaluate(s, &self.lambda, &self.rho, &self.vt);
-                let sufficient = (1.0 - params.sufficient_decrease * t) * g.norm * g.norm;
-                if self.trial.norm.is_finite() && self.trial.norm * self.trial.norm <= sufficient {
-                    std::mem::swap(&mut self.v, &mut self.vt);
-                    std::mem::swap(g, &mut self.trial);
-                    accepted = true;
-                    break;
-                }
-                t *= 0.5;
-            }
-            if !accepted {
+            // Armijo on ‖G‖²; a direction without sufficient decrease ends the run
+            let (v, vt, dv, trial) = (&self.v, &mut self.vt, &self.dv, &mut self.trial);
+            let (lambda, rho) = (&self.lambda, &self.rho);
+            let search = armijo(
+                g.norm * g.norm,
+                params.sufficient_decrease,
+                params.halvings,
+                |t| {
+                    for ((vt, v), dv) in vt.iter_mut().zip(v).zip(dv) {
+                        *vt = v + t * dv;
+                    }
+                    trial.evaluate(s, lambda, rho, vt);
+                    trial.norm * trial.norm
+                },
+            );
+            if search == Search::Exhausted {
                 break;
             }
+            std::mem::swap(&mut self.v, &mut self.vt);
+            std::mem::swap(g, &mut self.trial);
             if self.g.norm > params.slow_ratio * before {
                 slow += 1;
             } else {

@@ -29,6 +29,7 @@ use crate::linalg::normal::{Normal, NormalPattern};
 use crate::linalg::pattern_lu::JacobianPattern;
 /// At its former path: the size from which the sparse factorizations run on all threads.
 pub use crate::linalg::pattern_lu::SPARSE_PARALLEL_DIM;
+use crate::line_search::{armijo, Search};
 use crate::natural_map::de_saxce_map;
 use crate::problem::LocalProblem;
 
@@ -239,21 +240,18 @@ pub(crate) fn drive<M: SemismoothMap>(
             }
             let mut delta: Vec<f64> = map.current().iter().map(|g| -g).collect();
             if map.solve_shifted(lambda, &mut delta).is_some() {
-                let mut t = 1.0;
-                for _ in 0..=rule.halvings {
+                let c = rule.sufficient_decrease;
+                let search = armijo(norm, c, rule.halvings + 1, |t| {
                     for k in 0..n {
                         trial[k] = x[k] + t * delta[k];
                     }
-                    let n_trial = map.eval_trial(&trial);
-                    let c = rule.sufficient_decrease;
-                    if n_trial.is_finite() && n_trial < norm && n_trial <= (1.0 - c * t) * norm {
-                        x.copy_from_slice(&trial);
-                        map.accept_trial();
-                        norm = n_trial;
-                        accepted = true;
-                        break;
-                    }
-                    t *= 0.5;
+                    map.eval_trial(&trial)
+                });
+                if let Search::Accepted { merit, .. } = search {
+                    x.copy_from_slice(&trial);
+                    map.accept_trial();
+                    norm = merit;
+                    accepted = true;
                 }
             }
             if accepted {

@@ -21,8 +21,12 @@
 
 use crate::deadline::Deadline;
 use crate::linalg::pattern_lu::JacobianPattern;
+use crate::line_search::{armijo, Search};
 use crate::problem::LocalProblem;
 use crate::settings::ProxParams;
+
+/// Armijo's constant c of the search on ‖Φ_ρ‖ ([`crate::line_search::armijo`]).
+const SUFFICIENT_DECREASE: f64 = 1e-4;
 
 /// Why [`solve`] stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -152,25 +156,19 @@ pub fn solve(
             }
             // Armijo on ‖Φ‖; when no step decreases it, the full step (a non-monotone
             // escape from a stationary point of the merit)
-            let mut t = 1.0;
             let mut trial = vec![0.0; m];
-            let mut moved = false;
-            for _ in 0..params.line_search_steps {
+            let search = armijo(phi, SUFFICIENT_DECREASE, params.line_search_steps, |t| {
                 for k in 0..m {
                     trial[k] = x[k] + t * dir[k];
                 }
-                let phi2 = eval(&trial, &mut g2, &mut dbl2);
-                if phi2 <= (1.0 - 1e-4 * t) * phi {
-                    std::mem::swap(&mut x, &mut trial);
-                    std::mem::swap(&mut g, &mut g2);
-                    std::mem::swap(&mut dbl, &mut dbl2);
-                    phi = phi2;
-                    moved = true;
-                    break;
-                }
-                t *= 0.5;
-            }
-            if !moved {
+                eval(&trial, &mut g2, &mut dbl2)
+            });
+            if let Search::Accepted { merit, .. } = search {
+                std::mem::swap(&mut x, &mut trial);
+                std::mem::swap(&mut g, &mut g2);
+                std::mem::swap(&mut dbl, &mut dbl2);
+                phi = merit;
+            } else {
                 for k in 0..m {
                     x[k] += dir[k];
                 }

@@ -10,8 +10,10 @@
 //! The policy ([`Solver::solve`]) is the plan of [`crate::plan`]: an optional warm-up of
 //! Gauss–Seidel sweeps on Coulomb's law, on a cold solve of a rigid problem the interior
 //! point and the method of multipliers, then the main method, then the fallback method when
-//! the main one stops without converging; every status is decided on the problem as stored
-//! (`form`).
+//! the main one stops without converging. Each step is a `method::Method` (the fixed-point
+//! stage in `stage`, the interior point and the multipliers in `rigid`) returning one
+//! `method::Outcome`; `method::checkpoint` alone decides whether the solve stops after a
+//! step; every status is decided on the problem as stored (`form`).
 //!
 //! The setup/solve split: [`Solver::new`] checks the settings and builds the Delassus form of
 //! a global problem (W = Hᵀ M⁻¹ H, q = Hᵀ M⁻¹ f + w, the factorization of M) once;
@@ -23,7 +25,9 @@ pub mod anderson;
 pub mod fixed_point;
 pub(crate) mod form;
 pub mod fused;
+pub(crate) mod method;
 pub mod newton;
+mod rigid;
 mod stage;
 
 use crate::deadline::Deadline;
@@ -32,12 +36,14 @@ use crate::inner::{
     apgd::ApgdSolver, faceted::FacetedSolver, ipm::IpmSolver, pgs::PgsSolver, InnerSolver,
 };
 use crate::linalg::sparse::CscMatrix;
-use crate::plan::{Plan, Rigid, StepKind, Structure};
+use crate::plan::{Plan, Rigid, Step, StepKind, Structure};
 use crate::problem::{GlobalProblem, LocalProblem, Problem, ProblemError};
-use crate::settings::{InnerKind, InnerParams, MethodParams, OuterKind, Settings};
-use crate::solution::{Guess, OuterRecord, Solution, SolveError, Status};
+use crate::settings::{InnerKind, InnerParams, Settings};
+use crate::solution::{Guess, Solution, SolveError, Status};
 use form::{Form, Stored};
-use stage::{Best, Stage};
+use method::{checkpoint, Checkpoint, Ctx, Method, Outcome, Point};
+use rigid::{InteriorPoint, Multipliers};
+use stage::FixedPoint;
 use std::borrow::Cow;
 use std::time::Instant;
 
@@ -85,11 +91,6 @@ fn structure_of(form: &Form<'_>, settings: &Settings) -> Structure {
         mu_positive: !mu.is_empty() && mu.iter().all(|&x| x > 0.0 && x.is_finite()),
         rigid,
     }
-}
-
-/// Names `kind` as the step that made every history record of `ran`.
-fn label(ran: &mut Ran, kind: StepKind) {
-    ran.0.history.iter_mut().for_each(|h| h.step = kind);
 }
 
 /// The inner solvers of a [`Solver`], each set up for the problem's (d, W, μ) when first
@@ -323,492 +324,74 @@ impl<'a> Solver<'a> {
     }
 
     /// [`Solver::solve`] before the status of an interrupted solve is set: the steps of
-    /// [`Solver::plan`] in order, until one converges, the deadline passes, or the main step
-    /// ends in a way its fallback cannot improve.
+    /// [`Solver::plan`] in order, each the [`Method`] of its kind ([`method_of`]) run from
+    /// the start its [`crate::plan::Start`] names with its budget, until [`checkpoint`] stops
+    /// the solve (a step converged, the deadline passed, no step follows, or the main step
+    /// ended in a way its fallback cannot improve). A step that does not apply, or whose start
+    /// needs a step before it that did not run, is passed over.
     fn solve_stages(&mut self, guess: Option<&Guess>) -> Result<Solution, SolveError> {
         let start = Instant::now();
         let deadline =
             Deadline::after(start, self.settings.time_limit).with_cancel(self.settings.cancel);
-        let settings = &self.settings.clone();
         let plan = self.plan(guess);
-        let has_fallback = plan.steps.iter().any(|s| s.kind == StepKind::Fallback);
-        let mut stages: Vec<Ran> = Vec::new();
-        // the interior point's result and end points, waiting for the multipliers
-        let mut tried: Option<(Ran, Ends)> = None;
-        // the main step's result, waiting for the fallback
-        let mut main: Option<Ran> = None;
-        for step in &plan.steps {
-            match step.kind {
-                StepKind::Warmup => {
-                    let mut warm =
-                        self.run(&warmup_settings(settings), guess, deadline, false, true)?;
-                    label(&mut warm, StepKind::Warmup);
-                    if warm.0.converged() || deadline.passed() {
-                        return Ok(merge(Vec::new(), warm, start));
-                    }
-                    stages.push(warm);
-                }
-                StepKind::InteriorPoint => {
-                    if let Some((mut t, ends)) = self.barrier_try(deadline)? {
-                        label(&mut t, StepKind::InteriorPoint);
-                        if t.0.converged() || deadline.passed() {
-                            return Ok(merge(stages, t, start));
-                        }
-                        tried = Some((t, ends));
-                    }
-                }
-                StepKind::Multipliers => {
-                    // runs only after an interior point that ran and did not converge
-                    // (the history in the order the steps ran: the try's record first)
-                    if let Some((t, ends)) = tried.take() {
-                        let m = self.multiplier_try(&t, ends, deadline)?;
-                        stages.push(t);
-                        if let Some(mut m) = m {
-                            label(&mut m, StepKind::Multipliers);
-                            if m.0.converged() || deadline.passed() {
-                                return Ok(merge(stages, m, start));
-                            }
-                            stages.push(m);
-                        }
-                    }
-                }
-                StepKind::Main => {
-                    if let Some((t, _)) = tried.take() {
-                        stages.push(t);
-                    }
-                    // the main method starts from the caller's point, not from the
-                    // warm-up's r: on hard problems Gauss–Seidel's r leads the fixed point
-                    // of the main method astray
-                    let mut first = self.run(settings, guess, deadline, has_fallback, false)?;
-                    label(&mut first, StepKind::Main);
-                    let handover = matches!(
-                        first.0.status,
-                        Status::MaxIterations
-                            | Status::Stalled
-                            | Status::InnerFailure
-                            | Status::NumericalError
-                    );
-                    if !has_fallback || first.0.converged() || !handover || deadline.passed() {
-                        return Ok(merge(stages, first, start));
-                    }
-                    main = Some(first);
-                }
-                StepKind::Fallback => {
-                    let (Some(first), Some(method)) = (main.take(), step.method) else {
-                        continue;
-                    };
-                    // the fallback goes on from the main step's last iterate, not its best
-                    // one: that is where its own iteration stood
-                    let from_first = Guess {
-                        r: first.0.r.clone(),
-                        v: first.0.v.clone(),
-                    };
-                    let second_settings = Settings {
-                        inner: method.inner,
-                        outer: method.outer,
-                        fallback: None,
-                        ..settings.clone()
-                    };
-                    let warm = if first.0.r.iter().all(|x| x.is_finite()) {
-                        Some(&from_first)
-                    } else {
-                        guess
-                    };
-                    stages.push(first);
-                    let mut second = self.run(&second_settings, warm, deadline, false, false)?;
-                    label(&mut second, StepKind::Fallback);
-                    return Ok(merge(stages, second, start));
-                }
+        let mut ctx = Ctx {
+            form: &self.form,
+            settings: &self.settings,
+            solvers: &mut self.solvers,
+        };
+        let mut done: Vec<Outcome> = Vec::new();
+        // whether the step before ran (the last of `done` is its outcome)
+        let mut previous_ran = false;
+        for (k, step) in plan.steps.iter().enumerate() {
+            let next = plan.steps.get(k + 1);
+            let previous = done.last_mut().filter(|_| previous_ran);
+            let Some(from) = method::start_point(step.start, guess, previous) else {
+                previous_ran = false;
+                continue;
+            };
+            let ran = method_of(step, next)?.run(&mut ctx, from, step.budget, deadline)?;
+            previous_ran = ran.is_some();
+            let Some(mut outcome) = ran else {
+                continue;
+            };
+            outcome.label(step.kind);
+            if checkpoint(&outcome, next, deadline) == Checkpoint::Stop {
+                return Ok(merge(done, outcome, start));
             }
+            done.push(outcome);
         }
         Err(SolveError::Settings(
-            "the plan of this solve has no main step".into(),
+            "the plan of this solve ended on a step that did not run".into(),
         ))
     }
 }
 
-impl Solver<'_> {
-    /// One stage of `settings`' method from `guess`.
-    fn run(
-        &mut self,
-        settings: &Settings,
-        guess: Option<&Guess>,
-        deadline: Deadline,
-        stop_on_stall: bool,
-        warmup: bool,
-    ) -> Result<Ran, SolveError> {
-        let stage = Stage::new(&self.form, settings, guess, deadline, stop_on_stall, warmup)?;
-        Ok(stage.run(&mut self.solvers))
-    }
-
-    /// The interior-point try on Coulomb's law ([`crate::barrier`], policy and parameters
-    /// [`crate::settings::BarrierParams`]): cold-started runs along each path of
-    /// `paths` in turn, each finished by the Levenberg–Marquardt end game when its error is
-    /// ≤ [`crate::settings::LmParams::start`] (its stall rule
-    /// [`crate::settings::BarrierParams::lm_stall_segments`]), until one reaches the
-    /// tolerance — or [`crate::settings::BarrierParams::handover`] · tol where the method of
-    /// multipliers follows ([`Solver::multipliers_apply`]) — or the try's budget of steps
-    /// ([`crate::settings::BarrierParams::max_work`]) is spent. Its best point is judged on the problem as stored like
-    /// every iterate (status `converged`, `unbounded` or `max_iterations`; one outer record
-    /// whose inner iterations are all its Newton and LM steps); with it, the end points of
-    /// all its runs, lowest error first (the starts of [`Solver::multiplier_try`]). None
-    /// (nothing run) when the Newton systems have neither a Schur complement nor a skeleton
-    /// ([`crate::barrier::Setup::structured`]).
-    fn barrier_try(&mut self, deadline: Deadline) -> Result<Option<(Ran, Ends)>, SolveError> {
-        let settings = &self.settings;
-        let (bp, lm) = (settings.params.tuning.barrier, settings.params.tuning.lm);
-        let local = self.form.local();
-        let target = settings.params.tuning.newton.target_fraction * settings.tol;
-        let global = match &self.form.stored {
-            Stored::Global(g, _) => Some(&**g),
-            Stored::Local(_) => None,
-        };
-        let Some(setup) = crate::barrier::Setup::structured(local, global, &bp, deadline) else {
-            return Ok(None);
-        };
-        let try_lm = crate::settings::LmParams {
-            stall_segments: bp.lm_stall_segments,
-            ..lm
-        };
-        // the try hands over to the method of multipliers from an end point this close
-        let handover = if self.multipliers_follow(&setup) {
-            target.max(bp.handover * settings.tol)
-        } else {
-            target
-        };
-        let mut ends: Vec<(Vec<f64>, f64)> = Vec::new();
-        let mut steps = 0;
-        // the budget in steps (not in time: the same path on any machine and under any load)
-        for path in bp.paths {
-            if steps >= bp.max_work || deadline.passed() {
-                break;
-            }
-            let (mut r, report) = crate::barrier::solve_with(
-                local,
-                &setup,
-                target,
-                settings.params.barrier_steps.min(bp.max_work - steps),
-                &bp,
-                path,
-                deadline,
-            );
-            steps += report.steps;
-            let mut error = report.error;
-            let left = bp.max_work.saturating_sub(steps);
-            if error > target && error <= lm.start && lm.max_steps > 0 && left > 0 {
-                let mut trial = r.clone();
-                let finish_lm = crate::settings::LmParams {
-                    max_steps: try_lm.max_steps.min(left),
-                    ..try_lm
-                };
-                let lr = crate::levenberg::solve(local, &mut trial, target, &finish_lm, deadline);
-                steps += lr.steps;
-                if lr.error < error {
-                    (r, error) = (trial, lr.error);
-                }
-            }
-            ends.push((r, error));
-            if error <= handover {
-                break;
-            }
+/// The method of `step`: the fixed-point stage with the step's (inner, outer) pair for the
+/// warm-up, main and fallback steps (stopping on a stall when `next` goes on from its last
+/// iterate), the interior point, the method of multipliers.
+fn method_of(step: &Step, next: Option<&Step>) -> Result<Box<dyn Method>, SolveError> {
+    Ok(match step.kind {
+        StepKind::Warmup | StepKind::Main | StepKind::Fallback => {
+            let pair = step.method.ok_or_else(|| {
+                SolveError::Settings(format!("the {} step has no method", step.kind))
+            })?;
+            Box::new(FixedPoint {
+                pair,
+                stop_on_stall: next.is_some_and(|n| n.start == crate::plan::Start::PreviousLast),
+            })
         }
-        // lowest error first (a NaN last); the sort is stable: equal errors keep path order
-        ends.sort_by(|a, b| match (a.1.is_nan(), b.1.is_nan()) {
-            (false, false) => a.1.total_cmp(&b.1),
-            (x, y) => x.cmp(&y),
-        });
-        let ends: Vec<Vec<f64>> = ends.into_iter().map(|(r, _)| r).collect();
-        let r = ends
-            .first()
-            .cloned()
-            .unwrap_or_else(|| vec![0.0; local.q.len()]);
-        // the skeleton goes on to the method of multipliers (built once per solve)
-        let ends = Ends {
-            points: ends,
-            skeleton: setup.into_skeleton(),
-        };
-        let ran = self.judged(r, steps, deadline)?;
-        Ok(Some((ran, ends)))
-    }
-
-    /// The point `r` that a method outside the stage loop reached in `steps` inner steps,
-    /// judged on the problem as stored like every iterate (a stage of no outer iteration),
-    /// with one outer record (no fixed-point residual) counting those steps.
-    fn judged(&mut self, r: Vec<f64>, steps: usize, deadline: Deadline) -> Result<Ran, SolveError> {
-        let judge = Settings {
-            max_outer: 0,
-            fallback: None,
-            ..self.settings.clone()
-        };
-        let guess = Guess { r, v: None };
-        let (mut solution, best) = self.run(&judge, Some(&guess), deadline, false, false)?;
-        solution.history.push(OuterRecord {
-            error: solution.error,
-            fixed_point_residual: f64::NAN,
-            rule_6_1: f64::NAN,
-            inner_iterations: steps,
-            step: crate::plan::StepKind::Main,
-        });
-        solution.outer_iterations += 1;
-        solution.inner_iterations += steps;
-        Ok((solution, best))
-    }
+        StepKind::InteriorPoint => Box::new(InteriorPoint),
+        StepKind::Multipliers => Box::new(Multipliers),
+    })
 }
 
-impl Solver<'_> {
-    /// Whether [`Solver::multiplier_try`] applies, short of the skeleton of a local W: the
-    /// stage is on, every μ is finite, and the problem is a global one with at most
-    /// [`crate::settings::BarrierParams::max_schur_dofs`] degrees of freedom and at most half
-    /// as many as contact unknowns, or a local one with at most
-    /// [`crate::settings::BarrierParams::max_skeleton_unknowns`] contact unknowns (whose
-    /// skeleton [`Solver::multiplier_try`] then checks: it must reproduce W, symmetric or
-    /// not).
-    fn multipliers_apply(&self) -> bool {
-        let settings = &self.settings;
-        let (mp, bp) = (
-            settings.params.tuning.multiplier,
-            settings.params.tuning.barrier,
-        );
-        let local = self.form.local();
-        let m = local.q.len();
-        if mp.max_steps == 0 || !local.mu.iter().all(|mu| mu.is_finite()) {
-            return false;
-        }
-        match &self.form.stored {
-            Stored::Global(g, _) => {
-                let n = g.m.nrows;
-                n <= bp.max_schur_dofs && 2 * n <= m
-            }
-            Stored::Local(_) => m <= bp.max_skeleton_unknowns,
-        }
-    }
-
-    /// Whether the method of multipliers' stage will follow an interior-point try run on
-    /// `setup`: [`Solver::multipliers_apply`], and on a local problem a skeleton that
-    /// reproduces W within [`crate::settings::MultiplierParams::skeleton_residual`] · tol (as
-    /// [`Solver::exact_skeleton`] requires; a W with an antisymmetric part outside its range
-    /// has none: its try then goes on to tol instead of handing over at
-    /// [`crate::settings::BarrierParams::handover`] · tol).
-    fn multipliers_follow(&self, setup: &crate::barrier::Setup<'_>) -> bool {
-        let settings = &self.settings;
-        let limit = settings.params.tuning.multiplier.skeleton_residual * settings.tol;
-        let parallel_dim = settings.params.tuning.barrier.dense_parallel_dim;
-        self.multipliers_apply()
-            && match (&self.form.stored, setup.skeleton()) {
-                (Stored::Global(..), _) => true,
-                (Stored::Local(p), Some(sk)) => {
-                    sk.residual(&p.w, parallel_dim).is_some_and(|x| x <= limit)
-                }
-                (Stored::Local(_), None) => false,
-            }
-    }
-
-    /// The skeleton W ≈ C A⁻¹ R of the local problem `p` ([`crate::linalg::skeleton`]) of rank at
-    /// most min([`crate::settings::BarrierParams::max_schur_dofs`],
-    /// [`crate::settings::BarrierParams::skeleton_rank_ratio`] · m), when it reproduces W
-    /// (symmetric or not) within [`crate::settings::MultiplierParams::skeleton_residual`] · tol
-    /// ([`crate::linalg::skeleton::Skeleton::residual`]); None otherwise or when `deadline` passes.
-    #[cfg(test)]
-    fn exact_skeleton(
-        &self,
-        p: &LocalProblem,
-        deadline: Deadline,
-    ) -> Option<crate::linalg::skeleton::Skeleton> {
-        let bp = &self.settings.params.tuning.barrier;
-        let m = p.q.len();
-        let max_rank = bp
-            .max_schur_dofs
-            .min((bp.skeleton_rank_ratio * m as f64) as usize);
-        let skeleton =
-            crate::linalg::skeleton::Skeleton::new(&p.w, p.dim, max_rank, bp.rank_tol, deadline)?;
-        self.reproduces(&skeleton, p).then_some(skeleton)
-    }
-
-    /// Whether `skeleton` reproduces the W of `p` within
-    /// [`crate::settings::MultiplierParams::skeleton_residual`] · tol.
-    fn reproduces(&self, skeleton: &crate::linalg::skeleton::Skeleton, p: &LocalProblem) -> bool {
-        let (mp, bp) = (
-            &self.settings.params.tuning.multiplier,
-            &self.settings.params.tuning.barrier,
-        );
-        skeleton
-            .residual(&p.w, bp.dense_parallel_dim)
-            .is_some_and(|r| r <= mp.skeleton_residual * self.settings.tol)
-    }
-
-    /// The method of multipliers in the velocities ([`crate::multiplier`], parameters
-    /// [`crate::settings::MultiplierParams`]) from the best point of the interior-point try
-    /// `tried` and, at once, from the end points `ends` of its other runs, on a local problem
-    /// through the skeleton of W the try built (at most
-    /// [`crate::settings::MultiplierParams::starts`] runs in all, [`crate::multiplier::solve_from`]),
-    /// within its budget of factorizations
-    /// ([`crate::settings::MultiplierParams::max_factorizations`]). It applies where the try did: a global
-    /// problem with at most [`crate::settings::BarrierParams::max_schur_dofs`] degrees of
-    /// freedom and at most half as many as contact unknowns (rigid bodies touching at several
-    /// points per face), or a local one whose W has a skeleton W ≈ C A⁻¹ R of rank at most
-    /// that and [`crate::settings::BarrierParams::skeleton_rank_ratio`] · m
-    /// ([`crate::linalg::skeleton`]) equal to W within
-    /// [`crate::settings::MultiplierParams::skeleton_residual`] · tol (W symmetric or not:
-    /// the method then runs on the velocity form A v = R r, u = C v + q; a W whose
-    /// antisymmetric part is not of W's rank, as the corpus' nonsym class, has no such
-    /// skeleton). Its point is judged on the
-    /// problem as stored like every iterate (one outer record whose inner iterations are its
-    /// Newton steps). None when it does not apply.
-    fn multiplier_try(
-        &mut self,
-        tried: &Ran,
-        ends: Ends,
-        deadline: Deadline,
-    ) -> Result<Option<Ran>, SolveError> {
-        if !self.multipliers_apply() {
-            return Ok(None);
-        }
-        let settings = &self.settings;
-        let mp = settings.params.tuning.multiplier;
-        let bp = settings.params.tuning.barrier;
-        let local = self.form.local();
-        let m = local.q.len();
-        let skeleton_form;
-        let (g, hu, mass): (&GlobalProblem, Option<&CscMatrix>, &crate::mass::MassFactor) =
-            match &self.form.stored {
-                Stored::Global(g, delassus) => (g, None, &delassus.factor),
-                Stored::Local(p) => {
-                    let Some(skeleton) = ends.skeleton.filter(|sk| self.reproduces(sk, p)) else {
-                        return Ok(None);
-                    };
-                    let (a, a_sym, h, hu) = skeleton.velocity_form();
-                    let Ok(mass) = crate::mass::MassFactor::new(&a_sym) else {
-                        return Ok(None);
-                    };
-                    let Ok(g) = GlobalProblem::new_unfactored(
-                        p.dim as i64,
-                        a,
-                        h,
-                        vec![0.0; skeleton.rank()],
-                        p.q.clone(),
-                        p.mu.clone(),
-                    ) else {
-                        return Ok(None);
-                    };
-                    skeleton_form = (g, hu, mass);
-                    (&skeleton_form.0, Some(&skeleton_form.1), &skeleton_form.2)
-                }
-            };
-        let r = match &tried.1 {
-            Some(best)
-                if best.merit() < tried.0.error.max(tried.0.balance_residual.unwrap_or(0.0)) =>
-            {
-                best.r().to_vec()
-            }
-            _ => tried.0.r.clone(),
-        };
-        if r.len() != m || !r.iter().all(|x| x.is_finite()) {
-            return Ok(None);
-        }
-        // the try's best point, then the end points of its other runs (distinct, finite)
-        let mut starts = vec![r];
-        for end in ends.points {
-            if starts.len() >= mp.starts {
-                break;
-            }
-            if end.len() == m && end.iter().all(|x| x.is_finite()) && !starts.contains(&end) {
-                starts.push(end);
-            }
-        }
-        let par = crate::linalg::dense::parallelism(g.m.nrows, bp.dense_parallel_dim);
-        let diag = local.w.diagonal();
-        let w_mean = diag.iter().sum::<f64>() / diag.len().max(1) as f64;
-        let form = &self.form;
-        // the finish's steps stop at tol: its point is then judged by the same error on the
-        // stored problem (each step costs sparse factorizations; the runs wait for none)
-        let least_squares = |r: &mut [f64], until: Deadline| {
-            crate::newton::least_squares(
-                local,
-                r,
-                settings.tol,
-                mp.finish_steps,
-                mp.finish_slow_steps,
-                settings.params.tuning.lm.max_normal_nonzeros,
-                until,
-            )
-        };
-        let finish = |r: &[f64]| {
-            let mut trial = r.to_vec();
-            least_squares(&mut trial, deadline);
-            let v = form.verdict(&trial);
-            (v.error <= settings.tol && v.balance.unwrap_or(0.0) <= settings.tol).then_some(trial)
-        };
-        let report = crate::multiplier::solve_from(
-            g,
-            hu,
-            mass,
-            w_mean,
-            &mut starts,
-            settings.tol,
-            &mp,
-            par,
-            deadline,
-            |r| {
-                let v = form.verdict(r);
-                (v.error, v.balance.unwrap_or(0.0))
-            },
-            finish,
-        );
-        let mut r = starts.swap_remove(0);
-        let mut steps = report.newton_steps;
-        // the least-squares finish from the stage's end point, if close to the tolerance
-        let merit = report.error.max(report.balance);
-        if report.status != crate::multiplier::MultiplierStatus::Converged
-            && merit <= mp.finish_below * settings.tol
-            && m <= mp.finish_max_unknowns
-            && mp.finish_steps > 0
-        {
-            let mut trial = r.clone();
-            let last = least_squares(&mut trial, deadline);
-            steps += last.steps;
-            if last.residual < report.error {
-                r = trial;
-            }
-        }
-        self.judged(r, steps, deadline).map(Some)
-    }
-}
-
-/// What a stage returns: its last iterate's solution, and its lowest-error iterate when
-/// that one is lower.
-type Ran = (Solution, Option<Best>);
-
-/// What the interior-point try hands to the method of multipliers: the end points of its
-/// runs, lowest error first, and the skeleton of a local W its Newton systems were solved
-/// through (None for a global problem: the Schur complement).
-struct Ends {
-    points: Vec<Vec<f64>>,
-    skeleton: Option<crate::linalg::skeleton::Skeleton>,
-}
-
-/// The warm-up try: at most `warmup_sweeps` fused Gauss–Seidel sweeps, one outer iteration,
-/// no end game.
-fn warmup_settings(settings: &Settings) -> Settings {
-    Settings {
-        inner: InnerKind::Pgs,
-        outer: OuterKind::Fused,
-        fallback: None,
-        max_outer: 1,
-        max_inner: settings.params.warmup_sweeps,
-        params: MethodParams {
-            newton_steps: 0,
-            ..settings.params
-        },
-        ..settings.clone()
-    }
-}
-
-/// The last stage's solution with the histories and iteration counts of the earlier ones
-/// prepended, and the total time. When the last stage ends without converging on a cap, a
-/// stall or an inner failure, the returned iterate (r, u, v, s, error) is the one of lowest
-/// error ([`form::Verdict::merit`]) visited by any stage: a solve never returns a worse point
-/// than one it found. Its status and history stay those of the solve.
-fn merge(earlier: Vec<Ran>, (mut last, last_best): Ran, start: Instant) -> Solution {
+/// The solution of a solve whose last step had `last`, with the histories and work of the
+/// `earlier` steps prepended, and the total time. When the last step ends without converging
+/// on a cap, a stall or an inner failure, the returned iterate (r, u, v, s, error) is the one
+/// of lowest error ([`form::Verdict::merit`]) visited by any step ([`Outcome::candidate`]): a
+/// solve never returns a worse point than one it found. Its status and history stay those of
+/// the solve.
+fn merge(earlier: Vec<Outcome>, last: Outcome, start: Instant) -> Solution {
     let replaceable = matches!(
         last.status,
         Status::MaxIterations
@@ -820,23 +403,35 @@ fn merge(earlier: Vec<Ran>, (mut last, last_best): Ran, start: Instant) -> Solut
             | Status::FixedPointRule
     );
     let mut history = Vec::new();
-    let mut best = last_best;
-    for (mut stage, stage_best) in earlier {
-        history.append(&mut stage.history);
-        last.outer_iterations += stage.outer_iterations;
-        last.inner_iterations += stage.inner_iterations;
-        let candidate = stage_best.unwrap_or_else(|| Best::of(stage));
-        if candidate.merit() < best.as_ref().map_or(f64::INFINITY, Best::merit) {
+    let mut work = last.work;
+    let mut best = last.best;
+    for mut step in earlier {
+        history.append(&mut step.history);
+        work.outer_iterations += step.work.outer_iterations;
+        work.inner_iterations += step.work.inner_iterations;
+        let candidate = step.candidate();
+        if candidate.merit() < best.as_ref().map_or(f64::INFINITY, Point::merit) {
             best = Some(candidate);
         }
     }
-    history.append(&mut last.history);
-    last.history = history;
-    last.solve_time = start.elapsed();
-    let last_merit = last.error.max(last.balance_residual.unwrap_or(0.0));
-    match best {
-        Some(b) if replaceable && b.merit() < last_merit => b.into_solution(last),
-        _ => last,
+    let mut last_history = last.history;
+    history.append(&mut last_history);
+    let point = match best {
+        Some(b) if replaceable && b.merit() < last.last.error_or_balance() => b,
+        _ => last.last,
+    };
+    Solution {
+        r: point.r,
+        u: point.verdict.u,
+        v: point.verdict.v,
+        s: point.s,
+        status: last.status,
+        error: point.verdict.error,
+        balance_residual: point.verdict.balance,
+        outer_iterations: work.outer_iterations,
+        inner_iterations: work.inner_iterations,
+        history,
+        solve_time: start.elapsed(),
     }
 }
 
@@ -859,6 +454,7 @@ pub fn solve_with_guess(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::settings::OuterKind;
 
     /// Two 3-D contacts on an SPD W; q pushes both into contact with some sliding.
     fn local(q: Vec<f64>) -> LocalProblem {
@@ -1157,22 +753,25 @@ mod tests {
         ] {
             let solver = Solver::new(&problem, on.clone()).unwrap();
             assert_eq!(
-                solver.multipliers_apply(),
+                rigid::multipliers_apply(&solver.form, &solver.settings),
                 applies,
                 "{}",
                 problem.contacts()
             );
             if let Problem::Local(p) = &problem {
-                let found = solver.exact_skeleton(p, Deadline::NEVER);
+                let found = rigid::exact_skeleton(&solver.settings, p, Deadline::NEVER);
                 assert_eq!(found.is_some(), exact, "asymmetry {:e}", p.w.asymmetry());
                 // the try hands over to the stage only where the stage will run
                 let bp = on.params.tuning.barrier;
                 let setup = crate::barrier::Setup::structured(p, None, &bp, Deadline::NEVER)
                     .expect("rank m/2: a skeleton");
-                assert_eq!(solver.multipliers_follow(&setup), exact);
+                assert_eq!(
+                    rigid::multipliers_follow(&solver.form, &solver.settings, &setup),
+                    exact
+                );
             }
             let solver = Solver::new(&problem, off.clone()).unwrap();
-            assert!(!solver.multipliers_apply());
+            assert!(!rigid::multipliers_apply(&solver.form, &solver.settings));
         }
     }
 

@@ -17,13 +17,14 @@
 
 use super::fixed_point::{self, OuterUpdate};
 use super::form::{Form, Stored, Verdict};
+use super::method::{Ctx, Method, Outcome, Point, StartPoint, Work};
 use super::newton::{EndGame, Iterate};
 use super::InnerSolvers;
 use crate::deadline::Deadline;
 use crate::inner::{ipm, InnerLimits, InnerProblem, InnerReport, InnerStatus};
-use crate::settings::{InnerKind, OuterKind, Settings};
-use crate::solution::{Guess, OuterRecord, Solution, SolveError, Status};
-use std::time::Duration;
+use crate::plan::Budget;
+use crate::settings::{InnerKind, MethodParams, OuterKind, Settings};
+use crate::solution::{Guess, OuterRecord, SolveError, Status};
 
 /// The state of one stage: r, s, the history, and what the stopping tests remember.
 pub(super) struct Stage<'f, 'a> {
@@ -47,55 +48,7 @@ pub(super) struct Stage<'f, 'a> {
     balance_stalls: usize,
     end_game: EndGame,
     /// the iterate of lowest [`Verdict::merit`] so far (None: the current one, or none yet)
-    best: Option<Best>,
-}
-
-/// An iterate kept because its error was the lowest of the stage so far.
-pub(super) struct Best {
-    r: Vec<f64>,
-    s: Vec<f64>,
-    verdict: Verdict,
-}
-
-impl Best {
-    /// The last iterate of a stage's solution (a diverging one has an infinite merit).
-    pub(super) fn of(solution: Solution) -> Self {
-        Self {
-            r: solution.r,
-            s: solution.s,
-            verdict: Verdict {
-                u: solution.u,
-                v: solution.v,
-                error: solution.error,
-                balance: solution.balance_residual,
-                unbounded: solution.status == Status::Unbounded,
-            },
-        }
-    }
-
-    /// The impulses of this iterate.
-    pub(super) fn r(&self) -> &[f64] {
-        &self.r
-    }
-
-    /// The merit ([`Verdict::merit`]) of this iterate.
-    pub(super) fn merit(&self) -> f64 {
-        self.verdict.merit()
-    }
-
-    /// `solution` with its iterate (r, u, v, s, error, balance residual) replaced by this one;
-    /// status, counts and history are kept.
-    pub(super) fn into_solution(self, solution: Solution) -> Solution {
-        Solution {
-            r: self.r,
-            u: self.verdict.u,
-            v: self.verdict.v,
-            s: self.s,
-            error: self.verdict.error,
-            balance_residual: self.verdict.balance,
-            ..solution
-        }
-    }
+    best: Option<Point>,
 }
 
 impl<'f, 'a> Stage<'f, 'a> {
@@ -138,9 +91,9 @@ impl<'f, 'a> Stage<'f, 'a> {
         Ok(stage)
     }
 
-    /// The outer loop of §3.3 until a status: the last iterate's solution, and the iterate of
-    /// lowest error visited before it when that one is lower.
-    pub(super) fn run(mut self, solvers: &mut InnerSolvers) -> (Solution, Option<Best>) {
+    /// The outer loop of §3.3 until a status: the last iterate, and the iterate of lowest
+    /// error visited before it when that one is lower.
+    pub(super) fn run(mut self, solvers: &mut InnerSolvers) -> Outcome {
         let status = loop {
             if let Some(status) = self.check_start() {
                 break status;
@@ -355,8 +308,8 @@ impl<'f, 'a> Stage<'f, 'a> {
     /// Keeps the current iterate if its merit is the lowest so far.
     fn remember_best(&mut self) {
         let merit = self.verdict.merit();
-        if merit < self.best.as_ref().map_or(f64::INFINITY, Best::merit) {
-            self.best = Some(Best {
+        if merit < self.best.as_ref().map_or(f64::INFINITY, Point::merit) {
+            self.best = Some(Point {
                 r: self.r.clone(),
                 s: self.s.clone(),
                 verdict: self.verdict.clone(),
@@ -364,24 +317,23 @@ impl<'f, 'a> Stage<'f, 'a> {
         }
     }
 
-    fn finish(self, status: Status) -> (Solution, Option<Best>) {
+    fn finish(self, status: Status) -> Outcome {
         let current = self.verdict.merit();
-        let best = self.best.filter(|b| b.merit() < current);
-        let last = Solution {
-            r: self.r,
-            u: self.verdict.u,
-            v: self.verdict.v,
-            s: self.s,
+        Outcome {
             status,
-            error: self.verdict.error,
-            balance_residual: self.verdict.balance,
-            outer_iterations: self.history.len(),
-            inner_iterations: self.inner_total,
+            best: self.best.filter(|b| b.merit() < current),
+            last: Point {
+                r: self.r,
+                s: self.s,
+                verdict: self.verdict,
+            },
+            handover: None,
+            work: Work {
+                outer_iterations: self.history.len(),
+                inner_iterations: self.inner_total,
+            },
             history: self.history,
-            // the policy ([`super::Solver::solve`]) sets the time of the whole solve
-            solve_time: Duration::ZERO,
-        };
-        (last, best)
+        }
     }
 }
 
@@ -413,5 +365,65 @@ fn inner_failure(report: &InnerReport) -> Option<Status> {
         InnerStatus::TimeLimit => Some(Status::TimeLimit),
         InnerStatus::Infeasible => Some(Status::InnerInfeasible),
         InnerStatus::NumericalError => Some(Status::InnerFailure),
+    }
+}
+
+/// The fixed-point stage as a step of the plan: the warm-up (a budget of sweeps: one outer
+/// iteration of the fused method, no end game) and the main and fallback steps (a budget of
+/// outer and inner iterations and end-game Newton steps) with the (inner, outer) pair `pair`.
+pub(super) struct FixedPoint {
+    pub(super) pair: crate::settings::Method,
+    /// end with [`Status::Stalled`] when the error no longer decreases (a step that a
+    /// fallback follows)
+    pub(super) stop_on_stall: bool,
+}
+
+impl Method for FixedPoint {
+    fn run(
+        &mut self,
+        ctx: &mut Ctx<'_, '_>,
+        start: StartPoint<'_>,
+        budget: Budget,
+        deadline: Deadline,
+    ) -> Result<Option<Outcome>, SolveError> {
+        let (max_outer, max_inner, newton_steps, warmup) = match budget {
+            Budget::Sweeps(n) => (1, n, 0, true),
+            Budget::Iterations {
+                outer,
+                inner,
+                newton,
+            } => (outer, inner, newton, false),
+            _ => {
+                return Err(SolveError::Settings(format!(
+                    "a fixed-point step cannot run on a budget of {budget}"
+                )))
+            }
+        };
+        let StartPoint::One(guess) = start else {
+            return Err(SolveError::Settings(
+                "a fixed-point step starts from one point".into(),
+            ));
+        };
+        let settings = Settings {
+            inner: self.pair.inner,
+            outer: self.pair.outer,
+            fallback: None,
+            max_outer,
+            max_inner,
+            params: MethodParams {
+                newton_steps,
+                ..ctx.settings.params
+            },
+            ..ctx.settings.clone()
+        };
+        let stage = Stage::new(
+            ctx.form,
+            &settings,
+            guess.as_deref(),
+            deadline,
+            self.stop_on_stall,
+            warmup,
+        )?;
+        Ok(Some(stage.run(ctx.solvers)))
     }
 }

@@ -7,6 +7,7 @@
 #
 #   scripts/threads.sh [OUT_DIR] [BEADS] [STEPS] [REPEAT]
 #       defaults: threads-out "10000 100000" 30 2
+#   environment: COULOMB=BIN runs that binary instead of building target/release/coulomb
 #
 # A speed-up is only meaningful on a quiet machine: the script prints the load average
 # before and after; with other jobs running, compare CPU times, not wall clocks. The serial
@@ -20,8 +21,13 @@ repeat=${4:-2}
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 mkdir -p "$out"
-[ -n "${NO_BUILD:-}" ] || cargo build --release -p coulomb-cli
-bin=$root/target/release/coulomb
+# COULOMB=BIN: run that binary (no build), e.g. to compare two builds side by side
+if [ -n "${COULOMB:-}" ]; then
+  bin=$COULOMB
+else
+  [ -n "${NO_BUILD:-}" ] || cargo build --release -p coulomb-cli
+  bin=$root/target/release/coulomb
+fi
 echo "load before: $(cut -d' ' -f1-3 /proc/loadavg)"
 for n in $sizes; do
   for k in $(seq 1 "$repeat"); do

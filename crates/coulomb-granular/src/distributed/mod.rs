@@ -1146,8 +1146,10 @@ impl DistributedSimulation {
         let mut rank_work = 0u64;
         for (oi, w) in self.work.iter_mut().enumerate() {
             let add = BEAD_WORK + owned_contacts[local.of_owned[oi]] * sweeps as u64;
-            *w += add;
-            rank_work += add;
+            // no overflow in practice (≈ 10⁵ a step), but never a panic either, e.g. with
+            // --rebalance-every 0 (the counter never restarts)
+            *w = w.saturating_add(add);
+            rank_work = rank_work.saturating_add(add);
         }
         self.warm.clear();
         self.contacts.clear();

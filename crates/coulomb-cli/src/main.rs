@@ -153,6 +153,12 @@ fn simulate(args: sim_args::Args) -> anyhow::Result<Outcome> {
             );
         }
         #[cfg(feature = "mpi")]
+        if args.balance.is_some() && !(args.mpi || sim_args::under_launcher()) {
+            anyhow::bail!(
+                "--balance applies to distributed runs (under mpirun/srun, or with --mpi); this run is one process"
+            );
+        }
+        #[cfg(feature = "mpi")]
         if args.restart.is_some() && (args.mpi || sim_args::under_launcher()) {
             anyhow::bail!("--restart runs in one process, not distributed");
         }

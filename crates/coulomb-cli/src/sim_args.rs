@@ -194,6 +194,22 @@ pub struct Args {
     #[cfg(feature = "mpi")]
     #[arg(long, value_parser = crate::values::grid, value_name = "PXxPY")]
     pub grid: Option<[usize; 2]>,
+    /// distributed run: what a rebalance equalises across the ranks, the measured work
+    /// (contact updates of the beads' contacts in the sweeps, plus a fixed cost per bead;
+    /// the default) or the bead counts (docs/distributed.md)
+    #[cfg(feature = "mpi")]
+    #[arg(long, value_enum, value_name = "WHAT")]
+    pub balance: Option<BalanceArg>,
+}
+
+/// `--balance`: what the rebalancing of a distributed run equalises.
+#[cfg(feature = "mpi")]
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BalanceArg {
+    /// the bead counts (the slabs of the first distributed version, to the bit)
+    Beads,
+    /// the work measured since the last rebalance (counts of contact updates, deterministic)
+    Work,
 }
 
 impl Args {

@@ -6,16 +6,17 @@
 //! which then keeps its slab. The ranks step together ([`coulomb_granular::distributed`],
 //! docs/distributed.md); rank 0 prints the summary and writes stats.csv, stats.json (the
 //! statistics of `coulomb simulate`), summary.json, distributed.json (per step: sweeps,
-//! communication time, ghosts, interface contacts, migration, imbalance) and ranks.json (per
+//! communication time, ghosts, interface contacts, migration, imbalance of beads and of
+//! measured work, whether the bounds were recomputed) and ranks.json (per
 //! rank: beads held while building, owned at the start and at the end, peak resident memory);
 //! every rank writes its VTK pieces, rank 0 the .pvtp/.pvd collections.
 
 use crate::exit::Outcome;
 use crate::progress::bar as progress;
-use crate::sim_args::{Args, Method};
+use crate::sim_args::{Args, BalanceArg, Method};
 use anyhow::{bail, Context};
 use coulomb_granular::distributed::output::DistributedVtk;
-use coulomb_granular::distributed::{Comm, DistributedSimulation, DistributedStats};
+use coulomb_granular::distributed::{Balance, Comm, DistributedSimulation, DistributedStats};
 use coulomb_granular::output::write_stats;
 use coulomb_granular::scene::BoxLayout;
 use coulomb_granular::{Scene, StepStats, Stop, Summary};
@@ -101,6 +102,11 @@ fn run_source(args: &Args, source: Source, name: &str) -> anyhow::Result<Outcome
     let beads = sim.total_beads();
     let beads_start = sim.beads.len();
     sim.rebalance_every = args.rebalance_every;
+    sim.balance = match args.balance {
+        Some(BalanceArg::Beads) => Balance::Beads,
+        Some(BalanceArg::Work) => Balance::Work,
+        None => Balance::default(),
+    };
     let mut vtk = match &args.output {
         Some(dir) => Some(
             DistributedVtk::new(dir)
@@ -202,6 +208,7 @@ fn run_source(args: &Args, source: Source, name: &str) -> anyhow::Result<Outcome
         mean(|s| s.comm_ms),
         mean(|s| s.sweeps as f64),
     );
+    let (imbalance, work_imbalance) = (mean(|s| s.imbalance), mean(|s| s.work_imbalance));
     if let Some(dir) = &args.output {
         write_stats(dir, &steps)
             .with_context(|| format!("writing stats into {}", dir.display()))?;
@@ -224,6 +231,9 @@ fn run_source(args: &Args, source: Source, name: &str) -> anyhow::Result<Outcome
             "mean_sweeps": sweeps,
             "mean_step_ms": step_ms,
             "mean_comm_ms": comm_ms,
+            "balance": sim.balance,
+            "mean_imbalance": imbalance,
+            "mean_work_imbalance": work_imbalance,
             "per_rank": per_rank,
         });
         let extra = extra.as_object().cloned().unwrap_or_default();
@@ -262,9 +272,15 @@ fn run_source(args: &Args, source: Source, name: &str) -> anyhow::Result<Outcome
             .map(|m| m.held_at_build.to_string())
             .collect();
         println!(
-            "per rank: peak resident memory {} MiB, beads held while building {}",
+            "per rank: peak resident memory {} MiB, beads held while building {}; imbalance (most loaded rank / mean, mean over the steps) of beads {:.3}, of work {:.3} (balanced by {})",
             mem.join(" / "),
-            held.join(" / ")
+            held.join(" / "),
+            imbalance,
+            work_imbalance,
+            match sim.balance {
+                Balance::Beads => "beads",
+                Balance::Work => "work",
+            }
         );
     }
     Ok(crate::interrupt::simulation_outcome(

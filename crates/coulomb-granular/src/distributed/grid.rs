@@ -137,10 +137,12 @@ impl Grid {
         out
     }
 
-    /// The grid with p₁ × p₂ cells balanced by bead count: the slab bounds at the quantiles of
-    /// `outer` (a [`super::slab::HISTOGRAM_BINS`]-bin histogram along the first axis over `range[0]`), then
-    /// the cell bounds of slab i at the quantiles of `inner[i]` (its beads' histogram along the
-    /// second axis over `range[1]`); every rank computes the same grid from the same counts.
+    /// The grid with p₁ × p₂ cells balanced by the histograms' weights (bead counts, or the
+    /// measured work of [`super::Balance::Work`]): the slab bounds at the quantiles of `outer`
+    /// (a [`super::slab::HISTOGRAM_BINS`]-bin histogram along the first axis over `range[0]`),
+    /// then the cell bounds of slab i at the quantiles of `inner[i]` (its beads' histogram
+    /// along the second axis over `range[1]`); every rank computes the same grid from the same
+    /// histograms.
     pub fn balanced(
         axes: [usize; 2],
         parts: [usize; 2],

@@ -11,7 +11,10 @@
 //!   own quantiles): rank r owns the beads whose coordinates lie in its slab or cell, the bounds
 //!   at bead-count quantiles of histograms (at the start from the streamed beads, the same on
 //!   every rank; later reduced over all ranks), recomputed every
-//!   [`DistributedSimulation::rebalance_every`] steps (the heap spreads as it settles). Beads
+//!   [`DistributedSimulation::rebalance_every`] steps (the heap spreads as it settles) at the
+//!   quantiles of the work measured since the last rebalance ([`Balance::Work`], the default:
+//!   per bead [`BEAD_WORK`] a step plus sweeps × the contacts it owns, counts and not times,
+//!   so deterministic) or of the bead counts ([`Balance::Beads`]). Beads
 //!   that leave a slab migrate to their new owner at the start of every step, with the warm
 //!   start impulses of the contacts they own: point to point with the adjacent slabs or cells,
 //!   or by one all-to-all exchange when some bead goes farther (after a rebalance).
@@ -89,6 +92,27 @@ const WARM_WORDS: usize = 5;
 const PROJECTION_ROUNDS: usize = 4;
 /// Sweeps between two exact recomputations of v from r.
 const REFRESH: usize = 16;
+/// The work of a bead per step outside the sweeps (detection, assembly, θ-method, position
+/// correction, statistics), in contact updates: c_b / c_u = 6 µs / 0.23 µs ≈ 26, the costs
+/// per bead and per contact update measured on one rank (docs/distributed.md, "Projected cost
+/// per step"). A bead's measured work per step is this plus the updates of the contacts it
+/// owns: their number times the step's sweeps ([`Balance::Work`]).
+pub const BEAD_WORK: u64 = 26;
+
+/// What the rebalancing equalises across the ranks (every [`DistributedSimulation::rebalance_every`]
+/// steps; the bounds at the start are always at bead-count quantiles: nothing is measured yet).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Balance {
+    /// bead counts: the bounds at the quantiles of the beads (the slabs of #16, to the bit)
+    Beads,
+    /// measured work: the bounds at the quantiles of the work the beads took since the last
+    /// rebalance, each bead weighted by [`BEAD_WORK`] per step plus sweeps × the contacts it
+    /// owns, counts of operations (not times), so the same bits for the same input whatever
+    /// the machine's load
+    #[default]
+    Work,
+}
 
 /// The beads of a distributed run's initial state, handed to the callback one at a time in
 /// global id order; called once per pass of [`DistributedSimulation::from_stream`], giving the
@@ -126,6 +150,12 @@ pub struct DistributedStats {
     pub migration_all_to_all: bool,
     /// most beads owned by one rank divided by the mean
     pub imbalance: f64,
+    /// most work of one rank in this step divided by the mean over the ranks: work =
+    /// [`BEAD_WORK`] per owned bead + sweeps × owned contacts (1 with no work anywhere)
+    pub work_imbalance: f64,
+    /// whether the bounds were recomputed at the start of this step
+    /// ([`DistributedSimulation::rebalance`])
+    pub rebalanced: bool,
 }
 
 /// The ghost beads of a rank and the bookkeeping of the exchanges that refresh them.
@@ -170,12 +200,17 @@ pub struct DistributedSimulation {
     pub steps_done: usize,
     /// recompute the slab bounds every this many steps (0: never after the start)
     pub rebalance_every: usize,
+    /// what the rebalancing equalises: bead counts or measured work ([`Balance`])
+    pub balance: Balance,
     /// cap on Gauss–Seidel sweeps per step (from [`StepMethod::Nsgs`], else 20 000)
     pub max_sweeps: usize,
     /// the owned beads (global id, state), sorted by global id
     pub beads: Vec<(usize, Sphere)>,
     /// contact force Σ r / h on each owned bead at the last step (translational part)
     pub forces: Vec<Vec3>,
+    /// work of each owned bead since the last rebalance, in contact updates ([`Balance::Work`]);
+    /// travels with the bead when it migrates
+    pub work: Vec<u64>,
     /// the owned contacts of the last step with their impulses, in global ids
     pub contacts: Vec<Contact>,
     /// the decomposition: slabs (p × 1) or a p₁ × p₂ grid of cells
@@ -366,8 +401,10 @@ impl DistributedSimulation {
             time: 0.0,
             steps_done: 0,
             rebalance_every: 20,
+            balance: Balance::default(),
             max_sweeps,
             forces: vec![Vec3::ZERO; mine.len()],
+            work: vec![0; mine.len()],
             held_at_build: mine.len(),
             beads: mine,
             contacts: Vec::new(),
@@ -394,16 +431,23 @@ impl DistributedSimulation {
         self.total
     }
 
-    /// Places the bounds at the bead-count quantiles of the current positions: the ranges
-    /// along both axes reduced (max), a histogram of [`HISTOGRAM_BINS`] bins along the first
-    /// axis reduced (sum), and for a grid each slab's histogram along the second axis reduced
-    /// (sum); every rank computes the same bounds ([`Grid::balanced`]). Beads move at the next
-    /// [`Self::migrate`].
+    /// Places the bounds at the quantiles of the current positions weighted by bead count or
+    /// by the work measured since the last rebalance ([`Self::balance`]): the ranges along
+    /// both axes reduced (max), a histogram of [`HISTOGRAM_BINS`] bins along the first axis
+    /// reduced (sum), and for a grid each slab's histogram along the second axis reduced
+    /// (sum); every rank computes the same bounds ([`Grid::balanced`]). The weights are
+    /// integers (exact in f64 below 2⁵³, so the sums do not depend on the reduction's order).
+    /// The measured work restarts from zero. Beads move at the next [`Self::migrate`].
     pub fn rebalance(&mut self) {
         let size = self.comm.size();
+        let work = std::mem::replace(&mut self.work, vec![0; self.beads.len()]);
         if size == 1 {
             return;
         }
+        let weights: Vec<f64> = match self.balance {
+            Balance::Beads => vec![1.0; self.beads.len()],
+            Balance::Work => work.iter().map(|&w| w as f64).collect(),
+        };
         let (axes, parts) = (self.grid.axes, self.grid.parts());
         let along = |p: Vec3, a: usize| if a == 0 { p.x } else { p.y };
         let mut range = [f64::NEG_INFINITY; 4];
@@ -426,16 +470,16 @@ impl DistributedSimulation {
         };
         let ranges = [span(0), span(1)];
         let mut outer = vec![0.0; HISTOGRAM_BINS];
-        for (_, b) in &self.beads {
-            outer[self.grid.outer_bin(b.position, ranges[0])] += 1.0;
+        for ((_, b), w) in self.beads.iter().zip(&weights) {
+            outer[self.grid.outer_bin(b.position, ranges[0])] += w;
         }
         self.comm.sum(&mut outer);
         let mut grid = Grid::balanced(axes, parts, ranges, &outer, &[]);
         if parts[1] > 1 {
             let mut flat = vec![0.0; parts[0] * HISTOGRAM_BINS];
-            for (_, b) in &self.beads {
+            for ((_, b), w) in self.beads.iter().zip(&weights) {
                 let i = grid.slab_of(b.position);
-                flat[i * HISTOGRAM_BINS + grid.inner_bin(b.position, ranges[1])] += 1.0;
+                flat[i * HISTOGRAM_BINS + grid.inner_bin(b.position, ranges[1])] += w;
             }
             self.comm.sum(&mut flat);
             let inner: Vec<Vec<f64>> = flat
@@ -489,11 +533,16 @@ impl DistributedSimulation {
         let mut send = vec![Vec::new(); size];
         let mut kept = Vec::with_capacity(self.beads.len());
         let mut kept_forces = Vec::with_capacity(self.beads.len());
-        for ((gid, b), f) in self.beads.drain(..).zip(self.forces.drain(..)) {
+        let mut kept_work = Vec::with_capacity(self.beads.len());
+        let work = std::mem::take(&mut self.work);
+        let work = work.into_iter().chain(std::iter::repeat(0));
+        for (((gid, b), f), wk) in self.beads.drain(..).zip(self.forces.drain(..)).zip(work) {
             match leaving.get(&gid) {
                 Some(&dest) => {
                     let buf = &mut send[dest];
                     pack_bead(buf, gid, &b);
+                    // the measured work, an integer (exact in f64 below 2⁵³)
+                    buf.push(wk as f64);
                     let w = warm_of.remove(&gid).unwrap_or_default();
                     buf.push(w.len() as f64);
                     for (p, r) in w {
@@ -508,6 +557,7 @@ impl DistributedSimulation {
                 None => {
                     kept.push((gid, b));
                     kept_forces.push(f);
+                    kept_work.push(wk);
                 }
             }
         }
@@ -519,9 +569,11 @@ impl DistributedSimulation {
         };
         for buf in recv {
             let mut at = 0;
-            while at + BEAD_WORDS <= buf.len() {
+            while at + BEAD_WORDS < buf.len() {
                 let (gid, b) = unpack_bead(&buf[at..at + BEAD_WORDS]);
                 at += BEAD_WORDS;
+                let wk = buf[at] as u64;
+                at += 1;
                 let nw = buf.get(at).map_or(0, |x| *x as usize);
                 at += 1;
                 for _ in 0..nw {
@@ -538,12 +590,14 @@ impl DistributedSimulation {
                 }
                 kept.push((gid, b));
                 kept_forces.push(Vec3::ZERO);
+                kept_work.push(wk);
             }
         }
         let mut order: Vec<usize> = (0..kept.len()).collect();
         order.sort_by_key(|&i| kept[i].0);
         self.beads = order.iter().map(|&i| kept[i].clone()).collect();
         self.forces = order.iter().map(|&i| kept_forces[i]).collect();
+        self.work = order.iter().map(|&i| kept_work[i]).collect();
         leaving.len()
     }
 
@@ -823,9 +877,11 @@ impl DistributedSimulation {
         let k = self.steps_done;
         let h = self.params.h;
         let size = self.comm.size();
-        if k > 0 && self.rebalance_every > 0 && k % self.rebalance_every == 0 {
+        let due = k > 0 && self.rebalance_every > 0 && k % self.rebalance_every == 0;
+        if due {
             self.rebalance();
         }
+        let rebalanced = due && size > 1;
         let migrated_here = self.migrate();
 
         // global v_max for the broad phase margin, and the step's δ_k
@@ -1081,6 +1137,20 @@ impl DistributedSimulation {
         if fin[0] < size as f64 {
             return Err(SimulationError::NonFinite(k));
         }
+        // the measured work of each owned bead: BEAD_WORK plus sweeps × the contacts it owns
+        let mut owned_contacts = vec![0u64; local.world.bodies.len()];
+        for c in &contacts {
+            owned_contacts[c.body] += 1;
+        }
+        self.work.resize(self.beads.len(), 0);
+        let mut rank_work = 0u64;
+        for (oi, w) in self.work.iter_mut().enumerate() {
+            let add = BEAD_WORK + owned_contacts[local.of_owned[oi]] * sweeps as u64;
+            // no overflow in practice (≈ 10⁵ a step), but never a panic either, e.g. with
+            // --rebalance-every 0 (the counter never restarts)
+            *w = w.saturating_add(add);
+            rank_work = rank_work.saturating_add(add);
+        }
         self.warm.clear();
         self.contacts.clear();
         for (i, c) in contacts.iter().enumerate() {
@@ -1141,7 +1211,7 @@ impl DistributedSimulation {
             .iter()
             .map(|(_, b)| -b.mass * self.gravity.dot(b.position))
             .sum();
-        let mut sums = [ke, pe, proj_work, touching, pen_sum];
+        let mut sums = [ke, pe, proj_work, touching, pen_sum, rank_work as f64];
         self.comm.sum(&mut sums);
         let step_comm = self.comm.seconds() - comm0;
         let mut maxes = [
@@ -1151,6 +1221,7 @@ impl DistributedSimulation {
             assembly_ms,
             step_comm,
             self.beads.len() as f64,
+            rank_work as f64,
         ];
         self.comm.max(&mut maxes);
         let mut mean_comm = [step_comm];
@@ -1198,6 +1269,12 @@ impl DistributedSimulation {
             migrated: counts[5] as usize,
             migration_all_to_all: self.migrated_all_to_all,
             imbalance: maxes[5] * size as f64 / self.total.max(1) as f64,
+            work_imbalance: if sums[5] > 0.0 {
+                maxes[6] * size as f64 / sums[5]
+            } else {
+                1.0
+            },
+            rebalanced,
         })
     }
 

@@ -93,8 +93,9 @@ impl Slabs {
     }
 }
 
-/// Inner bounds at the bead-count quantiles k N / P (k = 1 … P − 1) of a histogram of
-/// `HISTOGRAM_BINS` equal bins over [lo, hi] (`counts`, summed over all ranks), linearly
+/// Inner bounds at the quantiles k W / P (k = 1 … P − 1) of a histogram of `HISTOGRAM_BINS`
+/// equal bins over [lo, hi] (`counts`: bead counts or measured work, summed over all ranks,
+/// W their total), linearly
 /// interpolated inside a bin. Every rank computes the same bounds from the same reduced
 /// histogram. With lo = hi (or no bead) all inner bounds are lo.
 pub fn quantile_bounds(counts: &[f64], lo: f64, hi: f64, parts: usize) -> Vec<f64> {
@@ -219,5 +220,28 @@ mod tests {
         // degenerate range: all bounds at lo
         let inner = quantile_bounds(&[5.0, 0.0], 1.0, 1.0, 3);
         assert_eq!(inner, vec![1.0, 1.0]);
+    }
+
+    /// Weighted histograms (the measured work of `Balance::Work`): beads on [0, 1) weigh 3
+    /// each, on [1, 2) 1 each, as many of each; two parts split the work, not the beads: the
+    /// bound at 2/3, below which lies half of the total work 3 × 1000 + 1000.
+    #[test]
+    fn quantiles_of_weighted_histograms_split_the_work() {
+        let xs: Vec<f64> = (0..2000).map(|i| (i as f64 + 0.5) * 0.001).collect();
+        let mut counts = vec![0.0; HISTOGRAM_BINS];
+        for &x in &xs {
+            counts[bin_of(x, 0.0, 2.0)] += if x < 1.0 { 3.0 } else { 1.0 };
+        }
+        let inner = quantile_bounds(&counts, 0.0, 2.0, 2);
+        assert!(
+            (inner[0] - 2.0 / 3.0).abs() < 2.0 / HISTOGRAM_BINS as f64,
+            "{inner:?}"
+        );
+        let s = Slabs::from_inner(&inner);
+        let mut work = [0.0f64; 2];
+        for &x in &xs {
+            work[s.owner(x)] += if x < 1.0 { 3.0 } else { 1.0 };
+        }
+        assert!((work[0] - work[1]).abs() <= 6.0, "{work:?}");
     }
 }

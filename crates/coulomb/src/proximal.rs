@@ -23,7 +23,103 @@ use crate::deadline::Deadline;
 use crate::linalg::pattern_lu::JacobianPattern;
 use crate::line_search::{armijo, Search};
 use crate::problem::LocalProblem;
-use crate::settings::ProxParams;
+
+/// The proximal-point end game ([`crate::proximal`]) of a stage. It runs (a) after a Newton
+/// try of the end game that did not converge, from an error ≤ `try_start`, with a budget of
+/// `max_steps` Newton steps (`capped_max_steps` after an inner solve at its iteration cap),
+/// and again only once the error is below `retry` times the end of its last such run; (b)
+/// after a Levenberg–Marquardt run of the stage that stalled, from LM's best point when that
+/// error is ≤ `start`, with a budget of `max_steps` Newton steps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct ProxParams {
+    /// cap on proximal steps per run; 0: no proximal end game
+    pub max_outer: usize,
+    /// semismooth Newton steps (sparse LU of J) per proximal step; ≥ 1
+    pub inner_steps: usize,
+    /// halvings of the Armijo search before the full Newton step is taken; ≥ 1
+    pub line_search_steps: usize,
+    /// σ = `sigma_factor` · err · max Wᵢᵢ after a regularized problem that was solved
+    /// (Siconos' PROX rule: 5); > 0
+    pub sigma_factor: f64,
+    /// σ is multiplied by this after a regularized problem that was not solved within
+    /// `inner_steps` (Siconos' PROX rule: 10); ≥ 1
+    pub sigma_growth: f64,
+    /// a regularized problem is solved once ‖Φ_ρ‖ is ≤ its value at the centre r_k divided
+    /// by this (Siconos: the inner tolerance is the outer error / 10); > 1
+    pub inner_ratio: f64,
+    /// a run stops after this many proximal steps in a row without a lower error; ≥ 1
+    pub stall_steps: usize,
+    /// (b) starts only from an error ≤ this (LM's best point); ≥ 0 (docs/tuning.md, `tuning.prox`)
+    pub start: f64,
+    /// (a) starts only from an error ≤ this (LM's own start, [`crate::levenberg::LmParams::start`]); ≥ 0
+    pub try_start: f64,
+    /// a run takes at most this many Newton steps (sparse LU factorizations of J) in all its
+    /// proximal steps, a budget in work so that the path does not depend on the machine's
+    /// speed or load; ≥ 1 (docs/tuning.md, `tuning.prox`)
+    pub max_steps: usize,
+    /// the budget of (a) after an inner solve that hit its iteration cap (the fixed point does
+    /// not solve its subproblems); ≥ 1 (docs/tuning.md, `tuning.prox`)
+    pub capped_max_steps: usize,
+    /// (a) runs again once the error is below `retry` times the lowest error of its previous
+    /// run; in (0, 1]
+    pub retry: f64,
+}
+
+impl Default for ProxParams {
+    fn default() -> Self {
+        Self {
+            max_outer: 100,
+            inner_steps: 20,
+            line_search_steps: 30,
+            sigma_factor: 5.0,
+            sigma_growth: 10.0,
+            inner_ratio: 10.0,
+            stall_steps: 5,
+            start: 1e-6,
+            try_start: 2e-5,
+            max_steps: PROX_MAX_STEPS,
+            capped_max_steps: PROX_CAPPED_MAX_STEPS,
+            retry: 0.1,
+        }
+    }
+}
+
+impl ProxParams {
+    pub(crate) fn validate(&self) -> Result<(), String> {
+        if self.inner_steps == 0 || self.line_search_steps == 0 || self.stall_steps == 0 {
+            return Err(
+                "tuning.prox: inner_steps, line_search_steps and stall_steps must be ≥ 1".into(),
+            );
+        }
+        if !(self.sigma_factor.is_finite() && self.sigma_factor > 0.0) {
+            return Err("tuning.prox.sigma_factor must be positive".into());
+        }
+        if !(self.sigma_growth.is_finite() && self.sigma_growth >= 1.0) {
+            return Err("tuning.prox.sigma_growth must be finite and ≥ 1".into());
+        }
+        if !(self.inner_ratio.is_finite() && self.inner_ratio > 1.0) {
+            return Err("tuning.prox.inner_ratio must be finite and > 1".into());
+        }
+        let level = |x: f64| x.is_finite() && x >= 0.0;
+        if !level(self.start) || !level(self.try_start) {
+            return Err("tuning.prox: start and try_start must be finite and ≥ 0".into());
+        }
+        if self.max_steps == 0 || self.capped_max_steps == 0 {
+            return Err("tuning.prox: max_steps and capped_max_steps must be ≥ 1".into());
+        }
+        if !(self.retry > 0.0 && self.retry <= 1.0) {
+            return Err("tuning.prox.retry must be in (0, 1]".into());
+        }
+        Ok(())
+    }
+}
+
+/// The default of [`ProxParams::max_steps`] (docs/solver-core.md).
+pub const PROX_MAX_STEPS: usize = 40;
+
+/// The default of [`ProxParams::capped_max_steps`] (docs/solver-core.md).
+pub const PROX_CAPPED_MAX_STEPS: usize = 200;
 
 /// Armijo's constant c of the search on ‖Φ_ρ‖ ([`crate::line_search::armijo`]).
 const SUFFICIENT_DECREASE: f64 = 1e-4;

@@ -11,6 +11,11 @@
 //! [`ProxParams::sigma_growth`]. A zero of the regularized map at r_{k+1} = r_k is a solution
 //! of the law itself.
 //!
+//! The Newton steps on Φ_ρ are those of the crate's one semismooth Newton driver
+//! (`newton::drive_from`, as the end game on (3.9)): J δ = −Φ_ρ, the Armijo search on ‖Φ_ρ‖
+//! (`line_search::armijo`, c = 1e-4, [`ProxParams::line_search_steps`] trials) and, where it
+//! is exhausted, the full step δ (a non-monotone escape from a stationary point of the merit).
+//!
 //! It is an end game of the outer method ([`crate::outer::newton`]) on problems where the law
 //! is far from monotone (granular heaps and drums, docs/rigid.md): after a Newton try that
 //! did not converge, and after a stalled Levenberg–Marquardt run ([`crate::levenberg`]); the
@@ -21,7 +26,7 @@
 
 use crate::deadline::Deadline;
 use crate::linalg::pattern_lu::JacobianPattern;
-use crate::line_search::{armijo, Search};
+use crate::newton::{drive_from, NewtonRule, OnExhausted, SemismoothMap};
 use crate::problem::LocalProblem;
 
 /// The proximal-point end game ([`crate::proximal`]) of a stage. It runs (a) after a Newton
@@ -189,13 +194,22 @@ pub fn solve(
     let Some(jac) = JacobianPattern::new(p) else {
         return report;
     };
-    let rho = crate::levenberg::base_rho(p);
-    let w_max = p.w.diagonal().iter().fold(0.0f64, |a, &b| a.max(b.abs()));
     let nb = p.mu.len() * d * d;
-    let (mut g, mut dbl) = (vec![0.0; m], vec![0.0; nb]);
-    let (mut g2, mut dbl2) = (vec![0.0; m], vec![0.0; nb]);
-    let (mut shifted, mut blocks) = (vec![0.0; nb], vec![0.0; nb]);
-    let (mut jv, mut wcol) = (Vec::new(), vec![0.0; m]);
+    let mut map = RegularizedMap {
+        p,
+        jac,
+        rho: crate::levenberg::base_rho(p),
+        center: vec![0.0; m],
+        sigma: 0.0,
+        g: [vec![0.0; m], vec![0.0; m]],
+        dbl: [vec![0.0; nb], vec![0.0; nb]],
+        shifted: vec![0.0; nb],
+        blocks: vec![0.0; nb],
+        jv: Vec::new(),
+        wcol: vec![0.0; m],
+        factorizations: 0,
+    };
+    let w_max = p.w.diagonal().iter().fold(0.0f64, |a, &b| a.max(b.abs()));
     let mut x = r.to_vec();
     let mut error = best_err;
     let mut since_best = 0;
@@ -214,70 +228,36 @@ pub fn solve(
             break ProxStatus::Stalled;
         }
         report.outer += 1;
-        let center = x.clone();
+        map.center.copy_from_slice(&x);
+        map.sigma = sigma;
         let center_error = error;
-        // Φ of the regularized problem at y: u = W y + q + σ (y − center)
-        let eval = |y: &[f64], g: &mut [f64], dbl: &mut [f64]| {
-            let mut u = p.velocity(y);
-            for k in 0..m {
-                u[k] += sigma * (y[k] - center[k]);
-            }
-            crate::levenberg::alart_curnier(d, &p.mu, &rho, y, &u, g, dbl)
-        };
-        let mut phi = eval(&x, &mut g, &mut dbl);
+        let phi = map.eval_trial(&x);
+        map.accept_trial();
         // the regularized problem is solved once ‖Φ‖ ≤ ‖Φ(centre)‖ / inner_ratio (at the
-        // centre Φ of the regularized problem is that of the law itself)
+        // centre Φ of the regularized problem is that of the law itself): Newton on Φ with
+        // Armijo on ‖Φ‖ and, when no step decreases it, the full step (a non-monotone escape
+        // from a stationary point of the merit)
         let inner_target = phi / params.inner_ratio;
-        let mut solved = false;
-        for _ in 0..params.inner_steps {
-            if phi <= inner_target {
-                solved = true;
-                break;
-            }
-            if deadline.passed() || phi.is_nan() || report.steps >= params.max_steps {
-                break;
-            }
-            report.steps += 1;
-            // J = I − D + B (W + σ I), B = ρ D: the diagonal blocks of I − (D − σ B)
-            for (i, &ri) in rho.iter().enumerate() {
-                for k in i * d * d..(i + 1) * d * d {
-                    blocks[k] = ri * dbl[k];
-                    shifted[k] = dbl[k] - sigma * blocks[k];
-                }
-            }
-            jac.fill(p, &shifted, &blocks, &mut wcol, &mut jv);
-            let mut dir: Vec<f64> = g.iter().map(|v| -v).collect();
-            if jac.solve(&jv, &mut dir).is_none() {
-                break;
-            }
-            // Armijo on ‖Φ‖; when no step decreases it, the full step (a non-monotone
-            // escape from a stationary point of the merit)
-            let mut trial = vec![0.0; m];
-            let search = armijo(phi, SUFFICIENT_DECREASE, params.line_search_steps, |t| {
-                for k in 0..m {
-                    trial[k] = x[k] + t * dir[k];
-                }
-                eval(&trial, &mut g2, &mut dbl2)
-            });
-            if let Search::Accepted { merit, .. } = search {
-                std::mem::swap(&mut x, &mut trial);
-                std::mem::swap(&mut g, &mut g2);
-                std::mem::swap(&mut dbl, &mut dbl2);
-                phi = merit;
-            } else {
-                for k in 0..m {
-                    x[k] += dir[k];
-                }
-                phi = eval(&x, &mut g, &mut dbl);
-            }
-            if !x.iter().all(|v| v.is_finite()) {
-                break;
-            }
-        }
+        let rule = NewtonRule {
+            target: inner_target,
+            max_steps: params
+                .inner_steps
+                .min(params.max_steps.saturating_sub(report.steps)),
+            trials: params.line_search_steps,
+            sufficient_decrease: SUFFICIENT_DECREASE,
+            shift: None,
+            on_exhausted: OnExhausted::FullStep,
+            slow_steps: usize::MAX,
+            slow_ratio: 1.0,
+            deadline,
+        };
+        let factorizations = map.factorizations;
+        let newton = drive_from(&mut map, &mut x, phi, &rule);
+        report.steps += map.factorizations - factorizations;
         if !x.iter().all(|v| v.is_finite()) {
             x.copy_from_slice(r);
         }
-        solved = solved || phi <= inner_target;
+        let mut solved = newton.residual <= inner_target;
         let y = crate::problem::projected(p, &x);
         error = p.error(&y).error;
         if error < best_err {
@@ -295,7 +275,7 @@ pub fn solve(
             // a regularized problem that was not solved does not move the centre: its
             // Newton iterate can be far off (the full steps that escape a stationary point
             // of the merit), and the next try, with a larger σ, starts from the centre again
-            x.copy_from_slice(&center);
+            x.copy_from_slice(&map.center);
             error = center_error;
             report.rejected += 1;
         }
@@ -309,6 +289,79 @@ pub fn solve(
     };
     report.error = best_err;
     report
+}
+
+/// Φ_ρ(y) = y − P_μ(y − ρ u) of the law regularized at the centre c = r_k with σ = σ_k,
+/// u = W y + q + σ (y − c), and its Jacobian J = I − D + ρ D (W + σ I), D = ∂P_μ, on W's
+/// block pattern (a sparse LU; W as stored, J is not symmetric anyway); counts the Jacobians
+/// it builds (one factorization each).
+struct RegularizedMap<'a> {
+    p: &'a LocalProblem,
+    jac: JacobianPattern,
+    /// ρᵢ of [`crate::levenberg::base_rho`]
+    rho: Vec<f64>,
+    center: Vec<f64>,
+    sigma: f64,
+    /// Φ_ρ and the D blocks: current and trial
+    g: [Vec<f64>; 2],
+    dbl: [Vec<f64>; 2],
+    /// the diagonal blocks D − σ ρ D of I − (D − σ B) and B = ρ D, at the current point
+    shifted: Vec<f64>,
+    blocks: Vec<f64>,
+    /// the values of J on its pattern
+    jv: Vec<f64>,
+    wcol: Vec<f64>,
+    factorizations: usize,
+}
+
+impl SemismoothMap for RegularizedMap<'_> {
+    fn eval_trial(&mut self, y: &[f64]) -> f64 {
+        let p = self.p;
+        let mut u = p.velocity(y);
+        for (k, uk) in u.iter_mut().enumerate() {
+            *uk += self.sigma * (y[k] - self.center[k]);
+        }
+        let (g, dbl) = (&mut self.g[1], &mut self.dbl[1]);
+        crate::levenberg::alart_curnier(p.dim, &p.mu, &self.rho, y, &u, g, dbl)
+    }
+
+    fn accept_trial(&mut self) {
+        self.g.swap(0, 1);
+        self.dbl.swap(0, 1);
+    }
+
+    fn current(&self) -> &[f64] {
+        &self.g[0]
+    }
+
+    fn build_jacobian(&mut self) {
+        self.factorizations += 1;
+        let (dd, sigma) = (self.p.dim * self.p.dim, self.sigma);
+        // J = I − D + B (W + σ I), B = ρ D: the diagonal blocks of I − (D − σ B)
+        let blocks = self.blocks.chunks_mut(dd).zip(self.shifted.chunks_mut(dd));
+        for ((&ri, (b, shifted)), dbl) in self.rho.iter().zip(blocks).zip(self.dbl[0].chunks(dd)) {
+            for ((bk, sk), &dk) in b.iter_mut().zip(shifted.iter_mut()).zip(dbl) {
+                *bk = ri * dk;
+                *sk = dk - sigma * *bk;
+            }
+        }
+        self.jac.fill(
+            self.p,
+            &self.shifted,
+            &self.blocks,
+            &mut self.wcol,
+            &mut self.jv,
+        );
+    }
+
+    fn solve_shifted(&mut self, lambda: f64, rhs: &mut [f64]) -> Option<()> {
+        if lambda == 0.0 {
+            return self.jac.solve(&self.jv, rhs);
+        }
+        let mut shifted = self.jv.clone();
+        self.jac.shift_diagonal(&mut shifted, lambda);
+        self.jac.solve(&shifted, rhs)
+    }
 }
 
 #[cfg(test)]

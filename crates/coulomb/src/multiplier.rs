@@ -28,9 +28,13 @@
 //! tries the factors of the run's last J (a chord step, v ← v − J_old⁻¹ G(v)), kept when it
 //! lowers ‖G‖ by the factor [`MultiplierParams::chord_ratio`]: near the solution of a
 //! subproblem J changes little from step to step and the LU costs O(n³) against O(n²).
+//! This Newton loop is its own, not the driver `newton::drive` of the end game and the
+//! proximal point: its steps try the chord direction before J is built, and take it on that
+//! ratio test without a search; only a step that factors J ends with the Armijo search (on
+//! ‖G‖², `line_search::armijo`), whose exhaustion ends the run.
 //! ρᵢ starts at ρ_f / w̄ with w̄ the mean of trace(Wᵢᵢ)/d: a penalty of the order of 1/‖W‖
-//! keeps the Newton systems regular and the outer iteration moving; the end game's σ = 5 err
-//! rule ([`crate::proximal`]) makes ρ so large there that Newton on G fails (docs/rigid.md).
+//! keeps the Newton systems regular and the outer iteration moving (how ρ_f was measured:
+//! docs/tuning.md, `tuning.multiplier.rho_factor`).
 //! ρ then follows the subproblems: it grows after a step whose Newton run was easy (the
 //! proximal point converges faster as ρ grows), up to a cap, and is halved after a step whose
 //! Newton run failed and whose r is worse (its error above
@@ -356,9 +360,8 @@ pub fn solve(
 /// [`solve`] from each point of `starts` at once (at least one): one run per start, the
 /// runs taking their outer steps in turn on rayon's threads, none waiting for another (each
 /// Newton run on one thread when `par` is [`faer::Par::Seq`]).
-/// The method of multipliers on a rigid problem goes where its start sends it: on the box
-/// piles of the corpus a start from which it circulates without converging and another
-/// from which it converges in 100 steps lie side by side (docs/rigid.md). It stops when a
+/// The law with μ > 0 is not monotone: the limit of the iteration, if any, depends on its
+/// start (measured: docs/tuning.md, `tuning.multiplier.starts`). It stops when a
 /// run has converged, every run has stopped, or at the deadline. `starts[0]` is replaced by
 /// the point returned: the first converged run's, else the lowest-merit iterate of all
 /// runs. The report is that run's, with `steps` and `newton_steps` summed over all runs.

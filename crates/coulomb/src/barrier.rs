@@ -40,6 +40,10 @@ use crate::problem::{GlobalProblem, LocalProblem};
 /// The default of [`BarrierParams::max_work`] (docs/solver-core.md: how it was calibrated).
 pub const BARRIER_MAX_WORK: usize = 150;
 
+/// Newton steps of one run of the interior-point try: the default of
+/// [`crate::settings::MethodParams::barrier_steps`].
+pub const BARRIER_STEPS: usize = 150;
+
 /// Parameters of the interior-point method on Coulomb's law ([`crate::barrier`]) and of its
 /// try in the default policy ([`crate::Solver::solve`]): after the warm-up of a cold solve
 /// (no guess) with every μ > 0 of a global problem with at most half as many degrees of

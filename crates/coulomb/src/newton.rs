@@ -113,6 +113,14 @@ pub const LAMBDA_FACTOR: f64 = 1e-2;
 /// A step with ‖G⁺‖ > `SLOW_RATIO` ‖G‖ counts as slow.
 pub const SLOW_RATIO: f64 = 0.9;
 
+/// Newton steps of the end game per stage: the default of
+/// [`crate::settings::MethodParams::newton_steps`].
+pub const END_GAME_STEPS: usize = 30;
+
+/// The end game is tried once the error of docs/error.md is ≤ this: the default of
+/// [`crate::settings::MethodParams::newton_start`].
+pub const END_GAME_START: f64 = 1e-3;
+
 /// Why a semismooth Newton run ([`polish`], and the polish steps of the interior-point inner
 /// solvers) stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

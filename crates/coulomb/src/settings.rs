@@ -305,7 +305,7 @@ impl Default for Tuning {
         Self {
             inner_tol_floor: 0.2,
             inner_tol_ceiling: 1e-2,
-            fused_tol_fraction: 0.9,
+            fused_tol_fraction: crate::outer::fused::TOL_FRACTION,
             stall_window: STALL_WINDOW,
             balance_stalls: 3,
             unbounded_ratio: UNBOUNDED_RATIO,
@@ -451,12 +451,12 @@ impl Default for MethodParams {
     fn default() -> Self {
         Self {
             warmup_sweeps: 50,
-            barrier_steps: 150,
+            barrier_steps: crate::barrier::BARRIER_STEPS,
             fixed_point_tol: None,
-            facets: 8,
+            facets: crate::inner::faceted::DEFAULT_FACETS,
             inner_tol_factor: 0.1,
-            newton_steps: 30,
-            newton_start: 1e-3,
+            newton_steps: crate::newton::END_GAME_STEPS,
+            newton_start: crate::newton::END_GAME_START,
             tuning: Tuning::default(),
         }
     }

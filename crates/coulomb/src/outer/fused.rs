@@ -12,6 +12,10 @@ use crate::linalg::sparse::CscMatrix;
 /// Sweeps over which [`solve_fused`] measures its rate when asked to give up early.
 pub const GIVE_UP_WINDOW: usize = 10;
 
+/// A batch of fused sweeps stops at this fraction of tol: the default of
+/// [`crate::settings::Tuning::fused_tol_fraction`].
+pub const TOL_FRACTION: f64 = 0.9;
+
 /// The defaults of the fused method's Anderson mixing, at their former path.
 pub use crate::inner::pgs::{ANDERSON_MEMORY, ANDERSON_PERIOD};
 

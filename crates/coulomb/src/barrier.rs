@@ -64,9 +64,9 @@ pub struct BarrierParams {
     /// a run stops when its lowest error has not improved for this many steps; ≥ 1
     pub stall_steps: usize,
     /// once its lowest error is ≤ `settle_below`, a run stops after this many steps in a row
-    /// cut below `settle_alpha` of the Newton step (jammed near the end of its path, where
-    /// the try's Levenberg–Marquardt finish, [`crate::levenberg::LmParams::start`], usually ends it in a few
-    /// steps); ≥ 1 (docs/tuning.md, `tuning.barrier`)
+    /// cut below `settle_alpha` of the Newton step (jammed near the end of its path: the try's
+    /// Levenberg–Marquardt finish, [`crate::levenberg::LmParams::start`], takes over from
+    /// there); ≥ 1 (measured: docs/tuning.md, `tuning.barrier.settle_steps`)
     pub settle_steps: usize,
     /// see `settle_steps`; ≥ 0 (0: never)
     pub settle_below: f64,

@@ -24,7 +24,8 @@
 //! formed contact by contact from the d columns of each contact, gathered once per solve
 //! into one dense block) and a backtracking search on ‖G‖,
 //! stopped at its target, at a cap, or after a few steps in a row that barely lower ‖G‖
-//! ([`MultiplierParams::slow_steps`]: a damped crawl rarely reaches the target). A step first
+//! ([`MultiplierParams::slow_steps`]; measured: docs/tuning.md,
+//! `tuning.multiplier.slow_steps`). A step first
 //! tries the factors of the run's last J (a chord step, v ← v − J_old⁻¹ G(v)), kept when it
 //! lowers ‖G‖ by the factor [`MultiplierParams::chord_ratio`]: near the solution of a
 //! subproblem J changes little from step to step and the LU costs O(n³) against O(n²).

@@ -40,6 +40,10 @@ use crate::problem::{GlobalProblem, LocalProblem};
 /// The default of [`BarrierParams::max_work`] (docs/solver-core.md: how it was calibrated).
 pub const BARRIER_MAX_WORK: usize = 150;
 
+/// Newton steps of one run of the interior-point try: the default of
+/// [`crate::settings::MethodParams::barrier_steps`].
+pub const BARRIER_STEPS: usize = 150;
+
 /// Parameters of the interior-point method on Coulomb's law ([`crate::barrier`]) and of its
 /// try in the default policy ([`crate::Solver::solve`]): after the warm-up of a cold solve
 /// (no guess) with every μ > 0 of a global problem with at most half as many degrees of
@@ -60,9 +64,9 @@ pub struct BarrierParams {
     /// a run stops when its lowest error has not improved for this many steps; ≥ 1
     pub stall_steps: usize,
     /// once its lowest error is ≤ `settle_below`, a run stops after this many steps in a row
-    /// cut below `settle_alpha` of the Newton step (jammed near the end of its path, where
-    /// the try's Levenberg–Marquardt finish, [`crate::levenberg::LmParams::start`], usually ends it in a few
-    /// steps); ≥ 1 (docs/tuning.md, `tuning.barrier`)
+    /// cut below `settle_alpha` of the Newton step (jammed near the end of its path: the try's
+    /// Levenberg–Marquardt finish, [`crate::levenberg::LmParams::start`], takes over from
+    /// there); ≥ 1 (measured: docs/tuning.md, `tuning.barrier.settle_steps`)
     pub settle_steps: usize,
     /// see `settle_steps`; ≥ 0 (0: never)
     pub settle_below: f64,

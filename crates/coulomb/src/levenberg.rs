@@ -31,6 +31,12 @@
 //! lie in the cones: each is judged as its projection onto L = Π K_μᵢ, and the projection of
 //! lowest error (on the problem given, W as stored) is returned — the point a caller's verdict
 //! on the stored problem sees.
+//!
+//! Its loop is its own, not the Newton driver `newton::drive` of the other
+//! Newton-type methods: a step δ is taken or rejected whole, on the gain ratio (actual over
+//! predicted decrease of ‖Φ_ρ‖², [`LmParams::accept_ratio`]) that also updates c, and never
+//! backtracked along δ by the Armijo search (`line_search::armijo`); the watchdog
+//! takes steps whatever the merit says.
 
 use crate::deadline::Deadline;
 use crate::linalg::normal::{Normal, NormalPattern};

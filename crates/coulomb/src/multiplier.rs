@@ -24,13 +24,18 @@
 //! formed contact by contact from the d columns of each contact, gathered once per solve
 //! into one dense block) and a backtracking search on ‖G‖,
 //! stopped at its target, at a cap, or after a few steps in a row that barely lower ‖G‖
-//! ([`MultiplierParams::slow_steps`]: a damped crawl rarely reaches the target). A step first
+//! ([`MultiplierParams::slow_steps`]; measured: docs/tuning.md,
+//! `tuning.multiplier.slow_steps`). A step first
 //! tries the factors of the run's last J (a chord step, v ← v − J_old⁻¹ G(v)), kept when it
 //! lowers ‖G‖ by the factor [`MultiplierParams::chord_ratio`]: near the solution of a
 //! subproblem J changes little from step to step and the LU costs O(n³) against O(n²).
+//! This Newton loop is its own, not the driver `newton::drive` of the end game and the
+//! proximal point: its steps try the chord direction before J is built, and take it on that
+//! ratio test without a search; only a step that factors J ends with the Armijo search (on
+//! ‖G‖², `line_search::armijo`), whose exhaustion ends the run.
 //! ρᵢ starts at ρ_f / w̄ with w̄ the mean of trace(Wᵢᵢ)/d: a penalty of the order of 1/‖W‖
-//! keeps the Newton systems regular and the outer iteration moving; the end game's σ = 5 err
-//! rule ([`crate::proximal`]) makes ρ so large there that Newton on G fails (docs/rigid.md).
+//! keeps the Newton systems regular and the outer iteration moving (how ρ_f was measured:
+//! docs/tuning.md, `tuning.multiplier.rho_factor`).
 //! ρ then follows the subproblems: it grows after a step whose Newton run was easy (the
 //! proximal point converges faster as ρ grows), up to a cap, and is halved after a step whose
 //! Newton run failed and whose r is worse (its error above
@@ -50,7 +55,214 @@ use crate::linalg::sparse::CscMatrix;
 use crate::line_search::{armijo, Search};
 use crate::mass::MassFactor;
 use crate::problem::GlobalProblem;
-use crate::settings::MultiplierParams;
+
+/// Parameters of the method of multipliers in the velocities ([`crate::multiplier`]): a
+/// stage of the default for problems of rigid bodies — global ones with at most
+/// [`crate::barrier::BarrierParams::max_schur_dofs`] degrees of freedom and at most half as
+/// many as contact unknowns, local ones whose W has a skeleton
+/// ([`crate::barrier::BarrierParams::skeleton_rank_ratio`]) that reproduces it
+/// (`skeleton_residual`) — run after the interior-point try, from its lowest-error point and
+/// the end points of its other runs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct MultiplierParams {
+    /// cap on outer (multiplier) steps per run; 0: no such stage
+    pub max_steps: usize,
+    /// ρᵢ = `rho_factor` / w̄, w̄ the mean of trace(Wᵢᵢ)/d; > 0
+    /// (docs/tuning.md, `tuning.multiplier`)
+    pub rho_factor: f64,
+    /// Newton steps per outer step; ≥ 1
+    pub newton_steps: usize,
+    /// a Newton run also stops after this many steps in a row that each lowered ‖G‖ by less
+    /// than the factor `slow_ratio` (a damped crawl: the outer step goes on from where it
+    /// stands, [`MultiplierParams::reject_growth`]); ≥ 1 (docs/tuning.md, `tuning.multiplier`)
+    pub slow_steps: usize,
+    /// see `slow_steps`; in (0, 1]
+    pub slow_ratio: f64,
+    /// a Newton step first tries the step of the factors of the last J factored in the same
+    /// Newton run (a chord step: two triangular solves instead of an LU of size n); it is
+    /// taken if ‖G‖ falls to at most `chord_ratio` times its value, else J is factored at
+    /// the current v; at most `newton_steps` chord steps per Newton run; in [0, 1) (0: every
+    /// step factors J) (docs/tuning.md, `tuning.multiplier`)
+    pub chord_ratio: f64,
+    /// halvings of the backtracking search on ‖G‖ before a Newton run gives up; ≥ 1
+    pub halvings: usize,
+    /// Armijo's constant of that search; in (0, 1)
+    pub sufficient_decrease: f64,
+    /// Newton on G stops at ‖G‖ ≤ `inner_ratio` · err · max(1, ‖f‖), err the error at the
+    /// outer step's start; > 0
+    pub inner_ratio: f64,
+    /// an outer step whose Newton run did not reach its target and whose r has an error above
+    /// `reject_growth` times the current one is taken again from the same multipliers with
+    /// every ρᵢ multiplied by `penalty_cut`; ≥ 1. With 1 an unsolved step is kept only when
+    /// its error is at most the current one (docs/tuning.md, `tuning.multiplier`)
+    pub reject_growth: f64,
+    /// see `reject_growth`; in (0, 1)
+    pub penalty_cut: f64,
+    /// after an outer step whose Newton run reached its target in more than
+    /// `easy_newton_steps`, a ρᵢ below its first value grows by this factor, up to that
+    /// value; ≥ 1
+    pub penalty_regrowth: f64,
+    /// after an outer step whose Newton run reached its target in at most this many steps
+    /// that factored J (its chord steps not counted, `chord_ratio`), every ρᵢ grows by
+    /// `penalty_growth`, up to `penalty_cap` times its first value (the
+    /// proximal point converges faster as ρ grows: Rockafellar 1976)
+    /// (docs/tuning.md, `tuning.multiplier`)
+    pub easy_newton_steps: usize,
+    /// see `easy_newton_steps`; ≥ 1 (1: ρ never grows above its first value)
+    /// (docs/tuning.md, `tuning.multiplier`)
+    pub penalty_growth: f64,
+    /// see `easy_newton_steps`; ≥ 1
+    pub penalty_cap: f64,
+    /// a run stops after this many outer steps without the lowest merit falling to
+    /// `stall_gain` times its value at the last such fall; ≥ 1
+    pub stall_steps: usize,
+    /// see `stall_steps`; in (0, 1)
+    pub stall_gain: f64,
+    /// the stage factors J at most this many times in all its runs (chord steps not
+    /// counted); its runs take their steps in lock-step rounds and the budget is checked
+    /// between rounds, a budget in work so that the path does not depend on the machine's
+    /// speed or load; ≥ 1 (docs/tuning.md, `tuning.multiplier`)
+    pub max_factorizations: usize,
+    /// the stage runs the method from at most this many starts at once, the best point of
+    /// the interior-point try and the end points of its other runs
+    /// ([`crate::multiplier::solve_from`]); ≥ 1 (1: from the best point only)
+    /// (docs/tuning.md, `tuning.multiplier`)
+    pub starts: usize,
+    /// on a local problem the stage runs on the velocity form of W's skeleton C A⁻¹ R
+    /// ([`crate::linalg::skeleton`]), symmetric or not, and only where
+    /// [`crate::linalg::skeleton::Skeleton::residual`] ≤ `skeleton_residual` · tol (W = C A⁻¹ R holds
+    /// to rounding when rank W equals the skeleton's rank: the stage then solves the stored
+    /// W's law; else it could not reach tol on it); ≥ 0
+    pub skeleton_residual: f64,
+    /// where the stage ends unconverged at an error (max with the balance residual) ≤
+    /// `finish_below` · tol, at most `finish_steps` Levenberg–Marquardt steps on the natural
+    /// map itself follow from its point ([`crate::newton::least_squares`]: sparse, for at most
+    /// `finish_max_unknowns` contact unknowns), kept where they lower the error; ≥ 0
+    /// (docs/tuning.md, `tuning.multiplier`)
+    pub finish_below: f64,
+    /// see `finish_below`; 0: no finish
+    pub finish_steps: usize,
+    /// the finish stops after this many steps in a row that each leave more than 90 % of the
+    /// error (the floor of the point's active set: [`crate::newton::least_squares`]); 0: no
+    /// such stop (docs/tuning.md, `tuning.multiplier`)
+    pub finish_slow_steps: usize,
+    /// see `finish_below`
+    pub finish_max_unknowns: usize,
+    /// the finish is also tried while the stage runs ([`crate::multiplier::solve_from`]):
+    /// on a run whose lowest merit falls to at most `finish_crawl` · tol and below this
+    /// factor times the merit from which that run last tried it, at most `finish_attempts`
+    /// times per stage (a step costs sparse Cholesky factorizations of JᵀJ + λνI); in (0, 1]
+    /// (docs/tuning.md, `tuning.multiplier`)
+    pub finish_gain: f64,
+    /// see `finish_gain`; ≥ 0
+    pub finish_crawl: f64,
+    /// see `finish_gain`
+    pub finish_attempts: usize,
+}
+
+impl Default for MultiplierParams {
+    fn default() -> Self {
+        Self {
+            max_steps: 20_000,
+            rho_factor: 300.0,
+            newton_steps: 50,
+            slow_steps: 4,
+            slow_ratio: 0.9,
+            chord_ratio: 0.5,
+            halvings: 30,
+            sufficient_decrease: 1e-4,
+            inner_ratio: 1e-2,
+            reject_growth: 1.0,
+            penalty_cut: 0.5,
+            penalty_regrowth: 1.2,
+            easy_newton_steps: 6,
+            penalty_growth: 1.5,
+            penalty_cap: 100.0,
+            stall_steps: 1000,
+            stall_gain: 0.5,
+            max_factorizations: MULTIPLIER_MAX_FACTORIZATIONS,
+            starts: 4,
+            skeleton_residual: 0.01,
+            finish_below: 10.0,
+            finish_steps: 8,
+            finish_slow_steps: 2,
+            finish_max_unknowns: 2000,
+            finish_gain: 0.5,
+            finish_crawl: 2.0,
+            finish_attempts: 8,
+        }
+    }
+}
+
+impl MultiplierParams {
+    pub(crate) fn validate(&self) -> Result<(), String> {
+        if self.newton_steps == 0
+            || self.slow_steps == 0
+            || self.halvings == 0
+            || self.stall_steps == 0
+            || self.starts == 0
+        {
+            return Err(
+                "tuning.multiplier: newton_steps, slow_steps, halvings, stall_steps and starts must \
+                 be ≥ 1"
+                    .into(),
+            );
+        }
+        if !(self.slow_ratio > 0.0 && self.slow_ratio <= 1.0) {
+            return Err("tuning.multiplier: slow_ratio must be in (0, 1]".into());
+        }
+        if !(self.chord_ratio >= 0.0 && self.chord_ratio < 1.0) {
+            return Err("tuning.multiplier: chord_ratio must be in [0, 1)".into());
+        }
+        let positive = |x: f64| x.is_finite() && x > 0.0;
+        if !positive(self.rho_factor) || !positive(self.inner_ratio) {
+            return Err("tuning.multiplier: rho_factor and inner_ratio must be positive".into());
+        }
+        let open = |x: f64| x > 0.0 && x < 1.0;
+        if !open(self.sufficient_decrease) || !open(self.stall_gain) || !open(self.penalty_cut) {
+            return Err(
+                "tuning.multiplier: sufficient_decrease, stall_gain and penalty_cut must be in (0, 1)"
+                    .into(),
+            );
+        }
+        let at_least_one = |x: f64| x.is_finite() && x >= 1.0;
+        if ![
+            self.reject_growth,
+            self.penalty_regrowth,
+            self.penalty_growth,
+            self.penalty_cap,
+        ]
+        .into_iter()
+        .all(at_least_one)
+        {
+            return Err(
+                "tuning.multiplier: reject_growth, penalty_regrowth, penalty_growth and \
+                 penalty_cap must be finite and ≥ 1"
+                    .into(),
+            );
+        }
+        if self.max_factorizations == 0 {
+            return Err("tuning.multiplier.max_factorizations must be ≥ 1".into());
+        }
+        if !(self.skeleton_residual.is_finite() && self.skeleton_residual >= 0.0) {
+            return Err("tuning.multiplier.skeleton_residual must be finite and ≥ 0".into());
+        }
+        let nonnegative = |x: f64| x.is_finite() && x >= 0.0;
+        if !nonnegative(self.finish_below) || !nonnegative(self.finish_crawl) {
+            return Err(
+                "tuning.multiplier.finish_below and finish_crawl must be finite and ≥ 0".into(),
+            );
+        }
+        if !(self.finish_gain > 0.0 && self.finish_gain <= 1.0) {
+            return Err("tuning.multiplier.finish_gain must be in (0, 1]".into());
+        }
+        Ok(())
+    }
+}
+
+/// The default of [`MultiplierParams::max_factorizations`] (docs/solver-core.md).
+pub const MULTIPLIER_MAX_FACTORIZATIONS: usize = 2000;
 
 /// The largest n [`solve`] takes: its Newton systems are dense n × n (8 n² bytes, O(n³)
 /// flops per step; the default's stage stays at or below
@@ -149,9 +361,8 @@ pub fn solve(
 /// [`solve`] from each point of `starts` at once (at least one): one run per start, the
 /// runs taking their outer steps in turn on rayon's threads, none waiting for another (each
 /// Newton run on one thread when `par` is [`faer::Par::Seq`]).
-/// The method of multipliers on a rigid problem goes where its start sends it: on the box
-/// piles of the corpus a start from which it circulates without converging and another
-/// from which it converges in 100 steps lie side by side (docs/rigid.md). It stops when a
+/// The law with μ > 0 is not monotone: the limit of the iteration, if any, depends on its
+/// start (measured: docs/tuning.md, `tuning.multiplier.starts`). It stops when a
 /// run has converged, every run has stopped, or at the deadline. `starts[0]` is replaced by
 /// the point returned: the first converged run's, else the lowest-merit iterate of all
 /// runs. The report is that run's, with `steps` and `newton_steps` summed over all runs.

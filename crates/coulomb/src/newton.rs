@@ -113,6 +113,14 @@ pub const LAMBDA_FACTOR: f64 = 1e-2;
 /// A step with ‖G⁺‖ > `SLOW_RATIO` ‖G‖ counts as slow.
 pub const SLOW_RATIO: f64 = 0.9;
 
+/// Newton steps of the end game per stage: the default of
+/// [`crate::settings::MethodParams::newton_steps`].
+pub const END_GAME_STEPS: usize = 30;
+
+/// The end game is tried once the error of docs/error.md is ≤ this: the default of
+/// [`crate::settings::MethodParams::newton_start`].
+pub const END_GAME_START: f64 = 1e-3;
+
 /// Why a semismooth Newton run ([`polish`], and the polish steps of the interior-point inner
 /// solvers) stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -173,20 +181,36 @@ pub(crate) struct Shift {
     pub(crate) floor: f64,
 }
 
+/// What [`drive`] does when no direction of a step passes the Armijo search
+/// ([`crate::line_search::armijo`]): each method's own policy.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum OnExhausted {
+    /// the run ends ([`NewtonStatus::NoDescent`]): the end game of (3.9) and the polish of
+    /// the inner problems (4.7), (3.15)
+    Stop,
+    /// the full step x + δ of the last direction solved is taken (a non-monotone escape from
+    /// a stationary point of the merit: the proximal point's Φ_ρ); a full step to a point
+    /// that is not finite ends the run ([`NewtonStatus::NoDescent`])
+    FullStep,
+}
+
 /// Caps and rules of one [`drive`] run.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct NewtonRule {
     /// stop once the merit is ≤ this
     pub(crate) target: f64,
-    /// at most this many accepted steps
+    /// at most this many steps
     pub(crate) max_steps: usize,
-    /// line search: the full step t = 1, then up to this many halvings of t (0: full step only)
-    pub(crate) halvings: usize,
+    /// line search: the merit is tried at t = 1, ½, … , 2^{1 − `trials`} (1: the full step
+    /// only; 0: no trial, every search is exhausted)
+    pub(crate) trials: usize,
     /// a trial is accepted when its merit is < ‖G‖ and ≤ (1 − c t) ‖G‖ (c = this; 0: any
     /// decrease)
     pub(crate) sufficient_decrease: f64,
     /// None: λ = 0, one direction per step
     pub(crate) shift: Option<Shift>,
+    /// when every direction of a step exhausts its search
+    pub(crate) on_exhausted: OnExhausted,
     /// stop (`Slow`) after this many consecutive steps with merit > `slow_ratio` · before
     pub(crate) slow_steps: usize,
     /// see `slow_steps`
@@ -195,24 +219,39 @@ pub(crate) struct NewtonRule {
     pub(crate) deadline: Deadline,
 }
 
-/// The damped semismooth Newton driver shared by the end game ([`polish`]) and the
-/// interior-point polish steps (dual (4.7) and primal (3.15) natural maps): from `x`
-/// (overwritten by the best iterate), steps δ from (J + λ I) δ = −G(x), each followed by the
-/// line search of `rule`, until the merit is ≤ `rule.target`, the step cap, no descent, too
-/// many slow steps, or the deadline. Evaluates G at x first.
+/// The one damped semismooth Newton driver of the crate: the end game on the natural map
+/// (3.9) ([`polish`]), the interior-point polish steps (dual (4.7) and primal (3.15) natural
+/// maps) and the inner loop of the proximal point on Φ_ρ ([`crate::proximal`]). From `x`
+/// (overwritten by the last iterate), steps δ from (J + λ I) δ = −G(x), each followed by the
+/// Armijo search of `rule` and, where it is exhausted, `rule.on_exhausted`, until the merit
+/// is ≤ `rule.target`, the step cap, no descent, too many slow steps, or the deadline.
+/// Evaluates G at x first ([`drive_from`] when it is evaluated).
 pub(crate) fn drive<M: SemismoothMap>(
     map: &mut M,
     x: &mut [f64],
     rule: &NewtonRule,
 ) -> NewtonReport {
-    let n = x.len();
-    let mut norm = map.eval_trial(x);
+    let merit = map.eval_trial(x);
     map.accept_trial();
+    drive_from(map, x, merit, rule)
+}
+
+/// [`drive`] from an x whose G the map holds as its current point, `merit` its norm.
+/// A NaN merit ends the run (`NoDescent`); an infinite one goes on to the linear solve,
+/// which fails on the infinite right-hand side.
+pub(crate) fn drive_from<M: SemismoothMap>(
+    map: &mut M,
+    x: &mut [f64],
+    merit: f64,
+    rule: &NewtonRule,
+) -> NewtonReport {
+    let n = x.len();
+    let mut norm = merit;
     let mut trial = vec![0.0; n];
     let mut steps = 0;
     let mut slow_steps = 0;
     let status = loop {
-        if !norm.is_finite() {
+        if norm.is_nan() {
             break NewtonStatus::NoDescent;
         }
         if norm <= rule.target {
@@ -234,6 +273,8 @@ pub(crate) fn drive<M: SemismoothMap>(
             None => (0.0, 1),
         };
         let mut accepted = false;
+        // the last direction solved whose search was exhausted
+        let mut exhausted = None;
         for _ in 0..tries {
             if rule.deadline.passed() {
                 break;
@@ -241,7 +282,7 @@ pub(crate) fn drive<M: SemismoothMap>(
             let mut delta: Vec<f64> = map.current().iter().map(|g| -g).collect();
             if map.solve_shifted(lambda, &mut delta).is_some() {
                 let c = rule.sufficient_decrease;
-                let search = armijo(norm, c, rule.halvings + 1, |t| {
+                let search = armijo(norm, c, rule.trials, |t| {
                     for k in 0..n {
                         trial[k] = x[k] + t * delta[k];
                     }
@@ -252,6 +293,8 @@ pub(crate) fn drive<M: SemismoothMap>(
                     map.accept_trial();
                     norm = merit;
                     accepted = true;
+                } else {
+                    exhausted = Some(delta);
                 }
             }
             if accepted {
@@ -262,10 +305,21 @@ pub(crate) fn drive<M: SemismoothMap>(
             }
         }
         if !accepted {
-            if rule.deadline.passed() {
-                break NewtonStatus::TimeLimit;
+            match (rule.on_exhausted, exhausted) {
+                (OnExhausted::FullStep, Some(delta)) => {
+                    for (xk, dk) in x.iter_mut().zip(&delta) {
+                        *xk += dk;
+                    }
+                    norm = map.eval_trial(x);
+                    map.accept_trial();
+                    if !x.iter().all(|v| v.is_finite()) {
+                        steps += 1;
+                        break NewtonStatus::NoDescent;
+                    }
+                }
+                _ if rule.deadline.passed() => break NewtonStatus::TimeLimit,
+                _ => break NewtonStatus::NoDescent,
             }
-            break NewtonStatus::NoDescent;
         }
         steps += 1;
         slow_steps = if norm > rule.slow_ratio * before {
@@ -531,7 +585,7 @@ pub fn polish_with(
     let rule = NewtonRule {
         target,
         max_steps,
-        halvings: params.halvings,
+        trials: params.halvings + 1,
         sufficient_decrease: params.sufficient_decrease,
         shift: Some(Shift {
             factor: params.lambda_factor,
@@ -542,6 +596,7 @@ pub fn polish_with(
             growth: params.shift_growth,
             floor: params.shift_floor,
         }),
+        on_exhausted: OnExhausted::Stop,
         slow_steps: params.slow_steps,
         slow_ratio: params.slow_ratio,
         deadline,
@@ -554,6 +609,62 @@ mod tests {
     use super::*;
     use crate::linalg::sparse::CscMatrix;
     use crate::natural_map::{push_d_times, push_identity_minus_d};
+
+    /// G(x) = x with the Jacobian reported as −I: every direction δ = x is an ascent
+    /// direction, so every Armijo search is exhausted.
+    struct Ascent {
+        g: [Vec<f64>; 2],
+    }
+
+    impl SemismoothMap for Ascent {
+        fn eval_trial(&mut self, x: &[f64]) -> f64 {
+            self.g[1].copy_from_slice(x);
+            crate::law::norm(x)
+        }
+        fn accept_trial(&mut self) {
+            self.g.swap(0, 1);
+        }
+        fn current(&self) -> &[f64] {
+            &self.g[0]
+        }
+        fn build_jacobian(&mut self) {}
+        fn solve_shifted(&mut self, lambda: f64, rhs: &mut [f64]) -> Option<()> {
+            rhs.iter_mut().for_each(|v| *v /= lambda - 1.0);
+            Some(())
+        }
+    }
+
+    #[test]
+    fn an_exhausted_search_stops_or_takes_the_full_step_as_the_rule_says() {
+        let rule = |on_exhausted| NewtonRule {
+            target: 0.0,
+            max_steps: 3,
+            trials: 5,
+            sufficient_decrease: 1e-4,
+            shift: None,
+            on_exhausted,
+            slow_steps: usize::MAX,
+            slow_ratio: 1.0,
+            deadline: Deadline::NEVER,
+        };
+        let mut map = Ascent {
+            g: [vec![0.0; 2], vec![0.0; 2]],
+        };
+        let mut x = [1.0, -2.0];
+        let report = drive(&mut map, &mut x, &rule(OnExhausted::Stop));
+        assert_eq!((report.status, report.steps), (NewtonStatus::NoDescent, 0));
+        assert_eq!(x, [1.0, -2.0]);
+        // the full step x + δ = 2x, three times
+        let report = drive(&mut map, &mut x, &rule(OnExhausted::FullStep));
+        assert_eq!((report.status, report.steps), (NewtonStatus::MaxSteps, 3));
+        assert_eq!(x, [8.0, -16.0]);
+        assert_eq!(report.residual, crate::law::norm(&x));
+        // a full step to a point that is not finite ends the run
+        let mut x = [f64::MAX, 0.0];
+        let report = drive(&mut map, &mut x, &rule(OnExhausted::FullStep));
+        assert_eq!((report.status, report.steps), (NewtonStatus::NoDescent, 1));
+        assert!(x[0].is_infinite());
+    }
 
     #[test]
     fn least_squares_reaches_a_solution_nearby_and_never_raises_the_error() {

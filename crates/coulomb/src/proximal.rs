@@ -11,6 +11,11 @@
 //! [`ProxParams::sigma_growth`]. A zero of the regularized map at r_{k+1} = r_k is a solution
 //! of the law itself.
 //!
+//! The Newton steps on Φ_ρ are those of the crate's one semismooth Newton driver
+//! (`newton::drive_from`, as the end game on (3.9)): J δ = −Φ_ρ, the Armijo search on ‖Φ_ρ‖
+//! (`line_search::armijo`, c = 1e-4, [`ProxParams::line_search_steps`] trials) and, where it
+//! is exhausted, the full step δ (a non-monotone escape from a stationary point of the merit).
+//!
 //! It is an end game of the outer method ([`crate::outer::newton`]) on problems where the law
 //! is far from monotone (granular heaps and drums, docs/rigid.md): after a Newton try that
 //! did not converge, and after a stalled Levenberg–Marquardt run ([`crate::levenberg`]); the
@@ -21,9 +26,105 @@
 
 use crate::deadline::Deadline;
 use crate::linalg::pattern_lu::JacobianPattern;
-use crate::line_search::{armijo, Search};
+use crate::newton::{drive_from, NewtonRule, OnExhausted, SemismoothMap};
 use crate::problem::LocalProblem;
-use crate::settings::ProxParams;
+
+/// The proximal-point end game ([`crate::proximal`]) of a stage. It runs (a) after a Newton
+/// try of the end game that did not converge, from an error ≤ `try_start`, with a budget of
+/// `max_steps` Newton steps (`capped_max_steps` after an inner solve at its iteration cap),
+/// and again only once the error is below `retry` times the end of its last such run; (b)
+/// after a Levenberg–Marquardt run of the stage that stalled, from LM's best point when that
+/// error is ≤ `start`, with a budget of `max_steps` Newton steps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct ProxParams {
+    /// cap on proximal steps per run; 0: no proximal end game
+    pub max_outer: usize,
+    /// semismooth Newton steps (sparse LU of J) per proximal step; ≥ 1
+    pub inner_steps: usize,
+    /// halvings of the Armijo search before the full Newton step is taken; ≥ 1
+    pub line_search_steps: usize,
+    /// σ = `sigma_factor` · err · max Wᵢᵢ after a regularized problem that was solved
+    /// (Siconos' PROX rule: 5); > 0
+    pub sigma_factor: f64,
+    /// σ is multiplied by this after a regularized problem that was not solved within
+    /// `inner_steps` (Siconos' PROX rule: 10); ≥ 1
+    pub sigma_growth: f64,
+    /// a regularized problem is solved once ‖Φ_ρ‖ is ≤ its value at the centre r_k divided
+    /// by this (Siconos: the inner tolerance is the outer error / 10); > 1
+    pub inner_ratio: f64,
+    /// a run stops after this many proximal steps in a row without a lower error; ≥ 1
+    pub stall_steps: usize,
+    /// (b) starts only from an error ≤ this (LM's best point); ≥ 0 (docs/tuning.md, `tuning.prox`)
+    pub start: f64,
+    /// (a) starts only from an error ≤ this (LM's own start, [`crate::levenberg::LmParams::start`]); ≥ 0
+    pub try_start: f64,
+    /// a run takes at most this many Newton steps (sparse LU factorizations of J) in all its
+    /// proximal steps, a budget in work so that the path does not depend on the machine's
+    /// speed or load; ≥ 1 (docs/tuning.md, `tuning.prox`)
+    pub max_steps: usize,
+    /// the budget of (a) after an inner solve that hit its iteration cap (the fixed point does
+    /// not solve its subproblems); ≥ 1 (docs/tuning.md, `tuning.prox`)
+    pub capped_max_steps: usize,
+    /// (a) runs again once the error is below `retry` times the lowest error of its previous
+    /// run; in (0, 1]
+    pub retry: f64,
+}
+
+impl Default for ProxParams {
+    fn default() -> Self {
+        Self {
+            max_outer: 100,
+            inner_steps: 20,
+            line_search_steps: 30,
+            sigma_factor: 5.0,
+            sigma_growth: 10.0,
+            inner_ratio: 10.0,
+            stall_steps: 5,
+            start: 1e-6,
+            try_start: 2e-5,
+            max_steps: PROX_MAX_STEPS,
+            capped_max_steps: PROX_CAPPED_MAX_STEPS,
+            retry: 0.1,
+        }
+    }
+}
+
+impl ProxParams {
+    pub(crate) fn validate(&self) -> Result<(), String> {
+        if self.inner_steps == 0 || self.line_search_steps == 0 || self.stall_steps == 0 {
+            return Err(
+                "tuning.prox: inner_steps, line_search_steps and stall_steps must be ≥ 1".into(),
+            );
+        }
+        if !(self.sigma_factor.is_finite() && self.sigma_factor > 0.0) {
+            return Err("tuning.prox.sigma_factor must be positive".into());
+        }
+        if !(self.sigma_growth.is_finite() && self.sigma_growth >= 1.0) {
+            return Err("tuning.prox.sigma_growth must be finite and ≥ 1".into());
+        }
+        if !(self.inner_ratio.is_finite() && self.inner_ratio > 1.0) {
+            return Err("tuning.prox.inner_ratio must be finite and > 1".into());
+        }
+        let level = |x: f64| x.is_finite() && x >= 0.0;
+        if !level(self.start) || !level(self.try_start) {
+            return Err("tuning.prox: start and try_start must be finite and ≥ 0".into());
+        }
+        if self.max_steps == 0 || self.capped_max_steps == 0 {
+            return Err("tuning.prox: max_steps and capped_max_steps must be ≥ 1".into());
+        }
+        if !(self.retry > 0.0 && self.retry <= 1.0) {
+            return Err("tuning.prox.retry must be in (0, 1]".into());
+        }
+        Ok(())
+    }
+}
+
+/// The default of [`ProxParams::max_steps`] (docs/solver-core.md).
+pub const PROX_MAX_STEPS: usize = 40;
+
+/// The default of [`ProxParams::capped_max_steps`] (docs/solver-core.md).
+pub const PROX_CAPPED_MAX_STEPS: usize = 200;
 
 /// Armijo's constant c of the search on ‖Φ_ρ‖ ([`crate::line_search::armijo`]).
 const SUFFICIENT_DECREASE: f64 = 1e-4;
@@ -93,13 +194,22 @@ pub fn solve(
     let Some(jac) = JacobianPattern::new(p) else {
         return report;
     };
-    let rho = crate::levenberg::base_rho(p);
-    let w_max = p.w.diagonal().iter().fold(0.0f64, |a, &b| a.max(b.abs()));
     let nb = p.mu.len() * d * d;
-    let (mut g, mut dbl) = (vec![0.0; m], vec![0.0; nb]);
-    let (mut g2, mut dbl2) = (vec![0.0; m], vec![0.0; nb]);
-    let (mut shifted, mut blocks) = (vec![0.0; nb], vec![0.0; nb]);
-    let (mut jv, mut wcol) = (Vec::new(), vec![0.0; m]);
+    let mut map = RegularizedMap {
+        p,
+        jac,
+        rho: crate::levenberg::base_rho(p),
+        center: vec![0.0; m],
+        sigma: 0.0,
+        g: [vec![0.0; m], vec![0.0; m]],
+        dbl: [vec![0.0; nb], vec![0.0; nb]],
+        shifted: vec![0.0; nb],
+        blocks: vec![0.0; nb],
+        jv: Vec::new(),
+        wcol: vec![0.0; m],
+        factorizations: 0,
+    };
+    let w_max = p.w.diagonal().iter().fold(0.0f64, |a, &b| a.max(b.abs()));
     let mut x = r.to_vec();
     let mut error = best_err;
     let mut since_best = 0;
@@ -118,70 +228,36 @@ pub fn solve(
             break ProxStatus::Stalled;
         }
         report.outer += 1;
-        let center = x.clone();
+        map.center.copy_from_slice(&x);
+        map.sigma = sigma;
         let center_error = error;
-        // Φ of the regularized problem at y: u = W y + q + σ (y − center)
-        let eval = |y: &[f64], g: &mut [f64], dbl: &mut [f64]| {
-            let mut u = p.velocity(y);
-            for k in 0..m {
-                u[k] += sigma * (y[k] - center[k]);
-            }
-            crate::levenberg::alart_curnier(d, &p.mu, &rho, y, &u, g, dbl)
-        };
-        let mut phi = eval(&x, &mut g, &mut dbl);
+        let phi = map.eval_trial(&x);
+        map.accept_trial();
         // the regularized problem is solved once ‖Φ‖ ≤ ‖Φ(centre)‖ / inner_ratio (at the
-        // centre Φ of the regularized problem is that of the law itself)
+        // centre Φ of the regularized problem is that of the law itself): Newton on Φ with
+        // Armijo on ‖Φ‖ and, when no step decreases it, the full step (a non-monotone escape
+        // from a stationary point of the merit)
         let inner_target = phi / params.inner_ratio;
-        let mut solved = false;
-        for _ in 0..params.inner_steps {
-            if phi <= inner_target {
-                solved = true;
-                break;
-            }
-            if deadline.passed() || phi.is_nan() || report.steps >= params.max_steps {
-                break;
-            }
-            report.steps += 1;
-            // J = I − D + B (W + σ I), B = ρ D: the diagonal blocks of I − (D − σ B)
-            for (i, &ri) in rho.iter().enumerate() {
-                for k in i * d * d..(i + 1) * d * d {
-                    blocks[k] = ri * dbl[k];
-                    shifted[k] = dbl[k] - sigma * blocks[k];
-                }
-            }
-            jac.fill(p, &shifted, &blocks, &mut wcol, &mut jv);
-            let mut dir: Vec<f64> = g.iter().map(|v| -v).collect();
-            if jac.solve(&jv, &mut dir).is_none() {
-                break;
-            }
-            // Armijo on ‖Φ‖; when no step decreases it, the full step (a non-monotone
-            // escape from a stationary point of the merit)
-            let mut trial = vec![0.0; m];
-            let search = armijo(phi, SUFFICIENT_DECREASE, params.line_search_steps, |t| {
-                for k in 0..m {
-                    trial[k] = x[k] + t * dir[k];
-                }
-                eval(&trial, &mut g2, &mut dbl2)
-            });
-            if let Search::Accepted { merit, .. } = search {
-                std::mem::swap(&mut x, &mut trial);
-                std::mem::swap(&mut g, &mut g2);
-                std::mem::swap(&mut dbl, &mut dbl2);
-                phi = merit;
-            } else {
-                for k in 0..m {
-                    x[k] += dir[k];
-                }
-                phi = eval(&x, &mut g, &mut dbl);
-            }
-            if !x.iter().all(|v| v.is_finite()) {
-                break;
-            }
-        }
+        let rule = NewtonRule {
+            target: inner_target,
+            max_steps: params
+                .inner_steps
+                .min(params.max_steps.saturating_sub(report.steps)),
+            trials: params.line_search_steps,
+            sufficient_decrease: SUFFICIENT_DECREASE,
+            shift: None,
+            on_exhausted: OnExhausted::FullStep,
+            slow_steps: usize::MAX,
+            slow_ratio: 1.0,
+            deadline,
+        };
+        let factorizations = map.factorizations;
+        let newton = drive_from(&mut map, &mut x, phi, &rule);
+        report.steps += map.factorizations - factorizations;
         if !x.iter().all(|v| v.is_finite()) {
             x.copy_from_slice(r);
         }
-        solved = solved || phi <= inner_target;
+        let mut solved = newton.residual <= inner_target;
         let y = crate::problem::projected(p, &x);
         error = p.error(&y).error;
         if error < best_err {
@@ -199,7 +275,7 @@ pub fn solve(
             // a regularized problem that was not solved does not move the centre: its
             // Newton iterate can be far off (the full steps that escape a stationary point
             // of the merit), and the next try, with a larger σ, starts from the centre again
-            x.copy_from_slice(&center);
+            x.copy_from_slice(&map.center);
             error = center_error;
             report.rejected += 1;
         }
@@ -213,6 +289,79 @@ pub fn solve(
     };
     report.error = best_err;
     report
+}
+
+/// Φ_ρ(y) = y − P_μ(y − ρ u) of the law regularized at the centre c = r_k with σ = σ_k,
+/// u = W y + q + σ (y − c), and its Jacobian J = I − D + ρ D (W + σ I), D = ∂P_μ, on W's
+/// block pattern (a sparse LU; W as stored, J is not symmetric anyway); counts the Jacobians
+/// it builds (one factorization each).
+struct RegularizedMap<'a> {
+    p: &'a LocalProblem,
+    jac: JacobianPattern,
+    /// ρᵢ of [`crate::levenberg::base_rho`]
+    rho: Vec<f64>,
+    center: Vec<f64>,
+    sigma: f64,
+    /// Φ_ρ and the D blocks: current and trial
+    g: [Vec<f64>; 2],
+    dbl: [Vec<f64>; 2],
+    /// the diagonal blocks D − σ ρ D of I − (D − σ B) and B = ρ D, at the current point
+    shifted: Vec<f64>,
+    blocks: Vec<f64>,
+    /// the values of J on its pattern
+    jv: Vec<f64>,
+    wcol: Vec<f64>,
+    factorizations: usize,
+}
+
+impl SemismoothMap for RegularizedMap<'_> {
+    fn eval_trial(&mut self, y: &[f64]) -> f64 {
+        let p = self.p;
+        let mut u = p.velocity(y);
+        for (k, uk) in u.iter_mut().enumerate() {
+            *uk += self.sigma * (y[k] - self.center[k]);
+        }
+        let (g, dbl) = (&mut self.g[1], &mut self.dbl[1]);
+        crate::levenberg::alart_curnier(p.dim, &p.mu, &self.rho, y, &u, g, dbl)
+    }
+
+    fn accept_trial(&mut self) {
+        self.g.swap(0, 1);
+        self.dbl.swap(0, 1);
+    }
+
+    fn current(&self) -> &[f64] {
+        &self.g[0]
+    }
+
+    fn build_jacobian(&mut self) {
+        self.factorizations += 1;
+        let (dd, sigma) = (self.p.dim * self.p.dim, self.sigma);
+        // J = I − D + B (W + σ I), B = ρ D: the diagonal blocks of I − (D − σ B)
+        let blocks = self.blocks.chunks_mut(dd).zip(self.shifted.chunks_mut(dd));
+        for ((&ri, (b, shifted)), dbl) in self.rho.iter().zip(blocks).zip(self.dbl[0].chunks(dd)) {
+            for ((bk, sk), &dk) in b.iter_mut().zip(shifted.iter_mut()).zip(dbl) {
+                *bk = ri * dk;
+                *sk = dk - sigma * *bk;
+            }
+        }
+        self.jac.fill(
+            self.p,
+            &self.shifted,
+            &self.blocks,
+            &mut self.wcol,
+            &mut self.jv,
+        );
+    }
+
+    fn solve_shifted(&mut self, lambda: f64, rhs: &mut [f64]) -> Option<()> {
+        if lambda == 0.0 {
+            return self.jac.solve(&self.jv, rhs);
+        }
+        let mut shifted = self.jv.clone();
+        self.jac.shift_diagonal(&mut shifted, lambda);
+        self.jac.solve(&shifted, rhs)
+    }
 }
 
 #[cfg(test)]

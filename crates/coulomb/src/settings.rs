@@ -20,7 +20,10 @@ pub use crate::barrier::{BarrierParams, BARRIER_MAX_WORK};
 pub use crate::inner::apgd::ApgdParams;
 pub use crate::inner::RayParams;
 pub use crate::levenberg::LmParams;
+pub use crate::multiplier::{MultiplierParams, MULTIPLIER_MAX_FACTORIZATIONS};
 pub use crate::newton::NewtonParams;
+pub use crate::outer::anderson::AndersonParams;
+pub use crate::proximal::{ProxParams, PROX_CAPPED_MAX_STEPS, PROX_MAX_STEPS};
 use std::fmt;
 use std::str::FromStr;
 use std::time::Duration;
@@ -204,309 +207,6 @@ impl FromStr for Method {
     }
 }
 
-/// Parameters of safeguarded Anderson mixing on s ([`crate::outer::anderson`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct AndersonParams {
-    /// number of previous differences kept (≥ 1)
-    pub memory: usize,
-}
-
-/// The proximal-point end game ([`crate::proximal`]) of a stage. It runs (a) after a Newton
-/// try of the end game that did not converge, from an error ≤ `try_start`, with a budget of
-/// `max_steps` Newton steps (`capped_max_steps` after an inner solve at its iteration cap),
-/// and again only once the error is below `retry` times the end of its last such run; (b)
-/// after a Levenberg–Marquardt run of the stage that stalled, from LM's best point when that
-/// error is ≤ `start`, with a budget of `max_steps` Newton steps.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct ProxParams {
-    /// cap on proximal steps per run; 0: no proximal end game
-    pub max_outer: usize,
-    /// semismooth Newton steps (sparse LU of J) per proximal step; ≥ 1
-    pub inner_steps: usize,
-    /// halvings of the Armijo search before the full Newton step is taken; ≥ 1
-    pub line_search_steps: usize,
-    /// σ = `sigma_factor` · err · max Wᵢᵢ after a regularized problem that was solved
-    /// (Siconos' PROX rule: 5); > 0
-    pub sigma_factor: f64,
-    /// σ is multiplied by this after a regularized problem that was not solved within
-    /// `inner_steps` (Siconos' PROX rule: 10); ≥ 1
-    pub sigma_growth: f64,
-    /// a regularized problem is solved once ‖Φ_ρ‖ is ≤ its value at the centre r_k divided
-    /// by this (Siconos: the inner tolerance is the outer error / 10); > 1
-    pub inner_ratio: f64,
-    /// a run stops after this many proximal steps in a row without a lower error; ≥ 1
-    pub stall_steps: usize,
-    /// (b) starts only from an error ≤ this (LM's best point); ≥ 0 (docs/tuning.md, `tuning.prox`)
-    pub start: f64,
-    /// (a) starts only from an error ≤ this (LM's own start, [`LmParams::start`]); ≥ 0
-    pub try_start: f64,
-    /// a run takes at most this many Newton steps (sparse LU factorizations of J) in all its
-    /// proximal steps, a budget in work so that the path does not depend on the machine's
-    /// speed or load; ≥ 1 (docs/tuning.md, `tuning.prox`)
-    pub max_steps: usize,
-    /// the budget of (a) after an inner solve that hit its iteration cap (the fixed point does
-    /// not solve its subproblems); ≥ 1 (docs/tuning.md, `tuning.prox`)
-    pub capped_max_steps: usize,
-    /// (a) runs again once the error is below `retry` times the lowest error of its previous
-    /// run; in (0, 1]
-    pub retry: f64,
-}
-
-impl Default for ProxParams {
-    fn default() -> Self {
-        Self {
-            max_outer: 100,
-            inner_steps: 20,
-            line_search_steps: 30,
-            sigma_factor: 5.0,
-            sigma_growth: 10.0,
-            inner_ratio: 10.0,
-            stall_steps: 5,
-            start: 1e-6,
-            try_start: 2e-5,
-            max_steps: PROX_MAX_STEPS,
-            capped_max_steps: PROX_CAPPED_MAX_STEPS,
-            retry: 0.1,
-        }
-    }
-}
-
-/// Parameters of the method of multipliers in the velocities ([`crate::multiplier`]): a
-/// stage of the default for problems of rigid bodies — global ones with at most
-/// [`BarrierParams::max_schur_dofs`] degrees of freedom and at most half as many as contact
-/// unknowns, local ones whose W has a skeleton ([`BarrierParams::skeleton_rank_ratio`]) that
-/// reproduces it (`skeleton_residual`) — run after the interior-point try, from its
-/// lowest-error point and the end points of its other runs.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct MultiplierParams {
-    /// cap on outer (multiplier) steps per run; 0: no such stage
-    pub max_steps: usize,
-    /// ρᵢ = `rho_factor` / w̄, w̄ the mean of trace(Wᵢᵢ)/d; > 0
-    /// (docs/tuning.md, `tuning.multiplier`)
-    pub rho_factor: f64,
-    /// Newton steps per outer step; ≥ 1
-    pub newton_steps: usize,
-    /// a Newton run also stops after this many steps in a row that each lowered ‖G‖ by less
-    /// than the factor `slow_ratio` (a damped crawl: the outer step goes on from where it
-    /// stands, [`MultiplierParams::reject_growth`]); ≥ 1 (docs/tuning.md, `tuning.multiplier`)
-    pub slow_steps: usize,
-    /// see `slow_steps`; in (0, 1]
-    pub slow_ratio: f64,
-    /// a Newton step first tries the step of the factors of the last J factored in the same
-    /// Newton run (a chord step: two triangular solves instead of an LU of size n); it is
-    /// taken if ‖G‖ falls to at most `chord_ratio` times its value, else J is factored at
-    /// the current v; at most `newton_steps` chord steps per Newton run; in [0, 1) (0: every
-    /// step factors J) (docs/tuning.md, `tuning.multiplier`)
-    pub chord_ratio: f64,
-    /// halvings of the backtracking search on ‖G‖ before a Newton run gives up; ≥ 1
-    pub halvings: usize,
-    /// Armijo's constant of that search; in (0, 1)
-    pub sufficient_decrease: f64,
-    /// Newton on G stops at ‖G‖ ≤ `inner_ratio` · err · max(1, ‖f‖), err the error at the
-    /// outer step's start; > 0
-    pub inner_ratio: f64,
-    /// an outer step whose Newton run did not reach its target and whose r has an error above
-    /// `reject_growth` times the current one is taken again from the same multipliers with
-    /// every ρᵢ multiplied by `penalty_cut`; ≥ 1. With 1 an unsolved step is kept only when
-    /// its error is at most the current one (docs/tuning.md, `tuning.multiplier`)
-    pub reject_growth: f64,
-    /// see `reject_growth`; in (0, 1)
-    pub penalty_cut: f64,
-    /// after an outer step whose Newton run reached its target in more than
-    /// `easy_newton_steps`, a ρᵢ below its first value grows by this factor, up to that
-    /// value; ≥ 1
-    pub penalty_regrowth: f64,
-    /// after an outer step whose Newton run reached its target in at most this many steps
-    /// that factored J (its chord steps not counted, `chord_ratio`), every ρᵢ grows by
-    /// `penalty_growth`, up to `penalty_cap` times its first value (the
-    /// proximal point converges faster as ρ grows: Rockafellar 1976)
-    /// (docs/tuning.md, `tuning.multiplier`)
-    pub easy_newton_steps: usize,
-    /// see `easy_newton_steps`; ≥ 1 (1: ρ never grows above its first value)
-    /// (docs/tuning.md, `tuning.multiplier`)
-    pub penalty_growth: f64,
-    /// see `easy_newton_steps`; ≥ 1
-    pub penalty_cap: f64,
-    /// a run stops after this many outer steps without the lowest merit falling to
-    /// `stall_gain` times its value at the last such fall; ≥ 1
-    pub stall_steps: usize,
-    /// see `stall_steps`; in (0, 1)
-    pub stall_gain: f64,
-    /// the stage factors J at most this many times in all its runs (chord steps not
-    /// counted); its runs take their steps in lock-step rounds and the budget is checked
-    /// between rounds, a budget in work so that the path does not depend on the machine's
-    /// speed or load; ≥ 1 (docs/tuning.md, `tuning.multiplier`)
-    pub max_factorizations: usize,
-    /// the stage runs the method from at most this many starts at once, the best point of
-    /// the interior-point try and the end points of its other runs
-    /// ([`crate::multiplier::solve_from`]); ≥ 1 (1: from the best point only)
-    /// (docs/tuning.md, `tuning.multiplier`)
-    pub starts: usize,
-    /// on a local problem the stage runs on the velocity form of W's skeleton C A⁻¹ R
-    /// ([`crate::linalg::skeleton`]), symmetric or not, and only where
-    /// [`crate::linalg::skeleton::Skeleton::residual`] ≤ `skeleton_residual` · tol (W = C A⁻¹ R holds
-    /// to rounding when rank W equals the skeleton's rank: the stage then solves the stored
-    /// W's law; else it could not reach tol on it); ≥ 0
-    pub skeleton_residual: f64,
-    /// where the stage ends unconverged at an error (max with the balance residual) ≤
-    /// `finish_below` · tol, at most `finish_steps` Levenberg–Marquardt steps on the natural
-    /// map itself follow from its point ([`crate::newton::least_squares`]: sparse, for at most
-    /// `finish_max_unknowns` contact unknowns), kept where they lower the error; ≥ 0
-    /// (docs/tuning.md, `tuning.multiplier`)
-    pub finish_below: f64,
-    /// see `finish_below`; 0: no finish
-    pub finish_steps: usize,
-    /// the finish stops after this many steps in a row that each leave more than 90 % of the
-    /// error (the floor of the point's active set: [`crate::newton::least_squares`]); 0: no
-    /// such stop (docs/tuning.md, `tuning.multiplier`)
-    pub finish_slow_steps: usize,
-    /// see `finish_below`
-    pub finish_max_unknowns: usize,
-    /// the finish is also tried while the stage runs ([`crate::multiplier::solve_from`]):
-    /// on a run whose lowest merit falls to at most `finish_crawl` · tol and below this
-    /// factor times the merit from which that run last tried it, at most `finish_attempts`
-    /// times per stage (a step costs sparse Cholesky factorizations of JᵀJ + λνI); in (0, 1]
-    /// (docs/tuning.md, `tuning.multiplier`)
-    pub finish_gain: f64,
-    /// see `finish_gain`; ≥ 0
-    pub finish_crawl: f64,
-    /// see `finish_gain`
-    pub finish_attempts: usize,
-}
-
-impl Default for MultiplierParams {
-    fn default() -> Self {
-        Self {
-            max_steps: 20_000,
-            rho_factor: 300.0,
-            newton_steps: 50,
-            slow_steps: 4,
-            slow_ratio: 0.9,
-            chord_ratio: 0.5,
-            halvings: 30,
-            sufficient_decrease: 1e-4,
-            inner_ratio: 1e-2,
-            reject_growth: 1.0,
-            penalty_cut: 0.5,
-            penalty_regrowth: 1.2,
-            easy_newton_steps: 6,
-            penalty_growth: 1.5,
-            penalty_cap: 100.0,
-            stall_steps: 1000,
-            stall_gain: 0.5,
-            max_factorizations: MULTIPLIER_MAX_FACTORIZATIONS,
-            starts: 4,
-            skeleton_residual: 0.01,
-            finish_below: 10.0,
-            finish_steps: 8,
-            finish_slow_steps: 2,
-            finish_max_unknowns: 2000,
-            finish_gain: 0.5,
-            finish_crawl: 2.0,
-            finish_attempts: 8,
-        }
-    }
-}
-
-impl MultiplierParams {
-    fn validate(&self) -> Result<(), String> {
-        if self.newton_steps == 0
-            || self.slow_steps == 0
-            || self.halvings == 0
-            || self.stall_steps == 0
-            || self.starts == 0
-        {
-            return Err(
-                "tuning.multiplier: newton_steps, slow_steps, halvings, stall_steps and starts must \
-                 be ≥ 1"
-                    .into(),
-            );
-        }
-        if !(self.slow_ratio > 0.0 && self.slow_ratio <= 1.0) {
-            return Err("tuning.multiplier: slow_ratio must be in (0, 1]".into());
-        }
-        if !(self.chord_ratio >= 0.0 && self.chord_ratio < 1.0) {
-            return Err("tuning.multiplier: chord_ratio must be in [0, 1)".into());
-        }
-        let positive = |x: f64| x.is_finite() && x > 0.0;
-        if !positive(self.rho_factor) || !positive(self.inner_ratio) {
-            return Err("tuning.multiplier: rho_factor and inner_ratio must be positive".into());
-        }
-        let open = |x: f64| x > 0.0 && x < 1.0;
-        if !open(self.sufficient_decrease) || !open(self.stall_gain) || !open(self.penalty_cut) {
-            return Err(
-                "tuning.multiplier: sufficient_decrease, stall_gain and penalty_cut must be in (0, 1)"
-                    .into(),
-            );
-        }
-        let at_least_one = |x: f64| x.is_finite() && x >= 1.0;
-        if ![
-            self.reject_growth,
-            self.penalty_regrowth,
-            self.penalty_growth,
-            self.penalty_cap,
-        ]
-        .into_iter()
-        .all(at_least_one)
-        {
-            return Err(
-                "tuning.multiplier: reject_growth, penalty_regrowth, penalty_growth and \
-                 penalty_cap must be finite and ≥ 1"
-                    .into(),
-            );
-        }
-        if self.max_factorizations == 0 {
-            return Err("tuning.multiplier.max_factorizations must be ≥ 1".into());
-        }
-        if !(self.skeleton_residual.is_finite() && self.skeleton_residual >= 0.0) {
-            return Err("tuning.multiplier.skeleton_residual must be finite and ≥ 0".into());
-        }
-        let nonnegative = |x: f64| x.is_finite() && x >= 0.0;
-        if !nonnegative(self.finish_below) || !nonnegative(self.finish_crawl) {
-            return Err(
-                "tuning.multiplier.finish_below and finish_crawl must be finite and ≥ 0".into(),
-            );
-        }
-        if !(self.finish_gain > 0.0 && self.finish_gain <= 1.0) {
-            return Err("tuning.multiplier.finish_gain must be in (0, 1]".into());
-        }
-        Ok(())
-    }
-}
-
-impl ProxParams {
-    fn validate(&self) -> Result<(), String> {
-        if self.inner_steps == 0 || self.line_search_steps == 0 || self.stall_steps == 0 {
-            return Err(
-                "tuning.prox: inner_steps, line_search_steps and stall_steps must be ≥ 1".into(),
-            );
-        }
-        if !(self.sigma_factor.is_finite() && self.sigma_factor > 0.0) {
-            return Err("tuning.prox.sigma_factor must be positive".into());
-        }
-        if !(self.sigma_growth.is_finite() && self.sigma_growth >= 1.0) {
-            return Err("tuning.prox.sigma_growth must be finite and ≥ 1".into());
-        }
-        if !(self.inner_ratio.is_finite() && self.inner_ratio > 1.0) {
-            return Err("tuning.prox.inner_ratio must be finite and > 1".into());
-        }
-        let level = |x: f64| x.is_finite() && x >= 0.0;
-        if !level(self.start) || !level(self.try_start) {
-            return Err("tuning.prox: start and try_start must be finite and ≥ 0".into());
-        }
-        if self.max_steps == 0 || self.capped_max_steps == 0 {
-            return Err("tuning.prox: max_steps and capped_max_steps must be ≥ 1".into());
-        }
-        if !(self.retry > 0.0 && self.retry <= 1.0) {
-            return Err("tuning.prox.retry must be in (0, 1]".into());
-        }
-        Ok(())
-    }
-}
-
 /// Parameters of the inner solvers of (4.7): the constants each has always used, as
 /// defaults. A [`crate::Solver`] builds its inner solvers with them.
 ///
@@ -605,11 +305,11 @@ impl Default for Tuning {
         Self {
             inner_tol_floor: 0.2,
             inner_tol_ceiling: 1e-2,
-            fused_tol_fraction: 0.9,
+            fused_tol_fraction: crate::outer::fused::TOL_FRACTION,
             stall_window: STALL_WINDOW,
             balance_stalls: 3,
             unbounded_ratio: UNBOUNDED_RATIO,
-            anderson: AndersonParams { memory: 5 },
+            anderson: AndersonParams::default(),
             newton: NewtonParams::default(),
             lm: LmParams::default(),
             prox: ProxParams::default(),
@@ -708,15 +408,6 @@ impl Tuning {
 /// data (docs/tuning.md, `Tuning`). The default of [`Tuning::unbounded_ratio`].
 pub const UNBOUNDED_RATIO: f64 = 1e6;
 
-/// The default of [`MultiplierParams::max_factorizations`] (docs/solver-core.md).
-pub const MULTIPLIER_MAX_FACTORIZATIONS: usize = 2000;
-
-/// The default of [`ProxParams::max_steps`] (docs/solver-core.md).
-pub const PROX_MAX_STEPS: usize = 40;
-
-/// The default of [`ProxParams::capped_max_steps`] (docs/solver-core.md).
-pub const PROX_CAPPED_MAX_STEPS: usize = 200;
-
 /// Outer iterations over which the error must halve for a first stage to be considered
 /// progressing (see [`Settings::fallback`]). The default of [`Tuning::stall_window`].
 pub const STALL_WINDOW: usize = 25;
@@ -760,12 +451,12 @@ impl Default for MethodParams {
     fn default() -> Self {
         Self {
             warmup_sweeps: 50,
-            barrier_steps: 150,
+            barrier_steps: crate::barrier::BARRIER_STEPS,
             fixed_point_tol: None,
-            facets: 8,
+            facets: crate::inner::faceted::DEFAULT_FACETS,
             inner_tol_factor: 0.1,
-            newton_steps: 30,
-            newton_start: 1e-3,
+            newton_steps: crate::newton::END_GAME_STEPS,
+            newton_start: crate::newton::END_GAME_START,
             tuning: Tuning::default(),
         }
     }

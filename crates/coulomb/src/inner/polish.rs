@@ -5,7 +5,7 @@ use super::InnerProblem;
 use crate::deadline::Deadline;
 use crate::linalg::pattern_lu::sparse_lu_solve;
 use crate::natural_map::{natural_map, push_d_times, push_identity_minus_d};
-use crate::newton::{drive, NewtonRule, SemismoothMap};
+use crate::newton::{drive, NewtonRule, OnExhausted, SemismoothMap};
 
 /// The natural map F(r) = r − P_L(r − (W r + b)) of (4.7), its Jacobian I − D + D W
 /// (D = ∂P_L) assembled as triplets for faer's sparse LU.
@@ -98,9 +98,10 @@ pub(crate) fn polish_rule(target: f64, steps: usize, deadline: Deadline) -> Newt
     NewtonRule {
         target,
         max_steps: steps,
-        halvings: 0,
+        trials: 1,
         sufficient_decrease: 0.0,
         shift: None,
+        on_exhausted: OnExhausted::Stop,
         slow_steps: usize::MAX,
         slow_ratio: 1.0,
         deadline,

@@ -2,6 +2,21 @@
 //! successive approximation s ← F(s) of (3.19).
 
 use crate::linalg::dense::least_squares;
+
+/// Parameters of safeguarded Anderson mixing on s ([`Anderson`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct AndersonParams {
+    /// number of previous differences kept (≥ 1)
+    pub memory: usize,
+}
+
+impl Default for AndersonParams {
+    fn default() -> Self {
+        Self { memory: 5 }
+    }
+}
+
 /// Safeguarded Anderson mixing (type II) on g(s) = F(s) − s, with memory `m`:
 ///
 /// ```text

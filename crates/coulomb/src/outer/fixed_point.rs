@@ -4,7 +4,8 @@
 
 pub use super::anderson::Anderson;
 use crate::cone;
-use crate::settings::{AndersonParams, OuterKind};
+use crate::outer::anderson::AndersonParams;
+use crate::settings::OuterKind;
 
 /// Fⁱ(s) = ‖ũ_Tⁱ‖ (3.19) for every contact; the tangential part of ũ = W r + b does not
 /// depend on E s, so `u` may be W r + q or W r + q + E s.

@@ -12,6 +12,10 @@ use crate::linalg::sparse::CscMatrix;
 /// Sweeps over which [`solve_fused`] measures its rate when asked to give up early.
 pub const GIVE_UP_WINDOW: usize = 10;
 
+/// A batch of fused sweeps stops at this fraction of tol: the default of
+/// [`crate::settings::Tuning::fused_tol_fraction`].
+pub const TOL_FRACTION: f64 = 0.9;
+
 /// The defaults of the fused method's Anderson mixing, at their former path.
 pub use crate::inner::pgs::{ANDERSON_MEMORY, ANDERSON_PERIOD};
 
@@ -20,8 +24,8 @@ pub use crate::inner::pgs::{ANDERSON_MEMORY, ANDERSON_PERIOD};
 /// (docs/error.md, u = W x + q recomputed) is below that of the plain sweeps' G(x_k); otherwise
 /// the differences are dropped and the iteration goes on from G(x_k). Where every contact keeps
 /// its piece of the law (take-off, stick, slide) the sweeps are an affine map and the mixing
-/// is a secant method on it: the slow linear phase of Gauss–Seidel on rank-deficient W (a
-/// factor 0.6 per 10 000 sweeps on the walls of docs/rigid.md) is what it shortens. Memory:
+/// is a secant method on it: the slow linear phase of Gauss–Seidel on rank-deficient W is
+/// what it shortens (measured: docs/tuning.md, `tuning.inner.gs_anderson_period`). Memory:
 /// about 2 `memory` + 5 vectors of the size of r.
 struct SweepMixing {
     period: usize,

@@ -51,6 +51,7 @@ pub mod scene;
 pub mod scene_file;
 pub mod shape;
 pub mod simulation;
+mod spin_barrier;
 pub mod tunnelling;
 pub mod validation;
 pub mod world;

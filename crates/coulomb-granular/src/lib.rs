@@ -30,6 +30,7 @@
 
 pub mod assembly;
 pub mod checkpoint;
+mod colour_progress;
 pub mod contact;
 #[cfg(feature = "mpi")]
 pub mod distributed;
@@ -51,7 +52,6 @@ pub mod scene;
 pub mod scene_file;
 pub mod shape;
 pub mod simulation;
-mod spin_barrier;
 pub mod tunnelling;
 pub mod validation;
 pub mod world;

@@ -47,16 +47,15 @@
 //! exactly. The fixed points are those of plain Gauss–Seidel: solutions of (2.10).
 
 use crate::assembly::{contact_offset_one, StepData};
+use crate::colour_progress::ColourProgress;
 use crate::contact::{Contact, Partner};
 use crate::world::World;
 use coulomb::inner::pgs::{solve_contact, solve_contact_law, OneContact};
 use coulomb::problem::{GlobalProblem, ProblemError};
 use coulomb::sparse::CscMatrix;
 use coulomb::{cone, law};
-use crate::spin_barrier::SpinBarrier;
 use rayon::prelude::*;
 use serde::Serialize;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 /// Largest number of contacts per chunk of a parallel pass (and of the fixed summation
@@ -781,7 +780,7 @@ struct ColourPass {
     end: usize,
     chunk: usize,
     first_sum: usize,
-    /// shared by the threads (else swept by one, as [`for_colour`] does below [`PARALLEL_MIN`])
+    /// at least [`PARALLEL_MIN`] contacts (a sweep without such a colour runs on one thread)
     parallel: bool,
 }
 
@@ -818,10 +817,6 @@ impl ColourPass {
     }
 }
 
-/// One sweep as one parallel region at a time in the process: two regions sharing a pool
-/// could each wait at its barrier for a thread held by the other.
-static REGION: std::sync::Mutex<()> = std::sync::Mutex::new(());
-
 /// Raw storage written by the chunks of one colour (disjoint ranges), or by one chunk per slot.
 #[derive(Clone, Copy)]
 struct SharedSlice<T>(*mut T);
@@ -851,9 +846,7 @@ impl State<'_> {
     fn sweep(&mut self, omega: f64) -> UpdateSums {
         let threads = rayon::current_num_threads();
         if self.parallel && threads > 1 && self.passes.iter().any(|c| c.parallel) {
-            if let Ok(_region) = REGION.try_lock() {
-                return self.sweep_region(omega, threads);
-            }
+            return self.sweep_region(omega, threads);
         }
         let p = self.problem;
         let v = Shared(self.v.as_mut_ptr());
@@ -876,10 +869,10 @@ impl State<'_> {
         total
     }
 
-    /// [`State::sweep`] as one parallel region (`rayon::broadcast`) instead of one parallel
-    /// call per colour: the threads claim the chunks of a colour one by one and meet at a
-    /// [`SpinBarrier`] before the next colour (colours below [`PARALLEL_MIN`] are swept by the
-    /// first thread, as [`for_colour`] does). Same chunks and the same order of summation as
+    /// [`State::sweep`] as one parallel region instead of one parallel call per colour:
+    /// `threads` tasks of one `rayon::scope` (the calling thread runs one) claim the chunks of
+    /// each colour in turn, starting on a colour once the one before is done
+    /// ([`ColourProgress`]). Same chunks ([`colour_chunk`]) and the same order of summation as
     /// [`for_colour`], hence the same bits for any number of threads.
     fn sweep_region(&mut self, omega: f64, threads: usize) -> UpdateSums {
         let p = self.problem;
@@ -888,18 +881,19 @@ impl State<'_> {
         let sums = SharedSlice(self.chunk_sums.as_mut_ptr());
         let rows = &self.rows;
         let passes = &self.passes;
-        let claimed: Vec<AtomicUsize> = passes.iter().map(|_| AtomicUsize::new(0)).collect();
-        let barrier = SpinBarrier::new(threads);
+        let chunks: Vec<usize> = passes.iter().map(ColourPass::chunks).collect();
+        let progress = ColourProgress::new(&chunks);
         let run = |pass: &ColourPass, k: usize| {
             let range = pass.chunk_range(k);
-            // SAFETY: chunk k of this colour is claimed by one thread only (or swept by the
-            // first thread alone), so its impulses and sum slot are written by that thread
+            // SAFETY: chunk k of this colour is claimed by one thread only, so its impulses and
+            // its sum slot are written by that thread alone
             let rs = unsafe {
                 std::slice::from_raw_parts_mut(r.at(range.start), range.end - range.start)
             };
             let mut s = UpdateSums::default();
             for (row, r) in rows[range].iter().zip(rs.iter_mut()) {
-                // SAFETY: within one colour no other update touches spheres a, b ≠ a
+                // SAFETY: within one colour no other update touches spheres a, b ≠ a, and the
+                // colour before is done (`wait_done`)
                 let va = unsafe { &mut *v.at(row.a) };
                 let b = row.b.map(|j| (&p.inv_mass[j], unsafe { &mut *v.at(j) }));
                 s = s + update_contact(row, &p.inv_mass[row.a], va, b, r, omega);
@@ -907,27 +901,22 @@ impl State<'_> {
             // SAFETY: first_sum + k < chunk_sums.len() (ColourPass::of), one writer
             unsafe { *sums.at(pass.first_sum + k) = s };
         };
-        rayon::broadcast(|ctx| {
-            // a broadcast runs on every thread of the pool: the barrier counts them
-            debug_assert_eq!(ctx.num_threads(), threads);
+        let work = || {
             for (c, pass) in passes.iter().enumerate() {
-                if pass.parallel {
-                    loop {
-                        let k = claimed[c].fetch_add(1, Ordering::Relaxed);
-                        if k >= pass.chunks() {
-                            break;
-                        }
-                        run(pass, k);
-                    }
-                } else if ctx.index() == 0 {
-                    (0..pass.chunks()).for_each(|k| run(pass, k));
+                if c > 0 {
+                    progress.wait_done(c - 1);
                 }
-                // the next colour may start at once when the first thread sweeps both alone
-                let next_alone = passes.get(c + 1).map(|n| !n.parallel && !pass.parallel);
-                if next_alone == Some(false) {
-                    barrier.wait();
+                while let Some(k) = progress.claim(c) {
+                    run(pass, k);
+                    progress.finish(c);
                 }
             }
+        };
+        rayon::scope(|s| {
+            for _ in 1..threads {
+                s.spawn(|_| work());
+            }
+            work();
         });
         passes.iter().fold(UpdateSums::default(), |total, pass| {
             let slots = &self.chunk_sums[pass.first_sum..pass.first_sum + pass.chunks()];

@@ -30,6 +30,7 @@
 
 pub mod assembly;
 pub mod checkpoint;
+mod colour_progress;
 pub mod contact;
 #[cfg(feature = "mpi")]
 pub mod distributed;

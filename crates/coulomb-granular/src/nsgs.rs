@@ -47,6 +47,7 @@
 //! exactly. The fixed points are those of plain Gauss–Seidel: solutions of (2.10).
 
 use crate::assembly::{contact_offset_one, StepData};
+use crate::colour_progress::ColourProgress;
 use crate::contact::{Contact, Partner};
 use crate::world::World;
 use coulomb::inner::pgs::{solve_contact, solve_contact_law, OneContact};
@@ -766,6 +767,70 @@ struct State<'a> {
     /// v per sphere
     v: Vec<[f64; 6]>,
     parallel: bool,
+    /// the chunks of every colour, for the sweep as one parallel region
+    passes: Vec<ColourPass>,
+    /// one sum per chunk of [`State::passes`] (the region's output, folded in chunk order)
+    chunk_sums: Vec<UpdateSums>,
+}
+
+/// The chunks of one colour in a sweep: colour order `start..end`, chunks of `chunk`
+/// contacts ([`colour_chunk`]) whose sums go to `first_sum..` of [`State::chunk_sums`].
+struct ColourPass {
+    start: usize,
+    end: usize,
+    chunk: usize,
+    first_sum: usize,
+    /// at least [`PARALLEL_MIN`] contacts (a sweep without such a colour runs on one thread)
+    parallel: bool,
+}
+
+impl ColourPass {
+    /// The passes of `colouring`, and the number of chunks of all of them.
+    fn of(colouring: &Colouring) -> (Vec<Self>, usize) {
+        let mut sums = 0;
+        let passes = (0..colouring.colours())
+            .map(|c| {
+                let (start, end) = (colouring.starts[c], colouring.starts[c + 1]);
+                let chunk = colour_chunk(end - start);
+                let pass = ColourPass {
+                    start,
+                    end,
+                    chunk,
+                    first_sum: sums,
+                    parallel: end - start >= PARALLEL_MIN,
+                };
+                sums += pass.chunks();
+                pass
+            })
+            .collect();
+        (passes, sums)
+    }
+
+    fn chunks(&self) -> usize {
+        (self.end - self.start).div_ceil(self.chunk)
+    }
+
+    /// Contacts of chunk k, in colour order.
+    fn chunk_range(&self, k: usize) -> std::ops::Range<usize> {
+        let from = self.start + k * self.chunk;
+        from..(from + self.chunk).min(self.end)
+    }
+}
+
+/// Raw storage written by the chunks of one colour (disjoint ranges), or by one chunk per slot.
+#[derive(Clone, Copy)]
+struct SharedSlice<T>(*mut T);
+// SAFETY: used only by `State::sweep_region`, where each index is written by the one thread
+// that claimed its chunk, and every index is in bounds.
+unsafe impl<T> Send for SharedSlice<T> {}
+unsafe impl<T> Sync for SharedSlice<T> {}
+impl<T> SharedSlice<T> {
+    /// The element i (a method, so that closures capture the whole wrapper, not its pointer).
+    #[inline]
+    fn at(self, i: usize) -> *mut T {
+        // SAFETY: i is in bounds (the callers' ranges come from `ColourPass::of`)
+        unsafe { self.0.add(i) }
+    }
 }
 
 /// The exact evaluation of (r, v) on the stored problem.
@@ -779,6 +844,10 @@ struct Evaluation {
 impl State<'_> {
     /// One sweep over the colours; sums of the pairs met.
     fn sweep(&mut self, omega: f64) -> UpdateSums {
+        let threads = rayon::current_num_threads();
+        if self.parallel && threads > 1 && self.passes.iter().any(|c| c.parallel) {
+            return self.sweep_region(omega, threads);
+        }
         let p = self.problem;
         let v = Shared(self.v.as_mut_ptr());
         let mut total = UpdateSums::default();
@@ -798,6 +867,61 @@ impl State<'_> {
             total = total + sums;
         }
         total
+    }
+
+    /// [`State::sweep`] as one parallel region instead of one parallel call per colour:
+    /// `threads` tasks of one `rayon::scope` (the calling thread runs one) claim the chunks of
+    /// each colour in turn, starting on a colour once the one before is done
+    /// ([`ColourProgress`]). Same chunks ([`colour_chunk`]) and the same order of summation as
+    /// [`for_colour`], hence the same bits for any number of threads.
+    fn sweep_region(&mut self, omega: f64, threads: usize) -> UpdateSums {
+        let p = self.problem;
+        let v = Shared(self.v.as_mut_ptr());
+        let r = SharedSlice(self.r.as_mut_ptr());
+        let sums = SharedSlice(self.chunk_sums.as_mut_ptr());
+        let rows = &self.rows;
+        let passes = &self.passes;
+        let chunks: Vec<usize> = passes.iter().map(ColourPass::chunks).collect();
+        let progress = ColourProgress::new(&chunks);
+        let run = |pass: &ColourPass, k: usize| {
+            let range = pass.chunk_range(k);
+            // SAFETY: chunk k of this colour is claimed by one thread only, so its impulses and
+            // its sum slot are written by that thread alone
+            let rs = unsafe {
+                std::slice::from_raw_parts_mut(r.at(range.start), range.end - range.start)
+            };
+            let mut s = UpdateSums::default();
+            for (row, r) in rows[range].iter().zip(rs.iter_mut()) {
+                // SAFETY: within one colour no other update touches spheres a, b ≠ a, and the
+                // colour before is done (`wait_done`)
+                let va = unsafe { &mut *v.at(row.a) };
+                let b = row.b.map(|j| (&p.inv_mass[j], unsafe { &mut *v.at(j) }));
+                s = s + update_contact(row, &p.inv_mass[row.a], va, b, r, omega);
+            }
+            // SAFETY: first_sum + k < chunk_sums.len() (ColourPass::of), one writer
+            unsafe { *sums.at(pass.first_sum + k) = s };
+        };
+        let work = || {
+            for (c, pass) in passes.iter().enumerate() {
+                if c > 0 {
+                    progress.wait_done(c - 1);
+                }
+                while let Some(k) = progress.claim(c) {
+                    run(pass, k);
+                    progress.finish(c);
+                }
+            }
+        };
+        rayon::scope(|s| {
+            for _ in 1..threads {
+                s.spawn(|_| work());
+            }
+            work();
+        });
+        passes.iter().fold(UpdateSums::default(), |total, pass| {
+            let slots = &self.chunk_sums[pass.first_sum..pass.first_sum + pass.chunks()];
+            total + slots.iter().fold(UpdateSums::default(), |a, &b| a + b)
+        })
     }
 
     /// v = M⁻¹ (f + H r) from scratch (colour by colour: disjoint writes), and the
@@ -1028,6 +1152,7 @@ pub fn solve_coloured(
         .par_iter()
         .map(|&i| problem.rows[i].clone())
         .collect();
+    let (passes, chunk_count) = ColourPass::of(colouring);
     let mut state = State {
         problem,
         colouring,
@@ -1035,6 +1160,8 @@ pub fn solve_coloured(
         r,
         v: vec![[0.0; 6]; bodies],
         parallel,
+        passes,
+        chunk_sums: vec![UpdateSums::default(); chunk_count],
     };
     let qn = q_norm(problem);
     let tol = settings.tol;

@@ -113,6 +113,11 @@ fn check_step(h: f64, scene: &BuiltScene) -> anyhow::Result<()> {
         .flat_map(|b| b.radii.iter().copied())
         .chain(scene.inlets.iter().map(|i| i.inlet.sizes.min_radius()))
         .fold(f64::INFINITY, f64::min);
+    check_fall(h, r, scene)
+}
+
+/// [`check_step`] with `r` the smallest radius of the scene's spheres and inlets.
+fn check_fall(h: f64, r: f64, scene: &BuiltScene) -> anyhow::Result<()> {
     let g = scene.model.gravity.norm();
     let fall = g * h * h;
     if r.is_finite() && fall > r {
@@ -134,7 +139,19 @@ fn check_step(h: f64, scene: &BuiltScene) -> anyhow::Result<()> {
 /// spheres and inlets, could cross a thin wall or a solid obstacle within one step
 /// ([`coulomb_granular::tunnelling`]), and warns above half of that.
 fn check_travel(h: f64, scene: &BuiltScene, world: &World, file: &str) -> anyhow::Result<()> {
-    let (mut speed, mut r_min) = coulomb_granular::tunnelling::speed_and_radius(world);
+    let (speed, r_min) = coulomb_granular::tunnelling::speed_and_radius(world);
+    check_travel_of(h, scene, world, (speed, r_min), file)
+}
+
+/// [`check_travel`] with the largest speed and smallest radius of the world's spheres
+/// given (`world`'s obstacles only are read).
+fn check_travel_of(
+    h: f64,
+    scene: &BuiltScene,
+    world: &World,
+    (mut speed, mut r_min): (f64, f64),
+    file: &str,
+) -> anyhow::Result<()> {
     for i in &scene.inlets {
         let v = i.inlet.velocity;
         speed = speed.max((v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt());
@@ -199,6 +216,18 @@ pub fn run(args: &Args) -> anyhow::Result<Outcome> {
         seed: (args.seed != 1).then_some(args.seed),
         max_fill: (args.beads != 150).then_some(args.beads),
     };
+    #[cfg(feature = "mpi")]
+    let mut universe = None;
+    #[cfg(feature = "mpi")]
+    if (args.mpi || crate::sim_args::under_launcher())
+        && args.resolve_overlaps.is_none()
+        && std::env::var_os(WHOLE_BUILD).is_none()
+    {
+        match streamed(args, &loaded, &opts, file)? {
+            Ok(outcome) => return Ok(outcome),
+            Err(u) => universe = u,
+        }
+    }
     let mut scene = loaded.build(&opts)?;
     if scene.model.has_shapes() {
         #[cfg(feature = "mpi")]
@@ -234,7 +263,7 @@ pub fn run(args: &Args) -> anyhow::Result<Outcome> {
             bail!("--checkpoint-every is not supported by distributed runs");
         }
         // per-pair materials and rolling resistance are refused by the distributed step
-        return crate::cmd::simulate_mpi::run_world(&a, world, &scene.name);
+        return crate::cmd::simulate_mpi::run_world(&a, world, &scene.name, universe);
     }
     let sim = Simulation::new(world, a.params()).context("invalid simulation parameters")?;
     let mut inlets = Inlets {
@@ -244,6 +273,92 @@ pub fn run(args: &Args) -> anyhow::Result<Outcome> {
     };
     let name = inlets.scene.name.clone();
     crate::cmd::simulate::steps(&a, sim, &name, false, &mut inlets)
+}
+
+/// Environment variable that, set, makes a distributed run build a scene file whole on every
+/// rank even where it could be streamed (the comparison of the two paths in the tests).
+#[cfg(feature = "mpi")]
+pub const WHOLE_BUILD: &str = "COULOMB_WHOLE_BUILD";
+
+/// A distributed run of a scene file streamed ([`LoadedScene::for_each_sphere`] into
+/// [`DistributedSimulation::from_stream_on`]): every rank enumerates the file's spheres and
+/// keeps those of its cell, never holding the others; the same beads, ids, owners and
+/// results as the whole build ([`crate::cmd::simulate_mpi::run_world`]) and the same
+/// refusals, in the same order: the file's checks ([`LoadedScene::build_skeleton`]), each
+/// sphere's validity and containment and the memory estimate (every rank sees every
+/// sphere, so all decide alike), the overlaps (each rank counts those among its beads and
+/// the beads within 2 R_max of its cell, [`DistributedSimulation::halo_overlaps`], and the
+/// counts are summed, so every pair is seen and every rank decides alike), then the checks
+/// of the step and travel and the options. `Err` where the whole build must run instead,
+/// with MPI when it was initialized here: a file that cannot be streamed, or any of these
+/// checks failing (the whole build then refuses the file with today's error).
+#[cfg(feature = "mpi")]
+fn streamed(
+    args: &Args,
+    loaded: &LoadedScene,
+    opts: &BuildOptions,
+    file: &str,
+) -> anyhow::Result<Result<Outcome, Option<crate::cmd::simulate_mpi::Universe>>> {
+    use coulomb_granular::distributed::{Comm, DistributedSimulation};
+    use coulomb_granular::model::{available_memory, check_memory, contained};
+    use coulomb_granular::world::Sphere;
+    let Ok(scene) = loaded.build_skeleton(opts) else {
+        return Ok(Err(None));
+    };
+    let law = scene.model.materials.default;
+    if scene.model.has_shapes()
+        || !scene.inlets.is_empty()
+        || !scene.model.materials.pairs.is_empty()
+        || law.rolling_friction != 0.0
+        || !scene.model.sphere_batches.is_empty()
+    {
+        return Ok(Err(None));
+    }
+    let Ok((skeleton, _)) = scene.build(&BuildChecks::default()) else {
+        return Ok(Err(None));
+    };
+    // every rank sees every sphere: validity, containment, count, speed and radius
+    let (mut inside, mut speed, mut r_min) = (true, 0.0f64, f64::INFINITY);
+    let count = loaded.for_each_sphere(opts, &mut |s: Sphere| {
+        inside &= contained(&skeleton.obstacles, s.position);
+        speed = speed.max(s.velocity.norm());
+        r_min = r_min.min(s.radius);
+    });
+    let Some(n) = count else {
+        return Ok(Err(None));
+    };
+    let memory = check_memory(n, scene.model.triangle_count(), available_memory());
+    if !inside || n == 0 || memory.is_err() {
+        return Ok(Err(None));
+    }
+    let a = file_args(args, &scene);
+    let universe = crate::cmd::simulate_mpi::initialize()?;
+    let stream = |emit: &mut dyn FnMut(Sphere)| {
+        let _ = loaded.for_each_sphere(opts, emit);
+    };
+    let comm = Comm::new(universe.world());
+    let built =
+        DistributedSimulation::from_stream_on(comm, skeleton.clone(), a.params(), a.grid, &stream);
+    // the errors of the build are the same on every rank (every rank saw every bead)
+    let Ok(mut sim) = built else {
+        return Ok(Err(Some(universe)));
+    };
+    let mut overlapping = [sim.halo_overlaps(&stream) as f64];
+    sim.comm.sum(&mut overlapping);
+    if overlapping[0] > 0.0 {
+        drop(sim);
+        return Ok(Err(Some(universe)));
+    }
+    // the checks the whole build runs after the world's, in its order
+    check_fall(a.dt, r_min, &scene)?;
+    check_travel_of(a.dt, &scene, &skeleton, (speed, r_min), file)?;
+    if a.outer == coulomb::OuterKind::Fused && a.inner != coulomb::InnerKind::Pgs {
+        bail!("--outer fused needs --inner pgs");
+    }
+    if a.checkpoint_every > 0 {
+        bail!("--checkpoint-every is not supported by distributed runs");
+    }
+    crate::cmd::simulate_mpi::run_built(&a, sim, &scene.name, universe).map(Ok)
 }
 
 /// `coulomb simulate SCENE.toml --restart FILE`: the run stored in FILE continued as

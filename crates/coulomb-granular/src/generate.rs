@@ -659,6 +659,26 @@ pub fn fill(
     spec: &FillSpec,
     avoid: &[(Vec3, f64)],
 ) -> Result<Filled, GenerateError> {
+    let mut particles = Vec::with_capacity(spec.count.min(1 << 20));
+    let attempts = fill_each(region, spec, avoid, &mut |q| particles.push(q))?;
+    Ok(Filled {
+        particles,
+        asked: spec.count,
+        attempts,
+    })
+}
+
+/// [`fill`] handing each placed sphere to `emit` as it is placed, in the order of
+/// [`Filled::particles`], instead of collecting them; returns the positions tried
+/// ([`Filled::attempts`]). A lattice fill holds nothing per sphere beyond the spheres of
+/// `avoid` (O(1) memory with nothing to avoid); a random fill keeps its placed spheres to
+/// test the next ones.
+pub fn fill_each(
+    region: &dyn Region,
+    spec: &FillSpec,
+    avoid: &[(Vec3, f64)],
+    emit: &mut dyn FnMut(Particle),
+) -> Result<usize, GenerateError> {
     spec.sizes.validate()?;
     let (lo, hi) = region.bounds();
     if !(lo.is_finite() && hi.is_finite() && lo.x < hi.x && lo.y < hi.y && lo.z < hi.z) {
@@ -677,7 +697,7 @@ pub fn fill(
     let rmax = spec.sizes.max_radius();
     let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
     let mut grid = grid_of(avoid, lo, hi, rmax);
-    let mut out = Vec::with_capacity(spec.count.min(1 << 20));
+    let mut placed = 0usize;
     let mut attempts = 0usize;
     let vj = spec.velocity_jitter;
     let velocity = |rng: &mut ChaCha8Rng| {
@@ -728,7 +748,7 @@ pub fn fill(
             'layers: for iz in 0..nz {
                 for iy in 0..ny {
                     for ix in 0..nx {
-                        if out.len() >= spec.count || attempts >= MAX_SITES {
+                        if placed >= spec.count || attempts >= MAX_SITES {
                             break 'layers;
                         }
                         attempts += 1;
@@ -750,7 +770,8 @@ pub fn fill(
                             continue;
                         }
                         let v = velocity(&mut rng);
-                        out.push(Particle {
+                        placed += 1;
+                        emit(Particle {
                             position: p,
                             radius: r,
                             velocity: v,
@@ -777,7 +798,7 @@ pub fn fill(
                     if region.contains_sphere(p, r) && !placed_grid.overlaps(p, r) {
                         let v = velocity(&mut rng);
                         placed_grid.insert(p, r);
-                        out.push(Particle {
+                        emit(Particle {
                             position: p,
                             radius: r,
                             velocity: v,
@@ -787,18 +808,9 @@ pub fn fill(
                 }
                 break;
             }
-            return Ok(Filled {
-                particles: out,
-                asked: spec.count,
-                attempts,
-            });
         }
     }
-    Ok(Filled {
-        particles: out,
-        asked: spec.count,
-        attempts,
-    })
+    Ok(attempts)
 }
 
 /// The flow rate of an inlet.

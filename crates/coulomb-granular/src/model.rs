@@ -1195,6 +1195,21 @@ fn check_obstacle(
     Ok(())
 }
 
+/// Whether a free sphere centred at `x` passes [`check_containment`] among `obstacles`:
+/// admitted by every obstacle that is not a container and, when there are containers, by
+/// one of them.
+pub fn contained(obstacles: &[Obstacle], x: Vec3) -> bool {
+    let mut containers = obstacles
+        .iter()
+        .filter(|o| o.shape.is_container())
+        .peekable();
+    let in_one = containers.peek().is_none() || containers.any(|o| o.admits(x, 0.0));
+    in_one
+        && obstacles
+            .iter()
+            .all(|o| o.shape.is_container() || o.admits(x, 0.0))
+}
+
 /// Every free sphere at t = 0 must be admitted by every obstacle that is not a container
 /// (free side of planes, outside solids) and, when there are containers, by one of them.
 pub fn check_containment(world: &World) -> Result<(), SceneError> {

@@ -19,7 +19,7 @@ use crate::model::{
     SceneModel, SphereBatch, StepChoice, StepSettings,
 };
 use crate::simulation::{Params, Simulation, SimulationError};
-use crate::world::{MeshSide, Motion, Shape, World};
+use crate::world::{MeshSide, Motion, Shape, Sphere, World};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -878,7 +878,125 @@ impl LoadedScene {
     /// Builds the scene: checks every value, resolves materials, generates and reads the
     /// spheres (each group avoiding the spheres of the groups before it), reads the meshes.
     pub fn build(&self, opts: &BuildOptions) -> Result<BuiltScene, SceneFileError> {
+        self.build_inner(opts, true)
+    }
+
+    /// [`Self::build`] without the spheres of `spheres` lists and fills: every check of the
+    /// file but those of single spheres (fills validated with a count of 0), the scene model
+    /// with its obstacles, materials and settings and no sphere batch from those groups
+    /// (groups read from files are read, shaped bodies built). With
+    /// [`Self::for_each_sphere`] the pieces of a distributed build that holds no sphere it does
+    /// not keep.
+    pub fn build_skeleton(&self, opts: &BuildOptions) -> Result<BuiltScene, SceneFileError> {
+        self.build_inner(opts, false)
+    }
+
+    /// Hands to `emit` the free spheres [`Self::build`] then [`BuiltScene::build`] put into
+    /// the world, one at a time, in the world's order and to the bit (materials as index 0,
+    /// as in a world of one contact law), holding none of them; returns their number. `None`
+    /// (after emitting some, possibly) where this file cannot be enumerated so, i.e. unless
+    /// every group of `[[bodies]]` is a free `spheres` list or a free lattice fill of a region
+    /// with nothing placed before it (a later fill avoids the spheres before it) and the file
+    /// has no inlet; and where a sphere would be refused by those builds (non-finite values,
+    /// radius or mass not positive, a fill with `require_all` placing fewer than asked): the
+    /// whole build then says why. Containment and overlaps are not checked here. The same
+    /// sequence at every call.
+    pub fn for_each_sphere(
+        &self,
+        opts: &BuildOptions,
+        emit: &mut dyn FnMut(Sphere),
+    ) -> Option<usize> {
         let f = &self.file;
+        if !f.inlets.is_empty() {
+            return None;
+        }
+        let seed = opts.seed.unwrap_or(f.seed);
+        let pos = |x: f64| x.is_finite() && x > 0.0;
+        let mut n = 0usize;
+        let mut ok = true;
+        for (i, g) in f.bodies.iter().enumerate() {
+            if g.fixed || g.shape.is_some() || g.file.is_some() {
+                return None;
+            }
+            let rho = match g.density {
+                Some(d) => d,
+                None => f
+                    .materials
+                    .get(&g.material)
+                    .map(|m| m.density)
+                    .or((g.material == DEFAULT_MATERIAL).then_some(DEFAULT_DENSITY))?,
+            };
+            let v0 = v3(g.velocity.unwrap_or([0.0; 3]));
+            let w0 = v3(g.angular_velocity);
+            let nothing_before = n == 0;
+            let mut put = |position: Vec3, radius: f64, velocity: Vec3| {
+                let mass = sphere_mass(rho, radius);
+                ok &= pos(radius)
+                    && pos(mass)
+                    && position.is_finite()
+                    && velocity.is_finite()
+                    && w0.is_finite();
+                n += 1;
+                emit(Sphere {
+                    position,
+                    velocity,
+                    angular_velocity: w0,
+                    radius,
+                    mass,
+                    rotation_locked: false,
+                    material: 0,
+                });
+            };
+            if let Some(list) = &g.spheres {
+                for s in list {
+                    if !(s[..3].iter().all(|x| x.is_finite()) && pos(s[3])) {
+                        return None;
+                    }
+                    put(Vec3::new(s[0], s[1], s[2]), s[3], v0);
+                }
+            } else if let Some(fill) = &g.fill {
+                let (Some(region), None) = (&fill.region, &fill.mesh) else {
+                    return None;
+                };
+                if !nothing_before || !matches!(fill.packing, Packing::Lattice { .. }) {
+                    return None;
+                }
+                let fill_index = f.bodies[..i].iter().filter(|b| b.fill.is_some()).count();
+                let count = opts.max_fill.map_or(fill.count, |m| fill.count.min(m));
+                let spec = FillSpec {
+                    count,
+                    sizes: fill.sizes.clone(),
+                    packing: fill.packing.clone(),
+                    velocity: v0,
+                    velocity_jitter: fill.velocity_jitter,
+                    seed: fill
+                        .seed
+                        .unwrap_or_else(|| seed.wrapping_add(fill_index as u64)),
+                };
+                region.validate().ok()?;
+                let mut placed = 0usize;
+                generate::fill_each(region, &spec, &[], &mut |q| {
+                    placed += 1;
+                    put(q.position, q.radius, q.velocity);
+                })
+                .ok()?;
+                if fill.require_all && opts.max_fill.is_none() && placed < count {
+                    return None;
+                }
+            } else {
+                return None;
+            }
+        }
+        ok.then_some(n)
+    }
+
+    fn build_inner(
+        &self,
+        opts: &BuildOptions,
+        spheres: bool,
+    ) -> Result<BuiltScene, SceneFileError> {
+        let f = &self.file;
+
         let seed = opts.seed.unwrap_or(f.seed);
         let fin3 = |a: &[f64; 3]| a.iter().all(|x| x.is_finite());
         let pos = |x: f64| x.is_finite() && x > 0.0;
@@ -989,6 +1107,7 @@ impl LoadedScene {
                     fixed: g.fixed,
                 };
             if let Some(list) = &g.spheres {
+                let list = if spheres { &list[..] } else { &[] };
                 for (k, s) in list.iter().enumerate() {
                     if !(s[..3].iter().all(|x| x.is_finite()) && pos(s[3])) {
                         return Err(self.invalid(
@@ -1028,7 +1147,7 @@ impl LoadedScene {
                 let fill_index = f.bodies[..i].iter().filter(|b| b.fill.is_some()).count();
                 let count = opts.max_fill.map_or(fill.count, |m| fill.count.min(m));
                 let spec = FillSpec {
-                    count,
+                    count: if spheres { count } else { 0 },
                     sizes: fill.sizes.clone(),
                     packing: fill.packing.clone(),
                     velocity: v3(v0),
@@ -1598,6 +1717,65 @@ mod tests {
 
     fn parse(text: &str) -> Result<LoadedScene, SceneFileError> {
         LoadedScene::parse(Path::new("t.toml"), text.to_string(), true)
+    }
+
+    /// The spheres [`LoadedScene::for_each_sphere`] hands out are the built world's, bit for
+    /// bit and in order, for an explicit list followed by another and for a first lattice fill
+    /// (examples/scenes/box.toml, with and without a cap and another seed); the skeleton
+    /// holds none of them; files it cannot enumerate (a fill after spheres, a random fill, a
+    /// fixed group) and a sphere the build refuses give `None`.
+    #[test]
+    fn streamed_spheres_are_the_built_ones() {
+        let list = "[[obstacles]]\nshape = { kind = \"plane\", point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }\n\
+            [[bodies]]\nspheres = [[0.0, 0.0, 0.1, 0.1], [0.3, 0.0, 0.2, 0.15]]\nvelocity = [1.0, 0.0, 0.0]\n\
+            [materials.heavy]\ndensity = 7800.0\n\
+            [[bodies]]\nmaterial = \"heavy\"\nangular_velocity = [0.0, 2.0, 0.0]\nspheres = [[1.0, 0.0, 0.1, 0.05]]\n";
+        let bx = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../examples/scenes/box.toml"
+        ))
+        .unwrap();
+        let capped = BuildOptions {
+            seed: Some(7),
+            max_fill: Some(40),
+        };
+        for (text, opts) in [
+            (list, BuildOptions::default()),
+            (&bx[..], BuildOptions::default()),
+            (&bx[..], capped),
+        ] {
+            let loaded = parse(text).unwrap();
+            let (world, _) = loaded
+                .build(&opts)
+                .unwrap()
+                .build(&BuildChecks::default())
+                .unwrap();
+            let mut streamed = Vec::new();
+            let n = loaded.for_each_sphere(&opts, &mut |s| streamed.push(s));
+            assert_eq!(n, Some(world.bodies.len()));
+            assert_eq!(streamed, world.bodies);
+            let skeleton = loaded.build_skeleton(&opts).unwrap();
+            assert!(skeleton.model.sphere_batches.is_empty());
+            assert_eq!(
+                skeleton.model.obstacles,
+                loaded.build(&opts).unwrap().model.obstacles
+            );
+        }
+        let fill = bx.split("[[bodies]]").nth(1).unwrap();
+        let after = format!("{list}[[bodies]]{fill}");
+        let random = bx.replace(
+            "packing = { method = \"lattice\", pitch = 0.125, jitter = 0.2 }",
+            "packing = { method = \"random\" }",
+        );
+        let fixed = list.replace("velocity = [1.0, 0.0, 0.0]", "fixed = true");
+        let bad = list.replace("[0.3, 0.0, 0.2, 0.15]", "[0.3, 0.0, 0.2, -0.15]");
+        for text in [&after[..], &random, &fixed, &bad] {
+            let loaded = parse(text).unwrap();
+            assert_eq!(
+                loaded.for_each_sphere(&BuildOptions::default(), &mut |_| {}),
+                None
+            );
+        }
     }
 
     #[test]

@@ -2,8 +2,9 @@
 //! simulate …` or `srun -n K coulomb simulate …`, or with `--mpi`. A built-in scene is
 //! streamed: every rank draws the same beads one at a time and keeps only those of its slab
 //! (memory per rank ∝ N / ranks, [`DistributedSimulation::from_stream`]); a scene file
-//! (without inlets, per-pair materials or rolling resistance) is built whole on every rank,
-//! which then keeps its slab. The ranks step together ([`coulomb_granular::distributed`],
+//! (without inlets, per-pair materials or rolling resistance) is streamed the same way where
+//! its spheres can be enumerated one at a time (explicit `spheres` lists, a first lattice
+//! fill: `crate::scene_arg`), else built whole on every rank, which then keeps its slab. The ranks step together ([`coulomb_granular::distributed`],
 //! docs/distributed.md); rank 0 prints the summary and writes stats.csv, stats.json (the
 //! statistics of `coulomb simulate`), summary.json, distributed.json (per step: sweeps,
 //! communication time, ghosts, interface contacts, migration, imbalance of beads and of
@@ -26,17 +27,41 @@ use coulomb_granular::{Scene, StepStats, Stop, Summary};
 /// stopped at its step cap without reaching rest (as in one process).
 pub fn run(args: Args, scene: Scene) -> anyhow::Result<Outcome> {
     let layout = args.layout()?;
-    run_source(&args, Source::Scene(scene, layout), scene.name())
+    run_source(&args, Source::Scene(scene, layout), scene.name(), None)
 }
 
 /// Runs the world `world` (every rank builds the same, e.g. from a scene file) distributed
-/// on the ranks of MPI_COMM_WORLD, `name` its scene's name in the outputs.
+/// on the ranks of MPI_COMM_WORLD, `name` its scene's name in the outputs; `universe` is MPI
+/// when already initialized (None: initialized here).
 pub fn run_world(
     args: &Args,
     world: coulomb_granular::World,
     name: &str,
+    universe: Option<Universe>,
 ) -> anyhow::Result<Outcome> {
-    run_source(args, Source::World(world), name)
+    run_source(args, Source::World(world), name, universe)
+}
+
+/// Runs the distributed simulation `sim`, built on a communicator of `universe` (e.g.
+/// streamed from a scene file), `name` its scene's name in the outputs.
+pub fn run_built(
+    args: &Args,
+    sim: DistributedSimulation,
+    name: &str,
+    universe: Universe,
+) -> anyhow::Result<Outcome> {
+    run_source(args, Source::Built(Box::new(sim)), name, Some(universe))
+}
+
+/// The MPI environment (finalized when dropped).
+pub type Universe = coulomb_granular::distributed::mpi::environment::Universe;
+
+/// MPI initialized, or the error every distributed run gives when it cannot be.
+pub fn initialize() -> anyhow::Result<Universe> {
+    match coulomb_granular::distributed::mpi::initialize() {
+        Some(u) => Ok(u),
+        None => bail!("MPI could not be initialized (already initialized?)"),
+    }
 }
 
 /// Where the beads of a distributed run come from.
@@ -45,6 +70,8 @@ enum Source {
     World(coulomb_granular::World),
     /// a built-in scene, streamed (`Args::beads`, `Args::seed`, this layout)
     Scene(Scene, BoxLayout),
+    /// a simulation already built (on a communicator of the universe handed with it)
+    Built(Box<DistributedSimulation>),
 }
 
 /// Peak resident memory of this process (VmHWM of /proc/self/status, KiB); None where the
@@ -70,20 +97,27 @@ struct RankMemory {
 }
 
 /// Runs the beads of `source` distributed on the ranks of MPI_COMM_WORLD.
-fn run_source(args: &Args, source: Source, name: &str) -> anyhow::Result<Outcome> {
+fn run_source(
+    args: &Args,
+    source: Source,
+    name: &str,
+    universe: Option<Universe>,
+) -> anyhow::Result<Outcome> {
     if args.dump_fclib.is_some() {
         bail!("--dump-fclib is not available in a distributed run");
     }
     if args.method != Method::Nsgs {
         bail!("a distributed run steps with the body-level Gauss–Seidel (--method nsgs) only");
     }
-    let Some(universe) = coulomb_granular::distributed::mpi::initialize() else {
-        bail!("MPI could not be initialized (already initialized?)");
+    let universe = match universe {
+        Some(u) => u,
+        None => initialize()?,
     };
     let comm = Comm::new(universe.world());
     let rank = comm.rank();
     let stop = args.stop();
     let built = match source {
+        Source::Built(sim) => Ok(*sim),
         Source::World(world) => {
             DistributedSimulation::new_on(comm, world, args.params(), args.grid)
         }

@@ -420,6 +420,32 @@ impl DistributedSimulation {
         })
     }
 
+    /// Overlapping pairs (gap below −10⁻⁹ (R_A + R_B), the test of
+    /// [`crate::model::overlaps`]) among this rank's beads as handed out by `beads` (the
+    /// stream it was built from, one more pass) and those within 2 R_max of its cell, i.e. the
+    /// ranks' counts together see every overlapping pair of the stream (a pair of beads
+    /// owned by two ranks is counted by both). Holds those beads while counting
+    /// ([`Self::held_at_build`] grows to their number). Local: no message.
+    pub fn halo_overlaps(&mut self, beads: &BeadStream<'_>) -> usize {
+        let me = self.comm.rank();
+        let halo = 2.0 * self.rmax;
+        let grid = &self.grid;
+        let mut held = World::new();
+        let mut targets = Vec::new();
+        beads(&mut |b: Sphere| {
+            let owner = grid.owner(b.position);
+            let keep = owner == me || {
+                grid.ghost_targets(owner, b.position, halo, &mut targets);
+                targets.contains(&me)
+            };
+            if keep {
+                held.bodies.push(b);
+            }
+        });
+        self.held_at_build = self.held_at_build.max(held.bodies.len());
+        crate::model::overlaps(&held).count
+    }
+
     /// Most beads this rank held at once while the simulation was built: its part for
     /// [`Self::from_stream`], all N for [`Self::new`].
     pub fn held_at_build(&self) -> usize {

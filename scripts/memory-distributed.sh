@@ -2,8 +2,10 @@
 # Peak resident memory per rank of a distributed run (docs/distributed.md, "Memory per rank"):
 # the box scene with BEADS beads on each rank count of RANKS, STEPS steps, two ways:
 #   built-in  `simulate box`: streamed, each rank holds only its slab's beads while building
-#   file      the same box as a scene file (sed from examples/scenes/box.toml): built whole on
-#             every rank, which then keeps its slab (the path of every scene file)
+#   file      the same box as a scene file (sed from examples/scenes/box.toml): streamed too
+#             (one lattice fill; each rank also holds the beads within 2 R_max of its cell for
+#             the overlap check); COULOMB_WHOLE_BUILD=1 in the environment builds it whole on
+#             every rank instead (the path of every scene file before)
 # From each run's JSON summary (per_rank: VmHWM of /proc/self/status at the end of the run,
 # beads held while building, beads owned).
 #

@@ -4,8 +4,8 @@
 //! (memory per rank ∝ N / ranks, [`DistributedSimulation::from_stream`]); a scene file
 //! (without inlets, per-pair materials or rolling resistance) is streamed the same way where
 //! its spheres can be enumerated one at a time (explicit `spheres` lists, a first lattice
-//! fill: `crate::scene_arg`), else built whole on every rank, which then keeps its slab. The ranks step together ([`coulomb_granular::distributed`],
-//! docs/distributed.md); rank 0 prints the summary and writes stats.csv, stats.json (the
+//! fill: `crate::scene_arg`), else built whole on every rank, which then keeps its slab. The
+//! ranks step together ([`coulomb_granular::distributed`], docs/distributed.md); rank 0 prints the summary and writes stats.csv, stats.json (the
 //! statistics of `coulomb simulate`), summary.json, distributed.json (per step: sweeps,
 //! communication time, ghosts, interface contacts, migration, imbalance of beads and of
 //! measured work, whether the bounds were recomputed) and ranks.json (per

@@ -65,6 +65,75 @@ pub fn read_particles(path: &Path) -> Result<Vec<ParticleRecord>, ImportError> {
     }
 }
 
+/// The records [`read_particles`] returns, handed to `emit` one at a time in the same order
+/// and to the bit, holding none of them (a CSV file or a C-order NPY file is read row by row;
+/// a Fortran-order NPY file is read whole first); returns their number. An error where
+/// [`read_particles`] gives one (not necessarily the same: the caller reads the file with
+/// [`read_particles`] to say why), possibly after some records were emitted.
+pub fn for_each_particle(
+    path: &Path,
+    emit: &mut dyn FnMut(ParticleRecord),
+) -> Result<usize, ImportError> {
+    match extension(path).as_deref() {
+        Some("csv") => csv_each(path, emit),
+        Some("npy") => npy_each(path, emit),
+        _ => format_err(path, None, "particle files must end in .csv or .npy"),
+    }
+}
+
+/// [`read_npy`] row by row for C order (the same checks), whole for Fortran order.
+fn npy_each(path: &Path, emit: &mut dyn FnMut(ParticleRecord)) -> Result<usize, ImportError> {
+    let io = |source| ImportError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let npy = match npyz::NpyFile::new(std::io::BufReader::new(file)) {
+        Ok(f) => f,
+        Err(e) => return format_err(path, None, format!("not an NPY file: {e}")),
+    };
+    let shape = npy.shape().to_vec();
+    let ok_type = matches!(&npy.dtype(), npyz::DType::Plain(t) if t.to_string().ends_with("f8"));
+    let c_order = matches!(npy.order(), npyz::Order::C);
+    if !ok_type || !c_order || shape.len() != 2 || !(shape[1] == 4 || shape[1] == 7) {
+        let all = read_npy(path)?;
+        let n = all.len();
+        all.into_iter().for_each(emit);
+        return Ok(n);
+    }
+    let (n, w) = (shape[0] as usize, shape[1] as usize);
+    if n > 100_000_000 {
+        return format_err(path, None, format!("{n} rows: above the limit of 1e8"));
+    }
+    let mut data = match npy.data::<f64>() {
+        Ok(d) => d,
+        Err(e) => return format_err(path, None, format!("cannot read the data: {e}")),
+    };
+    let mut row = [0.0f64; 7];
+    for i in 0..n {
+        for x in row.iter_mut().take(w) {
+            *x = match data.next() {
+                Some(Ok(v)) => v,
+                Some(Err(e)) => {
+                    return format_err(path, None, format!("cannot read the data: {e}"))
+                }
+                None => return format_err(path, None, format!("row {i}: the data end early")),
+            };
+        }
+        let r = ParticleRecord {
+            position: Vec3::new(row[0], row[1], row[2]),
+            radius: row[3],
+            velocity: (w == 7).then(|| Vec3::new(row[4], row[5], row[6])),
+            material: None,
+        };
+        if let Err(ImportError::Format { message, .. }) = check_record(path, None, &r) {
+            return format_err(path, None, format!("row {i}: {message}"));
+        }
+        emit(r);
+    }
+    Ok(n)
+}
+
 fn extension(path: &Path) -> Option<String> {
     path.extension()
         .and_then(|e| e.to_str())
@@ -90,6 +159,13 @@ fn check_record(path: &Path, line: Option<u64>, r: &ParticleRecord) -> Result<()
 /// (together or not at all) and `material` (optional), in any order; other columns are
 /// refused. Spaces around fields are ignored.
 pub fn read_csv(path: &Path) -> Result<Vec<ParticleRecord>, ImportError> {
+    let mut out = Vec::new();
+    csv_each(path, &mut |r| out.push(r))?;
+    Ok(out)
+}
+
+/// [`read_csv`] handing each record to `emit` as it is read; returns their number.
+fn csv_each(path: &Path, emit: &mut dyn FnMut(ParticleRecord)) -> Result<usize, ImportError> {
     let file = std::fs::File::open(path).map_err(|source| ImportError::Io {
         path: path.to_path_buf(),
         source,
@@ -126,7 +202,7 @@ pub fn read_csv(path: &Path) -> Result<Vec<ParticleRecord>, ImportError> {
     if has_v.iter().any(|&b| b) && !has_v.iter().all(|&b| b) {
         return format_err(path, Some(1), "columns vx, vy, vz go together");
     }
-    let mut out = Vec::new();
+    let mut count = 0usize;
     for rec in reader.records() {
         let rec = match rec {
             Ok(r) => r,
@@ -160,9 +236,10 @@ pub fn read_csv(path: &Path) -> Result<Vec<ParticleRecord>, ImportError> {
             material,
         };
         check_record(path, line, &r)?;
-        out.push(r);
+        count += 1;
+        emit(r);
     }
-    Ok(out)
+    Ok(count)
 }
 
 /// Reads an NPY file holding a float64 array of shape (n, 4) — x, y, z, r — or (n, 7) —
@@ -611,6 +688,39 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("row 0"), "{e}");
+    }
+
+    /// [`for_each_particle`] hands out the records of [`read_particles`], in order, and fails
+    /// where it fails.
+    #[test]
+    fn streamed_particles_are_the_read_ones() {
+        let data = [0.0, 0.0, 1.0, 0.1, 1.0, 0.0, 1.0, 0.2];
+        let data7 = [0.0, 0.0, 1.0, 0.1, 5.0, 6.0, 7.0];
+        let good = [
+            tmp("s1.npy", &npy_bytes((2, 4), &data)),
+            tmp("s2.npy", &npy_bytes((1, 7), &data7)),
+            tmp("s3.csv", b"r,x,y,z,material\n0.1,1,2,3,\n0.2,4,5,6,steel\n"),
+        ];
+        for p in &good {
+            let mut out = Vec::new();
+            let n = for_each_particle(p, &mut |r| out.push(r)).unwrap();
+            assert_eq!(n, out.len());
+            assert_eq!(out, read_particles(p).unwrap(), "{}", p.display());
+        }
+        let bad = [
+            tmp("s4.npy", &npy_bytes((2, 3), &data[..6])),
+            tmp("s5.npy", &npy_bytes((1, 4), &[0.0, f64::NAN, 1.0, 0.1])),
+            tmp("s6.csv", b"x,y,z,r\n0,0,0,1\n0,0,abc,1\n"),
+            tmp("s7.txt", b"x,y,z,r\n"),
+        ];
+        for p in &bad {
+            assert!(read_particles(p).is_err());
+            assert!(
+                for_each_particle(p, &mut |_| {}).is_err(),
+                "{}",
+                p.display()
+            );
+        }
     }
 
     const CUBE_OBJ: &str =

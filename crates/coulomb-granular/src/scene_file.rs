@@ -881,10 +881,10 @@ impl LoadedScene {
         self.build_inner(opts, true)
     }
 
-    /// [`Self::build`] without the spheres of `spheres` lists and fills: every check of the
-    /// file but those of single spheres (fills validated with a count of 0), the scene model
-    /// with its obstacles, materials and settings and no sphere batch from those groups
-    /// (groups read from files are read, shaped bodies built). With
+    /// [`Self::build`] without the spheres of `spheres` lists, files and fills: every check
+    /// of the file but those of single spheres (fills validated with a count of 0, sphere
+    /// files not read), the scene model with its obstacles, materials and settings and no
+    /// sphere batch from those groups (shaped bodies built). With
     /// [`Self::for_each_sphere`] the pieces of a distributed build that holds no sphere it does
     /// not keep.
     pub fn build_skeleton(&self, opts: &BuildOptions) -> Result<BuiltScene, SceneFileError> {
@@ -895,11 +895,12 @@ impl LoadedScene {
     /// the world, one at a time, in the world's order and to the bit (materials as index 0,
     /// as in a world of one contact law), holding none of them; returns their number. `None`
     /// (after emitting some, possibly) where this file cannot be enumerated so, i.e. unless
-    /// every group of `[[bodies]]` is a free `spheres` list or a free lattice fill of a region
-    /// with nothing placed before it (a later fill avoids the spheres before it) and the file
-    /// has no inlet; and where a sphere would be refused by those builds (non-finite values,
-    /// radius or mass not positive, a fill with `require_all` placing fewer than asked): the
-    /// whole build then says why. Containment and overlaps are not checked here. The same
+    /// every group of `[[bodies]]` is a free `spheres` list, a free sphere file (`.csv`,
+    /// `.npy`: read row by row, [`import::for_each_particle`]) or a free lattice fill of a
+    /// region with nothing placed before it (a later fill avoids the spheres before it) and
+    /// the file has no inlet; and where a sphere would be refused by those builds (non-finite
+    /// values, radius or mass not positive, an unknown material, an unreadable file, a fill
+    /// with `require_all` placing fewer than asked): the whole build then says why. Containment and overlaps are not checked here. The same
     /// sequence at every call.
     pub fn for_each_sphere(
         &self,
@@ -915,21 +916,23 @@ impl LoadedScene {
         let mut n = 0usize;
         let mut ok = true;
         for (i, g) in f.bodies.iter().enumerate() {
-            if g.fixed || g.shape.is_some() || g.file.is_some() {
+            if g.fixed || g.shape.is_some() {
                 return None;
             }
-            let rho = match g.density {
+            let density_of = |m: &str| {
+                f.materials
+                    .get(m)
+                    .map(|x| x.density)
+                    .or((m == DEFAULT_MATERIAL).then_some(DEFAULT_DENSITY))
+            };
+            let rho_group = match g.density {
                 Some(d) => d,
-                None => f
-                    .materials
-                    .get(&g.material)
-                    .map(|m| m.density)
-                    .or((g.material == DEFAULT_MATERIAL).then_some(DEFAULT_DENSITY))?,
+                None => density_of(&g.material)?,
             };
             let v0 = v3(g.velocity.unwrap_or([0.0; 3]));
             let w0 = v3(g.angular_velocity);
             let nothing_before = n == 0;
-            let mut put = |position: Vec3, radius: f64, velocity: Vec3| {
+            let mut put = |position: Vec3, radius: f64, velocity: Vec3, rho: f64| {
                 let mass = sphere_mass(rho, radius);
                 ok &= pos(radius)
                     && pos(mass)
@@ -952,7 +955,24 @@ impl LoadedScene {
                     if !(s[..3].iter().all(|x| x.is_finite()) && pos(s[3])) {
                         return None;
                     }
-                    put(Vec3::new(s[0], s[1], s[2]), s[3], v0);
+                    put(Vec3::new(s[0], s[1], s[2]), s[3], v0, rho_group);
+                }
+            } else if let Some(name) = &g.file {
+                let mut known = true;
+                import::for_each_particle(&self.resolve(name), &mut |r| {
+                    let rho = match (&r.material, g.density) {
+                        (Some(m), None) => density_of(m),
+                        (Some(m), Some(d)) => density_of(m).map(|_| d),
+                        (None, _) => Some(rho_group),
+                    };
+                    match rho {
+                        Some(rho) => put(r.position, r.radius, r.velocity.unwrap_or(v0), rho),
+                        None => known = false,
+                    }
+                })
+                .ok()?;
+                if !known {
+                    return None;
                 }
             } else if let Some(fill) = &g.fill {
                 let (Some(region), None) = (&fill.region, &fill.mesh) else {
@@ -977,7 +997,7 @@ impl LoadedScene {
                 let mut placed = 0usize;
                 generate::fill_each(region, &spec, &[], &mut |q| {
                     placed += 1;
-                    put(q.position, q.radius, q.velocity);
+                    put(q.position, q.radius, q.velocity, rho_group);
                 })
                 .ok()?;
                 if fill.require_all && opts.max_fill.is_none() && placed < count {
@@ -1124,6 +1144,10 @@ impl LoadedScene {
                     ));
                 }
             } else if let Some(name) = &g.file {
+                if !spheres {
+                    order.extend((first..bodies.len()).map(Ok));
+                    continue;
+                }
                 let recs = import::read_particles(&self.resolve(name)).map_err(|source| {
                     SceneFileError::Import {
                         path: self.path.clone(),
@@ -1721,9 +1745,11 @@ mod tests {
 
     /// The spheres [`LoadedScene::for_each_sphere`] hands out are the built world's, bit for
     /// bit and in order, for an explicit list followed by another and for a first lattice fill
-    /// (examples/scenes/box.toml, with and without a cap and another seed); the skeleton
-    /// holds none of them; files it cannot enumerate (a fill after spheres, a random fill, a
-    /// fixed group) and a sphere the build refuses give `None`.
+    /// (examples/scenes/box.toml, with and without a cap and another seed) and for a CSV
+    /// sphere file after a list (a material per row, the group's velocity where the file has
+    /// none); the skeleton holds none of them; files it cannot enumerate (a fill after
+    /// spheres, a random fill, a fixed group), a sphere the build refuses and a missing
+    /// sphere file give `None`.
     #[test]
     fn streamed_spheres_are_the_built_ones() {
         let list = "[[obstacles]]\nshape = { kind = \"plane\", point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }\n\
@@ -1739,8 +1765,21 @@ mod tests {
             seed: Some(7),
             max_fill: Some(40),
         };
+        let dir = std::env::temp_dir().join(format!("coulomb-stream-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let csv = dir.join("spheres.csv");
+        std::fs::write(
+            &csv,
+            "x,y,z,r,vx,vy,vz,material\n2,0,0.1,0.1,0,0,-1,heavy\n2.5,0,0.1,0.05,0,0,0,\n",
+        )
+        .unwrap();
+        let with_file = format!(
+            "{list}[[bodies]]\nfile = \"{}\"\nvelocity = [0.5, 0.0, 0.0]\n",
+            csv.display()
+        );
         for (text, opts) in [
             (list, BuildOptions::default()),
+            (&with_file[..], BuildOptions::default()),
             (&bx[..], BuildOptions::default()),
             (&bx[..], capped),
         ] {
@@ -1769,7 +1808,8 @@ mod tests {
         );
         let fixed = list.replace("velocity = [1.0, 0.0, 0.0]", "fixed = true");
         let bad = list.replace("[0.3, 0.0, 0.2, 0.15]", "[0.3, 0.0, 0.2, -0.15]");
-        for text in [&after[..], &random, &fixed, &bad] {
+        let unknown = with_file.replace("spheres.csv", "missing.csv");
+        for text in [&after[..], &random, &fixed, &bad, &unknown] {
             let loaded = parse(text).unwrap();
             assert_eq!(
                 loaded.for_each_sphere(&BuildOptions::default(), &mut |_| {}),

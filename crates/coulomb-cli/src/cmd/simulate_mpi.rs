@@ -3,8 +3,9 @@
 //! streamed: every rank draws the same beads one at a time and keeps only those of its slab
 //! (memory per rank ∝ N / ranks, [`DistributedSimulation::from_stream`]); a scene file
 //! (without inlets, per-pair materials or rolling resistance) is streamed the same way where
-//! its spheres can be enumerated one at a time (explicit `spheres` lists, a first lattice
-//! fill: `crate::scene_arg`), else built whole on every rank, which then keeps its slab. The
+//! its spheres can be enumerated one at a time (explicit `spheres` lists, `.csv`/`.npy`
+//! sphere files, a first lattice fill: `crate::scene_arg`), else built whole on every rank,
+//! which then keeps its slab. The
 //! ranks step together ([`coulomb_granular::distributed`], docs/distributed.md); rank 0 prints the summary and writes stats.csv, stats.json (the
 //! statistics of `coulomb simulate`), summary.json, distributed.json (per step: sweeps,
 //! communication time, ghosts, interface contacts, migration, imbalance of beads and of

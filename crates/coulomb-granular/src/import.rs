@@ -81,17 +81,21 @@ pub fn for_each_particle(
     }
 }
 
-/// [`read_npy`] row by row for C order (the same checks), whole for Fortran order.
-fn npy_each(path: &Path, emit: &mut dyn FnMut(ParticleRecord)) -> Result<usize, ImportError> {
-    let io = |source| ImportError::Io {
+/// The NPY file at `path`, its header read (an I/O error or a file that is not NPY: typed).
+fn open_npy(path: &Path) -> Result<npyz::NpyFile<std::io::BufReader<std::fs::File>>, ImportError> {
+    let file = std::fs::File::open(path).map_err(|source| ImportError::Io {
         path: path.to_path_buf(),
         source,
-    };
-    let file = std::fs::File::open(path).map_err(io)?;
-    let npy = match npyz::NpyFile::new(std::io::BufReader::new(file)) {
-        Ok(f) => f,
-        Err(e) => return format_err(path, None, format!("not an NPY file: {e}")),
-    };
+    })?;
+    match npyz::NpyFile::new(std::io::BufReader::new(file)) {
+        Ok(f) => Ok(f),
+        Err(e) => format_err(path, None, format!("not an NPY file: {e}")),
+    }
+}
+
+/// [`read_npy`] row by row for C order (the same checks), whole for Fortran order.
+fn npy_each(path: &Path, emit: &mut dyn FnMut(ParticleRecord)) -> Result<usize, ImportError> {
+    let npy = open_npy(path)?;
     let shape = npy.shape().to_vec();
     let ok_type = matches!(&npy.dtype(), npyz::DType::Plain(t) if t.to_string().ends_with("f8"));
     let c_order = matches!(npy.order(), npyz::Order::C);
@@ -245,15 +249,7 @@ fn csv_each(path: &Path, emit: &mut dyn FnMut(ParticleRecord)) -> Result<usize, 
 /// Reads an NPY file holding a float64 array of shape (n, 4) — x, y, z, r — or (n, 7) —
 /// x, y, z, r, vx, vy, vz — in C or Fortran order, either byte order.
 pub fn read_npy(path: &Path) -> Result<Vec<ParticleRecord>, ImportError> {
-    let io = |source| ImportError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let file = std::fs::File::open(path).map_err(io)?;
-    let npy = match npyz::NpyFile::new(std::io::BufReader::new(file)) {
-        Ok(f) => f,
-        Err(e) => return format_err(path, None, format!("not an NPY file: {e}")),
-    };
+    let npy = open_npy(path)?;
     let shape = npy.shape().to_vec();
     let order = npy.order();
     let dtype = npy.dtype();

@@ -41,4 +41,19 @@ for np in ranks:
           f"{m(lambda x: x['messages']):>6.0f} {m(lambda x: x['bytes'])/1e3:>7.1f} "
           f"{s['converged_steps']:>5}")
 print("(medians over steps 10.., per rank; comm ms: slowest rank, comm mean: mean over ranks)")
+# whole runs: the sum of rank 0's step times (every rank steps in lockstep) and of the sweeps;
+# weak-scaling efficiency T(1 rank) / T(P ranks), with the medians' ratio beside it
+print(f"{'ranks':>5} {'run s':>7} {'sweeps':>7} {'ms/sweep':>8} {'comm s':>7} {'eff. run':>8} {'eff. median':>11}")
+base = None
+for np in ranks:
+    d = json.load(open(f"{out}/np{np}/distributed.json"))
+    t = sum(x['step_ms'] for x in d) / 1e3
+    sw = sum(x['sweeps'] for x in d)
+    c = sum(x['comm_ms'] for x in d) / 1e3
+    med = st.median(x['step_ms'] for x in d[10:] or d)
+    if base is None:
+        base = (t, med)
+    print(f"{np:>5} {t:>7.2f} {sw:>7} {1e3 * t / max(sw, 1):>8.3f} {c:>7.2f} "
+          f"{100 * base[0] / t:>7.0f}% {100 * base[1] / med:>10.0f}%")
+print("(run s: the whole run's step time; eff.: against the first run, 1 rank for weak scaling)")
 PY

@@ -218,10 +218,22 @@ impl ContactRow {
             w_ii: [0.0; 9],
             w_inv: [0.0; 9],
         };
+        let minv_b = match b {
+            Some(j) => Some(inv_mass.get(j)?),
+            None => None,
+        };
+        row.set_delassus(inv_mass.get(c.body)?, minv_b)?;
+        Some(row)
+    }
+
+    /// W_ii = J_A M_A⁻¹ J_Aᵀ + J_B M_B⁻¹ J_Bᵀ and its inverse for the inverse masses given
+    /// (the diagonals of M_A⁻¹ and M_B⁻¹); `None` (row unchanged) when W_ii is not positive
+    /// definite.
+    pub fn set_delassus(&mut self, minv_a: &[f64; 6], minv_b: Option<&[f64; 6]>) -> Option<()> {
         let mut w_ii = [0.0; 9];
-        add_jmj(&row.jacobian(false), inv_mass.get(c.body)?, &mut w_ii);
-        if let Some(j) = b {
-            add_jmj(&row.jacobian(true), inv_mass.get(j)?, &mut w_ii);
+        add_jmj(&self.jacobian(false), minv_a, &mut w_ii);
+        if let Some(mb) = minv_b {
+            add_jmj(&self.jacobian(true), mb, &mut w_ii);
         }
         // symmetric by construction; make it exactly so
         for (k, l) in [(0, 1), (0, 2), (1, 2)] {
@@ -229,9 +241,9 @@ impl ContactRow {
             w_ii[3 * k + l] = s;
             w_ii[3 * l + k] = s;
         }
-        row.w_inv = invert_spd(&w_ii)?;
-        row.w_ii = w_ii;
-        Some(row)
+        self.w_inv = invert_spd(&w_ii)?;
+        self.w_ii = w_ii;
+        Some(())
     }
 
     /// J_A (`side_b` false) or J_B (true): 3 × 6, row k the entries of H's column 3i + k on

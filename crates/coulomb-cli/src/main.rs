@@ -1,5 +1,6 @@
 //! `coulomb`: solve, check, simulate and benchmark discrete Coulomb frictional contact problems.
 
+mod allocator;
 mod budget;
 mod cmd;
 mod existence_json;
@@ -105,6 +106,7 @@ fn quiet_broken_pipe() {
 }
 
 fn main() -> ExitCode {
+    allocator::keep_freed_memory();
     quiet_broken_pipe();
     let matches = allow_negative_numbers(Cli::command()).get_matches();
     let cli = match Cli::from_arg_matches(&matches) {

@@ -184,19 +184,26 @@ mod tests {
     use crate::contact::{detect, Activation};
     use crate::scene::Scene;
 
-    /// Sweeps (over-relaxed from the second on, as on one process) keep M v = H r + f, record
-    /// the velocity changes exactly, and drive the error of docs/error.md (from these sums)
-    /// below 1e-4, in agreement with the library's measure on the assembled problem.
-    #[test]
-    fn distributed_subdomain_sweeps_converge_and_keep_the_balance() {
+    /// A 120-bead box after 40 steps, and the problem of its next step.
+    struct Settled {
+        sim: crate::Simulation,
+        contacts: Vec<crate::contact::Contact>,
+        data: StepData,
+        p: StepProblem,
+        /// M⁻¹ f
+        v_free: Vec<[f64; 6]>,
+        /// H ᵀ M⁻¹ f + w
+        q: Vec<[f64; 3]>,
+    }
+
+    fn settled_box() -> Settled {
         let mut sim =
             crate::Simulation::new(Scene::Box.build(120, 3), crate::Params::default()).unwrap();
         for _ in 0..40 {
             sim.step().unwrap();
         }
-        let world = &sim.world;
         let h = sim.params.h;
-        let contacts = detect(world, sim.time, h, &Activation::accurate());
+        let contacts = detect(&sim.world, sim.time, h, &Activation::accurate());
         assert!(contacts.len() > 50, "{}", contacts.len());
         let data = StepData {
             h,
@@ -205,13 +212,37 @@ mod tests {
             mu: 0.3,
             close_gaps: true,
         };
-        let p = StepProblem::new(world, &contacts, &data).unwrap();
+        let p = StepProblem::new(&sim.world, &contacts, &data).unwrap();
         let v_free: Vec<[f64; 6]> =
             p.f.iter()
                 .zip(&p.inv_mass)
                 .map(|(f, m)| std::array::from_fn(|d| f[d] * m[d]))
                 .collect();
         let q = velocities(&p, &v_free);
+        Settled {
+            sim,
+            contacts,
+            data,
+            p,
+            v_free,
+            q,
+        }
+    }
+
+    /// Sweeps (over-relaxed from the second on, as on one process) keep M v = H r + f, record
+    /// the velocity changes exactly, and drive the error of docs/error.md (from these sums)
+    /// below 1e-4, in agreement with the library's measure on the assembled problem.
+    #[test]
+    fn distributed_subdomain_sweeps_converge_and_keep_the_balance() {
+        let Settled {
+            sim,
+            contacts,
+            data,
+            p,
+            v_free,
+            q,
+        } = settled_box();
+        let world = &sim.world;
         let mut r = vec![0.0; 3 * p.rows.len()];
         let mut v = v_free.clone();
         let mut dv = vec![[0.0; 6]; v.len()];
@@ -263,22 +294,7 @@ mod tests {
     /// after every round without any exact refresh, and the error falls below 1e-4.
     #[test]
     fn split_sweeps_of_two_subdomains_keep_the_balance_and_converge() {
-        let mut sim =
-            crate::Simulation::new(Scene::Box.build(120, 3), crate::Params::default()).unwrap();
-        for _ in 0..40 {
-            sim.step().unwrap();
-        }
-        let world = &sim.world;
-        let h = sim.params.h;
-        let contacts = detect(world, sim.time, h, &Activation::accurate());
-        let data = StepData {
-            h,
-            t_end: sim.time + h,
-            restitution: 0.2,
-            mu: 0.3,
-            close_gaps: true,
-        };
-        let p = StepProblem::new(world, &contacts, &data).unwrap();
+        let Settled { p, v_free, q, .. } = settled_box();
         let nb = p.inv_mass.len();
         let half = p.rows.len() / 2;
         let mut parts = [p.clone(), p.clone()];
@@ -312,12 +328,6 @@ mod tests {
                 );
             }
         }
-        let v_free: Vec<[f64; 6]> =
-            p.f.iter()
-                .zip(&p.inv_mass)
-                .map(|(f, m)| std::array::from_fn(|d| f[d] * m[d]))
-                .collect();
-        let q = velocities(&p, &v_free);
         let mut r = [vec![0.0; 3 * half], vec![0.0; 3 * (p.rows.len() - half)]];
         let mut v = v_free.clone();
         let relaxed = vec![false; nb];

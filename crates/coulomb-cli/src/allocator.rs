@@ -4,10 +4,11 @@
 //! frees them at its end. glibc serves every block above 32 MiB with a fresh `mmap` and unmaps
 //! it on free, so each step's arrays arrived as new zeroed pages that the kernel cleared
 //! (8.7 M page faults, 15 % of the CPU time of a 30-step 10⁶-bead run; docs/scaling.md,
-//! "Memory churn"). Kept in the heap instead, the next step reuses them: −11 % CPU time there,
-//! for a peak RSS 16 % higher (the freed blocks are not always reused in place), and the
-//! process keeps its peak until it exits. Written by hand: three calls of `mallopt`, which no
-//! crate wraps.
+//! "Memory churn"). Kept in the heap instead, the next step reuses them (10⁵ beads: −12 % wall
+//! time on one thread, −15 % on two; a 10⁶-bead scene from Python: half the CPU time), for a
+//! peak RSS up to 16 % higher (the freed blocks are not always reused in place), and the process
+//! keeps its peak until it exits. Written by hand: three calls of `mallopt`, which no crate
+//! wraps.
 
 /// Serves large blocks from the heap (no `mmap`), keeps freed memory (trim threshold 2 GiB)
 /// and uses one arena for all threads (the threads' own arenas cannot grow past 64 MiB and map

@@ -138,7 +138,11 @@ fn main() -> ExitCode {
                 });
                 println!("{obj}");
             }
-            eprintln!("error: {e:#}");
+            // one write of the whole line: under mpirun every rank may report the same error
+            // at once into one pipe, and `eprintln!` writes a chain of causes piece by piece
+            // (lines of two ranks came interleaved); a pipe keeps a write of ≤ 4 KiB whole
+            let line = format!("error: {e:#}\n");
+            let _ = std::io::Write::write_all(&mut std::io::stderr().lock(), line.as_bytes());
             ExitCode::from(status)
         }
     }

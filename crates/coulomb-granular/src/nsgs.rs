@@ -777,6 +777,34 @@ fn prefetch_row(row: &ContactRow, v: *const [f64; 6], inv_mass: &[[f64; 6]]) {
     let _ = (row, v, inv_mass);
 }
 
+/// Updates the contacts `rows` in order (impulses `rs`, velocities behind `v`), each by
+/// [`update_contact`], asking for the beads of the contact [`PREFETCH_AHEAD`] places on;
+/// returns the sums of the pairs met.
+///
+/// # Safety
+/// No other thread reads or writes the velocities of the beads of `rows` meanwhile (one
+/// colour of a valid colouring), and every bead index is in bounds of `v` and `inv_mass`.
+#[inline]
+unsafe fn sweep_chunk(
+    rows: &[ContactRow],
+    rs: &mut [[f64; 3]],
+    v: Shared,
+    inv_mass: &[[f64; 6]],
+    omega: f64,
+) -> UpdateSums {
+    let mut s = UpdateSums::default();
+    for (i, (row, r)) in rows.iter().zip(rs.iter_mut()).enumerate() {
+        if let Some(ahead) = rows.get(i + PREFETCH_AHEAD) {
+            prefetch_row(ahead, v.at(0), inv_mass);
+        }
+        // SAFETY: by the caller's contract, and a ≠ b (`Colouring::is_valid`)
+        let va = unsafe { &mut *v.at(row.a) };
+        let b = row.b.map(|j| (&inv_mass[j], unsafe { &mut *v.at(j) }));
+        s = s + update_contact(row, &inv_mass[row.a], va, b, r, omega);
+    }
+    s
+}
+
 /// Runs `f` over the chunks of one colour (rows `ids`, impulses `rs`, both in colour order),
 /// in parallel when the colour is large, and returns the per-chunk sums in chunk order.
 fn for_colour(
@@ -900,17 +928,8 @@ impl State<'_> {
             let range = self.colouring.starts[c]..self.colouring.starts[c + 1];
             let ids = &self.rows[range.clone()];
             let sums = for_colour(ids, &mut self.r[range], self.parallel, |ids, rs| {
-                let mut s = UpdateSums::default();
-                for (i, (row, r)) in ids.iter().zip(rs.iter_mut()).enumerate() {
-                    if let Some(ahead) = ids.get(i + PREFETCH_AHEAD) {
-                        prefetch_row(ahead, v.at(0), &p.inv_mass);
-                    }
-                    // SAFETY: within one colour no other update touches spheres a, b ≠ a
-                    let va = unsafe { &mut *v.at(row.a) };
-                    let b = row.b.map(|j| (&p.inv_mass[j], unsafe { &mut *v.at(j) }));
-                    s = s + update_contact(row, &p.inv_mass[row.a], va, b, r, omega);
-                }
-                s
+                // SAFETY: within one colour no other update touches spheres a, b ≠ a
+                unsafe { sweep_chunk(ids, rs, v, &p.inv_mass, omega) }
             });
             total = total + sums;
         }
@@ -938,18 +957,9 @@ impl State<'_> {
             let rs = unsafe {
                 std::slice::from_raw_parts_mut(r.at(range.start), range.end - range.start)
             };
-            let mut s = UpdateSums::default();
-            let chunk = &rows[range];
-            for (i, (row, r)) in chunk.iter().zip(rs.iter_mut()).enumerate() {
-                if let Some(ahead) = chunk.get(i + PREFETCH_AHEAD) {
-                    prefetch_row(ahead, v.at(0), &p.inv_mass);
-                }
-                // SAFETY: within one colour no other update touches spheres a, b ≠ a, and the
-                // colour before is done (`wait_done`)
-                let va = unsafe { &mut *v.at(row.a) };
-                let b = row.b.map(|j| (&p.inv_mass[j], unsafe { &mut *v.at(j) }));
-                s = s + update_contact(row, &p.inv_mass[row.a], va, b, r, omega);
-            }
+            // SAFETY: within one colour no other update touches spheres a, b ≠ a, and the
+            // colour before is done (`wait_done`)
+            let s = unsafe { sweep_chunk(&rows[range], rs, v, &p.inv_mass, omega) };
             // SAFETY: first_sum + k < chunk_sums.len() (ColourPass::of), one writer
             unsafe { *sums.at(pass.first_sum + k) = s };
         };

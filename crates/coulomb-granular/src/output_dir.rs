@@ -728,13 +728,18 @@ impl RunOutput {
         Ok((run.first_step, rows, json_rows))
     }
 
-    /// Appends one row (without its newline) to `stats.csv`, handed to the OS at once.
+    /// Appends one row (without its newline) to `stats.csv`, handed to the OS at once; a
+    /// row that could not be written whole is cut off again (the file keeps whole rows).
     pub fn row(&mut self, line: &str) -> io::Result<()> {
         if let Some(f) = self.csv.as_mut() {
             let mut l = String::with_capacity(line.len() + 1);
             l.push_str(line);
             l.push('\n');
-            f.write_all(l.as_bytes())?;
+            let before = f.metadata()?.len();
+            if let Err(e) = f.write_all(l.as_bytes()) {
+                let _ = f.set_len(before);
+                return Err(e);
+            }
         }
         Ok(())
     }

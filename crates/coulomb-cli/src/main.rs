@@ -42,7 +42,7 @@ enum Command {
     Check(cmd::check::Args),
     /// Write one of the paper's examples as an FCLIB file
     Example(cmd::example::Args),
-    /// Granular simulation (Moreau–Jean time stepping of rigid spheres)
+    /// Moreau–Jean time stepping of a granular scene: built-in sphere scenes, or a scene file of spheres and rigid bodies of any shape
     Simulate(Box<sim_args::Args>),
     /// Reproduce the paper's Table 1, Fig. 8 and Fig. 9
     Paper(cmd::paper::Args),

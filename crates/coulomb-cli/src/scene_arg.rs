@@ -239,7 +239,11 @@ pub fn run(args: &Args) -> anyhow::Result<Outcome> {
                 "{file}: --resolve-overlaps is for sphere-only scenes; this scene has bodies of other shapes"
             );
         }
-        return crate::cmd::simulate_rigid::run(&file_args(args, &scene), &scene);
+        return crate::cmd::simulate_rigid::run(
+            &file_args(args, &scene),
+            &scene,
+            &loaded.input_files(),
+        );
     }
     let world = match args.resolve_overlaps {
         None => scene.build(&BuildChecks::default())?.0,
@@ -272,7 +276,8 @@ pub fn run(args: &Args) -> anyhow::Result<Outcome> {
         skipped: 0,
     };
     let name = inlets.scene.name.clone();
-    crate::cmd::simulate::steps(&a, sim, &name, false, &mut inlets)
+    let inputs = loaded.input_files();
+    crate::cmd::simulate::steps(&a, sim, &name, false, &inputs, &mut inlets)
 }
 
 /// Environment variable that, set, makes a distributed run build a scene file whole on every
@@ -373,12 +378,19 @@ pub fn restart(args: &Args) -> anyhow::Result<Outcome> {
         bail!("--restart needs a checkpoint file");
     };
     if crate::cmd::simulate_rigid::is_rigid_checkpoint(checkpoint) {
-        let scene = LoadedScene::load(Path::new(file))?.build(&BuildOptions::default())?;
-        return crate::cmd::simulate_rigid::restart(args, checkpoint, Some(&scene));
+        let loaded = LoadedScene::load(Path::new(file))?;
+        let scene = loaded.build(&BuildOptions::default())?;
+        return crate::cmd::simulate_rigid::restart(
+            args,
+            checkpoint,
+            Some(&scene),
+            &loaded.input_files(),
+        );
     }
     let sim = Simulation::load_checkpoint(checkpoint)
         .with_context(|| format!("cannot restart from {}", checkpoint.display()))?;
-    let mut scene = LoadedScene::load(Path::new(file))?.build(&BuildOptions::default())?;
+    let loaded = LoadedScene::load(Path::new(file))?;
+    let mut scene = loaded.build(&BuildOptions::default())?;
     let unchecked = BuildChecks {
         overlaps: false,
         containment: false,
@@ -397,7 +409,8 @@ pub fn restart(args: &Args) -> anyhow::Result<Outcome> {
         skipped: 0,
     };
     let name = inlets.scene.name.clone();
-    crate::cmd::simulate::steps(args, sim, &name, true, &mut inlets)
+    let inputs = loaded.input_files();
+    crate::cmd::simulate::steps(args, sim, &name, true, &inputs, &mut inlets)
 }
 
 /// The inlets of a scene file, driven after each step: the spheres they owe for

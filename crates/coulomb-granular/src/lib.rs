@@ -42,6 +42,7 @@ pub mod mesh;
 pub mod model;
 pub mod nsgs;
 pub mod output;
+pub mod output_dir;
 pub mod projection;
 pub mod rigid;
 pub mod rigid_checkpoint;

@@ -8,12 +8,19 @@
 //! numbers); [`VtkFormat::Ascii`] writes the same arrays as text.
 
 use crate::math::Vec3;
+use crate::output_dir::OutputDir;
 use crate::simulation::{Simulation, StepStats};
 use crate::world::{Motion, Obstacle, Shape};
 use std::fmt::Write as _;
 use std::fs;
 use std::io;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use std::sync::Arc;
+
+/// The collections a sphere run writes beside `frames/`.
+pub const BEADS_NAMES: [&str; 3] = ["beads.pvd", "contacts.pvd", "obstacles.pvd"];
+/// The collections a rigid run writes beside `frames/`.
+pub const BODIES_NAMES: [&str; 3] = ["bodies.pvd", "contacts.pvd", "obstacles.pvd"];
 
 /// Header of the per-step CSV.
 pub const CSV_HEADER: &str = "step,time,contacts,subproblems,inner_iterations,solve_ms,assembly_ms,delassus_ms,error,rule_6_1,status,converged,kinetic_energy,potential_energy,max_penetration,warm_started";
@@ -85,7 +92,8 @@ fn write_stats_after(
     json_rows: Vec<serde_json::Value>,
     stats: &[StepStats],
 ) -> io::Result<()> {
-    fs::create_dir_all(dir)?;
+    let out = OutputDir::open(dir)?;
+    out.check(&["stats.csv", "stats.json"])?;
     let mut csv = String::from(CSV_HEADER);
     csv.push('\n');
     for row in csv_rows {
@@ -96,7 +104,7 @@ fn write_stats_after(
         csv.push_str(&csv_line(s));
         csv.push('\n');
     }
-    coulomb::atomic::write(dir.join("stats.csv"), csv)?;
+    out.write("stats.csv", csv.as_bytes())?;
     let json = if json_rows.is_empty() {
         serde_json::to_string_pretty(stats)
     } else {
@@ -107,7 +115,7 @@ fn write_stats_after(
         serde_json::to_string_pretty(&all)
     }
     .map_err(io::Error::other)?;
-    coulomb::atomic::write(dir.join("stats.json"), json)
+    out.write("stats.json", json.as_bytes())
 }
 
 /// How the arrays of a .vtp file are stored.
@@ -723,7 +731,7 @@ struct FrameFiles {
 /// beads stay inside the first extent).
 #[derive(Debug)]
 pub struct VtkWriter {
-    dir: PathBuf,
+    dir: Arc<OutputDir>,
     format: VtkFormat,
     frames: Vec<FrameFiles>,
     /// the region the last obstacles file covers, and that file
@@ -731,23 +739,37 @@ pub struct VtkWriter {
 }
 
 impl VtkWriter {
-    /// A writer into `dir` (created), binary frames.
+    /// A writer into `dir` (created), binary frames; the files of the collections and
+    /// `frames/` are written without following links ([`OutputDir`]; a link or special file
+    /// at one of those names is refused).
     pub fn new(dir: &Path) -> io::Result<Self> {
-        fs::create_dir_all(dir.join("frames"))?;
-        Ok(Self {
-            dir: dir.to_path_buf(),
+        let mut out = OutputDir::open(dir)?;
+        out.check(&BEADS_NAMES)?;
+        out.open_frames()?;
+        Ok(Self::in_dir(Arc::new(out)))
+    }
+
+    /// A writer into the output folder `dir` (its `frames/` opened: [`OutputDir::open_frames`]).
+    pub fn in_dir(dir: Arc<OutputDir>) -> Self {
+        Self {
+            dir,
             format: VtkFormat::default(),
             frames: Vec::new(),
             obstacles: None,
-        })
+        }
     }
 
     /// A writer into `dir` that continues the collections found there (a restarted run): the
     /// frames before step `first_step` that `beads.pvd` lists are kept, later ones dropped.
     pub fn resume(dir: &Path, first_step: usize) -> io::Result<Self> {
-        let mut w = Self::new(dir)?;
-        w.frames = frames_before(dir, "beads.pvd", first_step);
-        Ok(w)
+        let w = Self::new(dir)?;
+        Ok(w.resumed(first_step))
+    }
+
+    /// The writer continuing the collections of its folder from step `first_step`.
+    pub fn resumed(mut self, first_step: usize) -> Self {
+        self.frames = frames_before(&self.dir, "beads.pvd", first_step);
+        self
     }
 
     /// The same writer with frames in `format`.
@@ -762,8 +784,8 @@ impl VtkWriter {
         let k = sim.steps_done;
         let b = format!("frames/beads_{k:06}.vtp");
         let c = format!("frames/contacts_{k:06}.vtp");
-        coulomb::atomic::write(self.dir.join(&b), beads)?;
-        coulomb::atomic::write(self.dir.join(&c), contacts)?;
+        self.dir.write(&b, &beads)?;
+        self.dir.write(&c, &contacts)?;
         let o = self.obstacles_file(sim)?;
         self.frames.push(FrameFiles {
             time: sim.time,
@@ -798,7 +820,7 @@ impl VtkWriter {
         let k = sim.steps_done;
         let file = format!("frames/obstacles_{k:06}.vtp");
         let poly = obstacles_polydata(&sim.world.obstacles, sim.time, &extent);
-        coulomb::atomic::write(self.dir.join(&file), poly.to_vtp(self.format))?;
+        self.dir.write(&file, &poly.to_vtp(self.format))?;
         self.obstacles = Some((extent, file.clone()));
         Ok(file)
     }
@@ -811,10 +833,12 @@ impl VtkWriter {
 /// The frames of the collections in `dir` (`bodies`, contacts.pvd, obstacles.pvd) whose
 /// bodies file is of a step before `first_step` (a restarted run keeps them; missing or
 /// unreadable collections give none).
-fn frames_before(dir: &Path, bodies: &str, first_step: usize) -> Vec<FrameFiles> {
+fn frames_before(dir: &OutputDir, bodies: &str, first_step: usize) -> Vec<FrameFiles> {
     let listed = |name: &str| -> Vec<(f64, String)> {
-        fs::read_to_string(dir.join(name))
-            .map(|s| collection_entries(&s))
+        dir.read(name)
+            .ok()
+            .flatten()
+            .map(|s| collection_entries(&String::from_utf8_lossy(&s)))
             .unwrap_or_default()
     };
     let contacts = listed("contacts.pvd");
@@ -842,7 +866,7 @@ fn frames_before(dir: &Path, bodies: &str, first_step: usize) -> Vec<FrameFiles>
 /// The three .pvd collections of a run's frames in `dir`: `bodies` (the beads' or bodies'
 /// files), contacts.pvd and obstacles.pvd, one `<DataSet …/>` per frame that has the file,
 /// each written atomically.
-fn write_collections(dir: &Path, bodies: &str, frames: &[FrameFiles]) -> io::Result<()> {
+fn write_collections(dir: &OutputDir, bodies: &str, frames: &[FrameFiles]) -> io::Result<()> {
     for name in [bodies, "contacts.pvd", "obstacles.pvd"] {
         let mut s = String::from(
             "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n",
@@ -863,7 +887,7 @@ fn write_collections(dir: &Path, bodies: &str, frames: &[FrameFiles]) -> io::Res
             );
         }
         s.push_str("</Collection>\n</VTKFile>\n");
-        coulomb::atomic::write(dir.join(name), s)?;
+        dir.write(name, s.as_bytes())?;
     }
     Ok(())
 }
@@ -963,7 +987,7 @@ fn rigid_contacts_polydata(scene: &crate::rigid_scene::RigidScene) -> PolyData {
 /// the collections `bodies.pvd`, `contacts.pvd` and `obstacles.pvd`.
 #[derive(Debug)]
 pub struct RigidVtkWriter {
-    dir: PathBuf,
+    dir: Arc<OutputDir>,
     format: VtkFormat,
     shapes: Vec<crate::shape::Tessellation>,
     frames: Vec<FrameFiles>,
@@ -973,14 +997,27 @@ pub struct RigidVtkWriter {
 impl RigidVtkWriter {
     /// A writer into `dir` (created) for `scene`: the bodies' shapes tessellated once here.
     pub fn new(dir: &Path, scene: &crate::rigid_scene::RigidScene) -> io::Result<Self> {
-        fs::create_dir_all(dir.join("frames"))?;
-        Ok(Self {
-            dir: dir.to_path_buf(),
+        let mut out = OutputDir::open(dir)?;
+        out.check(&BODIES_NAMES)?;
+        out.open_frames()?;
+        Ok(Self::in_dir(Arc::new(out), scene))
+    }
+
+    /// A writer into the output folder `dir` (its `frames/` opened) for `scene`.
+    pub fn in_dir(dir: Arc<OutputDir>, scene: &crate::rigid_scene::RigidScene) -> Self {
+        Self {
+            dir,
             format: VtkFormat::Binary,
             shapes: scene.tessellations(),
             frames: Vec::new(),
             obstacles: None,
-        })
+        }
+    }
+
+    /// The writer continuing the collections of its folder from step `first_step`.
+    pub fn resumed(mut self, first_step: usize) -> Self {
+        self.frames = frames_before(&self.dir, "bodies.pvd", first_step);
+        self
     }
 
     /// A writer into `dir` for `scene` that continues the collections found there (a
@@ -991,9 +1028,7 @@ impl RigidVtkWriter {
         scene: &crate::rigid_scene::RigidScene,
         first_step: usize,
     ) -> io::Result<Self> {
-        let mut w = Self::new(dir, scene)?;
-        w.frames = frames_before(dir, "bodies.pvd", first_step);
-        Ok(w)
+        Ok(Self::new(dir, scene)?.resumed(first_step))
     }
 
     /// The same writer with `format`.
@@ -1008,11 +1043,9 @@ impl RigidVtkWriter {
         let b = format!("frames/bodies_{k:06}.vtp");
         let c = format!("frames/contacts_{k:06}.vtp");
         let bodies = rigid_bodies_polydata(scene, &self.shapes);
-        coulomb::atomic::write(self.dir.join(&b), bodies.to_vtp(self.format))?;
-        coulomb::atomic::write(
-            self.dir.join(&c),
-            rigid_contacts_polydata(scene).to_vtp(self.format),
-        )?;
+        self.dir.write(&b, &bodies.to_vtp(self.format))?;
+        self.dir
+            .write(&c, &rigid_contacts_polydata(scene).to_vtp(self.format))?;
         let moving = scene.obstacles.iter().any(|o| o.motion != Motion::Fixed);
         let o = match &self.obstacles {
             Some(f) if !moving => f.clone(),
@@ -1035,7 +1068,7 @@ impl RigidVtkWriter {
                 };
                 let file = format!("frames/obstacles_{k:06}.vtp");
                 let poly = obstacles_polydata(&scene.obstacles, scene.world.time(), &extent);
-                coulomb::atomic::write(self.dir.join(&file), poly.to_vtp(self.format))?;
+                self.dir.write(&file, &poly.to_vtp(self.format))?;
                 self.obstacles = Some(file.clone());
                 file
             }

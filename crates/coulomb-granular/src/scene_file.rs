@@ -835,6 +835,33 @@ impl LoadedScene {
         }
     }
 
+    /// The files this scene reads: the scene file and every `file` it names (particle,
+    /// mesh and shape files), resolved as they are read. The outputs of a run never replace
+    /// one of them (`coulomb_granular::output_dir`).
+    pub fn input_files(&self) -> Vec<PathBuf> {
+        fn walk(v: &serde_json::Value, out: &mut Vec<String>) {
+            match v {
+                serde_json::Value::Object(m) => {
+                    for (k, x) in m {
+                        match x {
+                            serde_json::Value::String(s) if k == "file" => out.push(s.clone()),
+                            _ => walk(x, out),
+                        }
+                    }
+                }
+                serde_json::Value::Array(a) => a.iter().for_each(|x| walk(x, out)),
+                _ => {}
+            }
+        }
+        let mut names = Vec::new();
+        if let Ok(v) = serde_json::to_value(&self.file) {
+            walk(&v, &mut names);
+        }
+        let mut files = vec![self.path.clone()];
+        files.extend(names.iter().map(|n| self.resolve(n)));
+        files
+    }
+
     fn resolve(&self, name: &str) -> PathBuf {
         let p = Path::new(name);
         if p.is_absolute() {

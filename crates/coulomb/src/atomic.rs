@@ -48,6 +48,10 @@ pub enum NotRegular {
     DanglingSymlink,
     /// a symbolic link that cannot be resolved (loop, no permission): the OS's reason
     UnresolvableSymlink(String),
+    /// a symbolic link planted where a file inside an output folder goes: files that coulomb
+    /// names inside an output folder are never written through a link
+    /// (`coulomb_granular::output_dir`)
+    Symlink,
     /// a file of a kind not listed above
     Other,
 }
@@ -66,6 +70,7 @@ impl fmt::Display for NotRegular {
             NotRegular::UnresolvableSymlink(why) => {
                 write!(f, "a symbolic link that cannot be resolved ({why})")
             }
+            NotRegular::Symlink => write!(f, "a symbolic link"),
             NotRegular::Other => write!(f, "a special file"),
         }
     }
@@ -118,6 +123,13 @@ impl fmt::Display for Refused {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "output path refused: {}", self.path.display())?;
         match (&self.link_to, &self.kind) {
+            (to, NotRegular::Symlink) => write!(
+                f,
+                " is a symbolic link{}; coulomb does not write through links inside an output folder: remove it or choose another folder",
+                to.as_ref()
+                    .map(|t| format!(" to {}", t.display()))
+                    .unwrap_or_default()
+            ),
             (Some(to), NotRegular::DanglingSymlink | NotRegular::UnresolvableSymlink(_)) => write!(
                 f,
                 " is {} pointing to {}; remove the link or name the target",

@@ -5,40 +5,85 @@
 use crate::exit::Outcome;
 use crate::sim_args::Args;
 use anyhow::{bail, Context};
-use coulomb_granular::output::{write_stats, write_stats_continued, VtkWriter};
+use coulomb_granular::output::{csv_line, VtkWriter, BEADS_NAMES, CSV_HEADER};
+use coulomb_granular::output_dir::{RunKind, RunOutput};
 use coulomb_granular::run::RestMonitor;
 use coulomb_granular::{CheckpointError, Scene, Simulation, Summary};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The checkpoint file that `--checkpoint-every` writes into the output folder.
 pub const CHECKPOINT_FILE: &str = "checkpoint.h5";
 
-/// Writes the full state of `sim` into `dir/checkpoint.h5` (replaced atomically: an existing
-/// checkpoint stays whole until the new one is complete); a failure is an output that could
-/// not be written (exit status 4). Called every `--checkpoint-every` steps, at the end of a
-/// run, and meant for the interrupt path too.
-pub fn write_checkpoint(dir: &Path, sim: &Simulation) -> anyhow::Result<()> {
-    save_checkpoint(dir, |path| sim.save_checkpoint(path))
+/// An I/O error writing `what` into the output folder `dir`: an output that could not be
+/// written (exit status 4), unless it is a refusal of a link or special file put there (the
+/// refusal is kept in the chain: exit status 2).
+pub(crate) fn write_failed(dir: &Path, what: &str) -> impl FnOnce(std::io::Error) -> anyhow::Error {
+    let path = dir.join(what).display().to_string();
+    move |source| crate::exit::WriteFailed { path, source }.into()
 }
 
-/// `save` applied to `dir/checkpoint.h5`, its failure an output that could not be written
-/// (exit status 4): [`write_checkpoint`] for any kind of run (spheres, rigid bodies).
-pub fn save_checkpoint(
-    dir: &Path,
-    save: impl FnOnce(&Path) -> Result<(), CheckpointError>,
+/// The outputs of a run into `--output DIR` ([`RunOutput`]: every name checked, the inputs
+/// refused and a restart's statistics continued only in its own run's folder, all before
+/// anything is computed or created; exit status 2 for a refusal).
+pub(crate) fn open_outputs(
+    args: &Args,
+    kind: RunKind,
+    names: &[&str],
+    header: &str,
+    inputs: &[PathBuf],
+    first_step: Option<u64>,
+) -> anyhow::Result<Option<RunOutput>> {
+    let Some(dir) = &args.output else {
+        return Ok(None);
+    };
+    let mut all: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+    if let Some(r) = &args.restart {
+        all.push(r);
+    }
+    let restart = match (first_step, &args.restart) {
+        (Some(step), Some(file)) => Some((file.as_path(), step)),
+        _ => None,
+    };
+    RunOutput::open(dir, kind, names, &all, restart, header)
+        .map(Some)
+        .with_context(|| format!("--output {}", dir.display()))
+}
+
+/// Writes `summary.json` into the run's folder, saying so when it replaces one.
+pub(crate) fn write_summary(out: &RunOutput, json: &str) -> anyhow::Result<()> {
+    let existed = out.dir.is_file("summary.json");
+    out.dir
+        .write("summary.json", json.as_bytes())
+        .map_err(write_failed(out.dir.path(), "summary.json"))?;
+    if existed {
+        eprintln!(
+            "note: replaced existing {}",
+            out.dir.display_path("summary.json").display()
+        );
+    }
+    Ok(())
+}
+
+/// Writes `stats.json` (`text`) and flushes `stats.csv`.
+pub(crate) fn write_stats_json(out: &mut RunOutput, text: &str) -> anyhow::Result<()> {
+    let dir = out.dir.path().to_path_buf();
+    out.write_json(text)
+        .map_err(write_failed(&dir, "stats.json"))
+}
+
+/// Writes the checkpoint `bytes` (of step `step`) into the run's folder.
+pub(crate) fn write_checkpoint_bytes(
+    out: &mut RunOutput,
+    step: u64,
+    bytes: Result<Vec<u8>, CheckpointError>,
 ) -> anyhow::Result<()> {
-    let path = dir.join(CHECKPOINT_FILE);
-    save(&path).map_err(|e| {
-        let source = match e {
-            CheckpointError::Io { source, .. } => source,
-            other => std::io::Error::other(other.to_string()),
-        };
-        crate::exit::WriteFailed {
-            path: path.display().to_string(),
-            source,
-        }
-        .into()
-    })
+    let dir = out.dir.path().to_path_buf();
+    let bytes = bytes.map_err(|e| crate::exit::WriteFailed {
+        path: dir.join(CHECKPOINT_FILE).display().to_string(),
+        source: std::io::Error::other(e.to_string()),
+    })?;
+    out.checkpoint(step, &bytes)
+        .map_err(write_failed(&dir, CHECKPOINT_FILE))
 }
 
 /// Runs `coulomb simulate` in this process, on the scene checked by
@@ -55,7 +100,7 @@ pub fn run(args: Args, scene: Scene) -> anyhow::Result<Outcome> {
         scene.build_with(args.beads, args.seed, &args.layout()?)
     };
     let sim = Simulation::new(world, args.params()).context("invalid simulation parameters")?;
-    steps(&args, sim, scene.name(), false, &mut NoHook)
+    steps(&args, sim, scene.name(), false, &[], &mut NoHook)
 }
 
 /// `coulomb simulate --restart FILE`: the simulation stored in FILE, continued for `--steps`
@@ -66,11 +111,11 @@ pub fn restart(args: Args) -> anyhow::Result<Outcome> {
         bail!("--restart needs a checkpoint file");
     };
     if crate::cmd::simulate_rigid::is_rigid_checkpoint(&file) {
-        return crate::cmd::simulate_rigid::restart(&args, &file, None);
+        return crate::cmd::simulate_rigid::restart(&args, &file, None, &[]);
     }
     let sim = Simulation::load_checkpoint(&file)
         .with_context(|| format!("cannot restart from {}", file.display()))?;
-    steps(&args, sim, "restart", true, &mut NoHook)
+    steps(&args, sim, "restart", true, &[], &mut NoHook)
 }
 
 /// What a run does after each step besides the outputs (the inlets of a scene file), and
@@ -101,6 +146,7 @@ pub(crate) fn steps(
     mut sim: Simulation,
     name: &str,
     restarted: bool,
+    inputs: &[PathBuf],
     hook: &mut dyn StepHook,
 ) -> anyhow::Result<Outcome> {
     crate::interrupt::install().context("installing the SIGINT/SIGTERM handlers")?;
@@ -108,26 +154,32 @@ pub(crate) fn steps(
     let stop = args.stop_after(first_step);
     let beads = sim.world.bodies.len();
     sim.keep_problem = args.dump_fclib.is_some();
+    // every output checked before anything is created or computed
+    let mut out = open_outputs(
+        args,
+        RunKind::Spheres,
+        &BEADS_NAMES,
+        CSV_HEADER,
+        inputs,
+        restarted.then_some(first_step as u64),
+    )?;
     if let Some(dir) = &args.dump_fclib {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
-    let mut vtk = match &args.output {
-        Some(dir) => Some(
-            if restarted {
-                VtkWriter::resume(dir, first_step)
-            } else {
-                VtkWriter::new(dir)
-            }
-            .with_context(|| format!("cannot write into {}", dir.display()))?,
-        ),
-        None => None,
+    let mut vtk = out.as_ref().map(|o| {
+        let w = VtkWriter::in_dir(o.dir.clone());
+        if restarted {
+            w.resumed(first_step)
+        } else {
+            w
+        }
+    });
+    let frame_failed = |k: usize| {
+        let dir = args.output.clone().unwrap_or_default();
+        write_failed(&dir, &format!("frames/beads_{k:06}.vtp"))
     };
-    if let Some(dir) = &args.output {
-        let names = ["stats.csv", "stats.json", "summary.json"];
-        crate::outputs::check_in("--output", dir, &names)?;
-    }
     if let Some(w) = vtk.as_mut() {
-        w.frame(&sim).context("writing VTK frame")?;
+        w.frame(&sim).map_err(frame_failed(sim.steps_done))?;
     }
     let start_energy = sim.world.kinetic_energy() + sim.world.potential_energy();
     let pb = crate::progress::bar(stop.max_steps().saturating_sub(first_step), args.json);
@@ -138,77 +190,91 @@ pub(crate) fn steps(
     let mut interrupted = None;
     // a sphere fast enough to cross a thin wall within one step is reported once
     let mut warned_travel = false;
-    while sim.steps_done < stop.max_steps() {
-        let t0 = sim.time;
-        let s = sim.step().context("time step failed")?;
-        let t1 = sim.time;
-        hook.after_step(&mut sim, t0, t1)?;
-        if !warned_travel {
-            let (v, r) = coulomb_granular::tunnelling::speed_and_radius(&sim.world);
-            if let Err(t) = coulomb_granular::tunnelling::check(&sim.world, sim.params.h, v, r) {
-                eprintln!("warning: step {}: {t}", sim.steps_done);
-                warned_travel = true;
+    let mut run = || -> anyhow::Result<()> {
+        while sim.steps_done < stop.max_steps() {
+            let t0 = sim.time;
+            let s = sim.step().context("time step failed")?;
+            let t1 = sim.time;
+            if let Some(o) = out.as_mut() {
+                o.row(&csv_line(&s))
+                    .map_err(write_failed(o.dir.path(), "stats.csv"))?;
+            }
+            stats.push(s);
+            hook.after_step(&mut sim, t0, t1)?;
+            if !warned_travel {
+                let (v, r) = coulomb_granular::tunnelling::speed_and_radius(&sim.world);
+                if let Err(t) = coulomb_granular::tunnelling::check(&sim.world, sim.params.h, v, r)
+                {
+                    eprintln!("warning: step {}: {t}", sim.steps_done);
+                    warned_travel = true;
+                }
+            }
+            let s = stats.last().expect("pushed above");
+            pb.set_message(format!(
+                "{} contacts, {} subproblems, {:.1} ms, err {:.1e}",
+                s.contacts, s.subproblems, s.solve_ms, s.error
+            ));
+            pb.inc(1);
+            if let (Some(dir), Some(p)) = (&args.dump_fclib, &sim.last_problem) {
+                dump_fclib(dir, sim.steps_done - 1, p)?;
+            }
+            if let Some(w) = vtk.as_mut() {
+                if args.frames_every > 0 && sim.steps_done % args.frames_every == 0 {
+                    w.frame(&sim).map_err(frame_failed(sim.steps_done))?;
+                }
+            }
+            if let Some(o) = out.as_mut() {
+                if args.checkpoint_every > 0 && sim.steps_done % args.checkpoint_every == 0 {
+                    write_checkpoint_bytes(o, sim.steps_done as u64, sim.checkpoint_bytes())?;
+                }
+            }
+            let (stop_now, rest) = monitor.should_stop(&stop, &sim);
+            if stop_now {
+                at_rest = rest;
+                break;
+            }
+            interrupted = crate::interrupt::received();
+            if interrupted.is_some() {
+                break;
             }
         }
-        pb.set_message(format!(
-            "{} contacts, {} subproblems, {:.1} ms, err {:.1e}",
-            s.contacts, s.subproblems, s.solve_ms, s.error
-        ));
-        pb.inc(1);
-        if let (Some(dir), Some(p)) = (&args.dump_fclib, &sim.last_problem) {
-            dump_fclib(dir, sim.steps_done - 1, p)?;
-        }
-        if let Some(w) = vtk.as_mut() {
-            if args.frames_every > 0 && sim.steps_done % args.frames_every == 0 {
-                w.frame(&sim).context("writing VTK frame")?;
-            }
-        }
-        stats.push(s);
-        if let Some(dir) = &args.output {
-            if args.checkpoint_every > 0 && sim.steps_done % args.checkpoint_every == 0 {
-                write_checkpoint(dir, &sim)?;
-            }
-        }
-        let (stop_now, rest) = monitor.should_stop(&stop, &sim);
-        if stop_now {
-            at_rest = rest;
-            break;
-        }
-        interrupted = crate::interrupt::received();
-        if interrupted.is_some() {
-            break;
-        }
-    }
+        Ok(())
+    };
+    let result = run();
     pb.finish_and_clear();
+    if let Err(e) = result {
+        // the statistics of every completed step are kept (stats.csv has them already)
+        if let Some(o) = out.as_mut() {
+            if let Ok(text) = o.json_text(&stats) {
+                let _ = o.write_json(&text);
+            }
+        }
+        return Err(e);
+    }
     // the last state, when the run stopped between two frames
     if let Some(w) = vtk.as_mut() {
         let written = args.frames_every > 0 && sim.steps_done % args.frames_every == 0;
         if !written && sim.steps_done > 0 {
-            w.frame(&sim).context("writing VTK frame")?;
+            w.frame(&sim).map_err(frame_failed(sim.steps_done))?;
         }
     }
     let summary = Summary::from_stats(name, sim.world.bodies.len(), &stats, at_rest)
         .stopped_by(&stop, interrupted.map(|s| s.name()));
     let end_energy = sim.world.kinetic_energy() + sim.world.potential_energy();
-    if let Some(dir) = &args.output {
-        if restarted {
-            write_stats_continued(dir, first_step, &stats)
-        } else {
-            write_stats(dir, &stats)
-        }
-        .with_context(|| format!("writing stats into {}", dir.display()))?;
+    if let Some(o) = out.as_mut() {
+        let text = o
+            .json_text(&stats)
+            .map_err(write_failed(o.dir.path(), "stats.json"))?;
+        write_stats_json(o, &text)?;
         // the end state, unless the last step just wrote it; an interrupted run always
         // leaves one, to be resumed with --restart
         let written = !stats.is_empty()
             && args.checkpoint_every > 0
             && sim.steps_done % args.checkpoint_every == 0;
         if (args.checkpoint_every > 0 || interrupted.is_some()) && !written {
-            write_checkpoint(dir, &sim)?;
+            write_checkpoint_bytes(o, sim.steps_done as u64, sim.checkpoint_bytes())?;
         }
-        crate::outputs::write(
-            &dir.join("summary.json"),
-            crate::outputs::json(&summary, true)?.as_bytes(),
-        )?;
+        write_summary(o, &crate::outputs::json(&summary, true)?)?;
     }
     let (extra, note) = hook.report();
     if args.json {

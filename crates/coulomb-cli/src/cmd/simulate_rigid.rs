@@ -12,11 +12,13 @@ use crate::exit::Outcome;
 use crate::sim_args::Args;
 use anyhow::Context;
 use coulomb_granular::output::RigidVtkWriter;
+use coulomb_granular::output::BODIES_NAMES;
+use coulomb_granular::output_dir::RunKind;
 use coulomb_granular::rigid::RigidStatus;
 use coulomb_granular::rigid_scene::RigidScene;
 use coulomb_granular::scene_file::BuiltScene;
 use serde::Serialize;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The summary of a rigid run (`summary.json`, `--json`).
 #[derive(Debug, Serialize)]
@@ -34,11 +36,38 @@ struct RigidSummary {
     max_penetration: f64,
     at_rest: bool,
     kinetic_energy: f64,
+    /// why the run stopped, as the sphere runs' summary says it: `steps`, `rest`,
+    /// `step_cap` (`--until-rest` at its cap) or `interrupted`
+    stopped: coulomb_granular::Stopped,
+    /// the signal that interrupted the run (`SIGINT`, `SIGTERM`), absent otherwise
+    #[serde(skip_serializing_if = "Option::is_none")]
+    signal: Option<String>,
+}
+
+/// Header of a rigid run's `stats.csv`.
+pub const RIGID_CSV_HEADER: &str = "step,time,status,error,contacts,loaded_contacts,warm_started,sweeps,method,max_penetration,kinetic_energy";
+
+/// One row of a rigid run's `stats.csv`.
+fn rigid_csv_line(r: &coulomb_granular::rigid::RigidStepReport) -> anyhow::Result<String> {
+    Ok(format!(
+        "{},{:.6},{},{:.6e},{},{},{},{},{},{:.6e},{:.9e}",
+        r.step,
+        r.time,
+        serde_json::to_value(r.status)?.as_str().unwrap_or(""),
+        r.error,
+        r.contacts,
+        r.loaded_contacts,
+        r.warm_started,
+        r.sweeps,
+        r.method,
+        r.max_penetration,
+        r.kinetic_energy
+    ))
 }
 
 /// Runs the rigid scene of `scene` with the run settings `a` (the file's, completed by the
 /// command line: [`crate::scene_arg`]).
-pub fn run(a: &Args, scene: &BuiltScene) -> anyhow::Result<Outcome> {
+pub fn run(a: &Args, scene: &BuiltScene, inputs: &[PathBuf]) -> anyhow::Result<Outcome> {
     let file = scene.path.display().to_string();
     let rigid = RigidScene::new(&scene.model).with_context(|| file.clone())?;
     if !scene.inlets.is_empty() {
@@ -46,7 +75,19 @@ pub fn run(a: &Args, scene: &BuiltScene) -> anyhow::Result<Outcome> {
             "{file}: inlets pour spheres into sphere-only scenes; this scene has other shapes"
         );
     }
-    steps(a, rigid, &scene.name, false)
+    steps(a, rigid, &scene.name, false, inputs)
+}
+
+/// `stats.json` of a rigid run: the rows kept from before a restart, then `reports`.
+fn rigid_json(
+    o: &coulomb_granular::output_dir::RunOutput,
+    reports: &[coulomb_granular::rigid::RigidStepReport],
+) -> anyhow::Result<String> {
+    let mut all = o.old_json.clone();
+    for r in reports {
+        all.push(serde_json::to_value(r)?);
+    }
+    Ok(crate::outputs::json(&all, true)?)
 }
 
 /// Whether `path` is a rigid-scene checkpoint ([`coulomb_granular::rigid_checkpoint`]), not
@@ -60,7 +101,12 @@ pub fn is_rigid_checkpoint(path: &Path) -> bool {
 /// FILE continued for `--steps` more steps (or `--until-rest`), the outputs of `--output`
 /// continuing those found there. With the scene file, it must be the stored run's (the same
 /// model; status 2 otherwise).
-pub fn restart(a: &Args, checkpoint: &Path, scene: Option<&BuiltScene>) -> anyhow::Result<Outcome> {
+pub fn restart(
+    a: &Args,
+    checkpoint: &Path,
+    scene: Option<&BuiltScene>,
+    inputs: &[PathBuf],
+) -> anyhow::Result<Outcome> {
     let rigid = RigidScene::load_checkpoint(checkpoint)
         .with_context(|| format!("cannot restart from {}", checkpoint.display()))?;
     let name = match scene {
@@ -76,34 +122,47 @@ pub fn restart(a: &Args, checkpoint: &Path, scene: Option<&BuiltScene>) -> anyho
         }
         None => "restart".to_string(),
     };
-    steps(a, rigid, &name, true)
+    steps(a, rigid, &name, true, inputs)
 }
 
 /// The time steps of `rigid` (new, or loaded by a restart when `restarted`) and their
 /// outputs.
-fn steps(a: &Args, mut rigid: RigidScene, name: &str, restarted: bool) -> anyhow::Result<Outcome> {
+fn steps(
+    a: &Args,
+    mut rigid: RigidScene,
+    name: &str,
+    restarted: bool,
+    inputs: &[PathBuf],
+) -> anyhow::Result<Outcome> {
+    use crate::cmd::simulate::{write_checkpoint_bytes, write_failed};
     crate::interrupt::install().context("installing the SIGINT/SIGTERM handlers")?;
+    let first = rigid.world.steps();
+    // every output checked before anything is created or computed (cmd::simulate::steps)
+    let mut out = crate::cmd::simulate::open_outputs(
+        a,
+        RunKind::Rigid,
+        &BODIES_NAMES,
+        RIGID_CSV_HEADER,
+        inputs,
+        restarted.then_some(first),
+    )?;
     if let Some(dir) = &a.dump_fclib {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
-    let first = rigid.world.steps();
-    let mut vtk = match &a.output {
-        Some(dir) => Some(
-            if restarted {
-                RigidVtkWriter::resume(dir, &rigid, first as usize)
-            } else {
-                RigidVtkWriter::new(dir, &rigid)
-            }
-            .with_context(|| format!("cannot write into {}", dir.display()))?,
-        ),
-        None => None,
+    let mut vtk = out.as_ref().map(|o| {
+        let w = RigidVtkWriter::in_dir(o.dir.clone(), &rigid);
+        if restarted {
+            w.resumed(first as usize)
+        } else {
+            w
+        }
+    });
+    let frame_failed = |k: u64| {
+        let dir = a.output.clone().unwrap_or_default();
+        write_failed(&dir, &format!("frames/bodies_{k:06}.vtp"))
     };
-    if let Some(dir) = &a.output {
-        let names = ["stats.csv", "stats.json", "summary.json"];
-        crate::outputs::check_in("--output", dir, &names)?;
-    }
     if let Some(w) = vtk.as_mut() {
-        w.frame(&rigid).context("writing VTK frame")?;
+        w.frame(&rigid).map_err(frame_failed(first))?;
     }
     let more = if a.until_rest {
         a.max_steps
@@ -126,55 +185,76 @@ fn steps(a: &Args, mut rigid: RigidScene, name: &str, restarted: bool) -> anyhow
     let mut still = 0;
     let mut at_rest = false;
     let mut interrupted = None;
-    while (rigid.world.steps() as usize) < max_steps {
-        let k = rigid.world.steps() as usize;
-        let r = rigid
-            .step()
-            .with_context(|| format!("{name}: time step failed"))?;
-        if let (Some(dir), Some(p)) = (&a.dump_fclib, rigid.world.last_problem()) {
-            crate::cmd::simulate::dump_fclib(dir, k, p)?;
-        }
-        if let Some(w) = vtk.as_mut() {
-            if a.frames_every > 0 && (k + 1) % a.frames_every == 0 {
-                w.frame(&rigid).context("writing VTK frame")?;
+    let mut run = || -> anyhow::Result<()> {
+        while (rigid.world.steps() as usize) < max_steps {
+            let k = rigid.world.steps() as usize;
+            let r = rigid
+                .step()
+                .with_context(|| format!("{name}: time step failed"))?;
+            if let Some(o) = out.as_mut() {
+                let line = rigid_csv_line(&r)?;
+                o.row(&line)
+                    .map_err(write_failed(o.dir.path(), "stats.csv"))?;
             }
-        }
-        if let Some(dir) = &a.output {
-            if a.checkpoint_every > 0 && (k + 1) % a.checkpoint_every == 0 {
-                crate::cmd::simulate::save_checkpoint(dir, |p| rigid.save_checkpoint(p))?;
+            if let (Some(dir), Some(p)) = (&a.dump_fclib, rigid.world.last_problem()) {
+                crate::cmd::simulate::dump_fclib(dir, k, p)?;
             }
-        }
-        if progress {
-            eprint!(
-                "\r{name}: step {}/{max_steps}, {} contacts, {} sweeps, error {:.1e}   ",
-                k + 1,
-                r.contacts,
-                r.sweeps,
-                r.error
-            );
-        }
-        if a.until_rest {
-            let v = rigid.world.velocities();
-            let w = rigid.world.angular_velocities();
-            let fastest = v
-                .iter()
-                .zip(&w)
-                .zip(&sizes)
-                .map(|((v, w), s)| {
-                    let n = |x: &[f64; 3]| (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
-                    n(v) + n(w) * s
-                })
-                .fold(0.0, f64::max);
-            still = if fastest < a.rest_speed { still + 1 } else { 0 };
-            if still >= 10 {
-                at_rest = true;
+            if let Some(w) = vtk.as_mut() {
+                if a.frames_every > 0 && (k + 1) % a.frames_every == 0 {
+                    w.frame(&rigid).map_err(frame_failed(k as u64 + 1))?;
+                }
+            }
+            if let Some(o) = out.as_mut() {
+                if a.checkpoint_every > 0 && (k + 1) % a.checkpoint_every == 0 {
+                    write_checkpoint_bytes(o, k as u64 + 1, rigid.checkpoint_bytes())?;
+                }
+            }
+            if progress {
+                eprint!(
+                    "\r{name}: step {}/{max_steps}, {} contacts, {} sweeps, error {:.1e}   ",
+                    k + 1,
+                    r.contacts,
+                    r.sweeps,
+                    r.error
+                );
+            }
+            if a.until_rest {
+                let v = rigid.world.velocities();
+                let w = rigid.world.angular_velocities();
+                let fastest = v
+                    .iter()
+                    .zip(&w)
+                    .zip(&sizes)
+                    .map(|((v, w), s)| {
+                        let n = |x: &[f64; 3]| (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt();
+                        n(v) + n(w) * s
+                    })
+                    .fold(0.0, f64::max);
+                still = if fastest < a.rest_speed { still + 1 } else { 0 };
+                if still >= 10 {
+                    at_rest = true;
+                    break;
+                }
+            }
+            interrupted = crate::interrupt::received();
+            if interrupted.is_some() {
                 break;
             }
         }
-        interrupted = crate::interrupt::received();
-        if interrupted.is_some() {
-            break;
+        Ok(())
+    };
+    let result = run();
+    if let Err(e) = result {
+        if progress {
+            eprintln!();
         }
+        // the statistics of every completed step are kept (stats.csv has them already)
+        if let Some(o) = out.as_mut() {
+            if let Ok(text) = rigid_json(o, &rigid.reports) {
+                let _ = o.write_json(&text);
+            }
+        }
+        return Err(e);
     }
     if progress {
         eprintln!();
@@ -204,62 +284,32 @@ fn steps(a: &Args, mut rigid: RigidScene, name: &str, restarted: bool) -> anyhow
             .fold(0.0, f64::max),
         at_rest,
         kinetic_energy: rigid.world.kinetic_energy(),
+        stopped: match interrupted {
+            Some(_) => coulomb_granular::Stopped::Interrupted,
+            None if at_rest => coulomb_granular::Stopped::Rest,
+            None if a.until_rest => coulomb_granular::Stopped::StepCap,
+            None => coulomb_granular::Stopped::Steps,
+        },
+        signal: interrupted.map(|s| s.name().to_string()),
     };
     if let Some(w) = vtk.as_mut() {
         let written = a.frames_every > 0 && rigid.world.steps() as usize % a.frames_every == 0;
         if !written && !reports.is_empty() {
-            w.frame(&rigid).context("writing VTK frame")?;
+            w.frame(&rigid).map_err(frame_failed(rigid.world.steps()))?;
         }
     }
-    if let Some(dir) = &a.output {
-        let (old_csv, mut old_json) = if restarted {
-            coulomb_granular::output::stats_rows_before(dir, first)
-        } else {
-            Default::default()
-        };
-        let mut csv = String::from(
-            "step,time,status,error,contacts,loaded_contacts,warm_started,sweeps,method,max_penetration,kinetic_energy\n",
-        );
-        for row in old_csv {
-            csv.push_str(&row);
-            csv.push('\n');
-        }
-        for r in reports {
-            csv.push_str(&format!(
-                "{},{:.6},{},{:.6e},{},{},{},{},{},{:.6e},{:.9e}\n",
-                r.step,
-                r.time,
-                serde_json::to_value(r.status)?.as_str().unwrap_or(""),
-                r.error,
-                r.contacts,
-                r.loaded_contacts,
-                r.warm_started,
-                r.sweeps,
-                r.method,
-                r.max_penetration,
-                r.kinetic_energy
-            ));
-        }
-        crate::outputs::write(&dir.join("stats.csv"), csv.as_bytes())?;
-        for r in reports {
-            old_json.push(serde_json::to_value(r)?);
-        }
-        crate::outputs::write(
-            &dir.join("stats.json"),
-            crate::outputs::json(&old_json, true)?.as_bytes(),
-        )?;
+    if let Some(o) = out.as_mut() {
+        let text = rigid_json(o, reports)?;
+        crate::cmd::simulate::write_stats_json(o, &text)?;
         // the end state, unless the last step just wrote it; an interrupted run always
         // leaves one, to be resumed with --restart
         let written = !reports.is_empty()
             && a.checkpoint_every > 0
             && rigid.world.steps() as usize % a.checkpoint_every == 0;
         if (a.checkpoint_every > 0 || interrupted.is_some()) && !written {
-            crate::cmd::simulate::save_checkpoint(dir, |p| rigid.save_checkpoint(p))?;
+            write_checkpoint_bytes(o, rigid.world.steps(), rigid.checkpoint_bytes())?;
         }
-        crate::outputs::write(
-            &dir.join("summary.json"),
-            crate::outputs::json(&summary, true)?.as_bytes(),
-        )?;
+        crate::cmd::simulate::write_summary(o, &crate::outputs::json(&summary, true)?)?;
     }
     if a.json {
         println!("{}", crate::outputs::json(&summary, false)?);

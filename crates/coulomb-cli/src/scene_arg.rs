@@ -199,6 +199,23 @@ fn relaxed(scene: &BuiltScene, sweeps: usize, file: &str) -> anyhow::Result<Worl
     Ok(world)
 }
 
+/// Refuses `--beads` and `--seed` where they cannot apply: `--beads` caps the spheres of a
+/// scene file's fills, `--seed` replaces the seed of its fills and inlets; a file without
+/// them would silently ignore the option.
+fn refuse_unused_generators(args: &Args, scene: &BuiltScene, file: &str) -> anyhow::Result<()> {
+    if args.beads != 150 && scene.fills.is_empty() {
+        bail!(
+            "--beads caps the spheres of a scene file's fills; {file} has no fill (its spheres are listed or read from files): remove --beads"
+        );
+    }
+    if args.seed != 1 && scene.fills.is_empty() && scene.inlets.is_empty() {
+        bail!(
+            "--seed replaces the seed of a scene file's fills and inlets; {file} has neither: remove --seed"
+        );
+    }
+    Ok(())
+}
+
 /// Runs `coulomb simulate FILE`.
 pub fn run(args: &Args) -> anyhow::Result<Outcome> {
     let refused = refused_options(args);
@@ -229,6 +246,7 @@ pub fn run(args: &Args) -> anyhow::Result<Outcome> {
         }
     }
     let mut scene = loaded.build(&opts)?;
+    refuse_unused_generators(args, &scene, file)?;
     if scene.model.has_shapes() {
         #[cfg(feature = "mpi")]
         if args.mpi || crate::sim_args::under_launcher() {
@@ -274,6 +292,7 @@ pub fn run(args: &Args) -> anyhow::Result<Outcome> {
         scene: &mut scene,
         poured: 0,
         skipped: 0,
+        warned_full: false,
     };
     let name = inlets.scene.name.clone();
     let inputs = loaded.input_files();
@@ -407,6 +426,7 @@ pub fn restart(args: &Args) -> anyhow::Result<Outcome> {
         scene: &mut scene,
         poured: 0,
         skipped: 0,
+        warned_full: false,
     };
     let name = inlets.scene.name.clone();
     let inputs = loaded.input_files();
@@ -419,15 +439,26 @@ struct Inlets<'a> {
     scene: &'a mut BuiltScene,
     poured: usize,
     skipped: usize,
+    /// whether the warning of a full region was printed
+    warned_full: bool,
 }
 
 impl StepHook for Inlets<'_> {
     fn after_step(&mut self, sim: &mut Simulation, t0: f64, t1: f64) -> anyhow::Result<()> {
         let model = &self.scene.model;
-        for inlet in &mut self.scene.inlets {
+        for (j, inlet) in self.scene.inlets.iter_mut().enumerate() {
+            let before = inlet.capped;
             let (n, k) = inlet.emit(sim, model, t0, t1).context("inlet")?;
             self.poured += n;
             self.skipped += k;
+            if inlet.capped > before && !self.warned_full {
+                self.warned_full = true;
+                eprintln!(
+                    "warning: inlet {} at t = {t1}: its region is full; {} emission(s) of this step skipped without trying (an inlet adds at most what its region holds per step; lower its rate)",
+                    j + 1,
+                    inlet.capped - before
+                );
+            }
         }
         Ok(())
     }

@@ -365,3 +365,46 @@ fn an_interrupted_rigid_run_says_stopped_and_signal() {
     assert_eq!(summary["signal"], "SIGINT", "{summary}");
     std::fs::remove_dir_all(&root).ok();
 }
+
+#[test]
+fn validate_refuses_a_fifo_as_markdown_before_running_the_suite() {
+    let root = temp_dir("outdir-validate");
+    let fifo = root.join("report.md");
+    let made = Command::new("mkfifo").arg(&fifo).status();
+    if !made.is_ok_and(|s| s.success()) {
+        println!("skipped: mkfifo failed");
+        return;
+    }
+    let out = coulomb(&["validate", "--quick", "--markdown", s(&fifo)]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("FIFO"), "{err}");
+    // refused before the first check ran (the suite prints a line per check)
+    assert!(
+        !String::from_utf8_lossy(&out.stdout).contains("pass "),
+        "the suite ran first"
+    );
+    std::fs::remove_dir_all(&root).ok();
+}
+
+#[test]
+fn options_that_cannot_apply_to_a_scene_file_are_refused() {
+    let root = temp_dir("outdir-options");
+    let scene = root.join("listed.toml");
+    std::fs::write(
+        &scene,
+        "[step]\nh = 0.001\nsteps = 2\n[[obstacles]]\nshape = { kind = \"plane\", point = [0, 0, 0], normal = [0, 0, 1] }\n[[bodies]]\nspheres = [[0, 0, 0.5, 0.1]]\n",
+    )
+    .unwrap();
+    for (opt, value) in [("--beads", "10"), ("--seed", "7")] {
+        let (code, err) = run(&["simulate", s(&scene), opt, value]);
+        assert_eq!(code, Some(2), "{opt}: {err}");
+        assert!(err.contains(opt), "{err}");
+    }
+    let (code, err) = run(&["simulate", s(&scene)]);
+    assert_eq!(code, Some(0), "{err}");
+    let help = coulomb(&["--help"]);
+    let text = String::from_utf8_lossy(&help.stdout);
+    assert!(!text.contains("rigid spheres"), "{text}");
+    std::fs::remove_dir_all(&root).ok();
+}

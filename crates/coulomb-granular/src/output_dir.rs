@@ -268,6 +268,8 @@ impl OutputDir {
     }
 
     #[cfg(unix)]
+    // st_dev and st_ino are u64 on Linux, not on every Unix
+    #[allow(clippy::unnecessary_cast)]
     fn classify(st: Option<libc::stat>) -> Found {
         use coulomb::atomic::NotRegular as K;
         let Some(st) = st else {

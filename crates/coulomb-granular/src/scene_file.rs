@@ -680,6 +680,9 @@ pub struct InletRun {
     pub density: f64,
     /// material of its spheres
     pub material: String,
+    /// emissions not tried so far because the region could hold no more in their step
+    /// ([`crate::generate::Emission::capped`])
+    pub capped: usize,
 }
 
 impl InletRun {
@@ -700,6 +703,7 @@ impl InletRun {
             .map(|b| (b.position, b.radius))
             .collect();
         let e = self.inlet.emit(t0, t1, &present);
+        self.capped += e.capped;
         if e.particles.is_empty() {
             return Ok((0, e.skipped));
         }
@@ -1303,6 +1307,7 @@ impl LoadedScene {
                 inlet,
                 density: rho,
                 material: s.material.clone(),
+                capped: 0,
             });
         }
         let name = f.name.clone().unwrap_or_else(|| {

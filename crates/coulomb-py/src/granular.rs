@@ -313,19 +313,14 @@ impl PySimulation {
 
     /// `n` time steps at once (GIL released for all of them); their statistics as a list.
     fn run<'py>(&mut self, py: Python<'py>, n: usize) -> PyResult<Bound<'py, PyList>> {
-        let sim = &mut self.sim;
-        let (stats, err) = py.detach(move || {
-            let mut out = Vec::with_capacity(n);
-            for _ in 0..n {
-                match sim.step() {
-                    Ok(s) => out.push(s),
-                    Err(e) => return (out, Some(e)),
-                }
-            }
-            (out, None)
-        });
-        if let Some(e) = err {
-            return Err(sim_error(e));
+        // one step at a time without the GIL, the signals checked between steps: Ctrl-C
+        // raises KeyboardInterrupt after the step in progress (the steps taken stay taken)
+        let mut stats = Vec::with_capacity(n.min(1 << 20));
+        for _ in 0..n {
+            let sim = &mut self.sim;
+            let s = py.detach(move || sim.step()).map_err(sim_error)?;
+            stats.push(s);
+            py.check_signals()?;
         }
         let list = PyList::empty(py);
         for s in &stats {
@@ -603,6 +598,7 @@ impl PyFeed {
                 density: e.inlet.density,
                 material: e.material,
                 inlet: e.inlet,
+                capped: 0,
             });
         }
         Ok(Self { model, inlets: out })

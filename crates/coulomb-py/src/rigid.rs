@@ -103,10 +103,17 @@ impl PyRigidSimulation {
 
     /// `n` steps at once (GIL released); their reports.
     fn run<'py>(&mut self, py: Python<'py>, n: usize) -> PyResult<Bound<'py, PyList>> {
-        let scene = &mut self.scene;
-        let reports = py
-            .detach(move || (0..n).map(|_| scene.step()).collect::<Result<Vec<_>, _>>())
-            .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        // one step at a time without the GIL, the signals checked between steps: Ctrl-C
+        // raises KeyboardInterrupt after the step in progress (the steps taken stay taken)
+        let mut reports = Vec::with_capacity(n.min(1 << 20));
+        for _ in 0..n {
+            let scene = &mut self.scene;
+            let r = py
+                .detach(move || scene.step())
+                .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+            reports.push(r);
+            py.check_signals()?;
+        }
         let out = PyList::empty(py);
         for r in reports {
             let json = serde_json::to_value(&r)

@@ -118,6 +118,22 @@ pub fn restart(args: Args) -> anyhow::Result<Outcome> {
     steps(&args, sim, "restart", true, &[], &mut NoHook)
 }
 
+/// Where the user sets the time step of this run: `--dt` for a built-in scene, `[step] h` in
+/// a scene file (where `--dt` is refused), a new run for a restart (whose h is the
+/// checkpoint's).
+fn step_advice(args: &Args) -> String {
+    match (&args.restart, args.scene.as_deref()) {
+        (Some(_), _) => {
+            "a restart keeps the checkpoint's h: run again from the start with a smaller h"
+                .to_string()
+        }
+        (None, Some(f)) if crate::scene_arg::is_scene_file(f) => {
+            format!("set h in the [step] section of {f}; --dt is for the built-in scenes")
+        }
+        _ => "set it with --dt".to_string(),
+    }
+}
+
 /// What a run does after each step besides the outputs (the inlets of a scene file), and
 /// what it adds to the printed JSON summary.
 pub(crate) trait StepHook {
@@ -205,7 +221,11 @@ pub(crate) fn steps(
                 let (v, r) = coulomb_granular::tunnelling::speed_and_radius(&sim.world);
                 if let Err(t) = coulomb_granular::tunnelling::check(&sim.world, sim.params.h, v, r)
                 {
-                    eprintln!("warning: step {}: {t}", sim.steps_done);
+                    eprintln!(
+                        "warning: step {}: {t} ({})",
+                        sim.steps_done,
+                        step_advice(args)
+                    );
                     warned_travel = true;
                 }
             }

@@ -39,6 +39,8 @@ fn simulate_defaults() -> anyhow::Result<Params> {
 /// Runs `coulomb validate`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(path) = &args.markdown {
+        // a device, FIFO, folder or dangling link is refused before the suite runs
+        crate::outputs::check("--markdown", path, &[])?;
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             if !dir.is_dir() {
                 bail!(

@@ -125,3 +125,92 @@ pub fn status_of(
         BAD_INPUT
     }
 }
+
+/// The longest error message printed, in bytes: a longer one (a scene file listing thousands
+/// of overlaps, a parser quoting a whole line of a huge file) is cut there with a note of how
+/// much was left out.
+pub const MESSAGE_LIMIT: usize = 4096;
+
+/// The message of `e` and its causes on one line, `outer: inner: ...`, each cause shown only
+/// when its text is not already part of what was printed (a file error that names the path
+/// and the system's reason, wrapped by one that repeats them, shows them once), cut at
+/// [`MESSAGE_LIMIT`] bytes.
+pub fn message(e: &anyhow::Error) -> String {
+    let mut out = String::new();
+    for cause in e.chain() {
+        let m = cause.to_string();
+        if m.is_empty() || out.contains(&m) {
+            continue;
+        }
+        if !out.is_empty() {
+            out.push_str(": ");
+        }
+        out.push_str(&m);
+    }
+    bounded(out, MESSAGE_LIMIT)
+}
+
+/// `text` cut at `limit` bytes (on a character boundary) with a note of what was left out.
+pub fn bounded(mut text: String, limit: usize) -> String {
+    if text.len() <= limit {
+        return text;
+    }
+    let mut cut = limit;
+    while !text.is_char_boundary(cut) {
+        cut -= 1;
+    }
+    let left = text.len() - cut;
+    text.truncate(cut);
+    text.push_str(&format!(" … ({left} more bytes left out)"));
+    text
+}
+
+#[cfg(test)]
+mod message_tests {
+    use super::*;
+
+    #[derive(Debug)]
+    struct Inner;
+    impl std::fmt::Display for Inner {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            write!(f, "a.csv: No such file or directory (os error 2)")
+        }
+    }
+    impl std::error::Error for Inner {}
+
+    #[derive(Debug)]
+    struct Outer(Inner);
+    impl std::fmt::Display for Outer {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            write!(f, "scene.toml: particles.file: {}", self.0)
+        }
+    }
+    impl std::error::Error for Outer {
+        fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+            Some(&self.0)
+        }
+    }
+
+    #[test]
+    fn a_cause_already_in_the_message_is_printed_once() {
+        let e = anyhow::Error::new(Outer(Inner)).context("loading the scene");
+        let m = message(&e);
+        assert_eq!(
+            m,
+            "loading the scene: scene.toml: particles.file: a.csv: No such file or directory (os error 2)"
+        );
+        assert_eq!(m.matches("os error 2").count(), 1);
+    }
+
+    #[test]
+    fn a_huge_message_is_cut() {
+        let e = anyhow::anyhow!("{}", "é".repeat(100_000));
+        let m = message(&e);
+        assert!(m.len() < MESSAGE_LIMIT + 64, "{}", m.len());
+        assert!(
+            m.ends_with("more bytes left out)"),
+            "{}",
+            &m[m.len() - 40..]
+        );
+    }
+}

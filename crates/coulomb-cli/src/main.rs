@@ -133,7 +133,7 @@ fn main() -> ExitCode {
             let status = exit::status_of(&e, cmd::bench::is_write_error);
             if json {
                 let obj = serde_json::json!({
-                    "error": format!("{e:#}"),
+                    "error": exit::message(&e),
                     "exit_status": status,
                 });
                 println!("{obj}");
@@ -141,7 +141,7 @@ fn main() -> ExitCode {
             // one write of the whole line: under mpirun every rank may report the same error
             // at once into one pipe, and `eprintln!` writes a chain of causes piece by piece
             // (lines of two ranks came interleaved); a pipe keeps a write of ≤ 4 KiB whole
-            let line = format!("error: {e:#}\n");
+            let line = format!("error: {}\n", exit::message(&e));
             let _ = std::io::Write::write_all(&mut std::io::stderr().lock(), line.as_bytes());
             ExitCode::from(status)
         }

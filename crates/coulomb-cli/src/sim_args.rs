@@ -112,7 +112,7 @@ pub struct Args {
     pub outer: OuterKind,
     /// tolerance on the error of docs/error.md, reached at every step (steps that do not
     /// reach it are counted and reported)
-    #[arg(long, default_value_t = 1e-4, value_parser = crate::values::positive)]
+    #[arg(long, default_value_t = 1e-4, value_parser = crate::values::tolerance)]
     pub tol: f64,
     /// ε of the paper's outer stopping rule (6.1); 0 (default) disables it, so that every
     /// step is solved to --tol

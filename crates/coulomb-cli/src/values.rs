@@ -25,6 +25,13 @@ pub fn positive(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A tolerance on the error of docs/error.md: above 0 and below 1
+/// ([`coulomb::settings::check_tol`], the rule of every entry point).
+pub fn tolerance(s: &str) -> Result<f64, String> {
+    let x = number(s)?;
+    coulomb::settings::check_tol(x).map(|()| x)
+}
+
 /// A finite number ≥ 0 (friction coefficients, tolerances where 0 means "off").
 pub fn nonnegative(s: &str) -> Result<f64, String> {
     let x = number(s)?;

@@ -85,6 +85,10 @@ pub enum CheckpointError {
         /// the system's error
         source: std::io::Error,
     },
+    /// the path is not a regular file of bounded size, or cannot be opened or read
+    /// ([`coulomb::input`])
+    #[error(transparent)]
+    Input(#[from] coulomb::input::InputError),
     /// the file is not HDF5 at all
     #[error("{}: not an HDF5 file (no HDF5 signature)", path.display())]
     NotHdf5 {
@@ -863,7 +867,7 @@ pub(crate) fn read_checked(
 /// without one): tells a sphere checkpoint ([`FORMAT_NAME`]) from a rigid one
 /// ([`crate::rigid_checkpoint::FORMAT_NAME`]).
 pub fn format_of(path: impl AsRef<Path>) -> Option<String> {
-    let bytes = std::fs::read(path.as_ref()).ok()?;
+    let bytes = read_file(path.as_ref()).ok()?;
     open(path.as_ref(), bytes, |r| {
         let attrs = r
             .file
@@ -1055,10 +1059,10 @@ pub(crate) fn write_file(path: &Path, bytes: Vec<u8>) -> Result<(), CheckpointEr
 
 /// The bytes of the file at `path`.
 pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, CheckpointError> {
-    std::fs::read(path).map_err(|source| CheckpointError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+    Ok(coulomb::input::read(
+        path,
+        coulomb::input::Kind::Checkpoint,
+    )?)
 }
 
 #[cfg(test)]
@@ -1325,7 +1329,10 @@ mod tests {
         let e = Simulation::from_checkpoint_bytes("o.h5", other.finish().unwrap()).unwrap_err();
         assert!(matches!(e, CheckpointError::WrongFormat { .. }), "{e}");
         let e = Simulation::load_checkpoint("/nonexistent/dir/c.h5").unwrap_err();
-        assert!(matches!(e, CheckpointError::Io { .. }), "{e}");
+        assert!(
+            matches!(&e, CheckpointError::Input(i) if i.is_not_found()),
+            "{e}"
+        );
     }
 
     #[test]

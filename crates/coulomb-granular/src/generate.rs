@@ -26,7 +26,46 @@ pub enum GenerateError {
     /// another parameter is out of range
     #[error("{0}")]
     Parameter(String),
+    /// the spheres asked for cannot fit in the region: their volume exceeds
+    /// [`MAX_PACKING_FRACTION`] of the region's bounding box
+    #[error("{count} spheres of radius at least {min_radius} m fill at least {volume:.6e} m³, more than {fraction} of the region's bounding box ({region:.6e} m³): they cannot fit; lower `count` or enlarge the region")]
+    CannotFit {
+        /// spheres asked for
+        count: usize,
+        /// the smallest radius of the size distribution (m)
+        min_radius: f64,
+        /// count × the volume of the smallest sphere (m³)
+        volume: f64,
+        /// the bounding box's volume (m³)
+        region: f64,
+        /// [`MAX_PACKING_FRACTION`]
+        fraction: f64,
+    },
+    /// the random addition ran past its time limit
+    #[error("random addition stopped after {seconds} s ({attempts} positions tried, {placed} of {count} spheres placed): the region is too crowded for this count; lower `count`, enlarge the region or use the lattice packing")]
+    TimeLimit {
+        /// the limit ([`FILL_TIME_LIMIT`], s)
+        seconds: u64,
+        /// positions tried
+        attempts: usize,
+        /// spheres placed
+        placed: usize,
+        /// spheres asked for
+        count: usize,
+    },
 }
+
+/// The densest packing fraction a random fill is asked for: 0.64, random close packing of
+/// equal spheres (random sequential addition itself jams near 0.38). A random fill whose
+/// spheres' volume (count × the smallest sphere's volume) exceeds this fraction of the
+/// region's bounding box is refused with [`GenerateError::CannotFit`] before anything is
+/// tried, whatever its attempt cap.
+pub const MAX_PACKING_FRACTION: f64 = 0.64;
+
+/// The wall-clock limit of one random fill (s): past it the fill stops with
+/// [`GenerateError::TimeLimit`] (an error, never a partial result, so that what a fill
+/// returns does not depend on the machine's speed).
+pub const FILL_TIME_LIMIT: u64 = 120;
 
 fn dist_err<T>(msg: impl Into<String>) -> Result<T, GenerateError> {
     Err(GenerateError::Distribution(msg.into()))
@@ -781,6 +820,20 @@ pub fn fill_each(
             }
         }
         Packing::Random { max_attempts } => {
+            let rmin = spec.sizes.min_radius();
+            let sphere = 4.0 / 3.0 * std::f64::consts::PI * rmin * rmin * rmin;
+            let volume = spec.count as f64 * sphere;
+            let bbox = (hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z);
+            if volume > MAX_PACKING_FRACTION * bbox {
+                return Err(GenerateError::CannotFit {
+                    count: spec.count,
+                    min_radius: rmin,
+                    volume,
+                    region: bbox,
+                    fraction: MAX_PACKING_FRACTION,
+                });
+            }
+            let start = std::time::Instant::now();
             let cap = max_attempts.unwrap_or(spec.count.saturating_mul(1000));
             let mut radii: Vec<f64> = (0..spec.count.min(MAX_SITES))
                 .map(|_| spec.sizes.sample(&mut rng))
@@ -790,6 +843,14 @@ pub fn fill_each(
             'spheres: for r in radii {
                 while attempts < cap {
                     attempts += 1;
+                    if attempts % 4096 == 0 && start.elapsed().as_secs() >= FILL_TIME_LIMIT {
+                        return Err(GenerateError::TimeLimit {
+                            seconds: FILL_TIME_LIMIT,
+                            attempts,
+                            placed,
+                            count: spec.count,
+                        });
+                    }
                     let p = Vec3::new(
                         rng.random_range(lo.x..=hi.x),
                         rng.random_range(lo.y..=hi.y),
@@ -798,6 +859,7 @@ pub fn fill_each(
                     if region.contains_sphere(p, r) && !placed_grid.overlaps(p, r) {
                         let v = velocity(&mut rng);
                         placed_grid.insert(p, r);
+                        placed += 1;
                         emit(Particle {
                             position: p,
                             radius: r,
@@ -1191,8 +1253,10 @@ mod tests {
         }
         // largest first
         assert!(a.particles.windows(2).all(|w| w[0].radius >= w[1].radius));
-        // the attempt cap stops an impossible fill
-        let full = fill(
+        // a count whose volume exceeds the packing bound of the bounding box is refused
+        // before anything is tried (issue 55: 1000 × count attempts for a count that
+        // cannot fit)
+        let e = fill(
             &region,
             &spec(
                 100_000,
@@ -1203,8 +1267,27 @@ mod tests {
             ),
             &[],
         )
+        .unwrap_err();
+        assert!(
+            matches!(e, GenerateError::CannotFit { count: 100_000, .. }),
+            "{e}"
+        );
+        assert!(e.to_string().contains("cannot fit"), "{e}");
+        // the attempt cap stops a fill within the bound that random addition cannot place
+        // (volume fraction 0.5 of the bounding box, 0.63 of the cylinder: past jamming)
+        let full = fill(
+            &region,
+            &spec(
+                950,
+                SizeDistribution::mono(0.05),
+                Packing::Random {
+                    max_attempts: Some(20_000),
+                },
+            ),
+            &[],
+        )
         .unwrap();
-        assert!(full.placed() < 100_000 && full.placed() > 100);
+        assert!(full.placed() < 950 && full.placed() > 100);
         assert_eq!(full.attempts, 20_000);
         assert!(no_overlap(&full.particles));
     }

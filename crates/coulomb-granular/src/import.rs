@@ -19,6 +19,10 @@ pub enum ImportError {
         /// the system's error
         source: std::io::Error,
     },
+    /// the path is not a regular file of bounded size, or cannot be opened or read
+    /// ([`coulomb::input`])
+    #[error(transparent)]
+    Input(#[from] coulomb::input::InputError),
     /// the content is not what the format requires
     #[error("{}{}: {message}", path.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
     Format {
@@ -82,12 +86,9 @@ pub fn for_each_particle(
 }
 
 /// The NPY file at `path`, its header read (an I/O error or a file that is not NPY: typed).
-fn open_npy(path: &Path) -> Result<npyz::NpyFile<std::io::BufReader<std::fs::File>>, ImportError> {
-    let file = std::fs::File::open(path).map_err(|source| ImportError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    match npyz::NpyFile::new(std::io::BufReader::new(file)) {
+fn open_npy(path: &Path) -> Result<npyz::NpyFile<std::io::Cursor<Vec<u8>>>, ImportError> {
+    let bytes = coulomb::input::read(path, coulomb::input::Kind::Particles)?;
+    match npyz::NpyFile::new(std::io::Cursor::new(bytes)) {
         Ok(f) => Ok(f),
         Err(e) => format_err(path, None, format!("not an NPY file: {e}")),
     }
@@ -170,13 +171,10 @@ pub fn read_csv(path: &Path) -> Result<Vec<ParticleRecord>, ImportError> {
 
 /// [`read_csv`] handing each record to `emit` as it is read; returns their number.
 fn csv_each(path: &Path, emit: &mut dyn FnMut(ParticleRecord)) -> Result<usize, ImportError> {
-    let file = std::fs::File::open(path).map_err(|source| ImportError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = coulomb::input::read(path, coulomb::input::Kind::Particles)?;
     let mut reader = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
-        .from_reader(std::io::BufReader::new(file));
+        .from_reader(bytes.as_slice());
     let header = match reader.headers() {
         Ok(h) => h.clone(),
         Err(e) => return format_err(path, Some(1), e.to_string()),
@@ -535,11 +533,8 @@ pub fn read_mesh(path: &Path, transform: &Transform) -> Result<TriMesh, ImportEr
 }
 
 fn read_stl(path: &Path) -> Result<TriMesh, ImportError> {
-    let file = std::fs::File::open(path).map_err(|source| ImportError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let mut reader = std::io::BufReader::new(file);
+    let bytes = coulomb::input::read(path, coulomb::input::Kind::Mesh)?;
+    let mut reader = std::io::Cursor::new(bytes);
     let m = match stl_io::read_stl(&mut reader) {
         Ok(m) => m,
         Err(e) => return format_err(path, None, format!("not a valid STL file: {e}")),
@@ -555,11 +550,8 @@ fn read_stl(path: &Path) -> Result<TriMesh, ImportError> {
 }
 
 fn read_obj(path: &Path) -> Result<TriMesh, ImportError> {
-    let file = std::fs::File::open(path).map_err(|source| ImportError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let mut reader = std::io::BufReader::new(file);
+    let bytes = coulomb::input::read(path, coulomb::input::Kind::Mesh)?;
+    let mut reader = bytes.as_slice();
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
@@ -658,7 +650,10 @@ mod tests {
             assert!(e.contains(name) && e.contains(want), "{e}");
         }
         let e = read_particles(Path::new("/nonexistent/p.csv")).unwrap_err();
-        assert!(matches!(e, ImportError::Io { .. }));
+        assert!(
+            matches!(&e, ImportError::Input(i) if i.is_not_found()),
+            "{e}"
+        );
     }
 
     #[test]

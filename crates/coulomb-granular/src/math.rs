@@ -4,8 +4,9 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use std::ops::{Add, AddAssign, Mul, Neg, Sub};
 
 /// A vector of ℝ³. Serialized as the array `[x, y, z]` (scene files, checkpoints); read from
-/// that array or from a map `{ x, y, z }`.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+/// that array or from a map `{ x, y, z }`. Shown (`{:?}` and `{}`) as that array too,
+/// `[1.0, 0.0, 2.5]`, in every message (issue 55: `Vec3 { x: 1.0, … }` in errors).
+#[derive(Clone, Copy, PartialEq, Default)]
 pub struct Vec3 {
     /// first component
     pub x: f64,
@@ -13,6 +14,18 @@ pub struct Vec3 {
     pub y: f64,
     /// third component (vertical in every scene: gravity is −g e_z)
     pub z: f64,
+}
+
+impl std::fmt::Debug for Vec3 {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "[{:?}, {:?}, {:?}]", self.x, self.y, self.z)
+    }
+}
+
+impl std::fmt::Display for Vec3 {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "[{}, {}, {}]", self.x, self.y, self.z)
+    }
 }
 
 impl Vec3 {
@@ -170,6 +183,14 @@ impl Neg for Vec3 {
 
 #[cfg(test)]
 mod tests {
+    /// A vector in a message reads as the array of a scene file, not as a Rust struct.
+    #[test]
+    fn shown_as_an_array() {
+        let v = super::Vec3::new(1.0, -0.5, 2.0);
+        assert_eq!(format!("{v:?}"), "[1.0, -0.5, 2.0]");
+        assert_eq!(format!("{v}"), "[1, -0.5, 2]");
+    }
+
     use super::*;
 
     #[test]

@@ -89,6 +89,24 @@ fn body_mass(b: &BodySpec, shape: &SharedShape, what: &str) -> Result<MassProper
         m.inertia = i;
         m.check()
             .map_err(|e| invalid(what, format!("inertia: {e}")))?;
+        // the principal moments of a body satisfy the triangle inequality (I₁ + I₂ ≥ I₃: the
+        // mass lies in space, not beyond it); a tensor that does not is no body's
+        let (p, _) = m
+            .principal()
+            .map_err(|e| invalid(what, format!("inertia: {e}")))?;
+        let trace = p[0] + p[1] + p[2];
+        for k in 0..3 {
+            let (a, b, c) = (p[k], p[(k + 1) % 3], p[(k + 2) % 3]);
+            if a + b < c - 1e-9 * trace {
+                return Err(invalid(
+                    what,
+                    format!(
+                        "inertia: principal moments {} {} {} violate the triangle inequality ({} + {} < {}): no mass distribution has them",
+                        p[0], p[1], p[2], a, b, c
+                    ),
+                ));
+            }
+        }
     }
     Ok(m)
 }
@@ -418,6 +436,15 @@ mod tests {
         assert!((m.inertia[0][0] - 2.0 * 0.04 / 6.0).abs() < 1e-12);
         b.inertia = Some([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]]);
         assert!(body_mass(&b, &shape, "body 0").is_err());
+        // positive definite but beyond the triangle inequality (1 + 1 < 3): refused
+        b.inertia = Some([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 3.0]]);
+        let e = body_mass(&b, &shape, "body 0").unwrap_err().to_string();
+        assert!(e.contains("triangle inequality"), "{e}");
+        // on the bound (a flat plate: 1 + 1 = 2) and within it: accepted
+        b.inertia = Some([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 2.0]]);
+        assert!(body_mass(&b, &shape, "body 0").is_ok());
+        b.inertia = Some([[1.0, 0.0, 0.0], [0.0, 1.5, 0.0], [0.0, 0.0, 2.0]]);
+        assert!(body_mass(&b, &shape, "body 0").is_ok());
         // a non-unit orientation is refused, not normalized
         let mut model = SceneModel::default();
         let mut q = BodySpec::new(c, Vec3::new(0.0, 0.0, 1.0), [1.0, 0.0, 0.0, 0.01], 1.0);

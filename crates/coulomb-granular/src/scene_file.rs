@@ -35,6 +35,10 @@ pub enum SceneFileError {
         /// the system's error
         source: std::io::Error,
     },
+    /// the path is not a regular file of bounded size, or cannot be opened or read
+    /// ([`coulomb::input`])
+    #[error(transparent)]
+    Input(#[from] coulomb::input::InputError),
     /// the extension is neither .toml nor .json
     #[error("{}: a scene file must end in .toml or .json", path.display())]
     Extension {
@@ -770,10 +774,7 @@ impl LoadedScene {
                 })
             }
         };
-        let text = std::fs::read_to_string(path).map_err(|source| SceneFileError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = coulomb::input::read_to_string(path, coulomb::input::Kind::Scene)?;
         Self::parse(path, text, is_toml)
     }
 
@@ -803,6 +804,69 @@ impl LoadedScene {
             is_toml,
             file,
         })
+        .and_then(|scene| {
+            if is_toml {
+                scene.check_no_dropped_elements()?;
+            }
+            Ok(scene)
+        })
+    }
+
+    /// Refuses a TOML array longer than its field (`[x, y, z, r, 1]` for a sphere, a
+    /// quaternion of 5 numbers, an inertia tensor of 4 rows): the TOML reader fills a
+    /// fixed-size array from the first elements and drops the rest without a word (JSON
+    /// refuses them itself). The file as parsed is written back and every array of the text
+    /// compared with its counterpart: one that lost elements is an error at its line and
+    /// column.
+    fn check_no_dropped_elements(&self) -> Result<(), SceneFileError> {
+        fn dropped(
+            text: &toml::Value,
+            kept: &toml::Value,
+            at: &mut Vec<Seg>,
+        ) -> Option<(Vec<Seg>, usize, usize)> {
+            match (text, kept) {
+                (toml::Value::Array(a), toml::Value::Array(b)) => {
+                    if a.len() > b.len() {
+                        return Some((at.clone(), a.len(), b.len()));
+                    }
+                    for (i, (x, y)) in a.iter().zip(b).enumerate() {
+                        at.push(Seg::Index(i));
+                        let found = dropped(x, y, at);
+                        at.pop();
+                        if found.is_some() {
+                            return found;
+                        }
+                    }
+                    None
+                }
+                (toml::Value::Table(a), toml::Value::Table(b)) => {
+                    for (k, x) in a {
+                        let Some(y) = b.get(k) else { continue };
+                        at.push(Seg::Key(k.clone()));
+                        let found = dropped(x, y, at);
+                        at.pop();
+                        if found.is_some() {
+                            return found;
+                        }
+                    }
+                    None
+                }
+                _ => None,
+            }
+        }
+        let (Ok(text), Ok(kept)) = (
+            toml::from_str::<toml::Value>(&self.text),
+            toml::Value::try_from(&self.file),
+        ) else {
+            return Ok(());
+        };
+        match dropped(&text, &kept, &mut Vec::new()) {
+            Some((at, found, expected)) => Err(self.invalid(
+                &at,
+                format!("{found} values where {expected} are expected: remove the extra ones"),
+            )),
+            None => Ok(()),
+        }
     }
 
     /// Line and column of the key at `p` (TOML only; the deepest part of the path found).
@@ -1041,6 +1105,76 @@ impl LoadedScene {
         ok.then_some(n)
     }
 
+    /// The spheres the scene will hold at most, from its counts alone (nothing generated):
+    /// the `spheres` lists, the fills' `count` (capped by [`BuildOptions::max_fill`]) and what
+    /// the inlets emit over the run when its length is known (`steps` × `h` or `duration`,
+    /// else the inlet's `end`): a count rate × the time, a mass rate × the time over the mass
+    /// of the smallest sphere, each at most [`generate::MAX_EMISSIONS`]. Particle files are
+    /// not counted (their size is bounded by [`coulomb::input::Kind::Particles`]).
+    pub fn planned_spheres(&self, opts: &BuildOptions) -> u64 {
+        let f = &self.file;
+        let mut n: u64 = 0;
+        for g in &f.bodies {
+            if let Some(s) = &g.spheres {
+                n = n.saturating_add(s.len() as u64);
+            }
+            if let Some(fill) = &g.fill {
+                let count = opts.max_fill.map_or(fill.count, |m| fill.count.min(m));
+                n = n.saturating_add(count as u64);
+            }
+        }
+        let run_end = match (f.step.steps, f.step.duration) {
+            (Some(k), _) => Some(k as f64 * f.step.h),
+            (None, Some(d)) => Some(d),
+            _ => None,
+        };
+        for s in &f.inlets {
+            let end = match (s.end, run_end) {
+                (Some(e), Some(r)) => e.min(r),
+                (Some(e), None) => e,
+                (None, Some(r)) => r,
+                (None, None) => continue,
+            };
+            let time = end - s.start;
+            if !(time.is_finite() && time > 0.0) {
+                continue;
+            }
+            let per_second = match s.rate {
+                Rate::Count(c) => c,
+                Rate::Mass(m) => {
+                    let rho = f
+                        .materials
+                        .get(&s.material)
+                        .map_or(DEFAULT_DENSITY, |x| x.density);
+                    let r = s.sizes.min_radius();
+                    m / (rho * 4.0 / 3.0 * std::f64::consts::PI * r * r * r)
+                }
+            };
+            let emitted = (per_second * time).ceil();
+            let emitted = if emitted.is_finite() && emitted >= 0.0 {
+                (emitted as u64).min(generate::MAX_EMISSIONS as u64)
+            } else {
+                generate::MAX_EMISSIONS as u64
+            };
+            n = n.saturating_add(emitted);
+        }
+        n
+    }
+
+    /// Refuses, before anything is generated, a scene whose [`Self::planned_spheres`] need
+    /// more memory than is available ([`crate::model::check_memory`]): `count = 1e12` is an
+    /// error, not an allocation.
+    fn check_planned_memory(&self, opts: &BuildOptions) -> Result<(), SceneFileError> {
+        let n = self.planned_spheres(opts);
+        let n = usize::try_from(n).unwrap_or(usize::MAX);
+        crate::model::check_memory(n, 0, crate::model::available_memory()).map_err(|source| {
+            SceneFileError::Model {
+                path: self.path.clone(),
+                source,
+            }
+        })
+    }
+
     fn build_inner(
         &self,
         opts: &BuildOptions,
@@ -1051,6 +1185,9 @@ impl LoadedScene {
         let seed = opts.seed.unwrap_or(f.seed);
         let fin3 = |a: &[f64; 3]| a.iter().all(|x| x.is_finite());
         let pos = |x: f64| x.is_finite() && x > 0.0;
+        if spheres {
+            self.check_planned_memory(opts)?;
+        }
         if !fin3(&f.gravity) {
             return Err(self.invalid(&[key("gravity")], "must be finite"));
         }
@@ -1489,8 +1626,8 @@ impl LoadedScene {
         if !(0.0..=1.0).contains(&s.theta) {
             return Err(self.invalid(&at("theta"), format!("{} must be in [0, 1]", s.theta)));
         }
-        if !pos(s.tol) {
-            return Err(self.invalid(&at("tol"), format!("{} must be positive", s.tol)));
+        if let Err(m) = coulomb::settings::check_tol(s.tol) {
+            return Err(self.invalid(&at("tol"), m));
         }
         if let Some(d) = s.duration {
             if !(d.is_finite() && d >= 0.0) {
@@ -1773,6 +1910,103 @@ mod tests {
 
     fn parse(text: &str) -> Result<LoadedScene, SceneFileError> {
         LoadedScene::parse(Path::new("t.toml"), text.to_string(), true)
+    }
+
+    /// A fill of 10¹² spheres (and an inlet pouring 10¹⁰ per second) is refused from its count
+    /// alone, before anything is generated: a typed memory error at once, never an abort.
+    /// Arrays longer than their field are refused at their line and column (issue 55: TOML
+    /// dropped the extra elements), in a sphere list, a region corner and a shaped body's
+    /// orientation and inertia; the same arrays of the right length are accepted.
+    #[test]
+    fn extra_array_elements_are_refused_with_their_place() {
+        let base = "[[obstacles]]\nshape = { kind = \"box\", lo = [0, 0, 0], hi = [1, 1, 1] }\n";
+        let ok = format!("{base}[[bodies]]\nspheres = [[0.5, 0.5, 0.5, 0.1]]\n");
+        assert!(parse(&ok).is_ok());
+        let e = parse(&format!(
+            "{base}[[bodies]]\nspheres = [[0.5, 0.5, 0.5, 0.1], [0.2, 0.2, 0.2, 0.1, 1]]\n"
+        ))
+        .unwrap_err();
+        let m = e.to_string();
+        assert!(
+            matches!(
+                &e,
+                SceneFileError::Invalid {
+                    at: Some((4, _)),
+                    ..
+                }
+            ),
+            "{m}"
+        );
+        assert!(
+            m.contains("bodies[0].spheres[1]") && m.contains("5 values where 4"),
+            "{m}"
+        );
+        let e =
+            parse("[[obstacles]]\nshape = { kind = \"box\", lo = [0, 0, 0, 7], hi = [1, 1, 1] }\n")
+                .unwrap_err();
+        // (the TOML reader refuses this one itself, as a syntax error)
+        let m = e.to_string();
+        assert!(
+            m.contains("4 values where 3") || m.contains("invalid length 4"),
+            "{m}"
+        );
+        let body = "[[bodies]]\nshape = { kind = \"cuboid\", half_extents = [0.1, 0.1, 0.1] }\npositions = [[0.5, 0.5, 0.5]]\n";
+        assert!(parse(&format!("{base}{body}orientations = [[1, 0, 0, 0]]\n")).is_ok());
+        let e = parse(&format!("{base}{body}orientations = [[1, 0, 0, 0, 0]]\n")).unwrap_err();
+        let m = e.to_string();
+        assert!(
+            m.contains("bodies[0].orientations[0]") && m.contains("5 values where 4"),
+            "{m}"
+        );
+        let e = parse(&format!(
+            "{base}{body}mass = 1.0\ninertia = [[1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0, 0]]\n"
+        ))
+        .unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("bodies[0].inertia: 4 values where 3"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_huge_fill_or_inlet_is_refused_before_building() {
+        let fill = "[step]\nh = 0.01\nsteps = 10\n[[obstacles]]\nshape = { kind = \"box\", lo = [0, 0, 0], hi = [1, 1, 1] }\n\
+            [[bodies]]\n[bodies.fill]\ncount = 1000000000000\nregion = { kind = \"box\", lo = [0, 0, 0], hi = [1, 1, 1] }\nsizes = { kind = \"uniform\", min = 0.01, max = 0.02 }\n";
+        let scene = parse(fill).unwrap();
+        assert_eq!(
+            scene.planned_spheres(&BuildOptions::default()),
+            1_000_000_000_000
+        );
+        let t = std::time::Instant::now();
+        let e = scene.build(&BuildOptions::default()).unwrap_err();
+        assert!(t.elapsed() < std::time::Duration::from_secs(5));
+        assert!(
+            matches!(
+                &e,
+                SceneFileError::Model {
+                    source: SceneError::Memory {
+                        spheres: 1_000_000_000_000,
+                        ..
+                    },
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        // a capped fill is not refused for the count it will not build
+        let capped = BuildOptions {
+            max_fill: Some(10),
+            ..Default::default()
+        };
+        assert_eq!(scene.planned_spheres(&capped), 10);
+        let inlet = "[step]\nh = 0.01\nsteps = 100\n[[obstacles]]\nshape = { kind = \"box\", lo = [0, 0, 0], hi = [1, 1, 1] }\n\
+            [[inlets]]\nregion = { kind = \"box\", lo = [0, 0, 0.5], hi = [1, 1, 1] }\nsizes = { kind = \"uniform\", min = 0.01, max = 0.02 }\nrate = { count = 1e10 }\n";
+        let scene = parse(inlet).unwrap();
+        assert_eq!(
+            scene.planned_spheres(&BuildOptions::default()),
+            crate::generate::MAX_EMISSIONS as u64
+        );
     }
 
     /// The spheres [`LoadedScene::for_each_sphere`] hands out are the built world's, bit for

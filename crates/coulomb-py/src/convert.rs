@@ -255,7 +255,11 @@ pub fn settings_from_kwargs(
         let name: String = k.extract()?;
         match name.as_str() {
             "method" => {}
-            "tol" => s.tol = real("tol", &v)?,
+            "tol" => {
+                s.tol = real("tol", &v)?;
+                coulomb::settings::check_tol(s.tol)
+                    .map_err(|m| errors::settings_error(py, "tol", m))?;
+            }
             "inner" => s.inner = parse_inner(py, "inner", &text("inner", &v)?)?,
             "outer" => s.outer = parse_outer(py, "outer", &text("outer", &v)?)?,
             "fallback" => {

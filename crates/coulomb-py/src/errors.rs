@@ -190,6 +190,18 @@ pub fn fclib_error(py: Python<'_>, e: FclibError) -> PyErr {
                 _ => PyOSError::new_err(args),
             };
         }
+        FclibErrorKind::Input(reason) => {
+            let path = std::path::PathBuf::from(&file);
+            return match reason {
+                coulomb::input::InputReason::Open(io) | coulomb::input::InputReason::Read(io) => {
+                    os_error(io, &path)
+                }
+                coulomb::input::InputReason::NotRegular(coulomb::atomic::NotRegular::Directory) => {
+                    PyIsADirectoryError::new_err((21, msg, file))
+                }
+                _ => input_error(py, "path", None, msg),
+            };
+        }
         FclibErrorKind::NotHdf5 => ("not_hdf5", py.None(), py.None()),
         FclibErrorKind::Corrupt { .. } => ("corrupt", py.None(), py.None()),
         FclibErrorKind::MissingGroup { .. } => ("missing_group", py.None(), py.None()),
@@ -327,6 +339,11 @@ pub fn scene_file_error(py: Python<'_>, e: &coulomb_granular::scene_file::SceneF
     let msg = e.to_string();
     match e {
         E::Io { path, source } => os_error(source, path),
+        E::Input(i) => input_file_error(py, i),
+        E::Import {
+            source: coulomb_granular::import::ImportError::Input(i),
+            ..
+        } => input_file_error(py, i),
         E::Model { source, .. } => {
             let err = scene_error(py, source);
             // the model's field and index, the message with the file's name
@@ -352,6 +369,7 @@ pub fn checkpoint_error(py: Python<'_>, e: coulomb_granular::CheckpointError) ->
         E::Io { path, source } => {
             return os_error(source, path);
         }
+        E::Input(i) => return input_file_error(py, i),
         E::NotHdf5 { path } => ("not_hdf5", shown(path), None),
         E::WrongFormat { path, .. } => ("wrong_format", shown(path), None),
         E::Version { path, .. } => ("version", shown(path), None),
@@ -379,6 +397,22 @@ fn field_and_index(py: Python<'_>, err: &PyErr) -> (Py<PyAny>, Py<PyAny>) {
     let v = err.value(py);
     let get = |name: &str| v.getattr(name).map_or_else(|_| py.None(), |x| x.unbind());
     (get("field"), get("index"))
+}
+
+/// An input that could not be read ([`coulomb::input`]): a failure to open it as the matching
+/// `OSError` subclass (errno, message, file name), a directory as `IsADirectoryError`;
+/// a FIFO, a device, a socket, a file over its kind's size limit or text that is not UTF-8
+/// as `coulomb.InputError` (a `ValueError`) with `field` = `"path"` and the message naming
+/// the file and what it is.
+pub fn input_file_error(py: Python<'_>, e: &coulomb::input::InputError) -> PyErr {
+    use coulomb::input::InputReason;
+    match &e.reason {
+        InputReason::Open(io) | InputReason::Read(io) => os_error(io, &e.path),
+        InputReason::NotRegular(coulomb::atomic::NotRegular::Directory) => {
+            PyIsADirectoryError::new_err((21, e.to_string(), e.path.display().to_string()))
+        }
+        _ => input_error(py, "path", None, e.to_string()),
+    }
 }
 
 /// An operating-system failure on `path` as the matching `OSError` subclass, with errno, the

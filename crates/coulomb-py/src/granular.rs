@@ -78,7 +78,10 @@ pub(crate) fn apply_to_model<'py>(
         match name.as_str() {
             "h" => step.h = real(&name, &v)?,
             "theta" => step.theta = real(&name, &v)?,
-            "tol" => step.tol = real(&name, &v)?,
+            "tol" => {
+                step.tol = real(&name, &v)?;
+                coulomb::settings::check_tol(step.tol).map_err(PyValueError::new_err)?;
+            }
             "method" => step.method = step_choice(&v)?,
             "max_sweeps" => step.max_sweeps = count(&name, &v)?,
             "relaxation" => step.relaxation = real(&name, &v)?,
@@ -118,9 +121,7 @@ fn set_param(p: &mut Params, name: &str, v: &Bound<'_, PyAny>) -> PyResult<()> {
         }
         "tol" => {
             let t = real(name, v)?;
-            if !(t.is_finite() && t > 0.0) {
-                return Err(PyValueError::new_err(format!("tol = {t} must be positive")));
-            }
+            coulomb::settings::check_tol(t).map_err(PyValueError::new_err)?;
             p.solver.tol = t;
             if let StepMethod::Nsgs(s) = &mut p.method {
                 s.tol = t;
@@ -235,6 +236,13 @@ impl PySimulation {
                 names.join(", ")
             ))
         })?;
+        // the memory of the scene from `beads`, before anything is built
+        coulomb_granular::model::check_memory(
+            beads,
+            0,
+            coulomb_granular::model::available_memory(),
+        )
+        .map_err(|e| crate::errors::scene_error(py, &e))?;
         let mut model = py.detach(move || scene.model(beads, seed, &BoxLayout::for_beads(beads)));
         let rest = apply_to_model(&mut model, params)?;
         // the built-in arrangements are loose by construction: the data are validated, the

@@ -258,6 +258,13 @@ pub(crate) fn scene_fill<'py>(
     let is_mesh = region.get("kind").and_then(Value::as_str) == Some("mesh");
     let args: FillArgs =
         serde_json::from_str(spec).map_err(|e| fill_err("fill", format!("fill: {e}")))?;
+    // the memory of what the fill would build, from its count, before anything is generated
+    coulomb_granular::model::check_memory(
+        args.count.saturating_add(avoid_radii.len().unwrap_or(0)),
+        0,
+        coulomb_granular::model::available_memory(),
+    )
+    .map_err(|e| fill_err("count", format!("fill: {e}")))?;
     let pos = flat3("avoid_positions", &avoid_positions)?;
     let rad = convert::slice("avoid_radii", &avoid_radii)?;
     let avoid: Vec<(Vec3, f64)> = pos.into_iter().zip(rad.iter().copied()).collect();

@@ -79,7 +79,7 @@ impl fmt::Display for NotRegular {
 impl NotRegular {
     /// The kind of `file_type`, None for a regular file (or a symbolic link, resolved by the
     /// caller).
-    fn of(file_type: std::fs::FileType) -> Option<Self> {
+    pub(crate) fn of(file_type: std::fs::FileType) -> Option<Self> {
         if file_type.is_file() || file_type.is_symlink() {
             return None;
         }
@@ -251,6 +251,7 @@ pub fn temp_name(path: &Path) -> PathBuf {
 pub fn write(path: impl AsRef<Path>, bytes: impl AsRef<[u8]>) -> std::io::Result<()> {
     let (path, bytes) = (path.as_ref(), bytes.as_ref());
     let dest = destination(path)?;
+    remove_stale_temps_once(&dest);
     let tmp = temp_name(&dest);
     let result = (|| {
         let mut f = std::fs::OpenOptions::new()
@@ -267,6 +268,70 @@ pub fn write(path: impl AsRef<Path>, bytes: impl AsRef<[u8]>) -> std::io::Result
         let _ = std::fs::remove_file(&tmp);
     }
     result
+}
+
+/// The process id in a temporary name of [`temp_name`] (`.NAME.tmp-PID-K`), `None` for any
+/// other name.
+fn temp_pid(file_name: &str) -> Option<u32> {
+    let rest = file_name.strip_prefix('.')?;
+    let at = rest.rfind(".tmp-")?;
+    let (pid, k) = rest[at + 5..].split_once('-')?;
+    if pid.is_empty() || k.is_empty() || !k.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    pid.parse()
+        .ok()
+        .filter(|_| pid.bytes().all(|b| b.is_ascii_digit()))
+}
+
+/// Removes from `dir` the temporary files of [`write()`] left by processes that no longer run
+/// (a `kill -9` or a power cut between the creation and the rename; every error path of
+/// [`write()`] removes its own). A file is removed only when its name is exactly a temporary
+/// name (`.NAME.tmp-PID-K`), it is a regular file, and no process PID exists (Linux: no
+/// `/proc/PID`; elsewhere nothing is removed). A PID reused by another process keeps the file
+/// (the safe side). Returns the number removed.
+pub fn remove_stale_temps(dir: &Path) -> usize {
+    let proc_fs = Path::new("/proc/self").exists();
+    if !proc_fs {
+        return 0;
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return 0;
+    };
+    let mut removed = 0;
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(pid) = name.to_str().and_then(temp_pid) else {
+            continue;
+        };
+        if pid == std::process::id() || Path::new(&format!("/proc/{pid}")).exists() {
+            continue;
+        }
+        let is_file = entry.file_type().is_ok_and(|t| t.is_file());
+        if is_file && std::fs::remove_file(entry.path()).is_ok() {
+            removed += 1;
+        }
+    }
+    removed
+}
+
+/// [`remove_stale_temps`] in the folder of `dest`, once per folder and process (the first
+/// write there), so that a run writing thousands of frames reads its folder once.
+fn remove_stale_temps_once(dest: &Path) {
+    static CLEANED: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+    let dir = match dest.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let Ok(mut cleaned) = CLEANED.lock() else {
+        return;
+    };
+    if cleaned.contains(&dir) {
+        return;
+    }
+    cleaned.push(dir.clone());
+    drop(cleaned);
+    remove_stale_temps(&dir);
 }
 
 /// Renames `tmp`, a finished file written by someone else (e.g. a plotting backend) next to
@@ -296,6 +361,34 @@ pub fn check_writable(path: &Path) -> std::io::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The temporary files of a dead process are removed by the first write into their
+    /// folder; those of a live process (this one, PID 1), other dot files and a directory of
+    /// a temporary name are kept (issue 55: stale `.tmp-PID` files were never removed).
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn stale_temporaries_of_dead_processes_are_removed() {
+        let dir = scratch("stale");
+        // a PID above the kernel's maximum (4194304) never runs
+        let dead = dir.join(".stats.csv.tmp-4999999-3");
+        let live = dir.join(format!(".x.tmp-{}-0", std::process::id()));
+        let init = dir.join(".y.tmp-1-0");
+        let other = dir.join(".stats.csv.tmp-abc-1");
+        let folder = dir.join(".z.tmp-4999999-1");
+        for p in [&dead, &live, &init, &other] {
+            std::fs::write(p, b"partial").unwrap();
+        }
+        std::fs::create_dir(&folder).unwrap();
+        assert_eq!(temp_pid(".stats.csv.tmp-4999999-3"), Some(4_999_999));
+        assert_eq!(temp_pid(".stats.csv.tmp-abc-1"), None);
+        assert_eq!(temp_pid("stats.csv"), None);
+        write(dir.join("out.txt"), b"x").unwrap();
+        assert!(!dead.exists());
+        for p in [&live, &init, &other, &folder] {
+            assert!(p.exists(), "{}", p.display());
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     fn scratch(tag: &str) -> PathBuf {
         let dir = std::env::temp_dir().join(format!("coulomb-atomic-{tag}-{}", std::process::id()));

@@ -74,6 +74,7 @@ pub mod examples;
 pub mod existence;
 pub mod fclib;
 pub mod inner;
+pub mod input;
 pub mod law;
 pub mod levenberg;
 pub mod linalg;

@@ -645,8 +645,8 @@ impl Settings {
     /// Checks every field; the error names the first bad one.
     pub fn validate(&self) -> Result<(), crate::solution::SolveError> {
         let bad = |m: &str| Err(crate::solution::SolveError::Settings(m.to_string()));
-        if self.tol.is_nan() || self.tol <= 0.0 || self.tol.is_infinite() {
-            return bad("tol must be positive and finite");
+        if let Err(m) = check_tol(self.tol) {
+            return bad(&m);
         }
         if self.max_outer == 0 || self.max_inner == 0 {
             return bad("max_outer and max_inner must be at least 1");
@@ -675,6 +675,21 @@ impl Settings {
         p.tuning
             .validate()
             .map_err(crate::solution::SolveError::Settings)
+    }
+}
+
+/// The tolerances accepted everywhere (the CLI's `--tol`, a scene file's `step.tol`, Python's
+/// `set_solver(tol=…)` and `Simulation(tol=…)`, [`Settings::validate`]): finite, above 0 and
+/// below 1. The error of `docs/error.md` is relative (abs_err / max(‖q‖, ‖r‖, ‖u‖)), so a
+/// tolerance of 1 or more accepts any r — "converged" would mean nothing (issue 55: `tol =
+/// 1e300` was accepted).
+pub fn check_tol(tol: f64) -> Result<(), String> {
+    if tol.is_finite() && tol > 0.0 && tol < 1.0 {
+        Ok(())
+    } else {
+        Err(format!(
+            "tol = {tol} must be above 0 and below 1 (the error of docs/error.md is relative: 1 accepts any answer)"
+        ))
     }
 }
 

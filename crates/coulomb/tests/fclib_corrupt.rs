@@ -165,9 +165,13 @@ fn fclib_corrupt_not_hdf5_and_truncated() {
     println!("truncation error kinds: {kinds:?}");
     assert!(kinds.contains_key("Corrupt") || kinds.contains_key("MissingGroup"));
 
-    // A missing file is an Io error naming it.
+    // A missing file is an input error (coulomb::input) naming it, the OS's reason once.
     let err = fclib::read(std::path::Path::new("/nonexistent/x.hdf5")).unwrap_err();
-    assert!(matches!(err.kind, FclibErrorKind::Io(_)));
+    assert!(matches!(
+        &err.kind,
+        FclibErrorKind::Input(coulomb::input::InputReason::Open(e)) if e.kind() == std::io::ErrorKind::NotFound
+    ));
+    assert_eq!(err.to_string().matches("os error 2").count(), 1, "{err}");
     assert!(err.to_string().contains("/nonexistent/x.hdf5"));
 }
 

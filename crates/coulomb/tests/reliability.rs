@@ -287,7 +287,21 @@ fn needs_shared_reliability_large_tolerances_do_not_panic_on_fclib() {
 }
 
 fn large_tolerances_on(problem: &Problem) {
-    for tol in [0.06, 0.3, 1.0, 1e3] {
+    // a tolerance of 1 or more accepts any answer of the relative error: refused (issue 55)
+    for tol in [1.0, 1e3, 1e300] {
+        let s = Settings {
+            tol,
+            ..Settings::default()
+        };
+        assert!(
+            matches!(
+                solver::solve(problem, &s),
+                Err(solver::SolveError::Settings(_))
+            ),
+            "{tol}"
+        );
+    }
+    for tol in [0.06, 0.3, 0.99] {
         for base in [
             Settings::default(),
             Settings::method(solver::InnerKind::Apgd, solver::OuterKind::FixedPoint),

@@ -20,7 +20,7 @@ pub struct Args {
     #[arg(long, value_delimiter = ',', default_value = "all")]
     pub solvers: Vec<String>,
     /// Tolerance on the error of docs/error.md (and on the balance residual of global problems)
-    #[arg(long, default_value_t = 1e-8, value_parser = crate::values::positive)]
+    #[arg(long, default_value_t = 1e-8, value_parser = crate::values::tolerance)]
     pub tol: f64,
     /// Time limit of each solve, in seconds (at most one week)
     #[arg(long, value_name = "SECONDS", default_value_t = 60.0, value_parser = crate::values::time_limit)]

@@ -16,7 +16,7 @@ pub struct Args {
     pub solution: Option<PathBuf>,
     /// Tolerance at which the result counts as a solution (err ≤ tol and, for a global
     /// problem, balance residual ≤ tol)
-    #[arg(long, default_value_t = 1e-8, value_parser = crate::values::positive)]
+    #[arg(long, default_value_t = 1e-8, value_parser = crate::values::tolerance)]
     pub tol: f64,
     /// Also list the K contacts with the largest natural-map residual ‖eᵢ‖ (where the error
     /// lives), with their r and recomputed u

@@ -40,7 +40,7 @@ pub struct Table1Args {
     #[arg(long, default_value_t = 300, value_parser = crate::values::count)]
     pub steps: usize,
     /// tolerance on the reported error (docs/error.md) for "converged"
-    #[arg(long, default_value_t = 1e-4, value_parser = crate::values::positive)]
+    #[arg(long, default_value_t = 1e-4, value_parser = crate::values::tolerance)]
     pub tol: f64,
     /// ε of the outer rule (6.1) (the paper's 0.01); 0 disables it, so that only err ≤ tol or
     /// the cap ends a step
@@ -148,7 +148,7 @@ pub struct ScalingArgs {
     #[arg(long)]
     pub accurate: bool,
     /// accurate mode: tolerance on the error of docs/error.md at every step
-    #[arg(long, default_value_t = 1e-4, value_parser = crate::values::positive)]
+    #[arg(long, default_value_t = 1e-4, value_parser = crate::values::tolerance)]
     pub tol: f64,
     /// accurate mode: thread counts to run each size with (default: 1 and all cores)
     #[arg(long, value_delimiter = ',', value_parser = crate::values::threads)]

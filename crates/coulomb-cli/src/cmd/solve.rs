@@ -21,7 +21,7 @@ pub struct Args {
     #[arg(long, value_parser = crate::method::outer())]
     pub outer: Option<OuterKind>,
     /// Tolerance on the error of docs/error.md (and the balance residual)
-    #[arg(long, default_value_t = 1e-8, value_parser = crate::values::positive)]
+    #[arg(long, default_value_t = 1e-8, value_parser = crate::values::tolerance)]
     pub tol: f64,
     /// Cap on outer iterations
     #[arg(long, value_name = "N", value_parser = crate::values::count)]

@@ -22,6 +22,9 @@ pub enum FclibErrorKind {
     /// The file could not be opened, read or written.
     #[error("{0}")]
     Io(#[from] std::io::Error),
+    /// The path is not a regular file of bounded size ([`crate::input`]).
+    #[error("the FCLIB file {0}")]
+    Input(crate::input::InputReason),
     /// The file does not start with the HDF5 signature.
     #[error("not an HDF5 file (no HDF5 signature)")]
     NotHdf5,
@@ -128,7 +131,7 @@ impl FclibError {
             | Unsupported { path, .. }
             | Write { path, .. } => Some(path),
             InvalidProblem { group, .. } => Some(group),
-            Io(_) | NotHdf5 => None,
+            Io(_) | Input(_) | NotHdf5 => None,
         }
     }
 }

@@ -147,6 +147,13 @@ fn file_name(path: &Path) -> String {
     path.display().to_string()
 }
 
+/// The bytes of the FCLIB file `path`, read through the checked reader of [`crate::input`]
+/// (a regular file of at most [`crate::input::Kind::Fclib`]'s limit).
+fn read_input(path: &Path) -> Result<Vec<u8>, FclibError> {
+    crate::input::read(path, crate::input::Kind::Fclib)
+        .map_err(|e| FclibError::new(&file_name(path), FclibErrorKind::Input(e.reason)))
+}
+
 /// Reads an FCLIB file: the problem (validated strictly), info, solution and guesses.
 pub fn read(path: &Path) -> Result<FclibFile, FclibError> {
     read_with(path, &ReadOptions::default())
@@ -155,7 +162,7 @@ pub fn read(path: &Path) -> Result<FclibFile, FclibError> {
 /// Reads an FCLIB file with the given options.
 pub fn read_with(path: &Path, options: &ReadOptions) -> Result<FclibFile, FclibError> {
     let name = file_name(path);
-    let bytes = std::fs::read(path).map_err(|e| FclibError::new(&name, e.into()))?;
+    let bytes = read_input(path)?;
     read_bytes_with(&name, bytes, options)
 }
 
@@ -182,7 +189,7 @@ pub fn read_lenient(
     options: &ReadOptions,
 ) -> Result<(FclibFile, Vec<FclibError>), FclibError> {
     let name = file_name(path);
-    let bytes = std::fs::read(path).map_err(|e| FclibError::new(&name, e.into()))?;
+    let bytes = read_input(path)?;
     let mut dropped = Vec::new();
     let file = read::Reader::open(&name, bytes)?.fclib_file_with(options, Some(&mut dropped))?;
     Ok((file, dropped))
@@ -193,7 +200,7 @@ pub fn read_lenient(
 /// Check the lengths with [`StoredSolution::check_lengths`] before use.
 pub fn read_solution(path: &Path) -> Result<Option<StoredSolution>, FclibError> {
     let name = file_name(path);
-    let bytes = std::fs::read(path).map_err(|e| FclibError::new(&name, e.into()))?;
+    let bytes = read_input(path)?;
     let reader = read::Reader::open(&name, bytes)?;
     if !reader.has_group("solution")? {
         return Ok(None);

@@ -417,7 +417,7 @@ pub fn input_file_error(py: Python<'_>, e: &coulomb::input::InputError) -> PyErr
 
 /// An operating-system failure on `path` as the matching `OSError` subclass, with errno, the
 /// message and the file name.
-fn os_error(source: &std::io::Error, path: &std::path::Path) -> PyErr {
+pub(crate) fn os_error(source: &std::io::Error, path: &std::path::Path) -> PyErr {
     let args = (
         source.raw_os_error().unwrap_or(0),
         source.to_string(),
@@ -428,5 +428,15 @@ fn os_error(source: &std::io::Error, path: &std::path::Path) -> PyErr {
         std::io::ErrorKind::PermissionDenied => PyPermissionError::new_err(args),
         std::io::ErrorKind::IsADirectory => PyIsADirectoryError::new_err(args),
         _ => PyOSError::new_err(args),
+    }
+}
+
+/// An error of the output-folder layer (`coulomb_granular::output_dir`) on `dir`: a refused
+/// name (a link, folder or special file where an output goes) → `ValueError` with the
+/// message; other I/O failures → the matching `OSError`.
+pub(crate) fn output_error(e: std::io::Error, dir: &std::path::Path) -> PyErr {
+    match coulomb::atomic::refusal(&e) {
+        Some(r) => PyValueError::new_err(r.to_string()),
+        None => os_error(&e, dir),
     }
 }

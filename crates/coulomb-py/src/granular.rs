@@ -212,6 +212,9 @@ fn stats_to_py<'py>(
 #[pyclass(name = "_Simulation", module = "coulomb._coulomb")]
 pub struct PySimulation {
     sim: Simulation,
+    /// the folder of `write_frames` and its writer (the collections continue while the
+    /// same folder is given)
+    frames: Option<(PathBuf, coulomb_granular::output::VtkWriter)>,
 }
 
 #[pymethods]
@@ -502,6 +505,25 @@ impl PySimulation {
             .map_err(|e| crate::errors::checkpoint_error(py, e))
     }
 
+    /// Writes the current state as a ParaView frame into the folder `dir` with the writer of
+    /// `coulomb simulate --output` (`frames/beads_KKKKKK.vtp`, contacts, obstacles and the
+    /// `.pvd` collections; links and special files there refused, nothing written through a
+    /// link: `coulomb_granular::output_dir`). Called again with the same folder, the frame is
+    /// added to its collections; with another folder, new collections start there.
+    fn write_frames(&mut self, py: Python<'_>, dir: PathBuf) -> PyResult<()> {
+        let (sim, frames) = (&self.sim, &mut self.frames);
+        let target = dir.clone();
+        py.detach(move || {
+            if frames.as_ref().is_none_or(|(d, _)| *d != dir) {
+                let w = coulomb_granular::output::VtkWriter::new(&dir)?;
+                *frames = Some((dir.clone(), w));
+            }
+            let (_, w) = frames.as_mut().expect("set above");
+            w.frame(sim)
+        })
+        .map_err(|e| crate::errors::output_error(e, &target))
+    }
+
     /// Whether `other` has this simulation's gravity and obstacles (the check that a scene
     /// given to `load_checkpoint` for its inlets is the stored run's).
     fn same_setup(&self, other: &PySimulation) -> bool {
@@ -514,7 +536,7 @@ impl PySimulation {
     #[staticmethod]
     fn load_checkpoint(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
         py.detach(|| Simulation::load_checkpoint(&path))
-            .map(|sim| Self { sim })
+            .map(|sim| Self { sim, frames: None })
             .map_err(|e| crate::errors::checkpoint_error(py, e))
     }
 }
@@ -539,7 +561,7 @@ impl PySimulation {
         let sim = py
             .detach(move || Simulation::new(world, p))
             .map_err(sim_error)?;
-        Ok(Self { sim })
+        Ok(Self { sim, frames: None })
     }
 }
 

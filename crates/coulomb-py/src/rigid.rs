@@ -21,6 +21,8 @@ use std::sync::Arc;
 #[pyclass(name = "_RigidSimulation", module = "coulomb._coulomb")]
 pub struct PyRigidSimulation {
     scene: RigidScene,
+    /// the folder of `write_frames` and its writer
+    frames: Option<(PathBuf, coulomb_granular::output::RigidVtkWriter)>,
 }
 
 fn rows<'py, const N: usize>(py: Python<'py>, v: &[[f64; N]]) -> Bound<'py, PyAny> {
@@ -35,7 +37,10 @@ fn build(py: Python<'_>, model: SceneModel) -> PyResult<PyRigidSimulation> {
     let scene = py
         .detach(move || RigidScene::new(&model))
         .map_err(|e| crate::errors::scene_error(py, &e))?;
-    Ok(PyRigidSimulation { scene })
+    Ok(PyRigidSimulation {
+        scene,
+        frames: None,
+    })
 }
 
 #[pymethods]
@@ -167,6 +172,23 @@ impl PyRigidSimulation {
         self.scene.world.steps()
     }
 
+    /// Writes the current state as a ParaView frame into the folder `dir` with the writer of
+    /// `coulomb simulate --output` (each body as its shape's polygons; the same folder
+    /// safety as the sphere frames).
+    fn write_frames(&mut self, py: Python<'_>, dir: PathBuf) -> PyResult<()> {
+        let (scene, frames) = (&self.scene, &mut self.frames);
+        let target = dir.clone();
+        py.detach(move || {
+            if frames.as_ref().is_none_or(|(d, _)| *d != dir) {
+                let w = coulomb_granular::output::RigidVtkWriter::new(&dir, scene)?;
+                *frames = Some((dir.clone(), w));
+            }
+            let (_, w) = frames.as_mut().expect("set above");
+            w.frame(scene)
+        })
+        .map_err(|e| crate::errors::output_error(e, &target))
+    }
+
     /// Number of bodies.
     fn __len__(&self) -> usize {
         self.scene.world.len()
@@ -193,7 +215,10 @@ impl PyRigidSimulation {
     #[staticmethod]
     fn load_checkpoint(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
         py.detach(|| RigidScene::load_checkpoint(&path))
-            .map(|scene| Self { scene })
+            .map(|scene| Self {
+                scene,
+                frames: None,
+            })
             .map_err(|e| crate::errors::checkpoint_error(py, e))
     }
 

@@ -872,6 +872,16 @@ class Simulation:
         p = self._sim.last_problem
         return None if p is None else Problem._wrap(p)  # type: ignore[return-value]
 
+    def write_frames(self, dir: Union[str, "os.PathLike[str]"]) -> None:
+        """Writes the current state as a ParaView frame into the folder ``dir`` (created), with
+        the writer of ``coulomb simulate --output``: ``frames/*.vtp`` and the ``.pvd``
+        collections (``beads.pvd`` or, for bodies of other shapes, ``bodies.pvd``; with
+        ``contacts.pvd`` and ``obstacles.pvd``). Called again with the same folder, the frame
+        is added to the collections (call it after each :meth:`run`). A link, folder or
+        special file where one of these files goes is refused with ``ValueError``; nothing is
+        written through a link (docs/outputs-and-signals.md)."""
+        self._sim.write_frames(os.fspath(dir))
+
     def save_checkpoint(self, path: Union[str, "os.PathLike[str]"]) -> None:
         """Writes the full state of the simulation (spheres, obstacles, materials, gravity,
         parameters and solver settings, time, step count, warm-start impulses, last contacts)

@@ -302,8 +302,8 @@ pub fn table1(a: Table1, bars: NewSteps<'_>, show: &mut dyn FnMut(&str)) -> anyh
 }
 
 fn read_stats(path: &Path) -> anyhow::Result<Vec<(usize, f64)>> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    // the checked reader of every input (a regular file of bounded size; coulomb::input)
+    let text = coulomb::input::read_to_string(path, coulomb::input::Kind::Text)?;
     let v: serde_json::Value =
         serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
     let Some(arr) = v.as_array() else {

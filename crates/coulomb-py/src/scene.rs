@@ -260,7 +260,7 @@ pub(crate) fn scene_fill<'py>(
         serde_json::from_str(spec).map_err(|e| fill_err("fill", format!("fill: {e}")))?;
     // the memory of what the fill would build, from its count, before anything is generated
     coulomb_granular::model::check_memory(
-        args.count.saturating_add(avoid_radii.len().unwrap_or(0)),
+        args.count.saturating_add(avoid_radii.len()),
         0,
         coulomb_granular::model::available_memory(),
     )

@@ -182,13 +182,17 @@ fn open_checked(path: &Path, kind: Kind, limit: u64) -> Result<(std::fs::File, u
     };
     let file = match open_nonblocking(path) {
         Ok(f) => f,
-        // Opening a directory for reading succeeds on Linux; on other systems it may fail
-        // with "is a directory": say it the same way on both.
-        Err(e) if std::fs::metadata(path).is_ok_and(|m| m.is_dir()) => {
-            let _ = e;
-            return Err(err(InputReason::NotRegular(NotRegular::Directory)));
+        // Opening a socket fails (ENXIO), opening a directory may (EISDIR, not on Linux): say
+        // what the path is rather than the system's reason
+        Err(e) => {
+            let what = std::fs::metadata(path)
+                .ok()
+                .and_then(|m| NotRegular::of(m.file_type()));
+            return Err(err(match what {
+                Some(kind) => InputReason::NotRegular(kind),
+                None => InputReason::Open(e),
+            }));
         }
-        Err(e) => return Err(err(InputReason::Open(e))),
     };
     let meta = file.metadata().map_err(|e| err(InputReason::Read(e)))?;
     if let Some(what) = NotRegular::of(meta.file_type()) {
@@ -315,6 +319,19 @@ mod tests {
         let e = read(&d, Kind::Mesh).unwrap_err();
         assert!(
             matches!(e.reason, InputReason::NotRegular(NotRegular::Directory)),
+            "{e}"
+        );
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn a_socket_is_named_as_one() {
+        let d = tmpdir("socket");
+        let p = d.join("s.csv");
+        let _listener = std::os::unix::net::UnixListener::bind(&p).unwrap();
+        let e = read(&p, Kind::Particles).unwrap_err();
+        assert!(
+            matches!(e.reason, InputReason::NotRegular(NotRegular::Socket)),
             "{e}"
         );
         std::fs::remove_dir_all(&d).unwrap();

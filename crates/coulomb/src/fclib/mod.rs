@@ -151,7 +151,7 @@ fn file_name(path: &Path) -> String {
 /// (a regular file of at most [`crate::input::Kind::Fclib`]'s limit).
 fn read_input(path: &Path) -> Result<Vec<u8>, FclibError> {
     crate::input::read(path, crate::input::Kind::Fclib)
-        .map_err(|e| FclibError::new(&file_name(path), FclibErrorKind::Input(e.reason)))
+        .map_err(|e| FclibError::new(file_name(path), FclibErrorKind::Input(e.reason)))
 }
 
 /// Reads an FCLIB file: the problem (validated strictly), info, solution and guesses.

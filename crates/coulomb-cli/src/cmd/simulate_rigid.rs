@@ -40,6 +40,8 @@ struct RigidSummary {
 /// command line: [`crate::scene_arg`]).
 pub fn run(a: &Args, scene: &BuiltScene) -> anyhow::Result<Outcome> {
     let file = scene.path.display().to_string();
+    coulomb_granular::rigid_scene::check_step_section(&scene.step)
+        .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
     let rigid = RigidScene::new(&scene.model).with_context(|| file.clone())?;
     if !scene.inlets.is_empty() {
         anyhow::bail!(

@@ -222,7 +222,7 @@ fn edge_query(
             let eb = b.v[vb[1]] - q0;
             let axis = ea.cross(eb);
             let len = axis.length();
-            if !(len > 1e-9 * ea.length() * eb.length()) {
+            if len.is_nan() || len <= 1e-9 * ea.length() * eb.length() {
                 continue; // parallel edges: a face axis covers them
             }
             let mut n = axis / len;
@@ -276,10 +276,10 @@ fn closest_points(p0: Vector, p1: Vector, q0: Vector, q1: Vector) -> (Vector, Ve
 /// Mixes two feature ids and a side-plane index into one id (order-free in the two ids).
 fn crossing_id(p: u32, q: u32, side: usize) -> u32 {
     let (lo, hi) = (p.min(q), p.max(q));
-    lo.wrapping_mul(0x9E37_79B1)
+    let mixed = lo.wrapping_mul(0x9E37_79B1)
         ^ hi.wrapping_mul(0x85EB_CA77).rotate_left(13)
-        ^ (side as u32).wrapping_mul(0xC2B2_AE3D)
-        | 0x4000_0000
+        ^ (side as u32).wrapping_mul(0xC2B2_AE3D);
+    mixed | 0x4000_0000
 }
 
 /// The manifold of A (`pa` at `pose_a`) and B (`pb` at `pose_b`): every point whose gap is
@@ -294,18 +294,18 @@ pub fn manifold(
     let a = place(pa, pose_a);
     let b = place(pb, pose_b);
     let (sa, fa) = face_query(pa, &a, &b);
-    if !(sa <= prediction) {
+    if sa.is_nan() || sa > prediction {
         return Vec::new();
     }
     let (sb, fb) = face_query(pb, &b, &a);
-    if !(sb <= prediction) {
+    if sb.is_nan() || sb > prediction {
         return Vec::new();
     }
     let size = pa.size.min(pb.size);
     let tol = 1e-6 * size;
     let edge = edge_query(pa, &a, pb, &b);
     if let Some((se, _, _, _)) = edge {
-        if !(se <= prediction) {
+        if se.is_nan() || se > prediction {
             return Vec::new();
         }
     }
@@ -350,7 +350,7 @@ pub fn manifold(
         let r1 = r.v[ref_ids[(k + 1) % m]];
         let side = (r1 - r0).cross(nr);
         let len = side.length();
-        if !(len > 0.0) {
+        if len.is_nan() || len <= 0.0 {
             continue;
         }
         let side = side / len;
@@ -382,7 +382,7 @@ pub fn manifold(
     let mut points: Vec<PolyPoint> = Vec::with_capacity(poly.len());
     for (p, id) in poly {
         let gap = nr.dot(p) - dr;
-        if !(gap <= prediction) || !p.is_finite() {
+        if gap.is_nan() || gap > prediction || !p.is_finite() {
             continue;
         }
         let point = p - 0.5 * gap * nr;

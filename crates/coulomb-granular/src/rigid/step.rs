@@ -318,7 +318,7 @@ impl RigidWorld {
                 continue;
             }
             let travel = h * (b.v.length() + b.omega.length() * b.reach);
-            if !(travel <= *w) {
+            if travel.is_nan() || travel > *w {
                 return Err(RigidError::Settings(format!(
                     "time step h = {h} is too large for body {i}: at its initial speed it travels {travel:.3e} m in one step, more than half its thinnest width {w:.3e} m (it could pass through a wall or a body); use h <= {:.3e} or a lower speed",
                     h * w / travel.max(f64::MIN_POSITIVE)
@@ -781,7 +781,7 @@ impl RigidWorld {
             .all(|o| matches!(o.motion, Motion::Fixed));
         let allowed =
             ENERGY_GROWTH_BOUND * kinetic_before.max(kinetic_after) + 1e-12 * self.energy_scale();
-        let energy_grew = fixed_obstacles && !(gained <= allowed);
+        let energy_grew = fixed_obstacles && (gained.is_nan() || gained > allowed);
         let physics_check = if too_deep {
             "penetration"
         } else if energy_grew {
@@ -943,7 +943,7 @@ fn correct_positions(
     target: f64,
 ) -> Option<Vec<[f64; 6]>> {
     let worst = end_gaps.iter().map(|g| -g).fold(0.0, f64::max);
-    if !(worst > trigger) {
+    if worst.is_nan() || worst <= trigger {
         return None;
     }
     let mut dq = vec![[0.0; 6]; problem.mass.len()];
@@ -966,7 +966,7 @@ fn correct_positions(
     for _ in 0..200 {
         let mut worst: f64 = 0.0;
         for (i, row) in problem.rows.iter().enumerate() {
-            if !(w[i] > 0.0) {
+            if w[i].is_nan() || w[i] <= 0.0 {
                 continue;
             }
             let mut g = end_gaps[i];

@@ -134,3 +134,46 @@ fn a_rigid_run_restarts_to_the_bit() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("not the scene of the checkpoint"));
 }
+
+/// Issues 52 (item 3) and 55 (item 6): a rigid scene with h = 100 s, a cube thrown at
+/// 1e8 m/s, rolling friction or `gamma`/`projection = false` exits 2 naming the setting
+/// (before: h = 100 and the cube ran to the end with every step "converged", exit 0; the
+/// settings were dropped).
+#[test]
+fn unsafe_steps_and_unhonoured_settings_exit_2() {
+    let dir = temp_dir("rigid-unsafe");
+    let cube = |step: &str, pair: &str, velocity: &str| {
+        format!(
+            "[step]\nsteps = 5\n{step}\n[default_pair]\nmu = 0.5\n{pair}\n\
+             [[obstacles]]\nname = \"floor\"\nshape = {{ kind = \"plane\", point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }}\n\
+             [[bodies]]\ndensity = 1000\nshape = {{ kind = \"cuboid\", half_extents = [0.1, 0.1, 0.1] }}\npositions = [[0.0, 0.0, 0.1]]\nvelocity = {velocity}\n"
+        )
+    };
+    for (text, words) in [
+        (cube("h = 100.0", "", "[0.0, 0.0, 0.0]"), "h = 100"),
+        (cube("h = 0.001", "", "[0.0, 0.0, -1e8]"), "travels"),
+        (
+            cube("h = 0.001", "rolling_friction = 0.5", "[0.0, 0.0, 0.0]"),
+            "rolling_friction = 0.5",
+        ),
+        (
+            cube("h = 0.001\ngamma = 0.5", "", "[0.0, 0.0, 0.0]"),
+            "gamma = 0.5",
+        ),
+        (
+            cube("h = 0.001\nprojection = false", "", "[0.0, 0.0, 0.0]"),
+            "projection = false",
+        ),
+    ] {
+        let path = dir.join("cube.toml");
+        std::fs::write(&path, &text).unwrap();
+        let o = coulomb(&["simulate", path.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{text}\n{err}");
+        assert!(err.contains(words), "{err}");
+    }
+    // the same cube at rest with h = 1e-3 runs
+    let path = dir.join("cube.toml");
+    std::fs::write(&path, cube("h = 0.001", "", "[0.0, 0.0, 0.0]")).unwrap();
+    ok(&coulomb(&["simulate", path.to_str().unwrap()]));
+}

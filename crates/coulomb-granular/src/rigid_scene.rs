@@ -57,6 +57,72 @@ fn invalid(what: &str, reason: impl Into<String>) -> SceneError {
     }
 }
 
+/// Refuses the settings of `model` that the rigid-body step cannot honour (issue 52, item 3:
+/// a setting means the same in every scene, or is refused, never dropped): rolling friction
+/// (not modelled between bodies of a scene with other shapes; the refusal names the
+/// material pair), `method = "library"` (the rigid step is Gauss–Seidel finished by the
+/// library where it stalls: `nsgs`), and a `relaxation` other than the default 1.5 (the rigid
+/// Gauss–Seidel does not over-relax).
+fn check_settings(
+    model: &SceneModel,
+    table: &crate::world::MaterialTable,
+) -> Result<(), SceneError> {
+    let n = table.names.len();
+    for a in 0..n {
+        for b in a..n {
+            if let Some(law) = table.law(a as u32, b as u32) {
+                if law.rolling_friction != 0.0 {
+                    return Err(SceneError::InvalidStep(format!(
+                        "rolling_friction = {} between materials '{}' and '{}' cannot apply: rolling resistance is not modelled in scenes with bodies of other shapes than spheres; set it to 0 for this pair or use spheres only",
+                        law.rolling_friction, table.names[a], table.names[b]
+                    )));
+                }
+            }
+        }
+    }
+    if model.step.method != crate::model::StepChoice::Nsgs {
+        return Err(SceneError::InvalidStep(
+            "method = \"library\" cannot apply to a scene with bodies of other shapes than spheres: its steps are solved by nsgs, finished by the library where it stalls; use method = \"nsgs\"".into(),
+        ));
+    }
+    let default_relaxation = crate::model::StepSettings::default().relaxation;
+    if model.step.relaxation != default_relaxation {
+        return Err(SceneError::InvalidStep(format!(
+            "relaxation = {} cannot apply to a scene with bodies of other shapes than spheres: their Gauss–Seidel does not over-relax; remove relaxation",
+            model.step.relaxation
+        )));
+    }
+    Ok(())
+}
+
+/// Refuses the `[step]` settings of a scene file that the rigid-body step cannot honour
+/// (`Err` names the setting): its activation uses γ = 1, it always closes the gaps of resting
+/// contacts, warm starts, and corrects positions (`projection = true`, the default; the
+/// correction is [`RigidSettings::position_correction`]).
+pub fn check_step_section(step: &crate::scene_file::StepSection) -> Result<(), String> {
+    let no = |what: String| {
+        Err(format!(
+            "[step] {what} cannot apply to a scene with bodies of other shapes than spheres; remove it"
+        ))
+    };
+    if step.gamma != 1.0 {
+        return no(format!(
+            "gamma = {} (their activation uses gamma = 1)",
+            step.gamma
+        ));
+    }
+    if !step.projection {
+        return no("projection = false (their positions are always corrected)".into());
+    }
+    if !step.gap_closure {
+        return no("gap_closure = false (their resting contacts always close their gaps)".into());
+    }
+    if !step.warm_start {
+        return no("warm_start = false (their steps are always warm started)".into());
+    }
+    Ok(())
+}
+
 /// The mass properties of a body spec: from the density, or scaled to `mass`, its inertia
 /// replaced by `inertia`.
 fn body_mass(b: &BodySpec, shape: &SharedShape, what: &str) -> Result<MassProperties, SceneError> {
@@ -236,6 +302,7 @@ impl RigidScene {
         };
         let sphere_world = spheres_only.world()?;
         let (table, _) = model.material_table()?;
+        check_settings(model, &table)?;
         let material = |what: &str, name: &str| {
             table
                 .index(name)

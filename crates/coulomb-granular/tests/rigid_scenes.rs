@@ -59,3 +59,59 @@ fn every_shipped_rigid_scene_parses_builds_and_runs_two_steps() {
         .unwrap();
     assert_eq!(rocks.model.bodies.len(), 500);
 }
+
+/// A sphere rolling on a floor and one cuboid lying 5 m away, with the given `[default_pair]`
+/// and `[step]` lines.
+fn ball_and_box(pair: &str, step: &str) -> LoadedScene {
+    let text = format!(
+        "[step]\nh = 0.001\nsteps = 10\ntol = 1e-8\n{step}\n\
+         [default_pair]\nmu = 0.5\nrestitution = 0.0\n{pair}\n\
+         [[obstacles]]\nname = \"floor\"\nshape = {{ kind = \"plane\", point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }}\n\
+         [[bodies]]\nspheres = [[0.0, 0.0, 0.1, 0.1]]\nvelocity = [1.0, 0.0, 0.0]\n\
+         [[bodies]]\ndensity = 1000\nshape = {{ kind = \"cuboid\", half_extents = [0.1, 0.1, 0.1] }}\npositions = [[5.0, 0.0, 0.1]]\n"
+    );
+    LoadedScene::parse(std::path::Path::new("ball-and-box.toml"), text, true)
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Issue 52, item 3: settings the rigid-body step cannot honour are refused with a message
+/// naming them (before: rolling_friction 0.5 gave the kinetic energy of 0 to the last digit,
+/// `method`, `relaxation`, `gamma`, `projection` were dropped).
+#[test]
+fn settings_a_scene_with_other_shapes_cannot_honour_are_refused() {
+    let build = |pair: &str, step: &str| {
+        let built = ball_and_box(pair, step)
+            .build(&BuildOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        RigidScene::new(&built.model)
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+    };
+    assert!(build("", "").is_ok());
+    assert!(build("rolling_friction = 0.0", "").is_ok());
+    let e = build("rolling_friction = 0.5", "").unwrap_err();
+    assert!(
+        e.contains("rolling_friction = 0.5") && e.contains("'default' and 'default'"),
+        "{e}"
+    );
+    let e = build("", "method = \"library\"").unwrap_err();
+    assert!(e.contains("method = \"library\""), "{e}");
+    let e = build("", "relaxation = 1.2").unwrap_err();
+    assert!(e.contains("relaxation = 1.2"), "{e}");
+    let step = |line: &str| {
+        let s = ball_and_box("", line);
+        let built = s.build(&BuildOptions::default()).unwrap();
+        coulomb_granular::rigid_scene::check_step_section(&built.step)
+    };
+    assert!(step("").is_ok());
+    assert!(step("gamma = 1.0\nprojection = true").is_ok());
+    for (line, name) in [
+        ("gamma = 0.5", "gamma = 0.5"),
+        ("projection = false", "projection = false"),
+        ("gap_closure = false", "gap_closure = false"),
+        ("warm_start = false", "warm_start = false"),
+    ] {
+        let e = step(line).unwrap_err();
+        assert!(e.contains(name), "{e}");
+    }
+}

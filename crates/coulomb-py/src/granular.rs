@@ -555,6 +555,22 @@ impl PySimulation {
         for (k, v) in rest {
             set_param(&mut p, &k, &v)?;
         }
+        // the g·h² rule of `coulomb simulate` (issue 55: Python skipped it): a sphere must not
+        // fall more than the smallest radius in one step
+        let r_min = world
+            .bodies
+            .iter()
+            .map(|b| b.radius)
+            .fold(f64::INFINITY, f64::min);
+        let g = world.gravity.norm();
+        let fall = g * p.h * p.h;
+        if r_min.is_finite() && fall > r_min {
+            return Err(PyValueError::new_err(format!(
+                "h = {} is too large: a sphere falls g·h² = {fall:.3e} m in one step, more than the smallest radius {r_min} m; use h <= {:.3e}",
+                p.h,
+                (r_min / g).sqrt()
+            )));
+        }
         if let Some(kw) = solver.filter(|d| !d.is_empty()) {
             p.solver = convert::settings_from_kwargs(py, "Simulation", Some(kw))?;
         }

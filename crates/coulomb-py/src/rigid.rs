@@ -33,6 +33,11 @@ fn rows<'py, const N: usize>(py: Python<'py>, v: &[[f64; N]]) -> Bound<'py, PyAn
         .unwrap_or_else(|_| PyArray1::<f64>::zeros(py, 0, false).into_any())
 }
 
+/// Default time step of a rigid scene built in Python (that of the shipped rigid scene files).
+const RIGID_H: f64 = 1e-3;
+/// Default tolerance of a rigid scene built in Python (that of the shipped rigid scene files).
+const RIGID_TOL: f64 = 1e-8;
+
 fn build(py: Python<'_>, model: SceneModel) -> PyResult<PyRigidSimulation> {
     let scene = py
         .detach(move || RigidScene::new(&model))
@@ -61,6 +66,10 @@ impl PyRigidSimulation {
         let mut model = py
             .detach(move || model_from_parts(&json, arrays))
             .map_err(|e| e.into_py(py))?;
+        // the rigid scene files' step defaults (h = 1e-3 s, tol = 1e-8), not the sphere
+        // scenes' 0.02 s and 1e-4 (issue 55: a 10-cube tower sank 5.6 cm at those)
+        model.step.h = RIGID_H;
+        model.step.tol = RIGID_TOL;
         let rest = crate::granular::apply_to_model(&mut model, params)?;
         if let Some((k, _)) = rest.first() {
             return Err(PyTypeError::new_err(format!(
@@ -224,6 +233,22 @@ impl PyRigidSimulation {
 
     /// Whether `other` was built from the same scene (bodies at t = 0, obstacles, materials,
     /// gravity; the step settings, which the checkpoint holds, may differ).
+    /// The step settings and the default contact law the rigid world runs with (h, theta,
+    /// tol, max_sweeps, mu, restitution: the parameters `from_scene` accepts).
+    #[getter]
+    fn params<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let step = &self.scene.model.step;
+        let law = &self.scene.model.materials.default;
+        let d = PyDict::new(py);
+        d.set_item("h", step.h)?;
+        d.set_item("theta", step.theta)?;
+        d.set_item("tol", step.tol)?;
+        d.set_item("max_sweeps", step.max_sweeps)?;
+        d.set_item("mu", law.mu)?;
+        d.set_item("restitution", law.restitution)?;
+        Ok(d)
+    }
+
     fn same_setup(&self, other: &Self) -> bool {
         let step = self.scene.model.step.clone();
         SceneModel {

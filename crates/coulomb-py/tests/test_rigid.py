@@ -130,3 +130,23 @@ def test_a_rigid_checkpoint_continues_to_the_bit(tmp_path):
     damaged.write_bytes(path.read_bytes()[:-200])
     with pytest.raises(coulomb.CheckpointError):
         Simulation.load_checkpoint(damaged)
+
+
+def test_rigid_defaults_are_the_scene_files_and_params_exist():
+    # issue 55: a rigid scene built in Python ran at h = 0.02 s and tol = 1e-4
+    sim = Simulation(_wall(2, 2))
+    assert sim.is_rigid
+    assert sim.params["h"] == 1e-3 and sim.params["tol"] == 1e-8
+    assert Simulation(_wall(2, 2), h=2e-3).params["h"] == 2e-3
+    # an unsafe h is refused, naming it
+    with pytest.raises(ValueError, match="h = 100"):
+        Simulation(_wall(2, 2), h=100.0)
+
+
+def test_sphere_scenes_refuse_an_h_in_which_a_sphere_falls_more_than_its_radius():
+    scene = Scene()
+    scene.add_plane((0, 0, 0), (0, 0, 1))
+    scene.add_spheres([[0.0, 0.0, 0.01]], 0.01)
+    with pytest.raises(ValueError, match="g·h²"):
+        Simulation(scene, h=0.1)
+    assert Simulation(scene, h=1e-3).params["h"] == 1e-3

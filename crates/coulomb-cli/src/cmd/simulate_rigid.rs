@@ -69,6 +69,8 @@ fn rigid_csv_line(r: &coulomb_granular::rigid::RigidStepReport) -> anyhow::Resul
 /// command line: [`crate::scene_arg`]).
 pub fn run(a: &Args, scene: &BuiltScene, inputs: &[PathBuf]) -> anyhow::Result<Outcome> {
     let file = scene.path.display().to_string();
+    coulomb_granular::rigid_scene::check_step_section(&scene.step)
+        .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
     let rigid = RigidScene::new(&scene.model).with_context(|| file.clone())?;
     if !scene.inlets.is_empty() {
         anyhow::bail!(

@@ -32,6 +32,7 @@ use super::parry::query::{
     ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher, PersistentQueryDispatcher,
 };
 use super::parry::shape::SharedShape;
+use super::polytope::{self, Polytope};
 use super::{RigidError, RigidPartner};
 use std::collections::BTreeMap;
 
@@ -74,6 +75,8 @@ pub struct PlacedObstacle<'a> {
 pub struct Detector {
     pairs: BTreeMap<(usize, RigidPartner), PairCache>,
     bvh_workspace: BvhWorkspace,
+    /// each body's polytope (cuboids and convex polyhedra), built at the first detection
+    polytopes: Vec<Option<Polytope>>,
 }
 
 impl std::fmt::Debug for Detector {
@@ -149,7 +152,7 @@ impl Detector {
         }
         Ok(Self {
             pairs,
-            bvh_workspace: BvhWorkspace::default(),
+            ..Self::default()
         })
     }
 
@@ -205,6 +208,11 @@ impl Detector {
         pairs.dedup();
         // drop the caches of pairs that left the broad phase
         let mut old = std::mem::take(&mut self.pairs);
+        if self.polytopes.len() != shapes.len() {
+            self.polytopes = shapes.iter().map(Polytope::of).collect();
+        }
+        let obstacle_polytopes: Vec<Option<Polytope>> =
+            obstacles.iter().map(|o| Polytope::of(o.shape)).collect();
         let dispatcher = DefaultQueryDispatcher;
         let mut points = Vec::new();
         for &(a, b) in &pairs {
@@ -215,6 +223,34 @@ impl Detector {
             };
             let pose_a = poses[a];
             let prediction = margins[a] + margin_b;
+            // two convex polyhedra (not two cuboids): separating axes and face clipping
+            let poly_b = match b {
+                RigidPartner::Body(j) => self.polytopes[j].as_ref(),
+                RigidPartner::Obstacle(o) => obstacle_polytopes[o].as_ref(),
+            };
+            let hull = shapes[a].as_convex_polyhedron().is_some()
+                || shape_b.as_convex_polyhedron().is_some();
+            if let (Some(pa), Some(pb), true) = (self.polytopes[a].as_ref(), poly_b, hull) {
+                let mut seen: BTreeMap<(u32, u32, u32), u32> = BTreeMap::new();
+                for c in polytope::manifold(pa, &pose_a, pb, &pose_b, prediction) {
+                    let ids = (c.sub1, c.sub2, c.feature);
+                    let rank = seen.entry(ids).or_insert(0);
+                    let key = (a, b, ids.0, ids.1, ids.2, 0, *rank);
+                    *rank += 1;
+                    let (t1, t2) = tangent_frame(c.normal);
+                    points.push(ContactPoint {
+                        a,
+                        b,
+                        key,
+                        point: c.point,
+                        normal: c.normal,
+                        t1,
+                        t2,
+                        gap: c.gap,
+                    });
+                }
+                continue;
+            }
             let pos12 = pose_a.inv_mul(&pose_b);
             dispatcher
                 .contact_manifolds(

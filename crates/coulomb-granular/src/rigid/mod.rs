@@ -19,6 +19,7 @@ pub use parry3d_f64 as parry;
 
 pub mod body;
 pub mod contacts;
+pub mod polytope;
 pub mod step;
 pub mod validation;
 
@@ -214,6 +215,11 @@ pub struct RigidSettings {
     /// warm start each contact from the impulse of the same manifold point (parry's
     /// feature ids) at the previous step; default true
     pub warm_start: bool,
+    /// correct the positions after each step when a contact ends deeper than 1e-3 of the
+    /// thinnest half width, down to 1e-4 of it (the sphere scenes' projection,
+    /// [`step`]'s `correct_positions`); positions only, velocities and impulses untouched;
+    /// default true
+    pub position_correction: bool,
     /// keep each step's global problem ([`RigidWorld::last_problem`], `--dump-fclib`);
     /// default true
     pub keep_problem: bool,
@@ -234,6 +240,7 @@ impl Default for RigidSettings {
             activation_delta: 1e-8,
             max_initial_penetration: 1e-8,
             warm_start: true,
+            position_correction: true,
             keep_problem: true,
         }
     }
@@ -334,6 +341,12 @@ pub struct RigidStepReport {
     pub kinetic_energy: f64,
     /// bodies whose free-rotation predictor did not converge to round-off (0 normally)
     pub rotation_unconverged: usize,
+    /// "" when the step passed the physical checks, else the check it failed
+    /// ("penetration": a contact deeper than [`step::PENETRATION_BOUND`] of the thinner
+    /// body's half width; "energy growth": mechanical energy gained beyond
+    /// [`step::ENERGY_GROWTH_BOUND`] with fixed obstacles); the status is then
+    /// [`RigidStatus::NotConverged`]
+    pub physics_check: &'static str,
 }
 
 /// Why a rigid world cannot be built or stepped.

@@ -61,6 +61,8 @@ pub struct RigidWorld {
     detector: Detector,
     /// block index of each body among the moving ones (None: fixed)
     dof: Vec<Option<usize>>,
+    /// half the thinnest width of each body's shape (m): the scale of the physical checks
+    half_width: Vec<f64>,
 }
 
 /// The state a [`RigidWorld`] carries between steps ([`RigidWorld::state`]).
@@ -176,6 +178,7 @@ impl RigidWorld {
         let count = materials.len();
         let mut states = Vec::with_capacity(bodies.len());
         let mut shapes = Vec::with_capacity(bodies.len());
+        let mut half_width = Vec::with_capacity(bodies.len());
         for (i, b) in bodies.into_iter().enumerate() {
             let what = format!("body {i}");
             let q_shape = check_quaternion(&what, b.orientation)?;
@@ -236,6 +239,7 @@ impl RigidWorld {
                 fixed: b.fixed,
                 reach,
             });
+            half_width.push(half_thinnest_width(&b.shape));
             shapes.push(b.shape);
         }
         let mut obstacle_base = Vec::with_capacity(obstacles.len());
@@ -278,9 +282,50 @@ impl RigidWorld {
             previous: BTreeMap::new(),
             detector: Detector::default(),
             dof,
+            half_width,
         };
+        world.check_time_step()?;
         world.check_overlaps()?;
         Ok(world)
+    }
+
+    /// Refuses a time step in which a body falls under gravity (g h²), or travels at its
+    /// initial speed (|v| + |ω| × its reach, h times), more than half its thinnest width: its
+    /// contacts could not be detected before it is through a wall or another body (the rule of
+    /// sphere scenes, the radius replaced by half the thinnest width).
+    fn check_time_step(&self) -> Result<(), RigidError> {
+        let h = self.settings.h;
+        let g = self.gravity.length();
+        let thin = self
+            .half_width
+            .iter()
+            .zip(&self.bodies)
+            .filter(|(_, b)| !b.fixed)
+            .map(|(w, _)| *w)
+            .fold(f64::INFINITY, f64::min);
+        if !thin.is_finite() {
+            return Ok(());
+        }
+        let fall = g * h * h;
+        if fall > thin {
+            return Err(RigidError::Settings(format!(
+                "time step h = {h} is too large: a body falls g·h² = {fall:.3e} m in one step, more than half the thinnest body width {thin:.3e} m; use h <= {:.3e}",
+                (thin / g).sqrt()
+            )));
+        }
+        for (i, (b, w)) in self.bodies.iter().zip(&self.half_width).enumerate() {
+            if b.fixed {
+                continue;
+            }
+            let travel = h * (b.v.length() + b.omega.length() * b.reach);
+            if travel.is_nan() || travel > *w {
+                return Err(RigidError::Settings(format!(
+                    "time step h = {h} is too large for body {i}: at its initial speed it travels {travel:.3e} m in one step, more than half its thinnest width {w:.3e} m (it could pass through a wall or a body); use h <= {:.3e} or a lower speed",
+                    h * w / travel.max(f64::MIN_POSITIVE)
+                )));
+            }
+        }
+        Ok(())
     }
 
     /// Refuses manifold points deeper than `max_initial_penetration` at t = 0.
@@ -455,6 +500,23 @@ impl RigidWorld {
     pub fn kinetic_energy(&self) -> f64 {
         self.bodies.iter().map(BodyState::kinetic_energy).sum()
     }
+    /// Potential energy of gravity, −Σ m g·x over the moving bodies.
+    pub fn potential_energy(&self) -> f64 {
+        self.bodies
+            .iter()
+            .filter(|b| !b.fixed)
+            .map(|b| -b.mass * self.gravity.dot(b.x))
+            .sum()
+    }
+    /// Σ m (|g| (|x| + reach) + |v|²): the scale of the round-off of the energies.
+    fn energy_scale(&self) -> f64 {
+        let g = self.gravity.length();
+        self.bodies
+            .iter()
+            .filter(|b| !b.fixed)
+            .map(|b| b.mass * (g * (b.x.length() + b.reach) + b.v.length_squared()))
+            .sum()
+    }
     /// The last step's active contacts with their impulses.
     pub fn contacts(&self) -> Vec<RigidContact> {
         self.contacts.clone()
@@ -553,11 +615,22 @@ impl RigidWorld {
         let delta = self.settings.activation_delta;
         let mut active = Vec::with_capacity(points.len());
         let mut rows = Vec::with_capacity(points.len());
+        // (u_{N,k}, −n·V_B(t_{k+1})) of each active point, for the end gaps
+        let mut normal_parts = Vec::with_capacity(points.len());
+        let look_ahead = h * self.gravity.length();
         for c in points {
-            let (row, u_nk, u_free) = self.row(&c, &omega_free, t_end);
+            let (row, u_nk, u_free, w_obstacle) = self.row(&c, &omega_free, t_end);
+            // two bodies fall together in the free motion: either may be stopped by its other
+            // contacts within the step, so the pair looks ahead by h |g| as a body does
+            // against an obstacle (a stack with gaps just above δ closes them in one step)
+            let u_free = match c.b {
+                RigidPartner::Body(_) => u_free - look_ahead,
+                RigidPartner::Obstacle(_) => u_free,
+            };
             let u = u_nk.min(u_free).min(0.0);
             if c.gap + gamma * h * u <= delta {
                 rows.push(row);
+                normal_parts.push((u_nk, w_obstacle));
                 active.push(c);
             }
         }
@@ -636,6 +709,29 @@ impl RigidWorld {
             return Err(RigidError::NonFiniteState(k));
         }
         let solve_seconds = ts.elapsed().as_secs_f64();
+        let (kinetic_before, potential_before) = (self.kinetic_energy(), self.potential_energy());
+        // 5. position correction on the linearized end gaps
+        let correction = if self.settings.position_correction && !active.is_empty() {
+            let end_gaps: Vec<f64> = active
+                .iter()
+                .zip(&normal_parts)
+                .enumerate()
+                .map(|(i, (c, (u_nk, w_obstacle)))| {
+                    let u_end = problem.u(i, &v)[0] - problem.rows[i].w[0] + w_obstacle;
+                    c.gap + h * ((1.0 - theta) * u_nk + theta * u_end)
+                })
+                .collect();
+            let scale = self
+                .half_width
+                .iter()
+                .zip(&self.bodies)
+                .filter(|(_, b)| !b.fixed)
+                .map(|(w, _)| *w)
+                .fold(f64::INFINITY, f64::min);
+            correct_positions(&problem, &end_gaps, 1e-3 * scale, 1e-4 * scale)
+        } else {
+            None
+        };
         // 4. position update (2.7)
         for (i, b) in self.bodies.iter_mut().enumerate() {
             let Some(d) = self.dof[i] else {
@@ -651,7 +747,53 @@ impl RigidWorld {
                 return Err(RigidError::NonFiniteState(k));
             }
         }
+        // energies before the correction (its work, lifting bodies out, is not the step's)
+        let kinetic_after = self.kinetic_energy();
+        let potential_after = self.potential_energy();
+        if let Some(dq) = &correction {
+            for (i, b) in self.bodies.iter_mut().enumerate() {
+                let Some(d) = self.dof[i] else {
+                    continue;
+                };
+                let x = dq[d];
+                b.x += Vector::new(x[0], x[1], x[2]);
+                b.q = integrate_orientation(b.q, Vector::new(x[3], x[4], x[5]));
+                if !(b.x.is_finite() && b.q.is_finite()) {
+                    return Err(RigidError::NonFiniteState(k));
+                }
+            }
+        }
         let max_penetration = active.iter().map(|c| (-c.gap).max(0.0)).fold(0.0, f64::max);
+        // physical checks: a penetration deeper than a tenth of the thinner body's half
+        // width, or mechanical energy gained while every obstacle is fixed, is no solution
+        let too_deep = active.iter().any(|c| {
+            let wa = self.half_width[c.a];
+            let w = match c.b {
+                RigidPartner::Body(j) => wa.min(self.half_width[j]),
+                RigidPartner::Obstacle(_) => wa,
+            };
+            -c.gap > PENETRATION_BOUND * w
+        });
+        let gained = kinetic_after + potential_after - kinetic_before - potential_before;
+        let fixed_obstacles = self
+            .obstacles
+            .iter()
+            .all(|o| matches!(o.motion, Motion::Fixed));
+        let allowed =
+            ENERGY_GROWTH_BOUND * kinetic_before.max(kinetic_after) + 1e-12 * self.energy_scale();
+        let energy_grew = fixed_obstacles && (gained.is_nan() || gained > allowed);
+        let physics_check = if too_deep {
+            "penetration"
+        } else if energy_grew {
+            "energy growth"
+        } else {
+            ""
+        };
+        let status = if physics_check.is_empty() {
+            status
+        } else {
+            RigidStatus::NotConverged
+        };
         let max_rn = r.iter().step_by(3).copied().fold(0.0, f64::max);
         let loaded_contacts = r
             .iter()
@@ -694,12 +836,18 @@ impl RigidWorld {
             max_penetration,
             kinetic_energy: self.kinetic_energy(),
             rotation_unconverged,
+            physics_check,
         })
     }
 
     /// The row of manifold point `c` (Jacobians, w, μ), its normal velocity u_{N,k} at t_k
     /// and u_{N,free} of the free motion (gravity and free rotation).
-    fn row(&self, c: &ContactPoint, omega_free: &[Vector], t_end: f64) -> (nsgs::Row, f64, f64) {
+    fn row(
+        &self,
+        c: &ContactPoint,
+        omega_free: &[Vector],
+        t_end: f64,
+    ) -> (nsgs::Row, f64, f64, f64) {
         let h = self.settings.h;
         let frame = [c.normal, c.t1, c.t2];
         let a = &self.bodies[c.a];
@@ -759,7 +907,8 @@ impl RigidWorld {
             .law(a.material, mat_b)
             .unwrap_or_default_law();
         let e = law.restitution;
-        let mut w = [-c.normal.dot(v_end), -c.t1.dot(v_end), -c.t2.dot(v_end)];
+        let w_obstacle = -c.normal.dot(v_end);
+        let mut w = [w_obstacle, -c.t1.dot(v_end), -c.t2.dot(v_end)];
         w[0] += crate::assembly::impact_offset(e, u_nk);
         // gap closure of a pair that gravity's look-ahead made active (no hovering)
         let g = self.gravity.length();
@@ -775,8 +924,93 @@ impl RigidWorld {
             w,
             mu: law.mu,
         };
-        (row, u_nk, u_free)
+        (row, u_nk, u_free, w_obstacle)
     }
+}
+
+/// The position correction of a step (`RigidSettings::position_correction`), the sphere
+/// scenes' projection (`crate::projection`) for bodies of any shape: when some contact's end
+/// gap g_i (linearized along its normal: g_k + h((1 − θ) u_{N,k} + θ u_{N,k+1})) is below
+/// −`trigger`, the displacements Δq = M⁻¹ H_Nᵀ λ (translations and body-frame rotations, the
+/// metric of M) with λ ≥ 0 that bring every g_i + (H_Nᵀ Δq)_i to ≥ 0, by projected
+/// Gauss–Seidel on λ until every gap is ≥ −`target` (at most 200 sweeps). Positions only: the
+/// velocities and the impulses are untouched, so the correction carries no load (the
+/// impulses written out balance the weight). None when nothing is below −`trigger`.
+fn correct_positions(
+    problem: &nsgs::Problem,
+    end_gaps: &[f64],
+    trigger: f64,
+    target: f64,
+) -> Option<Vec<[f64; 6]>> {
+    let worst = end_gaps.iter().map(|g| -g).fold(0.0, f64::max);
+    if worst.is_nan() || worst <= trigger {
+        return None;
+    }
+    let mut dq = vec![[0.0; 6]; problem.mass.len()];
+    let mut lambda = vec![0.0; end_gaps.len()];
+    let w: Vec<f64> = problem
+        .rows
+        .iter()
+        .map(|row| {
+            row.a
+                .iter()
+                .chain(row.b.iter())
+                .map(|(blk, j)| {
+                    (0..6)
+                        .map(|d| j[0][d] * j[0][d] / problem.mass[*blk][d])
+                        .sum::<f64>()
+                })
+                .sum()
+        })
+        .collect();
+    for _ in 0..200 {
+        let mut worst: f64 = 0.0;
+        for (i, row) in problem.rows.iter().enumerate() {
+            if w[i].is_nan() || w[i] <= 0.0 {
+                continue;
+            }
+            let mut g = end_gaps[i];
+            for (blk, j) in row.a.iter().chain(row.b.iter()) {
+                g += (0..6).map(|d| j[0][d] * dq[*blk][d]).sum::<f64>();
+            }
+            worst = worst.max(-g);
+            let new = (lambda[i] - g / w[i]).max(0.0);
+            let delta = new - lambda[i];
+            if delta != 0.0 {
+                lambda[i] = new;
+                for (blk, j) in row.a.iter().chain(row.b.iter()) {
+                    for d in 0..6 {
+                        dq[*blk][d] += j[0][d] * delta / problem.mass[*blk][d];
+                    }
+                }
+            }
+        }
+        if worst <= target {
+            break;
+        }
+    }
+    dq.iter().flatten().all(|x| x.is_finite()).then_some(dq)
+}
+
+/// A contact deeper than this fraction of the thinner body's half width makes the step's
+/// status [`RigidStatus::NotConverged`] (a body went through another or an obstacle).
+pub const PENETRATION_BOUND: f64 = 0.1;
+
+/// Mechanical energy (kinetic + gravity's potential) gained in one step beyond this fraction
+/// of the kinetic energy (plus round-off) makes the step's status
+/// [`RigidStatus::NotConverged`] when every obstacle is fixed: Moreau–Jean with θ = ½ and
+/// e ≤ 1 never creates energy (docs/rigid-bodies.md).
+pub const ENERGY_GROWTH_BOUND: f64 = 1e-2;
+
+/// Half the thinnest width of a shape (m): over the face normals of a polyhedron or cuboid,
+/// else the smallest extent of its local bounding box (a ball's radius, a capsule's radius,
+/// a cylinder's smaller of radius and half height).
+fn half_thinnest_width(shape: &SharedShape) -> f64 {
+    if let Some(w) = super::polytope::Polytope::of(shape).map(|p| p.thinnest_width()) {
+        return 0.5 * w;
+    }
+    let b = shape.compute_local_aabb();
+    0.5 * (b.maxs - b.mins).min_element()
 }
 
 /// A material law, with μ = 0, e = 0 when the pair is out of the table (cannot happen

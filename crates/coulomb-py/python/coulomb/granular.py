@@ -699,6 +699,9 @@ class Simulation:
     the activation rule's look-ahead distance; docs/granular.md, "Resting on an obstacle").
     ``solver`` holds keyword settings of :func:`coulomb.solve` that replace the library
     solver's (used by ``method="library"`` and as the fallback of ``nsgs``).
+    A scene with bodies of other shapes than spheres runs at the rigid scene files' defaults
+    ``h = 1e-3`` and ``tol = 1e-8``; an ``h`` in which a body falls (g h²) or travels more than
+    half its thinnest width, or a sphere more than its radius, raises :class:`ValueError`.
 
     Unknown names raise :class:`TypeError`, values out of range :class:`ValueError`; a scene
     that cannot be built raises :class:`coulomb.SceneError` (a ``ValueError``) naming the

@@ -145,8 +145,8 @@ impl PivotedCholesky {
         for j in 0..self.k {
             y[j] /= self.f[j * self.p + j];
             let yj = y[j];
-            for i in j + 1..self.k {
-                y[i] -= self.f[j * self.p + i] * yj;
+            for (i, yi) in y.iter_mut().enumerate().take(self.k).skip(j + 1) {
+                *yi -= self.f[j * self.p + i] * yj;
             }
         }
     }
@@ -155,8 +155,8 @@ impl PivotedCholesky {
     fn backward(&self, y: &mut [f64]) {
         for j in (0..self.k).rev() {
             let mut x = y[j];
-            for i in j + 1..self.k {
-                x -= self.f[j * self.p + i] * y[i];
+            for (i, yi) in y.iter().enumerate().take(self.k).skip(j + 1) {
+                x -= self.f[j * self.p + i] * yi;
             }
             y[j] = x / self.f[j * self.p + j];
         }
@@ -345,8 +345,8 @@ impl Reduction {
         let mut lperm = lk;
         lperm.resize(p, 0.0);
         for (t, &at) in a.iter().enumerate() {
-            for i in 0..k {
-                lperm[i] -= self.z_k[t * k + i] * at;
+            for (i, li) in lperm.iter_mut().enumerate().take(k) {
+                *li -= self.z_k[t * k + i] * at;
             }
             lperm[k + t] -= at;
         }
@@ -416,8 +416,10 @@ mod tests {
 
     fn solve(p: &GlobalProblem) -> crate::Solution {
         let problem = Problem::Global(p.clone());
-        let mut settings = Settings::default();
-        settings.tol = TOL;
+        let settings = Settings {
+            tol: TOL,
+            ..Settings::default()
+        };
         crate::solve(&problem, &settings).unwrap()
     }
 

@@ -139,8 +139,9 @@ pub struct GlobalProblem {
     pub w: Vec<f64>,
     /// friction coefficient of each contact
     pub mu: Vec<f64>,
-    /// equality constraints Gᵀ v + b = 0 (None: the problem has none)
-    pub equality: Option<Equality>,
+    /// equality constraints Gᵀ v + b = 0 (None: the problem has none; boxed so that a
+    /// problem without them stays small)
+    pub equality: Option<Box<Equality>>,
 }
 
 /// Either form of the incremental problem.
@@ -476,13 +477,13 @@ impl GlobalProblem {
     pub fn with_equality(mut self, g: CscMatrix, b: Vec<f64>) -> Result<Self, ProblemError> {
         check_matrix("G", &g, self.m.nrows, b.len())?;
         check_len("b", &b, g.ncols)?;
-        self.equality = Some(Equality { g, b });
+        self.equality = Some(Box::new(Equality { g, b }));
         Ok(self)
     }
 
     /// Number of equality rows p (0 without equality constraints).
     pub fn equality_rows(&self) -> usize {
-        self.equality.as_ref().map_or(0, Equality::rows)
+        self.equality.as_ref().map_or(0, |e| e.rows())
     }
 
     /// The equality residual ‖Gᵀ v + b‖ / max(1, ‖b‖) (docs/error.md); None without

@@ -361,6 +361,7 @@ fn check_equality(
 ) -> Result<ExistenceReport, CheckError> {
     let reduction = crate::equality::Reduction::new(p)?;
     let mut report = check_local_with(&reduction.local, settings, progress)?;
+    report.kind = "global";
     let asymmetry = p.m.asymmetry();
     if asymmetry > ROUNDING_ASYMMETRY {
         downgrade(&mut report, "M", asymmetry);
@@ -368,7 +369,7 @@ fn check_equality(
     let r0 = vec![0.0; p.h.ncols];
     let (v0, _) = reduction.recover(p, &r0);
     let residual = p.equality_residual(&v0).unwrap_or(0.0);
-    if !(residual <= settings.tol) {
+    if residual.is_nan() || residual > settings.tol {
         if let Conclusion::Exists { by, .. } = report.conclusion {
             report.note = Some(format!(
                 "{by} holds on the problem reduced by the equality constraints, but no velocity \

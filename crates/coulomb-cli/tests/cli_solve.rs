@@ -158,3 +158,68 @@ fn explain_prints_the_structure_and_the_plan_and_json_carries_them() {
     assert_eq!(j["structure"]["symmetric"], false);
     assert_eq!(j["structure"]["rigid"], "skeleton_probe");
 }
+
+/// A ball of mass 2 pressed onto the floor, its x velocity held at 0.5 by two copies of the
+/// same equality row (b = (−0.5, −0.5), consistent) or by two that disagree.
+fn equality_ball(path: &std::path::Path, b: [f64; 2]) {
+    use coulomb::{fclib, CscMatrix, GlobalProblem, Problem};
+    let h = CscMatrix::from_dense(3, 3, &[0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0]);
+    let g = CscMatrix::from_dense(3, 2, &[1.0, 1.0, 0.0, 0.0, 0.0, 0.0]);
+    let p = GlobalProblem::new(
+        3,
+        CscMatrix::identity(3, 2.0),
+        h,
+        vec![2.0, 0.0, -2.0],
+        vec![0.0; 3],
+        vec![0.3],
+    )
+    .unwrap()
+    .with_equality(g, b.to_vec())
+    .unwrap();
+    fclib::write(path, &fclib::FclibFile::new(Problem::Global(p))).unwrap();
+}
+
+#[test]
+fn equality_constraints_through_info_solve_and_error() {
+    let file = tmp("eq-ball.hdf5");
+    equality_ball(&file, [-0.5, -0.5]);
+    let f = file.to_str().unwrap();
+    let info = stdout_json(&coulomb(&["info", "--json", f]));
+    assert_eq!(info["equality_rows"], 2);
+    let out = tmp("eq-ball-out.hdf5");
+    let o = out.to_str().unwrap();
+    let solved = coulomb(&["solve", f, "--json", "--output", o]);
+    assert_eq!(solved.status.code(), Some(0));
+    let j: serde_json::Value = serde_json::from_slice(&solved.stdout).unwrap();
+    assert_eq!(j["status"], "converged");
+    assert!(j["equality_residual"].as_f64().unwrap() <= 1e-8);
+    // the written solution carries l and `coulomb error` recomputes every residual from it
+    let sol = coulomb::fclib::read_solution(&out).unwrap().unwrap();
+    let l = sol.l.unwrap();
+    assert!(
+        (l[0] + 0.2).abs() < 1e-7 && (l[1] + 0.2).abs() < 1e-7,
+        "{l:?}"
+    );
+    let err = coulomb(&["error", o, "--json"]);
+    assert_eq!(err.status.code(), Some(0));
+    let e: serde_json::Value = serde_json::from_slice(&err.stdout).unwrap();
+    assert_eq!(e["converged"], true);
+    assert!(e["equality_residual"].as_f64().unwrap() <= 1e-8);
+    // a plain problem has no equality_residual in its reports
+    let plain = stdout_json(&coulomb(&[
+        "solve",
+        &data_file("box-global.hdf5"),
+        "--json",
+    ]));
+    assert!(plain.get("equality_residual").is_none());
+
+    // inconsistent rows: exit 1, status equality_residual, never converged
+    let bad = tmp("eq-bad.hdf5");
+    equality_ball(&bad, [-0.5, -0.4]);
+    let solved = coulomb(&["solve", bad.to_str().unwrap(), "--json"]);
+    assert_eq!(solved.status.code(), Some(1));
+    let j: serde_json::Value = serde_json::from_slice(&solved.stdout).unwrap();
+    assert_eq!(j["status"], "equality_residual");
+    assert_eq!(j["converged"], false);
+    assert_ne!(j["existence"]["conclusion"], "exists");
+}

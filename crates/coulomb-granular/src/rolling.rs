@@ -795,6 +795,8 @@ pub fn solve_step(
         status,
         error: err,
         balance_residual: Some(balance),
+        l: None,
+        equality_residual: None,
         outer_iterations: 1,
         inner_iterations: sweeps,
         history: Vec::new(),

@@ -346,6 +346,8 @@ pub fn solution_to_dict(py: Python<'_>, sol: Solution) -> PyResult<Bound<'_, PyD
     d.set_item("u", PyArray1::from_vec(py, sol.u))?;
     d.set_item("v", sol.v.map(|v| PyArray1::from_vec(py, v)))?;
     d.set_item("s", PyArray1::from_vec(py, sol.s))?;
+    d.set_item("l", sol.l.map(|l| PyArray1::from_vec(py, l)))?;
+    d.set_item("equality_residual", sol.equality_residual)?;
     Ok(d)
 }
 

@@ -167,6 +167,7 @@ pub fn evaluate_error(py: Python<'_>, e: &EvaluateError) -> PyErr {
     match e {
         EvaluateError::Length { what, .. } => input_error(py, what, None, e.to_string()),
         EvaluateError::MissingVelocity => input_error(py, "v", None, e.to_string()),
+        EvaluateError::MissingMultipliers => input_error(py, "l", None, e.to_string()),
         EvaluateError::Problem(p) => problem_error(py, p),
         #[allow(unreachable_patterns)]
         _ => variant_error(py, "InputError", e),

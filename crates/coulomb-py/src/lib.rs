@@ -54,9 +54,12 @@ impl PyProblem {
         })
     }
 
-    /// Validates (M, H, f, w, μ) with `GlobalProblem::new` (Cholesky test of M included).
+    /// Validates (M, H, f, w, μ) with `GlobalProblem::new` (Cholesky test of M included),
+    /// and the equality constraints (G, b) with `GlobalProblem::with_equality` when given
+    /// (both or neither).
     #[staticmethod]
     #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (dim, m, h, f, w, mu, g=None, b=None))]
     fn global_(
         py: Python<'_>,
         dim: i64,
@@ -65,12 +68,33 @@ impl PyProblem {
         f: PyReadonlyArray1<'_, f64>,
         w: PyReadonlyArray1<'_, f64>,
         mu: PyReadonlyArray1<'_, f64>,
+        g: Option<&Bound<'_, PyTuple>>,
+        b: Option<PyReadonlyArray1<'_, f64>>,
     ) -> PyResult<Self> {
         let m = convert::csc_from_arrays(py, "M", m)?;
         let h = convert::csc_from_arrays(py, "H", h)?;
         let (f, w, mu) = (owned("f", &f)?, owned("w", &w)?, owned("mu", &mu)?);
+        let equality = match (g, b) {
+            (None, None) => None,
+            (Some(g), Some(b)) => Some((convert::csc_from_arrays(py, "G", g)?, owned("b", &b)?)),
+            (g, _) => {
+                let (what, other) = if g.is_some() { ("b", "G") } else { ("G", "b") };
+                return Err(errors::input_error(
+                    py,
+                    what,
+                    None,
+                    format!("{other} is given without {what}: equality constraints need both"),
+                ));
+            }
+        };
         let p = py
-            .detach(move || GlobalProblem::new(dim, m, h, f, w, mu))
+            .detach(move || {
+                let p = GlobalProblem::new(dim, m, h, f, w, mu)?;
+                match equality {
+                    Some((g, b)) => p.with_equality(g, b),
+                    None => Ok(p),
+                }
+            })
             .map_err(|e| errors::problem_error(py, &e))?;
         Ok(Self {
             inner: Arc::new(Problem::Global(p)),
@@ -116,6 +140,10 @@ impl PyProblem {
                 d.set_item("f", PyArray1::from_slice(py, &p.f))?;
                 d.set_item("w", PyArray1::from_slice(py, &p.w))?;
                 d.set_item("mu", PyArray1::from_slice(py, &p.mu))?;
+                if let Some(e) = &p.equality {
+                    d.set_item("G", convert::csc_to_tuple(py, &e.g)?)?;
+                    d.set_item("b", PyArray1::from_slice(py, &e.b))?;
+                }
             }
         }
         Ok(d)
@@ -174,17 +202,21 @@ fn resolve_settings<'py>(
 }
 
 /// The error of docs/error.md for impulses r (and velocities v of a global problem; when v is
-/// None it is recomputed as M⁻¹(H r + f)): dict with error, absolute, scale, balance_residual.
+/// None it is recomputed as M⁻¹(H r + f), or with equality constraints with λ as the
+/// elimination of `coulomb::equality` gives them): dict with error, absolute, scale,
+/// balance_residual, equality_residual.
 #[pyfunction]
-#[pyo3(signature = (problem, r, v=None))]
+#[pyo3(signature = (problem, r, v=None, l=None))]
 fn error<'py>(
     py: Python<'py>,
     problem: &PyProblem,
     r: PyReadonlyArray1<'_, f64>,
     v: Option<PyReadonlyArray1<'_, f64>>,
+    l: Option<PyReadonlyArray1<'_, f64>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let r = owned("r", &r)?;
     let v = v.map(|v| owned("v", &v)).transpose()?;
+    let l = l.map(|l| owned("l", &l)).transpose()?;
     let p = Arc::clone(&problem.inner);
     let m = p.dim() * p.contacts();
     if r.len() != m {
@@ -196,19 +228,18 @@ fn error<'py>(
         ));
     }
     let eval = py.detach(move || -> Result<_, fclib::EvaluateError> {
-        let v = match (&*p, v) {
+        let (v, l) = match (&*p, v) {
+            (Problem::Global(g), None) if g.equality.is_some() => {
+                let (v, lr) = coulomb::equality::Reduction::new(g)?.recover(g, &r);
+                (Some(v), l.or(Some(lr)))
+            }
             (Problem::Global(g), None) => {
                 let d = coulomb::delassus::Delassus::new(g)?;
-                Some(d.velocity(&g.h, &r))
+                (Some(d.velocity(&g.h, &r)), l)
             }
-            (_, v) => v,
+            (_, v) => (v, l),
         };
-        let stored = StoredSolution {
-            v,
-            u: None,
-            r,
-            l: None,
-        };
+        let stored = StoredSolution { v, u: None, r, l };
         fclib::evaluate(&p, &stored)
     });
     let eval = eval.map_err(|e| errors::evaluate_error(py, &e))?;
@@ -217,6 +248,7 @@ fn error<'py>(
     d.set_item("absolute", eval.measure.absolute)?;
     d.set_item("scale", eval.measure.scale)?;
     d.set_item("balance_residual", eval.balance_residual)?;
+    d.set_item("equality_residual", eval.equality_residual)?;
     Ok(d)
 }
 

@@ -69,6 +69,7 @@ pub mod barrier;
 pub mod cone;
 pub mod deadline;
 pub mod delassus;
+pub mod equality;
 pub mod evaluation;
 pub mod examples;
 pub mod existence;

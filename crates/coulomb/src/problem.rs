@@ -104,7 +104,27 @@ pub struct LocalProblem {
     pub mu: Vec<f64>,
 }
 
-/// The global problem (2.10) in FCLIB convention: M v = H r + f, u = Hᵀ v + w.
+/// Bilateral (equality) constraints of a global problem, FCLIB's `/fclib_global/G` and
+/// `/fclib_global/vectors/b`: the problem becomes M v = H r + G λ + f, Gᵀ v + b = 0 with
+/// multipliers λ ∈ ℝᵖ (joints: each row of Gᵀ is one constrained velocity component).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Equality {
+    /// G (n × p): column k is the generalized direction of constraint k
+    pub g: CscMatrix,
+    /// b (p)
+    pub b: Vec<f64>,
+}
+
+impl Equality {
+    /// Number of equality rows p.
+    pub fn rows(&self) -> usize {
+        self.b.len()
+    }
+}
+
+/// The global problem (2.10) in FCLIB convention: M v = H r + f, u = Hᵀ v + w; with
+/// [`Equality`] constraints, M v = H r + G λ + f and Gᵀ v + b = 0 in addition (the equality
+/// rows extend (2.10); they carry no friction).
 #[derive(Debug, Clone, PartialEq)]
 pub struct GlobalProblem {
     /// space dimension d ∈ {2, 3}
@@ -119,6 +139,9 @@ pub struct GlobalProblem {
     pub w: Vec<f64>,
     /// friction coefficient of each contact
     pub mu: Vec<f64>,
+    /// equality constraints Gᵀ v + b = 0 (None: the problem has none; boxed so that a
+    /// problem without them stays small)
+    pub equality: Option<Box<Equality>>,
 }
 
 /// Either form of the incremental problem.
@@ -445,7 +468,45 @@ impl GlobalProblem {
             f,
             w,
             mu,
+            equality: None,
         })
+    }
+
+    /// The problem with equality constraints Gᵀ v + b = 0 added (G of size n × p, b of
+    /// length p, finite; any rank: redundant rows are valid data), replacing any it had.
+    pub fn with_equality(mut self, g: CscMatrix, b: Vec<f64>) -> Result<Self, ProblemError> {
+        check_matrix("G", &g, self.m.nrows, b.len())?;
+        check_len("b", &b, g.ncols)?;
+        self.equality = Some(Box::new(Equality { g, b }));
+        Ok(self)
+    }
+
+    /// Number of equality rows p (0 without equality constraints).
+    pub fn equality_rows(&self) -> usize {
+        self.equality.as_ref().map_or(0, |e| e.rows())
+    }
+
+    /// The equality residual ‖Gᵀ v + b‖ / max(1, ‖b‖) (docs/error.md); None without
+    /// equality constraints.
+    pub fn equality_residual(&self, v: &[f64]) -> Option<f64> {
+        let e = self.equality.as_ref()?;
+        let mut res = e.b.clone();
+        e.g.gemv_t_acc(1.0, v, &mut res);
+        Some(crate::law::relative_norm(&res, &e.b))
+    }
+
+    /// The balance residual ‖M v − H r − G λ − f‖ / max(1, ‖f‖), with the multipliers λ of
+    /// the equality constraints (`l`; ignored without them, taken as zero when None).
+    pub fn balance_residual_with(&self, v: &[f64], r: &[f64], l: Option<&[f64]>) -> f64 {
+        let mut res = self.m.mul_vec(v);
+        self.h.gemv_acc(-1.0, r, &mut res);
+        if let (Some(e), Some(l)) = (&self.equality, l) {
+            e.g.gemv_acc(-1.0, l, &mut res);
+        }
+        for (x, f) in res.iter_mut().zip(&self.f) {
+            *x -= f;
+        }
+        crate::law::relative_norm(&res, &self.f)
     }
 
     /// Builds a problem from the paper's convention (2.8): `M v + f_p = H_pᵀ r`,
@@ -490,14 +551,10 @@ impl GlobalProblem {
         u
     }
 
-    /// The balance residual ‖M v − H r − f‖ / max(1, ‖f‖).
+    /// The balance residual ‖M v − H r − f‖ / max(1, ‖f‖) (λ = 0 for a problem with
+    /// equality constraints: see [`GlobalProblem::balance_residual_with`]).
     pub fn balance_residual(&self, v: &[f64], r: &[f64]) -> f64 {
-        let mut res = self.m.mul_vec(v);
-        self.h.gemv_acc(-1.0, r, &mut res);
-        for (x, f) in res.iter_mut().zip(&self.f) {
-            *x -= f;
-        }
-        crate::law::relative_norm(&res, &self.f)
+        self.balance_residual_with(v, r, None)
     }
 }
 

@@ -41,6 +41,12 @@ pub enum Status {
     /// the solve was asked to stop ([`crate::Settings::cancel`], e.g. on SIGINT) before the
     /// error reached tol; the returned iterate is the best one found so far
     Interrupted,
+    /// a global problem with equality constraints ([`crate::equality`]): the reduced contact
+    /// problem was solved, but on the problem as stored the equality residual
+    /// ‖Gᵀ v + b‖ / max(1, ‖b‖) (or the error or balance residual after recovering v and λ)
+    /// stays above tol: b is not in the range of Gᵀ (inconsistent constraints, no v satisfies
+    /// them) or the constraints are too ill-conditioned for the elimination
+    EqualityResidual,
 }
 
 impl Status {
@@ -58,6 +64,7 @@ impl Status {
             Status::Unbounded => "unbounded",
             Status::BalanceResidual => "balance_residual",
             Status::Interrupted => "interrupted",
+            Status::EqualityResidual => "equality_residual",
         }
     }
 }
@@ -114,8 +121,12 @@ pub struct Solution {
     pub status: Status,
     /// the error of docs/error.md, recomputed from r (and v)
     pub error: f64,
-    /// ‖M v − H r − f‖ / max(1, ‖f‖) for global problems
+    /// ‖M v − H r − G λ − f‖ / max(1, ‖f‖) for global problems
     pub balance_residual: Option<f64>,
+    /// multipliers λ of the equality constraints (global problems that have them)
+    pub l: Option<Vec<f64>>,
+    /// ‖Gᵀ v + b‖ / max(1, ‖b‖) for global problems with equality constraints
+    pub equality_residual: Option<f64>,
     /// outer iterations (subproblems solved)
     pub outer_iterations: usize,
     /// inner iterations, summed
@@ -197,6 +208,7 @@ mod tests {
             Status::Unbounded,
             Status::BalanceResidual,
             Status::Interrupted,
+            Status::EqualityResidual,
         ] {
             let json = serde_json::to_string(&s).unwrap();
             assert_eq!(json, format!("\"{s}\""));

@@ -410,3 +410,73 @@ fn needs_shared_fclib_corrupt_huge_declared_size_is_refused() {
     assert!(matches!(err.kind, FclibErrorKind::Corrupt { .. }), "{msg}");
     assert!(msg.contains("declares shape [1125899906842624]"), "{msg}");
 }
+
+/// A valid global problem with one equality row (d = 2, two dofs, one contact; M = I, H = I,
+/// G = e₀, b = −1), all matrices stored CSC.
+fn valid_equality() -> Layout {
+    let mut l = Layout::new();
+    let mut put = |p: &str, d: Data| {
+        l.insert(p.to_string(), d);
+    };
+    for name in ["M", "H"] {
+        put(&format!("fclib_global/{name}/m"), Data::I32(vec![2]));
+        put(&format!("fclib_global/{name}/n"), Data::I32(vec![2]));
+        put(&format!("fclib_global/{name}/nz"), Data::I32(vec![-1]));
+        put(&format!("fclib_global/{name}/nzmax"), Data::I32(vec![2]));
+        put(&format!("fclib_global/{name}/p"), Data::I32(vec![0, 1, 2]));
+        put(&format!("fclib_global/{name}/i"), Data::I32(vec![0, 1]));
+        put(&format!("fclib_global/{name}/x"), Data::F64(vec![1.0, 1.0]));
+    }
+    put("fclib_global/G/m", Data::I32(vec![2]));
+    put("fclib_global/G/n", Data::I32(vec![1]));
+    put("fclib_global/G/nz", Data::I32(vec![-1]));
+    put("fclib_global/G/nzmax", Data::I32(vec![1]));
+    put("fclib_global/G/p", Data::I32(vec![0, 1]));
+    put("fclib_global/G/i", Data::I32(vec![0]));
+    put("fclib_global/G/x", Data::F64(vec![1.0]));
+    put("fclib_global/vectors/f", Data::F64(vec![0.0, -1.0]));
+    put("fclib_global/vectors/w", Data::F64(vec![0.0, 0.0]));
+    put("fclib_global/vectors/mu", Data::F64(vec![0.5]));
+    put("fclib_global/vectors/b", Data::F64(vec![-1.0]));
+    put("fclib_global/spacedim", Data::I32(vec![2]));
+    put("solution/r", Data::F64(vec![0.0; 2]));
+    put("solution/v", Data::F64(vec![0.0; 2]));
+    put("solution/l", Data::F64(vec![0.0]));
+    l
+}
+
+#[test]
+fn fclib_corrupt_equality_constraints() {
+    let f = read(&valid_equality()).unwrap();
+    let Problem::Global(p) = &f.problem else {
+        panic!()
+    };
+    let e = p.equality.as_ref().unwrap();
+    assert_eq!((e.g.nrows, e.g.ncols, e.b.clone()), (2, 1, vec![-1.0]));
+    // G without b, b without G
+    let mut l = valid_equality();
+    l.remove("fclib_global/vectors/b");
+    expect_err(&l, "/fclib_global/vectors/b", "missing dataset");
+    let mut l = valid_equality();
+    l.retain(|k, _| !k.starts_with("fclib_global/G/"));
+    expect_err(&l, "/fclib_global/G", "both");
+    // G with the wrong number of rows, b of the wrong length, an index out of range
+    let mut l = valid_equality();
+    l.insert("fclib_global/G/m".into(), Data::I32(vec![3]));
+    expect_err(&l, "/fclib_global/G/m", "as many rows as M");
+    let mut l = valid_equality();
+    l.insert("fclib_global/vectors/b".into(), Data::F64(vec![1.0, 2.0]));
+    expect_err(&l, "/fclib_global/vectors/b", "n of /fclib_global/G");
+    let mut l = valid_equality();
+    l.insert("fclib_global/G/i".into(), Data::I32(vec![5]));
+    expect_err(&l, "/fclib_global/G/i", "row index");
+    // G stored as a dataset, not a matrix group
+    let mut l = valid_equality();
+    l.retain(|k, _| !k.starts_with("fclib_global/G/"));
+    l.insert("fclib_global/G".into(), Data::F64(vec![1.0]));
+    expect_err(&l, "/fclib_global/G", "expected a group");
+    // l of the wrong length
+    let mut l = valid_equality();
+    l.insert("solution/l".into(), Data::F64(vec![0.0, 0.0]));
+    expect_err(&l, "/solution/l", "equality rows");
+}

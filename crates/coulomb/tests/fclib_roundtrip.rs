@@ -307,3 +307,116 @@ fn fclib_h5py_reads_what_coulomb_writes() {
         }
     }
 }
+
+/// A global problem with equality constraints (G n × 3 with a repeated column: redundant rows
+/// are valid data), a solution with multipliers l and a guess without.
+fn equality_file(seed: u64) -> FclibFile {
+    let FclibFile {
+        problem: Problem::Global(p),
+        ..
+    } = global_file(seed)
+    else {
+        unreachable!()
+    };
+    let mut rng = Lcg(seed + 100);
+    let n = p.m.nrows;
+    let mut gd = sparse(n, 3, &mut rng).to_dense();
+    for i in 0..n {
+        gd[i * 3 + 2] = gd[i * 3];
+    }
+    let g = CscMatrix::from_dense(n, 3, &gd);
+    let p = p.with_equality(g, rng.vec(3)).unwrap();
+    let m = p.h.ncols;
+    FclibFile {
+        problem: Problem::Global(p),
+        info: None,
+        solution: Some(StoredSolution {
+            v: Some(rng.vec(n)),
+            u: Some(rng.vec(m)),
+            r: rng.vec(m),
+            l: Some(rng.vec(3)),
+        }),
+        guesses: vec![StoredSolution {
+            v: Some(rng.vec(n)),
+            u: None,
+            r: rng.vec(m),
+            l: None,
+        }],
+    }
+}
+
+#[test]
+fn fclib_roundtrip_equality_constraints() {
+    let file = equality_file(5);
+    for storage in STORAGES {
+        for index in WIDTHS {
+            let opts = WriteOptions { storage, index };
+            let bytes = fclib::to_bytes(&file, &opts).unwrap();
+            let back =
+                fclib::read_bytes("mem.hdf5", bytes).unwrap_or_else(|e| panic!("{opts:?}: {e}"));
+            assert_eq!(back, file, "{opts:?}");
+            let Problem::Global(p) = &back.problem else {
+                panic!()
+            };
+            assert_eq!(p.equality_rows(), 3);
+        }
+    }
+    // through disk, and h5py sees G, b and l under FCLIB's names
+    let dir = tempdir("equality");
+    let path = dir.join("eq.hdf5");
+    fclib::write(&path, &file).unwrap();
+    assert_eq!(fclib::read(&path).unwrap(), file);
+    assert_eq!(fclib::read_solution(&path).unwrap(), file.solution);
+    if !h5py_available() {
+        println!("h5py part skipped: python3 with h5py not available");
+        return;
+    }
+    let out = Command::new("python3")
+        .args(["-c", DUMP])
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let dump: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let Problem::Global(p) = &file.problem else {
+        panic!()
+    };
+    let e = p.equality.as_ref().unwrap();
+    let floats = |k: &str| -> Vec<f64> {
+        dump[k][2]
+            .as_array()
+            .unwrap_or_else(|| panic!("h5py lacks {k}"))
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect()
+    };
+    assert_eq!(floats("fclib_global/vectors/b"), e.b);
+    assert_eq!(floats("fclib_global/G/x"), e.g.values);
+    assert_eq!(dump["fclib_global/G/m"][2], serde_json::json!([p.m.nrows]));
+    assert_eq!(dump["fclib_global/G/n"][2], serde_json::json!([3]));
+    assert_eq!(
+        floats("solution/l"),
+        *file.solution.as_ref().unwrap().l.as_ref().unwrap()
+    );
+}
+
+#[test]
+fn fclib_equality_inconsistent_datasets_are_refused() {
+    let file = equality_file(6);
+    let bytes = fclib::to_bytes(&file, &WriteOptions::default()).unwrap();
+    assert!(fclib::read_bytes("ok.hdf5", bytes).is_ok());
+    // l of the wrong length
+    let mut bad = file.clone();
+    bad.solution.as_mut().unwrap().l = Some(vec![0.0; 2]);
+    let bytes = fclib::to_bytes(&bad, &WriteOptions::default()).unwrap();
+    let err = fclib::read_bytes("bad.hdf5", bytes).unwrap_err();
+    assert_eq!(err.object_path(), Some("/solution/l"), "{err}");
+    // a non-finite b: the problem's validation names it
+    let mut bad = file.clone();
+    if let Problem::Global(p) = &mut bad.problem {
+        p.equality.as_mut().unwrap().b[1] = f64::NAN;
+    }
+    let bytes = fclib::to_bytes(&bad, &WriteOptions::default()).unwrap();
+    let err = fclib::read_bytes("bad.hdf5", bytes).unwrap_err();
+    assert!(err.to_string().contains("non-finite entry in b"), "{err}");
+}

@@ -108,11 +108,15 @@ pub struct Report {
     pub absolute_error: f64,
     /// max(‖q‖, ‖r‖, ‖u‖)
     pub scale: f64,
-    /// ‖M v − H r − f‖ / max(1, ‖f‖) (null for a local problem)
+    /// ‖M v − H r − G λ − f‖ / max(1, ‖f‖) (null for a local problem)
     pub balance_residual: Option<f64>,
+    /// ‖Gᵀ v + b‖ / max(1, ‖b‖) (global problems with equality constraints only; absent
+    /// otherwise)
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub equality_residual: Option<f64>,
     /// the tolerance of `converged`
     pub tol: f64,
-    /// err ≤ tol (and balance residual ≤ tol)
+    /// err ≤ tol (and balance residual ≤ tol, and equality residual ≤ tol)
     pub converged: bool,
     /// relative asymmetry of W (local) or M (global) as stored (the error is always that of
     /// the stored problem)
@@ -174,6 +178,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         absolute_error: eval.measure.absolute,
         scale: eval.measure.scale,
         balance_residual: eval.balance_residual,
+        equality_residual: eval.equality_residual,
         tol: args.tol,
         converged: eval.converged(args.tol),
         asymmetry: file.problem.asymmetry(),
@@ -196,6 +201,9 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         );
         if let Some(b) = report.balance_residual {
             println!("balance residual  {b:.3e}");
+        }
+        if let Some(e) = report.equality_residual {
+            println!("equality residual {e:.3e}");
         }
         println!(
             "solution at {:.0e}: {}",

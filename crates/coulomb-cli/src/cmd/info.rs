@@ -31,6 +31,9 @@ pub struct Summary {
     pub contacts: usize,
     /// degrees of freedom n (null for a local problem)
     pub dofs: Option<usize>,
+    /// equality (bilateral) constraint rows p, `/fclib_global/G` (null for a local problem,
+    /// 0 for a global problem without them)
+    pub equality_rows: Option<usize>,
     /// stored entries of W, or of M + H
     pub nnz: usize,
     /// smallest friction coefficient (null without contacts)
@@ -70,6 +73,10 @@ pub fn summarize(file: String, f: &FclibFile) -> Summary {
         dim: p.dim(),
         contacts: p.contacts(),
         dofs: p.dofs(),
+        equality_rows: match p {
+            Problem::Local(_) => None,
+            Problem::Global(g) => Some(g.equality_rows()),
+        },
         nnz,
         mu_min,
         mu_max,
@@ -115,8 +122,18 @@ pub fn run(args: Args) -> anyhow::Result<crate::exit::Outcome> {
         println!("{out}");
     } else {
         println!(
-            "{:<45} {:>6} {:>3} {:>8} {:>6} {:>8} {:>7} {:>7} {:>4} {:>7}",
-            "file", "kind", "d", "contacts", "dofs", "nnz", "mu_min", "mu_max", "sol", "guesses"
+            "{:<45} {:>6} {:>3} {:>8} {:>6} {:>8} {:>7} {:>7} {:>4} {:>7} {:>5}",
+            "file",
+            "kind",
+            "d",
+            "contacts",
+            "dofs",
+            "nnz",
+            "mu_min",
+            "mu_max",
+            "sol",
+            "guesses",
+            "eq"
         );
         for r in &rows {
             match r {
@@ -125,7 +142,7 @@ pub fn run(args: Args) -> anyhow::Result<crate::exit::Outcome> {
                         .file_name()
                         .map_or(s.file.clone(), |n| n.to_string_lossy().into_owned());
                     println!(
-                        "{:<45} {:>6} {:>3} {:>8} {:>6} {:>8} {:>7} {:>7} {:>4} {:>7}",
+                        "{:<45} {:>6} {:>3} {:>8} {:>6} {:>8} {:>7} {:>7} {:>4} {:>7} {:>5}",
                         name,
                         s.kind,
                         s.dim,
@@ -135,7 +152,8 @@ pub fn run(args: Args) -> anyhow::Result<crate::exit::Outcome> {
                         opt(s.mu_min.map(|m| format!("{m:.3}"))),
                         opt(s.mu_max.map(|m| format!("{m:.3}"))),
                         if s.has_solution { "yes" } else { "no" },
-                        s.guesses
+                        s.guesses,
+                        opt(s.equality_rows)
                     );
                 }
                 Err((file, _)) => println!("{file:<45} (unreadable, see below)"),

@@ -54,12 +54,16 @@ pub struct Report {
     pub file: String,
     /// how the solve ended
     pub status: solver::Status,
-    /// err ≤ tol (and balance residual ≤ tol)
+    /// err ≤ tol (and balance residual ≤ tol, and equality residual ≤ tol)
     pub converged: bool,
     /// the error of docs/error.md, recomputed from the returned r (and v)
     pub error: f64,
-    /// ‖M v − H r − f‖ / max(1, ‖f‖) (global problems)
+    /// ‖M v − H r − G λ − f‖ / max(1, ‖f‖) (global problems)
     pub balance_residual: Option<f64>,
+    /// ‖Gᵀ v + b‖ / max(1, ‖b‖) (global problems with equality constraints only; absent
+    /// otherwise)
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub equality_residual: Option<f64>,
     /// outer iterations
     pub outer_iterations: usize,
     /// inner iterations, summed
@@ -140,7 +144,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
             v: sol.v.clone(),
             u: Some(sol.u.clone()),
             r: sol.r.clone(),
-            l: None,
+            l: sol.l.clone(),
         });
         crate::outputs::write_fclib(out, &written)?;
     }
@@ -189,6 +193,7 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         converged: sol.converged(),
         error: sol.error,
         balance_residual: sol.balance_residual,
+        equality_residual: sol.equality_residual,
         outer_iterations: sol.outer_iterations,
         inner_iterations: sol.inner_iterations,
         solve_time_s: sol.solve_time.as_secs_f64(),
@@ -216,6 +221,9 @@ pub fn run(args: Args) -> anyhow::Result<Outcome> {
         println!("error             {:.3e}", report.error);
         if let Some(b) = report.balance_residual {
             println!("balance residual  {b:.3e}");
+        }
+        if let Some(e) = report.equality_residual {
+            println!("equality residual {e:.3e}");
         }
         println!("outer iterations  {}", report.outer_iterations);
         println!("inner iterations  {}", report.inner_iterations);

@@ -190,21 +190,28 @@ class GlobalProblem(Problem):
     w : 1-D array, length m
     mu : 1-D array (one μ per contact) or a scalar for all contacts
     dim : 2 or 3
+    G : optional dense or scipy.sparse, n × p: equality (bilateral) constraints
+        ``Gᵀ v + b = 0`` with multipliers λ, ``M v = H r + G λ + f`` (FCLIB's G)
+    b : optional 1-D array, length p (given with G)
 
     Raises
     ------
     ProblemError
-        The validation of ``coulomb::problem::GlobalProblem::new``.
+        The validation of ``coulomb::problem::GlobalProblem::new`` (and ``with_equality``).
+    InputError
+        G given without b, or b without G.
     """
 
     __slots__ = ()
 
     def __init__(self, M: MatrixLike, H: MatrixLike, f: ArrayLike, w: ArrayLike,
-                 mu: ArrayLike, dim: int = 3) -> None:
+                 mu: ArrayLike, dim: int = 3, G: Optional[MatrixLike] = None,
+                 b: Optional[ArrayLike] = None) -> None:
         wv = _vector("w", w)
         self._inner = _coulomb._Problem.global_(
             int(dim), _csc("M", M), _csc("H", H), _vector("f", f), wv,
-            _mu(mu, len(wv) // max(int(dim), 1)))
+            _mu(mu, len(wv) // max(int(dim), 1)),
+            None if G is None else _csc("G", G), None if b is None else _vector("b", b))
         self._arrays = None
 
     @property
@@ -226,6 +233,17 @@ class GlobalProblem(Problem):
     def w(self) -> np.ndarray:
         """w."""
         return self._data()["w"]
+
+    @property
+    def G(self) -> Any:
+        """G of the equality constraints as a ``scipy.sparse.csc_array``, or None."""
+        g = self._data().get("G")
+        return None if g is None else _to_scipy(g)
+
+    @property
+    def b(self) -> Optional[np.ndarray]:
+        """b of the equality constraints, or None."""
+        return self._data().get("b")
 
 
 AnyProblem = Union[LocalProblem, GlobalProblem]

@@ -46,6 +46,9 @@ class Status(str, enum.Enum):
     FIXED_POINT_RULE = "fixed_point_rule"
     #: the error is ≤ tol but the balance residual of the global problem stays above tol
     BALANCE_RESIDUAL = "balance_residual"
+    #: with equality constraints: the equality residual ‖Gᵀv + b‖ / max(1, ‖b‖) (or the
+    #: error after recovering v, λ) stays above tol, e.g. b not in the range of Gᵀ
+    EQUALITY_RESIDUAL = "equality_residual"
 
     def __str__(self) -> str:
         return self.value
@@ -97,6 +100,10 @@ class Solution:
     #: per outer iteration: arrays ``error``, ``fixed_point_residual``, ``rule_6_1``,
     #: ``inner_iterations``
     history: Dict[str, np.ndarray] = field(repr=False)
+    #: multipliers λ of the equality constraints (global problems with G, b), else None
+    l: Optional[np.ndarray] = None  # noqa: E741 (FCLIB's name)
+    #: ‖Gᵀ v + b‖ / max(1, ‖b‖) (global problems with G, b), else None
+    equality_residual: Optional[float] = None
 
     @property
     def error(self) -> float:
@@ -157,7 +164,8 @@ def solve(problem: Problem, r0: Optional[ArrayLike] = None, v0: Optional[ArrayLi
         r=d["r"], u=d["u"], v=d["v"], s=d["s"], status=Status(d["status"]),
         converged=d["converged"], err=d["error"], balance_residual=d["balance_residual"],
         outer_iterations=d["outer_iterations"], inner_iterations=d["inner_iterations"],
-        time=d["time"], history=d["history"])
+        time=d["time"], history=d["history"], l=d["l"],
+        equality_residual=d["equality_residual"])
 
 
 @dataclass(frozen=True)
@@ -170,23 +178,31 @@ class Evaluation:
     absolute: float
     #: max(‖q‖, ‖r‖, ‖u‖)
     scale: float
-    #: ‖M v − H r − f‖ / max(1, ‖f‖) for a global problem, else None
+    #: ‖M v − H r − G λ − f‖ / max(1, ‖f‖) for a global problem, else None
     balance_residual: Optional[float]
+    #: ‖Gᵀ v + b‖ / max(1, ‖b‖) for a global problem with G, b, else None
+    equality_residual: Optional[float] = None
 
     def converged(self, tol: float) -> bool:
-        """err ≤ tol and, for a global problem, balance residual ≤ tol."""
-        return self.error <= tol and (self.balance_residual is None
-                                      or self.balance_residual <= tol)
+        """err ≤ tol and, for a global problem, balance residual ≤ tol (and equality
+        residual ≤ tol with G, b)."""
+        return (self.error <= tol
+                and (self.balance_residual is None or self.balance_residual <= tol)
+                and (self.equality_residual is None or self.equality_residual <= tol))
 
 
-def evaluate(problem: Problem, r: ArrayLike, v: Optional[ArrayLike] = None) -> Evaluation:
+def evaluate(problem: Problem, r: ArrayLike, v: Optional[ArrayLike] = None,
+             l: Optional[ArrayLike] = None) -> Evaluation:  # noqa: E741
     """The error measure of docs/error.md for impulses r on the problem as stored: local,
     u = W r + q; global, u = Hᵀ v + w with the given v, or v = M⁻¹(H r + f) when v is None,
-    the scale using the Delassus vector q = Hᵀ M⁻¹ f + w. Raises :class:`InputError` for
+    the scale using the Delassus vector q = Hᵀ M⁻¹ f + w. With equality constraints (G, b)
+    the multipliers l = λ enter the balance residual (given with v, or recovered with v
+    when v is None) and the equality residual is reported. Raises :class:`InputError` for
     arrays of the wrong length."""
-    d = _coulomb.error(problem._inner, _vec(r), _vec(v))
+    d = _coulomb.error(problem._inner, _vec(r), _vec(v), _vec(l))
     return Evaluation(error=d["error"], absolute=d["absolute"], scale=d["scale"],
-                      balance_residual=d["balance_residual"])
+                      balance_residual=d["balance_residual"],
+                      equality_residual=d["equality_residual"])
 
 
 def error(problem: Problem, r: ArrayLike, v: Optional[ArrayLike] = None) -> float:

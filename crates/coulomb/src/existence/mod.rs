@@ -336,11 +336,48 @@ fn check_global_with(
     settings: &CheckSettings,
     progress: &mut dyn FnMut(Criterion),
 ) -> Result<ExistenceReport, CheckError> {
+    if p.equality.is_some() {
+        return check_equality(p, settings, progress);
+    }
     let data = KinematicData::new(p.dim, &p.h, &p.w, &p.mu)?;
     let mut report = run_all_with(&data, "global", settings, progress)?;
     let asymmetry = p.m.asymmetry();
     if asymmetry > ROUNDING_ASYMMETRY {
         downgrade(&mut report, "M", asymmetry);
+    }
+    Ok(report)
+}
+
+/// A global problem with equality constraints (G, b): the criteria on its reduced local
+/// problem (W̃, q̃) of [`crate::equality`] (W̃ = Hᵀ (M⁻¹ − M⁻¹ G S⁺ Gᵀ M⁻¹) H is the Delassus
+/// operator of the motions the constraints allow, symmetric when M is). That equivalence needs
+/// constraints some v satisfies: when the velocity of r = 0 leaves an equality residual above
+/// `settings.tol` (b not in the range of Gᵀ), an "exists" becomes [`Conclusion::Unknown`]
+/// with a note.
+fn check_equality(
+    p: &GlobalProblem,
+    settings: &CheckSettings,
+    progress: &mut dyn FnMut(Criterion),
+) -> Result<ExistenceReport, CheckError> {
+    let reduction = crate::equality::Reduction::new(p)?;
+    let mut report = check_local_with(&reduction.local, settings, progress)?;
+    report.kind = "global";
+    let asymmetry = p.m.asymmetry();
+    if asymmetry > ROUNDING_ASYMMETRY {
+        downgrade(&mut report, "M", asymmetry);
+    }
+    let r0 = vec![0.0; p.h.ncols];
+    let (v0, _) = reduction.recover(p, &r0);
+    let residual = p.equality_residual(&v0).unwrap_or(0.0);
+    if residual.is_nan() || residual > settings.tol {
+        if let Conclusion::Exists { by, .. } = report.conclusion {
+            report.note = Some(format!(
+                "{by} holds on the problem reduced by the equality constraints, but no velocity \
+                 satisfies them: the equality residual ‖Gᵀ v + b‖ / max(1, ‖b‖) stays at \
+                 {residual:.2e} (b is not in the range of Gᵀ)"
+            ));
+            report.conclusion = Conclusion::Unknown;
+        }
     }
     Ok(report)
 }

@@ -4,6 +4,7 @@
 //! ```text
 //! /fclib_local/{W}            /fclib_local/vectors/{q, mu}          local:  u = W r + q
 //! /fclib_global/{M, H}        /fclib_global/vectors/{f, w, mu}      global: M v = H r + f, u = Hᵀ v + w
+//! /fclib_global/G             /fclib_global/vectors/b               optional: M v = H r + G λ + f, Gᵀ v + b = 0
 //! /fclib_*/spacedim           int32[1], d ∈ {2, 3}
 //! /fclib_*/info/{title, description, math_info}     strings, optional
 //! /solution/{v?, u?, r, l?}                         optional
@@ -26,9 +27,12 @@
 //! dataset). They are strict about everything else: sizes that disagree, indices out of
 //! range, decreasing pointers, and the validation of [`crate::LocalProblem::new`] /
 //! [`crate::GlobalProblem::new`] (½(W + Wᵀ) positive semidefinite, the symmetric part of M positive
-//! definite, finite data, μ ≥ 0; W and M are kept exactly as stored, symmetric or not). FCLIB's
-//! optional equality constraints (`/fclib_local/{V, R}`) and bilateral constraints
-//! (`/fclib_global/G`) are refused with [`FclibErrorKind::Unsupported`] rather than dropped.
+//! definite, finite data, μ ≥ 0; W and M are kept exactly as stored, symmetric or not). The
+//! bilateral (equality) constraints of a global problem, `/fclib_global/G` (n × p, any of the
+//! three storages) with `/fclib_global/vectors/b` (p), are read into
+//! [`crate::problem::Equality`] (both or neither; G's rows must be M's), and their multipliers
+//! λ are `/solution/l` (length p). The local problem's optional equality constraints
+//! (`/fclib_local/{V, R}`) are refused with [`FclibErrorKind::Unsupported`] rather than dropped.
 //! Every failure is an [`FclibError`] naming the file and the HDF5 object; a malformed file
 //! never panics (the HDF5 crate is `hdf5-pure`, pure Rust; see `docs/hdf5-crates.md`).
 //!
@@ -74,7 +78,7 @@ pub struct StoredSolution {
     pub u: Option<Vec<f64>>,
     /// local impulses (reactions), length m
     pub r: Vec<f64>,
-    /// multipliers of equality / bilateral constraints (not used by coulomb)
+    /// multipliers λ of the equality (bilateral) constraints of a global problem, length p
     pub l: Option<Vec<f64>>,
 }
 
@@ -242,6 +246,10 @@ pub enum EvaluateError {
     /// A global problem's solution without velocities v.
     #[error("the solution of a global problem has no velocities v")]
     MissingVelocity,
+    /// The solution of a global problem with equality constraints has no multipliers λ
+    /// (`/solution/l`): its balance residual cannot be computed.
+    #[error("the solution of a problem with equality constraints has no multipliers l")]
+    MissingMultipliers,
     /// The Delassus form could not be built (M not positive definite).
     #[error("{0}")]
     Problem(#[from] ProblemError),
@@ -269,6 +277,11 @@ impl StoredSolution {
         if let (Some(v), Some(n)) = (&self.v, problem.dofs()) {
             check("v", v.len(), n)?;
         }
+        if let (Some(l), Problem::Global(g)) = (&self.l, problem) {
+            if g.equality.is_some() {
+                check("l", l.len(), g.equality_rows())?;
+            }
+        }
         Ok(())
     }
 }
@@ -279,7 +292,10 @@ pub use crate::evaluation::Evaluation;
 /// Evaluates a stored solution against `problem` with the error of `docs/error.md`:
 /// local, u = W r + q recomputed from r; global, u = Hᵀ v + w recomputed from the stored v,
 /// the scale uses the Delassus vector q = Hᵀ M⁻¹ f + w, and the balance residual
-/// ‖M v − H r − f‖ / max(1, ‖f‖) is reported. A stored u is never used.
+/// ‖M v − H r − f‖ / max(1, ‖f‖) is reported. With equality constraints the stored λ (`l`,
+/// required) enters the balance residual ‖M v − H r − G λ − f‖ / max(1, ‖f‖), the equality
+/// residual ‖Gᵀ v + b‖ / max(1, ‖b‖) is reported, and the scale uses the reduced Delassus
+/// vector q̃ ([`crate::equality`]). A stored u is never used.
 pub fn evaluate(problem: &Problem, solution: &StoredSolution) -> Result<Evaluation, EvaluateError> {
     evaluate_with_velocity(problem, solution).map(|(_, e)| e)
 }
@@ -298,6 +314,20 @@ pub fn evaluate_with_velocity(
                 .v
                 .as_deref()
                 .ok_or(EvaluateError::MissingVelocity)?;
+            if p.equality.is_some() {
+                let l = solution
+                    .l
+                    .as_deref()
+                    .ok_or(EvaluateError::MissingMultipliers)?;
+                let reduction = crate::equality::Reduction::new(p)?;
+                return Ok(crate::evaluation::global_with(
+                    p,
+                    v,
+                    &solution.r,
+                    Some(l),
+                    norm(&reduction.local.q),
+                ));
+            }
             let delassus = Delassus::new(p)?;
             Ok(crate::evaluation::global(
                 p,

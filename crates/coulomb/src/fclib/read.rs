@@ -441,7 +441,6 @@ impl<'a> Reader<'a> {
     /// The global problem in `/fclib_global`, exactly as stored.
     fn global(&self) -> Result<Problem, FclibError> {
         let g = "fclib_global";
-        self.refuse("fclib_global/G", "bilateral constraints (G, b)")?;
         let d = self.spacedim(g)?;
         for mg in ["fclib_global/M", "fclib_global/H"] {
             if !self.has_group(mg)? {
@@ -474,9 +473,14 @@ impl<'a> Reader<'a> {
         let f = self.floats_len("fclib_global/vectors/f", mm, "m of /fclib_global/M")?;
         let w = self.floats_len("fclib_global/vectors/w", hn, "n of /fclib_global/H")?;
         let mu = self.floats_len("fclib_global/vectors/mu", hn / d, "n of H / spacedim")?;
+        let equality = self.equality(mm)?;
         let mmat = self.matrix("fclib_global/M")?;
         let hmat = self.matrix("fclib_global/H")?;
         GlobalProblem::new(d as i64, mmat, hmat, f, w, mu)
+            .and_then(|p| match equality {
+                Some((gmat, b)) => p.with_equality(gmat, b),
+                None => Ok(p),
+            })
             .map(Problem::Global)
             .map_err(|source| {
                 self.err(FclibErrorKind::InvalidProblem {
@@ -484,6 +488,40 @@ impl<'a> Reader<'a> {
                     source,
                 })
             })
+    }
+
+    /// The equality constraints `/fclib_global/G` (n × p, n = `dofs`) and
+    /// `/fclib_global/vectors/b` (p), when present: both or neither.
+    fn equality(&self, dofs: usize) -> Result<Option<(CscMatrix, Vec<f64>)>, FclibError> {
+        let (gg, bp) = ("fclib_global/G", "fclib_global/vectors/b");
+        let has_g = self.exists(gg)?;
+        let has_b = self.exists(bp)?;
+        match (has_g, has_b) {
+            (false, false) => return Ok(None),
+            (false, true) => {
+                return Err(self.err(FclibErrorKind::MissingGroup {
+                    path: shown(gg),
+                    hint: " (/fclib_global/vectors/b is stored: equality constraints need both)"
+                        .into(),
+                }))
+            }
+            (true, false) => {
+                return Err(self.err(FclibErrorKind::MissingDataset { path: shown(bp) }))
+            }
+            (true, true) => {}
+        }
+        // a dataset stored at G is refused here (WrongType: expected a group)
+        self.has_group(gg)?;
+        let (gm, gn) = self.matrix_shape(gg)?;
+        if gm != dofs {
+            return Err(self.bad(
+                "fclib_global/G/m",
+                format!("G must have as many rows as M (m = {dofs}), found m = {gm}"),
+            ));
+        }
+        let b = self.floats_len(bp, gn, "n of /fclib_global/G")?;
+        let gmat = self.matrix(gg)?;
+        Ok(Some((gmat, b)))
     }
 
     /// Reads `group` (`solution` or `guesses/k`) as a stored solution. When `problem` is
@@ -508,6 +546,11 @@ impl<'a> Reader<'a> {
             }
             if let (Some(v), Some(n)) = (&sol.v, p.dofs()) {
                 self.check_len(&path("v"), v.len(), n, "dofs")?;
+            }
+            if let (Some(l), Problem::Global(g)) = (&sol.l, p) {
+                if g.equality.is_some() {
+                    self.check_len(&path("l"), l.len(), g.equality_rows(), "equality rows")?;
+                }
             }
         }
         Ok(sol)

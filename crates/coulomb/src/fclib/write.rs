@@ -192,10 +192,16 @@ pub(super) fn to_bytes(file: &FclibFile, opts: &WriteOptions) -> Result<Vec<u8>,
             let mut g = b.create_group("fclib_global");
             put_matrix(&mut g, "M", &p.m, opts, path)?;
             put_matrix(&mut g, "H", &p.h, opts, path)?;
+            if let Some(e) = &p.equality {
+                put_matrix(&mut g, "G", &e.g, opts, path)?;
+            }
             let mut v = g.create_group("vectors");
             v.create_dataset("f").with_f64_data(&p.f);
             v.create_dataset("w").with_f64_data(&p.w);
             v.create_dataset("mu").with_f64_data(&p.mu);
+            if let Some(e) = &p.equality {
+                v.create_dataset("b").with_f64_data(&e.b);
+            }
             g.add_group(v.finish());
             put_size(&mut g, "spacedim", p.dim, path)?;
             if let Some(info) = &file.info {

@@ -32,6 +32,7 @@ mod stage;
 
 use crate::deadline::Deadline;
 use crate::delassus::Delassus;
+use crate::equality::Reduction;
 use crate::inner::{
     apgd::ApgdSolver, faceted::FacetedSolver, ipm::IpmSolver, pgs::PgsSolver, InnerSolver,
 };
@@ -175,6 +176,9 @@ pub struct Solver<'a> {
     solvers: InnerSolvers,
     /// what the solver knows of the problem ([`crate::plan::Structure`]), computed once
     structure: Structure,
+    /// a global problem with equality constraints: the problem as stored and its reduction
+    /// ([`crate::equality`]); `form` then holds the reduced local problem
+    equality: Option<Box<(Cow<'a, GlobalProblem>, Reduction)>>,
 }
 
 impl<'a> Solver<'a> {
@@ -197,6 +201,15 @@ impl<'a> Solver<'a> {
 
     fn global(g: Cow<'a, GlobalProblem>, settings: Settings) -> Result<Self, SolveError> {
         settings.validate()?;
+        if g.equality.is_some() {
+            // the equality rows are eliminated (crate::equality): the methods solve the
+            // reduced local problem, the result is evaluated on the stored one
+            let reduction = Reduction::new(&g)?;
+            let local = reduction.local.clone();
+            let mut solver = Self::with_stored(Stored::Local(Cow::Owned(local)), settings)?;
+            solver.equality = Some(Box::new((g, reduction)));
+            return Ok(solver);
+        }
         let delassus = Box::new(Delassus::new(&g)?);
         Self::with_stored(Stored::Global(g, delassus), settings)
     }
@@ -209,6 +222,7 @@ impl<'a> Solver<'a> {
             form,
             solvers: InnerSolvers::new(&settings),
             settings,
+            equality: None,
         })
     }
 
@@ -251,7 +265,7 @@ impl<'a> Solver<'a> {
 
     /// New free velocity q of a local problem (same W and μ), e.g. the next time step.
     pub fn update_q(&mut self, q: Vec<f64>) -> Result<(), SolveError> {
-        let Stored::Local(p) = &mut self.form.stored else {
+        let (Stored::Local(p), None) = (&mut self.form.stored, &self.equality) else {
             return Err(SolveError::Problem(ProblemError::Shape {
                 what: "q",
                 expected: "a local problem (use update_rhs for a global one)".into(),
@@ -267,6 +281,19 @@ impl<'a> Solver<'a> {
     /// New f and w of a global problem (same M, H and μ: the factorization and W are kept);
     /// q = Hᵀ M⁻¹ f + w is recomputed.
     pub fn update_rhs(&mut self, f: Vec<f64>, w: Vec<f64>) -> Result<(), SolveError> {
+        if let Some(eq) = &mut self.equality {
+            let (g, reduction) = &mut **eq;
+            crate::problem::check_len("f", &f, g.f.len())?;
+            crate::problem::check_len("w", &w, g.w.len())?;
+            let g = g.to_mut();
+            (g.f, g.w) = (f, w);
+            reduction.update_rhs(g);
+            if let Stored::Local(p) = &mut self.form.stored {
+                p.to_mut().q.clone_from(&reduction.local.q);
+            }
+            self.form.refresh();
+            return Ok(());
+        }
         let Stored::Global(g, d) = &mut self.form.stored else {
             return Err(SolveError::Problem(ProblemError::Shape {
                 what: "f",
@@ -287,7 +314,7 @@ impl<'a> Solver<'a> {
     /// [`LocalProblem::new`] checks it). The inner solvers' data are rebuilt for it at their
     /// next use.
     pub fn update_w(&mut self, w: CscMatrix) -> Result<(), SolveError> {
-        let Stored::Local(p) = &mut self.form.stored else {
+        let (Stored::Local(p), None) = (&mut self.form.stored, &self.equality) else {
             return Err(SolveError::Problem(ProblemError::Shape {
                 what: "W",
                 expected: "a local problem".into(),
@@ -320,7 +347,30 @@ impl<'a> Solver<'a> {
         {
             sol.status = Status::Interrupted;
         }
+        if let Some(eq) = &self.equality {
+            self.report_on_stored(&eq.0, &eq.1, &mut sol);
+        }
         Ok(sol)
+    }
+
+    /// A problem with equality constraints: v and λ recovered from the returned r, and the
+    /// error, balance and equality residuals evaluated on the problem as stored
+    /// ([`crate::evaluation::global_with`], the scale ‖q̃‖ of the reduced Delassus vector).
+    /// "Converged" needs the reduced solve converged and the stored evaluation converged
+    /// ([`crate::evaluation::Evaluation::converged`]); otherwise a converged reduced solve
+    /// ends with [`Status::EqualityResidual`].
+    fn report_on_stored(&self, g: &GlobalProblem, reduction: &Reduction, sol: &mut Solution) {
+        let (v, l) = reduction.recover(g, &sol.r);
+        let (u, ev) = crate::evaluation::global_with(g, &v, &sol.r, Some(&l), self.form.q_norm);
+        if sol.status == Status::Converged && !ev.converged(self.settings.tol) {
+            sol.status = Status::EqualityResidual;
+        }
+        sol.u = u;
+        sol.v = Some(v);
+        sol.l = Some(l);
+        sol.error = ev.measure.error;
+        sol.balance_residual = ev.balance_residual;
+        sol.equality_residual = ev.equality_residual;
     }
 
     /// [`Solver::solve`] before the status of an interrupted solve is set: the steps of
@@ -428,6 +478,8 @@ fn merge(earlier: Vec<Outcome>, last: Outcome, start: Instant) -> Solution {
         status: last.status,
         error: point.verdict.error,
         balance_residual: point.verdict.balance,
+        l: None,
+        equality_residual: None,
         outer_iterations: work.outer_iterations,
         inner_iterations: work.inner_iterations,
         history,

@@ -57,7 +57,6 @@ fn refused_options(args: &Args) -> Vec<&'static str> {
     check(args.method != d.method, "--method");
     check(args.max_sweeps != d.max_sweeps, "--max-sweeps");
     check(args.relaxation != d.relaxation, "--relaxation");
-    check(args.subspace_every != d.subspace_every, "--subspace-every");
     check(args.gamma != d.gamma, "--gamma");
     check(args.no_projection, "--no-projection");
     check(args.no_gap_closure, "--no-gap-closure");

@@ -22,7 +22,7 @@ pub enum Method {
 
 /// The options that a checkpoint fixes (the parameters): refused with --restart. A scene is
 /// refused too, unless it is the scene file of the stored run (its inlets continue).
-const RESTART_CONFLICTS: [&str; 25] = [
+const RESTART_CONFLICTS: [&str; 26] = [
     "beads",
     "mu",
     "rolling_friction",
@@ -32,6 +32,7 @@ const RESTART_CONFLICTS: [&str; 25] = [
     "method",
     "max_sweeps",
     "relaxation",
+    "subspace_every",
     "inner",
     "outer",
     "tol",
@@ -100,6 +101,11 @@ pub struct Args {
     /// towards 1 automatically when it does not help)
     #[arg(long, default_value_t = 1.5, value_parser = crate::values::relaxation)]
     pub relaxation: f64,
+    /// every K Gauss–Seidel sweeps, a subspace minimization: one sparse Cholesky solve on
+    /// the sweeps' stick / slip / separation pattern, kept only if the step's error
+    /// decreased (--method nsgs; docs/scaling.md, "Depth"); 0: never
+    #[arg(long, default_value_t = 0, value_parser = crate::values::count0)]
+    pub subspace_every: usize,
     /// worker threads (default: all cores); results do not depend on it
     #[arg(long, value_parser = crate::values::threads)]
     pub threads: Option<usize>,
@@ -247,6 +253,7 @@ impl Args {
                     tol: self.tol,
                     max_sweeps: self.max_sweeps,
                     relaxation: self.relaxation,
+                    subspace_every: self.subspace_every,
                     time_limit: Some(step_time_limit(self.beads)),
                     ..NsgsSettings::default()
                 }),

@@ -53,6 +53,7 @@ pub mod scene;
 pub mod scene_file;
 pub mod shape;
 pub mod simulation;
+pub mod subspace;
 pub mod tunnelling;
 pub mod validation;
 pub mod world;

@@ -672,7 +672,18 @@ pub struct NsgsSettings {
     /// that its files do not change when the solver under test does). Not applied to steps
     /// of more than `simulation::LIBRARY_FINISH_MAX_CONTACTS` contacts (memory)
     pub library_finish: bool,
+    /// every this many sweeps, a subspace minimization ([`crate::subspace`]): the sweeps'
+    /// stick / slip / separation pattern, one sparse Cholesky solve of the active rows, the
+    /// result kept only if the error on the stored problem decreased; 0: never
+    #[serde(default)]
+    pub subspace_every: usize,
 }
+
+/// Subspace corrections tried in a row while each one lowers the error.
+pub const SUBSPACE_REPEAT: usize = 4;
+
+/// Step lengths α = 1, ½, ¼, … tried on each subspace correction.
+pub const SUBSPACE_STEPS: usize = 8;
 
 /// Sweeps over which the relaxation's progress is judged.
 pub const RELAX_WINDOW: usize = 10;
@@ -688,6 +699,7 @@ impl Default for NsgsSettings {
             relaxation: 1.5,
             serial_below: 1_500,
             library_finish: true,
+            subspace_every: 0,
         }
     }
 }
@@ -727,6 +739,8 @@ pub struct NsgsSolution {
     pub evaluations: usize,
     /// colours of the contact graph
     pub colours: usize,
+    /// subspace corrections kept (`NsgsSettings::subspace_every`)
+    pub subspace: usize,
 }
 
 /// Raw velocity storage shared by the updates of one colour, which touch disjoint spheres.
@@ -1182,6 +1196,7 @@ pub fn solve_coloured(
             sweeps: 0,
             evaluations: 0,
             colours: 0,
+            subspace: 0,
         };
     }
     let sequential;
@@ -1240,6 +1255,7 @@ pub fn solve_coloured(
         1.0
     };
     let mut window_start = f64::INFINITY;
+    let mut subspace = 0usize;
     let ok = |e: &Evaluation| e.error.is_finite() && e.error <= tol && e.balance <= tol;
     let status = loop {
         if !eval.error.is_finite() {
@@ -1257,6 +1273,61 @@ pub fn solve_coloured(
         // the first sweep is plain Gauss–Seidel: it solves isolated contacts exactly
         let s = state.sweep(if sweeps == 0 { 1.0 } else { omega });
         sweeps += 1;
+        if settings.subspace_every > 0 && sweeps % settings.subspace_every == 0 {
+            eval = state.evaluate(qn);
+            evaluations += 1;
+            for _ in 0..SUBSPACE_REPEAT {
+                if ok(&eval) || !eval.error.is_finite() {
+                    break;
+                }
+                let Some((target, _)) =
+                    crate::subspace::correction(&state.rows, &problem.inv_mass, &state.r, &state.v)
+                else {
+                    break;
+                };
+                // projected line search on the error: Π(r + α (target − r)), α = 1, ½, …
+                let saved = state.r.clone();
+                let mut best: Option<(Evaluation, Vec<[f64; 3]>)> = None;
+                let mut alpha = 1.0;
+                for _ in 0..SUBSPACE_STEPS {
+                    state.r = saved
+                        .iter()
+                        .zip(&target)
+                        .zip(&state.rows)
+                        .map(|((r, t), row)| {
+                            let mut x: [f64; 3] =
+                                std::array::from_fn(|k| r[k] + alpha * (t[k] - r[k]));
+                            cone::project(row.mu, &mut x);
+                            x
+                        })
+                        .collect();
+                    let after = state.evaluate(qn);
+                    evaluations += 1;
+                    let better = after.error.is_finite()
+                        && after.error < best.as_ref().map_or(eval.error, |b| b.0.error);
+                    if better {
+                        best = Some((after, state.r.clone()));
+                    } else if best.is_some() {
+                        break;
+                    }
+                    alpha *= 0.5;
+                }
+                match best {
+                    Some((e, r)) => {
+                        state.r = r;
+                        state.recompute_velocity();
+                        eval = e;
+                        subspace += 1;
+                    }
+                    None => {
+                        state.r = saved;
+                        state.recompute_velocity();
+                        break;
+                    }
+                }
+            }
+            continue;
+        }
         let scale = qn.max(s.r_sq.sqrt()).max(s.u_sq.sqrt());
         let proxy = if scale > f64::EPSILON {
             s.residual_sq.sqrt() / scale
@@ -1302,6 +1373,7 @@ pub fn solve_coloured(
         sweeps,
         evaluations,
         colours: colouring.colours(),
+        subspace,
     }
 }
 

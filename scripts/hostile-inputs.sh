@@ -62,14 +62,14 @@ for kind in fifo zero dir dangling loop; do
 done
 # huge counts: refused from the count, before anything is built
 for count in 20000000000 1000000000000 18446744073709551615; do
-  for packing in '' 'packing = { random = {} }'; do
+  for packing in '' 'packing = { method = "random" }'; do
     printf '%s\n%s\n[[bodies]]\n[bodies.fill]\ncount = %s\nregion = { kind = "box", lo = [0, 0, 0], hi = [1, 1, 1] }\nsizes = { kind = "uniform", min = 0.01, max = 0.02 }\n%s\n' \
       "$step" "$box" "$count" "$packing" >scene.toml
     run 2 simulate scene.toml
   done
 done
 # a random fill of more than the region holds: refused by the packing bound
-printf '%s\n%s\n[[bodies]]\n[bodies.fill]\ncount = 10000000\nregion = { kind = "box", lo = [0, 0, 0], hi = [1, 1, 1] }\nsizes = { kind = "uniform", min = 0.01, max = 0.02 }\npacking = { random = {} }\n' \
+printf '%s\n%s\n[[bodies]]\n[bodies.fill]\ncount = 10000000\nregion = { kind = "box", lo = [0, 0, 0], hi = [1, 1, 1] }\nsizes = { kind = "uniform", min = 0.01, max = 0.02 }\npacking = { method = "random" }\n' \
   "$step" "$box" >scene.toml
 run 2 simulate scene.toml
 # arrays longer than their field

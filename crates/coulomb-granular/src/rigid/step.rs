@@ -779,8 +779,16 @@ impl RigidWorld {
             .obstacles
             .iter()
             .all(|o| matches!(o.motion, Motion::Fixed));
-        let allowed =
-            ENERGY_GROWTH_BOUND * kinetic_before.max(kinetic_after) + 1e-12 * self.energy_scale();
+        // 1 % of the kinetic energy, or of that which gravity gives in one step, Σ m (g h)²
+        // (the scale of what a solve within its tolerance may add to a body at rest)
+        let step_scale: f64 = self
+            .bodies
+            .iter()
+            .filter(|b| !b.fixed)
+            .map(|b| b.mass * (h * self.gravity.length()).powi(2))
+            .sum();
+        let allowed = ENERGY_GROWTH_BOUND * kinetic_before.max(kinetic_after).max(step_scale)
+            + 1e-12 * self.energy_scale();
         let energy_grew = fixed_obstacles && (gained.is_nan() || gained > allowed);
         let physics_check = if too_deep {
             "penetration"
@@ -997,7 +1005,7 @@ fn correct_positions(
 pub const PENETRATION_BOUND: f64 = 0.1;
 
 /// Mechanical energy (kinetic + gravity's potential) gained in one step beyond this fraction
-/// of the kinetic energy (plus round-off) makes the step's status
+/// of the larger of the kinetic energy and Σ m (g h)² (plus round-off) makes the step's status
 /// [`RigidStatus::NotConverged`] when every obstacle is fixed: Moreau–Jean with θ = ½ and
 /// e ≤ 1 never creates energy (docs/rigid-bodies.md).
 pub const ENERGY_GROWTH_BOUND: f64 = 1e-2;

@@ -58,8 +58,8 @@ pub enum GenerateError {
 /// The densest packing fraction a random fill is asked for: 0.64, random close packing of
 /// equal spheres (random sequential addition itself jams near 0.38). A random fill whose
 /// spheres' volume (count × the smallest sphere's volume) exceeds this fraction of the
-/// region's bounding box is refused with [`GenerateError::CannotFit`] before anything is
-/// tried, whatever its attempt cap.
+/// region's bounding box cannot place them all ([`check_fits`]): it tries at most as many
+/// positions as the count that could fit would (1000 each by default) and keeps what fits.
 pub const MAX_PACKING_FRACTION: f64 = 0.64;
 
 /// The wall-clock limit of one random fill (s): past it the fill stops with
@@ -707,6 +707,29 @@ pub fn fill(
     })
 }
 
+/// Whether `spec.count` spheres can fit by random addition in the bounding box `(lo, hi)`:
+/// [`GenerateError::CannotFit`] when count × the smallest sphere's volume exceeds
+/// [`MAX_PACKING_FRACTION`] of the box (a fill with `require_all` is refused by it before
+/// anything is tried; one without places what fits within the attempts of the count that
+/// could).
+pub fn check_fits(bounds: (Vec3, Vec3), spec: &FillSpec) -> Result<(), GenerateError> {
+    let (lo, hi) = bounds;
+    let rmin = spec.sizes.min_radius();
+    let sphere = 4.0 / 3.0 * std::f64::consts::PI * rmin * rmin * rmin;
+    let volume = spec.count as f64 * sphere;
+    let bbox = (hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z);
+    if volume > MAX_PACKING_FRACTION * bbox {
+        return Err(GenerateError::CannotFit {
+            count: spec.count,
+            min_radius: rmin,
+            volume,
+            region: bbox,
+            fraction: MAX_PACKING_FRACTION,
+        });
+    }
+    Ok(())
+}
+
 /// [`fill`] handing each placed sphere to `emit` as it is placed, in the order of
 /// [`Filled::particles`], instead of collecting them; returns the positions tried
 /// ([`Filled::attempts`]). A lattice fill holds nothing per sphere beyond the spheres of
@@ -820,22 +843,19 @@ pub fn fill_each(
             }
         }
         Packing::Random { max_attempts } => {
-            let rmin = spec.sizes.min_radius();
-            let sphere = 4.0 / 3.0 * std::f64::consts::PI * rmin * rmin * rmin;
-            let volume = spec.count as f64 * sphere;
-            let bbox = (hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z);
-            if volume > MAX_PACKING_FRACTION * bbox {
-                return Err(GenerateError::CannotFit {
-                    count: spec.count,
-                    min_radius: rmin,
-                    volume,
-                    region: bbox,
-                    fraction: MAX_PACKING_FRACTION,
-                });
-            }
+            // a count past the packing bound cannot all be placed: the attempts are those of
+            // the count that could (a fill that must place every sphere is refused before,
+            // by `check_fits`)
+            let fit = match check_fits((lo, hi), spec) {
+                Ok(()) => spec.count,
+                Err(GenerateError::CannotFit { region, volume, .. }) => {
+                    ((spec.count as f64) * MAX_PACKING_FRACTION * region / volume) as usize
+                }
+                Err(e) => return Err(e),
+            };
             let start = std::time::Instant::now();
-            let cap = max_attempts.unwrap_or(spec.count.saturating_mul(1000));
-            let mut radii: Vec<f64> = (0..spec.count.min(MAX_SITES))
+            let cap = max_attempts.unwrap_or(fit.saturating_mul(1000));
+            let mut radii: Vec<f64> = (0..fit.min(MAX_SITES))
                 .map(|_| spec.sizes.sample(&mut rng))
                 .collect();
             radii.sort_by(|x, y| y.total_cmp(x));
@@ -1253,26 +1273,33 @@ mod tests {
         }
         // largest first
         assert!(a.particles.windows(2).all(|w| w[0].radius >= w[1].radius));
-        // a count whose volume exceeds the packing bound of the bounding box is refused
-        // before anything is tried (issue 55: 1000 × count attempts for a count that
-        // cannot fit)
-        let e = fill(
-            &region,
-            &spec(
-                100_000,
-                SizeDistribution::mono(0.05),
-                Packing::Random {
-                    max_attempts: Some(20_000),
-                },
-            ),
-            &[],
-        )
-        .unwrap_err();
+        // a count whose volume exceeds the packing bound of the bounding box cannot fit
+        // (issue 55: 1000 × count attempts for a count that cannot): `check_fits` says so
+        // (a fill that must place all is refused by it), and the fill itself places what
+        // fits within the attempts of the count that could (not the default 1000 × 10⁵)
+        let big = spec(
+            100_000,
+            SizeDistribution::mono(0.05),
+            Packing::Random { max_attempts: None },
+        );
+        let e = check_fits(region.bounds(), &big).unwrap_err();
         assert!(
             matches!(e, GenerateError::CannotFit { count: 100_000, .. }),
             "{e}"
         );
         assert!(e.to_string().contains("cannot fit"), "{e}");
+        let some = fill(&region, &big, &[]).unwrap();
+        let (lo, hi) = region.bounds();
+        let bbox = (hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z);
+        let bound = (MAX_PACKING_FRACTION * bbox
+            / (4.0 / 3.0 * std::f64::consts::PI * 0.05f64.powi(3))) as usize;
+        assert!(
+            some.placed() > 100 && some.placed() < bound,
+            "{}",
+            some.placed()
+        );
+        assert!(some.attempts <= 1000 * bound);
+        assert!(no_overlap(&some.particles));
         // the attempt cap stops a fill within the bound that random addition cannot place
         // (volume fraction 0.5 of the bounding box, 0.63 of the cylinder: past jamming)
         let full = fill(

@@ -1350,11 +1350,16 @@ impl LoadedScene {
                 };
                 let avoid: Vec<(Vec3, f64)> =
                     bodies.iter().map(|b| (b.position, b.radius)).collect();
+                let must_fit = fill.require_all && opts.max_fill.is_none();
                 let filled = match (&fill.region, &fill.mesh) {
                     (Some(r), None) => {
                         r.validate().map_err(|e| {
                             self.invalid(&[&fp[..], &[key("region")]].concat(), e.to_string())
                         })?;
+                        if must_fit && matches!(spec.packing, generate::Packing::Random { .. }) {
+                            generate::check_fits(r.bounds(), &spec)
+                                .map_err(|e| self.invalid(&fp, e.to_string()))?;
+                        }
                         generate::fill(r, &spec, &avoid)
                     }
                     (None, Some(m)) => {
@@ -1363,6 +1368,10 @@ impl LoadedScene {
                         mesh.check_closed_and_oriented()
                             .map_err(|e| self.invalid(&mp, e))?;
                         let (lo, hi) = mesh.bounds();
+                        if must_fit && matches!(spec.packing, generate::Packing::Random { .. }) {
+                            generate::check_fits((lo, hi), &spec)
+                                .map_err(|e| self.invalid(&fp, e.to_string()))?;
+                        }
                         let inside = |x: Vec3| mesh.inside(x);
                         let region = generate::Predicate {
                             lo,
@@ -1374,7 +1383,7 @@ impl LoadedScene {
                     _ => return Err(self.invalid(&fp, "give exactly one of `region` and `mesh`")),
                 }
                 .map_err(|e| self.invalid(&fp, e.to_string()))?;
-                if fill.require_all && opts.max_fill.is_none() && filled.placed() < filled.asked {
+                if must_fit && filled.placed() < filled.asked {
                     return Err(self.invalid(
                         &fp,
                         format!(
@@ -2007,6 +2016,33 @@ mod tests {
             scene.planned_spheres(&BuildOptions::default()),
             crate::generate::MAX_EMISSIONS as u64
         );
+    }
+
+    /// A random fill past the packing bound: refused at once when every sphere must be placed,
+    /// else the spheres that fit are kept, within the attempts of the count that could fit.
+    #[test]
+    fn an_overfull_random_fill_is_refused_or_keeps_what_fits() {
+        let text = |require_all: bool| {
+            format!(
+                "[step]\nh = 0.01\nsteps = 10\n[[obstacles]]\nshape = {{ kind = \"box\", lo = [0, 0, 0], hi = [0.5, 0.5, 0.5] }}\n\
+                 [[bodies]]\n[bodies.fill]\ncount = 20000\nrequire_all = {require_all}\npacking = {{ method = \"random\" }}\n\
+                 region = {{ kind = \"box\", lo = [0, 0, 0], hi = [0.5, 0.5, 0.5] }}\nsizes = {{ kind = \"uniform\", min = 0.02, max = 0.03 }}\n"
+            )
+        };
+        let t = std::time::Instant::now();
+        let e = parse(&text(true))
+            .unwrap()
+            .build(&BuildOptions::default())
+            .unwrap_err();
+        assert!(t.elapsed() < std::time::Duration::from_secs(5));
+        assert!(e.to_string().contains("cannot fit"), "{e}");
+        let built = parse(&text(false))
+            .unwrap()
+            .build(&BuildOptions::default())
+            .unwrap();
+        let (asked, placed) = built.fills[0];
+        assert_eq!(asked, 20000);
+        assert!(placed > 100 && placed < 20000, "{placed}");
     }
 
     /// The spheres [`LoadedScene::for_each_sphere`] hands out are the built world's, bit for

@@ -210,3 +210,20 @@ def test_check_time_limit_is_positive_seconds():
         with pytest.raises(coulomb.SettingsError) as e:
             coulomb.check(p, time_limit=t)
         assert e.value.field == "time_limit"
+
+
+@pytest.mark.parametrize("call", [
+    lambda p: coulomb.solve(p),
+    lambda p: coulomb.evaluate(p, np.zeros(3)),
+    lambda p: coulomb.check(p),
+    lambda p: coulomb.fclib.write("never-written.hdf5", p),
+])
+def test_a_path_given_as_a_problem_names_the_argument(call, tmp_path, monkeypatch):
+    # issue 55: "'str' object has no attribute '_inner'" named nothing
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(TypeError) as e:
+        call("problem.hdf5")
+    msg = str(e.value)
+    assert "argument 'problem'" in msg and "got str" in msg, msg
+    assert "coulomb.fclib.read(path).problem" in msg, msg
+    assert not (tmp_path / "never-written.hdf5").exists()

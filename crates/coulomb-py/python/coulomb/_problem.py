@@ -6,6 +6,8 @@ Stored in the FCLIB convention (see docs/reference.md): ``M v = H r + f``, ``u =
 
 from __future__ import annotations
 
+import os
+
 from typing import Any, Dict, Optional, Tuple, Union
 
 import numpy as np
@@ -247,3 +249,14 @@ class GlobalProblem(Problem):
 
 
 AnyProblem = Union[LocalProblem, GlobalProblem]
+
+
+def _inner_of(problem: Any, function: str) -> Any:
+    """The Rust problem behind ``problem``, or a TypeError naming the argument of
+    ``function`` (a path or another object given where a problem is expected)."""
+    if isinstance(problem, Problem):
+        return problem._inner
+    hint = ("; read a file with coulomb.fclib.read(path).problem"
+            if isinstance(problem, (str, bytes, os.PathLike)) else "")
+    raise TypeError(f"{function}(): argument 'problem' must be a coulomb.LocalProblem or "
+                    f"GlobalProblem, got {type(problem).__name__}{hint}")

@@ -9,7 +9,7 @@ from typing import Any, Dict, Optional
 import numpy as np
 
 from . import _coulomb
-from ._problem import ArrayLike, Problem
+from ._problem import ArrayLike, Problem, _inner_of
 
 __all__ = [
     "Status",
@@ -159,7 +159,7 @@ def solve(problem: Problem, r0: Optional[ArrayLike] = None, v0: Optional[ArrayLi
     ProblemError
         M not positive definite (global problems)
     """
-    d = _coulomb.solve(problem._inner, _vec(r0), _vec(v0), **settings)
+    d = _coulomb.solve(_inner_of(problem, "solve"), _vec(r0), _vec(v0), **settings)
     return Solution(
         r=d["r"], u=d["u"], v=d["v"], s=d["s"], status=Status(d["status"]),
         converged=d["converged"], err=d["error"], balance_residual=d["balance_residual"],
@@ -199,7 +199,7 @@ def evaluate(problem: Problem, r: ArrayLike, v: Optional[ArrayLike] = None,
     the multipliers l = λ enter the balance residual (given with v, or recovered with v
     when v is None) and the equality residual is reported. Raises :class:`InputError` for
     arrays of the wrong length."""
-    d = _coulomb.error(problem._inner, _vec(r), _vec(v), _vec(l))
+    d = _coulomb.error(_inner_of(problem, "evaluate"), _vec(r), _vec(v), _vec(l))
     return Evaluation(error=d["error"], absolute=d["absolute"], scale=d["scale"],
                       balance_residual=d["balance_residual"],
                       equality_residual=d["equality_residual"])
@@ -264,7 +264,7 @@ def check(problem: Problem, **settings: Any) -> ExistenceReport:
     Settings (``CheckSettings``): ``tol`` (1e-7), ``certificate_tol`` (1e-6), ``max_iter``
     (200), ``time_limit`` (30 s per conic solve). Unknown names raise :class:`TypeError`.
     """
-    d = _coulomb.check(problem._inner, **settings)
+    d = _coulomb.check(_inner_of(problem, "check"), **settings)
     criteria = {}
     for key, c in d["criteria"].items():
         cert = c.get("certificate")

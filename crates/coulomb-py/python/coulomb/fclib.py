@@ -15,7 +15,7 @@ from typing import Any, List, Mapping, Optional, Union
 import numpy as np
 
 from . import _coulomb
-from ._problem import Problem
+from ._problem import Problem, _inner_of
 
 __all__ = ["FclibFile", "StoredSolution", "read", "write"]
 
@@ -84,4 +84,4 @@ def write(path: PathLike, problem: Problem, solution: Any = None,
     if info is not None:
         inf = (str(info.get("title", "")), str(info.get("description", "")),
                str(info.get("math_info", "")))
-    _coulomb.fclib_write(os.fspath(path), problem._inner, r, u, v, inf)
+    _coulomb.fclib_write(os.fspath(path), _inner_of(problem, "write"), r, u, v, inf)

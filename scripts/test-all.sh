@@ -41,13 +41,26 @@ summary() {
 }
 trap summary EXIT
 
+# One build for every stage. Where an MPI implementation is installed (.ci/run installs one) the
+# whole suite is built with the distributed feature `mpi` (docs/distributed.md) from the start, so
+# that its tests at the end reuse every artifact; building it only for the last stage compiled
+# coulomb-granular, the CLI, the lab and the bindings a second time (2 min 22 s of CI, docs/testing.md).
+# The feature adds code paths (run under mpirun) and changes no default behaviour.
+FEATURES=()
+if command -v mpicc >/dev/null && command -v mpirun >/dev/null; then
+  FEATURES=(--features coulomb-cli/mpi)
+fi
+# A fresh build gains nothing from incremental compilation's caches (they cost time and disk:
+# docs/testing.md); a developer's own setting is kept.
+export CARGO_INCREMENTAL="${CARGO_INCREMENTAL:-0}"
+
 # Unit and integration tests, then the doc tests: `--tests` leaves out the examples, which a
 # plain `cargo test` would also compile and link at opt-level 2 only to check that they build
 # (one of them took over a minute); clippy --all-targets (.ci/run) checks that they compile.
 # --no-fail-fast: every test binary runs even when an earlier one fails, so that the counts
 # are complete.
-cargo test --workspace --tests --no-fail-fast 2>&1 | tee -a "$LOG"
-cargo test --workspace --doc --no-fail-fast 2>&1 | tee -a "$LOG"
+cargo test --workspace "${FEATURES[@]}" --tests --no-fail-fast 2>&1 | tee -a "$LOG"
+cargo test --workspace "${FEATURES[@]}" --doc --no-fail-fast 2>&1 | tee -a "$LOG"
 
 VENV=${COULOMB_PY_VENV:-target/py-venv}
 PYTHON=${PYTHON:-python3}
@@ -65,7 +78,7 @@ PY="$(cd "$VENV" && pwd)/bin/python"
 # The library then goes where `maturin develop` puts it in this mixed Rust/Python layout: next
 # to the package's Python sources (python/coulomb/_coulomb.abi3.so, git-ignored), which a .pth
 # file in the venv puts on Python's path.
-PYO3_PYTHON="$PY" cargo build --workspace --lib --tests --profile test 2>&1 | tee -a "$LOG"
+PYO3_PYTHON="$PY" cargo build --workspace "${FEATURES[@]}" --lib --tests --profile test 2>&1 | tee -a "$LOG"
 lib=target/debug/lib_coulomb.so
 [ -f "$lib" ] || lib=target/debug/lib_coulomb.dylib
 cp "$lib" crates/coulomb-py/python/coulomb/_coulomb.abi3.so
@@ -78,18 +91,8 @@ export COULOMB_CLI="$PWD/target/debug/coulomb"
 # (set -e and pipefail make both fail the run; nothing is masked)
 "$PY" -m pytest crates/coulomb-py/tests -q -rs 2>&1 | tee -a "$LOG"
 
-# the distributed feature (docs/distributed.md): its unit tests and `coulomb simulate` under
-# `mpirun -np 2`, when an MPI implementation is installed (.ci/run installs one); last, because
-# its build replaces target/debug/coulomb by the MPI-enabled binary
-if command -v mpicc >/dev/null && command -v mpirun >/dev/null; then
-  # (the whole workspace, the bindings too, and PYO3_PYTHON as for the extension above: the
-  # same selection of packages as the first build gives the dependencies the same features, so
-  # that serde, faer, Clarabel, parry and coulomb are reused; leaving coulomb-py out changed
-  # their features and compiled them all again, 3.5 of this stage's 3.7 minutes on a fresh
-  # clone. Only mpi, the workspace crates that the feature touches and the binding crate
-  # compile here)
-  PYO3_PYTHON="$PY" cargo test --workspace --features coulomb-cli/mpi --lib --test cli_mpi \
-    -- distributed 2>&1 | tee -a "$LOG"
-else
+# The distributed feature's tests (its unit tests and `coulomb simulate` under `mpirun -np 2`,
+# tests/cli_mpi.rs) ran above with the rest when MPI is installed.
+if [ ${#FEATURES[@]} -eq 0 ]; then
   echo "note: the distributed (mpi) tests were not built: they need mpicc and mpirun (apt-get install libopenmpi-dev openmpi-bin libclang-dev)"
 fi

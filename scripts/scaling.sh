@@ -24,4 +24,4 @@ $bin paper scaling --accurate --layout calibrated --beads 600,2500,10000 --threa
 echo "== every step of a 2 500-bead default simulate box (200 steps)"
 $bin simulate box --beads 2500 --json | tee "$out/simulate_2500.json"
 echo "== criterion: one accurate step at 600 and 10 000 beads"
-cargo bench --workspace --bench box_step -- nsgs 2>&1 | tee "$out/bench_nsgs.txt"
+cargo bench -p coulomb-bench --bench box_step -- nsgs 2>&1 | tee "$out/bench_nsgs.txt"

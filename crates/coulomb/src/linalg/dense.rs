@@ -6,7 +6,7 @@
 //! faer's `PartialPivLu` always runs on faer's global parallelism; this type calls faer's
 //! factorization and triangular solves with a parallelism chosen per matrix instead
 //! ([`parallelism`]), without touching the global setting, which belongs to the application.
-//! Measured (`cargo bench -p coulomb --bench dense_lu`, 2 cores): on all threads a factor
+//! Measured (`cargo bench -p coulomb-bench --bench dense_lu`, 2 cores): on all threads a factor
 //! and solve takes 4.8× as long as on one at n = 100, 2.3× at n = 384, 1.13× at 1 000, and
 //! 0.93× at 1 500, 0.78× at 3 000; the box piles of the corpus spend most of their time in
 //! such systems of size 100–400, where the threads' synchronisation costs more than it

@@ -2,7 +2,7 @@
 //! all of rayon's, for the sizes of the rigid problems' Newton systems (the Schur complement
 //! and the skeleton: n ≤ `BarrierParams::max_schur_dofs` = 1 500) and one above: the
 //! measurement behind `BarrierParams::dense_parallel_dim`.
-//! `cargo bench -p coulomb --bench dense_lu`.
+//! `cargo bench -p coulomb-bench --bench dense_lu`.
 
 use coulomb::dense::Lu;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};

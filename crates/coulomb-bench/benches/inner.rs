@@ -1,5 +1,5 @@
 //! Time to solve each problem of ../shared/fclib to error 1e-8 with each solver combination
-//! (skipped quietly when the directory is absent). `cargo bench -p coulomb --bench inner`.
+//! (skipped quietly when the directory is absent). `cargo bench -p coulomb-bench --bench inner`.
 
 use coulomb::fclib::read;
 use coulomb::solver::{solve, InnerKind, OuterKind, Settings};

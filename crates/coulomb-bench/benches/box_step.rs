@@ -2,7 +2,7 @@
 //! tolerance with the library's APGD (150 and 600 beads), and the accurate step of `coulomb
 //! simulate` — body-level Gauss–Seidel to err ≤ 1e-4 (`nsgs_*`, 600 and 10 000 beads, on the
 //! ambient rayon pool: `RAYON_NUM_THREADS=1` for one thread). Run: `cargo bench -p
-//! coulomb-granular` (or `--bench box_step -- nsgs_10000`).
+//! coulomb-bench --bench box_step` (or `--bench box_step -- nsgs_10000`).
 
 use coulomb::solver::{InnerKind, MethodParams, OuterKind, Settings};
 use coulomb_granular::{NsgsSettings, Params, Scene, Simulation, StepMethod};

@@ -1,6 +1,6 @@
 //! `coulomb bench`, run as the built binary.
 
-mod common;
+use crate::common;
 use common::*;
 
 use serde_json::Value;

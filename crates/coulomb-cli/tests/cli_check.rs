@@ -1,7 +1,7 @@
 //! `coulomb example …` writes the paper's examples; `coulomb check` reads them back and
 //! reports the criteria (JSON format of the README).
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::path::{Path, PathBuf};

@@ -3,7 +3,7 @@
 //! to the bit (the checkpoint files, the last VTK frames and the numbers of the stats files are
 //! identical); bad checkpoints and options a checkpoint fixes are refused with status 2.
 
-mod common;
+use crate::common;
 
 use common::{coulomb, ok, temp_dir};
 use std::path::Path;

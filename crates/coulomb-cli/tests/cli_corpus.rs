@@ -6,7 +6,7 @@
 //! ‖M v − H r − f‖ / max(1, ‖f‖) (global). Asserted: no "converged" whose recomputed error is
 //! above tol (zero false converged), no Painlevé case without a solution reported converged.
 
-mod common;
+use crate::common;
 use common::*;
 
 use serde_json::Value;

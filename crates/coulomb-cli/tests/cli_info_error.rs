@@ -1,6 +1,6 @@
 //! `coulomb info` and `coulomb error`, run as the built binary.
 
-mod common;
+use crate::common;
 use common::*;
 
 use coulomb::fclib::{self, FclibFile, StoredSolution};

@@ -3,7 +3,7 @@
 //! 5–7).
 #![cfg(unix)]
 
-mod common;
+use crate::common;
 
 use common::{coulomb, painleve, read_json, temp_dir};
 use serde_json::Value;

@@ -4,7 +4,7 @@
 //! complete.
 #![cfg(feature = "mpi")]
 
-mod common;
+use crate::common;
 
 use common::{read_json, stdout_json, temp_dir};
 use std::process::Command;

@@ -5,7 +5,7 @@
 //! an interrupted rigid run's summary says so.
 #![cfg(unix)]
 
-mod common;
+use crate::common;
 
 use common::{coulomb, read_json, temp_dir};
 use std::path::{Path, PathBuf};

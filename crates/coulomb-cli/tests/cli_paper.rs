@@ -1,7 +1,7 @@
 //! `coulomb simulate` and `coulomb paper table1|fig8|fig9|scaling`, run as the built binary on
 //! tiny sizes (a few beads, a few steps) so that the suite stays fast.
 
-mod common;
+use crate::common;
 use common::*;
 
 use serde_json::Value;

@@ -3,7 +3,7 @@
 //! extreme scales, outputs that never destroy an input, malformed stored solutions that only
 //! warn, JSON error objects.
 
-mod common;
+use crate::common;
 
 use common::{coulomb, data_file, temp_dir};
 use coulomb::fclib::{self, FclibFile, StoredSolution};

@@ -4,7 +4,7 @@
 //! naming the file, line and key; a run with `--checkpoint-every` continued by `--restart`
 //! ends in the state of the uninterrupted run to the bit.
 
-mod common;
+use crate::common;
 use common::{coulomb, ok, temp_dir};
 use std::path::PathBuf;
 

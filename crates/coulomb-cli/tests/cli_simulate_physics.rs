@@ -1,6 +1,6 @@
 //! `coulomb simulate` physics defaults and `coulomb validate`, on tiny sizes.
 
-mod common;
+use crate::common;
 use common::*;
 
 #[test]

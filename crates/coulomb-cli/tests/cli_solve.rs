@@ -1,7 +1,7 @@
 //! `coulomb solve`: JSON fields, --output read back by `coulomb error`, and the existence
 //! verdict printed beside a failure.
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::path::PathBuf;

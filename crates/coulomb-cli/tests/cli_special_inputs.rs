@@ -6,7 +6,7 @@
 //! no read of `/dev/zero` until memory runs out, no abort.
 #![cfg(unix)]
 
-mod common;
+use crate::common;
 
 use common::temp_dir;
 use std::path::{Path, PathBuf};

@@ -13,7 +13,7 @@
 //! `COULOMB_CLI_FUZZ_SECS` seconds (default 600), with the binary `COULOMB_BIN` when set.
 //! Results: docs/fuzz.md.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};

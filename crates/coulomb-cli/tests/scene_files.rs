@@ -2,7 +2,7 @@
 //! to the bit; inlets pour during the run; particles come from CSV files next to the scene;
 //! bad scene files exit with status 2, name the file, line and column, and write nothing.
 
-mod common;
+use crate::common;
 use common::{coulomb, ok, temp_dir};
 use std::path::{Path, PathBuf};
 

@@ -9,7 +9,7 @@
 //! interior-point try and the method of multipliers on its skeleton) and
 //! `data/box-local.hdf5` (a settled heap of 120 spheres: the warm-up and the main method).
 
-mod common;
+use crate::common;
 
 use coulomb::solver::{solve, Settings, Solution};
 use std::sync::atomic::{AtomicBool, Ordering};

@@ -2,7 +2,7 @@
 //! conclusion (time is not asserted here;
 //! `coulomb check` prints it). Prints a table of the conclusions.
 
-mod common;
+use crate::common;
 
 use coulomb::existence::{check, CheckSettings, Conclusion, Criterion, Verdict};
 use coulomb::fclib;

@@ -2,7 +2,7 @@
 //! nothing panics. Files are made with a low-level HDF5 writer (hdf5-pure, coulomb's own
 //! HDF5 dependency) from a valid layout with one thing changed, or by byte edits.
 
-mod common;
+use crate::common;
 
 use coulomb::fclib::{self, FclibError, FclibErrorKind, FclibFile, WriteOptions};
 use coulomb::{CscMatrix, LocalProblem, Problem};

@@ -1,7 +1,7 @@
 //! The files of data/ are read as data/README.md describes them; every real FCLIB file in
 //! ../shared/fclib (when present) is read and matches what h5py shows.
 
-mod common;
+use crate::common;
 
 use coulomb::fclib::{self, FclibFile};
 use coulomb::Problem;

@@ -1,7 +1,7 @@
 //! write → read round trips in every storage and index width, and h5py reading what
 //! coulomb writes.
 
-mod common;
+use crate::common;
 
 use coulomb::fclib::{self, FclibFile, IndexWidth, Info, Storage, StoredSolution, WriteOptions};
 use coulomb::{CscMatrix, GlobalProblem, LocalProblem, Problem};

@@ -17,10 +17,10 @@
 //! - `fuzz_short` (CI): a fixed number of cases from fixed seeds, a few seconds.
 //! - `fuzz_long` (ignored): `COULOMB_FUZZ_SECS` seconds (default 3600) from seed
 //!   `COULOMB_FUZZ_SEED`; prints the tally every minute. Run in release mode:
-//!   `cargo test --release -p coulomb --test fuzz -- --ignored --nocapture fuzz_long`.
+//!   `cargo test --release -p coulomb --test integration -- --ignored --nocapture fuzz::fuzz_long`.
 //!   Results: docs/fuzz.md.
 
-mod common;
+use crate::common;
 
 use coulomb::existence::{self, CheckSettings};
 use coulomb::fclib::{self, FclibFile, StoredSolution};
@@ -918,8 +918,8 @@ fn fuzz_long() {
     assert!(t.panics == 0 && t.hangs == 0 && t.false_converged == 0);
 }
 
-/// Replays one case: `COULOMB_FUZZ_ONE=SEED cargo test -p coulomb --test fuzz -- --ignored
-/// --nocapture fuzz_one` prints what each entry point returned.
+/// Replays one case: `COULOMB_FUZZ_ONE=SEED cargo test -p coulomb --test integration -- --ignored
+/// --nocapture fuzz::fuzz_one` prints what each entry point returned.
 #[test]
 #[ignore = "replays the case COULOMB_FUZZ_ONE"]
 fn fuzz_one() {

@@ -1,7 +1,7 @@
 //! Issue #12: no false "converged" from an overflowing error measure, and no panic on any
 //! `Settings` a caller can build (time limits beyond what `Instant` can hold).
 
-mod common;
+use crate::common;
 
 use coulomb::law::{self, error_measure};
 use coulomb::solver::{self, Settings, Status};

@@ -3,7 +3,7 @@
 //! independently: the solution is written as the file's /solution group, read back, and its
 //! error recomputed by `fclib::evaluate` from r (and v) alone.
 
-mod common;
+use crate::common;
 
 use coulomb::fclib::{self, read, FclibFile, StoredSolution};
 use coulomb::solver::{solve, Settings, Status};

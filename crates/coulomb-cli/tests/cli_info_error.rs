@@ -105,7 +105,8 @@ fn needs_shared_cli_error_missing_solution_and_bad_file() {
     );
     assert!(!err.contains("panicked"), "{err}");
 
-    let tmp = std::env::temp_dir().join(format!("coulomb-cli-bad-{}.hdf5", std::process::id()));
+    let tmp = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("coulomb-cli-bad-{}.hdf5", std::process::id()));
     std::fs::write(&tmp, b"not hdf5").unwrap();
     let t = tmp.display().to_string();
     for args in [vec!["info", &t], vec!["error", &t]] {
@@ -137,7 +138,8 @@ fn unit_delassus(q: Vec<f64>, mu: Vec<f64>) -> Problem {
 #[test]
 fn cli_error_with_solution_file() {
     // W = I, q = (1, 0, 0): take-off, r = 0, u = q is the exact solution.
-    let dir = std::env::temp_dir().join(format!("coulomb-cli-sol-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("coulomb-cli-sol-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let problem = unit_delassus(vec![1.0, 0.0, 0.0], vec![0.5]);
     let prob_path = dir.join("p.hdf5");
@@ -167,7 +169,8 @@ fn cli_error_worst_lists_the_contacts_that_carry_the_error() {
     // W = I, q = (1, 0, 0, −1, 0, 0), μ = 0.5; r = (0, 0, 0, 0.5, 0, 0): contact 0 takes off
     // exactly (u = q), contact 1 is pushed too little: u = (−0.5, 0, 0), ũ = u, r − ũ =
     // (1, 0, 0) ∈ K, e₁ = r − (1, 0, 0) = (−0.5, 0, 0); scale = max(‖q‖, ‖r‖, ‖u‖) = √2.
-    let dir = std::env::temp_dir().join(format!("coulomb-cli-worst-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("coulomb-cli-worst-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let problem = unit_delassus(vec![1.0, 0.0, 0.0, -1.0, 0.0, 0.0], vec![0.5, 0.5]);
     let mut file = FclibFile::new(problem);

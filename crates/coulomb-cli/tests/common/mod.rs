@@ -41,9 +41,11 @@ pub fn data_file(name: &str) -> String {
     path.display().to_string()
 }
 
-/// A fresh empty directory under the system temp dir.
+/// A fresh empty directory under cargo's scratch folder for integration tests
+/// (`target/tmp`, CARGO_TARGET_TMPDIR): what a test leaves stays inside the build folder.
 pub fn temp_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("coulomb-cli-{tag}-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("coulomb-cli-{tag}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("temp dir");
     dir
@@ -51,7 +53,8 @@ pub fn temp_dir(tag: &str) -> PathBuf {
 
 /// `name` inside a per-process scratch directory for `tag` (created if needed, kept).
 pub fn scratch_file(tag: &str, name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("coulomb-cli-{tag}-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("coulomb-cli-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("scratch dir");
     dir.join(name)
 }

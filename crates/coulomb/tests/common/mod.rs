@@ -53,9 +53,11 @@ fn hdf5_files(dir: &std::path::Path) -> Vec<PathBuf> {
     files
 }
 
-/// A fresh scratch folder under the system's temp dir, unique to this process and `tag`.
+/// A fresh scratch folder under cargo's scratch folder for integration tests (`target/tmp`,
+/// CARGO_TARGET_TMPDIR), unique to this process and `tag`.
 pub fn tempdir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("coulomb-{tag}-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("coulomb-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir is writable");
     dir
 }

@@ -2,7 +2,7 @@
 //! only).
 
 use crate::linalg::sparse::CscMatrix;
-use crate::problem::LocalProblem;
+use crate::problem::{GlobalProblem, LocalProblem};
 
 /// Deterministic pseudo-random numbers in [−1, 1) (a linear congruential generator; the
 /// stream is fixed by `seed` and `salt`), for the tests' problem builders.
@@ -38,4 +38,25 @@ pub(crate) fn problem(contacts: usize, seed: u64, delta: f64, skew: f64) -> Loca
         q: (0..m).map(|_| next()).collect(),
         mu: (0..contacts).map(|_| 0.3 + 0.7 * next().abs()).collect(),
     }
+}
+
+/// A ball (3 translational dofs, mass 2) pressed onto the floor (free velocity
+/// (1, 0, −1)), contact normal z, tangents x, y, μ = 0.3, its x velocity held at 0.5 by
+/// `rows` copies of the constraint v_x − 0.5 = 0 (G = e_x, b = −0.5), or with b given.
+pub(crate) fn equality_ball(rows: usize, b: Option<Vec<f64>>) -> GlobalProblem {
+    let m = CscMatrix::identity(3, 2.0);
+    let h = CscMatrix::from_dense(3, 3, &[0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0]);
+    let f = vec![2.0, 0.0, -2.0];
+    let g = CscMatrix::from_dense(
+        3,
+        rows,
+        &(0..3 * rows)
+            .map(|k| if k < rows { 1.0 } else { 0.0 })
+            .collect::<Vec<_>>(),
+    );
+    let b = b.unwrap_or(vec![-0.5; rows]);
+    GlobalProblem::new(3, m, h, f, vec![0.0; 3], vec![0.3])
+        .unwrap()
+        .with_equality(g, b)
+        .unwrap()
 }

@@ -2,6 +2,7 @@
 //! binary (`cargo test --test integration`): one link instead of one per file (docs/testing.md).
 //! A new file of `tests/` must be declared here; the test below fails when one is not.
 
+mod architecture;
 mod common;
 mod determinism;
 mod existence_3d;

@@ -564,4 +564,29 @@ mod tests {
         };
         assert!(matches!(check(&p, &s), Err(CheckError::Settings(_))));
     }
+
+    #[test]
+    fn existence_check_sees_the_constraints() {
+        let settings = CheckSettings::default();
+        // a solution exists (found above): the check of the reduced problem cannot say none
+        let ok = check(
+            &Problem::Global(crate::test_problems::equality_ball(1, None)),
+            &settings,
+        )
+        .unwrap();
+        assert!(!matches!(ok.conclusion, Conclusion::None { .. }), "{ok:?}");
+        // inconsistent rows: no solution, so never "exists"
+        let bad = check(
+            &Problem::Global(crate::test_problems::equality_ball(
+                2,
+                Some(vec![-0.5, -0.4]),
+            )),
+            &settings,
+        )
+        .unwrap();
+        assert!(
+            !matches!(bad.conclusion, Conclusion::Exists { .. }),
+            "{bad:?}"
+        );
+    }
 }

@@ -338,3 +338,29 @@ pub fn evaluate_with_velocity(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_problems::equality_ball;
+
+    /// Two inconsistent equality rows (v_x = 0.5 and v_x = 0.4) and a solution that meets the
+    /// first, the contact law and the balance exactly (r = (2, −0.6, 0), v = (0.5, 0, 0),
+    /// λ₁ + λ₂ = −0.4): the stored evaluation reports the second row's miss, ‖Gᵀv + b‖ /
+    /// max(1, ‖b‖) = 0.1, and never "converged".
+    #[test]
+    fn stored_evaluation_reports_the_equality_residual() {
+        let p = Problem::Global(equality_ball(2, Some(vec![-0.5, -0.4])));
+        let stored = StoredSolution {
+            v: Some(vec![0.5, 0.0, 0.0]),
+            u: None,
+            r: vec![2.0, -0.6, 0.0],
+            l: Some(vec![-0.4, 0.0]),
+        };
+        let ev = evaluate(&p, &stored).unwrap();
+        let eq = ev.equality_residual.expect("an equality residual");
+        assert!((eq - 0.1).abs() < 1e-12, "{eq}");
+        assert!(!ev.converged(1e-8));
+        assert!(!ev.converged(0.05));
+    }
+}

@@ -10,8 +10,18 @@ use std::io::{IsTerminal, Write};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
-/// Time between two plain progress lines.
+/// Time between two plain progress lines (unless `COULOMB_PROGRESS_SECONDS` says otherwise).
 pub const PLAIN_EVERY: Duration = Duration::from_secs(5);
+
+/// The time between two plain progress lines: `COULOMB_PROGRESS_SECONDS` (a nonnegative
+/// number of seconds; 0: a line per step) when set to one, else [`PLAIN_EVERY`].
+fn plain_every() -> Duration {
+    std::env::var("COULOMB_PROGRESS_SECONDS")
+        .ok()
+        .and_then(|s| s.trim().parse::<f64>().ok())
+        .filter(|x| x.is_finite() && *x >= 0.0 && *x < 1e9)
+        .map_or(PLAIN_EVERY, Duration::from_secs_f64)
+}
 
 /// A progress report: see the module doc. Same calls as an indicatif bar.
 pub struct Progress {
@@ -35,7 +45,7 @@ pub fn bar(len: usize, hidden: bool) -> Progress {
     let plain = (!hidden && !terminal).then(|| {
         Mutex::new(Plain::new(
             len,
-            PLAIN_EVERY,
+            plain_every(),
             Box::new(std::io::stderr()) as Box<dyn Write + Send>,
         ))
     });

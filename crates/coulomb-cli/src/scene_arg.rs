@@ -14,7 +14,7 @@ use crate::sim_args::{Args, Method};
 use anyhow::{bail, Context};
 use clap::Parser;
 use coulomb_granular::model::{
-    check_containment, overlaps, resolve_overlaps, BuildChecks, SceneError,
+    check_containment, obstacle_penetration, overlaps, resolve_overlaps, BuildChecks, SceneError,
 };
 use coulomb_granular::scene_file::{BuildOptions, BuiltScene, LoadedScene, MethodName};
 use coulomb_granular::{Simulation, World};
@@ -188,6 +188,9 @@ fn relaxed(scene: &BuiltScene, sweeps: usize, file: &str) -> anyhow::Result<Worl
         );
     }
     check_containment(&world)?;
+    if let Some(e) = obstacle_penetration(&world) {
+        return Err(e.into());
+    }
     if done.left.count > 0 {
         return Err(SceneError::Overlaps {
             count: done.left.count,

@@ -16,6 +16,7 @@ mod cli_rigid;
 mod cli_simulate_physics;
 mod cli_solve;
 mod cli_special_inputs;
+mod cli_start_checks;
 mod common;
 mod fuzz_cli;
 mod scene_files;

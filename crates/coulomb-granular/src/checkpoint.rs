@@ -30,7 +30,10 @@
 //!
 //! Root attributes `format` = [`FORMAT_NAME`], `format_version` = [`FORMAT_VERSION`],
 //! `coulomb_version` (the writer's crate version, informative) and `crc32`, the CRC-32 of
-//! every stored dataset (its path and its values, little-endian, in a fixed order). Reading
+//! every stored dataset (its path and its values, little-endian, in a fixed order), and
+//! `crc32_datasets`, the CRC-32 of each dataset alone (hexadecimal, space-separated, in the
+//! same order; optional: files written before it are read without it), with which a checksum
+//! error names the dataset that changed. Reading
 //! checks the format name and version (another version is refused: no migration), every
 //! dataset's type and shape, the checksum, index ranges and the parameters
 //! ([`Simulation::new`]'s checks); any failure is a [`CheckpointError`] saying what is wrong
@@ -130,8 +133,10 @@ pub enum CheckpointError {
     },
     /// the stored data do not match their checksum
     #[error(
-        "{}: corrupted checkpoint: CRC-32 of the data is {computed:#010x}, the file says {stored:#010x}",
-        path.display()
+        "{}: corrupted checkpoint{}: CRC-32 of {} is {computed:#010x}, the file says {stored:#010x}",
+        path.display(),
+        dataset.as_ref().map(|d| format!(" at /{d}")).unwrap_or_default(),
+        if dataset.is_some() { "its values" } else { "the data" }
     )]
     Checksum {
         /// the file
@@ -140,6 +145,10 @@ pub enum CheckpointError {
         stored: u32,
         /// the checksum of the data as read
         computed: u32,
+        /// the dataset whose values changed, found from the per-dataset checksums (the
+        /// `crc32_datasets` attribute; `None` for files without it, or when every dataset
+        /// matches its own checksum and only the whole does not)
+        dataset: Option<String>,
     },
     /// readable, but a value is out of range (an index, a parameter, a non-finite state)
     #[error("{}: invalid checkpoint at {location}: {detail}", path.display())]
@@ -459,6 +468,18 @@ pub(crate) fn encode_entries(
         AttrValue::AsciiString(env!("CARGO_PKG_VERSION").into()),
     );
     file.set_attr("crc32", AttrValue::U32(crc));
+    // one CRC-32 per dataset, in order (hexadecimal, space-separated): a damaged file's
+    // error names the dataset that changed
+    file.set_attr(
+        "crc32_datasets",
+        AttrValue::AsciiString(
+            entries
+                .iter()
+                .map(|e| format!("{:08x}", crc_of(std::slice::from_ref(e))))
+                .collect::<Vec<_>>()
+                .join(" "),
+        ),
+    );
     // entries are grouped by their first path component, in order
     let mut k = 0;
     while k < entries.len() {
@@ -747,6 +768,58 @@ impl Cursor<'_, '_> {
     }
 }
 
+/// Number of rows of a dataset as read (values / columns).
+pub(crate) fn rows_of(e: &Entry) -> usize {
+    let len = match &e.2 {
+        Data::F64(v) => v.len(),
+        Data::I64(v) => v.len(),
+        Data::U8(v) => v.len(),
+        Data::Str(_) => 1,
+    };
+    len / e.1.max(1)
+}
+
+/// Checks that the datasets of each group of `groups` (paths of `read`) have the same number
+/// of rows; where they do not, the error names the dataset whose count differs from that of
+/// most of its group (the first such), not the one read after it.
+pub(crate) fn check_rows(
+    r: &Reader<'_>,
+    read: &[Entry],
+    groups: &[&[&str]],
+) -> Result<(), CheckpointError> {
+    for group in groups {
+        let rows: Vec<(&str, usize)> = group
+            .iter()
+            .filter_map(|p| read.iter().find(|e| e.0 == *p))
+            .map(|e| (e.0, rows_of(e)))
+            .collect();
+        // the count most of the group agree on (the first such on ties)
+        let Some(&(_, n)) = rows.iter().max_by_key(|(p, n)| {
+            let votes = rows.iter().filter(|(_, m)| m == n).count();
+            let first = rows.iter().position(|(q, _)| q == p).unwrap_or(0);
+            (votes, usize::MAX - first)
+        }) else {
+            continue;
+        };
+        if let Some(&(p, m)) = rows.iter().find(|(_, m)| *m != n) {
+            let agree: Vec<String> = rows
+                .iter()
+                .filter(|(_, k)| *k == n)
+                .map(|(q, _)| format!("/{q}"))
+                .collect();
+            return Err(r.invalid(
+                p,
+                format!(
+                    "{m} rows, where {} {} {n}",
+                    agree.join(", "),
+                    if agree.len() == 1 { "has" } else { "have" }
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The simulation stored in `bytes` (the contents of the file at `path`, named in errors).
 fn decode(path: &Path, bytes: Vec<u8>) -> Result<Simulation, CheckpointError> {
     open(path, bytes, decode_file)
@@ -854,10 +927,31 @@ pub(crate) fn read_checked(
     }
     let computed = crc_of(&read);
     if computed != stored {
-        return Err(CheckpointError::Checksum {
-            path: path.to_path_buf(),
-            stored,
-            computed,
+        // the per-dataset checksums, where the file has them, name the dataset that changed
+        let each: Option<Vec<u32>> = attr_string(attrs.get("crc32_datasets")).and_then(|s| {
+            s.split_whitespace()
+                .map(|x| u32::from_str_radix(x, 16).ok())
+                .collect()
+        });
+        let changed = each.filter(|c| c.len() == read.len()).and_then(|c| {
+            read.iter().zip(c).find_map(|(e, stored)| {
+                let computed = crc_of(std::slice::from_ref(e));
+                (computed != stored).then(|| (e.0.to_string(), stored, computed))
+            })
+        });
+        return Err(match changed {
+            Some((dataset, stored, computed)) => CheckpointError::Checksum {
+                path: path.to_path_buf(),
+                stored,
+                computed,
+                dataset: Some(dataset),
+            },
+            None => CheckpointError::Checksum {
+                path: path.to_path_buf(),
+                stored,
+                computed,
+                dataset: None,
+            },
         });
     }
     Ok(read)
@@ -886,6 +980,61 @@ fn decode_file(r: &Reader<'_>) -> Result<Simulation, CheckpointError> {
         .map_err(|e| r.corrupt("", format!("internal layout: {e}")))
         .and_then(|empty| entries(&empty))?;
     let read = read_checked(r, FORMAT_NAME, FORMAT_VERSION, &layout)?;
+    // datasets that hold one row per sphere, per warm-start entry, per contact, per rolling
+    // entry: a count that differs is blamed on the dataset that differs
+    let keys = |g: &'static str| -> [&'static str; 4] {
+        match g {
+            "warm_start" => [
+                "warm_start/body",
+                "warm_start/partner_kind",
+                "warm_start/partner_index",
+                "warm_start/partner_feature",
+            ],
+            "contacts" => [
+                "contacts/body",
+                "contacts/partner_kind",
+                "contacts/partner_index",
+                "contacts/partner_feature",
+            ],
+            _ => [
+                "rolling/body",
+                "rolling/partner_kind",
+                "rolling/partner_index",
+                "rolling/partner_feature",
+            ],
+        }
+    };
+    let contacts = [
+        &keys("contacts")[..],
+        &[
+            "contacts/normal",
+            "contacts/t1",
+            "contacts/t2",
+            "contacts/point",
+            "contacts/gap",
+            "contacts/normal_velocity",
+            "contacts/impulse",
+        ],
+    ]
+    .concat();
+    check_rows(
+        r,
+        &read,
+        &[
+            &[
+                "bodies/position",
+                "bodies/velocity",
+                "bodies/angular_velocity",
+                "bodies/radius",
+                "bodies/mass",
+                "bodies/rotation_locked",
+                "bodies/material",
+            ],
+            &[&keys("warm_start")[..], &["warm_start/impulse"]].concat(),
+            &contacts,
+            &[&keys("rolling")[..], &["rolling/impulse"]].concat(),
+        ],
+    )?;
     let mut c = Cursor {
         r,
         entries: read.into_iter(),
@@ -1354,5 +1503,65 @@ mod tests {
         sim.params.activation.delta = f64::INFINITY;
         let e = sim.checkpoint_bytes().unwrap_err();
         assert!(matches!(e, CheckpointError::Unrepresentable(_)), "{e}");
+    }
+
+    /// The stored bytes of `values` (little-endian f64) inside `bytes`: their offset.
+    fn find_f64s(bytes: &[u8], values: &[f64]) -> usize {
+        let needle: Vec<u8> = values.iter().flat_map(|x| x.to_le_bytes()).collect();
+        bytes
+            .windows(needle.len())
+            .position(|w| w == needle.as_slice())
+            .expect("values stored contiguously")
+    }
+
+    #[test]
+    fn a_changed_value_is_named_by_its_dataset() {
+        let (sim, bytes) = small_checkpoint();
+        let radii: Vec<f64> = sim.world.bodies.iter().map(|b| b.radius).collect();
+        let masses: Vec<f64> = sim.world.bodies.iter().map(|b| b.mass).collect();
+        for (values, dataset) in [(&radii, "bodies/radius"), (&masses, "bodies/mass")] {
+            let at = find_f64s(&bytes, values);
+            let mut bad = bytes.clone();
+            bad[at + 8 * 3 + 2] ^= 0x01;
+            let e = Simulation::from_checkpoint_bytes("f.h5", bad).unwrap_err();
+            match &e {
+                CheckpointError::Checksum { dataset: d, .. } => {
+                    assert_eq!(d.as_deref(), Some(dataset), "{e}")
+                }
+                _ => panic!("{e}"),
+            }
+            assert!(e.to_string().contains(&format!("at /{dataset}:")), "{e}");
+        }
+    }
+
+    #[test]
+    fn a_dataset_of_the_wrong_length_is_the_one_named() {
+        let (sim, _) = small_checkpoint();
+        let good = entries(&sim).unwrap();
+        for (dataset, cut) in [
+            ("bodies/position", 3),
+            ("bodies/velocity", 3),
+            ("bodies/mass", 1),
+            ("contacts/gap", 1),
+            ("contacts/partner_kind", 1),
+            ("warm_start/impulse", 3),
+        ] {
+            let mut e = good.clone();
+            let entry = e.iter_mut().find(|x| x.0 == dataset).unwrap();
+            match &mut entry.2 {
+                Data::F64(v) => v.truncate(v.len() - cut),
+                Data::U8(v) => v.truncate(v.len() - cut),
+                Data::I64(v) => v.truncate(v.len() - cut),
+                Data::Str(_) => unreachable!(),
+            }
+            let bytes = encode_entries(FORMAT_NAME, FORMAT_VERSION, &e).unwrap();
+            let err = Simulation::from_checkpoint_bytes("f.h5", bytes).unwrap_err();
+            match &err {
+                CheckpointError::Invalid { location, .. } => {
+                    assert_eq!(location, &format!("/{dataset}"), "{err}")
+                }
+                _ => panic!("{dataset}: {err}"),
+            }
+        }
     }
 }

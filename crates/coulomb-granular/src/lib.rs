@@ -51,6 +51,7 @@ pub mod rolling;
 pub mod run;
 pub mod scene;
 pub mod scene_file;
+pub mod scene_save;
 pub mod shape;
 pub mod simulation;
 pub mod subspace;

@@ -519,6 +519,21 @@ pub enum SceneError {
         /// the worst pair (world sphere indices)
         pair: (usize, usize),
     },
+    /// free spheres overlap an obstacle at the start (centre on the free side, but closer to
+    /// it than their radius): released, they would be pushed out with energy from nowhere
+    #[error("{count} sphere(s) overlap an obstacle at the start, the worst sphere {sphere} by {depth:.3e} m into obstacle {obstacle} ('{name}'); move them out, or relax them first (resolve_overlaps, `coulomb simulate --resolve-overlaps N`)")]
+    Penetration {
+        /// spheres overlapping some obstacle
+        count: usize,
+        /// the worst (world sphere index)
+        sphere: usize,
+        /// its obstacle (world obstacle index)
+        obstacle: usize,
+        /// the obstacle's name
+        name: String,
+        /// its overlap (m)
+        depth: f64,
+    },
     /// a free sphere's centre is where no sphere may be
     #[error("{what} at {position:?} is {reason}")]
     Outside {
@@ -638,6 +653,45 @@ pub fn overlaps(world: &World) -> Overlaps {
         }
     }
     o
+}
+
+/// The free spheres of `world` that overlap an obstacle at t = 0 by more than 10⁻⁹ of their
+/// radius (gap < 0 at a feature of an obstacle that admits their centre: a centre that is
+/// not admitted is [`check_containment`]'s): `None` when there is none, else the refusal
+/// naming the deepest (sphere, obstacle, overlap) and their count.
+pub fn obstacle_penetration(world: &World) -> Option<SceneError> {
+    let mut buf = Vec::new();
+    let mut worst: Option<(usize, usize, f64)> = None;
+    let mut count = 0;
+    for (i, b) in world.bodies.iter().enumerate() {
+        let mut deepest: Option<(usize, f64)> = None;
+        for (k, ob) in world.obstacles.iter().enumerate() {
+            buf.clear();
+            ob.proximities(b.position, b.radius, 0.0, 0.0, &mut buf);
+            for (_, p) in &buf {
+                let depth = -p.gap;
+                if depth > 1e-9 * b.radius
+                    && ob.admits(b.position, 0.0)
+                    && deepest.is_none_or(|(_, d)| depth > d)
+                {
+                    deepest = Some((k, depth));
+                }
+            }
+        }
+        if let Some((k, d)) = deepest {
+            count += 1;
+            if worst.is_none_or(|(_, _, w)| d > w) {
+                worst = Some((i, k, d));
+            }
+        }
+    }
+    worst.map(|(sphere, obstacle, depth)| SceneError::Penetration {
+        count,
+        sphere,
+        obstacle,
+        name: world.obstacles[obstacle].name.clone(),
+        depth,
+    })
 }
 
 /// Result of [`resolve_overlaps`].
@@ -818,6 +872,9 @@ impl SceneModel {
             check_containment(&world)?;
         }
         if checks.overlaps {
+            if let Some(e) = obstacle_penetration(&world) {
+                return Err(e);
+            }
             let o = overlaps(&world);
             if o.count > 0 {
                 return Err(SceneError::Overlaps {
@@ -1512,6 +1569,52 @@ mod tests {
         ));
         assert!(e.to_string().contains("20547109504"), "{e}");
         assert!(check_memory(10_000_000, 5, None).is_ok());
+    }
+
+    #[test]
+    fn spheres_overlapping_an_obstacle_are_refused_and_relaxed() {
+        let mut m = SceneModel::default();
+        m.obstacles.push(floor());
+        m.obstacles.push(ObstacleSpec::fixed(
+            "wall",
+            Shape::Plane {
+                point: Vec3::new(1.0, 0.0, 0.0),
+                normal: Vec3::new(-1.0, 0.0, 0.0),
+            },
+        ));
+        m.bodies.push(ball(0.0, 0.0, 0.5));
+        m.bodies.push(ball(0.0, 0.5, 0.08));
+        m.bodies.push(ball(0.91, 1.0, 0.5));
+        match m.build().unwrap_err() {
+            SceneError::Penetration {
+                count,
+                sphere,
+                obstacle,
+                name,
+                depth,
+            } => {
+                assert_eq!((count, sphere, obstacle), (2, 1, 0));
+                assert_eq!(name, "floor");
+                assert!((depth - 0.02).abs() < 1e-12, "{depth}");
+            }
+            e => panic!("{e}"),
+        }
+        let msg = m.build().unwrap_err().to_string();
+        assert!(msg.contains("sphere 1") && msg.contains("'floor'"), "{msg}");
+        // touching is not overlapping
+        let mut touching = m.clone();
+        touching.bodies[1] = ball(0.0, 0.5, 0.1);
+        touching.bodies[2] = ball(0.9, 1.0, 0.5);
+        assert!(touching.build().is_ok());
+        // relaxed: moved out along the normals, nothing left
+        let checks = BuildChecks {
+            overlaps: false,
+            ..BuildChecks::default()
+        };
+        let (mut world, _) = m.build_with(&checks).unwrap();
+        resolve_overlaps(&mut world, 100);
+        assert!(obstacle_penetration(&world).is_none());
+        assert!(world.bodies[1].position.z >= 0.1);
     }
 
     #[test]

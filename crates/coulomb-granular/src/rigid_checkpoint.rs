@@ -39,8 +39,8 @@
 //! | `/json/model`, `/json/contacts`, `/json/detector` | UTF-8 string | scalar |
 
 use crate::checkpoint::{
-    encode_entries, index, json_of, open, read_checked, read_file, write_file, CheckpointError,
-    Cursor, Data, Entry, Reader,
+    check_rows, encode_entries, index, json_of, open, read_checked, read_file, write_file,
+    CheckpointError, Cursor, Data, Entry, Reader,
 };
 use crate::model::SceneModel;
 use crate::rigid::contacts::ContactKey;
@@ -165,6 +165,21 @@ fn layout() -> Result<Vec<Entry>, CheckpointError> {
 
 fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
     let read = read_checked(r, FORMAT_NAME, FORMAT_VERSION, &layout()?)?;
+    // one row per body in each body dataset, one per entry in the warm start: a count that
+    // differs is blamed on the dataset that differs
+    check_rows(
+        r,
+        &read,
+        &[
+            &[
+                "bodies/position",
+                "bodies/orientation",
+                "bodies/velocity",
+                "bodies/angular_velocity",
+            ],
+            &["warm_start/key", "warm_start/impulse"],
+        ],
+    )?;
     let mut c = Cursor {
         r,
         entries: read.into_iter(),
@@ -196,6 +211,40 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
     };
     let mut scene = RigidScene::new(&model)
         .map_err(|e| r.invalid("json/model", format!("the stored scene: {e}")))?;
+    // the state's checks, each on the dataset it reads (those left to `restore` — a fixed
+    // body that moved, the detector's caches — name the rest)
+    let n = scene.world.len();
+    if x.len() != n {
+        return Err(r.invalid(
+            "bodies/position",
+            format!(
+                "{} rows (as the other body datasets) for the {n} bodies of /json/model",
+                x.len()
+            ),
+        ));
+    }
+    if !(time.is_finite() && time >= 0.0) {
+        return Err(r.invalid("state/time", format!("time {time}")));
+    }
+    for (path, rows) in [
+        ("bodies/position", &x),
+        ("bodies/velocity", &v),
+        ("bodies/angular_velocity", &omega),
+    ] {
+        if let Some(i) = rows.iter().position(|a| !a.iter().all(|c| c.is_finite())) {
+            return Err(r.invalid(path, format!("row {i}: {:?} is not finite", rows[i])));
+        }
+    }
+    for (i, qi) in q.iter().enumerate() {
+        crate::shape::check_quaternion(&format!("row {i}"), *qi)
+            .map_err(|e| r.invalid("bodies/orientation", e))?;
+    }
+    if let Some(i) = imp.iter().position(|a| !a.iter().all(|c| c.is_finite())) {
+        return Err(r.invalid(
+            "warm_start/impulse",
+            format!("row {i}: {:?} is not finite", imp[i]),
+        ));
+    }
     let state = RigidState {
         time,
         steps,
@@ -207,7 +256,20 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
         contacts,
         detector,
     };
-    scene.world.restore(state).map_err(|e| r.invalid(dp, e))?;
+    scene.world.restore(state).map_err(|e| {
+        // what `restore` still checks: fixed bodies at rest ("body i …"), warm-start and
+        // contact pairs in range, the detector's caches
+        let at = if e.starts_with("body ") {
+            "bodies"
+        } else if e.starts_with("warm start") {
+            "warm_start/key"
+        } else if e.starts_with("contact") {
+            "json/contacts"
+        } else {
+            dp
+        };
+        r.invalid(at, e)
+    })?;
     Ok(scene)
 }
 
@@ -428,5 +490,91 @@ mod tests {
         s.detector = "{\"pairs\": [[[0, {\"kind\": \"body\", \"index\": 99}], {\"manifolds\": [], \"workspace\": null}]]}".into();
         assert!(w.restore(s).unwrap_err().contains("out of range"));
         assert!(w.restore(good).is_ok());
+    }
+
+    /// A checkpoint of MIXED with one dataset replaced by `edit` of it.
+    fn edited(edit: impl Fn(&str, &mut Data)) -> Result<RigidScene, CheckpointError> {
+        let mut a = scene(MIXED);
+        for _ in 0..20 {
+            a.step().expect("step");
+        }
+        let state = a.world.state().expect("state");
+        let mut e = entries(&a.model, &state).expect("entries");
+        for (p, _, d) in &mut e {
+            edit(p, d);
+        }
+        let bytes = encode_entries(FORMAT_NAME, FORMAT_VERSION, &e).expect("encode");
+        RigidScene::from_checkpoint_bytes("e.h5", bytes)
+    }
+
+    fn location(r: Result<RigidScene, CheckpointError>) -> String {
+        match r {
+            Err(CheckpointError::Invalid { location, .. }) => location,
+            Err(e) => panic!("{e}"),
+            Ok(_) => panic!("loaded"),
+        }
+    }
+
+    #[test]
+    fn errors_name_the_dataset_that_is_wrong() {
+        let f64s = |d: &mut Data| match d {
+            Data::F64(v) => v.clone(),
+            _ => unreachable!(),
+        };
+        // one row short: the short dataset, not the one read after it
+        for (name, cols) in [
+            ("bodies/position", 3),
+            ("bodies/orientation", 4),
+            ("bodies/angular_velocity", 3),
+        ] {
+            let at = location(edited(|p, d| {
+                if p == name {
+                    let mut v = f64s(d);
+                    v.truncate(v.len() - cols);
+                    *d = Data::F64(v);
+                }
+            }));
+            assert_eq!(at, format!("/{name}"));
+        }
+        // a non-finite value or a quaternion that is not unit: its dataset
+        for (name, k, x) in [
+            ("bodies/velocity", 4, f64::NAN),
+            ("bodies/orientation", 1, 0.5),
+            ("bodies/position", 0, f64::INFINITY),
+        ] {
+            let at = location(edited(|p, d| {
+                if p == name {
+                    let mut v = f64s(d);
+                    v[k] = x;
+                    *d = Data::F64(v);
+                }
+            }));
+            assert_eq!(at, format!("/{name}"));
+        }
+        let at = location(edited(|p, d| {
+            if p == "state/time" {
+                *d = Data::F64(vec![-1.0]);
+            }
+        }));
+        assert_eq!(at, "/state/time");
+        // a value changed after writing: the checksum names its dataset
+        let mut a = scene(MIXED);
+        a.step().expect("step");
+        let bytes = a.checkpoint_bytes().expect("checkpoint");
+        let v = a.world.velocities();
+        let needle: Vec<u8> = v.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+        let at = bytes
+            .windows(needle.len())
+            .position(|w| w == needle.as_slice())
+            .expect("velocities stored");
+        let mut bad = bytes.clone();
+        bad[at + 5] ^= 0x04;
+        match RigidScene::from_checkpoint_bytes("c.h5", bad) {
+            Err(CheckpointError::Checksum { dataset, .. }) => {
+                assert_eq!(dataset.as_deref(), Some("bodies/velocity"))
+            }
+            Err(e) => panic!("{e}"),
+            Ok(_) => panic!("loaded"),
+        }
     }
 }

@@ -1373,10 +1373,20 @@ impl LoadedScene {
                                 .map_err(|e| self.invalid(&fp, e.to_string()))?;
                         }
                         let inside = |x: Vec3| mesh.inside(x);
+                        // a sphere clears the walls when no triangle is nearer than its radius
+                        let tris = mesh.triangles.iter().map(|t| t.map(|i| i as u64)).collect();
+                        let walls = TriangleMesh::new(mesh.vertices.clone(), tris)
+                            .map_err(|e| self.invalid(&mp, e.to_string()))?;
+                        let clear = |c: Vec3, r: f64| {
+                            let mut hit = false;
+                            walls.near_each(c, r, 0.0, |_, _, _| hit = true);
+                            !hit
+                        };
                         let region = generate::Predicate {
                             lo,
                             hi,
                             inside: &inside,
+                            clear: Some(&clear),
                         };
                         generate::fill(&region as &dyn Region, &spec, &avoid)
                     }

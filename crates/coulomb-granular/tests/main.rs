@@ -4,6 +4,7 @@
 
 mod builtin_fingerprint;
 mod example_scenes;
+mod fuzz_inputs;
 mod physics;
 mod rigid_contacts;
 mod rigid_scenes;

@@ -320,6 +320,7 @@ pub fn scene_error(py: Python<'_>, e: &coulomb_granular::SceneError) -> PyErr {
         E::InvalidStep(reason) => (reason.split_whitespace().next(), none()),
         E::InvalidGravity(_) => (Some("gravity"), none()),
         E::Overlaps { pair, .. } => (Some("positions"), obj(py, *pair)),
+        E::Penetration { sphere, .. } => (Some("positions"), obj(py, *sphere)),
         E::Outside { what, .. } => (
             Some("positions"),
             sphere_index(what).map_or_else(none, |i| obj(py, i)),
@@ -375,7 +376,11 @@ pub fn checkpoint_error(py: Python<'_>, e: coulomb_granular::CheckpointError) ->
         E::WrongFormat { path, .. } => ("wrong_format", shown(path), None),
         E::Version { path, .. } => ("version", shown(path), None),
         E::Corrupt { path, location, .. } => ("corrupt", shown(path), Some(location.clone())),
-        E::Checksum { path, .. } => ("checksum", shown(path), None),
+        E::Checksum { path, dataset, .. } => (
+            "checksum",
+            shown(path),
+            dataset.as_ref().map(|d| format!("/{d}")),
+        ),
         E::Invalid { path, location, .. } => ("invalid", shown(path), Some(location.clone())),
         E::Unrepresentable(_) => ("unrepresentable", None, None),
         #[allow(unreachable_patterns)]

@@ -34,9 +34,9 @@ fn rows<'py, const N: usize>(py: Python<'py>, v: &[[f64; N]]) -> Bound<'py, PyAn
 }
 
 /// Default time step of a rigid scene built in Python (that of the shipped rigid scene files).
-const RIGID_H: f64 = 1e-3;
+pub(crate) const RIGID_H: f64 = 1e-3;
 /// Default tolerance of a rigid scene built in Python (that of the shipped rigid scene files).
-const RIGID_TOL: f64 = 1e-8;
+pub(crate) const RIGID_TOL: f64 = 1e-8;
 
 fn build(py: Python<'_>, model: SceneModel) -> PyResult<PyRigidSimulation> {
     let scene = py

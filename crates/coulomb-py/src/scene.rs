@@ -292,10 +292,16 @@ pub(crate) fn scene_fill<'py>(
         let (lo, hi) = mesh.bounds();
         py.detach(|| {
             let inside = |x: Vec3| mesh.contains(x) == Some(true);
+            let clear = |c: Vec3, r: f64| {
+                let mut hit = false;
+                mesh.near_each(c, r, 0.0, |_, _, _| hit = true);
+                !hit
+            };
             let region = generate::Predicate {
                 lo,
                 hi,
                 inside: &inside,
+                clear: Some(&clear),
             };
             generate::fill(&region, &spec, &avoid)
         })
@@ -321,4 +327,77 @@ pub(crate) fn scene_fill<'py>(
             filled.attempts.into_pyobject(py)?.into_any(),
         ],
     )
+}
+
+/// Writes the scene (`json`, `batches`, `meshes` as for `_Simulation.from_scene`; `inlets`
+/// the JSON list of `{inlet, material}` of `_Feed`) as the scene file `path` (`.toml` or
+/// `.json`, `coulomb_granular::scene_save`), with the step settings the same `params` give
+/// `Simulation(scene, **params)` (a scene with shaped bodies: the rigid defaults h = 1e-3 s,
+/// tol = 1e-8) and `steps` steps (default: the scene files' 200). Written atomically; a path
+/// that exists and is not a regular file is refused.
+#[pyfunction]
+#[pyo3(signature = (json, batches, meshes, inlets, params, path, steps=None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn scene_save(
+    py: Python<'_>,
+    json: &str,
+    batches: &Bound<'_, PyList>,
+    meshes: &Bound<'_, PyList>,
+    inlets: &str,
+    params: &Bound<'_, pyo3::types::PyDict>,
+    path: std::path::PathBuf,
+    steps: Option<usize>,
+) -> PyResult<()> {
+    use coulomb_granular::scene_save::{self, SaveError};
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Entry {
+        inlet: generate::Inlet,
+        material: String,
+    }
+    let arrays = SceneArrays::extract(batches, meshes)?;
+    let json = json.to_string();
+    let mut model = py
+        .detach(move || model_from_parts(&json, arrays))
+        .map_err(|e| e.into_py(py))?;
+    if model.has_shapes() {
+        model.step.h = crate::rigid::RIGID_H;
+        model.step.tol = crate::rigid::RIGID_TOL;
+    }
+    let rest = crate::granular::apply_to_model(&mut model, params)?;
+    let entries: Vec<Entry> = serde_json::from_str(inlets)
+        .map_err(|e| describe_error(py, Some("inlets"), format!("inlets: {e}")))?;
+    if model.has_shapes() && !entries.is_empty() {
+        return Err(describe_error(
+            py,
+            Some("inlets"),
+            "inlets are for sphere-only scenes".into(),
+        ));
+    }
+    let inlets: Vec<_> = entries.into_iter().map(|e| (e.inlet, e.material)).collect();
+    let mut file = scene_save::scene_file_of(&model, &inlets)
+        .map_err(|e| describe_error(py, Some("scene"), e.to_string()))?;
+    for (k, v) in rest {
+        let b: bool = v
+            .extract()
+            .map_err(|_| pyo3::exceptions::PyTypeError::new_err(format!("{k} must be a bool")))?;
+        if model.has_shapes() {
+            return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+                "'{k}' is not a parameter of rigid-body scenes"
+            )));
+        }
+        match k.as_str() {
+            "warm_start" => file.step.warm_start = b,
+            _ => file.step.gap_closure = b,
+        }
+    }
+    file.step.steps = steps;
+    py.detach(|| scene_save::save(&path, &file))
+        .map_err(|e| match e {
+            SaveError::Io { path, source } => errors::output_error(source, &path),
+            SaveError::Extension(_) => {
+                errors::scene_input_error(py, "save", Some("path"), py.None(), e.to_string())
+            }
+            other => describe_error(py, Some("scene"), other.to_string()),
+        })
 }

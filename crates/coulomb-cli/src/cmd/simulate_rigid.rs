@@ -183,7 +183,13 @@ fn steps(
                 .fold(0.0, f64::max)
         })
         .collect();
-    let progress = !a.json && std::io::IsTerminal::is_terminal(&std::io::stderr());
+    // the progress report of sphere runs: a bar on a terminal, plain lines on stderr every
+    // few seconds otherwise (a log file, CI), nothing with --json
+    let pb = crate::progress::bar(
+        max_steps.saturating_sub(rigid.world.steps() as usize),
+        a.json,
+    );
+    pb.set_prefix(format!("{name} {}", rigid.world.len()));
     let mut still = 0;
     let mut at_rest = false;
     let mut interrupted = None;
@@ -211,15 +217,11 @@ fn steps(
                     write_checkpoint_bytes(o, k as u64 + 1, rigid.checkpoint_bytes())?;
                 }
             }
-            if progress {
-                eprint!(
-                    "\r{name}: step {}/{max_steps}, {} contacts, {} sweeps, error {:.1e}   ",
-                    k + 1,
-                    r.contacts,
-                    r.sweeps,
-                    r.error
-                );
-            }
+            pb.set_message(format!(
+                "{} contacts, {} sweeps, error {:.1e}",
+                r.contacts, r.sweeps, r.error
+            ));
+            pb.inc(1);
             if a.until_rest {
                 let v = rigid.world.velocities();
                 let w = rigid.world.angular_velocities();
@@ -246,10 +248,8 @@ fn steps(
         Ok(())
     };
     let result = run();
+    pb.finish_and_clear();
     if let Err(e) = result {
-        if progress {
-            eprintln!();
-        }
         // the statistics of every completed step are kept (stats.csv has them already)
         if let Some(o) = out.as_mut() {
             if let Ok(text) = rigid_json(o, &rigid.reports) {
@@ -257,9 +257,6 @@ fn steps(
             }
         }
         return Err(e);
-    }
-    if progress {
-        eprintln!();
     }
     let reports = &rigid.reports;
     let n = reports.len().max(1) as f64;

@@ -164,8 +164,14 @@ class LocalProblem(Problem):
 
     def __init__(self, W: MatrixLike, q: ArrayLike, mu: ArrayLike, dim: int = 3) -> None:
         qv = _vector("q", q)
-        self._inner = _coulomb._Problem.local(
-            int(dim), _csc("W", W), qv, _mu(mu, len(qv) // max(int(dim), 1)))
+        d = max(int(dim), 1)
+        mv = _mu(mu, len(qv) // d)
+        if int(dim) in (2, 3) and len(qv) % d == 0 and len(mv) != len(qv) // d:
+            # one μ per contact: the contacts are len(q) / d, so the odd one is mu
+            raise _problem_error(
+                f"mu has {len(mv)} entries, expected {len(qv) // d} (one per contact: "
+                f"len(q) = {len(qv)} = {len(qv) // d} contacts x d = {d})", "mu")
+        self._inner = _coulomb._Problem.local(int(dim), _csc("W", W), qv, mv)
         self._arrays = None
 
     @property
@@ -210,8 +216,17 @@ class GlobalProblem(Problem):
                  mu: ArrayLike, dim: int = 3, G: Optional[MatrixLike] = None,
                  b: Optional[ArrayLike] = None) -> None:
         wv = _vector("w", w)
+        fv = _vector("f", f)
+        Mc, Hc = _csc("M", M), _csc("H", H)
+        # n dofs: M is n x n, H has n rows, f n entries; where two of them agree on n, the
+        # third is the one named (the library checks H and f against M, and would blame H)
+        n_m, n_h, n_f = Mc[0], Hc[0], len(fv)
+        if n_h == n_f != n_m or (Mc[0] != Mc[1] and n_h == n_f):
+            raise _problem_error(
+                f"M is {Mc[0]} x {Mc[1]}, expected {n_f} x {n_f} (H has {n_h} rows and f "
+                f"{n_f} entries)", "M")
         self._inner = _coulomb._Problem.global_(
-            int(dim), _csc("M", M), _csc("H", H), _vector("f", f), wv,
+            int(dim), Mc, Hc, fv, wv,
             _mu(mu, len(wv) // max(int(dim), 1)),
             None if G is None else _csc("G", G), None if b is None else _vector("b", b))
         self._arrays = None

@@ -680,6 +680,29 @@ class Scene:
     def _parts(self) -> Tuple[str, List[Tuple[np.ndarray, ...]], List[Tuple[np.ndarray, ...]]]:
         return self._description(), [a for _, a in self._batches], list(self._meshes)
 
+    def save(self, path: Union[str, "os.PathLike[str]"], steps: Optional[int] = None,
+             **params: Any) -> None:
+        """Writes the scene as a scene file (``.toml`` or ``.json``, the format of ``coulomb
+        simulate SCENE.toml``, docs/granular.md "Scene files") that builds the same bodies,
+        obstacles, materials and inlets, in the same order and to the bit (unit normals and
+        axes are normalized again when read). ``params`` are the step settings of
+        :class:`Simulation` (``h``, ``theta``, ``tol``, ``method``, ``max_sweeps``,
+        ``relaxation``, ``mu``, ``restitution``, ``rolling_friction``, ``warm_start``,
+        ``gap_closure``) with its defaults (a scene with shaped bodies: h = 1e-3 s,
+        tol = 1e-8), so that ``coulomb simulate`` on the file steps as
+        ``Simulation(scene, **params)`` does; ``steps``: the run's length (default 200).
+
+        Written atomically (a failed write leaves an existing file as it was); a ``path``
+        that exists and is not a regular file is refused (``ValueError``). What a scene
+        file cannot hold is refused (:class:`coulomb.SceneError`): an infinite cylinder
+        (``height=None``), two inlets of one material with different densities."""
+        if steps is not None and (isinstance(steps, bool) or int(steps) != steps or steps < 0):
+            raise _arg_error("steps", f"steps must be a nonnegative int, got {steps!r}")
+        desc, batches, meshes = self._parts()
+        _coulomb.scene_save(desc, batches, meshes, json.dumps(self._inlets, allow_nan=False),
+                            dict(params), os.fspath(path),
+                            None if steps is None else int(steps))
+
 
 
 class Simulation:
@@ -845,11 +868,13 @@ class Simulation:
 
     def set_velocities(self, v: Any) -> None:
         """Replaces the sphere velocities (shape (n, 3), finite) before the next step."""
-        self._sim.set_velocities(np.ascontiguousarray(v, dtype=np.float64).ravel())
+        a = _rows3("velocities", v, self.positions.shape[0])
+        self._sim.set_velocities(np.ascontiguousarray(a).ravel())
 
     def set_positions(self, x: Any) -> None:
         """Replaces the sphere centres (shape (n, 3), finite) before the next step."""
-        self._sim.set_positions(np.ascontiguousarray(x, dtype=np.float64).ravel())
+        a = _rows3("positions", x, self.positions.shape[0])
+        self._sim.set_positions(np.ascontiguousarray(a).ravel())
 
     def set_params(self, **params: Any) -> None:
         """Changes h, theta, restitution, mu, rolling_friction, warm_start, gap_closure for the following

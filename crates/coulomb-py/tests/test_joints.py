@@ -131,3 +131,12 @@ def test_both_bodies_fixed_and_an_unknown_kind_are_refused():
     s.add_joint("hinge", 0, None, anchor=[0, 0, 1])
     with pytest.raises(ValueError, match="hinge"):
         Simulation(s)
+
+
+def test_readme_pendulum_chain_runs_as_written(capsys):
+    from conftest import REPO
+    text = (REPO / "README.md").read_text(encoding="utf-8")
+    start = text.index("```python\n", text.index("### Joints")) + len("```python\n")
+    exec(compile(text[start:text.index("```", start)], "README.md", "exec"), {})
+    out = capsys.readouterr().out
+    assert out.strip()

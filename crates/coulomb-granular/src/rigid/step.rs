@@ -796,11 +796,9 @@ impl RigidWorld {
             } else {
                 let s = &self.settings;
                 let sol = problem.solve(&r0, &lambda0, s.tolerance, s.max_sweeps, s.stall_window);
-                let lambda = sol.lambda;
+                let mut lambda = sol.lambda;
                 let mut best = (sol.r, sol.error, "nsgs");
-                // the library's solver takes the contacts of a step without joints (with joints,
-                // the motors' and limits' bounds are not in its problem: Gauss–Seidel's result)
-                let library = s.library_finish && self.joints.is_empty();
+                let library = s.library_finish;
                 let global = if library && sol.error > s.tolerance || s.keep_problem {
                     Some(
                         problem
@@ -815,9 +813,12 @@ impl RigidWorld {
                 };
                 if sol.error > s.tolerance && library {
                     if let Some(g) = &global {
-                        if let Some((r_lib, err_lib)) = library_finish(g, &problem, &best.0, s) {
+                        if let Some((r_lib, l_lib, err_lib)) =
+                            library_finish(g, &problem, &best.0, &lambda, s)
+                        {
                             if err_lib < best.1 || !best.1.is_finite() {
                                 best = (r_lib, err_lib, "nsgs+library");
+                                lambda = l_lib;
                             }
                         }
                     }
@@ -1241,12 +1242,18 @@ pub fn obstacle_pose(motion: &Motion, base: &Pose, t: f64) -> Pose {
 /// stalled iterate is a poor start on face contacts: on a brick wall with touching joints
 /// (2 742 unknowns, W rank-deficient) the library took 2.4 s a step from it and 0.1 s from
 /// its own start, both to 1e-8 (docs/rigid-bodies.md, "Touching bricks").
+///
+/// With joints, `global` is the problem at Gauss–Seidel's multipliers `lambda` (its active set
+/// of motors and limits, [`nsgs::Problem::to_global_with`]): the library's multipliers of the
+/// stored equality rows replace those, the others keep theirs, and the error is that of
+/// [`nsgs::Problem::error_with`] (bounds and signs included).
 fn library_finish(
     global: &GlobalProblem,
     problem: &nsgs::Problem,
     r: &[f64],
+    lambda: &[f64],
     s: &RigidSettings,
-) -> Option<(Vec<f64>, f64)> {
+) -> Option<(Vec<f64>, Vec<f64>, f64)> {
     use coulomb::problem::Problem;
     use coulomb::solver::{solve_with_guess, Guess};
     let start = if r.iter().all(|x| x.is_finite()) {
@@ -1254,7 +1261,12 @@ fn library_finish(
     } else {
         vec![0.0; r.len()]
     };
-    let v: Vec<f64> = problem.velocities(&start).into_iter().flatten().collect();
+    let v: Vec<f64> = problem
+        .velocities_with(&start, lambda)
+        .into_iter()
+        .flatten()
+        .collect();
+    let columns = problem.equality_columns(lambda);
     let guess = Guess {
         r: start,
         v: Some(v),
@@ -1269,15 +1281,25 @@ fn library_finish(
         if sol.r.len() != r.len() || sol.r.iter().any(|x| !x.is_finite()) {
             return None;
         }
-        let err = problem.error(&sol.r);
-        Some((sol.r, err))
+        let mut l = lambda.to_vec();
+        if !columns.is_empty() {
+            let lib = sol.l.as_ref()?;
+            if lib.len() != columns.len() || lib.iter().any(|x| !x.is_finite()) {
+                return None;
+            }
+            for (&k, x) in columns.iter().zip(lib) {
+                l[k] = *x;
+            }
+        }
+        let err = problem.error_with(&sol.r, &l);
+        Some((sol.r, l, err))
     };
     let cold = run(None);
-    if cold.as_ref().is_some_and(|(_, e)| *e <= s.tolerance) {
+    if cold.as_ref().is_some_and(|(_, _, e)| *e <= s.tolerance) {
         return cold;
     }
     match (cold, run(Some(&guess))) {
-        (Some(a), Some(b)) => Some(if b.1 < a.1 { b } else { a }),
+        (Some(a), Some(b)) => Some(if b.2 < a.2 { b } else { a }),
         (a, b) => a.or(b),
     }
 }
@@ -1295,6 +1317,15 @@ pub mod nsgs {
     use coulomb::problem::{GlobalProblem, ProblemError};
     use coulomb::sparse::CscMatrix;
     use coulomb::{cone, law};
+
+    /// Whether a joint row with multiplier l is a row of G in the stored problem.
+    fn stored_row(kind: RowKind, l: f64) -> bool {
+        match kind {
+            RowKind::Equality => true,
+            RowKind::Box(lo, hi) => l > lo && l < hi,
+            RowKind::Unilateral => l > 0.0,
+        }
+    }
 
     /// Exact error evaluations: every this many sweeps.
     pub const CHECK_EVERY: usize = 5;
@@ -1758,6 +1789,20 @@ pub mod nsgs {
             self.to_global_with(&[])
         }
 
+        /// The index in λ of each column of G of [`Problem::to_global_with`] at `lambda`.
+        pub fn equality_columns(&self, lambda: &[f64]) -> Vec<usize> {
+            let mut cols = Vec::new();
+            for jb in &self.joints {
+                for (k, row) in jb.rows.iter().enumerate() {
+                    let l = lambda.get(jb.offset + k).copied().unwrap_or(0.0);
+                    if stored_row(row.kind, l) {
+                        cols.push(jb.offset + k);
+                    }
+                }
+            }
+            cols
+        }
+
         /// The problem as a library global problem with the joints' equality constraints
         /// (G, b) at the multipliers λ: the equality rows, a motor row whose impulse is below
         /// its bound and a limit row that carries load are rows of Gᵀ v + b = 0; a motor at
@@ -1797,11 +1842,7 @@ pub mod nsgs {
             for jb in &self.joints {
                 for (k, row) in jb.rows.iter().enumerate() {
                     let l = lambda.get(jb.offset + k).copied().unwrap_or(0.0);
-                    let stored = match row.kind {
-                        RowKind::Equality => true,
-                        RowKind::Box(lo, hi) => l > lo && l < hi,
-                        RowKind::Unilateral => l > 0.0,
-                    };
+                    let stored = stored_row(row.kind, l);
                     let parts = [(jb.a, &row.ja), (jb.b, &row.jb)];
                     if stored {
                         for (blk, j) in parts {

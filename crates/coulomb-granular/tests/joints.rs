@@ -370,3 +370,31 @@ fn jointed_bodies_may_overlap() {
     assert_eq!(r.contacts, 0);
     assert_eq!(r.status, RigidStatus::Converged);
 }
+
+/// The joints' checks of `coulomb validate --quick` pass (expected values and tolerances of
+/// docs/joints.md).
+#[test]
+fn validate_joint_checks_pass() {
+    let checks = coulomb_granular::rigid::joint_checks::checks(true).unwrap();
+    assert_eq!(checks.len(), 5);
+    for (section, c) in &checks {
+        assert_eq!(section, "Joints");
+        eprintln!(
+            "{}: expected {} measured {}",
+            c.name, c.expected, c.measured
+        );
+        assert!(c.pass(), "{c:?}");
+    }
+}
+
+/// The double pendulum: 10 s (10⁴ steps) released at θ = ½: drift < 1e-6 m, energy
+/// within 1 % of |E₀|.
+#[test]
+fn double_pendulum_ten_seconds() {
+    let (drift, energy, bad) =
+        coulomb_granular::rigid::joint_checks::double_pendulum(10_000).unwrap();
+    eprintln!("double pendulum 10 s: drift {drift:.2e} m, |E - E0|/|E0| {energy:.2e}");
+    assert_eq!(bad, 0);
+    assert!(drift < 1e-6, "{drift}");
+    assert!(energy < 0.01, "{energy}");
+}

@@ -19,6 +19,7 @@ pub use parry3d_f64 as parry;
 
 pub mod body;
 pub mod contacts;
+pub mod joint_checks;
 pub mod joints;
 pub mod polytope;
 pub mod step;

@@ -398,3 +398,59 @@ fn double_pendulum_ten_seconds() {
     assert!(drift < 1e-6, "{drift}");
     assert!(energy < 0.01, "{energy}");
 }
+
+/// A slider on a prismatic joint along a 45° axis slides at g/√2 without turning; on a
+/// vertical cylindrical joint a spinning body falls freely and keeps its spin; a welded body
+/// stays where it is and its joint carries its weight.
+#[test]
+fn prismatic_cylindrical_and_fixed_joints_move_as_they_should() {
+    let s2 = std::f64::consts::FRAC_1_SQRT_2;
+    let body = || cuboid([0.05, 0.05, 0.05], 1000.0, [0.0, 0.0, 1.0]).unwrap();
+    let slide = JointDesc {
+        axis: Some([s2, 0.0, -s2]),
+        limits: Some((-1.0, 1.0)),
+        ..joint(JointKind::Prismatic, 0, None, [0.0, 0.0, 1.0])
+    };
+    let mut w = world(vec![body()], &[slide], RigidSettings::default()).unwrap();
+    for _ in 0..200 {
+        assert_eq!(w.step().unwrap().status, RigidStatus::Converged);
+    }
+    let (s, rate) = w.joint_coordinate(0).unwrap();
+    let t = w.time();
+    assert!((rate - G * s2 * t).abs() < 1e-9 * G * t, "{rate}");
+    assert!((s - 0.5 * G * s2 * t * t).abs() < 1e-6, "{s}");
+    let v = w.velocities()[0];
+    assert!((v[0] + v[2]).abs() < 1e-9 && v[1].abs() < 1e-12, "{v:?}");
+    assert!(w.angular_velocities()[0].iter().all(|x| x.abs() < 1e-9));
+    // cylindrical, vertical: free fall with the spin kept
+    let mut spinning = body();
+    spinning.angular_velocity = [0.0, 0.0, 3.0];
+    let cyl = JointDesc {
+        axis: Some([0.0, 0.0, 1.0]),
+        ..joint(JointKind::Cylindrical, 0, None, [0.0, 0.0, 1.0])
+    };
+    let mut w = world(vec![spinning], &[cyl], RigidSettings::default()).unwrap();
+    for _ in 0..100 {
+        assert_eq!(w.step().unwrap().status, RigidStatus::Converged);
+    }
+    let t = w.time();
+    assert!(
+        (w.velocities()[0][2] + G * t).abs() < 1e-9,
+        "{:?}",
+        w.velocities()
+    );
+    assert!((w.angular_velocities()[0][2] - 3.0).abs() < 1e-9);
+    assert!(w.joint_drift() < 1e-9);
+    // fixed to the world
+    let weld = joint(JointKind::Fixed, 0, None, [0.0, 0.0, 1.0]);
+    let b = body();
+    let weight = b.mass.mass * G;
+    let mut w = world(vec![b], &[weld], RigidSettings::default()).unwrap();
+    for _ in 0..50 {
+        assert_eq!(w.step().unwrap().status, RigidStatus::Converged);
+    }
+    assert!((w.centres_of_mass()[0][2] - 1.0).abs() < 1e-12);
+    let f = w.joint_forces()[0];
+    assert!((f[2] - weight).abs() < 1e-9 * weight, "{f:?}");
+    assert!(f[3..].iter().all(|x| x.abs() < 1e-9), "{f:?}");
+}

@@ -177,3 +177,39 @@ fn unsafe_steps_and_unhonoured_settings_exit_2() {
     std::fs::write(&path, cube("h = 0.001", "", "[0.0, 0.0, 0.0]")).unwrap();
     ok(&coulomb(&["simulate", path.to_str().unwrap()]));
 }
+
+/// A scene file with a bad joint exits 2 naming the joint and the field (issue 53); a good
+/// one of spheres only runs in the rigid-body simulator.
+#[test]
+fn bad_joints_exit_2_and_a_sphere_pendulum_runs() {
+    let dir = temp_dir("rigid-joints");
+    let text = |axis: &str| {
+        format!(
+            "[step]\nh = 0.001\nsteps = 5\ntol = 1e-8\n\
+             [[bodies]]\nspheres = [[0.0, 0.0, -0.5, 0.05]]\n\
+             [[joints]]\nkind = \"revolute\"\nbody_a = 0\nanchor = [0.0, 0.0, 0.0]\naxis = {axis}\n"
+        )
+    };
+    let path = dir.join("pendulum.toml");
+    std::fs::write(&path, text("[0.0, 0.0, 0.0]")).unwrap();
+    let o = coulomb(&["simulate", path.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("joint 0: axis"), "{err}");
+    std::fs::write(&path, text("[0.0, 1.0, 0.0]")).unwrap();
+    let out = dir.join("out");
+    let fc = dir.join("fc");
+    let o = coulomb(&[
+        "simulate",
+        path.to_str().unwrap(),
+        "--output",
+        out.to_str().unwrap(),
+        "--dump-fclib",
+        fc.to_str().unwrap(),
+    ]);
+    ok(&o);
+    // each step's problem, with the joint's equality rows, is written
+    let dumped = std::fs::read_dir(&fc).unwrap().count();
+    assert!(dumped >= 1, "{dumped}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

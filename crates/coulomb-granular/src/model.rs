@@ -101,6 +101,11 @@ pub struct SceneModel {
     /// time step, θ, tolerance, step method
     #[serde(default)]
     pub step: StepSettings,
+    /// joints between bodies (issue 53), bodies numbered as the rigid-body simulator's:
+    /// `bodies` in order, then the spheres of each batch; a scene with joints goes to the
+    /// rigid-body simulator ([`SceneModel::has_shapes`])
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub joints: Vec<crate::rigid::joints::JointDesc>,
 }
 
 impl Default for SceneModel {
@@ -112,6 +117,7 @@ impl Default for SceneModel {
             sphere_batches: Vec::new(),
             obstacles: Vec::new(),
             step: StepSettings::default(),
+            joints: Vec::new(),
         }
     }
 }
@@ -827,7 +833,7 @@ impl SceneModel {
     /// Whether some body is not a sphere: then the scene runs in the rigid-body simulator
     /// (spheres as balls), else in the sphere simulator ([`SceneModel::build`]).
     pub fn has_shapes(&self) -> bool {
-        self.bodies.iter().any(|b| !b.shape.is_sphere())
+        self.bodies.iter().any(|b| !b.shape.is_sphere()) || !self.joints.is_empty()
     }
 
     /// Number of free spheres the world will have.
@@ -891,6 +897,12 @@ impl SceneModel {
     /// The world of the scene, the data validated (materials, bodies, obstacles, gravity),
     /// without the checks of [`BuildChecks`].
     pub fn world(&self) -> Result<World, SceneError> {
+        if !self.joints.is_empty() {
+            return Err(SceneError::InvalidStep(format!(
+                "{} joint(s): joints are simulated by the rigid-body simulator (a scene with joints is built with RigidScene), not the sphere simulator",
+                self.joints.len()
+            )));
+        }
         let g = self.gravity;
         if !g.is_finite() {
             return Err(SceneError::InvalidGravity(g.to_array()));

@@ -298,6 +298,7 @@ impl RigidScene {
                 .filter(|b| b.shape.is_sphere())
                 .cloned()
                 .collect(),
+            joints: Vec::new(),
             ..model.clone()
         };
         let sphere_world = spheres_only.world()?;
@@ -414,7 +415,8 @@ impl RigidScene {
             ..RigidSettings::default()
         };
         let world =
-            RigidWorld::new(bodies, rigid_obstacles, table, settings).map_err(SceneError::Rigid)?;
+            RigidWorld::with_joints(bodies, rigid_obstacles, table, settings, &model.joints)
+                .map_err(SceneError::Rigid)?;
         Ok(Self {
             world,
             shapes,

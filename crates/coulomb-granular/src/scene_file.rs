@@ -142,6 +142,11 @@ pub struct SceneFile {
     /// inlets pouring spheres during the run
     #[serde(default)]
     pub inlets: Vec<InletSection>,
+    /// `[[joints]]`: joints between bodies (issue 53; keys kind, body_a, body_b (absent: the
+    /// world), anchor, axis, limits = [lo, hi], motor = {velocity, max_force}); bodies are
+    /// numbered from 0 in file order over every `[[bodies]]` group
+    #[serde(default)]
+    pub joints: Vec<crate::rigid::joints::JointDesc>,
 }
 
 /// Which solver takes each step.
@@ -1516,7 +1521,7 @@ impl LoadedScene {
         }
         // with shaped bodies, every body is a body spec in file order (the rigid-body
         // simulator's indices); else the spheres are batches (the sphere simulator's path)
-        let (specs, sphere_batches) = if order.iter().any(|e| e.is_err()) {
+        let (specs, sphere_batches) = if order.iter().any(|e| e.is_err()) || !f.joints.is_empty() {
             let specs = order
                 .into_iter()
                 .map(|e| match e {
@@ -1545,6 +1550,7 @@ impl LoadedScene {
                 max_sweeps: f.step.max_sweeps,
                 relaxation: f.step.relaxation,
             },
+            joints: f.joints.clone(),
         };
         Ok(BuiltScene {
             path: self.path.clone(),

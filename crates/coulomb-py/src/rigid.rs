@@ -143,6 +143,19 @@ impl PyRigidSimulation {
         rows(py, &self.scene.world.positions())
     }
 
+    /// The joints' force and torque on their body A in the last step (world axes; torque
+    /// about the joint's anchor): (n_joints, 6), the impulse / h.
+    #[getter]
+    fn joint_forces<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        rows(py, &self.scene.world.joint_forces())
+    }
+
+    /// Largest violation of the joints' constraints at t_k (m or rad).
+    #[getter]
+    fn joint_drift(&self) -> f64 {
+        self.scene.world.joint_drift()
+    }
+
     /// Orientations (w, x, y, z), (n, 4).
     #[getter]
     fn body_orientations<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {

@@ -247,6 +247,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         section("Column collapse", c, &mut checks);
     }
     checks.extend(coulomb_granular::rigid::validation::checks(args.quick)?);
+    checks.extend(coulomb_granular::rigid::joint_checks::checks(args.quick)?);
     // the granular laws, from the scene files of examples/scenes/validation/
     for (s, c) in coulomb_granular::laws::checks(!args.quick)? {
         section(&s, c, &mut checks);

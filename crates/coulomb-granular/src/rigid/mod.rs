@@ -19,6 +19,8 @@ pub use parry3d_f64 as parry;
 
 pub mod body;
 pub mod contacts;
+pub mod joint_checks;
+pub mod joints;
 pub mod polytope;
 pub mod step;
 pub mod validation;
@@ -428,4 +430,14 @@ pub enum RigidError {
     /// positions or velocities became non-finite
     #[error("non-finite state at step {0}")]
     NonFiniteState(u64),
+    /// an invalid joint ([`joints`])
+    #[error("joint {joint}: {field}: {detail}")]
+    Joint {
+        /// the joint's index
+        joint: usize,
+        /// the field at fault ("body_a", "axis", "limits", "motor.max_force", ...)
+        field: &'static str,
+        /// what is wrong
+        detail: String,
+    },
 }

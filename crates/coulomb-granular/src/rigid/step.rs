@@ -32,6 +32,7 @@ use super::body::{
     free_rotation, integrate_orientation, rotation_from_wxyz, rotation_to_wxyz, BodyState,
 };
 use super::contacts::{ContactKey, ContactPoint, Detector, PlacedObstacle};
+use super::joints::{Joint, JointDesc, RowKind, SLOTS};
 use super::parry::math::{Pose, Rotation, Vector};
 use super::parry::shape::SharedShape;
 use super::{
@@ -63,6 +64,14 @@ pub struct RigidWorld {
     dof: Vec<Option<usize>>,
     /// half the thinnest width of each body's shape (m): the scale of the physical checks
     half_width: Vec<f64>,
+    /// the joints ([`super::joints`])
+    joints: Vec<Joint>,
+    /// the last step's joint impulses by row slot (the next step's warm start)
+    joint_warm: Vec<[f64; SLOTS]>,
+    /// the last step's force and torque of each joint on its body A
+    joint_forces: Vec<[f64; 6]>,
+    /// pairs of bodies (i < j) that a joint links: no contact between them
+    jointed: std::collections::BTreeSet<(usize, usize)>,
 }
 
 /// The state a [`RigidWorld`] carries between steps ([`RigidWorld::state`]).
@@ -168,6 +177,19 @@ impl RigidWorld {
         materials: MaterialTable,
         settings: RigidSettings,
     ) -> Result<Self, RigidError> {
+        Self::with_joints(bodies, obstacles, materials, settings, &[])
+    }
+
+    /// [`RigidWorld::new`] with `joints` between the bodies (numbered as in `bodies`), each
+    /// validated ([`RigidError::Joint`] names the joint and the field); two bodies a joint
+    /// links have no contact with each other.
+    pub fn with_joints(
+        bodies: Vec<RigidBodyDesc>,
+        obstacles: Vec<RigidObstacle>,
+        materials: MaterialTable,
+        settings: RigidSettings,
+        joints: &[JointDesc],
+    ) -> Result<Self, RigidError> {
         check_settings(&settings)?;
         if materials.is_empty() {
             return Err(RigidError::Settings("the material table is empty".into()));
@@ -267,7 +289,23 @@ impl RigidWorld {
                 moving - 1
             }));
         }
+        let joints = joints
+            .iter()
+            .enumerate()
+            .map(|(i, d)| Joint::new(i, d, &states))
+            .collect::<Result<Vec<_>, _>>()?;
+        let jointed = joints
+            .iter()
+            .filter_map(|j| {
+                let (a, b) = (j.desc.body_a, j.desc.body_b?);
+                Some((a.min(b), a.max(b)))
+            })
+            .collect();
         let mut world = Self {
+            joint_warm: vec![[0.0; SLOTS]; joints.len()],
+            joint_forces: vec![[0.0; 6]; joints.len()],
+            joints,
+            jointed,
             bodies: states,
             shapes,
             obstacles,
@@ -332,9 +370,10 @@ impl RigidWorld {
     fn check_overlaps(&mut self) -> Result<(), RigidError> {
         let margins = vec![0.0; self.bodies.len()];
         let placed = placed_obstacles(&self.obstacles, &self.obstacle_base, self.time);
-        let points = self
+        let mut points = self
             .detector
             .detect(&self.bodies, &self.shapes, &placed, &margins)?;
+        self.drop_jointed(&mut points);
         let limit = self.settings.max_initial_penetration;
         let deep: Vec<&ContactPoint> = points.iter().filter(|c| c.gap < -limit).collect();
         if let Some(worst) = deep.iter().min_by(|x, y| x.gap.total_cmp(&y.gap)) {
@@ -347,6 +386,45 @@ impl RigidWorld {
             });
         }
         Ok(())
+    }
+
+    /// Drops the contact points between two bodies a joint links.
+    fn drop_jointed(&self, points: &mut Vec<ContactPoint>) {
+        if self.jointed.is_empty() {
+            return;
+        }
+        points.retain(|c| match c.b {
+            RigidPartner::Body(j) => !self.jointed.contains(&(c.a.min(j), c.a.max(j))),
+            RigidPartner::Obstacle(_) => true,
+        });
+    }
+
+    /// The joints' forces and torques of the last step on their bodies A, world axes:
+    /// (F, τ) with F = Σ λ_k J_A,k / h over the joint's rows and τ the torque about the
+    /// joint's anchor on A (h: the step; zeros before the first step).
+    pub fn joint_forces(&self) -> Vec<[f64; 6]> {
+        self.joint_forces.clone()
+    }
+
+    /// Number of joints.
+    pub fn joint_count(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// The largest violation |C| of the joints' equality constraints at the current
+    /// positions (m for the point rows, rad for the angular ones).
+    pub fn joint_drift(&self) -> f64 {
+        self.joints
+            .iter()
+            .map(|j| j.violation(&self.bodies))
+            .fold(0.0, f64::max)
+    }
+
+    /// The joint coordinate (revolute: angle of A relative to B about the axis, rad;
+    /// prismatic: travel of A's anchor along the axis, m) and its rate, of joint `j`; None
+    /// for the other kinds or an index out of range.
+    pub fn joint_coordinate(&self, j: usize) -> Option<(f64, f64)> {
+        self.joints.get(j)?.coordinate(&self.bodies)
     }
 
     /// What the world carries from step k to step k + 1 besides what it is built from (a
@@ -609,6 +687,8 @@ impl RigidWorld {
             self.detector
                 .detect(&self.bodies, &self.shapes, &placed, &margins)?
         };
+        let mut points = points;
+        self.drop_jointed(&mut points);
         let detection_seconds = td.elapsed().as_secs_f64();
         let ts = Instant::now();
         let gamma = self.settings.activation_gamma;
@@ -652,7 +732,37 @@ impl RigidWorld {
                 f[d] = [p.x, p.y, p.z, l.x, l.y, l.z];
             }
         }
+        let joint_blocks: Vec<_> = self
+            .joints
+            .iter()
+            .map(|j| {
+                let rows = j.step_rows(&self.bodies, h, self.settings.activation_delta);
+                let blk = |b: Option<usize>| b.and_then(|i| self.dof[i]);
+                (blk(Some(j.desc.body_a)), blk(j.desc.body_b), rows)
+            })
+            .collect();
+        let lambda0: Vec<f64> = self
+            .joints
+            .iter()
+            .zip(&joint_blocks)
+            .zip(&self.joint_warm)
+            .flat_map(|((_, (_, _, rows)), warm)| {
+                rows.iter().map(|r| {
+                    let l = if self.settings.warm_start {
+                        warm[r.slot]
+                    } else {
+                        0.0
+                    };
+                    match r.kind {
+                        RowKind::Box(lo, hi) => l.clamp(lo, hi),
+                        RowKind::Unilateral => l.max(0.0),
+                        RowKind::Equality => l,
+                    }
+                })
+            })
+            .collect();
         let problem = nsgs::Problem::new(rows, mass, f)
+            .and_then(|p| p.with_joints(joint_blocks))
             .map_err(|detail| RigidError::Solve { step: k, detail })?;
         let mut warm_started = 0;
         let r0: Vec<f64> = active
@@ -670,43 +780,80 @@ impl RigidWorld {
                 [p.dot(c.normal), p.dot(c.t1), p.dot(c.t2)]
             })
             .collect();
-        let (r, v, status, error, sweeps, method) = if active.is_empty() {
-            self.last_problem = None;
-            let v = problem.velocities(&[]);
-            (Vec::new(), v, RigidStatus::NoContact, 0.0, 0, "none")
-        } else {
-            let s = &self.settings;
-            let sol = problem.solve(&r0, s.tolerance, s.max_sweeps, s.stall_window);
-            let mut best = (sol.r, sol.error, "nsgs");
-            let global = if s.library_finish && sol.error > s.tolerance || s.keep_problem {
-                Some(problem.to_global().map_err(|e| RigidError::Solve {
-                    step: k,
-                    detail: format!("global problem: {e}"),
-                })?)
+        let (r, lambda, v, status, error, sweeps, method) =
+            if active.is_empty() && self.joints.is_empty() {
+                self.last_problem = None;
+                let v = problem.velocities(&[]);
+                (
+                    Vec::new(),
+                    Vec::new(),
+                    v,
+                    RigidStatus::NoContact,
+                    0.0,
+                    0,
+                    "none",
+                )
             } else {
-                None
-            };
-            if sol.error > s.tolerance && s.library_finish {
-                if let Some(g) = &global {
-                    if let Some((r_lib, err_lib)) = library_finish(g, &problem, &best.0, s) {
-                        if err_lib < best.1 || !best.1.is_finite() {
-                            best = (r_lib, err_lib, "nsgs+library");
+                let s = &self.settings;
+                let sol = problem.solve(&r0, &lambda0, s.tolerance, s.max_sweeps, s.stall_window);
+                let mut lambda = sol.lambda;
+                let mut best = (sol.r, sol.error, "nsgs");
+                let library = s.library_finish;
+                let global = if library && sol.error > s.tolerance || s.keep_problem {
+                    Some(
+                        problem
+                            .to_global_with(&lambda)
+                            .map_err(|e| RigidError::Solve {
+                                step: k,
+                                detail: format!("global problem: {e}"),
+                            })?,
+                    )
+                } else {
+                    None
+                };
+                if sol.error > s.tolerance && library {
+                    if let Some(g) = &global {
+                        if let Some((r_lib, l_lib, err_lib)) =
+                            library_finish(g, &problem, &best.0, &lambda, s)
+                        {
+                            if err_lib < best.1 || !best.1.is_finite() {
+                                best = (r_lib, err_lib, "nsgs+library");
+                                lambda = l_lib;
+                            }
                         }
                     }
                 }
-            }
-            self.last_problem = if s.keep_problem { global } else { None };
-            let (r, error, method) = best;
-            let v = problem.velocities(&r);
-            let status = if error <= s.tolerance {
-                RigidStatus::Converged
-            } else {
-                RigidStatus::NotConverged
+                self.last_problem = if s.keep_problem { global } else { None };
+                let (r, error, method) = best;
+                let v = problem.velocities_with(&r, &lambda);
+                let status = if error <= s.tolerance {
+                    RigidStatus::Converged
+                } else {
+                    RigidStatus::NotConverged
+                };
+                (r, lambda, v, status, error, sol.sweeps, method)
             };
-            (r, v, status, error, sol.sweeps, method)
-        };
-        if v.iter().flatten().any(|x| !x.is_finite()) || r.iter().any(|x| !x.is_finite()) {
+        if v.iter().flatten().any(|x| !x.is_finite())
+            || r.iter().chain(&lambda).any(|x| !x.is_finite())
+        {
             return Err(RigidError::NonFiniteState(k));
+        }
+        // the joints' impulses: warm start and forces on A (world, torque about the anchor)
+        for (j, jb) in problem.joints.iter().enumerate() {
+            let mut warm = [0.0; SLOTS];
+            let (mut force, mut torque_body) = (Vector::ZERO, Vector::ZERO);
+            for (kk, row) in jb.rows.iter().enumerate() {
+                let l = lambda[jb.offset + kk];
+                warm[row.slot] = l;
+                force += l * Vector::new(row.ja[0], row.ja[1], row.ja[2]);
+                torque_body += l * Vector::new(row.ja[3], row.ja[4], row.ja[5]);
+            }
+            self.joint_warm[j] = warm;
+            let a = &self.bodies[self.joints[j].desc.body_a];
+            let arm = self.joints[j].anchor_a(&self.bodies) - a.x;
+            let (force, torque) = (force / h, (a.q * torque_body) / h);
+            let torque = torque - arm.cross(force);
+            self.joint_forces[j] = [force.x, force.y, force.z, torque.x, torque.y, torque.z];
         }
         let solve_seconds = ts.elapsed().as_secs_f64();
         let (kinetic_before, potential_before) = (self.kinetic_energy(), self.potential_energy());
@@ -763,6 +910,16 @@ impl RigidWorld {
                 }
             }
         }
+        if !self.joints.is_empty() {
+            super::joints::project(&self.joints, &mut self.bodies, JOINT_DRIFT_TARGET);
+            if self
+                .bodies
+                .iter()
+                .any(|b| !(b.x.is_finite() && b.q.is_finite()))
+            {
+                return Err(RigidError::NonFiniteState(k));
+            }
+        }
         let max_penetration = active.iter().map(|c| (-c.gap).max(0.0)).fold(0.0, f64::max);
         // physical checks: a penetration deeper than a tenth of the thinner body's half
         // width, or mechanical energy gained while every obstacle is fixed, is no solution
@@ -775,10 +932,12 @@ impl RigidWorld {
             -c.gap > PENETRATION_BOUND * w
         });
         let gained = kinetic_after + potential_after - kinetic_before - potential_before;
+        // motors do work: the check applies without them
         let fixed_obstacles = self
             .obstacles
             .iter()
-            .all(|o| matches!(o.motion, Motion::Fixed));
+            .all(|o| matches!(o.motion, Motion::Fixed))
+            && self.joints.iter().all(|j| j.desc.motor.is_none());
         // 1 % of the kinetic energy, or of that which gravity gives in one step, Σ m (g h)²
         // (the scale of what a solve within its tolerance may add to a body at rest)
         let step_scale: f64 = self
@@ -1000,6 +1159,10 @@ fn correct_positions(
     dq.iter().flatten().all(|x| x.is_finite()).then_some(dq)
 }
 
+/// The joints' positions are projected back until every |C| ≤ this (m or rad), at most 100
+/// Gauss–Seidel Newton sweeps ([`super::joints::project`]).
+pub const JOINT_DRIFT_TARGET: f64 = 1e-12;
+
 /// A contact deeper than this fraction of the thinner body's half width makes the step's
 /// status [`RigidStatus::NotConverged`] (a body went through another or an obstacle).
 pub const PENETRATION_BOUND: f64 = 0.1;
@@ -1079,12 +1242,18 @@ pub fn obstacle_pose(motion: &Motion, base: &Pose, t: f64) -> Pose {
 /// stalled iterate is a poor start on face contacts: on a brick wall with touching joints
 /// (2 742 unknowns, W rank-deficient) the library took 2.4 s a step from it and 0.1 s from
 /// its own start, both to 1e-8 (docs/rigid-bodies.md, "Touching bricks").
+///
+/// With joints, `global` is the problem at Gauss–Seidel's multipliers `lambda` (its active set
+/// of motors and limits, [`nsgs::Problem::to_global_with`]): the library's multipliers of the
+/// stored equality rows replace those, the others keep theirs, and the error is that of
+/// [`nsgs::Problem::error_with`] (bounds and signs included).
 fn library_finish(
     global: &GlobalProblem,
     problem: &nsgs::Problem,
     r: &[f64],
+    lambda: &[f64],
     s: &RigidSettings,
-) -> Option<(Vec<f64>, f64)> {
+) -> Option<(Vec<f64>, Vec<f64>, f64)> {
     use coulomb::problem::Problem;
     use coulomb::solver::{solve_with_guess, Guess};
     let start = if r.iter().all(|x| x.is_finite()) {
@@ -1092,7 +1261,12 @@ fn library_finish(
     } else {
         vec![0.0; r.len()]
     };
-    let v: Vec<f64> = problem.velocities(&start).into_iter().flatten().collect();
+    let v: Vec<f64> = problem
+        .velocities_with(&start, lambda)
+        .into_iter()
+        .flatten()
+        .collect();
+    let columns = problem.equality_columns(lambda);
     let guess = Guess {
         r: start,
         v: Some(v),
@@ -1107,15 +1281,25 @@ fn library_finish(
         if sol.r.len() != r.len() || sol.r.iter().any(|x| !x.is_finite()) {
             return None;
         }
-        let err = problem.error(&sol.r);
-        Some((sol.r, err))
+        let mut l = lambda.to_vec();
+        if !columns.is_empty() {
+            let lib = sol.l.as_ref()?;
+            if lib.len() != columns.len() || lib.iter().any(|x| !x.is_finite()) {
+                return None;
+            }
+            for (&k, x) in columns.iter().zip(lib) {
+                l[k] = *x;
+            }
+        }
+        let err = problem.error_with(&sol.r, &l);
+        Some((sol.r, l, err))
     };
     let cold = run(None);
-    if cold.as_ref().is_some_and(|(_, e)| *e <= s.tolerance) {
+    if cold.as_ref().is_some_and(|(_, _, e)| *e <= s.tolerance) {
         return cold;
     }
     match (cold, run(Some(&guess))) {
-        (Some(a), Some(b)) => Some(if b.1 < a.1 { b } else { a }),
+        (Some(a), Some(b)) => Some(if b.2 < a.2 { b } else { a }),
         (a, b) => a.or(b),
     }
 }
@@ -1128,10 +1312,20 @@ pub mod nsgs {
     //! (M, H, f, w, μ): v = M⁻¹(f + H r) recomputed from r, u = Hᵀ v + w,
     //! q = Hᵀ M⁻¹ f + w.
 
+    use crate::rigid::joints::{JointRow, RowKind};
     use coulomb::inner::pgs::{solve_contact, solve_contact_law, OneContact};
     use coulomb::problem::{GlobalProblem, ProblemError};
     use coulomb::sparse::CscMatrix;
     use coulomb::{cone, law};
+
+    /// Whether a joint row with multiplier l is a row of G in the stored problem.
+    fn stored_row(kind: RowKind, l: f64) -> bool {
+        match kind {
+            RowKind::Equality => true,
+            RowKind::Box(lo, hi) => l > lo && l < hi,
+            RowKind::Unilateral => l > 0.0,
+        }
+    }
 
     /// Exact error evaluations: every this many sweeps.
     pub const CHECK_EVERY: usize = 5;
@@ -1161,6 +1355,27 @@ pub mod nsgs {
         w_ii: Vec<[f64; 9]>,
         w_inv: Vec<[f64; 9]>,
         q_norm: f64,
+        /// the joints' blocks (equality rows, [`crate::rigid::joints`])
+        pub joints: Vec<JointBlock>,
+    }
+
+    /// One joint's rows of Gᵀ on its bodies' dofs, b, the kinds of their multipliers, and
+    /// the block J M⁻¹ Jᵀ.
+    #[derive(Debug, Clone, PartialEq)]
+    pub struct JointBlock {
+        /// A's block index (None: fixed)
+        pub a: Option<usize>,
+        /// B's block index (None: the world or a fixed body)
+        pub b: Option<usize>,
+        /// the rows
+        pub rows: Vec<JointRow>,
+        /// offset of its multipliers in λ
+        pub offset: usize,
+        /// J M⁻¹ Jᵀ (k × k, row-major)
+        w: Vec<f64>,
+        /// the equality rows and their block of w
+        eq: Vec<usize>,
+        w_eq: Vec<f64>,
     }
 
     /// Result of [`Problem::solve`].
@@ -1168,6 +1383,8 @@ pub mod nsgs {
     pub struct Solution {
         /// r of lowest error met
         pub r: Vec<f64>,
+        /// the joints' multipliers λ (impulses) with it
+        pub lambda: Vec<f64>,
         /// its error on the stored problem
         pub error: f64,
         /// sweeps done
@@ -1228,6 +1445,7 @@ pub mod nsgs {
                 w_ii,
                 w_inv,
                 q_norm: 0.0,
+                joints: Vec::new(),
             };
             let v0 = p.velocities(&[]);
             let q: Vec<f64> = (0..p.rows.len()).flat_map(|i| p.u(i, &v0)).collect();
@@ -1240,9 +1458,80 @@ pub mod nsgs {
             self.rows.len()
         }
 
+        /// The problem with the joints' blocks `joints` ((A's block, B's block, rows) each).
+        pub fn with_joints(
+            mut self,
+            joints: Vec<(Option<usize>, Option<usize>, Vec<JointRow>)>,
+        ) -> Result<Self, String> {
+            let mut offset = 0;
+            for (i, (a, b, rows)) in joints.into_iter().enumerate() {
+                let k = rows.len();
+                let mut w = vec![0.0; k * k];
+                for (blk, pick) in [(a, 0), (b, 1)] {
+                    let Some(blk) = blk else { continue };
+                    let m = self
+                        .mass
+                        .get(blk)
+                        .ok_or(format!("joint {i}: no body block {blk}"))?;
+                    for r in 0..k {
+                        for c in 0..k {
+                            let (jr, jc) = if pick == 0 {
+                                (&rows[r].ja, &rows[c].ja)
+                            } else {
+                                (&rows[r].jb, &rows[c].jb)
+                            };
+                            w[r * k + c] += (0..6).map(|d| jr[d] * jc[d] / m[d]).sum::<f64>();
+                        }
+                    }
+                }
+                let eq: Vec<usize> = (0..k)
+                    .filter(|&r| rows[r].kind == RowKind::Equality)
+                    .collect();
+                let w_eq: Vec<f64> = eq
+                    .iter()
+                    .flat_map(|&r| eq.iter().map(move |&c| (r, c)))
+                    .map(|(r, c)| w[r * k + c])
+                    .collect();
+                self.joints.push(JointBlock {
+                    a,
+                    b,
+                    rows,
+                    offset,
+                    w,
+                    eq,
+                    w_eq,
+                });
+                offset += k;
+            }
+            Ok(self)
+        }
+
+        /// Number of joint rows (the length of λ).
+        pub fn joint_rows(&self) -> usize {
+            self.joints.last().map_or(0, |j| j.offset + j.rows.len())
+        }
+
         /// v = M⁻¹ (f + H r) (r shorter than 3 · contacts: zeros).
         pub fn velocities(&self, r: &[f64]) -> Vec<[f64; 6]> {
+            self.velocities_with(r, &[])
+        }
+
+        /// v = M⁻¹ (f + H r + G λ) (r or λ short: zeros).
+        pub fn velocities_with(&self, r: &[f64], lambda: &[f64]) -> Vec<[f64; 6]> {
             let mut p = self.f.clone();
+            for jb in &self.joints {
+                for (k, row) in jb.rows.iter().enumerate() {
+                    let Some(l) = lambda.get(jb.offset + k) else {
+                        break;
+                    };
+                    if let Some(a) = jb.a {
+                        (0..6).for_each(|d| p[a][d] += row.ja[d] * l);
+                    }
+                    if let Some(b) = jb.b {
+                        (0..6).for_each(|d| p[b][d] += row.jb[d] * l);
+                    }
+                }
+            }
             for (i, row) in self.rows.iter().enumerate() {
                 if r.len() < 3 * i + 3 {
                     break;
@@ -1277,10 +1566,117 @@ pub mod nsgs {
 
         /// The error of docs/error.md of r on the stored problem (v recomputed from r).
         pub fn error(&self, r: &[f64]) -> f64 {
-            let v = self.velocities(r);
+            self.error_with(r, &[])
+        }
+
+        /// (Gᵀ v + b)_k of joint block `j`'s rows.
+        pub fn joint_u(&self, j: usize, v: &[[f64; 6]]) -> Vec<f64> {
+            let jb = &self.joints[j];
+            jb.rows
+                .iter()
+                .map(|row| {
+                    let mut u = row.b;
+                    if let Some(a) = jb.a {
+                        u += (0..6).map(|d| row.ja[d] * v[a][d]).sum::<f64>();
+                    }
+                    if let Some(b) = jb.b {
+                        u += (0..6).map(|d| row.jb[d] * v[b][d]).sum::<f64>();
+                    }
+                    u
+                })
+                .collect()
+        }
+
+        /// The error of (r, λ), v recomputed from them: the larger of the error of
+        /// docs/error.md of the contacts and the joints' residual ‖ρ‖ / max(1, ‖b‖), ρ_k the
+        /// row's Gᵀ v + b where its multiplier is free (an equality row, a motor below its
+        /// bound, a limit carrying load: the equality residual of docs/error.md on those rows)
+        /// and its violation of the sign condition where the multiplier sits at a bound.
+        pub fn error_with(&self, r: &[f64], lambda: &[f64]) -> f64 {
+            let v = self.velocities_with(r, lambda);
             let u: Vec<f64> = (0..self.rows.len()).flat_map(|i| self.u(i, &v)).collect();
             let mu: Vec<f64> = self.rows.iter().map(|r| r.mu).collect();
-            law::error_measure(3, &mu, r, &u, self.q_norm).error
+            let contact = if self.rows.is_empty() {
+                0.0
+            } else {
+                law::error_measure(3, &mu, r, &u, self.q_norm).error
+            };
+            if self.joints.is_empty() {
+                return contact;
+            }
+            let (mut res, mut b2) = (0.0, 0.0);
+            for (j, jb) in self.joints.iter().enumerate() {
+                for (k, (row, uk)) in jb.rows.iter().zip(self.joint_u(j, &v)).enumerate() {
+                    let l = lambda.get(jb.offset + k).copied().unwrap_or(0.0);
+                    let rho = match row.kind {
+                        RowKind::Equality => uk,
+                        RowKind::Box(_, hi) if l >= hi => uk.max(0.0),
+                        RowKind::Box(lo, _) if l <= lo => uk.min(0.0),
+                        RowKind::Box(..) => uk,
+                        RowKind::Unilateral if l > 0.0 => uk,
+                        RowKind::Unilateral => uk.min(0.0),
+                    };
+                    res += rho * rho;
+                    b2 += row.b * row.b;
+                }
+            }
+            let joint = res.sqrt() / b2.sqrt().max(1.0);
+            if joint.is_nan() {
+                return f64::NAN;
+            }
+            contact.max(joint)
+        }
+
+        /// One exact update of joint block j (the others frozen): its equality rows by the
+        /// small dense solve of W_EE δ = −u_E (pivoted: dependent rows get no update), then
+        /// each motor and limit row projected on its bound.
+        fn update_joint(&self, j: usize, v: &mut [[f64; 6]], lambda: &mut [f64]) {
+            let jb = &self.joints[j];
+            let k = jb.rows.len();
+            let apply = |v: &mut [[f64; 6]], row: &JointRow, d: f64| {
+                if let Some(a) = jb.a {
+                    (0..6).for_each(|c| v[a][c] += row.ja[c] * d / self.mass[a][c]);
+                }
+                if let Some(b) = jb.b {
+                    (0..6).for_each(|c| v[b][c] += row.jb[c] * d / self.mass[b][c]);
+                }
+            };
+            if !jb.eq.is_empty() {
+                let u = self.joint_u(j, v);
+                let rhs: Vec<f64> = jb.eq.iter().map(|&r| -u[r]).collect();
+                let delta = crate::rigid::joints::solve_spd(&jb.w_eq, &rhs, jb.eq.len());
+                for (&r, d) in jb.eq.iter().zip(delta) {
+                    if d != 0.0 && d.is_finite() {
+                        lambda[jb.offset + r] += d;
+                        apply(v, &jb.rows[r], d);
+                    }
+                }
+            }
+            for r in 0..k {
+                let row = &jb.rows[r];
+                let (lo, hi) = match row.kind {
+                    RowKind::Equality => continue,
+                    RowKind::Box(lo, hi) => (lo, hi),
+                    RowKind::Unilateral => (0.0, f64::INFINITY),
+                };
+                let wrr = jb.w[r * k + r];
+                if !(wrr.is_finite() && wrr > 0.0) {
+                    continue;
+                }
+                let mut u = row.b;
+                if let Some(a) = jb.a {
+                    u += (0..6).map(|d| row.ja[d] * v[a][d]).sum::<f64>();
+                }
+                if let Some(b) = jb.b {
+                    u += (0..6).map(|d| row.jb[d] * v[b][d]).sum::<f64>();
+                }
+                let old = lambda[jb.offset + r];
+                let new = (old - u / wrr).clamp(lo, hi);
+                if new != old {
+                    lambda[jb.offset + r] = new;
+                    apply(v, row, new - old);
+                }
+            }
         }
 
         /// Gauss–Seidel from r0 until the error is ≤ tol, `max_sweeps`, or a stall (the
@@ -1289,20 +1685,28 @@ pub mod nsgs {
         pub fn solve(
             &self,
             r0: &[f64],
+            lambda0: &[f64],
             tol: f64,
             max_sweeps: usize,
             stall_window: usize,
         ) -> Solution {
             let n = self.rows.len();
+            let nl = self.joint_rows();
             let mut r = if r0.len() == 3 * n && r0.iter().all(|x| x.is_finite()) {
                 r0.to_vec()
             } else {
                 vec![0.0; 3 * n]
             };
-            let mut v = self.velocities(&r);
+            let mut lambda = if lambda0.len() == nl && lambda0.iter().all(|x| x.is_finite()) {
+                lambda0.to_vec()
+            } else {
+                vec![0.0; nl]
+            };
+            let mut v = self.velocities_with(&r, &lambda);
             let mut best = Solution {
-                error: self.error(&r),
+                error: self.error_with(&r, &lambda),
                 r: r.clone(),
+                lambda: lambda.clone(),
                 sweeps: 0,
             };
             if best.error <= tol {
@@ -1313,14 +1717,18 @@ pub mod nsgs {
                 for i in 0..n {
                     self.update(i, &mut v, &mut r);
                 }
+                for j in 0..self.joints.len() {
+                    self.update_joint(j, &mut v, &mut lambda);
+                }
                 if sweep % CHECK_EVERY == 0 || sweep == max_sweeps || sweep == 1 {
                     // exact evaluation on the stored problem (v from scratch)
-                    v = self.velocities(&r);
-                    let err = self.error(&r);
+                    v = self.velocities_with(&r, &lambda);
+                    let err = self.error_with(&r, &lambda);
                     best.sweeps = sweep;
                     if err < best.error || !best.error.is_finite() {
                         best.error = err;
                         best.r.copy_from_slice(&r);
+                        best.lambda.copy_from_slice(&lambda);
                     }
                     if err <= tol || !err.is_finite() {
                         break;
@@ -1378,6 +1786,29 @@ pub mod nsgs {
 
         /// The same problem as a library global problem (M diagonal, H sparse).
         pub fn to_global(&self) -> Result<GlobalProblem, ProblemError> {
+            self.to_global_with(&[])
+        }
+
+        /// The index in λ of each column of G of [`Problem::to_global_with`] at `lambda`.
+        pub fn equality_columns(&self, lambda: &[f64]) -> Vec<usize> {
+            let mut cols = Vec::new();
+            for jb in &self.joints {
+                for (k, row) in jb.rows.iter().enumerate() {
+                    let l = lambda.get(jb.offset + k).copied().unwrap_or(0.0);
+                    if stored_row(row.kind, l) {
+                        cols.push(jb.offset + k);
+                    }
+                }
+            }
+            cols
+        }
+
+        /// The problem as a library global problem with the joints' equality constraints
+        /// (G, b) at the multipliers λ: the equality rows, a motor row whose impulse is below
+        /// its bound and a limit row that carries load are rows of Gᵀ v + b = 0; a motor at
+        /// its bound is the known impulse J λ added to f; a limit carrying none is left out
+        /// (the active set of the returned solution).
+        pub fn to_global_with(&self, lambda: &[f64]) -> Result<GlobalProblem, ProblemError> {
             let n = 6 * self.mass.len();
             let diag: Vec<f64> = self.mass.iter().flatten().copied().collect();
             let idx: Vec<usize> = (0..n).collect();
@@ -1399,10 +1830,46 @@ pub mod nsgs {
             }
             let h = CscMatrix::from_triplets(n, 3 * self.rows.len(), &rows, &cols, &vals)
                 .map_err(|source| ProblemError::Sparse { what: "H", source })?;
-            let f: Vec<f64> = self.f.iter().flatten().copied().collect();
+            let mut f: Vec<f64> = self.f.iter().flatten().copied().collect();
             let w: Vec<f64> = self.rows.iter().flat_map(|r| r.w).collect();
             let mu: Vec<f64> = self.rows.iter().map(|r| r.mu).collect();
-            GlobalProblem::new_unfactored(3, m, h, f, w, mu)
+            let problem = GlobalProblem::new_unfactored(3, m, h, f.clone(), w.clone(), mu.clone())?;
+            if self.joints.is_empty() {
+                return Ok(problem);
+            }
+            let (mut rows, mut cols, mut vals, mut b) =
+                (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+            for jb in &self.joints {
+                for (k, row) in jb.rows.iter().enumerate() {
+                    let l = lambda.get(jb.offset + k).copied().unwrap_or(0.0);
+                    let stored = stored_row(row.kind, l);
+                    let parts = [(jb.a, &row.ja), (jb.b, &row.jb)];
+                    if stored {
+                        for (blk, j) in parts {
+                            let Some(blk) = blk else { continue };
+                            for (d, x) in j.iter().enumerate() {
+                                if *x != 0.0 {
+                                    rows.push(6 * blk + d);
+                                    cols.push(b.len());
+                                    vals.push(*x);
+                                }
+                            }
+                        }
+                        b.push(row.b);
+                    } else if matches!(row.kind, RowKind::Box(..)) {
+                        for (blk, j) in parts {
+                            let Some(blk) = blk else { continue };
+                            for (d, x) in j.iter().enumerate() {
+                                f[6 * blk + d] += x * l;
+                            }
+                        }
+                    }
+                }
+            }
+            let g = CscMatrix::from_triplets(n, b.len(), &rows, &cols, &vals)
+                .map_err(|source| ProblemError::Sparse { what: "G", source })?;
+            let problem = GlobalProblem { f, ..problem };
+            problem.with_equality(g, b)
         }
     }
 }

@@ -69,6 +69,19 @@ def _vec3(name: str, v: Any) -> List[float]:
     return [float(x) for x in a]
 
 
+def _vec3_any(name: str, v: Any, index: int) -> np.ndarray:
+    """Three numbers, finite or not (the build names what is not finite)."""
+    try:
+        a = np.asarray(v, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise _arg_error(name, f"joint {index}: {name} must be 3 numbers, got {v!r}", index)
+    if a.shape != (3,):
+        raise _arg_error(name, f"joint {index}: {name} must be 3 numbers, got {v!r}", index)
+    if not np.all(np.isfinite(a)):
+        raise _arg_error(name, f"joint {index}: {name} {a.tolist()} is not finite", index)
+    return a
+
+
 def _unit(name: str, v: Any) -> List[float]:
     a = np.array(_vec3(name, v))
     n = float(np.linalg.norm(a))
@@ -335,6 +348,11 @@ class Scene:
         self._inlets: List[Dict[str, Any]] = []
         # bodies of any shape (coulomb_granular::BodySpec dicts)
         self._bodies: List[Dict[str, Any]] = []
+        # insertion order of the bodies: ("body", index in _bodies) or ("batch", index in
+        # _batches), one entry per body (a batch's spheres one after the other)
+        self._order: List[Tuple[str, int, int]] = []
+        # joints (coulomb_granular::rigid::joints::JointDesc dicts, bodies in insertion order)
+        self._joints: List[Dict[str, Any]] = []
 
     # -- materials and gravity --------------------------------------------------------------
 
@@ -426,6 +444,7 @@ class Scene:
                 raise _arg_error("density", "give a density or masses")
             desc["density"] = _real("density", density)
             m = empty
+        self._order.extend(("batch", len(self._batches), k) for k in range(n))
         self._batches.append((desc, (pos.ravel(), r, vel, ang, m)))
         return self
 
@@ -462,19 +481,92 @@ class Scene:
             if i.shape != (3, 3):
                 raise _arg_error("inertia", f"inertia must be 3 x 3, got shape {i.shape}")
             body["inertia"] = i.tolist()
+        self._order.append(("body", len(self._bodies), 0))
         self._bodies.append(body)
         return self
 
     @property
     def body_count(self) -> int:
-        """Number of bodies added by :meth:`add_body`."""
-        return len(self._bodies)
+        """Number of bodies, spheres of :meth:`add_spheres` (and :meth:`fill`) and bodies of
+        :meth:`add_body` together: the bodies are numbered from 0 in insertion order (the
+        indices of :meth:`add_joint`)."""
+        return len(self._order)
+
+    def add_joint(self, kind: str, body_a: int, body_b: Optional[int], anchor: Sequence[float],
+                  axis: Optional[Sequence[float]] = None,
+                  limits: Optional[Sequence[float]] = None,
+                  motor: Optional[Mapping[str, float]] = None) -> "Scene":
+        """Adds a joint between bodies ``body_a`` and ``body_b`` (indices in insertion order,
+        :attr:`body_count`; ``body_b=None``: the world). ``kind``: ``"revolute"`` (hinge),
+        ``"spherical"`` (ball), ``"prismatic"`` (slider), ``"cylindrical"``, ``"fixed"``
+        (weld). ``anchor`` and ``axis`` (revolute, prismatic, cylindrical) are in world
+        coordinates at the initial configuration. ``limits=(lo, hi)`` bounds the joint
+        coordinate of a revolute (angle of A relative to B about the axis, rad, within
+        [−π, π]) or prismatic joint (travel, m); ``motor=dict(velocity=..., max_force=...)``
+        drives its rate with at most ``max_force`` (N m or N). The joint's two bodies do not
+        collide with each other. A scene with joints runs in the rigid-body simulator
+        (spheres become balls). Bad input raises :class:`coulomb.SceneError` (a
+        ``ValueError``) naming the field; the rest (zero axis, lo > hi, both bodies fixed, …)
+        is checked at build, naming the joint. docs/joints.md has the model."""
+        k = len(self._joints)
+        if not isinstance(kind, str):
+            raise _arg_error("kind", f"joint {k}: kind must be a string", k)
+        j: Dict[str, Any] = {"kind": kind}
+        for name, b in (("body_a", body_a), ("body_b", body_b)):
+            if b is None and name == "body_b":
+                continue
+            if isinstance(b, bool) or not isinstance(b, (int, np.integer)):
+                raise _arg_error(name, f"joint {k}: {name} must be a body index, got {b!r}", k)
+            if not 0 <= int(b) < self.body_count:
+                raise _arg_error(name, f"joint {k}: {name} = {b}: no such body (the scene has "
+                                 f"{self.body_count} bodies; add them before their joints)", k)
+            j[name] = int(b)
+        if body_b is not None and int(body_b) == int(body_a):
+            raise _arg_error("body_b", f"joint {k}: a joint of body {body_a} with itself", k)
+        j["anchor"] = [float(x) for x in _vec3_any("anchor", anchor, k)]
+        if axis is not None:
+            j["axis"] = [float(x) for x in _vec3_any("axis", axis, k)]
+        if limits is not None:
+            lim = np.asarray(limits, dtype=np.float64)
+            if lim.shape != (2,):
+                raise _arg_error("limits", f"joint {k}: limits must be (lo, hi), got {limits!r}",
+                                 k)
+            if not np.all(np.isfinite(lim)):
+                raise _arg_error("limits", f"joint {k}: limits {lim.tolist()} are not finite", k)
+            j["limits"] = [float(lim[0]), float(lim[1])]
+        if motor is not None:
+            if not isinstance(motor, Mapping) or set(motor) != {"velocity", "max_force"}:
+                raise _arg_error("motor", f"joint {k}: motor must be "
+                                 f"dict(velocity=..., max_force=...), got {motor!r}", k)
+            mv = {"velocity": float(motor["velocity"]), "max_force": float(motor["max_force"])}
+            for name, x in mv.items():
+                if not np.isfinite(x):
+                    raise _arg_error(f"motor.{name}", f"joint {k}: motor {name} {x} is not finite",
+                                     k)
+            j["motor"] = mv
+        self._joints.append(j)
+        return self
+
+    @property
+    def joint_count(self) -> int:
+        """Number of joints."""
+        return len(self._joints)
+
+    def _model_index(self, i: int) -> int:
+        """The index of body ``i`` (insertion order) in the rigid-body simulator's order:
+        the bodies of :meth:`add_body`, then the spheres of each batch."""
+        what, k, m = self._order[i]
+        if what == "body":
+            return k
+        return (len(self._bodies)
+                + sum(a[0].shape[0] // 3 for _, a in self._batches[:k]) + m)
 
     @property
     def has_shapes(self) -> bool:
-        """Whether some body is not a sphere (the scene then runs in the rigid-body
-        simulator)."""
-        return any(b["shape"]["kind"] != "sphere" for b in self._bodies)
+        """Whether some body is not a sphere or the scene has joints (the scene then runs in
+        the rigid-body simulator)."""
+        return (any(b["shape"]["kind"] != "sphere" for b in self._bodies)
+                or bool(self._joints))
 
     @property
     def sphere_count(self) -> int:
@@ -675,6 +767,11 @@ class Scene:
             "sphere_batches": [d for d, _ in self._batches],
             "obstacles": self._obstacles,
         }
+        if self._joints:
+            desc["joints"] = [
+                dict(j, body_a=self._model_index(j["body_a"]),
+                     **({"body_b": self._model_index(j["body_b"])} if "body_b" in j else {}))
+                for j in self._joints]
         return json.dumps(desc, allow_nan=False)
 
     def _parts(self) -> Tuple[str, List[Tuple[np.ndarray, ...]], List[Tuple[np.ndarray, ...]]]:
@@ -795,6 +892,21 @@ class Simulation:
     def is_rigid(self) -> bool:
         """Whether the scene runs in the rigid-body simulator (some body is not a sphere)."""
         return isinstance(self._sim, _coulomb._RigidSimulation)
+
+    @property
+    def joint_forces(self) -> np.ndarray:
+        """Force and torque of each joint on its body A in the last step, shape
+        (n_joints, 6): (F, τ) in world axes, τ about the joint's anchor on A; the step's
+        impulse / h (zeros before the first step; (0, 6) without joints)."""
+        if self.is_rigid:
+            return self._sim.joint_forces
+        return np.zeros((0, 6))
+
+    @property
+    def joint_drift(self) -> float:
+        """Largest violation of the joints' constraints at t_k (m for positions, rad for
+        angles; 0 without joints)."""
+        return self._sim.joint_drift if self.is_rigid else 0.0
 
     @property
     def body_positions(self) -> np.ndarray:

@@ -1,0 +1,214 @@
+//! The validation cases of the joints (issue 53) for `coulomb validate`: a simple pendulum's
+//! period, a hanging chain's top force, a motorised hinge's acceleration and a double
+//! pendulum's drift and energy, each with its expected value and tolerance (docs/joints.md).
+
+use super::joints::{JointDesc, JointKind, Motor};
+use super::validation::{cuboid, one_material};
+use super::{RigidError, RigidSettings, RigidStatus, RigidWorld};
+use crate::validation::Check;
+use crate::world::GRAVITY;
+
+fn hinge(a: usize, b: Option<usize>, anchor: [f64; 3], axis: [f64; 3]) -> JointDesc {
+    JointDesc {
+        kind: JointKind::Revolute,
+        body_a: a,
+        body_b: b,
+        anchor,
+        axis: Some(axis),
+        limits: None,
+        motor: None,
+    }
+}
+
+/// Steps `w` n times; the steps not converged.
+fn run(w: &mut RigidWorld, n: usize) -> Result<usize, RigidError> {
+    let mut bad = 0;
+    for _ in 0..n {
+        if w.step()?.status == RigidStatus::NotConverged {
+            bad += 1;
+        }
+    }
+    Ok(bad)
+}
+
+/// A bar 0.04 × 0.04 × 0.5 m hanging from a hinge at its end, amplitude 0.01 rad: (measured
+/// period from upward zero crossings of the hinge angle, 2π √(I/(m g d)), steps not
+/// converged).
+pub fn pendulum_period() -> Result<(f64, f64, usize), RigidError> {
+    let (a, c) = (0.02, 0.25);
+    let mut bar = cuboid([a, a, c], 1000.0, [0.0, 0.0, -c])?;
+    let m = bar.mass.mass;
+    let i = m * (a * a + c * c) / 3.0 + m * c * c;
+    let w0 = 0.01 * (m * GRAVITY * c / i).sqrt();
+    bar.angular_velocity = [0.0, w0, 0.0];
+    bar.velocity = [-w0 * c, 0.0, 0.0];
+    let joints = [hinge(0, None, [0.0; 3], [0.0, 1.0, 0.0])];
+    let settings = RigidSettings::default();
+    let h = settings.h;
+    let mut w = RigidWorld::with_joints(vec![bar], vec![], one_material(0.3), settings, &joints)?;
+    let period = 2.0 * std::f64::consts::PI * (i / (m * GRAVITY * c)).sqrt();
+    let (mut crossings, mut prev, mut bad) = (Vec::new(), 0.0, 0);
+    for _ in 0..(3.2 * period / h) as usize {
+        bad += run(&mut w, 1)?;
+        let theta = w.joint_coordinate(0).map_or(0.0, |c| c.0);
+        if prev < 0.0 && theta >= 0.0 {
+            crossings.push(w.time() - h * theta / (theta - prev));
+        }
+        prev = theta;
+    }
+    let measured = match crossings.as_slice() {
+        [first, .., last] => (last - first) / (crossings.len() - 1) as f64,
+        _ => f64::NAN,
+    };
+    Ok((measured, period, bad))
+}
+
+/// 20 links 0.02 × 0.02 × 0.1 m hanging from spherical joints, solved to 1e-13: (top joint's
+/// vertical force, the chain's weight, steps not converged) after 3 steps.
+pub fn hanging_chain() -> Result<(f64, f64, usize), RigidError> {
+    let n = 20;
+    let mut bodies = Vec::new();
+    let mut joints = Vec::new();
+    for k in 0..n {
+        bodies.push(cuboid(
+            [0.01, 0.01, 0.05],
+            1000.0,
+            [0.0, 0.0, -0.05 - 0.1 * k as f64],
+        )?);
+        joints.push(JointDesc {
+            kind: JointKind::Spherical,
+            axis: None,
+            ..hinge(k, k.checked_sub(1), [0.0, 0.0, -0.1 * k as f64], [0.0; 3])
+        });
+    }
+    let weight: f64 = bodies.iter().map(|b| b.mass.mass * GRAVITY).sum();
+    let settings = RigidSettings {
+        tolerance: 1e-13,
+        max_sweeps: 50_000,
+        stall_window: 5_000,
+        ..RigidSettings::default()
+    };
+    let mut w = RigidWorld::with_joints(bodies, vec![], one_material(0.3), settings, &joints)?;
+    let bad = run(&mut w, 3)?;
+    Ok((w.joint_forces()[0][2], weight, bad))
+}
+
+/// A plate 0.2 × 0.2 × 0.04 m on a hinge through its centre (axis z), motor torque limit
+/// 0.05 N m, target speed out of reach, 500 steps: (measured angular acceleration, τ/I, steps
+/// not converged).
+pub fn motor_acceleration() -> Result<(f64, f64, usize), RigidError> {
+    let plate = cuboid([0.1, 0.1, 0.02], 1000.0, [0.0, 0.0, 1.0])?;
+    let i = plate.mass.mass * 0.02 / 3.0;
+    let tau = 0.05;
+    let joints = [JointDesc {
+        motor: Some(Motor {
+            velocity: 1e3,
+            max_force: tau,
+        }),
+        ..hinge(0, None, [0.0, 0.0, 1.0], [0.0, 0.0, 1.0])
+    }];
+    let mut w = RigidWorld::with_joints(
+        vec![plate],
+        vec![],
+        one_material(0.3),
+        RigidSettings::default(),
+        &joints,
+    )?;
+    let bad = run(&mut w, 500)?;
+    Ok((w.angular_velocities()[0][2] / w.time(), tau / i, bad))
+}
+
+/// A double pendulum of two bars 0.04 × 0.04 × 0.5 m released at θ = ½ rad, `steps` steps:
+/// (largest joint drift (m), largest |E − E₀| / |E₀| (E from the hinge's height), steps not
+/// converged).
+pub fn double_pendulum(steps: usize) -> Result<(f64, f64, usize), RigidError> {
+    let l = 0.5;
+    let theta: f64 = 0.5;
+    let u = [theta.sin(), 0.0, -theta.cos()];
+    let q = [(-theta / 2.0).cos(), 0.0, (-theta / 2.0).sin(), 0.0];
+    let at = |s: f64| [u[0] * s, 0.0, u[2] * s];
+    let mut b1 = cuboid([0.02, 0.02, l / 2.0], 1000.0, at(l / 2.0))?;
+    let mut b2 = cuboid([0.02, 0.02, l / 2.0], 1000.0, at(1.5 * l))?;
+    b1.orientation = q;
+    b2.orientation = q;
+    let joints = [
+        hinge(0, None, [0.0; 3], [0.0, 1.0, 0.0]),
+        hinge(1, Some(0), at(l), [0.0, 1.0, 0.0]),
+    ];
+    let mut w = RigidWorld::with_joints(
+        vec![b1, b2],
+        vec![],
+        one_material(0.3),
+        RigidSettings::default(),
+        &joints,
+    )?;
+    let e0 = w.kinetic_energy() + w.potential_energy();
+    let (mut drift, mut energy, mut bad): (f64, f64, usize) = (0.0, 0.0, 0);
+    for _ in 0..steps {
+        bad += run(&mut w, 1)?;
+        drift = drift.max(w.joint_drift());
+        let e = w.kinetic_energy() + w.potential_energy();
+        energy = energy.max((e - e0).abs() / e0.abs());
+    }
+    Ok((drift, energy, bad))
+}
+
+/// The joints' checks of `coulomb validate` (section "Joints"); `quick`: the double pendulum
+/// over 2 s instead of 10 s.
+pub fn checks(quick: bool) -> Result<Vec<(String, Check)>, RigidError> {
+    let check = |name: &str, expected: f64, measured: f64, tolerance: f64, bad: usize| {
+        (
+            "Joints".to_string(),
+            Check {
+                name: name.to_string(),
+                expected,
+                measured,
+                tolerance,
+                unit: String::new(),
+                not_converged: bad,
+            },
+        )
+    };
+    let mut out = Vec::new();
+    let (period, expected, bad) = pendulum_period()?;
+    out.push(check(
+        "simple pendulum, amplitude 0.01 rad: period 2π √(I/(m g d)) (s, 0.5 %)",
+        expected,
+        period,
+        0.005 * expected,
+        bad,
+    ));
+    let (force, weight, bad) = hanging_chain()?;
+    out.push(check(
+        "hanging chain of 20 links at rest: top joint force = chain weight (N, 1e-8 relative)",
+        weight,
+        force,
+        1e-8 * weight,
+        bad,
+    ));
+    let (acc, expected, bad) = motor_acceleration()?;
+    out.push(check(
+        "motorised hinge under its torque limit: angular acceleration τ/I (rad/s², 1e-6 relative)",
+        expected,
+        acc,
+        1e-6 * expected,
+        bad,
+    ));
+    let steps = if quick { 2_000 } else { 10_000 };
+    let (drift, energy, bad) = double_pendulum(steps)?;
+    out.push(check(
+        &format!("double pendulum θ = ½, {steps} steps: joint position drift (m, < 1e-6)"),
+        0.0,
+        drift,
+        1e-6,
+        bad,
+    ));
+    out.push(check(
+        &format!("double pendulum θ = ½, {steps} steps: largest |E − E₀| / |E₀| (1 %)"),
+        0.0,
+        energy,
+        0.01,
+        bad,
+    ));
+    Ok(out)
+}

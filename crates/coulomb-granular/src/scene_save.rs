@@ -360,6 +360,9 @@ pub fn scene_file_of(
         bodies,
         obstacles,
         inlets,
+        // the file's bodies are written in the model's order (bodies, then each batch's
+        // spheres), the numbering the joints use
+        joints: model.joints.clone(),
     })
 }
 
@@ -593,8 +596,21 @@ mod tests {
                 normal: Vec3::Z,
             },
         ));
+        m.joints.push(crate::rigid::joints::JointDesc {
+            kind: crate::rigid::joints::JointKind::Revolute,
+            body_a: 1,
+            body_b: Some(0),
+            anchor: [0.5, 0.0, 0.5],
+            axis: Some([0.0, 1.0, 0.0]),
+            limits: Some((-0.5, 0.25)),
+            motor: Some(crate::rigid::joints::Motor {
+                velocity: 1.5,
+                max_force: 2.0,
+            }),
+        });
         let (_, built) = round_trip(&m, "r.toml");
         assert_eq!(built.model.bodies, m.bodies);
+        assert_eq!(built.model.joints, m.joints);
         assert_eq!(built.model.obstacles, m.obstacles);
         assert_eq!(m.bodies[0].orientation, [0.6, 0.8, 0.0, 0.0]);
         assert_ne!(m.bodies[0].orientation, IDENTITY);

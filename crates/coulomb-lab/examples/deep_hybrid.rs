@@ -110,6 +110,9 @@ fn main() -> anyhow::Result<()> {
             first.tol = tol;
             first.max_outer = 1;
             first.max_inner = pre_sweeps;
+            // the sweeps alone: a fused solve stopped by its cap below 1e-3 would else try
+            // the Newton end game (a sparse LU of W) before returning
+            first.params.newton_steps = 0;
             let main = solver.settings().clone();
             solver.set_settings(first)?;
             let sol = solver.solve(None);

@@ -110,14 +110,16 @@ fn pile(nx: usize, ny: usize, nz: usize) -> (GlobalProblem, Vec<usize>) {
 
 /// ‖q‖ of the Delassus vector q = Hᵀ M⁻¹ f + w of a pile (M diagonal, w = 0).
 fn q_norm(p: &GlobalProblem) -> f64 {
-    let mut q = vec![0.0; p.h.ncols];
-    for j in 0..p.h.ncols {
-        for k in p.h.col_ptr[j]..p.h.col_ptr[j + 1] {
-            let i = p.h.row_idx[k];
-            let mii = p.m.values[p.m.col_ptr[i]];
-            q[j] += p.h.values[k] * p.f[i] / mii;
-        }
-    }
+    let q: Vec<f64> = (0..p.h.ncols)
+        .map(|j| {
+            (p.h.col_ptr[j]..p.h.col_ptr[j + 1])
+                .map(|k| {
+                    let i = p.h.row_idx[k];
+                    p.h.values[k] * p.f[i] / p.m.values[p.m.col_ptr[i]]
+                })
+                .sum()
+        })
+        .collect();
     q.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 

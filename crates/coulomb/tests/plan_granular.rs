@@ -190,8 +190,17 @@ fn a_small_pile_and_a_chosen_method_keep_their_plan() {
         "{plan}"
     );
     assert_eq!(plan.steps[1].method, Some(settings.main_method()));
-    // the deep pile with a method named by the caller: that method alone
+    // the deep pile at a tolerance tighter than GRANULAR_MIN_TOL: the settings' order
     let deep = Problem::Global(pile(8, 8, 6).0);
+    let tight = Settings {
+        tol: 1e-8,
+        ..Settings::default()
+    };
+    let plan = Solver::new(&deep, tight.clone()).unwrap().plan(None);
+    assert!(plan.main_reason.is_none(), "{plan}");
+    assert_eq!(plan.steps[0].kind, StepKind::Warmup, "{plan}");
+    assert_eq!(plan.steps[1].method, Some(tight.main_method()), "{plan}");
+    // the deep pile with a method named by the caller: that method alone
     let alone = Settings {
         tol: 1e-4,
         ..Settings::method(InnerKind::Apgd, OuterKind::Anderson)

@@ -107,6 +107,8 @@ pub struct Step {
 pub struct Plan {
     /// the steps; a step that converges ends the solve
     pub steps: Vec<Step>,
+    /// why the main method is not the settings' own (None: it is)
+    pub main_reason: Option<String>,
 }
 
 impl fmt::Display for Plan {
@@ -123,6 +125,9 @@ impl fmt::Display for Plan {
                 Start::PreviousLast => "the previous step's last iterate",
             };
             writeln!(f, ": {}, from {start}", s.budget)?;
+        }
+        if let Some(why) = &self.main_reason {
+            writeln!(f, "main method: {why}")?;
         }
         Ok(())
     }
@@ -166,7 +171,41 @@ pub struct Structure {
     pub mu_positive: bool,
     /// the rigid-body steps' applicability
     pub rigid: Rigid,
+    /// a global problem: the size of the largest diagonal block of M, where M is block
+    /// diagonal in consecutive indices (6 for spheres or rigid bodies in 3-D; n for a
+    /// deformable body); None for a local problem
+    pub m_block: Option<usize>,
 }
+
+impl Structure {
+    /// Whether the problem has the structure of a step of granular matter
+    /// ([`GRANULAR_MIN_CONTACTS`] contacts or more, global, W symmetric, M block diagonal
+    /// with blocks of at most [`GRANULAR_MAX_BLOCK`], no rigid-body structure: the bodies do
+    /// not carry many contacts each, 2n > m), where Gauss–Seidel on Coulomb's law (pgs +
+    /// fused) is the faster method (measured: docs/scaling.md, "The default plan on deep
+    /// steps").
+    pub fn granular(&self) -> bool {
+        self.contacts >= GRANULAR_MIN_CONTACTS
+            && self.symmetric
+            && self.rigid == Rigid::No
+            && self.m_block.is_some_and(|b| b <= GRANULAR_MAX_BLOCK)
+    }
+}
+
+/// The fewest contacts of a [`Structure::granular`] problem: below it the default plan keeps
+/// its order (the corpus' granular steps of fewer contacts are solved by the warm-up or by
+/// APGD + Anderson; docs/scaling.md).
+pub const GRANULAR_MIN_CONTACTS: usize = 1000;
+
+/// The tightest tolerance at which a [`Structure::granular`] problem runs Gauss–Seidel first:
+/// at 1e-4 it is 5–6× faster than APGD + Anderson on deep steps and solves the 8-layer steps
+/// the default order fails; at 1e-8 the default order (APGD + Anderson with the Newton end
+/// game) solves more of the corpus' granular steps (docs/scaling.md).
+pub const GRANULAR_MIN_TOL: f64 = 1e-6;
+
+/// The largest diagonal block of M of a [`Structure::granular`] problem: one body, 6 degrees
+/// of freedom in 3-D.
+pub const GRANULAR_MAX_BLOCK: usize = 6;
 
 impl fmt::Display for Structure {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -178,6 +217,10 @@ impl fmt::Display for Structure {
             Rigid::No => "no",
             Rigid::Schur => "Schur complement of size n",
             Rigid::SkeletonProbe => "skeleton probe of W",
+        };
+        let form = match self.m_block {
+            Some(b) => format!("{form} (M's largest diagonal block {b})"),
+            None => form,
         };
         writeln!(
             f,
@@ -206,10 +249,38 @@ impl fmt::Display for Structure {
 ///    skeleton reproduces it);
 /// 4. main, from the caller's point (not the warm-up's);
 /// 5. fallback ([`Settings::fallback`]), when main stops on a cap, a stall or a failure.
+///
+/// On a [`Structure::granular`] problem, at a tolerance of at least [`GRANULAR_MIN_TOL`], whose
+/// settings name Gauss–Seidel on Coulomb's law (pgs + fused) as the fallback of another main
+/// method (the default settings), the two
+/// change places: pgs + fused is the main method and the settings' main method its
+/// fallback, and there is no warm-up (it would be the main method's first sweeps).
+/// [`Plan::main_reason`] says so.
 pub fn choose(s: &Structure, settings: &Settings, cold: bool) -> Plan {
     let t = &settings.params.tuning;
+    let gauss_seidel = Method::new(crate::InnerKind::Pgs, crate::OuterKind::Fused);
+    let swapped = s.granular()
+        && settings.tol >= GRANULAR_MIN_TOL
+        && settings.fallback.map(Method::from) == Some(gauss_seidel)
+        && settings.main_method() != gauss_seidel;
+    let (main, fallback) = if swapped {
+        (gauss_seidel, Some(settings.main_method()))
+    } else {
+        (settings.main_method(), settings.fallback.map(Method::from))
+    };
+    let main_reason = swapped.then(|| {
+        format!(
+            "{gauss_seidel} first, {} as its fallback: a granular step ({} contacts ≥ {GRANULAR_MIN_CONTACTS}, \
+             global with M block diagonal in blocks ≤ {GRANULAR_MAX_BLOCK}, W symmetric, no rigid-body \
+             structure) at tol {:e} ≥ {GRANULAR_MIN_TOL:e}, where Gauss–Seidel on Coulomb's law is the \
+             faster method (docs/scaling.md)",
+            settings.main_method(),
+            s.contacts,
+            settings.tol,
+        )
+    });
     let mut steps = Vec::new();
-    if settings.params.warmup_sweeps > 0 {
+    if settings.params.warmup_sweeps > 0 && !swapped {
         steps.push(Step {
             kind: StepKind::Warmup,
             method: Some(Method::new(crate::InnerKind::Pgs, crate::OuterKind::Fused)),
@@ -247,19 +318,19 @@ pub fn choose(s: &Structure, settings: &Settings, cold: bool) -> Plan {
     };
     steps.push(Step {
         kind: StepKind::Main,
-        method: Some(settings.main_method()),
+        method: Some(main),
         budget: iterations,
         start: Start::Caller,
     });
-    if let Some(fallback) = settings.fallback {
+    if let Some(fallback) = fallback {
         steps.push(Step {
             kind: StepKind::Fallback,
-            method: Some(Method::from(fallback)),
+            method: Some(fallback),
             budget: iterations,
             start: Start::PreviousLast,
         });
     }
-    Plan { steps }
+    Plan { steps, main_reason }
 }
 
 #[cfg(test)]
@@ -278,6 +349,7 @@ mod tests {
             mu_range: (0.3, 0.3),
             mu_positive: true,
             rigid,
+            m_block: None,
         }
     }
 
@@ -312,5 +384,112 @@ mod tests {
         let text = choose(&structure(Rigid::Schur), &d, true).to_string();
         assert!(text.contains("2. interior point"), "{text}");
         assert!(text.contains("5. fallback"), "{text}");
+    }
+
+    /// A global problem of granular matter: 1 200 spheres, 2 000 contacts, 6 × 6 blocks of M.
+    fn granular() -> Structure {
+        Structure {
+            contacts: GRANULAR_MIN_CONTACTS * 2,
+            unknowns: GRANULAR_MIN_CONTACTS * 6,
+            dofs: Some(7200),
+            density: 1e-3,
+            m_block: Some(6),
+            ..structure(Rigid::No)
+        }
+    }
+
+    #[test]
+    fn a_granular_step_runs_gauss_seidel_first_and_other_problems_keep_their_plan() {
+        use StepKind::*;
+        let d = Settings {
+            tol: 1e-4,
+            ..Settings::default()
+        };
+        let gs = Method::new(InnerKind::Pgs, OuterKind::Fused);
+        let plan = choose(&granular(), &d, true);
+        let pairs: Vec<_> = plan.steps.iter().map(|s| (s.kind, s.method)).collect();
+        assert_eq!(
+            pairs,
+            [(Main, Some(gs)), (Fallback, Some(d.main_method()))],
+            "{plan}"
+        );
+        let text = plan.to_string();
+        assert!(
+            text.contains("main method: pgs+fused first") && text.contains("granular"),
+            "{text}"
+        );
+        // the other kinds keep the settings' order, with the warm-up and no reason
+        let default_order = |s: &Structure| {
+            let p = choose(s, &d, true);
+            assert!(p.main_reason.is_none(), "{p}");
+            let main = p.steps.iter().find(|s| s.kind == Main).unwrap();
+            assert_eq!(main.method, Some(d.main_method()), "{p}");
+            assert_eq!(p.steps[0].kind, Warmup, "{p}");
+        };
+        for other in [
+            // too few contacts
+            Structure {
+                contacts: GRANULAR_MIN_CONTACTS - 1,
+                ..granular()
+            },
+            // a deformable body: M not in body blocks
+            Structure {
+                m_block: Some(162),
+                ..granular()
+            },
+            // W not symmetric (gyroscopic M)
+            Structure {
+                symmetric: false,
+                ..granular()
+            },
+            // rigid bodies carrying many contacts each: the Schur complement applies
+            Structure {
+                rigid: Rigid::Schur,
+                ..granular()
+            },
+            // a local problem (no M to read)
+            Structure {
+                dofs: None,
+                m_block: None,
+                ..granular()
+            },
+        ] {
+            default_order(&other);
+        }
+        // a tight tolerance: the default order (the Newton end game of the main method)
+        let tight = Settings {
+            tol: GRANULAR_MIN_TOL / 10.0,
+            ..d.clone()
+        };
+        let p = choose(&granular(), &tight, true);
+        assert!(p.main_reason.is_none(), "{p}");
+        assert_eq!(p.steps[0].kind, Warmup, "{p}");
+        assert!(choose(
+            &granular(),
+            &Settings {
+                tol: GRANULAR_MIN_TOL,
+                ..d.clone()
+            },
+            true
+        )
+        .main_reason
+        .is_some());
+        // a method the caller chose runs as chosen: without the default fallback, or when
+        // the main method is Gauss–Seidel already
+        let alone = Settings {
+            tol: 1e-4,
+            ..Settings::method(InnerKind::Apgd, OuterKind::Anderson)
+        };
+        let p = choose(&granular(), &alone, true);
+        assert_eq!(p.steps.len(), 1);
+        assert_eq!(p.steps[0].method, Some(alone.main_method()));
+        let gs_main = Settings {
+            inner: InnerKind::Pgs,
+            outer: OuterKind::Fused,
+            ..d.clone()
+        };
+        let p = choose(&granular(), &gs_main, true);
+        assert!(p.main_reason.is_none());
+        assert_eq!(p.steps[0].kind, Warmup);
     }
 }

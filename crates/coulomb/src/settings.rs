@@ -468,7 +468,9 @@ impl Default for MethodParams {
 /// Gauss–Seidel sweeps on Coulomb's law, then APGD inside Anderson-mixed fixed-point
 /// iterations, a semismooth Newton end game on the whole law once the error is
 /// ≤ [`MethodParams::newton_start`] (1e-3), and fused Gauss–Seidel as fallback when the first
-/// stage stalls. [`Settings::paper`] is the paper's algorithm.
+/// stage stalls; on a step of granular matter ([`crate::plan::Structure::granular`]) the plan
+/// runs the fused Gauss–Seidel first and APGD + Anderson as its fallback
+/// ([`crate::plan::choose`]). [`Settings::paper`] is the paper's algorithm.
 ///
 /// With the `serde` feature its JSON keeps every field of [`MethodParams`] at the top level,
 /// next to `tol` and the limits, in the order of the layout before the parameters moved down
@@ -487,7 +489,8 @@ pub struct Settings {
     /// outer iteration of the main method
     pub outer: OuterKind,
     /// a second (inner, outer) method, warm-started from the first one's r, run when the first
-    /// stops without converging (iteration cap, inner failure, or stalled: the error no longer
+    /// stops without converging (pgs + fused here and another main method: the two change
+    /// places on a granular step, [`crate::plan::choose`]) (iteration cap, inner failure, or stalled: the error no longer
     /// halves over [`Tuning::stall_window`] outer iterations); the time limit covers both
     pub fallback: Option<(InnerKind, OuterKind)>,
     /// cap on outer iterations (subproblems)

@@ -53,11 +53,15 @@ fn structure_of(form: &Form<'_>, settings: &Settings) -> Structure {
     let local = form.local();
     let m = local.q.len();
     let bp = &settings.params.tuning.barrier;
-    let (dofs, rigid) = match &form.stored {
+    let (dofs, rigid, m_block) = match &form.stored {
         Stored::Global(g, _) => {
             let n = g.m.nrows;
             let schur = n <= bp.max_schur_dofs && 2 * n <= m;
-            (Some(n), if schur { Rigid::Schur } else { Rigid::No })
+            (
+                Some(n),
+                if schur { Rigid::Schur } else { Rigid::No },
+                Some(largest_diagonal_block(&g.m)),
+            )
         }
         Stored::Local(_) => (
             None,
@@ -66,6 +70,7 @@ fn structure_of(form: &Form<'_>, settings: &Settings) -> Structure {
             } else {
                 Rigid::No
             },
+            None,
         ),
     };
     let mu = &local.mu;
@@ -91,7 +96,37 @@ fn structure_of(form: &Form<'_>, settings: &Settings) -> Structure {
         mu_range,
         mu_positive: !mu.is_empty() && mu.iter().all(|&x| x > 0.0 && x.is_finite()),
         rigid,
+        m_block,
     }
+}
+
+/// The size of the largest diagonal block of the square matrix `m` in the finest partition of
+/// its indices into consecutive blocks that no stored entry crosses (1 for a diagonal
+/// matrix, n for a matrix coupling its first and last index): each stored entry (i, j) joins
+/// the indices between i and j.
+fn largest_diagonal_block(m: &CscMatrix) -> usize {
+    let n = m.ncols.min(m.nrows);
+    // joins[k] > 0: indices k and k + 1 are in one block (a difference array over entries)
+    let mut joins = vec![0i64; n + 1];
+    for j in 0..n {
+        for &i in &m.row_idx[m.col_ptr[j]..m.col_ptr[j + 1]] {
+            let (lo, hi) = (i.min(j), i.max(j).min(n - 1));
+            if lo < hi {
+                joins[lo] += 1;
+                joins[hi] -= 1;
+            }
+        }
+    }
+    let (mut largest, mut run, mut open) = (0, 0, 0i64);
+    for &d in joins.iter().take(n) {
+        run += 1;
+        open += d;
+        if open == 0 {
+            largest = largest.max(run);
+            run = 0;
+        }
+    }
+    largest.max(run)
 }
 
 /// The inner solvers of a [`Solver`], each set up for the problem's (d, W, μ) when first
@@ -519,6 +554,29 @@ mod tests {
             }
         }
         LocalProblem::new(3, CscMatrix::from_dense(6, 6, &w), q, vec![0.3, 0.5]).unwrap()
+    }
+
+    /// The blocks of M the plan reads: a diagonal matrix, two 2 × 2 blocks and one 3 × 3
+    /// whose coupling is stored only above the diagonal, and a matrix that couples its ends.
+    #[test]
+    fn the_largest_diagonal_block_of_m() {
+        let dense = |n: usize, entries: &[(usize, usize)]| {
+            let mut a = vec![0.0; n * n];
+            for i in 0..n {
+                a[i * n + i] = 2.0;
+            }
+            for &(i, j) in entries {
+                a[i * n + j] = 0.5;
+            }
+            CscMatrix::from_dense(n, n, &a)
+        };
+        assert_eq!(largest_diagonal_block(&dense(5, &[])), 1);
+        assert_eq!(
+            largest_diagonal_block(&dense(7, &[(0, 1), (1, 0), (2, 3), (3, 2), (4, 6)])),
+            3
+        );
+        assert_eq!(largest_diagonal_block(&dense(6, &[(5, 0)])), 6);
+        assert_eq!(largest_diagonal_block(&dense(0, &[])), 0);
     }
 
     /// A stop requested before or during a solve ends it with `Interrupted`, never with a

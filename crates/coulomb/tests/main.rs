@@ -13,6 +13,7 @@ mod fclib_corrupt;
 mod fclib_read;
 mod fclib_roundtrip;
 mod fuzz;
+mod plan_granular;
 mod inner_clarabel;
 mod reliability;
 mod settings_json;

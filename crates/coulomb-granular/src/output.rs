@@ -22,30 +22,12 @@ pub const BEADS_NAMES: [&str; 3] = ["beads.pvd", "contacts.pvd", "obstacles.pvd"
 /// The collections a rigid run writes beside `frames/`.
 pub const BODIES_NAMES: [&str; 3] = ["bodies.pvd", "contacts.pvd", "obstacles.pvd"];
 
-/// Header of the per-step CSV.
-pub const CSV_HEADER: &str = "step,time,contacts,subproblems,inner_iterations,solve_ms,assembly_ms,delassus_ms,error,rule_6_1,status,converged,kinetic_energy,potential_energy,max_penetration,warm_started";
+pub use crate::report::CSV_HEADER;
 
-/// One CSV line of a step's statistics.
+/// The `stats.csv` row of a sphere step ([`crate::report::StepRecord`], the columns of every
+/// scene).
 pub fn csv_line(s: &StepStats) -> String {
-    format!(
-        "{},{:.6},{},{},{},{:.4},{:.4},{:.4},{:.6e},{:.6e},{},{},{:.9e},{:.9e},{:.6e},{}",
-        s.step,
-        s.time,
-        s.contacts,
-        s.subproblems,
-        s.inner_iterations,
-        s.solve_ms,
-        s.assembly_ms,
-        s.delassus_ms,
-        s.error,
-        s.rule_6_1,
-        s.status,
-        s.converged,
-        s.kinetic_energy,
-        s.potential_energy,
-        s.max_penetration,
-        s.warm_started
-    )
+    crate::report::StepRecord::of_spheres(s).csv_line()
 }
 
 /// Writes `stats.csv` and `stats.json` in `dir`.

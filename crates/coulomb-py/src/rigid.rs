@@ -104,35 +104,37 @@ impl PyRigidSimulation {
         build(py, built.model)
     }
 
-    /// One time step; its report (`coulomb_granular::rigid::RigidStepReport`) as a dict.
+    /// One time step; its record (`coulomb_granular::StepRecord`, the same keys for every
+    /// scene) as a dict.
     fn step<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let scene = &mut self.scene;
         let r = py
             .detach(move || scene.step())
             .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-        let json = serde_json::to_value(&r)
-            .map_err(|e| PyRuntimeError::new_err(format!("cannot serialize the report: {e}")))?;
-        convert::json_to_py(py, &json)
+        let record =
+            coulomb_granular::StepRecord::of_rigid(&r, self.scene.world.potential_energy());
+        crate::granular::record_to_py(py, &record)
     }
 
-    /// `n` steps at once (GIL released); their reports.
+    /// `n` steps at once (GIL released); their records (as [`Self::step`]).
     fn run<'py>(&mut self, py: Python<'py>, n: usize) -> PyResult<Bound<'py, PyList>> {
         // one step at a time without the GIL, the signals checked between steps: Ctrl-C
         // raises KeyboardInterrupt after the step in progress (the steps taken stay taken)
-        let mut reports = Vec::with_capacity(n.min(1 << 20));
+        let mut records = Vec::with_capacity(n.min(1 << 20));
         for _ in 0..n {
             let scene = &mut self.scene;
             let r = py
                 .detach(move || scene.step())
                 .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-            reports.push(r);
+            records.push(coulomb_granular::StepRecord::of_rigid(
+                &r,
+                self.scene.world.potential_energy(),
+            ));
             py.check_signals()?;
         }
         let out = PyList::empty(py);
-        for r in reports {
-            let json = serde_json::to_value(&r)
-                .map_err(|e| PyRuntimeError::new_err(format!("cannot serialize: {e}")))?;
-            out.append(convert::json_to_py(py, &json)?)?;
+        for r in &records {
+            out.append(crate::granular::record_to_py(py, r)?)?;
         }
         Ok(out)
     }

@@ -44,27 +44,6 @@ struct RigidSummary {
     signal: Option<String>,
 }
 
-/// Header of a rigid run's `stats.csv`.
-pub const RIGID_CSV_HEADER: &str = "step,time,status,error,contacts,loaded_contacts,warm_started,sweeps,method,max_penetration,kinetic_energy";
-
-/// One row of a rigid run's `stats.csv`.
-fn rigid_csv_line(r: &coulomb_granular::rigid::RigidStepReport) -> anyhow::Result<String> {
-    Ok(format!(
-        "{},{:.6},{},{:.6e},{},{},{},{},{},{:.6e},{:.9e}",
-        r.step,
-        r.time,
-        serde_json::to_value(r.status)?.as_str().unwrap_or(""),
-        r.error,
-        r.contacts,
-        r.loaded_contacts,
-        r.warm_started,
-        r.sweeps,
-        r.method,
-        r.max_penetration,
-        r.kinetic_energy
-    ))
-}
-
 /// Runs the rigid scene of `scene` with the run settings `a` (the file's, completed by the
 /// command line: [`crate::scene_arg`]).
 pub fn run(a: &Args, scene: &BuiltScene, inputs: &[PathBuf]) -> anyhow::Result<Outcome> {
@@ -144,7 +123,7 @@ fn steps(
         a,
         RunKind::Rigid,
         &BODIES_NAMES,
-        RIGID_CSV_HEADER,
+        coulomb_granular::report::CSV_HEADER,
         inputs,
         restarted.then_some(first),
     )?;
@@ -194,7 +173,9 @@ fn steps(
                 .step()
                 .with_context(|| format!("{name}: time step failed"))?;
             if let Some(o) = out.as_mut() {
-                let line = rigid_csv_line(&r)?;
+                let line =
+                    coulomb_granular::StepRecord::of_rigid(&r, rigid.world.potential_energy())
+                        .csv_line();
                 o.row(&line)
                     .map_err(write_failed(o.dir.path(), "stats.csv"))?;
             }

@@ -30,9 +30,10 @@ __all__ = ["SCENES", "Motion", "Region", "Scene", "Simulation", "SimulationResul
 #: the scenes of ``coulomb_granular::Scene``
 SCENES = ("box", "funnel", "vibrating-plate", "rotating-drum")
 
-#: per-step statistics (``coulomb_granular::StepStats``): step, time, contacts, subproblems
-#: (outer iterations), inner_iterations, solve_ms, assembly_ms, error (docs/error.md),
-#: rule_6_1, status, converged, kinetic_energy, potential_energy, max_penetration, ...
+#: one step's record (``coulomb_granular::StepRecord``), the same keys for every scene (sphere
+#: or rigid) and the columns of ``stats.csv`` (docs/python.md): step, time, status, converged,
+#: error (docs/error.md), contacts, warm_started, iterations, solve_seconds, kinetic_energy,
+#: potential_energy, max_penetration
 StepStats = Dict[str, Any]
 
 

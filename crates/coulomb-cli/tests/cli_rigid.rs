@@ -77,6 +77,16 @@ fn the_incline_runs_with_frames_stats_and_fclib_dumps() {
     };
     assert_eq!(header(&out), header(&spheres));
     assert_eq!(header(&out), coulomb_granular::report::CSV_HEADER);
+    // one frames file name for every scene (issue 52): bodies.pvd, frames/bodies_*.vtp
+    for d in [&out, &spheres] {
+        assert!(d.join("bodies.pvd").is_file() && !d.join("beads.pvd").exists());
+    }
+    assert!(spheres.join("frames/bodies_000002.vtp").is_file());
+    let glyphs = std::fs::read(spheres.join("frames/bodies_000002.vtp")).unwrap();
+    assert!(
+        String::from_utf8_lossy(&glyphs).contains("Name=\"radius\""),
+        "spheres as points with a radius array"
+    );
     let rigid = std::fs::read_to_string(out.join("stats.csv")).unwrap();
     let last: Vec<&str> = rigid.lines().last().unwrap().split(',').collect();
     assert_eq!(last.len(), 12, "{last:?}");

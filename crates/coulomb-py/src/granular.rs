@@ -516,7 +516,7 @@ impl PySimulation {
     }
 
     /// Writes the current state as a ParaView frame into the folder `dir` with the writer of
-    /// `coulomb simulate --output` (`frames/beads_KKKKKK.vtp`, contacts, obstacles and the
+    /// `coulomb simulate --output` (`frames/bodies_KKKKKK.vtp`, contacts, obstacles and the
     /// `.pvd` collections; links and special files there refused, nothing written through a
     /// link: `coulomb_granular::output_dir`). Called again with the same folder, the frame is
     /// added to its collections; with another folder, new collections start there.

@@ -5,7 +5,7 @@
 use crate::exit::Outcome;
 use crate::sim_args::Args;
 use anyhow::{bail, Context};
-use coulomb_granular::output::{csv_line, VtkWriter, BEADS_NAMES, CSV_HEADER};
+use coulomb_granular::output::{csv_line, VtkWriter, BODIES_NAMES, CSV_HEADER};
 use coulomb_granular::output_dir::{RunKind, RunOutput};
 use coulomb_granular::run::RestMonitor;
 use coulomb_granular::{CheckpointError, Scene, Simulation, Summary};
@@ -174,7 +174,7 @@ pub(crate) fn steps(
     let mut out = open_outputs(
         args,
         RunKind::Spheres,
-        &BEADS_NAMES,
+        &BODIES_NAMES,
         CSV_HEADER,
         inputs,
         restarted.then_some(first_step as u64),
@@ -192,7 +192,7 @@ pub(crate) fn steps(
     });
     let frame_failed = |k: usize| {
         let dir = args.output.clone().unwrap_or_default();
-        write_failed(&dir, &format!("frames/beads_{k:06}.vtp"))
+        write_failed(&dir, &format!("frames/bodies_{k:06}.vtp"))
     };
     if let Some(w) = vtk.as_mut() {
         w.frame(&sim).map_err(frame_failed(sim.steps_done))?;

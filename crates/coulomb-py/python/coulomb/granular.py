@@ -879,8 +879,8 @@ class Simulation:
     def write_frames(self, dir: Union[str, "os.PathLike[str]"]) -> None:
         """Writes the current state as a ParaView frame into the folder ``dir`` (created), with
         the writer of ``coulomb simulate --output``: ``frames/*.vtp`` and the ``.pvd``
-        collections (``beads.pvd`` or, for bodies of other shapes, ``bodies.pvd``; with
-        ``contacts.pvd`` and ``obstacles.pvd``). Called again with the same folder, the frame
+        collections (``bodies.pvd`` for every scene: spheres as points with a ``radius``
+        array, other shapes as polygons; with ``contacts.pvd`` and ``obstacles.pvd``). Called again with the same folder, the frame
         is added to the collections (call it after each :meth:`run`). A link, folder or
         special file where one of these files goes is refused with ``ValueError``; nothing is
         written through a link (docs/outputs-and-signals.md)."""

@@ -10,7 +10,7 @@ use coulomb_granular::rigid_scene::RigidScene;
 use coulomb_granular::scene_file::{BuildOptions, LoadedScene};
 use coulomb_granular::SceneModel;
 use numpy::{PyArray1, PyArrayMethods};
-use pyo3::exceptions::{PyRuntimeError, PyTypeError};
+use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::path::PathBuf;
@@ -155,6 +155,41 @@ impl PyRigidSimulation {
     #[getter]
     fn velocities<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
         rows(py, &self.scene.world.velocities())
+    }
+
+    /// Radii, (n,): a sphere body's radius, NaN for every other shape (a radius that is not
+    /// the shape's would mislead whoever sizes glyphs or packing fractions with it).
+    #[getter]
+    fn radii<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        let r = self.scene.shapes.iter().map(|s| match s {
+            coulomb_granular::shape::BodyShape::Sphere { radius } => *radius,
+            _ => f64::NAN,
+        });
+        PyArray1::from_iter(py, r).into_any()
+    }
+
+    /// Masses, (n,).
+    #[getter]
+    fn masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        PyArray1::from_vec(py, self.scene.world.masses()).into_any()
+    }
+
+    /// Replaces the velocities of the centres of mass (flattened (n, 3), finite; a fixed
+    /// body's must be 0).
+    fn set_velocities(&mut self, v: numpy::PyReadonlyArray1<'_, f64>) -> PyResult<()> {
+        let s = convert::slice("velocities", &v)?;
+        if s.len() != 3 * self.scene.world.len() {
+            return Err(PyValueError::new_err(format!(
+                "velocities: expected shape ({}, 3), got {} entries",
+                self.scene.world.len(),
+                s.len()
+            )));
+        }
+        let rows: Vec<[f64; 3]> = s.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        self.scene
+            .world
+            .set_velocities(&rows)
+            .map_err(|e| PyValueError::new_err(format!("velocities: {e}")))
     }
 
     /// Angular velocities (world frame), (n, 3).

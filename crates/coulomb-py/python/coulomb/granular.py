@@ -811,7 +811,8 @@ class Simulation:
 
     @property
     def velocities(self) -> np.ndarray:
-        """Sphere velocities at t_k, shape (n, 3) (a copy)."""
+        """Velocities at t_k of the sphere centres (in a rigid-body scene, of the bodies'
+        centres of mass), shape (n, 3) (a copy)."""
         return self._sim.velocities
 
     @property
@@ -821,12 +822,13 @@ class Simulation:
 
     @property
     def radii(self) -> np.ndarray:
-        """Radii, shape (n,)."""
+        """Radii, shape (n,); in a rigid-body scene a sphere body's radius and NaN for every
+        other shape (it has no radius)."""
         return self._sim.radii
 
     @property
     def masses(self) -> np.ndarray:
-        """Masses, shape (n,)."""
+        """Masses, shape (n,) (every scene)."""
         return self._sim.masses
 
     @property
@@ -845,7 +847,9 @@ class Simulation:
         return self._sim.params
 
     def set_velocities(self, v: Any) -> None:
-        """Replaces the sphere velocities (shape (n, 3), finite) before the next step."""
+        """Replaces the velocities (shape (n, 3), finite) before the next step: of the sphere
+        centres, or in a rigid-body scene of the bodies' centres of mass (a fixed body's must
+        stay 0); ``ValueError`` otherwise, nothing changed."""
         self._sim.set_velocities(np.ascontiguousarray(v, dtype=np.float64).ravel())
 
     def set_positions(self, x: Any) -> None:

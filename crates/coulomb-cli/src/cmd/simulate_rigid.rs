@@ -115,11 +115,11 @@ fn steps(
     restarted: bool,
     inputs: &[PathBuf],
 ) -> anyhow::Result<Outcome> {
-    use crate::cmd::simulate::{write_checkpoint_bytes, write_failed};
+    use crate::run_output::{write_checkpoint_bytes, write_failed};
     crate::interrupt::install().context("installing the SIGINT/SIGTERM handlers")?;
     let first = rigid.world.steps();
-    // every output checked before anything is created or computed (cmd::simulate::steps)
-    let mut out = crate::cmd::simulate::open_outputs(
+    // every output checked before anything is created or computed (run_output::open_outputs)
+    let mut out = crate::run_output::open_outputs(
         a,
         RunKind::Rigid,
         &BODIES_NAMES,
@@ -180,7 +180,7 @@ fn steps(
                     .map_err(write_failed(o.dir.path(), "stats.csv"))?;
             }
             if let (Some(dir), Some(p)) = (&a.dump_fclib, rigid.world.last_problem()) {
-                crate::cmd::simulate::dump_fclib(dir, k, p)?;
+                crate::run_output::dump_fclib(dir, k, p)?;
             }
             if let Some(w) = vtk.as_mut() {
                 if a.frames_every > 0 && (k + 1) % a.frames_every == 0 {
@@ -283,7 +283,7 @@ fn steps(
     }
     if let Some(o) = out.as_mut() {
         let text = rigid_json(o, reports)?;
-        crate::cmd::simulate::write_stats_json(o, &text)?;
+        crate::run_output::write_stats_json(o, &text)?;
         // the end state, unless the last step just wrote it; an interrupted run always
         // leaves one, to be resumed with --restart
         let written = !reports.is_empty()
@@ -292,7 +292,7 @@ fn steps(
         if (a.checkpoint_every > 0 || interrupted.is_some()) && !written {
             write_checkpoint_bytes(o, rigid.world.steps(), rigid.checkpoint_bytes())?;
         }
-        crate::cmd::simulate::write_summary(o, &crate::outputs::json(&summary, true)?)?;
+        crate::run_output::write_summary(o, &crate::outputs::json(&summary, true)?)?;
     }
     if a.json {
         println!("{}", crate::outputs::json(&summary, false)?);

@@ -101,3 +101,33 @@ pub(crate) fn dump_fclib(
     });
     crate::outputs::write_fclib(&path, &file)
 }
+
+/// Where a run stopped, for [`finish`].
+pub(crate) struct RunEnd {
+    /// steps done k at the end (the checkpoint's step)
+    pub steps_done: u64,
+    /// whether this run took a step
+    pub stepped: bool,
+    /// whether a signal stopped the run
+    pub interrupted: bool,
+}
+
+/// The end of a run's outputs, the same for every engine: `stats.json` (`stats_json`), the end
+/// state's checkpoint (`checkpoint`) unless the last step just wrote it — an interrupted run
+/// always leaves one, to be resumed with `--restart` — and `summary.json` (`summary_json`).
+pub(crate) fn finish(
+    out: &mut RunOutput,
+    args: &Args,
+    end: RunEnd,
+    checkpoint: impl FnOnce() -> Result<Vec<u8>, CheckpointError>,
+    stats_json: &str,
+    summary_json: &str,
+) -> anyhow::Result<()> {
+    write_stats_json(out, stats_json)?;
+    let every = args.checkpoint_every as u64;
+    let written = end.stepped && every > 0 && end.steps_done % every == 0;
+    if (every > 0 || end.interrupted) && !written {
+        write_checkpoint_bytes(out, end.steps_done, checkpoint())?;
+    }
+    write_summary(out, summary_json)
+}

@@ -4,7 +4,7 @@
 
 use crate::exit::Outcome;
 use crate::run_output::{
-    dump_fclib, open_outputs, write_checkpoint_bytes, write_failed, write_stats_json, write_summary,
+    dump_fclib, finish, open_outputs, write_checkpoint_bytes, write_failed, RunEnd,
 };
 use crate::sim_args::Args;
 use anyhow::{bail, Context};
@@ -213,16 +213,20 @@ pub(crate) fn steps(
         let text = o
             .json_text(&stats)
             .map_err(write_failed(o.dir.path(), "stats.json"))?;
-        write_stats_json(o, &text)?;
-        // the end state, unless the last step just wrote it; an interrupted run always
-        // leaves one, to be resumed with --restart
-        let written = !stats.is_empty()
-            && args.checkpoint_every > 0
-            && sim.steps_done % args.checkpoint_every == 0;
-        if (args.checkpoint_every > 0 || interrupted.is_some()) && !written {
-            write_checkpoint_bytes(o, sim.steps_done as u64, sim.checkpoint_bytes())?;
-        }
-        write_summary(o, &crate::outputs::json(&summary, true)?)?;
+        let end = RunEnd {
+            steps_done: sim.steps_done as u64,
+            stepped: !stats.is_empty(),
+            interrupted: interrupted.is_some(),
+        };
+        let summary_json = crate::outputs::json(&summary, true)?;
+        finish(
+            o,
+            args,
+            end,
+            || sim.checkpoint_bytes(),
+            &text,
+            &summary_json,
+        )?;
     }
     let (extra, note) = hook.report();
     if args.json {

@@ -283,16 +283,13 @@ fn steps(
     }
     if let Some(o) = out.as_mut() {
         let text = rigid_json(o, reports)?;
-        crate::run_output::write_stats_json(o, &text)?;
-        // the end state, unless the last step just wrote it; an interrupted run always
-        // leaves one, to be resumed with --restart
-        let written = !reports.is_empty()
-            && a.checkpoint_every > 0
-            && rigid.world.steps() as usize % a.checkpoint_every == 0;
-        if (a.checkpoint_every > 0 || interrupted.is_some()) && !written {
-            write_checkpoint_bytes(o, rigid.world.steps(), rigid.checkpoint_bytes())?;
-        }
-        crate::run_output::write_summary(o, &crate::outputs::json(&summary, true)?)?;
+        let end = crate::run_output::RunEnd {
+            steps_done: rigid.world.steps(),
+            stepped: !reports.is_empty(),
+            interrupted: interrupted.is_some(),
+        };
+        let summary_json = crate::outputs::json(&summary, true)?;
+        crate::run_output::finish(o, a, end, || rigid.checkpoint_bytes(), &text, &summary_json)?;
     }
     if a.json {
         println!("{}", crate::outputs::json(&summary, false)?);

@@ -10,14 +10,11 @@
 //! constraint's gap g_α and normal n_α evaluated *exactly* at the current positions (sphere
 //! distance, plane, rectangle, inside of a cylinder), so that curved walls are handled without
 //! linearisation: λ_α ← max(0, λ_α − g_α / w_α), w_α = 1/m_A + 1/m_B, the centres moved by
-//! ±n_α Δλ_α / m. The normal of a sphere contact passes through the centres, so rotations are
-//! untouched. The correction starts only when some penetration exceeds `trigger` and stops
-//! when every penetration is below `target` (or after `max_sweeps`).
+//! ±n_α Δλ_α / m. The normal of a sphere contact passes through the centres, so rotations and
+//! velocities are untouched. The correction starts only when some penetration exceeds
+//! `trigger` and stops when every penetration is below `target` (or after `max_sweeps`).
 //!
-//! Positions only: the velocities v_{k+1} that the step's impulses produced (2.5) are left as
-//! they are, so that the correction carries no load — the impulses written out balance the
-//! weight and the walls' loads (issue 52; the rigid engine's correction does the same). The
-//! projection changes the potential energy by W_p = −Σ m g·Δx (reported as
+//! The projection changes the potential energy by W_p = −Σ m g·Δx (reported as
 //! [`ProjectionStats::work`]): the energy balance of a step is then
 //! E_{k+1} − E_k = (dissipation of the velocity step, ≤ 0) + W_p (docs/granular.md).
 
@@ -36,6 +33,10 @@ pub struct Projection {
     pub target: f64,
     /// cap on Gauss–Seidel sweeps
     pub max_sweeps: usize,
+    /// balance the potential energy ΔE_p a moving bead gains (or loses) by the correction with
+    /// its own kinetic energy E_k: v and ω scaled by √(1 − ΔE_p / E_k), at most down to rest,
+    /// so that the correction neither feeds nor drains the energy of moving beads
+    pub conserve_energy: bool,
 }
 
 impl Default for Projection {
@@ -45,6 +46,7 @@ impl Default for Projection {
             trigger: 1e-3,
             target: 1e-4,
             max_sweeps: 200,
+            conserve_energy: true,
         }
     }
 }
@@ -58,8 +60,8 @@ pub struct ProjectionStats {
     pub max_after: f64,
     /// sweeps done (0: nothing to correct)
     pub sweeps: usize,
-    /// change of potential energy caused by the correction (J): −Σ m g·Δx (the kinetic
-    /// energy is untouched)
+    /// change of kinetic + potential energy caused by the correction (J): −Σ m g·Δx, less the
+    /// kinetic energy taken back with `conserve_energy`
     pub work: f64,
 }
 
@@ -374,7 +376,21 @@ pub fn project_measured(
     for ((b, x0), x) in world.bodies.iter_mut().zip(&start).zip(&pos) {
         b.position = *x;
         moved = moved.max((*x - *x0).norm());
-        work += -b.mass * gravity.dot(b.position - *x0);
+        let gained = -b.mass * gravity.dot(b.position - *x0);
+        work += gained;
+        if settings.conserve_energy && gained != 0.0 {
+            let ke = b.kinetic_energy();
+            if ke > 0.0 {
+                let f = (1.0 - gained / ke).max(0.0).sqrt();
+                if !f.is_finite() {
+                    // ke so small (a bead held at rest) that gained / ke overflows: no rescale
+                    continue;
+                }
+                work -= ke * (1.0 - f * f);
+                b.velocity = b.velocity * f;
+                b.angular_velocity = b.angular_velocity * f;
+            }
+        }
     }
     stats.work = work;
     let world_ref: &World = world;

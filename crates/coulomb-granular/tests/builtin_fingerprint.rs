@@ -2,10 +2,8 @@
 //! give the same numbers bit for bit as before the scene model (issue 40): the fingerprints
 //! below are FNV-1a hashes of every f64 bit of the positions, velocities and angular
 //! velocities after the steps, RECORDED FROM THE PREVIOUS IMPLEMENTATION (the hand-built
-//! scenes of `scene.rs` and the global μ, e of `Params`) before the scene model was written,
-//! and recorded again once, on purpose, when the position correction stopped rescaling the
-//! velocities (issue 52, bug 4). Hard-coding them is deliberate: this is a regression test
-//! against that implementation.
+//! scenes of `scene.rs` and the global μ, e of `Params`) before the scene model was written.
+//! Hard-coding them is deliberate: this is a regression test against that implementation.
 
 use coulomb::{InnerKind, Method, MethodParams, OuterKind, Settings};
 use coulomb_granular::{
@@ -78,16 +76,12 @@ fn builtin_scenes_are_unchanged_bit_for_bit() {
         fingerprint(Scene::RotatingDrum, 150, 10),
     ];
     println!("fingerprints: {got:#018x?}");
-    // recorded from the implementation before the scene model (commit d2d3faf), then once
-    // again when the position correction stopped rescaling velocities (issue 52, bug 4: the
-    // rescaling carried part of the weight; docs/granular.md, "Position correction"). The
-    // fingerprints of d2d3faf were 0xc8e5_7167_2770_5352, 0xd0ad_7798_74cc_2cb6,
-    // 0x77c2_9b29_635c_b42a, 0x0507_a309_08e7_fd9c.
+    // recorded from the implementation before the scene model (commit d2d3faf)
     let want: [u64; 4] = [
-        0x6e9c_27cb_93f6_d22c,
-        0x7cdf_a4af_b637_ee0a,
-        0x828c_90a6_1e61_884e,
-        0x521b_d136_a30b_d704,
+        0xc8e5_7167_2770_5352,
+        0xd0ad_7798_74cc_2cb6,
+        0x77c2_9b29_635c_b42a,
+        0x0507_a309_08e7_fd9c,
     ];
     assert_eq!(got, want);
 }

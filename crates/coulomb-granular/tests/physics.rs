@@ -297,10 +297,7 @@ fn a_sphere_at_rest_just_above_the_floor_settles_unless_elastic() {
         let (touched, gap, de) = run(e);
         eprintln!("e = {e}: touched after {touched:?} steps, final gap {gap:.2e} m, ΔE {de:.2e} J");
         assert!(touched.is_some_and(|k| k <= 25), "e = {e}: {touched:?}");
-        // at rest within the position correction's trigger (0.1 % R): the correction moves
-        // positions only, so a bead that lands keeps the velocity of its impact law and may
-        // settle up to the trigger into the floor (measured 3.2e-5 m for e = 0.2)
-        assert!(gap.abs() <= 1e-3 * r, "e = {e}: {gap}");
+        assert!(gap.abs() < 1e-6, "e = {e}: {gap}");
         assert!(de < 0.0, "e = {e}: {de}");
     }
     // e = 1: held at the gap, energy conserved (the micro-bounce it stands for is elastic)
@@ -312,10 +309,9 @@ fn a_sphere_at_rest_just_above_the_floor_settles_unless_elastic() {
 
 #[test]
 fn position_correction_of_a_bead_at_rest_keeps_finite_velocities() {
-    // a bead held at rest (as with rolling resistance) has a kinetic energy so small that an
-    // energy-conserving rescale √(1 − W_p/E_k) (the correction's before issue 52) overflowed
-    // when the correction lowered it; the velocities must stay finite (found by the rolling
-    // box of docs/validation.md)
+    // a bead held at rest (as with rolling resistance) has a kinetic energy so small that the
+    // energy-conserving rescale √(1 − W_p/E_k) overflows when the correction lowers it; the
+    // velocities must stay finite (found by the rolling box of docs/validation.md)
     let mut w = World::new();
     w.gravity = Vec3::new(0.0, 0.0, -9.81);
     let mut lower = Sphere::new(Vec3::new(0.0, 0.0, 0.0), 0.05, 1.0);

@@ -32,9 +32,9 @@ for l in layers:
     rows = list(csv.DictReader(open(f"{out}/l{l}/stats.csv")))[-30:]
     s = json.load(open(f"{out}/l{l}.json"))
     c = sum(float(r["contacts"]) for r in rows) / len(rows)
-    sw = [float(r["inner_iterations"]) for r in rows]
-    ns = 1e6 * sum(float(r["solve_ms"]) for r in rows) / sum(
-        float(r["contacts"]) * float(r["inner_iterations"]) for r in rows)
+    sw = [float(r["iterations"]) for r in rows]
+    ns = 1e6 * sum(1e3 * float(r["solve_seconds"]) for r in rows) / sum(
+        float(r["contacts"]) * float(r["iterations"]) for r in rows)
     print(f"| {l} | {400 * int(l)} | {c:.0f} | {sum(sw)/len(sw):.0f} ({max(sw):.0f}) | "
           f"{s['converged_steps']}/{s['steps']} | {ns:.0f} |")
 PY

@@ -5,7 +5,7 @@ single-process spread (docs/distributed.md, "2 000-bead box").
     python3 scripts/distributed-stats.py [--window A B] [--radius R] RUN_DIR...
 
 RUN_DIR: an --output folder of `coulomb simulate` (one process) or of `mpirun … coulomb
-simulate` (the ranks' pieces frames/beads_KKKKKK_R.vtp are joined). Reads stats.json and the
+simulate` (the ranks' pieces frames/bodies_KKKKKK_R.vtp are joined). Reads stats.json and the
 last bead frame (ascii .vtp). Prints one markdown row per run, then, for each statistic, the
 spread of the runs whose folder name starts with "sp" (single process) and where each other
 run falls in it (in standard deviations and relative to the mean). Needs numpy.
@@ -28,13 +28,13 @@ import numpy as np
 
 def frame(run):
     """Positions and radii of the last bead frame (all ranks' pieces joined)."""
-    files = glob.glob(f"{run}/frames/beads_*.vtp")
-    steps = sorted({int(re.search(r"beads_(\d{6})", f).group(1)) for f in files})
+    files = glob.glob(f"{run}/frames/bodies_*.vtp")
+    steps = sorted({int(re.search(r"bodies_(\d{6})", f).group(1)) for f in files})
     if not steps:
         return None, None, None
     k = steps[-1]
-    pieces = sorted(glob.glob(f"{run}/frames/beads_{k:06d}.vtp")) or sorted(
-        glob.glob(f"{run}/frames/beads_{k:06d}_*.vtp"))
+    pieces = sorted(glob.glob(f"{run}/frames/bodies_{k:06d}.vtp")) or sorted(
+        glob.glob(f"{run}/frames/bodies_{k:06d}_*.vtp"))
     pos, rad = [], []
     for f in pieces:
         t = open(f).read()

@@ -51,9 +51,9 @@ for n in sizes:
     # so that other jobs on the machine inflate it less)
     late = rows[len(rows) // 2:]
     c = sum(float(r["contacts"]) for r in late) / len(late)
-    sw = [float(r["inner_iterations"]) for r in late]
+    sw = [float(r["iterations"]) for r in late]
     per_c = 1e6 * cpu / sum(float(r["contacts"]) for r in rows)
-    per_cs = 1e9 * cpu / sum(float(r["contacts"]) * float(r["inner_iterations"]) for r in rows)
+    per_cs = 1e9 * cpu / sum(float(r["contacts"]) * float(r["iterations"]) for r in rows)
     fr = sum(os.path.getsize(f"{out}/run{n}/frames/{f}") for f in os.listdir(f"{out}/run{n}/frames"))
     print(f"| {int(n):,} | {c:,.0f} | {sum(sw)/len(sw):.1f} ({max(sw):.0f}) | "
           f"{s['converged_steps']}/{s['steps']} | {s['max_error']:.1e} | {cpu:.0f} | "

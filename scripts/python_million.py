@@ -75,7 +75,7 @@ def main() -> int:
     cpu = time.process_time() - cpu1
     rss_mib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     contact_steps = sum(s["contacts"] for s in stats)
-    sweeps = sum(s["inner_iterations"] for s in stats)
+    sweeps = sum(s["iterations"] for s in stats)
     row = {
         "beads": a.beads,
         "steps": a.steps,

@@ -54,7 +54,7 @@ for n in sizes:
         runs = [list(map(float, open(f"{out}/n{n}-t{t}-r{k}.time").read().split()))
                 for k in range(1, repeat + 1)]
         best[t] = (min(r[0] for r in runs), min(r[1] + r[2] for r in runs))
-    frame = f"frames/beads_{steps:06d}.vtp"
+    frame = f"frames/bodies_{steps:06d}.vtp"
     ref = f"{out}/n{n}-t1-r1"
     for t in (1, 2):
         same = all(

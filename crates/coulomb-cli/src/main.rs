@@ -9,6 +9,7 @@ mod interrupt;
 mod method;
 mod progress;
 mod read;
+mod run_output;
 mod scene_arg;
 mod sim_args;
 mod values;
@@ -205,5 +206,15 @@ mod tests {
     #[test]
     fn command_tree_is_consistent() {
         allow_negative_numbers(Cli::command()).debug_assert();
+    }
+
+    /// No import circle between the two simulate loops (issue 52): the rigid one takes the
+    /// shared output pieces from `run_output`, never from `cmd::simulate`.
+    #[test]
+    fn the_rigid_simulate_loop_does_not_import_the_sphere_one() {
+        let rigid = include_str!("cmd/simulate_rigid.rs");
+        assert!(!rigid.contains(concat!("cmd::", "simulate::")));
+        assert!(!rigid.contains(concat!("use super::", "simulate")));
+        assert!(rigid.contains("run_output::"));
     }
 }

@@ -164,7 +164,7 @@ pub struct Args {
     /// (`coulomb_granular::model::resolve_overlaps`); the run is refused if overlaps remain
     #[arg(long, value_name = "SWEEPS", num_args = 0..=1, default_missing_value = "1000")]
     pub resolve_overlaps: Option<usize>,
-    /// output folder: stats.csv, stats.json, summary.json, beads.pvd, contacts.pvd, frames/
+    /// output folder: stats.csv, stats.json, summary.json, bodies.pvd, contacts.pvd, frames/
     #[arg(long)]
     pub output: Option<PathBuf>,
     /// write a VTK frame every K steps (with --output)

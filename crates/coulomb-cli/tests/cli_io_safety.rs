@@ -216,7 +216,7 @@ fn interrupted_simulation(tag: &str, signal: &str, json: bool) -> (ExitStatus, V
         args.push("--json");
     }
     let mut child = spawn(&args);
-    let first = run.join("frames/beads_000000.vtp");
+    let first = run.join("frames/bodies_000000.vtp");
     wait_until(&mut child, "a first frame", || first.exists());
     send(&child, signal);
     let (status, stdout, stderr) = finish(child);

@@ -107,13 +107,13 @@ fn distributed_two_ranks_match_one_process() {
     }
     // the ParaView collection: frames 0, 30, 60, each a .pvtp joining two pieces whose beads
     // add up to all of them
-    let pvd = std::fs::read_to_string(out.join("beads.pvd")).unwrap();
+    let pvd = std::fs::read_to_string(out.join("bodies.pvd")).unwrap();
     assert_eq!(pvd.matches("<DataSet").count(), 3, "{pvd}");
-    let pvtp = std::fs::read_to_string(out.join("frames/beads_000060.pvtp")).unwrap();
+    let pvtp = std::fs::read_to_string(out.join("frames/bodies_000060.pvtp")).unwrap();
     assert_eq!(pvtp.matches("<Piece").count(), 2, "{pvtp}");
     let mut points = 0;
     for r in 0..2 {
-        let piece = std::fs::read_to_string(out.join(format!("frames/beads_000060_{r}.vtp")))
+        let piece = std::fs::read_to_string(out.join(format!("frames/bodies_000060_{r}.vtp")))
             .expect("each rank writes its piece");
         let n: usize = piece
             .split("NumberOfPoints=\"")

@@ -48,7 +48,7 @@ fn links_planted_at_output_names_are_refused_before_computing() {
         "stats.csv",
         "stats.json",
         "checkpoint.h5",
-        "beads.pvd",
+        "bodies.pvd",
     ] {
         std::fs::write(&victim, b"precious").unwrap();
         let out = root.join(format!("out-{name}"));
@@ -70,14 +70,14 @@ fn links_planted_at_output_names_are_refused_before_computing() {
     // a planted frames/ link: refused, nothing written where it points
     let elsewhere = root.join("elsewhere");
     std::fs::create_dir(&elsewhere).unwrap();
-    std::fs::write(elsewhere.join("beads_000000.vtp"), b"not a frame").unwrap();
+    std::fs::write(elsewhere.join("bodies_000000.vtp"), b"not a frame").unwrap();
     let out = root.join("out-frames");
     std::fs::create_dir(&out).unwrap();
     std::os::unix::fs::symlink(&elsewhere, out.join("frames")).unwrap();
     let (code, err) = box_into(&out, &[]);
     assert_eq!(code, Some(2), "{err}");
     assert_eq!(
-        std::fs::read(elsewhere.join("beads_000000.vtp")).unwrap(),
+        std::fs::read(elsewhere.join("bodies_000000.vtp")).unwrap(),
         b"not a frame"
     );
     assert_eq!(std::fs::read_dir(&elsewhere).unwrap().count(), 1);
@@ -288,7 +288,7 @@ fn a_write_failing_mid_run_keeps_every_completed_row_and_exits_4() {
     assert_eq!(steps, (0..steps.len() as u64).collect::<Vec<_>>());
     let text = std::fs::read_to_string(out.join("stats.csv")).unwrap();
     assert!(text.ends_with('\n'), "whole rows only");
-    let frame = out.join(format!("frames/beads_{:06}.vtp", steps.len()));
+    let frame = out.join(format!("frames/bodies_{:06}.vtp", steps.len()));
     assert!(frame.is_file(), "frames up to the failed step");
     std::fs::remove_dir_all(&root).ok();
 }

@@ -80,11 +80,11 @@ fn simulate_writes_the_last_frame_between_two_frame_steps() {
     ]);
     ok(&out);
     for k in [0, 5, 10, 13] {
-        let f = dir.join(format!("frames/beads_{k:06}.vtp"));
+        let f = dir.join(format!("frames/bodies_{k:06}.vtp"));
         assert!(f.is_file(), "{} missing", f.display());
     }
-    let pvd = std::fs::read_to_string(dir.join("beads.pvd")).unwrap();
-    assert!(pvd.contains("beads_000013.vtp"));
+    let pvd = std::fs::read_to_string(dir.join("bodies.pvd")).unwrap();
+    assert!(pvd.contains("bodies_000013.vtp"));
 }
 
 #[test]

@@ -40,7 +40,7 @@ fn box_file_gives_the_built_in_box_to_the_bit() {
     assert_eq!(ja, jb);
     assert!(ja["mean_contacts"].as_f64().unwrap() > 10.0);
     for k in [0, 6, 12] {
-        let f = format!("frames/beads_{k:06}.vtp");
+        let f = format!("frames/bodies_{k:06}.vtp");
         let (fa, fb) = (
             std::fs::read(a.join(&f)).unwrap(),
             std::fs::read(b.join(&f)).unwrap(),

@@ -44,6 +44,7 @@ pub mod nsgs;
 pub mod output;
 pub mod output_dir;
 pub mod projection;
+pub mod report;
 pub mod rigid;
 pub mod rigid_checkpoint;
 pub mod rigid_scene;
@@ -69,6 +70,7 @@ pub use model::{
 };
 pub use nsgs::{NsgsSettings, NsgsStatus, StepProblem};
 pub use projection::{Penetration, Projection, ProjectionStats};
+pub use report::StepRecord;
 pub use run::{run, run_with, SimulationSettings, Stop, Stopped, Summary};
 pub use scene::Scene;
 pub use simulation::{Params, Simulation, SimulationError, StepMethod, StepStats};

@@ -17,35 +17,16 @@ use std::io;
 use std::path::Path;
 use std::sync::Arc;
 
-/// The collections a sphere run writes beside `frames/`.
-pub const BEADS_NAMES: [&str; 3] = ["beads.pvd", "contacts.pvd", "obstacles.pvd"];
-/// The collections a rigid run writes beside `frames/`.
+/// The collections every run writes beside `frames/` (sphere and rigid scenes alike, issue 52:
+/// spheres are glyph-ready points with a `radius` array, other shapes polygons).
 pub const BODIES_NAMES: [&str; 3] = ["bodies.pvd", "contacts.pvd", "obstacles.pvd"];
 
-/// Header of the per-step CSV.
-pub const CSV_HEADER: &str = "step,time,contacts,subproblems,inner_iterations,solve_ms,assembly_ms,delassus_ms,error,rule_6_1,status,converged,kinetic_energy,potential_energy,max_penetration,warm_started";
+pub use crate::report::CSV_HEADER;
 
-/// One CSV line of a step's statistics.
+/// The `stats.csv` row of a sphere step ([`crate::report::StepRecord`], the columns of every
+/// scene).
 pub fn csv_line(s: &StepStats) -> String {
-    format!(
-        "{},{:.6},{},{},{},{:.4},{:.4},{:.4},{:.6e},{:.6e},{},{},{:.9e},{:.9e},{:.6e},{}",
-        s.step,
-        s.time,
-        s.contacts,
-        s.subproblems,
-        s.inner_iterations,
-        s.solve_ms,
-        s.assembly_ms,
-        s.delassus_ms,
-        s.error,
-        s.rule_6_1,
-        s.status,
-        s.converged,
-        s.kinetic_energy,
-        s.potential_energy,
-        s.max_penetration,
-        s.warm_started
-    )
+    crate::report::StepRecord::of_spheres(s).csv_line()
 }
 
 /// Writes `stats.csv` and `stats.json` in `dir`.
@@ -723,7 +704,7 @@ struct FrameFiles {
     obstacles: String,
 }
 
-/// Writes VTK frames into a directory and the ParaView collections `beads.pvd`,
+/// Writes VTK frames into a directory and the ParaView collections `bodies.pvd`,
 /// `contacts.pvd` and `obstacles.pvd` indexing them. Obstacles are written as triangles into
 /// `frames/obstacles_KKKKKK.vtp` when they move or when the region they must cover (the
 /// bodies' [`Extent`], only ever grown) has grown; otherwise the collection points again to
@@ -744,7 +725,7 @@ impl VtkWriter {
     /// at one of those names is refused).
     pub fn new(dir: &Path) -> io::Result<Self> {
         let mut out = OutputDir::open(dir)?;
-        out.check(&BEADS_NAMES)?;
+        out.check(&BODIES_NAMES)?;
         out.open_frames()?;
         Ok(Self::in_dir(Arc::new(out)))
     }
@@ -760,7 +741,7 @@ impl VtkWriter {
     }
 
     /// A writer into `dir` that continues the collections found there (a restarted run): the
-    /// frames before step `first_step` that `beads.pvd` lists are kept, later ones dropped.
+    /// frames before step `first_step` that `bodies.pvd` lists are kept, later ones dropped.
     pub fn resume(dir: &Path, first_step: usize) -> io::Result<Self> {
         let w = Self::new(dir)?;
         Ok(w.resumed(first_step))
@@ -768,7 +749,7 @@ impl VtkWriter {
 
     /// The writer continuing the collections of its folder from step `first_step`.
     pub fn resumed(mut self, first_step: usize) -> Self {
-        self.frames = frames_before(&self.dir, "beads.pvd", first_step);
+        self.frames = frames_before(&self.dir, "bodies.pvd", first_step);
         self
     }
 
@@ -782,7 +763,7 @@ impl VtkWriter {
     pub fn frame(&mut self, sim: &Simulation) -> io::Result<()> {
         let (beads, contacts) = vtp_frame_with(sim, self.format);
         let k = sim.steps_done;
-        let b = format!("frames/beads_{k:06}.vtp");
+        let b = format!("frames/bodies_{k:06}.vtp");
         let c = format!("frames/contacts_{k:06}.vtp");
         self.dir.write(&b, &beads)?;
         self.dir.write(&c, &contacts)?;
@@ -826,7 +807,7 @@ impl VtkWriter {
     }
 
     fn write_collections(&self) -> io::Result<()> {
-        write_collections(&self.dir, "beads.pvd", &self.frames)
+        write_collections(&self.dir, "bodies.pvd", &self.frames)
     }
 }
 
@@ -1266,14 +1247,14 @@ mod tests {
         let mut r = VtkWriter::resume(&dir, 10).unwrap();
         assert_eq!(r.frames.len(), 2);
         r.frame(&sim).unwrap();
-        let beads = collection_entries(&fs::read_to_string(dir.join("beads.pvd")).unwrap());
+        let beads = collection_entries(&fs::read_to_string(dir.join("bodies.pvd")).unwrap());
         let names: Vec<&str> = beads.iter().map(|x| x.1.as_str()).collect();
         assert_eq!(
             names,
             [
-                "frames/beads_000000.vtp",
-                "frames/beads_000005.vtp",
-                "frames/beads_000015.vtp"
+                "frames/bodies_000000.vtp",
+                "frames/bodies_000005.vtp",
+                "frames/bodies_000015.vtp"
             ]
         );
         fs::remove_dir_all(&dir).ok();

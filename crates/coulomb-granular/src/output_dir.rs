@@ -529,13 +529,14 @@ impl OutputDir {
     }
 }
 
-/// The kind of a run's outputs (`run.json`): statistics columns differ between the two.
+/// The kind of a run's outputs (`run.json`): a restart continues only a folder of its own
+/// kind (the files' names and statistics columns are the same for both since issue 52).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum RunKind {
-    /// the sphere engine (`beads.pvd`, 16 statistics columns)
+    /// the sphere engine
     Spheres,
-    /// the rigid-body engine (`bodies.pvd`, 11 statistics columns)
+    /// the rigid-body engine
     Rigid,
 }
 

@@ -198,13 +198,22 @@ fn points(what: &str, n: usize, a: &PyReadonlyArray1<'_, f64>) -> PyResult<Vec<V
         .collect())
 }
 
-/// A step's statistics (the fields of `coulomb_granular::StepStats`) as a dict.
+/// A step's record (`coulomb_granular::StepRecord`: the keys of every scene, the columns of
+/// `stats.csv`) as a dict.
 fn stats_to_py<'py>(
     py: Python<'py>,
     stats: &coulomb_granular::StepStats,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let json = serde_json::to_value(stats)
-        .map_err(|e| PyRuntimeError::new_err(format!("cannot serialize step stats: {e}")))?;
+    record_to_py(py, &coulomb_granular::StepRecord::of_spheres(stats))
+}
+
+/// A [`coulomb_granular::StepRecord`] as a dict.
+pub(crate) fn record_to_py<'py>(
+    py: Python<'py>,
+    record: &coulomb_granular::StepRecord,
+) -> PyResult<Bound<'py, PyAny>> {
+    let json = serde_json::to_value(record)
+        .map_err(|e| PyRuntimeError::new_err(format!("cannot serialize the step record: {e}")))?;
     convert::json_to_py(py, &json)
 }
 
@@ -315,14 +324,15 @@ impl PySimulation {
         Ok((Self::finish(py, Ok(world_params), rest, solver)?, feed))
     }
 
-    /// One time step; its statistics (the fields of `coulomb_granular::StepStats`) as a dict.
+    /// One time step; its record (`coulomb_granular::StepRecord`, the same keys for every
+    /// scene) as a dict.
     fn step<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let sim = &mut self.sim;
         let stats = py.detach(move || sim.step()).map_err(sim_error)?;
         stats_to_py(py, &stats)
     }
 
-    /// `n` time steps at once (GIL released for all of them); their statistics as a list.
+    /// `n` time steps at once (GIL released for all of them); their records as a list.
     fn run<'py>(&mut self, py: Python<'py>, n: usize) -> PyResult<Bound<'py, PyList>> {
         // one step at a time without the GIL, the signals checked between steps: Ctrl-C
         // raises KeyboardInterrupt after the step in progress (the steps taken stay taken)
@@ -506,7 +516,7 @@ impl PySimulation {
     }
 
     /// Writes the current state as a ParaView frame into the folder `dir` with the writer of
-    /// `coulomb simulate --output` (`frames/beads_KKKKKK.vtp`, contacts, obstacles and the
+    /// `coulomb simulate --output` (`frames/bodies_KKKKKK.vtp`, contacts, obstacles and the
     /// `.pvd` collections; links and special files there refused, nothing written through a
     /// link: `coulomb_granular::output_dir`). Called again with the same folder, the frame is
     /// added to its collections; with another folder, new collections start there.

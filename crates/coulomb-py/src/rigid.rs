@@ -10,7 +10,7 @@ use coulomb_granular::rigid_scene::RigidScene;
 use coulomb_granular::scene_file::{BuildOptions, LoadedScene};
 use coulomb_granular::SceneModel;
 use numpy::{PyArray1, PyArrayMethods};
-use pyo3::exceptions::{PyRuntimeError, PyTypeError};
+use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::path::PathBuf;
@@ -104,35 +104,37 @@ impl PyRigidSimulation {
         build(py, built.model)
     }
 
-    /// One time step; its report (`coulomb_granular::rigid::RigidStepReport`) as a dict.
+    /// One time step; its record (`coulomb_granular::StepRecord`, the same keys for every
+    /// scene) as a dict.
     fn step<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let scene = &mut self.scene;
         let r = py
             .detach(move || scene.step())
             .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-        let json = serde_json::to_value(&r)
-            .map_err(|e| PyRuntimeError::new_err(format!("cannot serialize the report: {e}")))?;
-        convert::json_to_py(py, &json)
+        let record =
+            coulomb_granular::StepRecord::of_rigid(&r, self.scene.world.potential_energy());
+        crate::granular::record_to_py(py, &record)
     }
 
-    /// `n` steps at once (GIL released); their reports.
+    /// `n` steps at once (GIL released); their records (as [`Self::step`]).
     fn run<'py>(&mut self, py: Python<'py>, n: usize) -> PyResult<Bound<'py, PyList>> {
         // one step at a time without the GIL, the signals checked between steps: Ctrl-C
         // raises KeyboardInterrupt after the step in progress (the steps taken stay taken)
-        let mut reports = Vec::with_capacity(n.min(1 << 20));
+        let mut records = Vec::with_capacity(n.min(1 << 20));
         for _ in 0..n {
             let scene = &mut self.scene;
             let r = py
                 .detach(move || scene.step())
                 .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-            reports.push(r);
+            records.push(coulomb_granular::StepRecord::of_rigid(
+                &r,
+                self.scene.world.potential_energy(),
+            ));
             py.check_signals()?;
         }
         let out = PyList::empty(py);
-        for r in reports {
-            let json = serde_json::to_value(&r)
-                .map_err(|e| PyRuntimeError::new_err(format!("cannot serialize: {e}")))?;
-            out.append(convert::json_to_py(py, &json)?)?;
+        for r in &records {
+            out.append(crate::granular::record_to_py(py, r)?)?;
         }
         Ok(out)
     }
@@ -166,6 +168,41 @@ impl PyRigidSimulation {
     #[getter]
     fn velocities<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
         rows(py, &self.scene.world.velocities())
+    }
+
+    /// Radii, (n,): a sphere body's radius, NaN for every other shape (a radius that is not
+    /// the shape's would mislead whoever sizes glyphs or packing fractions with it).
+    #[getter]
+    fn radii<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        let r = self.scene.shapes.iter().map(|s| match s {
+            coulomb_granular::shape::BodyShape::Sphere { radius } => *radius,
+            _ => f64::NAN,
+        });
+        PyArray1::from_iter(py, r).into_any()
+    }
+
+    /// Masses, (n,).
+    #[getter]
+    fn masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        PyArray1::from_vec(py, self.scene.world.masses()).into_any()
+    }
+
+    /// Replaces the velocities of the centres of mass (flattened (n, 3), finite; a fixed
+    /// body's must be 0).
+    fn set_velocities(&mut self, v: numpy::PyReadonlyArray1<'_, f64>) -> PyResult<()> {
+        let s = convert::slice("velocities", &v)?;
+        if s.len() != 3 * self.scene.world.len() {
+            return Err(PyValueError::new_err(format!(
+                "velocities: expected shape ({}, 3), got {} entries",
+                self.scene.world.len(),
+                s.len()
+            )));
+        }
+        let rows: Vec<[f64; 3]> = s.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        self.scene
+            .world
+            .set_velocities(&rows)
+            .map_err(|e| PyValueError::new_err(format!("velocities: {e}")))
     }
 
     /// Angular velocities (world frame), (n, 3).

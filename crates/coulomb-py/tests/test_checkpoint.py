@@ -90,7 +90,7 @@ def test_simulate_frames_are_valid_vtk_with_the_positions(tmp_path):
                           "--frames-every", "5", "--checkpoint-every", "10", "--output",
                           str(out)], capture_output=True, text=True, timeout=120)
     assert run.returncode == 0, run.stderr
-    for pvd in ("beads.pvd", "contacts.pvd", "obstacles.pvd"):
+    for pvd in ("bodies.pvd", "contacts.pvd", "obstacles.pvd"):
         coll = ET.parse(out / pvd).getroot()
         assert coll.get("type") == "Collection"
         files = [d.get("file") for d in coll.iter("DataSet")]
@@ -111,7 +111,7 @@ def test_simulate_frames_are_valid_vtk_with_the_positions(tmp_path):
             if pvd != "contacts.pvd":
                 assert count > 0
     last = Simulation.load_checkpoint(out / "checkpoint.h5")
-    root, blob = _vtp(out / "frames" / "beads_000010.vtp")
+    root, blob = _vtp(out / "frames" / "bodies_000010.vtp")
     xyz = _array(root.find("PolyData/Piece/Points/DataArray"), blob).reshape(-1, 3)
     assert np.array_equal(xyz, last.positions)
 

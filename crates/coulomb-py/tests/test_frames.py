@@ -17,9 +17,9 @@ def test_write_frames_builds_the_collections_and_refuses_planted_links(tmp_path)
     sim.write_frames(out)
     sim.run(3)
     sim.write_frames(out)
-    pvd = ET.parse(out / "beads.pvd").getroot()
+    pvd = ET.parse(out / "bodies.pvd").getroot()
     files = [d.get("file") for d in pvd.iter("DataSet")]
-    assert files == ["frames/beads_000000.vtp", "frames/beads_000003.vtp"]
+    assert files == ["frames/bodies_000000.vtp", "frames/bodies_000003.vtp"]
     for f in files:
         assert (out / f).stat().st_size > 0
     assert (out / "contacts.pvd").is_file() and (out / "obstacles.pvd").is_file()
@@ -28,7 +28,7 @@ def test_write_frames_builds_the_collections_and_refuses_planted_links(tmp_path)
     victim.write_text("keep")
     bad = tmp_path / "bad"
     bad.mkdir()
-    os.symlink(victim, bad / "beads.pvd")
+    os.symlink(victim, bad / "bodies.pvd")
     with pytest.raises(ValueError, match="symbolic link"):
         sim.write_frames(bad)
     assert victim.read_text() == "keep"

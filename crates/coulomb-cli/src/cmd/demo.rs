@@ -109,7 +109,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         summary.max_penetration
     ));
     say(format!(
-        "frames for ParaView: {}/beads.pvd; statistics: {}/",
+        "frames for ParaView: {}/bodies.pvd; statistics: {}/",
         frames.display(),
         frames.display()
     ));

@@ -3,88 +3,16 @@
 //! (`--checkpoint-every`, `--restart`) and optional FCLIB dumps of each step.
 
 use crate::exit::Outcome;
+use crate::run_output::{
+    dump_fclib, finish, open_outputs, write_checkpoint_bytes, write_failed, RunEnd,
+};
 use crate::sim_args::Args;
 use anyhow::{bail, Context};
-use coulomb_granular::output::{csv_line, VtkWriter, BEADS_NAMES, CSV_HEADER};
-use coulomb_granular::output_dir::{RunKind, RunOutput};
+use coulomb_granular::output::{csv_line, VtkWriter, BODIES_NAMES, CSV_HEADER};
+use coulomb_granular::output_dir::RunKind;
 use coulomb_granular::run::RestMonitor;
-use coulomb_granular::{CheckpointError, Scene, Simulation, Summary};
-use std::path::{Path, PathBuf};
-
-/// The checkpoint file that `--checkpoint-every` writes into the output folder.
-pub const CHECKPOINT_FILE: &str = "checkpoint.h5";
-
-/// An I/O error writing `what` into the output folder `dir`: an output that could not be
-/// written (exit status 4), unless it is a refusal of a link or special file put there (the
-/// refusal is kept in the chain: exit status 2).
-pub(crate) fn write_failed(dir: &Path, what: &str) -> impl FnOnce(std::io::Error) -> anyhow::Error {
-    let path = dir.join(what).display().to_string();
-    move |source| crate::exit::WriteFailed { path, source }.into()
-}
-
-/// The outputs of a run into `--output DIR` ([`RunOutput`]: every name checked, the inputs
-/// refused and a restart's statistics continued only in its own run's folder, all before
-/// anything is computed or created; exit status 2 for a refusal).
-pub(crate) fn open_outputs(
-    args: &Args,
-    kind: RunKind,
-    names: &[&str],
-    header: &str,
-    inputs: &[PathBuf],
-    first_step: Option<u64>,
-) -> anyhow::Result<Option<RunOutput>> {
-    let Some(dir) = &args.output else {
-        return Ok(None);
-    };
-    let mut all: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
-    if let Some(r) = &args.restart {
-        all.push(r);
-    }
-    let restart = match (first_step, &args.restart) {
-        (Some(step), Some(file)) => Some((file.as_path(), step)),
-        _ => None,
-    };
-    RunOutput::open(dir, kind, names, &all, restart, header)
-        .map(Some)
-        .with_context(|| format!("--output {}", dir.display()))
-}
-
-/// Writes `summary.json` into the run's folder, saying so when it replaces one.
-pub(crate) fn write_summary(out: &RunOutput, json: &str) -> anyhow::Result<()> {
-    let existed = out.dir.is_file("summary.json");
-    out.dir
-        .write("summary.json", json.as_bytes())
-        .map_err(write_failed(out.dir.path(), "summary.json"))?;
-    if existed {
-        eprintln!(
-            "note: replaced existing {}",
-            out.dir.display_path("summary.json").display()
-        );
-    }
-    Ok(())
-}
-
-/// Writes `stats.json` (`text`) and flushes `stats.csv`.
-pub(crate) fn write_stats_json(out: &mut RunOutput, text: &str) -> anyhow::Result<()> {
-    let dir = out.dir.path().to_path_buf();
-    out.write_json(text)
-        .map_err(write_failed(&dir, "stats.json"))
-}
-
-/// Writes the checkpoint `bytes` (of step `step`) into the run's folder.
-pub(crate) fn write_checkpoint_bytes(
-    out: &mut RunOutput,
-    step: u64,
-    bytes: Result<Vec<u8>, CheckpointError>,
-) -> anyhow::Result<()> {
-    let dir = out.dir.path().to_path_buf();
-    let bytes = bytes.map_err(|e| crate::exit::WriteFailed {
-        path: dir.join(CHECKPOINT_FILE).display().to_string(),
-        source: std::io::Error::other(e.to_string()),
-    })?;
-    out.checkpoint(step, &bytes)
-        .map_err(write_failed(&dir, CHECKPOINT_FILE))
-}
+use coulomb_granular::{Scene, Simulation, Summary};
+use std::path::PathBuf;
 
 /// Runs `coulomb simulate` in this process, on the scene checked by
 /// [`crate::sim_args::checked_scene`] (main.rs hands distributed runs to `simulate_mpi`).
@@ -174,7 +102,7 @@ pub(crate) fn steps(
     let mut out = open_outputs(
         args,
         RunKind::Spheres,
-        &BEADS_NAMES,
+        &BODIES_NAMES,
         CSV_HEADER,
         inputs,
         restarted.then_some(first_step as u64),
@@ -192,7 +120,7 @@ pub(crate) fn steps(
     });
     let frame_failed = |k: usize| {
         let dir = args.output.clone().unwrap_or_default();
-        write_failed(&dir, &format!("frames/beads_{k:06}.vtp"))
+        write_failed(&dir, &format!("frames/bodies_{k:06}.vtp"))
     };
     if let Some(w) = vtk.as_mut() {
         w.frame(&sim).map_err(frame_failed(sim.steps_done))?;
@@ -285,16 +213,20 @@ pub(crate) fn steps(
         let text = o
             .json_text(&stats)
             .map_err(write_failed(o.dir.path(), "stats.json"))?;
-        write_stats_json(o, &text)?;
-        // the end state, unless the last step just wrote it; an interrupted run always
-        // leaves one, to be resumed with --restart
-        let written = !stats.is_empty()
-            && args.checkpoint_every > 0
-            && sim.steps_done % args.checkpoint_every == 0;
-        if (args.checkpoint_every > 0 || interrupted.is_some()) && !written {
-            write_checkpoint_bytes(o, sim.steps_done as u64, sim.checkpoint_bytes())?;
-        }
-        write_summary(o, &crate::outputs::json(&summary, true)?)?;
+        let end = RunEnd {
+            steps_done: sim.steps_done as u64,
+            stepped: !stats.is_empty(),
+            interrupted: interrupted.is_some(),
+        };
+        let summary_json = crate::outputs::json(&summary, true)?;
+        finish(
+            o,
+            args,
+            end,
+            || sim.checkpoint_bytes(),
+            &text,
+            &summary_json,
+        )?;
     }
     let (extra, note) = hook.report();
     if args.json {
@@ -327,21 +259,4 @@ pub(crate) fn steps(
         &summary,
         stop.max_steps(),
     ))
-}
-
-/// Writes one step's problem as `step_KKKKKK.hdf5` in FCLIB global format.
-pub(crate) fn dump_fclib(
-    dir: &std::path::Path,
-    step: usize,
-    problem: &coulomb::problem::GlobalProblem,
-) -> anyhow::Result<()> {
-    use coulomb::fclib::{FclibFile, Info};
-    let path = dir.join(format!("step_{step:06}.hdf5"));
-    let mut file = FclibFile::new(coulomb::problem::Problem::Global(problem.clone()));
-    file.info = Some(Info {
-        title: format!("granular step {step}"),
-        description: "Moreau-Jean step of coulomb simulate (coulomb-granular)".into(),
-        math_info: String::new(),
-    });
-    crate::outputs::write_fclib(&path, &file)
 }

@@ -44,27 +44,6 @@ struct RigidSummary {
     signal: Option<String>,
 }
 
-/// Header of a rigid run's `stats.csv`.
-pub const RIGID_CSV_HEADER: &str = "step,time,status,error,contacts,loaded_contacts,warm_started,sweeps,method,max_penetration,kinetic_energy";
-
-/// One row of a rigid run's `stats.csv`.
-fn rigid_csv_line(r: &coulomb_granular::rigid::RigidStepReport) -> anyhow::Result<String> {
-    Ok(format!(
-        "{},{:.6},{},{:.6e},{},{},{},{},{},{:.6e},{:.9e}",
-        r.step,
-        r.time,
-        serde_json::to_value(r.status)?.as_str().unwrap_or(""),
-        r.error,
-        r.contacts,
-        r.loaded_contacts,
-        r.warm_started,
-        r.sweeps,
-        r.method,
-        r.max_penetration,
-        r.kinetic_energy
-    ))
-}
-
 /// Runs the rigid scene of `scene` with the run settings `a` (the file's, completed by the
 /// command line: [`crate::scene_arg`]).
 pub fn run(a: &Args, scene: &BuiltScene, inputs: &[PathBuf]) -> anyhow::Result<Outcome> {
@@ -136,15 +115,15 @@ fn steps(
     restarted: bool,
     inputs: &[PathBuf],
 ) -> anyhow::Result<Outcome> {
-    use crate::cmd::simulate::{write_checkpoint_bytes, write_failed};
+    use crate::run_output::{write_checkpoint_bytes, write_failed};
     crate::interrupt::install().context("installing the SIGINT/SIGTERM handlers")?;
     let first = rigid.world.steps();
-    // every output checked before anything is created or computed (cmd::simulate::steps)
-    let mut out = crate::cmd::simulate::open_outputs(
+    // every output checked before anything is created or computed (run_output::open_outputs)
+    let mut out = crate::run_output::open_outputs(
         a,
         RunKind::Rigid,
         &BODIES_NAMES,
-        RIGID_CSV_HEADER,
+        coulomb_granular::report::CSV_HEADER,
         inputs,
         restarted.then_some(first),
     )?;
@@ -200,12 +179,14 @@ fn steps(
                 .step()
                 .with_context(|| format!("{name}: time step failed"))?;
             if let Some(o) = out.as_mut() {
-                let line = rigid_csv_line(&r)?;
+                let line =
+                    coulomb_granular::StepRecord::of_rigid(&r, rigid.world.potential_energy())
+                        .csv_line();
                 o.row(&line)
                     .map_err(write_failed(o.dir.path(), "stats.csv"))?;
             }
             if let (Some(dir), Some(p)) = (&a.dump_fclib, rigid.world.last_problem()) {
-                crate::cmd::simulate::dump_fclib(dir, k, p)?;
+                crate::run_output::dump_fclib(dir, k, p)?;
             }
             if let Some(w) = vtk.as_mut() {
                 if a.frames_every > 0 && (k + 1) % a.frames_every == 0 {
@@ -299,16 +280,13 @@ fn steps(
     }
     if let Some(o) = out.as_mut() {
         let text = rigid_json(o, reports)?;
-        crate::cmd::simulate::write_stats_json(o, &text)?;
-        // the end state, unless the last step just wrote it; an interrupted run always
-        // leaves one, to be resumed with --restart
-        let written = !reports.is_empty()
-            && a.checkpoint_every > 0
-            && rigid.world.steps() as usize % a.checkpoint_every == 0;
-        if (a.checkpoint_every > 0 || interrupted.is_some()) && !written {
-            write_checkpoint_bytes(o, rigid.world.steps(), rigid.checkpoint_bytes())?;
-        }
-        crate::cmd::simulate::write_summary(o, &crate::outputs::json(&summary, true)?)?;
+        let end = crate::run_output::RunEnd {
+            steps_done: rigid.world.steps(),
+            stepped: !reports.is_empty(),
+            interrupted: interrupted.is_some(),
+        };
+        let summary_json = crate::outputs::json(&summary, true)?;
+        crate::run_output::finish(o, a, end, || rigid.checkpoint_bytes(), &text, &summary_json)?;
     }
     if a.json {
         println!("{}", crate::outputs::json(&summary, false)?);

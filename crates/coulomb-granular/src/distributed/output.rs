@@ -1,7 +1,7 @@
 //! VTK output of a distributed run: each rank writes the piece of its owned beads and contacts
-//! (`frames/beads_KKKKKK_R.vtp`, `frames/contacts_KKKKKK_R.vtp`), rank 0 the parallel files
-//! `frames/beads_KKKKKK.pvtp` / `frames/contacts_KKKKKK.pvtp` that join the pieces, and the
-//! ParaView collections `beads.pvd` / `contacts.pvd` indexing them by time, so that ParaView
+//! (`frames/bodies_KKKKKK_R.vtp`, `frames/contacts_KKKKKK_R.vtp`), rank 0 the parallel files
+//! `frames/bodies_KKKKKK.pvtp` / `frames/contacts_KKKKKK.pvtp` that join the pieces, and the
+//! ParaView collections `bodies.pvd` / `contacts.pvd` indexing them by time, so that ParaView
 //! opens the whole run as one scene.
 
 use super::DistributedSimulation;
@@ -58,7 +58,7 @@ impl DistributedVtk {
         }
         let piece = polydata(&points, &BEAD_ARRAYS, &arrays);
         coulomb::atomic::write(
-            self.dir.join(format!("frames/beads_{k:06}_{rank}.vtp")),
+            self.dir.join(format!("frames/bodies_{k:06}_{rank}.vtp")),
             piece,
         )?;
         let mut points = Vec::with_capacity(sim.contacts.len());
@@ -77,7 +77,7 @@ impl DistributedVtk {
         self.frames.push((sim.time, k));
         if rank == 0 {
             for (name, arrays) in [
-                ("beads", &BEAD_ARRAYS[..]),
+                ("bodies", &BEAD_ARRAYS[..]),
                 ("contacts", &CONTACT_ARRAYS[..]),
             ] {
                 let pvtp = parallel(name, k, size, arrays);

@@ -560,6 +560,36 @@ impl RigidWorld {
     pub fn velocities(&self) -> Vec<[f64; 3]> {
         self.bodies.iter().map(|b| b.v.to_array()).collect()
     }
+    /// Masses m of the bodies (world order; a fixed body's too, though it never moves).
+    pub fn masses(&self) -> Vec<f64> {
+        self.bodies.iter().map(|b| b.mass).collect()
+    }
+    /// Replaces the velocities of the centres of mass (world) before the next step, as the
+    /// sphere engine's `World::bodies[i].velocity`; refused, nothing changed, when the count
+    /// is not the number of bodies, an entry is not finite, or a fixed body would move.
+    pub fn set_velocities(&mut self, v: &[[f64; 3]]) -> Result<(), String> {
+        if v.len() != self.bodies.len() {
+            return Err(format!(
+                "expected {} velocities (one per body), got {}",
+                self.bodies.len(),
+                v.len()
+            ));
+        }
+        for (i, (b, vi)) in self.bodies.iter().zip(v).enumerate() {
+            if vi.iter().any(|x| !x.is_finite()) {
+                return Err(format!("body {i}: non-finite velocity {vi:?}"));
+            }
+            if b.fixed && vi.iter().any(|x| *x != 0.0) {
+                return Err(format!(
+                    "body {i} is fixed: its velocity stays 0, got {vi:?}"
+                ));
+            }
+        }
+        for (b, vi) in self.bodies.iter_mut().zip(v) {
+            b.v = Vector::new(vi[0], vi[1], vi[2]);
+        }
+        Ok(())
+    }
     /// Angular velocities, world frame.
     pub fn angular_velocities(&self) -> Vec<[f64; 3]> {
         self.bodies

@@ -30,9 +30,10 @@ __all__ = ["SCENES", "Motion", "Region", "Scene", "Simulation", "SimulationResul
 #: the scenes of ``coulomb_granular::Scene``
 SCENES = ("box", "funnel", "vibrating-plate", "rotating-drum")
 
-#: per-step statistics (``coulomb_granular::StepStats``): step, time, contacts, subproblems
-#: (outer iterations), inner_iterations, solve_ms, assembly_ms, error (docs/error.md),
-#: rule_6_1, status, converged, kinetic_energy, potential_energy, max_penetration, ...
+#: one step's record (``coulomb_granular::StepRecord``), the same keys for every scene (sphere
+#: or rigid) and the columns of ``stats.csv`` (docs/python.md): step, time, status, converged,
+#: error (docs/error.md), contacts, warm_started, iterations, solve_seconds, kinetic_energy,
+#: potential_energy, max_penetration
 StepStats = Dict[str, Any]
 
 
@@ -945,7 +946,8 @@ class Simulation:
 
     @property
     def velocities(self) -> np.ndarray:
-        """Sphere velocities at t_k, shape (n, 3) (a copy)."""
+        """Velocities at t_k of the sphere centres (in a rigid-body scene, of the bodies'
+        centres of mass), shape (n, 3) (a copy)."""
         return self._sim.velocities
 
     @property
@@ -955,12 +957,13 @@ class Simulation:
 
     @property
     def radii(self) -> np.ndarray:
-        """Radii, shape (n,)."""
+        """Radii, shape (n,); in a rigid-body scene a sphere body's radius and NaN for every
+        other shape (it has no radius)."""
         return self._sim.radii
 
     @property
     def masses(self) -> np.ndarray:
-        """Masses, shape (n,)."""
+        """Masses, shape (n,) (every scene)."""
         return self._sim.masses
 
     @property
@@ -979,8 +982,10 @@ class Simulation:
         return self._sim.params
 
     def set_velocities(self, v: Any) -> None:
-        """Replaces the sphere velocities (shape (n, 3), finite) before the next step."""
-        a = _rows3("velocities", v, self.positions.shape[0])
+        """Replaces the velocities (shape (n, 3), finite) before the next step: of the sphere
+        centres, or in a rigid-body scene of the bodies' centres of mass (a fixed body's must
+        stay 0); ``ValueError`` otherwise, nothing changed."""
+        a = _rows3("velocities", v, self.masses.shape[0])
         self._sim.set_velocities(np.ascontiguousarray(a).ravel())
 
     def set_positions(self, x: Any) -> None:
@@ -1015,8 +1020,8 @@ class Simulation:
     def write_frames(self, dir: Union[str, "os.PathLike[str]"]) -> None:
         """Writes the current state as a ParaView frame into the folder ``dir`` (created), with
         the writer of ``coulomb simulate --output``: ``frames/*.vtp`` and the ``.pvd``
-        collections (``beads.pvd`` or, for bodies of other shapes, ``bodies.pvd``; with
-        ``contacts.pvd`` and ``obstacles.pvd``). Called again with the same folder, the frame
+        collections (``bodies.pvd`` for every scene: spheres as points with a ``radius``
+        array, other shapes as polygons; with ``contacts.pvd`` and ``obstacles.pvd``). Called again with the same folder, the frame
         is added to the collections (call it after each :meth:`run`). A link, folder or
         special file where one of these files goes is refused with ``ValueError``; nothing is
         written through a link (docs/outputs-and-signals.md)."""

@@ -1,0 +1,167 @@
+//! Issue 52, bug (4): in a packed column of beads at rest, the contact impulses the step
+//! exports (those of `Simulation::contacts`, written as forces to the contact frames) carry the
+//! whole weight: Σ over the floor and wall contacts of the impulses' vertical component equals
+//! M |g| h. The position correction moves centres only and must not carry weight.
+
+use coulomb::{InnerKind, Method, MethodParams, OuterKind, Settings};
+use coulomb_granular::contact::Partner;
+use coulomb_granular::math::Vec3;
+use coulomb_granular::world::{Obstacle, Shape, Sphere, World};
+use coulomb_granular::{Activation, NsgsSettings, Params, Projection, Simulation, StepMethod};
+
+fn params(projection: bool, tol: f64) -> Params {
+    let d = Settings::time_stepping(Method::new(InnerKind::Pgs, Settings::default().outer));
+    let solver = Settings {
+        tol,
+        max_outer: 20,
+        params: MethodParams {
+            fixed_point_tol: None,
+            ..d.params
+        },
+        outer: OuterKind::Fused,
+        fallback: Some((InnerKind::Apgd, OuterKind::Anderson)),
+        ..d
+    };
+    Params {
+        h: 0.02,
+        theta: 0.5,
+        restitution: 0.2,
+        mu: 0.3,
+        activation: Activation {
+            gamma: 1.0,
+            close_gaps: true,
+            ..Activation::accurate()
+        },
+        solver,
+        warm_start: true,
+        projection: projection.then(Projection::default),
+        method: StepMethod::Nsgs(NsgsSettings {
+            tol,
+            max_sweeps: 20_000,
+            relaxation: 1.5,
+            ..NsgsSettings::default()
+        }),
+        rolling_friction: 0.0,
+    }
+}
+
+/// A square tube 3 diameters wide (a floor and four walls) holding `layers` layers of beads
+/// (R = 5 cm, 1.3 kg), alternately 3 × 3 beads touching each other and the walls and 2 × 2
+/// beads in their hollows, √2 R apart vertically: every bead touches its neighbours (gap 0),
+/// a stable packing.
+fn packed_column(layers: usize) -> World {
+    let r = 0.05;
+    let side = 6.0 * r;
+    let mut w = World::new();
+    let plane = |p: Vec3, n: Vec3| Shape::Plane {
+        point: p,
+        normal: n,
+    };
+    w.obstacles
+        .push(Obstacle::fixed("floor", plane(Vec3::ZERO, Vec3::Z)));
+    w.obstacles
+        .push(Obstacle::fixed("x0", plane(Vec3::ZERO, Vec3::X)));
+    w.obstacles.push(Obstacle::fixed(
+        "x1",
+        plane(Vec3::new(side, 0.0, 0.0), -Vec3::X),
+    ));
+    w.obstacles
+        .push(Obstacle::fixed("y0", plane(Vec3::ZERO, Vec3::Y)));
+    w.obstacles.push(Obstacle::fixed(
+        "y1",
+        plane(Vec3::new(0.0, side, 0.0), -Vec3::Y),
+    ));
+    for layer in 0..layers {
+        let z = r + layer as f64 * 2f64.sqrt() * r;
+        let (n, first) = if layer % 2 == 0 { (3, r) } else { (2, 2.0 * r) };
+        for i in 0..n {
+            for j in 0..n {
+                let p = Vec3::new(first + 2.0 * r * i as f64, first + 2.0 * r * j as f64, z);
+                w.bodies.push(Sphere::new(p, r, 1.3));
+            }
+        }
+    }
+    w
+}
+
+/// What a run measured over its last `last` steps.
+struct Balance {
+    /// mean over the steps of (Σ obstacle impulses' z) / (M |g| h)
+    mean: f64,
+    /// largest |(Σ obstacle impulses' z) − (M |g| h + ΔP_z)| / (M |g| h) of one step
+    momentum_residual: f64,
+    /// position-correction sweeps done
+    sweeps: usize,
+}
+
+fn balance(world: World, projection: bool, tol: f64, steps: usize, last: usize) -> Balance {
+    let mut sim = Simulation::new(world, params(projection, tol)).unwrap();
+    let h = sim.params.h;
+    let weight: f64 =
+        sim.world.bodies.iter().map(|b| b.mass).sum::<f64>() * sim.world.gravity.norm();
+    let momentum = |sim: &Simulation| -> f64 {
+        sim.world
+            .bodies
+            .iter()
+            .map(|b| b.mass * b.velocity.z)
+            .sum::<f64>()
+    };
+    let mut out = Balance {
+        mean: 0.0,
+        momentum_residual: 0.0,
+        sweeps: 0,
+    };
+    for k in 0..steps {
+        let p0 = momentum(&sim);
+        let s = sim.step().unwrap();
+        if k + last < steps {
+            continue;
+        }
+        let dp = momentum(&sim) - p0;
+        let up: f64 = sim
+            .contacts
+            .iter()
+            .filter(|c| matches!(c.partner, Partner::Obstacle(..)))
+            .map(|c| c.world_impulse().z)
+            .sum();
+        out.mean += up / (weight * h) / last as f64;
+        out.momentum_residual = out
+            .momentum_residual
+            .max((up - weight * h - dp).abs() / (weight * h));
+        out.sweeps += s.projection_sweeps;
+    }
+    out
+}
+
+/// A packed column of 130 beads at rest, solved to 10⁻² and 10⁻³ (the solver's residual lets
+/// it sink, so that the position correction acts every few steps): over the last 100 of 150
+/// steps the floor and walls carry the weight, Σ_steps Σ_obstacles r_z = 100 M |g| h, to
+/// 0.1 % (the mean differs from 1 by the column's change of momentum over the 100 steps
+/// divided by 100 M |g| h, a few 10⁻⁵ here: the column is at rest); and every step obeys
+/// the momentum balance Σ r_z = M |g| h + ΔP_z exactly (to round-off): the correction changes
+/// no velocity. Before the fix (velocities rescaled by the correction) the mean was short of 1
+/// by 1.8 % at 10⁻² (docs/granular.md, "Position correction").
+#[test]
+#[ignore = "issue 52 bug 4, open: the correction's velocity rescaling carries 1.8 % of the weight (mean 0.982 at 1e-2); a positions-only correction balanced it but fed energy into dense flows (validate: Beverloo C 1.47, column collapse runout 2.88), so it was reverted"]
+fn a_packed_column_at_rest_puts_its_whole_weight_on_the_floor_and_walls() {
+    for tol in [1e-2, 1e-3] {
+        let b = balance(packed_column(20), true, tol, 150, 100);
+        eprintln!(
+            "tol {tol:e}: mean Σ r_z / (M g h) = {:.6}, largest momentum residual {:.2e}, {} correction sweeps",
+            b.mean, b.momentum_residual, b.sweeps
+        );
+        assert!(
+            b.sweeps > 0,
+            "the correction never acted: the test tests nothing"
+        );
+        assert!((b.mean - 1.0).abs() <= 1e-3, "tol {tol:e}: {:.6}", b.mean);
+        assert!(
+            b.momentum_residual <= 1e-9,
+            "tol {tol:e}: {:e}",
+            b.momentum_residual
+        );
+    }
+    // without the correction, the same balance
+    let b = balance(packed_column(20), false, 1e-2, 150, 100);
+    assert!((b.mean - 1.0).abs() <= 1e-3, "no correction: {:.6}", b.mean);
+}

@@ -5,6 +5,7 @@
 mod builtin_fingerprint;
 mod example_scenes;
 mod fuzz_inputs;
+mod impulse_balance;
 mod joints;
 mod physics;
 mod rigid_contacts;

@@ -31,7 +31,7 @@
 //! start of the step, as the contacts' w carries their gap, so that a violation is removed
 //! over the step instead of accumulating. After the position update (2.7), as the contacts'
 //! penetration correction, the positions (never the velocities or λ) are projected back on
-//! C(q) = 0 by Gauss–Seidel Newton steps in the metric of M ([`project`]).
+//! C(q) = 0 by Gauss–Seidel Newton steps in the metric of M (`project`).
 //!
 //! # Motors and limits
 //! A motor is one more row on the joint coordinate's rate with b = −velocity and the impulse

@@ -1190,7 +1190,7 @@ fn correct_positions(
 }
 
 /// The joints' positions are projected back until every |C| ≤ this (m or rad), at most 100
-/// Gauss–Seidel Newton sweeps ([`super::joints::project`]).
+/// Gauss–Seidel Newton sweeps (`joints::project`).
 pub const JOINT_DRIFT_TARGET: f64 = 1e-12;
 
 /// A contact deeper than this fraction of the thinner body's half width makes the step's

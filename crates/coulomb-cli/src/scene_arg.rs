@@ -20,11 +20,7 @@ use coulomb_granular::scene_file::{BuildOptions, BuiltScene, LoadedScene, Method
 use coulomb_granular::{Simulation, World};
 use std::path::Path;
 
-/// Whether the scene argument names a scene file (it ends in .toml or .json).
-pub fn is_scene_file(scene: &str) -> bool {
-    let lower = scene.to_ascii_lowercase();
-    lower.ends_with(".toml") || lower.ends_with(".json")
-}
+pub use crate::sim_args::is_scene_file;
 
 #[derive(Parser)]
 struct Defaults {

@@ -428,6 +428,12 @@ pub(crate) fn summary_json(
     obj
 }
 
+/// Whether the scene argument names a scene file (it ends in .toml or .json).
+pub fn is_scene_file(scene: &str) -> bool {
+    let lower = scene.to_ascii_lowercase();
+    lower.ends_with(".toml") || lower.ends_with(".json")
+}
+
 #[cfg(test)]
 mod tests {
     use super::check_beads_fit;

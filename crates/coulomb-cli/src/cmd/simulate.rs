@@ -55,7 +55,7 @@ fn step_advice(args: &Args) -> String {
             "a restart keeps the checkpoint's h: run again from the start with a smaller h"
                 .to_string()
         }
-        (None, Some(f)) if crate::scene_arg::is_scene_file(f) => {
+        (None, Some(f)) if crate::sim_args::is_scene_file(f) => {
             format!("set h in the [step] section of {f}; --dt is for the built-in scenes")
         }
         _ => "set it with --dt".to_string(),

@@ -15,7 +15,10 @@
 //!   starts a pair's next GJK from its stored normal and, when the pose barely moved, updates
 //!   the stored manifold points instead of recomputing them, so without them the continued
 //!   run would differ in the last bits;
-//! - the last step's contacts (`/json/contacts`, read by the outputs only).
+//! - the last step's contacts (`/json/contacts`, read by the outputs only);
+//! - per joint the last step's impulses by row slot, the next step's warm start, and its
+//!   force and torque (`/joints/…`; version 2, absent from version-1 files, which are still
+//!   read when their scene has no joint).
 //!
 //! Not stored: the step reports and the last step's problem (reports of the steps already
 //! taken). A sphere-only scene has its own checkpoint ([`crate::checkpoint`]); the `format`
@@ -37,6 +40,8 @@
 //! | `/warm_start/key` | i64 (body A, partner kind 0 body / 1 obstacle, partner index, sub-shape A, sub-shape B, feature A, feature B, rank) | (m, 8) |
 //! | `/warm_start/impulse` | f64, world axes | (m, 3) |
 //! | `/json/model`, `/json/contacts`, `/json/detector` | UTF-8 string | scalar |
+//! | `/joints/warm_start` | f64, by row slot | (joints, 9) |
+//! | `/joints/force` | f64, force and torque, world axes | (joints, 6) |
 
 use crate::checkpoint::{
     check_rows, encode_entries, index, json_of, open, read_checked, read_file, write_file,
@@ -44,6 +49,7 @@ use crate::checkpoint::{
 };
 use crate::model::SceneModel;
 use crate::rigid::contacts::ContactKey;
+use crate::rigid::joints::SLOTS;
 use crate::rigid::step::RigidState;
 use crate::rigid::{RigidContact, RigidPartner};
 use crate::rigid_scene::RigidScene;
@@ -51,8 +57,9 @@ use std::path::Path;
 
 /// The `format` attribute of a rigid-scene checkpoint.
 pub const FORMAT_NAME: &str = "coulomb-rigid-checkpoint";
-/// The `format_version` attribute; files of another version are refused.
-pub const FORMAT_VERSION: i64 = 1;
+/// The `format_version` attribute written. Version 1 (before joints were stored) is still
+/// read, for scenes without joints; other versions are refused.
+pub const FORMAT_VERSION: i64 = 2;
 
 /// Columns of `/warm_start/key`.
 const KEY_COLUMNS: usize = 8;
@@ -63,14 +70,6 @@ fn flat<const N: usize>(rows: &[[f64; N]]) -> Vec<f64> {
 
 /// The datasets of a checkpoint of `state` built from `model`, in their fixed order.
 fn entries(model: &SceneModel, state: &RigidState) -> Result<Vec<Entry>, CheckpointError> {
-    if !model.joints.is_empty() {
-        // the joints' warm starts are not part of the format: a restart would not continue
-        // the run to the bit
-        return Err(CheckpointError::Unrepresentable(format!(
-            "{} joint(s): checkpoints of scenes with joints are not supported yet",
-            model.joints.len()
-        )));
-    }
     let mut keys = Vec::with_capacity(KEY_COLUMNS * state.previous.len());
     for ((a, b, s1, s2, f1, f2, rank), _) in &state.previous {
         let (kind, j) = match b {
@@ -103,6 +102,12 @@ fn entries(model: &SceneModel, state: &RigidState) -> Result<Vec<Entry>, Checkpo
         ),
         ("json/contacts", 0, Data::Str(contacts)),
         ("json/detector", 0, Data::Str(state.detector.clone())),
+        (
+            "joints/warm_start",
+            SLOTS,
+            Data::F64(flat(&state.joint_warm)),
+        ),
+        ("joints/force", 6, Data::F64(flat(&state.joint_forces))),
     ])
 }
 
@@ -155,8 +160,9 @@ fn keys(r: &Reader<'_>, raw: &[i64]) -> Result<Vec<ContactKey>, CheckpointError>
     Ok(out)
 }
 
-/// The layout of a checkpoint (paths, columns, types).
-fn layout() -> Result<Vec<Entry>, CheckpointError> {
+/// The layout of a checkpoint of `version` (paths, columns, types): version 1 has no
+/// `/joints/…` datasets.
+fn layout(version: i64) -> Result<Vec<Entry>, CheckpointError> {
     let empty = RigidState {
         time: 0.0,
         steps: 0,
@@ -167,12 +173,23 @@ fn layout() -> Result<Vec<Entry>, CheckpointError> {
         previous: Vec::new(),
         contacts: Vec::new(),
         detector: String::new(),
+        joint_warm: Vec::new(),
+        joint_forces: Vec::new(),
     };
-    entries(&SceneModel::default(), &empty)
+    let mut all = entries(&SceneModel::default(), &empty)?;
+    if version == 1 {
+        all.retain(|(p, _, _)| !p.starts_with("joints/"));
+    }
+    Ok(all)
 }
 
 fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
-    let read = read_checked(r, FORMAT_NAME, FORMAT_VERSION, &layout()?)?;
+    let (read, version) = match read_checked(r, FORMAT_NAME, FORMAT_VERSION, &layout(2)?) {
+        Err(CheckpointError::Version { found: 1, .. }) => {
+            (read_checked(r, FORMAT_NAME, 1, &layout(1)?)?, 1)
+        }
+        other => (other?, FORMAT_VERSION),
+    };
     // one row per body in each body dataset, one per entry in the warm start: a count that
     // differs is blamed on the dataset that differs
     check_rows(
@@ -216,6 +233,22 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
     let (dp, detector) = match c.entries.next() {
         Some((p, _, Data::Str(s))) => (p, s),
         _ => return Err(r.corrupt("json/detector", "expected a string")),
+    };
+    let (joint_warm, joint_forces) = if version == 1 {
+        if !model.joints.is_empty() {
+            return Err(r.invalid(
+                "json/model",
+                "a version-1 checkpoint cannot hold joints (the scene has some)",
+            ));
+        }
+        (Vec::new(), Vec::new())
+    } else {
+        let nj = Some(model.joints.len());
+        let (p, w) = c.f64s()?;
+        let w: Vec<[f64; SLOTS]> = rows(r, p, w, nj)?;
+        let (p, f) = c.f64s()?;
+        let f: Vec<[f64; 6]> = rows(r, p, f, nj)?;
+        (w, f)
     };
     let mut scene = RigidScene::new(&model)
         .map_err(|e| r.invalid("json/model", format!("the stored scene: {e}")))?;
@@ -263,6 +296,8 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
         previous: keys.into_iter().zip(imp).collect(),
         contacts,
         detector,
+        joint_warm,
+        joint_forces,
     };
     scene.world.restore(state).map_err(|e| {
         // what `restore` still checks: fixed bodies at rest ("body i …"), warm-start and
@@ -273,6 +308,8 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
             "warm_start/key"
         } else if e.starts_with("contact") {
             "json/contacts"
+        } else if e.starts_with("joints") {
+            "joints/warm_start"
         } else {
             dp
         };
@@ -437,6 +474,88 @@ mod tests {
             b.step().expect("step b");
         }
         assert_eq!(snapshot(&b), snapshot(&a));
+    }
+
+    /// The shipped pendulum chain (8 links on revolute joints) swinging into its brick wall:
+    /// the joints' warm starts and forces are stored, so the continued run gives the bits of
+    /// the uninterrupted one.
+    #[test]
+    fn a_scene_with_joints_restarts_to_the_bit() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../examples/scenes/rigid/pendulum-chain.toml"
+        );
+        let loaded = LoadedScene::load(Path::new(path)).expect("load");
+        let built = loaded.build(&Default::default()).expect("build");
+        let mut a = RigidScene::new(&built.model).expect("scene");
+        for _ in 0..60 {
+            a.step().expect("step");
+        }
+        let mut b =
+            RigidScene::from_checkpoint_bytes("chain.h5", a.checkpoint_bytes().expect("save"))
+                .expect("load");
+        assert_eq!(b.world.joint_forces(), a.world.joint_forces());
+        for _ in 0..60 {
+            let ra = a.step().expect("step a");
+            let rb = b.step().expect("step b");
+            assert_eq!(ra.sweeps, rb.sweeps);
+            assert_eq!(ra.error.to_bits(), rb.error.to_bits());
+        }
+        assert_eq!(snapshot(&b), snapshot(&a));
+        let bits = |s: &RigidScene| -> Vec<u64> {
+            s.world
+                .joint_forces()
+                .iter()
+                .flatten()
+                .map(|x| x.to_bits())
+                .collect()
+        };
+        assert_eq!(bits(&b), bits(&a));
+        assert!(a.world.joint_forces()[0].iter().any(|f| *f != 0.0));
+    }
+
+    /// A version-1 file (written before the joints' datasets existed) still reads for a scene
+    /// without joints, and is refused, naming the dataset, for a scene with some.
+    #[test]
+    fn version_one_files_read_without_joints() {
+        let mut a = scene(MIXED);
+        for _ in 0..5 {
+            a.step().expect("step");
+        }
+        let state = a.world.state().expect("state");
+        let mut v1 = entries(&a.model, &state).expect("entries");
+        v1.retain(|(p, _, _)| !p.starts_with("joints/"));
+        let bytes = encode_entries(FORMAT_NAME, 1, &v1).expect("v1 bytes");
+        let mut b = RigidScene::from_checkpoint_bytes("v1.h5", bytes).expect("v1 loads");
+        a.step().expect("a");
+        b.step().expect("b");
+        assert_eq!(snapshot(&b), snapshot(&a));
+        // a version-1 file whose model has joints cannot be continued to the bit
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../examples/scenes/rigid/pendulum-chain.toml"
+        );
+        let loaded = LoadedScene::load(Path::new(path)).expect("load");
+        let built = loaded.build(&Default::default()).expect("build");
+        let c = RigidScene::new(&built.model).expect("scene");
+        let state = c.world.state().expect("state");
+        let mut v1 = entries(&c.model, &state).expect("entries");
+        v1.retain(|(p, _, _)| !p.starts_with("joints/"));
+        let bytes = encode_entries(FORMAT_NAME, 1, &v1).expect("v1 bytes");
+        let e = RigidScene::from_checkpoint_bytes("v1j.h5", bytes).expect_err("joints in v1");
+        assert!(e.to_string().contains("json/model"), "{e}");
+        // and another version is refused
+        let bytes = encode_entries(
+            FORMAT_NAME,
+            3,
+            &entries(&a.model, &a.world.state().expect("s")).expect("e"),
+        )
+        .expect("v3 bytes");
+        let e = RigidScene::from_checkpoint_bytes("v3.h5", bytes).expect_err("v3");
+        assert!(
+            matches!(e, CheckpointError::Version { found: 3, .. }),
+            "{e}"
+        );
     }
 
     #[test]

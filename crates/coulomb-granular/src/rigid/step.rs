@@ -95,6 +95,10 @@ pub(crate) struct RigidState {
     pub contacts: Vec<RigidContact>,
     /// the detector's pair caches, JSON ([`Detector::to_json`])
     pub detector: String,
+    /// each joint's last impulses by row slot, the next step's warm start
+    pub joint_warm: Vec<[f64; SLOTS]>,
+    /// each joint's last force and torque (read by the outputs)
+    pub joint_forces: Vec<[f64; 6]>,
 }
 
 fn v3(a: [f64; 3]) -> Vector {
@@ -446,6 +450,8 @@ impl RigidWorld {
                 .collect(),
             contacts: self.contacts.clone(),
             detector: self.detector.to_json()?,
+            joint_warm: self.joint_warm.clone(),
+            joint_forces: self.joint_forces.clone(),
         })
     }
 
@@ -502,6 +508,19 @@ impl RigidWorld {
         if let Some(c) = s.contacts.iter().find(|c| !partner_ok(c.a, c.b)) {
             return Err(format!("contact of pair ({}, {:?}) out of range", c.a, c.b));
         }
+        let nj = self.joints.len();
+        if s.joint_warm.len() != nj || s.joint_forces.len() != nj {
+            return Err(format!(
+                "joints: {} warm-start and {} force rows for the {nj} joints of the scene",
+                s.joint_warm.len(),
+                s.joint_forces.len()
+            ));
+        }
+        if let Some(j) =
+            (0..nj).find(|&j| !(finite(&s.joint_warm[j]) && finite(&s.joint_forces[j])))
+        {
+            return Err(format!("joints: row {j} is not finite"));
+        }
         let detector = Detector::from_json(&s.detector, n, no)?;
         for (i, b) in self.bodies.iter_mut().enumerate() {
             b.x = v3(s.x[i]);
@@ -514,6 +533,8 @@ impl RigidWorld {
         self.previous = s.previous.into_iter().map(|(k, r)| (k, v3(r))).collect();
         self.contacts = s.contacts;
         self.detector = detector;
+        self.joint_warm = s.joint_warm;
+        self.joint_forces = s.joint_forces;
         self.last_problem = None;
         Ok(())
     }

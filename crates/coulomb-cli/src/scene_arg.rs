@@ -251,11 +251,6 @@ pub fn run(args: &Args) -> anyhow::Result<Outcome> {
         if args.mpi || crate::sim_args::under_launcher() {
             bail!("{file}: scenes with bodies of other shapes than spheres run in one process, not distributed");
         }
-        if args.resolve_overlaps.is_some() {
-            bail!(
-                "{file}: --resolve-overlaps is for sphere-only scenes; this scene has bodies of other shapes"
-            );
-        }
         return crate::cmd::simulate_rigid::run(
             &file_args(args, &scene),
             &scene,

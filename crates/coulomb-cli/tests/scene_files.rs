@@ -232,3 +232,39 @@ fn overlapping_spheres_are_refused_unless_resolve_overlaps_relaxes_them() {
     let out = coulomb(&["simulate", scene, "--resolve-overlaps", "0"]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+/// Issue 52, item 3: `--resolve-overlaps` means the same for scenes of any shapes: a cuboid
+/// sunk 1 cm into the floor under a sphere sunk into it is refused, then relaxed and run.
+#[test]
+fn resolve_overlaps_relaxes_bodies_of_any_shape() {
+    let dir = temp_dir("scene-overlap-rigid");
+    let scene = dir.join("sunk.toml");
+    std::fs::write(
+        &scene,
+        "[step]\nh = 0.001\nsteps = 5\ntol = 1e-8\n\
+         [[bodies]]\nshape = { kind = \"cuboid\", half_extents = [0.1, 0.1, 0.05] }\n\
+         positions = [[0.0, 0.0, 0.04]]\n\
+         [[bodies]]\nshape = { kind = \"sphere\", radius = 0.05 }\n\
+         positions = [[0.0, 0.0, 0.135]]\n\
+         [[obstacles]]\nshape = { kind = \"plane\", point = [0, 0, 0], normal = [0, 0, 1] }\n",
+    )
+    .unwrap();
+    let scene = scene.to_str().unwrap();
+    let out = coulomb(&["simulate", scene, "--json"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("interpenetrat"), "{err}");
+    let out = coulomb(&["simulate", scene, "--resolve-overlaps", "--json"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains("overlaps at the start") && err.contains(", 0 left"),
+        "{err}"
+    );
+    let j = json(&String::from_utf8_lossy(&out.stdout));
+    assert_eq!(j["steps"], 5);
+    assert!(j["max_penetration"].as_f64().unwrap() < 1e-6, "{j}");
+    let out = coulomb(&["simulate", scene, "--resolve-overlaps", "0"]);
+    assert_eq!(out.status.code(), Some(2));
+    std::fs::remove_dir_all(&dir).ok();
+}

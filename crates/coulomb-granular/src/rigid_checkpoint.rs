@@ -250,7 +250,7 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
         let f: Vec<[f64; 6]> = rows(r, p, f, nj)?;
         (w, f)
     };
-    let mut scene = RigidScene::new(&model)
+    let mut scene = RigidScene::for_restore(&model)
         .map_err(|e| r.invalid("json/model", format!("the stored scene: {e}")))?;
     // the state's checks, each on the dataset it reads (those left to `restore` — a fixed
     // body that moved, the detector's caches — name the rest)

@@ -280,10 +280,46 @@ fn obstacle_shapes(k: usize, o: &Obstacle) -> Result<Vec<Placed>, SceneError> {
     })
 }
 
+/// What building a scene does with bodies interpenetrating at the start.
+#[derive(Debug, Clone, Copy)]
+enum InitialOverlaps {
+    /// refused ([`crate::rigid::RigidError::Interpenetration`])
+    Refuse,
+    /// relaxed in at most this many sweeps, then refused if some are left
+    Relax(usize),
+    /// kept (a checkpoint's state replaces the world's)
+    Ignore,
+}
+
 impl RigidScene {
     /// The rigid world of `model` (module docs), every body and obstacle validated; the
     /// world refuses bodies interpenetrating at the start (count and depth).
     pub fn new(model: &SceneModel) -> Result<Self, SceneError> {
+        Ok(Self::build(model, InitialOverlaps::Refuse)?.0)
+    }
+
+    /// [`RigidScene::new`] without the check of initial interpenetrations, for a checkpoint's
+    /// state to replace the world's (a run started with `--resolve-overlaps`).
+    pub(crate) fn for_restore(model: &SceneModel) -> Result<Self, SceneError> {
+        Ok(Self::build(model, InitialOverlaps::Ignore)?.0)
+    }
+
+    /// [`RigidScene::new`] with the bodies' initial interpenetrations relaxed first
+    /// ([`crate::rigid::RigidWorld::relaxed`], at most `max_sweeps` sweeps; the scene is
+    /// refused if some are left). The model keeps the positions as given; the world starts
+    /// from the relaxed ones.
+    pub fn new_relaxed(
+        model: &SceneModel,
+        max_sweeps: usize,
+    ) -> Result<(Self, crate::rigid::step::Relaxed), SceneError> {
+        let (scene, relaxed) = Self::build(model, InitialOverlaps::Relax(max_sweeps))?;
+        Ok((scene, relaxed.unwrap_or_default()))
+    }
+
+    fn build(
+        model: &SceneModel,
+        overlaps: InitialOverlaps,
+    ) -> Result<(Self, Option<crate::rigid::step::Relaxed>), SceneError> {
         model.step.check()?;
         let g = model.gravity;
         if !g.is_finite() {
@@ -414,17 +450,39 @@ impl RigidScene {
             max_sweeps: model.step.max_sweeps,
             ..RigidSettings::default()
         };
-        let world =
-            RigidWorld::with_joints(bodies, rigid_obstacles, table, settings, &model.joints)
+        let (world, relaxed) = match overlaps {
+            InitialOverlaps::Refuse => (
+                RigidWorld::with_joints(bodies, rigid_obstacles, table, settings, &model.joints)
+                    .map_err(SceneError::Rigid)?,
+                None,
+            ),
+            InitialOverlaps::Ignore => (
+                RigidWorld::overlapping(bodies, rigid_obstacles, table, settings, &model.joints)
+                    .map_err(SceneError::Rigid)?,
+                None,
+            ),
+            InitialOverlaps::Relax(sweeps) => {
+                let (w, r) = RigidWorld::relaxed(
+                    bodies,
+                    rigid_obstacles,
+                    table,
+                    settings,
+                    &model.joints,
+                    sweeps,
+                )
                 .map_err(SceneError::Rigid)?;
-        Ok(Self {
+                (w, Some(r))
+            }
+        };
+        let scene = Self {
             world,
             shapes,
             obstacles,
             obstacle_of,
             reports: Vec::new(),
             model: model.clone(),
-        })
+        };
+        Ok((scene, relaxed))
     }
 
     /// One Moreau–Jean step of the rigid world; its report is kept in `reports`.

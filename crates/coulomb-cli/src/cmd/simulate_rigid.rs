@@ -5,7 +5,8 @@
 //! most `max_steps`), `--output` (VTK frames of the bodies as their shapes, contacts and
 //! obstacles every `--frames-every` steps; `stats.json`, `stats.csv`, `summary.json`),
 //! `--dump-fclib` (each step's problem (2.10) in FCLIB global form), `--checkpoint-every`
-//! and `--restart` (a rigid checkpoint, [`coulomb_granular::rigid_checkpoint`]) and `--json`.
+//! and `--restart` (a rigid checkpoint, [`coulomb_granular::rigid_checkpoint`]),
+//! `--resolve-overlaps` (the bodies moved apart first, [`RigidScene::new_relaxed`]) and `--json`.
 //! Exit 1 when a step ended above its tolerance or `--until-rest` hit its cap.
 
 use crate::exit::Outcome;
@@ -50,7 +51,20 @@ pub fn run(a: &Args, scene: &BuiltScene, inputs: &[PathBuf]) -> anyhow::Result<O
     let file = scene.path.display().to_string();
     coulomb_granular::rigid_scene::check_step_section(&scene.step)
         .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
-    let rigid = RigidScene::new(&scene.model).with_context(|| file.clone())?;
+    let rigid = match a.resolve_overlaps {
+        None => RigidScene::new(&scene.model).with_context(|| file.clone())?,
+        Some(sweeps) => {
+            let (rigid, r) =
+                RigidScene::new_relaxed(&scene.model, sweeps).with_context(|| file.clone())?;
+            if r.before.count > 0 {
+                eprintln!(
+                    "{file}: {} overlaps at the start (worst {:.3e} m) relaxed in {} sweeps, {} left",
+                    r.before.count, r.before.worst, r.sweeps, r.left.count
+                );
+            }
+            rigid
+        }
+    };
     if !scene.inlets.is_empty() {
         anyhow::bail!(
             "{file}: inlets pour spheres into sphere-only scenes; this scene has other shapes"

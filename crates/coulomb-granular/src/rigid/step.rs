@@ -44,6 +44,9 @@ use coulomb::problem::GlobalProblem;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
+mod relax;
+pub use relax::{Overlaps, Relaxed};
+
 /// A world of rigid bodies and obstacles advanced by [`RigidWorld::step`].
 #[derive(Debug)]
 pub struct RigidWorld {
@@ -328,6 +331,44 @@ impl RigidWorld {
         };
         world.check_time_step()?;
         world.check_overlaps()?;
+        Ok(world)
+    }
+
+    /// [`RigidWorld::with_joints`] for a world whose bodies may interpenetrate at the start:
+    /// they are first moved apart by [`RigidWorld::relax_overlaps`] in at most `max_sweeps`
+    /// sweeps, then the world is refused as `with_joints` refuses it if points deeper than
+    /// `settings.max_initial_penetration` are left ([`RigidError::Interpenetration`]).
+    pub fn relaxed(
+        bodies: Vec<RigidBodyDesc>,
+        obstacles: Vec<RigidObstacle>,
+        materials: MaterialTable,
+        settings: RigidSettings,
+        joints: &[JointDesc],
+        max_sweeps: usize,
+    ) -> Result<(Self, Relaxed), RigidError> {
+        let mut world = Self::overlapping(bodies, obstacles, materials, settings, joints)?;
+        let relaxed = world.relax_overlaps(max_sweeps)?;
+        world.check_overlaps()?;
+        Ok((world, relaxed))
+    }
+
+    /// [`RigidWorld::with_joints`] without the check of initial interpenetrations (a world
+    /// whose state a checkpoint then replaces, or that [`RigidWorld::relaxed`] relaxes).
+    pub(crate) fn overlapping(
+        bodies: Vec<RigidBodyDesc>,
+        obstacles: Vec<RigidObstacle>,
+        materials: MaterialTable,
+        settings: RigidSettings,
+        joints: &[JointDesc],
+    ) -> Result<Self, RigidError> {
+        check_settings(&settings)?;
+        let limit = settings.max_initial_penetration;
+        let unchecked = RigidSettings {
+            max_initial_penetration: f64::MAX,
+            ..settings
+        };
+        let mut world = Self::with_joints(bodies, obstacles, materials, unchecked, joints)?;
+        world.settings.max_initial_penetration = limit;
         Ok(world)
     }
 
@@ -926,7 +967,8 @@ impl RigidWorld {
                 .filter(|(_, b)| !b.fixed)
                 .map(|(w, _)| *w)
                 .fold(f64::INFINITY, f64::min);
-            correct_positions(&problem, &end_gaps, 1e-3 * scale, 1e-4 * scale)
+            correct_positions(&problem, &end_gaps, 1e-3 * scale, 1e-4 * scale, 200)
+                .map(|(dq, _)| dq)
         } else {
             None
         };
@@ -1153,13 +1195,15 @@ impl RigidWorld {
 /// metric of M) with λ ≥ 0 that bring every g_i + (H_Nᵀ Δq)_i to ≥ 0, by projected
 /// Gauss–Seidel on λ until every gap is ≥ −`target` (at most 200 sweeps). Positions only: the
 /// velocities and the impulses are untouched, so the correction carries no load (the
-/// impulses written out balance the weight). None when nothing is below −`trigger`.
+/// impulses written out balance the weight). None when nothing is below −`trigger`; else the
+/// displacements and the sweeps done (at most `max_sweeps`).
 fn correct_positions(
     problem: &nsgs::Problem,
     end_gaps: &[f64],
     trigger: f64,
     target: f64,
-) -> Option<Vec<[f64; 6]>> {
+    max_sweeps: usize,
+) -> Option<(Vec<[f64; 6]>, usize)> {
     let worst = end_gaps.iter().map(|g| -g).fold(0.0, f64::max);
     if worst.is_nan() || worst <= trigger {
         return None;
@@ -1181,7 +1225,9 @@ fn correct_positions(
                 .sum()
         })
         .collect();
-    for _ in 0..200 {
+    let mut sweeps = 0;
+    while sweeps < max_sweeps {
+        sweeps += 1;
         let mut worst: f64 = 0.0;
         for (i, row) in problem.rows.iter().enumerate() {
             if w[i].is_nan() || w[i] <= 0.0 {
@@ -1207,7 +1253,10 @@ fn correct_positions(
             break;
         }
     }
-    dq.iter().flatten().all(|x| x.is_finite()).then_some(dq)
+    dq.iter()
+        .flatten()
+        .all(|x| x.is_finite())
+        .then_some((dq, sweeps))
 }
 
 /// The joints' positions are projected back until every |C| ≤ this (m or rad), at most 100

@@ -13,9 +13,7 @@ use crate::exit::Outcome;
 use crate::sim_args::{Args, Method};
 use anyhow::{bail, Context};
 use clap::Parser;
-use coulomb_granular::model::{
-    check_containment, obstacle_penetration, overlaps, resolve_overlaps, BuildChecks, SceneError,
-};
+use coulomb_granular::model::{overlaps, relax, BuildChecks, SceneError};
 use coulomb_granular::scene_file::{BuildOptions, BuiltScene, LoadedScene, MethodName};
 use coulomb_granular::{Simulation, World};
 use std::path::Path;
@@ -176,25 +174,18 @@ fn relaxed(scene: &BuiltScene, sweeps: usize, file: &str) -> anyhow::Result<Worl
     };
     let (mut world, _) = scene.build(&unchecked)?;
     let before = overlaps(&world);
-    let done = resolve_overlaps(&mut world, sweeps);
+    let relaxed = relax(&mut world, sweeps);
     if before.count > 0 {
+        let (done, left) = match &relaxed {
+            Ok(r) => (r.done.sweeps, 0),
+            Err(_) => (sweeps, overlaps(&world).count),
+        };
         eprintln!(
-            "{file}: {} overlaps at the start (worst {:.3e} m) relaxed in {} sweeps, {} left",
-            before.count, before.worst, done.sweeps, done.left.count
+            "{file}: {} overlaps at the start (worst {:.3e} m) relaxed in {done} sweeps, {left} left",
+            before.count, before.worst
         );
     }
-    check_containment(&world)?;
-    if let Some(e) = obstacle_penetration(&world) {
-        return Err(e.into());
-    }
-    if done.left.count > 0 {
-        return Err(SceneError::Overlaps {
-            count: done.left.count,
-            worst: done.left.worst,
-            pair: done.left.pair,
-        }
-        .into());
-    }
+    relaxed?;
     Ok(world)
 }
 

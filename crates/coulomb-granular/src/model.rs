@@ -756,6 +756,36 @@ pub fn resolve_overlaps(world: &mut World, max_sweeps: usize) -> Resolved {
     }
 }
 
+/// Result of [`relax`]: the overlaps found, and the relaxation's [`Resolved`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Relaxation {
+    /// overlaps before the relaxation
+    pub before: Overlaps,
+    /// sweeps done and overlaps left (none: `relax` refuses the world otherwise)
+    pub done: Resolved,
+}
+
+/// `--resolve-overlaps` (and Python's `resolve_overlaps=`) on a world built without the
+/// overlap and containment checks: [`resolve_overlaps`] in at most `max_sweeps` sweeps, then
+/// the checks the build skipped: containment ([`check_containment`]), spheres still inside an
+/// obstacle ([`obstacle_penetration`]) and overlaps left ([`SceneError::Overlaps`]).
+pub fn relax(world: &mut World, max_sweeps: usize) -> Result<Relaxation, SceneError> {
+    let before = overlaps(world);
+    let done = resolve_overlaps(world, max_sweeps);
+    check_containment(world)?;
+    if let Some(e) = obstacle_penetration(world) {
+        return Err(e);
+    }
+    if done.left.count > 0 {
+        return Err(SceneError::Overlaps {
+            count: done.left.count,
+            worst: done.left.worst,
+            pair: done.left.pair,
+        });
+    }
+    Ok(Relaxation { before, done })
+}
+
 /// A name → index map of the materials of a model.
 struct MaterialIndex {
     names: Vec<String>,

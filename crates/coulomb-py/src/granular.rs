@@ -226,6 +226,25 @@ pub struct PySimulation {
     frames: Option<(PathBuf, coulomb_granular::output::VtkWriter)>,
 }
 
+/// The build checks of a scene whose overlaps `resolve_overlaps=` relaxes: those
+/// [`relaxed`] makes after the relaxation are skipped.
+const UNCHECKED: BuildChecks = BuildChecks {
+    overlaps: false,
+    containment: false,
+    memory: true,
+};
+
+/// `built` with its overlaps relaxed in at most `sweeps` sweeps and the skipped checks made
+/// (`coulomb_granular::model::relax`, as `coulomb simulate --resolve-overlaps`).
+fn relaxed(
+    built: Result<(World, Params), coulomb_granular::SceneError>,
+    sweeps: usize,
+) -> Result<(World, Params), coulomb_granular::SceneError> {
+    let (mut world, params) = built?;
+    coulomb_granular::model::relax(&mut world, sweeps)?;
+    Ok((world, params))
+}
+
 #[pymethods]
 impl PySimulation {
     /// A built-in scene (`box`, `funnel`, `vibrating-plate`, `rotating-drum`) of `beads`
@@ -272,7 +291,7 @@ impl PySimulation {
     /// and `meshes` the arrays (see `scene.rs`); `params` as for the constructor. Built and
     /// validated with every check of `SceneModel::build`, without the GIL.
     #[staticmethod]
-    #[pyo3(signature = (json, batches, meshes, params, solver))]
+    #[pyo3(signature = (json, batches, meshes, params, solver, resolve_overlaps=None))]
     fn from_scene(
         py: Python<'_>,
         json: &str,
@@ -280,6 +299,7 @@ impl PySimulation {
         meshes: &Bound<'_, PyList>,
         params: &Bound<'_, PyDict>,
         solver: Option<&Bound<'_, PyDict>>,
+        resolve_overlaps: Option<usize>,
     ) -> PyResult<Self> {
         let arrays = SceneArrays::extract(batches, meshes)?;
         let json = json.to_string();
@@ -287,7 +307,10 @@ impl PySimulation {
             .detach(move || model_from_parts(&json, arrays))
             .map_err(|e| e.into_py(py))?;
         let rest = apply_to_model(&mut model, params)?;
-        let built = py.detach(move || model.build());
+        let built = py.detach(move || match resolve_overlaps {
+            None => model.build(),
+            Some(sweeps) => relaxed(model.build_with(&UNCHECKED), sweeps),
+        });
         Self::finish(py, built, rest, solver)
     }
 
@@ -295,13 +318,14 @@ impl PySimulation {
     /// `seed` replaces the file's), `params` applied on top of its step settings; with the
     /// file's inlets when it has some.
     #[staticmethod]
-    #[pyo3(signature = (path, seed, params, solver))]
+    #[pyo3(signature = (path, seed, params, solver, resolve_overlaps=None))]
     fn from_file(
         py: Python<'_>,
         path: PathBuf,
         seed: Option<u64>,
         params: &Bound<'_, PyDict>,
         solver: Option<&Bound<'_, PyDict>>,
+        resolve_overlaps: Option<usize>,
     ) -> PyResult<(Self, Option<PyFeed>)> {
         let file_err = |e: SceneFileError| crate::errors::scene_file_error(py, &e);
         let loaded = py.detach(|| LoadedScene::load(&path)).map_err(file_err)?;
@@ -318,9 +342,16 @@ impl PySimulation {
             inlets: built.inlets.clone(),
         });
         let rest = apply_to_model(&mut built.model, params)?;
-        let world_params = py
-            .detach(move || built.build(&BuildChecks::default()))
-            .map_err(file_err)?;
+        let world_params = match resolve_overlaps {
+            None => py
+                .detach(move || built.build(&BuildChecks::default()))
+                .map_err(file_err)?,
+            Some(sweeps) => {
+                let unchecked = py.detach(|| built.build(&UNCHECKED)).map_err(file_err)?;
+                let relaxed = py.detach(move || relaxed(Ok(unchecked), sweeps));
+                relaxed.map_err(|e| crate::errors::scene_error(py, &e))?
+            }
+        };
         Ok((Self::finish(py, Ok(world_params), rest, solver)?, feed))
     }
 

@@ -38,9 +38,16 @@ pub(crate) const RIGID_H: f64 = 1e-3;
 /// Default tolerance of a rigid scene built in Python (that of the shipped rigid scene files).
 pub(crate) const RIGID_TOL: f64 = 1e-8;
 
-fn build(py: Python<'_>, model: SceneModel) -> PyResult<PyRigidSimulation> {
+fn build(
+    py: Python<'_>,
+    model: SceneModel,
+    resolve_overlaps: Option<usize>,
+) -> PyResult<PyRigidSimulation> {
     let scene = py
-        .detach(move || RigidScene::new(&model))
+        .detach(move || match resolve_overlaps {
+            None => RigidScene::new(&model),
+            Some(sweeps) => RigidScene::new_relaxed(&model, sweeps).map(|(s, _)| s),
+        })
         .map_err(|e| crate::errors::scene_error(py, &e))?;
     Ok(PyRigidSimulation {
         scene,
@@ -53,13 +60,14 @@ impl PyRigidSimulation {
     /// A scene built in Python (as `_Simulation.from_scene`); `params` may set the step
     /// settings h, theta, tol, max_sweeps and the default law mu, restitution.
     #[staticmethod]
-    #[pyo3(signature = (json, batches, meshes, params))]
+    #[pyo3(signature = (json, batches, meshes, params, resolve_overlaps=None))]
     fn from_scene(
         py: Python<'_>,
         json: &str,
         batches: &Bound<'_, PyList>,
         meshes: &Bound<'_, PyList>,
         params: &Bound<'_, PyDict>,
+        resolve_overlaps: Option<usize>,
     ) -> PyResult<Self> {
         let arrays = SceneArrays::extract(batches, meshes)?;
         let json = json.to_string();
@@ -76,17 +84,18 @@ impl PyRigidSimulation {
                 "'{k}' is not a parameter of rigid-body scenes (h, theta, tol, max_sweeps, mu, restitution)"
             )));
         }
-        build(py, model)
+        build(py, model, resolve_overlaps)
     }
 
     /// The scene of a scene file with shaped bodies; `params` as for `from_scene`.
     #[staticmethod]
-    #[pyo3(signature = (path, seed, params))]
+    #[pyo3(signature = (path, seed, params, resolve_overlaps=None))]
     fn from_file(
         py: Python<'_>,
         path: PathBuf,
         seed: Option<u64>,
         params: &Bound<'_, PyDict>,
+        resolve_overlaps: Option<usize>,
     ) -> PyResult<Self> {
         let file_err = |e| crate::errors::scene_file_error(py, &e);
         let loaded = py.detach(|| LoadedScene::load(&path)).map_err(file_err)?;
@@ -101,7 +110,7 @@ impl PyRigidSimulation {
                 "'{k}' is not a parameter of rigid-body scenes"
             )));
         }
-        build(py, built.model)
+        build(py, built.model, resolve_overlaps)
     }
 
     /// One time step; its record (`coulomb_granular::StepRecord`, the same keys for every

@@ -104,3 +104,31 @@ def test_a_fixed_body_keeps_velocity_zero():
     v[np.isnan(sim.radii)] = 0.0  # the fixed cube stays at rest
     sim.set_velocities(v)
     assert np.array_equal(sim.velocities, v)
+
+
+@pytest.mark.parametrize("shaped", [False, True])
+def test_resolve_overlaps_means_the_same_for_every_scene(shaped: bool) -> None:
+    """``resolve_overlaps=`` (``coulomb simulate --resolve-overlaps``) relaxes spheres and
+    bodies of any shape that start inside each other or the floor; without it they are
+    refused, and a zero budget that leaves overlaps is refused too."""
+    scene = Scene()
+    scene.add_plane((0, 0, 0), (0, 0, 1))
+    scene.add_spheres([(0.0, 0.0, 0.2), (0.06, 0.0, 0.2)], radii=0.05)
+    if shaped:
+        scene.add_body(Cuboid((0.1, 0.1, 0.05)), (1.0, 0.0, 0.04))
+    import coulomb
+    with pytest.raises(coulomb.SceneError):
+        Simulation(scene)
+    with pytest.raises(coulomb.SceneError):
+        Simulation(scene, resolve_overlaps=0)
+    sim = Simulation(scene, resolve_overlaps=1000)
+    assert sim.is_rigid == shaped
+    p = np.asarray(sim.positions)
+    assert np.linalg.norm(p[0] - p[1]) >= 0.1 - 1e-8
+    if shaped:
+        assert p[2][2] >= 0.05 - 1e-8
+    assert sim.step()["converged"]
+    with pytest.raises(coulomb.SceneError):
+        Simulation(scene, resolve_overlaps=-1)
+    with pytest.raises(coulomb.SceneError):
+        Simulation("box", resolve_overlaps=10)

@@ -803,6 +803,17 @@ class Scene:
 
 
 
+def _sweeps(resolve_overlaps: Optional[int]) -> Optional[int]:
+    """``resolve_overlaps`` checked: None, or a number of sweeps ≥ 0."""
+    if resolve_overlaps is None:
+        return None
+    if isinstance(resolve_overlaps, bool) or not isinstance(resolve_overlaps, int) \
+            or resolve_overlaps < 0:
+        raise _arg_error("resolve_overlaps",
+                         f"must be a number of sweeps >= 0, got {resolve_overlaps!r}")
+    return resolve_overlaps
+
+
 class Simulation:
     """A granular simulation of a :class:`Scene` of your own, or of the built-in ``scene``
     (``box``, ``funnel``, ``vibrating-plate``, ``rotating-drum``) with ``beads`` spheres built
@@ -824,26 +835,36 @@ class Simulation:
     ``h = 1e-3`` and ``tol = 1e-8``; an ``h`` in which a body falls (g h²) or travels more than
     half its thinnest width, or a sphere more than its radius, raises :class:`ValueError`.
 
+    ``resolve_overlaps`` (a number of sweeps, as ``coulomb simulate --resolve-overlaps
+    SWEEPS``; the command's default is 1000): bodies of any shape overlapping each other or an
+    obstacle at the start are moved apart first, and the scene is refused if some overlap is
+    left; without it such a scene raises :class:`coulomb.SceneError`.
+
     Unknown names raise :class:`TypeError`, values out of range :class:`ValueError`; a scene
     that cannot be built raises :class:`coulomb.SceneError` (a ``ValueError``) naming the
     datum. Building and stepping run without the GIL.
     """
 
     def __init__(self, scene: Union[Scene, str] = "box", beads: int = 100, seed: int = 1,
-                 solver: Optional[Mapping[str, Any]] = None, **params: Any) -> None:
+                 solver: Optional[Mapping[str, Any]] = None,
+                 resolve_overlaps: Optional[int] = None, **params: Any) -> None:
+        relax = _sweeps(resolve_overlaps)
         if isinstance(scene, Scene):
             desc, batches, meshes = scene._parts()
             if scene.has_shapes:
                 if scene._inlets or solver:
                     raise _arg_error("scene", "inlets and solver= are for sphere-only scenes")
                 self._sim = _coulomb._RigidSimulation.from_scene(desc, batches, meshes,
-                                                                 dict(params))
+                                                                 dict(params), relax)
                 return
             if scene._inlets:  # checked before the build
                 self._feed = _coulomb._Feed(desc, json.dumps(scene._inlets, allow_nan=False))
             self._sim = _coulomb._Simulation.from_scene(desc, batches, meshes, dict(params),
-                                                        dict(solver or {}))
+                                                        dict(solver or {}), relax)
         elif isinstance(scene, str):
+            if relax is not None:
+                raise _arg_error("resolve_overlaps", "the built-in scenes have no overlaps to "
+                                 "relax; it is for scenes of your own")
             self._sim = _coulomb._Simulation(scene, int(beads), int(seed), dict(params),
                                              dict(solver or {}))
         else:
@@ -856,6 +877,7 @@ class Simulation:
     @staticmethod
     def from_file(path: Union[str, "os.PathLike[str]"], seed: Optional[int] = None,
                   solver: Optional[Mapping[str, Any]] = None,
+                  resolve_overlaps: Optional[int] = None,
                   **params: Any) -> "Simulation":
         """The scene of a scene file (``.toml`` or ``.json``, the format of ``coulomb
         simulate SCENE.toml``, docs/granular.md "Scene files"); ``seed`` replaces the file's,
@@ -863,13 +885,14 @@ class Simulation:
         the file, line and key (:class:`coulomb.SceneError`; ``OSError`` when it cannot be
         read). The file's inlets pour as in ``coulomb simulate``."""
         sim = Simulation.__new__(Simulation)
+        relax = _sweeps(resolve_overlaps)
         if _coulomb._scene_file_has_shapes(os.fspath(path)):
             sim._sim = _coulomb._RigidSimulation.from_file(
-                os.fspath(path), None if seed is None else int(seed), dict(params))
+                os.fspath(path), None if seed is None else int(seed), dict(params), relax)
             return sim
         sim._sim, sim._feed = _coulomb._Simulation.from_file(
             os.fspath(path), None if seed is None else int(seed), dict(params),
-            dict(solver or {}))
+            dict(solver or {}), relax)
         return sim
 
     def step(self) -> StepStats:

@@ -110,10 +110,14 @@ fn main() -> ExitCode {
     allocator::keep_freed_memory();
     quiet_broken_pipe();
     let matches = allow_negative_numbers(Cli::command()).get_matches();
-    let cli = match Cli::from_arg_matches(&matches) {
+    let mut cli = match Cli::from_arg_matches(&matches) {
         Ok(c) => c,
         Err(e) => e.exit(),
     };
+    if let (Command::Simulate(a), Some(("simulate", m))) = (&mut cli.command, matches.subcommand())
+    {
+        a.given = sim_args::given_options(m);
+    }
     let json = cli.command.json();
     let result: anyhow::Result<Outcome> = match cli.command {
         Command::Info(a) => cmd::info::run(a),

@@ -26,8 +26,10 @@ struct Defaults {
     args: Args,
 }
 
-/// The command line's values of the options a scene file sets, when they differ from the
-/// defaults: refused, since the file's values are used.
+/// The options a scene file sets that the command line gives (`Args::given`, or a value
+/// that differs from the default): refused, since the file's values are used — also when
+/// given with the default value (`--tol 1e-4` on a file with `tol = 1e-2` is refused, not
+/// dropped).
 fn refused_options(args: &Args) -> Vec<&'static str> {
     let Ok(d) = Defaults::try_parse_from(["simulate", "x.toml"]) else {
         return Vec::new();
@@ -35,7 +37,8 @@ fn refused_options(args: &Args) -> Vec<&'static str> {
     let d = d.args;
     let mut out = Vec::new();
     let mut check = |differs: bool, name: &'static str| {
-        if differs {
+        let id = name.trim_start_matches("--").replace('-', "_");
+        if differs || args.given.contains(&id) {
             out.push(name);
         }
     };
@@ -473,7 +476,11 @@ mod tests {
     fn args(extra: &[&str]) -> Args {
         let mut v = vec!["simulate", "x.toml"];
         v.extend_from_slice(extra);
-        Defaults::try_parse_from(v).unwrap().args
+        use clap::{CommandFactory, FromArgMatches};
+        let m = Defaults::command().try_get_matches_from(v).unwrap();
+        let mut a = Defaults::from_arg_matches(&m).unwrap().args;
+        a.given = crate::sim_args::given_options(&m);
+        a
     }
 
     #[test]
@@ -490,6 +497,12 @@ mod tests {
         assert_eq!(
             refused_options(&args(&["--mu", "0.5", "--cold"])),
             vec!["--mu", "--cold"]
+        );
+        // given with the default value: still the file's setting, so refused, not dropped
+        assert_eq!(refused_options(&args(&["--tol", "1e-4"])), vec!["--tol"]);
+        assert_eq!(
+            refused_options(&args(&["--method", "nsgs", "--max-sweeps", "20000"])),
+            vec!["--method", "--max-sweeps"]
         );
     }
 

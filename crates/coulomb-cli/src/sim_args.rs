@@ -206,6 +206,18 @@ pub struct Args {
     #[cfg(feature = "mpi")]
     #[arg(long, value_enum, value_name = "WHAT")]
     pub balance: Option<BalanceArg>,
+    /// the ids of the options given on the command line ([`given_options`], set by `main`),
+    /// so that an option a scene file sets is refused even when given with its default value
+    #[arg(skip)]
+    pub given: Vec<String>,
+}
+
+/// The ids of the arguments of `m` given on the command line (not defaulted).
+pub fn given_options(m: &clap::ArgMatches) -> Vec<String> {
+    m.ids()
+        .filter(|id| m.value_source(id.as_str()) == Some(clap::parser::ValueSource::CommandLine))
+        .map(|id| id.as_str().to_string())
+        .collect()
 }
 
 /// `--balance`: what the rebalancing of a distributed run equalises.

@@ -159,6 +159,15 @@ fn bad_scene_files_exit_2_with_the_place_and_write_nothing() {
     ]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--dt"));
+    // the same with the CLI's default value: refused, not silently dropped for the file's
+    let out = coulomb(&[
+        "simulate",
+        scenes_dir().join("box.toml").to_str().unwrap(),
+        "--tol",
+        "1e-4",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--tol"));
     // a missing file
     let out = coulomb(&["simulate", "no/such/scene.toml"]);
     assert_eq!(out.status.code(), Some(2));

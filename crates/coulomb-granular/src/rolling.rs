@@ -116,6 +116,38 @@ pub struct RollingState {
     pub impulses: Vec<[f64; 3]>,
     /// the last step's rolling part of the residual sqrt(Σ ‖e_R,ᵢ‖²) / scale
     pub rolling_error: f64,
+    /// the sweep's constants (defaults: the module's constants); for probes of the method
+    /// (`examples/rolling_probe.rs`), not a user setting
+    #[doc(hidden)]
+    pub tuning: Tuning,
+}
+
+/// The constants of [`solve_step`]'s sweep, for probes (`examples/rolling_probe.rs`).
+#[doc(hidden)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tuning {
+    /// [`RELAXATION`]
+    pub relaxation: f64,
+    /// [`LOCAL`]
+    pub local: usize,
+    /// [`LOCAL_EXACT`]
+    pub local_exact: usize,
+    /// [`WINDOW`]
+    pub window: usize,
+    /// [`STALLED_RELAXATION`]
+    pub stalled_relaxation: f64,
+}
+
+impl Default for Tuning {
+    fn default() -> Self {
+        Self {
+            relaxation: RELAXATION,
+            local: LOCAL,
+            local_exact: LOCAL_EXACT,
+            window: WINDOW,
+            stalled_relaxation: STALLED_RELAXATION,
+        }
+    }
 }
 
 /// Effective radius R_e of a contact: R_A R_B / (R_A + R_B) between two spheres, R_A against an
@@ -653,12 +685,13 @@ pub fn solve_step(
     let (mut err, _) = error_of(&blocks, &r, &y, &v, q_norm);
     let mut sweeps = 0;
     let (mut stalled, mut window_start) = (false, err);
-    let (mut relax, mut relax_start) = (RELAXATION, f64::INFINITY);
+    let tuning = state.tuning;
+    let (mut relax, mut relax_start) = (tuning.relaxation, f64::INFINITY);
     let mut order: Vec<usize> = (0..blocks.len()).collect();
     // xorshift64 state of the random sweep orders (deterministic)
     let mut seed: u64 = 0x9E37_79B9_7F4A_7C15;
     let max_sweeps = settings.max_inner.max(1);
-    let mut stalled_omega = STALLED_RELAXATION;
+    let mut stalled_omega = tuning.stalled_relaxation;
     let status = loop {
         if !err.is_finite() {
             break Status::NumericalError;
@@ -681,13 +714,13 @@ pub fn solve_step(
             }
             relax_start = err;
         }
-        if sweeps > 0 && sweeps % WINDOW == 0 {
+        if sweeps > 0 && sweeps % tuning.window == 0 {
             if stalled && err > window_start {
                 // the error grew over a window: switch between over-relaxed and damped sweeps
                 stalled_omega = if stalled_omega > 1.0 {
                     DAMPING
                 } else {
-                    STALLED_RELAXATION
+                    tuning.stalled_relaxation
                 };
             }
             if err > 0.5 * window_start && relax == 1.0 {
@@ -701,7 +734,11 @@ pub fn solve_step(
             (false, 0) => 1.0,
             (false, _) => relax,
         };
-        let local = if stalled { LOCAL_EXACT } else { LOCAL };
+        let local = if stalled {
+            tuning.local_exact
+        } else {
+            tuning.local
+        };
         if stalled {
             // a fresh random order each sweep (Fisher–Yates)
             for k in (1..order.len()).rev() {

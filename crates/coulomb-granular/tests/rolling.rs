@@ -121,3 +121,48 @@ fn zero_rolling_friction_is_the_plain_step() {
     assert!(Simulation::new(Scene::Box.build(10, 1), params(-1.0)).is_err());
     assert!(Simulation::new(Scene::Box.build(10, 1), params(f64::NAN)).is_err());
 }
+
+/// The sweep's constants (`rolling::Tuning`, used by `examples/rolling_probe.rs`) change the
+/// path, not the law: from the same state, plain sweeps (ω = 1, blocks solved to rounding)
+/// converge on every step like the default sweep, to velocities that differ by no more than
+/// the tolerance allows.
+#[test]
+fn the_sweep_tuning_changes_the_path_not_the_solution() {
+    let d = coulomb_granular::rolling::Tuning::default();
+    let plain = coulomb_granular::rolling::Tuning {
+        relaxation: 1.0,
+        local: 50,
+        ..d
+    };
+    let mut sim = Simulation::new(Scene::Box.build(40, 4), params(0.1)).unwrap();
+    let mut compared = 0;
+    for _ in 0..40 {
+        let mut other = sim.clone();
+        other.rolling.tuning = plain;
+        let a = sim.step().unwrap();
+        let b = other.step().unwrap();
+        assert!(
+            a.converged && b.converged,
+            "step {}: {:.2e} {:.2e}",
+            a.step,
+            a.error,
+            b.error
+        );
+        assert!(a.error <= 1e-4 && b.error <= 1e-4);
+        if a.contacts == 0 {
+            continue;
+        }
+        compared += 1;
+        // both solve the same step problem to err ≤ 1e-4 relative to the step's scale, of
+        // which g h (the free fall of one step) is a part
+        let scale = sim
+            .max_speed()
+            .max(other.max_speed())
+            .max(9.81 * sim.params.h);
+        for (p, q) in sim.world.bodies.iter().zip(&other.world.bodies) {
+            let dv = (p.velocity - q.velocity).norm();
+            assert!(dv <= 1e-2 * scale, "step {}: |Δv| = {dv:.2e}", a.step);
+        }
+    }
+    assert!(compared > 10);
+}

@@ -13,7 +13,7 @@ use crate::exit::Outcome;
 use crate::sim_args::{Args, Method};
 use anyhow::{bail, Context};
 use clap::Parser;
-use coulomb_granular::model::{overlaps, relax, BuildChecks, SceneError};
+use coulomb_granular::model::{overlaps, relax, BuildChecks};
 use coulomb_granular::scene_file::{BuildOptions, BuiltScene, LoadedScene, MethodName};
 use coulomb_granular::{Simulation, World};
 use std::path::Path;

@@ -28,37 +28,27 @@
 //! sim.step().unwrap();
 //! ```
 
-pub mod assembly;
-pub mod checkpoint;
-mod colour_progress;
-pub mod contact;
+pub mod bodies;
+pub mod collision;
 #[cfg(feature = "mpi")]
 pub mod distributed;
-pub mod generate;
-pub mod import;
-pub mod laws;
+pub mod io;
 pub mod math;
-pub mod mesh;
-pub mod model;
-pub mod nsgs;
-pub mod output;
-pub mod output_dir;
-pub mod projection;
-pub mod report;
 pub mod rigid;
-pub mod rigid_checkpoint;
-pub mod rigid_scene;
-pub mod rolling;
-pub mod run;
 pub mod scene;
-pub mod scene_file;
-pub mod scene_save;
-pub mod shape;
-pub mod simulation;
-pub mod subspace;
-pub mod tunnelling;
+pub mod step;
 pub mod validation;
-pub mod world;
+
+// The modules' paths from before the folders (issue 52, item 6), kept so that
+// `coulomb_granular::world::World` and the like still name the same items.
+pub use bodies::{mesh, shape, world};
+pub use collision::{contact, tunnelling};
+pub use io::{checkpoint, output, output_dir, report};
+pub use rigid::{checkpoint as rigid_checkpoint, scene as rigid_scene};
+pub use scene::{file as scene_file, generate, import, model, save as scene_save};
+use step::colour_progress;
+pub use step::{assembly, nsgs, projection, rolling, run, simulation, subspace};
+pub use validation::laws;
 
 pub use checkpoint::CheckpointError;
 pub use contact::{Activation, Contact, Partner};

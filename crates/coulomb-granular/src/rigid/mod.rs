@@ -18,10 +18,12 @@
 pub use parry3d_f64 as parry;
 
 pub mod body;
+pub mod checkpoint;
 pub mod contacts;
 pub mod joint_checks;
 pub mod joints;
 pub mod polytope;
+pub mod scene;
 pub mod step;
 pub mod validation;
 

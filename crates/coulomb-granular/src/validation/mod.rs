@@ -2,6 +2,8 @@
 //! from mechanics, the measured one and the tolerance, used by the fast tests
 //! (`tests/physics.rs`) and by `coulomb validate`.
 
+pub mod laws;
+
 use crate::projection::penetrations;
 use crate::simulation::{Params, Simulation, SimulationError};
 use crate::world::{Obstacle, Shape, Sphere, World, GRAVITY};

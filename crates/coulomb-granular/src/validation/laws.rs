@@ -53,19 +53,19 @@ type Embedded = (&'static str, &'static str);
 
 const INCLINE: Embedded = (
     "examples/scenes/validation/incline.toml",
-    include_str!("../../../examples/scenes/validation/incline.toml"),
+    include_str!("../../../../examples/scenes/validation/incline.toml"),
 );
 const JANSSEN: Embedded = (
     "examples/scenes/validation/janssen.toml",
-    include_str!("../../../examples/scenes/validation/janssen.toml"),
+    include_str!("../../../../examples/scenes/validation/janssen.toml"),
 );
 const BEVERLOO: Embedded = (
     "examples/scenes/validation/beverloo.toml",
-    include_str!("../../../examples/scenes/validation/beverloo.toml"),
+    include_str!("../../../../examples/scenes/validation/beverloo.toml"),
 );
 const REPOSE: Embedded = (
     "examples/scenes/validation/repose.toml",
-    include_str!("../../../examples/scenes/validation/repose.toml"),
+    include_str!("../../../../examples/scenes/validation/repose.toml"),
 );
 
 /// Every law case, with the section it belongs to: the incline always, the others when

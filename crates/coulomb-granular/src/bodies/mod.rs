@@ -1,0 +1,6 @@
+//! The bodies: spheres, obstacles and the world that holds them (`world`), the shapes of
+//! other bodies and their mass properties (`shape`), triangle meshes (`mesh`).
+
+pub mod mesh;
+pub mod shape;
+pub mod world;

@@ -1,0 +1,11 @@
+//! Scenes: the model (`model`), its files (`file`, `save`), fills and particle files
+//! (`generate`, `import`) and the built-in scenes (`builtin`, re-exported here).
+
+pub mod builtin;
+pub mod file;
+pub mod generate;
+pub mod import;
+pub mod model;
+pub mod save;
+
+pub use builtin::*;

@@ -1,0 +1,13 @@
+//! The Moreau–Jean step (2.5)–(2.7) of sphere scenes as named phases: assemble the problem
+//! (2.10) (`assembly`), solve it by body-level Gauss–Seidel (`nsgs`, `subspace`, `rolling`)
+//! with the library as fallback, correct positions (`projection`), integrate
+//! (`simulation`), and whole runs (`run`).
+
+pub mod assembly;
+pub(crate) mod colour_progress;
+pub mod nsgs;
+pub mod projection;
+pub mod rolling;
+pub mod run;
+pub mod simulation;
+pub mod subspace;

@@ -34,17 +34,58 @@ def strip_comments(text):
     return re.sub(r"//[^\n]*", "", text)
 
 
-def resolve(path, mods):
-    """The longest prefix of `path` (a list of names) that is a module."""
+def reexports(mods):
+    """Modules re-exported under another path by `pub use` in a module file: `pub use a::b;`,
+    `pub use a::{b, c as d};` (aliases: the new path -> the module) and `pub use a::*;`
+    (globs: the re-exporting module -> the modules whose items it re-exports)."""
+    aliases, globs = {}, {}
+    stmt = re.compile(r"\bpub(?:\([a-z]+\))?\s+use\s+(?:self::)?([^;]*);", re.S)
+    for m, path in mods.items():
+        text = strip_comments(open(path, encoding="utf-8").read())
+        prefix = m.split("::") if m else []
+        for rest in stmt.findall(text):
+            head, _, group = rest.partition("{")
+            head = [p for p in head.strip().strip(":").split("::") if p]
+            items = [g.strip() for g in group.rstrip("}").split(",")] if group else [""]
+            for item in items:
+                if not item and not head:
+                    continue
+                name, _, alias = item.partition(" as ")
+                full = prefix + head + [p for p in name.strip().split("::") if p]
+                if full and full[-1] == "*":
+                    target = "::".join(full[:-1])
+                    if target in mods:
+                        globs.setdefault(m, []).append(target)
+                    continue
+                target = "::".join(full)
+                if target in mods:
+                    new = prefix + [(alias or full[-1]).strip()]
+                    if "::".join(new) != target:
+                        aliases["::".join(new)] = target
+    return aliases, globs
+
+
+def resolve(path, mods, aliases=None, globs=None):
+    """The longest prefix of `path` (a list of names) that is a module, through the
+    re-exports (`reexports`)."""
+    aliases, globs = aliases or {}, globs or {}
+    for k in range(len(path), 0, -1):
+        name = "::".join(path[:k])
+        if name in aliases:
+            path = aliases[name].split("::") + path[k:]
+            break
     for k in range(len(path), 0, -1):
         name = "::".join(path[:k])
         if name in mods:
+            if k < len(path) and globs.get(name):
+                return globs[name][0]
             return name
     return None
 
 
 def edges(mods):
     out = {m: set() for m in mods}
+    aliases, globs = reexports(mods)
     use_group = re.compile(r"\buse\s+(crate|super)::([^;]*);", re.S)
     inline = re.compile(r"\b(crate|super)((?:::[A-Za-z_][A-Za-z0-9_]*)+)")
     for m, path in mods.items():
@@ -63,7 +104,7 @@ def edges(mods):
         for root, rest in inline.findall(text):
             paths.append(base[root] + rest.strip(":").split("::"))
         for p in paths:
-            target = resolve(p, mods)
+            target = resolve(p, mods, aliases, globs)
             if target is not None and target != m and not m.startswith(target + "::") and target != "":
                 out[m].add(target)
     return out

@@ -17,8 +17,8 @@
 //!
 //! The bodies keep the model's order (`bodies`, then the spheres of each batch).
 
+use crate::bodies::surface::{obstacle_surface, Extent};
 use crate::model::{BodyShape, BodySpec, SceneError, SceneModel};
-use crate::output::{obstacle_surface, Extent};
 use crate::rigid::parry::math::Vector;
 use crate::rigid::parry::shape::SharedShape;
 use crate::rigid::{

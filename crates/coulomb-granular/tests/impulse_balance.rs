@@ -165,3 +165,60 @@ fn a_packed_column_at_rest_puts_its_whole_weight_on_the_floor_and_walls() {
     let b = balance(packed_column(20), false, 1e-2, 150, 100);
     assert!((b.mean - 1.0).abs() <= 1e-3, "no correction: {:.6}", b.mean);
 }
+
+/// The same property on the rigid-body engine, whose position correction moves positions only
+/// (`RigidSettings::position_correction`): a pyramid of 14 cubes (3 layers, each cube on four)
+/// on the floor, each step solved to 10⁻⁴ (loose, so that contacts sink and the correction
+/// acts) or to the default 10⁻⁸: every step Σ floor r_z = M |g| h + ΔP_z to round-off, and over
+/// the last 100 of 150 steps the floor carries the weight, mean Σ r_z / (M |g| h) = 1 to 10⁻³.
+#[test]
+fn a_pyramid_of_boxes_puts_its_whole_weight_on_the_floor() {
+    use coulomb_granular::rigid::validation::{cube_pyramid, floor, one_material};
+    use coulomb_granular::rigid::{RigidPartner, RigidSettings, RigidWorld};
+    for tol in [1e-4, 1e-8] {
+        let settings = RigidSettings {
+            tolerance: tol,
+            ..RigidSettings::default()
+        };
+        let (h, g) = (settings.h, settings.gravity[2].abs());
+        let mut w = RigidWorld::new(
+            cube_pyramid(3).unwrap(),
+            vec![floor()],
+            one_material(0.5),
+            settings,
+        )
+        .unwrap();
+        let weight = w.masses().iter().sum::<f64>() * g;
+        let momentum = |w: &RigidWorld| -> f64 {
+            w.masses()
+                .iter()
+                .zip(w.velocities())
+                .map(|(m, v)| m * v[2])
+                .sum()
+        };
+        let (steps, last) = (150, 100);
+        let (mut mean, mut worst, mut deepest) = (0.0, 0.0f64, 0.0f64);
+        for k in 0..steps {
+            let p0 = momentum(&w);
+            let r = w.step().unwrap();
+            deepest = deepest.max(r.max_penetration);
+            if k + last < steps {
+                continue;
+            }
+            let up: f64 = w
+                .contacts()
+                .iter()
+                .filter(|c| matches!(c.b, RigidPartner::Obstacle(_)))
+                .map(|c| c.world_impulse()[2])
+                .sum();
+            let dp = momentum(&w) - p0;
+            mean += up / (weight * h) / last as f64;
+            worst = worst.max((up - weight * h - dp).abs() / (weight * h));
+        }
+        eprintln!(
+            "rigid, tol {tol:e}: mean Σ r_z / (M g h) = {mean:.6}, largest momentum residual {worst:.2e}, deepest penetration at a step start {deepest:.2e} m"
+        );
+        assert!((mean - 1.0).abs() <= 1e-3, "tol {tol:e}: {mean:.6}");
+        assert!(worst <= 1e-9, "tol {tol:e}: {worst:e}");
+    }
+}

@@ -376,7 +376,7 @@ fn jointed_bodies_may_overlap() {
 #[test]
 fn validate_joint_checks_pass() {
     let checks = coulomb_granular::rigid::joint_checks::checks(true).unwrap();
-    assert_eq!(checks.len(), 5);
+    assert_eq!(checks.len(), 6);
     for (section, c) in &checks {
         assert_eq!(section, "Joints");
         eprintln!(
@@ -453,4 +453,19 @@ fn prismatic_cylindrical_and_fixed_joints_move_as_they_should() {
     let f = w.joint_forces()[0];
     assert!((f[2] - weight).abs() < 1e-9 * weight, "{f:?}");
     assert!(f[3..].iter().all(|x| x.abs() < 1e-9), "{f:?}");
+}
+
+/// Newton's cradle, 5 balls 1 mm apart on hinges, e = 1, ball 0 released from 0.5 rad: the
+/// last ball leaves with ≥ 95 % of the first ball's speed and the others are (nearly) at rest.
+#[test]
+fn newtons_cradle_passes_the_speed_on() {
+    let c =
+        coulomb_granular::rigid::joint_checks::newtons_cradle(0.5, 500, RigidSettings::default())
+            .unwrap();
+    eprintln!("{c:?}");
+    assert_eq!(c.not_converged, 0);
+    assert!(c.first_speed > 0.6, "{c:?}");
+    assert!(c.last_speed >= 0.95 * c.first_speed, "{c:?}");
+    assert!(c.others_speed <= 0.05 * c.first_speed, "{c:?}");
+    assert!(c.drift < 1e-9, "{c:?}");
 }

@@ -178,3 +178,38 @@ fn bad_joints_in_a_scene_file_are_refused() {
         assert!(e.to_string().contains(words), "{e}");
     }
 }
+
+/// The shipped Newton's cradle (issue 53): 5 balls on hinges 1 mm apart with e = 1; ball 0,
+/// released from 0.5 rad, hits the row and ball 4 leaves with ≥ 95 % of its speed while
+/// the others stay (nearly) at rest.
+#[test]
+fn the_newtons_cradle_passes_the_speed_on() {
+    let built = LoadedScene::load(&scenes_dir().join("newtons-cradle.toml"))
+        .unwrap()
+        .build(&BuildOptions::default())
+        .unwrap();
+    assert_eq!(built.model.joints.len(), 5);
+    let mut scene = RigidScene::new(&built.model).unwrap();
+    let speed = |s: &RigidScene, i: usize| {
+        let v = s.world.velocities()[i];
+        (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+    };
+    let (mut first, mut last, mut others, mut touched) = (0.0f64, 0.0f64, 0.0f64, false);
+    for _ in 0..500 {
+        let r = scene.step().unwrap();
+        assert_eq!(r.status, RigidStatus::Converged, "{r:?}");
+        touched |= r.contacts > 0;
+        if !touched {
+            first = first.max(speed(&scene, 0));
+        }
+        let v4 = speed(&scene, 4);
+        if last > 0.5 * first && v4 < last {
+            others = (0..4).map(|i| speed(&scene, i)).fold(others, f64::max);
+        }
+        last = last.max(v4);
+    }
+    eprintln!("cradle scene: first {first} last {last} others {others}");
+    assert!(first > 0.6, "{first}");
+    assert!(last >= 0.95 * first, "{first} {last}");
+    assert!(others <= 0.05 * first, "{others}");
+}

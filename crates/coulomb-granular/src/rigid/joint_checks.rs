@@ -1,6 +1,6 @@
 //! The validation cases of the joints (issue 53) for `coulomb validate`: a simple pendulum's
-//! period, a hanging chain's top force, a motorised hinge's acceleration and a double
-//! pendulum's drift and energy, each with its expected value and tolerance (docs/joints.md).
+//! period, a hanging chain's top force, a motorised hinge's acceleration, Newton's cradle's
+//! speed transfer and a double pendulum's drift and energy, each with its expected value and tolerance (docs/joints.md).
 
 use super::joints::{JointDesc, JointKind, Motor};
 use super::validation::{cuboid, one_material};
@@ -153,6 +153,101 @@ pub fn double_pendulum(steps: usize) -> Result<(f64, f64, usize), RigidError> {
     Ok((drift, energy, bad))
 }
 
+/// Result of [`newtons_cradle`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Cradle {
+    /// ball 0's largest speed before it first touches ball 1 (m/s)
+    pub first_speed: f64,
+    /// ball 4's largest speed over the run: its speed as it leaves (m/s)
+    pub last_speed: f64,
+    /// the largest speed of balls 0–3 after ball 4 has left (m/s): what the others kept
+    pub others_speed: f64,
+    /// the largest joint drift over the run (m)
+    pub drift: f64,
+    /// steps not converged
+    pub not_converged: usize,
+}
+
+/// Newton's cradle (issue 53, examples/scenes/rigid/newtons-cradle.toml): 5 steel balls of
+/// radius 0.02 m (7800 kg/m³) in a row along x, 1 mm apart, centres at z = 0.1 m, each
+/// hanging 0.2 m below its own revolute joint to the world (axis y); frictionless contacts
+/// with e = 1. Ball 0 is released from `release` rad (pulled back, at rest) and swings into
+/// the others; `steps` steps of `settings`.
+pub fn newtons_cradle(
+    release: f64,
+    steps: usize,
+    settings: RigidSettings,
+) -> Result<Cradle, RigidError> {
+    use super::parry::shape::SharedShape;
+    use super::MassProperties;
+    let (radius, gap, length, n) = (0.02, 1e-3, 0.2, 5);
+    let shape = SharedShape::ball(radius);
+    let mass = MassProperties::from_shape(&shape, 7800.0)?;
+    let mut bodies = Vec::new();
+    let mut joints = Vec::new();
+    for k in 0..n {
+        let pivot = [k as f64 * (2.0 * radius + gap), 0.0, 0.1 + length];
+        let a = if k == 0 { release } else { 0.0 };
+        bodies.push(super::RigidBodyDesc {
+            shape: shape.clone(),
+            mass,
+            position: [
+                pivot[0] - length * a.sin(),
+                0.0,
+                pivot[2] - length * a.cos(),
+            ],
+            orientation: [1.0, 0.0, 0.0, 0.0],
+            velocity: [0.0; 3],
+            angular_velocity: [0.0; 3],
+            material: 0,
+            fixed: false,
+        });
+        joints.push(hinge(k, None, pivot, [0.0, 1.0, 0.0]));
+    }
+    let materials = crate::world::MaterialTable::uniform(
+        vec!["steel".into()],
+        crate::world::ContactLaw {
+            mu: 0.0,
+            restitution: 1.0,
+            rolling_friction: 0.0,
+        },
+    );
+    let mut w = RigidWorld::with_joints(bodies, vec![], materials, settings, &joints)?;
+    let speed = |w: &RigidWorld, i: usize| {
+        let v = w.velocities()[i];
+        (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+    };
+    let mut out = Cradle {
+        first_speed: 0.0,
+        last_speed: 0.0,
+        others_speed: 0.0,
+        drift: 0.0,
+        not_converged: 0,
+    };
+    let (mut touched, mut left) = (false, false);
+    for _ in 0..steps {
+        let report = w.step()?;
+        if report.status == RigidStatus::NotConverged {
+            out.not_converged += 1;
+        }
+        touched |= report.contacts > 0;
+        if !touched {
+            out.first_speed = out.first_speed.max(speed(&w, 0));
+        }
+        let last = speed(&w, n - 1);
+        // ball 4 has left once it slows down (gravity) after its largest speed
+        left |= out.last_speed > 0.5 * out.first_speed && last < out.last_speed;
+        out.last_speed = out.last_speed.max(last);
+        if left {
+            for i in 0..n - 1 {
+                out.others_speed = out.others_speed.max(speed(&w, i));
+            }
+        }
+        out.drift = out.drift.max(w.joint_drift());
+    }
+    Ok(out)
+}
+
 /// The joints' checks of `coulomb validate` (section "Joints"); `quick`: the double pendulum
 /// over 2 s instead of 10 s.
 pub fn checks(quick: bool) -> Result<Vec<(String, Check)>, RigidError> {
@@ -193,6 +288,14 @@ pub fn checks(quick: bool) -> Result<Vec<(String, Check)>, RigidError> {
         acc,
         1e-6 * expected,
         bad,
+    ));
+    let c = newtons_cradle(0.5, 500, RigidSettings::default())?;
+    out.push(check(
+        "Newton's cradle, 5 balls 1 mm apart, e = 1: the last ball leaves with ≥ 95 % of the first ball's speed (m/s)",
+        c.first_speed,
+        c.last_speed,
+        0.05 * c.first_speed,
+        c.not_converged,
     ));
     let steps = if quick { 2_000 } else { 10_000 };
     let (drift, energy, bad) = double_pendulum(steps)?;

@@ -607,6 +607,7 @@ mod tests {
                 velocity: 1.5,
                 max_force: 2.0,
             }),
+            limit_restitution: Some(0.5),
         });
         let (_, built) = round_trip(&m, "r.toml");
         assert_eq!(built.model.bodies, m.bodies);

@@ -17,6 +17,7 @@ fn joint(kind: JointKind, a: usize, b: Option<usize>, anchor: [f64; 3]) -> Joint
         axis: None,
         limits: None,
         motor: None,
+        limit_restitution: None,
     }
 }
 
@@ -376,7 +377,7 @@ fn jointed_bodies_may_overlap() {
 #[test]
 fn validate_joint_checks_pass() {
     let checks = coulomb_granular::rigid::joint_checks::checks(true).unwrap();
-    assert_eq!(checks.len(), 6);
+    assert_eq!(checks.len(), 7);
     for (section, c) in &checks {
         assert_eq!(section, "Joints");
         eprintln!(
@@ -459,13 +460,88 @@ fn prismatic_cylindrical_and_fixed_joints_move_as_they_should() {
 /// last ball leaves with ≥ 95 % of the first ball's speed and the others are (nearly) at rest.
 #[test]
 fn newtons_cradle_passes_the_speed_on() {
-    let c =
-        coulomb_granular::rigid::joint_checks::newtons_cradle(0.5, 500, RigidSettings::default())
-            .unwrap();
+    let c = coulomb_granular::rigid::joint_checks::newtons_cradle(
+        0.5,
+        1e-3,
+        500,
+        RigidSettings::default(),
+    )
+    .unwrap();
     eprintln!("{c:?}");
     assert_eq!(c.not_converged, 0);
     assert!(c.first_speed > 0.6, "{c:?}");
     assert!(c.last_speed >= 0.95 * c.first_speed, "{c:?}");
     assert!(c.others_speed <= 0.05 * c.first_speed, "{c:?}");
     assert!(c.drift < 1e-9, "{c:?}");
+}
+
+/// The slider-crank of `coulomb validate`: over 3 turns of the motorised crank the piston
+/// follows x(φ) = r cos φ + √(l² − r² sin² φ) and sweeps [l − r, l + r].
+#[test]
+fn slider_crank_follows_its_kinematics() {
+    let sc = coulomb_granular::rigid::joint_checks::slider_crank(3_000).unwrap();
+    eprintln!("{sc:?}");
+    let (r, l) = coulomb_granular::rigid::joint_checks::CRANK;
+    assert_eq!(sc.not_converged, 0);
+    assert!(sc.turns > 2.99 && sc.turns < 3.01, "{sc:?}");
+    assert!(sc.max_error < 1e-6, "{sc:?}");
+    assert!((sc.x_range.0 - (l - r)).abs() < 1e-4, "{sc:?}");
+    assert!((sc.x_range.1 - (l + r)).abs() < 1e-4, "{sc:?}");
+    assert!(sc.drift < 1e-6, "{sc:?}");
+}
+
+/// A plate on a vertical hinge (gravity along the axis) turning at 2 rad/s into its limit at
+/// 0.5 rad: with `limit_restitution` = 1 it comes back at −2 rad/s, with 0 it stops there.
+#[test]
+fn a_limit_with_restitution_rebounds_and_without_stops() {
+    for e in [1.0, 0.0] {
+        let mut plate = cuboid([0.1, 0.1, 0.02], 1000.0, [0.0, 0.0, 1.0]).unwrap();
+        plate.angular_velocity = [0.0, 0.0, 2.0];
+        let j = JointDesc {
+            limits: Some((-0.5, 0.5)),
+            limit_restitution: Some(e),
+            ..hinge(0, None, [0.0, 0.0, 1.0], [0.0, 0.0, 1.0])
+        };
+        let mut w = world(vec![plate], &[j], RigidSettings::default()).unwrap();
+        let mut max_angle: f64 = 0.0;
+        // 0.25 s to the limit, then 0.1 s more
+        for _ in 0..350 {
+            let r = w.step().unwrap();
+            assert_eq!(r.status, RigidStatus::Converged, "{r:?}");
+            max_angle = max_angle.max(w.joint_coordinate(0).unwrap().0);
+        }
+        let (angle, rate) = w.joint_coordinate(0).unwrap();
+        eprintln!("e = {e}: angle {angle} rate {rate} largest angle {max_angle}");
+        assert!(max_angle <= 0.5 + 1e-9, "{max_angle}");
+        // the impact comes up to one step's travel (2e-3 rad) early
+        assert!(max_angle > 0.5 - 2.0 * 1e-3 - 1e-12, "{max_angle}");
+        if e == 1.0 {
+            assert!((rate + 2.0).abs() < 1e-8, "{rate}");
+            assert!(angle < 0.5 - 0.19, "{angle}");
+        } else {
+            assert!(rate.abs() < 1e-8, "{rate}");
+            assert!((angle - 0.5).abs() < 1e-8, "{angle}");
+        }
+    }
+}
+
+/// `limit_restitution` without limits, or outside [0, 1], is refused naming the field.
+#[test]
+fn bad_limit_restitution_is_refused() {
+    let body = || cuboid([0.05, 0.05, 0.05], 1000.0, [0.0, 0.0, 1.0]).unwrap();
+    for (limits, e, words) in [
+        (None, 0.5, "give limits"),
+        (Some((-0.5, 0.5)), 1.5, "[0, 1]"),
+        (Some((-0.5, 0.5)), -0.1, "[0, 1]"),
+        (Some((-0.5, 0.5)), f64::NAN, "[0, 1]"),
+    ] {
+        let j = JointDesc {
+            limits,
+            limit_restitution: Some(e),
+            ..hinge(0, None, [0.0, 0.0, 1.0], [0.0, 0.0, 1.0])
+        };
+        let err = world(vec![body()], &[j], RigidSettings::default()).unwrap_err();
+        assert_eq!(field_of(err.clone()), (0, "limit_restitution"));
+        assert!(err.to_string().contains(words), "{err}");
+    }
 }

@@ -37,8 +37,11 @@
 //! A motor is one more row on the joint coordinate's rate with b = −velocity and the impulse
 //! bounded, |λ| ≤ h · max_force (a torque for a revolute joint, a force for a prismatic one):
 //! clamped in the sweep. A limit lo ≤ coordinate ≤ hi is a unilateral row (λ ≥ 0, like a
-//! frictionless contact, without restitution), active when the coordinate is at or beyond
-//! the limit or reaches it within the step at its current rate, with b = gap/h.
+//! frictionless contact), active when the coordinate is at or beyond the limit or reaches it
+//! within the step at its current rate, with b = e min(u_k, 0) + (1 − e) gap/h: Newton's
+//! impact law with the restitution e = `limit_restitution` on the row's rate u_k at t_k, as
+//! the contacts' impact offset and gap closure (e = 0, the default: the step ends at the
+//! limit; e = 1: the rate after the impact is minus the rate before).
 
 use super::body::BodyState;
 use super::parry::math::{Rotation, Vector};
@@ -123,6 +126,10 @@ pub struct JointDesc {
     /// motor on the coordinate
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub motor: Option<Motor>,
+    /// Newton restitution e ∈ [0, 1] of the limits (with `limits`; default 0: a limit
+    /// stops the coordinate)
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub limit_restitution: Option<f64>,
 }
 
 /// Row slots of a joint (warm start): 0..6 the equality rows, then motor, lower, upper limit.
@@ -285,6 +292,22 @@ impl Joint {
                     i,
                     "limits",
                     format!("angles ({lo}, {hi}) must lie in [-pi, pi]"),
+                ));
+            }
+        }
+        if let Some(e) = d.limit_restitution {
+            if d.limits.is_none() {
+                return Err(bad(
+                    i,
+                    "limit_restitution",
+                    "applies to limits: give limits = (lo, hi) too".to_string(),
+                ));
+            }
+            if !(0.0..=1.0).contains(&e) {
+                return Err(bad(
+                    i,
+                    "limit_restitution",
+                    format!("{e} must lie in [0, 1]"),
                 ));
             }
         }
@@ -486,6 +509,7 @@ impl Joint {
             }
             if let Some((lo, hi)) = self.desc.limits {
                 let neg = |j: [f64; 6]| j.map(|x| -x);
+                let e = self.desc.limit_restitution.unwrap_or(0.0);
                 for (slot, gap, sign) in [(LOWER, c - lo, 1.0), (UPPER, hi - c, -1.0)] {
                     let approach = (sign * rate).min(0.0);
                     if gap + h * approach <= delta {
@@ -494,11 +518,14 @@ impl Joint {
                         } else {
                             (neg(ja), neg(jb))
                         };
+                        // Newton's law as the contacts' (impact offset e u_k, gap closure
+                        // (1 − e) g / h): e = 0 ends the step at the limit, e = 1 gives
+                        // the coordinate back its approach rate
                         rows.push(JointRow {
                             slot,
                             ja,
                             jb,
-                            b: gap / h,
+                            b: e * approach + (1.0 - e) * gap / h,
                             kind: RowKind::Unilateral,
                         });
                     }

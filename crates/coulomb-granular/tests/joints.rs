@@ -136,10 +136,7 @@ fn motorised_hinge_accelerates_as_torque_over_inertia() {
     let i = wheel.mass.mass * (0.1f64.powi(2) + 0.1f64.powi(2)) / 3.0;
     let tau = 0.05;
     let j = JointDesc {
-        motor: Some(Motor {
-            velocity: 1e3,
-            max_force: tau,
-        }),
+        motor: Some(Motor::with_velocity(1e3, tau)),
         ..hinge(0, None, [0.0, 0.0, 1.0], [0.0, 0.0, 1.0])
     };
     let mut w = world(vec![wheel], &[j], RigidSettings::default()).unwrap();
@@ -165,10 +162,7 @@ fn motorised_hinge_accelerates_as_torque_over_inertia() {
 fn motor_reaches_its_speed_and_a_limit_stops_the_hinge() {
     let wheel = cuboid([0.1, 0.1, 0.02], 1000.0, [0.0, 0.0, 1.0]).unwrap();
     let j = JointDesc {
-        motor: Some(Motor {
-            velocity: 2.0,
-            max_force: 100.0,
-        }),
+        motor: Some(Motor::with_velocity(2.0, 100.0)),
         limits: Some((-1.0, 0.5)),
         ..hinge(0, None, [0.0, 0.0, 1.0], [0.0, 0.0, 1.0])
     };
@@ -324,23 +318,54 @@ fn bad_joints_are_refused_with_the_joint_and_field() {
     );
     check(
         JointDesc {
-            motor: Some(Motor {
-                velocity: 1.0,
-                max_force: -1.0,
-            }),
+            motor: Some(Motor::with_velocity(1.0, -1.0)),
             ..hinge(0, None, [0.0; 3], [0.0, 0.0, 1.0])
         },
         "motor.max_force",
     );
     check(
         JointDesc {
-            motor: Some(Motor {
-                velocity: f64::NAN,
-                max_force: 1.0,
-            }),
+            motor: Some(Motor::with_velocity(f64::NAN, 1.0)),
             ..hinge(0, None, [0.0; 3], [0.0, 0.0, 1.0])
         },
         "motor.velocity",
+    );
+    let servo = |m: Motor| JointDesc {
+        motor: Some(m),
+        ..hinge(0, None, [0.0; 3], [0.0, 0.0, 1.0])
+    };
+    check(
+        servo(Motor {
+            position: Some(0.5),
+            ..Motor::with_velocity(1.0, 1.0)
+        }),
+        "motor",
+    );
+    check(
+        servo(Motor {
+            velocity: None,
+            ..Motor::with_velocity(1.0, 1.0)
+        }),
+        "motor",
+    );
+    check(servo(Motor::with_position(0.5, -1.0)), "motor.max_force");
+    check(servo(Motor::with_position(4.0, 1.0)), "motor.position");
+    check(servo(Motor::with_position(f64::NAN, 1.0)), "motor.position");
+    for g in [0.0, -1.0, f64::INFINITY] {
+        check(
+            servo(Motor {
+                gain: Some(g),
+                ..Motor::with_position(0.5, 1.0)
+            }),
+            "motor.gain",
+        );
+    }
+    check(
+        servo(Motor {
+            gain: Some(5.0),
+            ..Motor::with_velocity(1.0, 1.0)
+        }),
+        "motor.gain",
     );
     // the good one alone builds, and a joint to a fixed body is fine
     assert!(world(bodies.clone(), &[good], RigidSettings::default()).is_ok());
@@ -544,4 +569,53 @@ fn bad_limit_restitution_is_refused() {
         assert_eq!(field_of(err.clone()), (0, "limit_restitution"));
         assert!(err.to_string().contains(words), "{err}");
     }
+}
+
+/// A bar hanging from a horizontal hinge (gravity torque up to m g c = 1.96 N m) with a
+/// position servo to 0.8 rad (at most 5 N m): it settles there, still, the motor holding the
+/// gravity torque m g c sin 0.8; a servo on a prismatic joint settles at its travel too.
+#[test]
+fn a_position_servo_settles_at_its_target() {
+    let (a, c) = (0.02, 0.25);
+    let bar = cuboid([a, a, c], 1000.0, [0.0, 0.0, -c]).unwrap();
+    let m = bar.mass.mass;
+    let j = JointDesc {
+        motor: Some(Motor::with_position(0.8, 5.0)),
+        ..hinge(0, None, [0.0; 3], [0.0, 1.0, 0.0])
+    };
+    let mut w = world(vec![bar], &[j], RigidSettings::default()).unwrap();
+    let mut trace = Vec::new();
+    for k in 0..3000 {
+        let r = w.step().unwrap();
+        assert_eq!(r.status, RigidStatus::Converged, "{r:?}");
+        if k % 500 == 499 {
+            trace.push(w.joint_coordinate(0).unwrap());
+        }
+    }
+    eprintln!("servo: {trace:?}");
+    let (angle, rate) = w.joint_coordinate(0).unwrap();
+    assert!((angle - 0.8).abs() < 1e-6, "{angle}");
+    assert!(rate.abs() < 1e-6, "{rate}");
+    // the holding torque about the axis is the gravity torque
+    let torque = w.joint_forces()[0][4].abs();
+    let want = m * G * c * 0.8f64.sin();
+    assert!((torque - want).abs() < 1e-4 * want, "{torque} vs {want}");
+    // prismatic: a block on a vertical slide servoed to 0.1 m above its start
+    let block = cuboid([0.05, 0.05, 0.05], 1000.0, [0.0, 0.0, 1.0]).unwrap();
+    let j = JointDesc {
+        kind: JointKind::Prismatic,
+        motor: Some(Motor {
+            gain: Some(20.0),
+            ..Motor::with_position(0.1, 50.0)
+        }),
+        ..hinge(0, None, [0.0, 0.0, 1.0], [0.0, 0.0, 1.0])
+    };
+    let mut w = world(vec![block], &[j], RigidSettings::default()).unwrap();
+    for _ in 0..2000 {
+        assert_eq!(w.step().unwrap().status, RigidStatus::Converged);
+    }
+    let (s, rate) = w.joint_coordinate(0).unwrap();
+    eprintln!("prismatic servo: {s} {rate}");
+    assert!((s - 0.1).abs() < 1e-6, "{s}");
+    assert!(rate.abs() < 1e-6, "{rate}");
 }

@@ -158,6 +158,9 @@ fn bad_joints_in_a_scene_file_are_refused() {
         ("kind = \"revolute\"\nbody_a = 0\nanchor = [0, 0, 2]\naxis = [0, 0, 0]", "joint 0: axis"),
         ("kind = \"prismatic\"\nbody_a = 0\nanchor = [0, 0, 2]\naxis = [0, 0, 1]\nlimits = [1.0, 0.0]", "joint 0: limits"),
         ("kind = \"revolute\"\nbody_a = 0\nanchor = [0, 0, 2]\naxis = [0, 0, 1]\nmotor = { velocity = 1.0, max_force = -1.0 }", "joint 0: motor.max_force"),
+        ("kind = \"revolute\"\nbody_a = 0\nanchor = [0, 0, 2]\naxis = [0, 0, 1]\nmotor = { velocity = 1.0, position = 0.5, max_force = 1.0 }", "joint 0: motor: velocity and position both"),
+        ("kind = \"revolute\"\nbody_a = 0\nanchor = [0, 0, 2]\naxis = [0, 0, 1]\nmotor = { position = 0.5, max_force = -1.0 }", "joint 0: motor.max_force"),
+        ("kind = \"revolute\"\nbody_a = 0\nanchor = [0, 0, 2]\naxis = [0, 0, 1]\nlimit_restitution = 0.5", "joint 0: limit_restitution"),
     ] {
         let text = format!("{base}[[joints]]\n{joint}\n");
         let loaded = LoadedScene::parse(std::path::Path::new("j.toml"), text, true)

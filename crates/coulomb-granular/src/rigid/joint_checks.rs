@@ -102,10 +102,7 @@ pub fn motor_acceleration() -> Result<(f64, f64, usize), RigidError> {
     let i = plate.mass.mass * 0.02 / 3.0;
     let tau = 0.05;
     let joints = [JointDesc {
-        motor: Some(Motor {
-            velocity: 1e3,
-            max_force: tau,
-        }),
+        motor: Some(Motor::with_velocity(1e3, tau)),
         ..hinge(0, None, [0.0, 0.0, 1.0], [0.0, 0.0, 1.0])
     }];
     let mut w = RigidWorld::with_joints(
@@ -286,10 +283,7 @@ pub fn slider_crank(steps: usize) -> Result<SliderCrank, RigidError> {
     let z = [0.0, 0.0, 1.0];
     let joints = [
         JointDesc {
-            motor: Some(Motor {
-                velocity: 2.0 * std::f64::consts::PI,
-                max_force: 50.0,
-            }),
+            motor: Some(Motor::with_velocity(2.0 * std::f64::consts::PI, 50.0)),
             ..hinge(0, None, [0.0; 3], z)
         },
         hinge(1, Some(0), [r, 0.0, 0.01], z),

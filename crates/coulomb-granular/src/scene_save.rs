@@ -605,6 +605,7 @@ mod tests {
             limits: Some((-0.5, 0.25)),
             motor: Some(crate::rigid::joints::Motor::with_velocity(1.5, 2.0)),
             limit_restitution: Some(0.5),
+            friction: Some(0.25),
         });
         let (_, built) = round_trip(&m, "r.toml");
         assert_eq!(built.model.bodies, m.bodies);

@@ -120,6 +120,8 @@ def test_bad_joint_arguments_are_refused_at_once(kwargs, field):
      "limit_restitution"),
     (dict(kind="revolute", anchor=[0, 0, 0], axis=[0, 0, 1], limits=(-1, 1),
           limit_restitution=2.0), "limit_restitution"),
+    (dict(kind="revolute", anchor=[0, 0, 0], axis=[0, 0, 1], friction=-1.0), "friction"),
+    (dict(kind="spherical", anchor=[0, 0, 0], friction=1.0), "friction"),
 ])
 def test_bad_joints_are_refused_at_build(kwargs, field):
     s = Scene()
@@ -174,3 +176,17 @@ def test_a_position_servo_settles_and_a_limit_with_restitution_rebounds():
     sim = Simulation(s)
     sim.run(350)
     assert abs(sim.angular_velocities[0][2] + 2.0) < 1e-8
+
+
+def test_joint_friction_brakes_a_spinning_plate():
+    # friction torque 0.05 N m on a plate spinning at 2 rad/s about a vertical hinge
+    s = Scene().set_gravity([0, 0, -G])
+    s.add_body(Cuboid([0.1, 0.1, 0.02]), [0, 0, 1], density=1000.0,
+               angular_velocity=[0, 0, 2.0])
+    s.add_joint("revolute", 0, None, anchor=[0, 0, 1], axis=[0, 0, 1], friction=0.05)
+    sim = Simulation(s)
+    sim.run(200)
+    i = 1000.0 * 0.2 * 0.2 * 0.04 * 0.02 / 3.0
+    assert abs(sim.angular_velocities[0][2] - (2.0 - 0.05 / i * sim.time)) < 1e-9
+    sim.run(600)
+    assert abs(sim.angular_velocities[0][2]) < 1e-9

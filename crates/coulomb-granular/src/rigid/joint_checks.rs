@@ -18,6 +18,7 @@ fn hinge(a: usize, b: Option<usize>, anchor: [f64; 3], axis: [f64; 3]) -> JointD
         limits: None,
         motor: None,
         limit_restitution: None,
+        friction: None,
     }
 }
 

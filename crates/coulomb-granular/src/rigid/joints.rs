@@ -38,7 +38,9 @@
 //! bounded, |λ| ≤ h · max_force (a torque for a revolute joint, a force for a prismatic one):
 //! clamped in the sweep. A position servo is the same row with the target rate
 //! gain · (position − c_k) from the coordinate c_k at t_k (the angle error wrapped to
-//! (−π, π]): below its bound the error decays as (1 − gain h)-like steps of e^(−gain t). A limit lo ≤ coordinate ≤ hi is a unilateral row (λ ≥ 0, like a
+//! (−π, π]): below its bound the error decays as (1 − gain h)-like steps of e^(−gain t).
+//! Joint friction is a row like a motor's with target rate 0 and |λ| ≤ h · friction: it
+//! stops (sticks) the coordinate when that impulse suffices and brakes it otherwise. A limit lo ≤ coordinate ≤ hi is a unilateral row (λ ≥ 0, like a
 //! frictionless contact), active when the coordinate is at or beyond the limit or reaches it
 //! within the step at its current rate, with b = e min(u_k, 0) + (1 − e) gap/h: Newton's
 //! impact law with the restitution e = `limit_restitution` on the row's rate u_k at t_k, as
@@ -186,13 +188,19 @@ pub struct JointDesc {
     /// stops the coordinate)
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub limit_restitution: Option<f64>,
+    /// joint friction: the largest torque (N m) or force (N) opposing the coordinate's rate,
+    /// ≥ 0 (revolute and prismatic joints)
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub friction: Option<f64>,
 }
 
-/// Row slots of a joint (warm start): 0..6 the equality rows, then motor, lower, upper limit.
-pub(crate) const SLOTS: usize = 9;
+/// Row slots of a joint (warm start): 0..6 the equality rows, then motor, lower, upper limit,
+/// friction.
+pub(crate) const SLOTS: usize = 10;
 const MOTOR: usize = 6;
 const LOWER: usize = 7;
 const UPPER: usize = 8;
+const FRICTION: usize = 9;
 
 /// What a row's multiplier may be.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -349,6 +357,21 @@ impl Joint {
                     "limits",
                     format!("angles ({lo}, {hi}) must lie in [-pi, pi]"),
                 ));
+            }
+        }
+        if let Some(f) = d.friction {
+            if !d.kind.has_coordinate() {
+                return Err(bad(
+                    i,
+                    "friction",
+                    format!(
+                        "friction does not apply to a {} joint (revolute and prismatic joints have it)",
+                        d.kind.name()
+                    ),
+                ));
+            }
+            if !(f.is_finite() && f >= 0.0) {
+                return Err(bad(i, "friction", format!("{f} must be finite and >= 0")));
             }
         }
         if let Some(e) = d.limit_restitution {
@@ -604,6 +627,18 @@ impl Joint {
                     ja,
                     jb,
                     b: -m.target_rate(self.desc.kind, c),
+                    kind: RowKind::Box(-bound, bound),
+                });
+            }
+            if let Some(f) = self.desc.friction {
+                // a motor with target rate 0 and bound h · friction: the impulse that
+                // opposes the coordinate's motion, sticking below it
+                let bound = h * f;
+                rows.push(JointRow {
+                    slot: FRICTION,
+                    ja,
+                    jb,
+                    b: 0.0,
                     kind: RowKind::Box(-bound, bound),
                 });
             }

@@ -497,7 +497,8 @@ class Scene:
                   axis: Optional[Sequence[float]] = None,
                   limits: Optional[Sequence[float]] = None,
                   motor: Optional[Mapping[str, float]] = None,
-                  limit_restitution: Optional[float] = None) -> "Scene":
+                  limit_restitution: Optional[float] = None,
+                  friction: Optional[float] = None) -> "Scene":
         """Adds a joint between bodies ``body_a`` and ``body_b`` (indices in insertion order,
         :attr:`body_count`; ``body_b=None``: the world). ``kind``: ``"revolute"`` (hinge),
         ``"spherical"`` (ball), ``"prismatic"`` (slider), ``"cylindrical"``, ``"fixed"``
@@ -509,7 +510,8 @@ class Scene:
         sends it back at its speed. ``motor=dict(velocity=..., max_force=...)`` drives its
         rate with at most ``max_force`` (N m or N); ``motor=dict(position=..., max_force=...,
         gain=...)`` is a position servo, target rate ``gain * (position - coordinate)``
-        (``gain`` in 1/s, default 10). The joint's two bodies do not
+        (``gain`` in 1/s, default 10). ``friction`` (N m or N, ≥ 0) is a friction torque or
+        force opposing the coordinate's rate (revolute, prismatic). The joint's two bodies do not
         collide with each other. A scene with joints runs in the rigid-body simulator
         (spheres become balls). Bad input raises :class:`coulomb.SceneError` (a
         ``ValueError``) naming the field; the rest (zero axis, lo > hi, both bodies fixed, …)
@@ -540,16 +542,16 @@ class Scene:
             if not np.all(np.isfinite(lim)):
                 raise _arg_error("limits", f"joint {k}: limits {lim.tolist()} are not finite", k)
             j["limits"] = [float(lim[0]), float(lim[1])]
-        if limit_restitution is not None:
+        for name, x in (("limit_restitution", limit_restitution), ("friction", friction)):
+            if x is None:
+                continue
             try:
-                e = float(limit_restitution)
+                j[name] = float(x)
             except (TypeError, ValueError):
-                raise _arg_error("limit_restitution", f"joint {k}: limit_restitution must be a "
-                                 f"number, got {limit_restitution!r}", k) from None
-            if not np.isfinite(e):
-                raise _arg_error("limit_restitution",
-                                 f"joint {k}: limit_restitution {e} is not finite", k)
-            j["limit_restitution"] = e
+                raise _arg_error(name, f"joint {k}: {name} must be a number, got {x!r}",
+                                 k) from None
+            if not np.isfinite(j[name]):
+                raise _arg_error(name, f"joint {k}: {name} {j[name]} is not finite", k)
         if motor is not None:
             allowed = {"velocity", "position", "gain", "max_force"}
             if (not isinstance(motor, Mapping) or "max_force" not in motor

@@ -110,6 +110,18 @@ def test_bad_joint_arguments_are_refused_at_once(kwargs, field):
     (dict(kind="revolute", anchor=[0, 0, 0], axis=[0, 0, 1], limits=(1.0, -1.0)), "limits"),
     (dict(kind="revolute", anchor=[0, 0, 0], axis=[0, 0, 1],
           motor=dict(velocity=1.0, max_force=-2.0)), "motor.max_force"),
+    (dict(kind="revolute", anchor=[0, 0, 0], axis=[0, 0, 1],
+          motor=dict(velocity=1.0, position=0.5, max_force=2.0)), "motor: velocity and position"),
+    (dict(kind="revolute", anchor=[0, 0, 0], axis=[0, 0, 1],
+          motor=dict(position=0.5, max_force=-2.0)), "motor.max_force"),
+    (dict(kind="revolute", anchor=[0, 0, 0], axis=[0, 0, 1],
+          motor=dict(position=0.5, max_force=2.0, gain=0.0)), "motor.gain"),
+    (dict(kind="revolute", anchor=[0, 0, 0], axis=[0, 0, 1], limit_restitution=0.5),
+     "limit_restitution"),
+    (dict(kind="revolute", anchor=[0, 0, 0], axis=[0, 0, 1], limits=(-1, 1),
+          limit_restitution=2.0), "limit_restitution"),
+    (dict(kind="revolute", anchor=[0, 0, 0], axis=[0, 0, 1], friction=-1.0), "friction"),
+    (dict(kind="spherical", anchor=[0, 0, 0], friction=1.0), "friction"),
 ])
 def test_bad_joints_are_refused_at_build(kwargs, field):
     s = Scene()
@@ -140,3 +152,41 @@ def test_readme_pendulum_chain_runs_as_written(capsys):
     exec(compile(text[start:text.index("```", start)], "README.md", "exec"), {})
     out = capsys.readouterr().out
     assert out.strip()
+
+
+def test_a_position_servo_settles_and_a_limit_with_restitution_rebounds():
+    # a bar hanging from a hinge, servoed to 0.8 rad (gain 10 / s by default)
+    a, c = 0.02, 0.25
+    s = Scene().set_gravity([0, 0, -G])
+    s.add_body(Cuboid([a, a, c]), [0, 0, -c], density=1000.0)
+    s.add_joint("revolute", 0, None, anchor=[0, 0, 0], axis=[0, 1, 0],
+                motor=dict(position=0.8, max_force=5.0))
+    sim = Simulation(s)
+    sim.run(3000)
+    # the bar's centre is at 0.8 rad from the vertical
+    x, _, z = sim.body_positions[0]
+    assert abs(math.atan2(abs(x), -z) - 0.8) < 1e-6
+    assert np.abs(sim.angular_velocities).max() < 1e-6
+    # a plate turning at 2 rad/s on a vertical hinge into its limit at 0.5 rad, e = 1
+    s = Scene().set_gravity([0, 0, -G])
+    s.add_body(Cuboid([0.1, 0.1, 0.02]), [0, 0, 1], density=1000.0,
+               angular_velocity=[0, 0, 2.0])
+    s.add_joint("revolute", 0, None, anchor=[0, 0, 1], axis=[0, 0, 1], limits=(-0.5, 0.5),
+                limit_restitution=1.0)
+    sim = Simulation(s)
+    sim.run(350)
+    assert abs(sim.angular_velocities[0][2] + 2.0) < 1e-8
+
+
+def test_joint_friction_brakes_a_spinning_plate():
+    # friction torque 0.05 N m on a plate spinning at 2 rad/s about a vertical hinge
+    s = Scene().set_gravity([0, 0, -G])
+    s.add_body(Cuboid([0.1, 0.1, 0.02]), [0, 0, 1], density=1000.0,
+               angular_velocity=[0, 0, 2.0])
+    s.add_joint("revolute", 0, None, anchor=[0, 0, 1], axis=[0, 0, 1], friction=0.05)
+    sim = Simulation(s)
+    sim.run(200)
+    i = 1000.0 * 0.2 * 0.2 * 0.04 * 0.02 / 3.0
+    assert abs(sim.angular_velocities[0][2] - (2.0 - 0.05 / i * sim.time)) < 1e-9
+    sim.run(600)
+    assert abs(sim.angular_velocities[0][2]) < 1e-9

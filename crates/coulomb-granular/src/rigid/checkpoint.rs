@@ -40,7 +40,7 @@
 //! | `/warm_start/key` | i64 (body A, partner kind 0 body / 1 obstacle, partner index, sub-shape A, sub-shape B, feature A, feature B, rank) | (m, 8) |
 //! | `/warm_start/impulse` | f64, world axes | (m, 3) |
 //! | `/json/model`, `/json/contacts`, `/json/detector` | UTF-8 string | scalar |
-//! | `/joints/warm_start` | f64, by row slot | (joints, 9) |
+//! | `/joints/warm_start` | f64, by row slot | (joints, `SLOTS`) |
 //! | `/joints/force` | f64, force and torque, world axes | (joints, 6) |
 
 use crate::checkpoint::{

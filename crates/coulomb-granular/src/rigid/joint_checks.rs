@@ -1,6 +1,6 @@
 //! The validation cases of the joints (issue 53) for `coulomb validate`: a simple pendulum's
-//! period, a hanging chain's top force, a motorised hinge's acceleration and a double
-//! pendulum's drift and energy, each with its expected value and tolerance (docs/joints.md).
+//! period, a hanging chain's top force, a motorised hinge's acceleration, Newton's cradle's
+//! speed transfer and a double pendulum's drift and energy, each with its expected value and tolerance (docs/joints.md).
 
 use super::joints::{JointDesc, JointKind, Motor};
 use super::validation::{cuboid, one_material};
@@ -17,6 +17,8 @@ fn hinge(a: usize, b: Option<usize>, anchor: [f64; 3], axis: [f64; 3]) -> JointD
         axis: Some(axis),
         limits: None,
         motor: None,
+        limit_restitution: None,
+        friction: None,
     }
 }
 
@@ -101,10 +103,7 @@ pub fn motor_acceleration() -> Result<(f64, f64, usize), RigidError> {
     let i = plate.mass.mass * 0.02 / 3.0;
     let tau = 0.05;
     let joints = [JointDesc {
-        motor: Some(Motor {
-            velocity: 1e3,
-            max_force: tau,
-        }),
+        motor: Some(Motor::with_velocity(1e3, tau)),
         ..hinge(0, None, [0.0, 0.0, 1.0], [0.0, 0.0, 1.0])
     }];
     let mut w = RigidWorld::with_joints(
@@ -153,6 +152,186 @@ pub fn double_pendulum(steps: usize) -> Result<(f64, f64, usize), RigidError> {
     Ok((drift, energy, bad))
 }
 
+/// Result of [`newtons_cradle`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Cradle {
+    /// ball 0's largest speed before it first touches ball 1 (m/s)
+    pub first_speed: f64,
+    /// ball 4's largest speed over the run: its speed as it leaves (m/s)
+    pub last_speed: f64,
+    /// the largest speed of balls 0–3 after ball 4 has left (m/s): what the others kept
+    pub others_speed: f64,
+    /// the largest joint drift over the run (m)
+    pub drift: f64,
+    /// steps not converged
+    pub not_converged: usize,
+}
+
+/// Newton's cradle (issue 53, examples/scenes/rigid/newtons-cradle.toml): 5 steel balls of
+/// radius 0.02 m (7800 kg/m³) in a row along x, `gap` apart (1 mm in the scene and the
+/// check), centres at z = 0.1 m, each
+/// hanging 0.2 m below its own revolute joint to the world (axis y); frictionless contacts
+/// with e = 1. Ball 0 is released from `release` rad (pulled back, at rest) and swings into
+/// the others; `steps` steps of `settings`.
+pub fn newtons_cradle(
+    release: f64,
+    gap: f64,
+    steps: usize,
+    settings: RigidSettings,
+) -> Result<Cradle, RigidError> {
+    use super::parry::shape::SharedShape;
+    use super::MassProperties;
+    let (radius, length, n) = (0.02, 0.2, 5);
+    let shape = SharedShape::ball(radius);
+    let mass = MassProperties::from_shape(&shape, 7800.0)?;
+    let mut bodies = Vec::new();
+    let mut joints = Vec::new();
+    for k in 0..n {
+        let pivot = [k as f64 * (2.0 * radius + gap), 0.0, 0.1 + length];
+        let a = if k == 0 { release } else { 0.0 };
+        bodies.push(super::RigidBodyDesc {
+            shape: shape.clone(),
+            mass,
+            position: [
+                pivot[0] - length * a.sin(),
+                0.0,
+                pivot[2] - length * a.cos(),
+            ],
+            orientation: [1.0, 0.0, 0.0, 0.0],
+            velocity: [0.0; 3],
+            angular_velocity: [0.0; 3],
+            material: 0,
+            fixed: false,
+        });
+        joints.push(hinge(k, None, pivot, [0.0, 1.0, 0.0]));
+    }
+    let materials = crate::world::MaterialTable::uniform(
+        vec!["steel".into()],
+        crate::world::ContactLaw {
+            mu: 0.0,
+            restitution: 1.0,
+            rolling_friction: 0.0,
+        },
+    );
+    let mut w = RigidWorld::with_joints(bodies, vec![], materials, settings, &joints)?;
+    let speed = |w: &RigidWorld, i: usize| {
+        let v = w.velocities()[i];
+        (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+    };
+    let mut out = Cradle {
+        first_speed: 0.0,
+        last_speed: 0.0,
+        others_speed: 0.0,
+        drift: 0.0,
+        not_converged: 0,
+    };
+    let (mut touched, mut left) = (false, false);
+    for _ in 0..steps {
+        let report = w.step()?;
+        if report.status == RigidStatus::NotConverged {
+            out.not_converged += 1;
+        }
+        touched |= report.contacts > 0;
+        if !touched {
+            out.first_speed = out.first_speed.max(speed(&w, 0));
+        }
+        let last = speed(&w, n - 1);
+        // ball 4 has left once it slows down (gravity) after its largest speed
+        left |= out.last_speed > 0.5 * out.first_speed && last < out.last_speed;
+        out.last_speed = out.last_speed.max(last);
+        if left {
+            for i in 0..n - 1 {
+                out.others_speed = out.others_speed.max(speed(&w, i));
+            }
+        }
+        out.drift = out.drift.max(w.joint_drift());
+    }
+    Ok(out)
+}
+
+/// Result of [`slider_crank`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SliderCrank {
+    /// largest |x − x(φ)| of the piston over the run (m)
+    pub max_error: f64,
+    /// crank turns made
+    pub turns: f64,
+    /// smallest and largest piston position seen (m)
+    pub x_range: (f64, f64),
+    /// largest joint drift over the run (m or rad)
+    pub drift: f64,
+    /// steps not converged
+    pub not_converged: usize,
+}
+
+/// Crank radius r and rod length l of [`slider_crank`] (m).
+pub const CRANK: (f64, f64) = (0.1, 0.3);
+
+/// A slider-crank (issue 53, examples/scenes/rigid/slider-crank.toml) in the plane z = 0,
+/// steel (7800 kg/m³): a crank bar of r = 0.1 m on a revolute joint to the world at the
+/// origin (axis z) whose motor turns it at 2π rad/s (at most 50 N m), a connecting rod of l =
+/// 0.3 m hinged to the crank pin, a piston hinged to the rod and on a prismatic joint to the
+/// world along x; starts at φ = 0 at rest; `steps` steps of h = 1e-3 s. The piston's centre
+/// (its pin) follows x(φ) = r cos φ + √(l² − r² sin² φ), φ the crank's angle from its centre
+/// of mass.
+pub fn slider_crank(steps: usize) -> Result<SliderCrank, RigidError> {
+    let (r, l) = CRANK;
+    let bodies = vec![
+        cuboid([r / 2.0, 0.01, 0.01], 7800.0, [r / 2.0, 0.0, 0.0])?,
+        cuboid([l / 2.0, 0.01, 0.01], 7800.0, [r + l / 2.0, 0.0, 0.02])?,
+        cuboid([0.03, 0.03, 0.03], 7800.0, [r + l, 0.0, 0.02])?,
+    ];
+    let z = [0.0, 0.0, 1.0];
+    let joints = [
+        JointDesc {
+            motor: Some(Motor::with_velocity(2.0 * std::f64::consts::PI, 50.0)),
+            ..hinge(0, None, [0.0; 3], z)
+        },
+        hinge(1, Some(0), [r, 0.0, 0.01], z),
+        hinge(2, Some(1), [r + l, 0.0, 0.02], z),
+        JointDesc {
+            kind: JointKind::Prismatic,
+            ..hinge(2, None, [r + l, 0.0, 0.02], [1.0, 0.0, 0.0])
+        },
+    ];
+    let mut w = RigidWorld::with_joints(
+        bodies,
+        vec![],
+        one_material(0.3),
+        RigidSettings::default(),
+        &joints,
+    )?;
+    let mut out = SliderCrank {
+        max_error: 0.0,
+        turns: 0.0,
+        x_range: (f64::INFINITY, f64::NEG_INFINITY),
+        drift: 0.0,
+        not_converged: 0,
+    };
+    let mut prev = 0.0;
+    let mut unwrapped = 0.0;
+    for _ in 0..steps {
+        out.not_converged += run(&mut w, 1)?;
+        let c = w.centres_of_mass();
+        let phi = c[0][1].atan2(c[0][0]);
+        let mut d = phi - prev;
+        if d > std::f64::consts::PI {
+            d -= 2.0 * std::f64::consts::PI;
+        } else if d < -std::f64::consts::PI {
+            d += 2.0 * std::f64::consts::PI;
+        }
+        unwrapped += d;
+        prev = phi;
+        let x = c[2][0];
+        let want = r * phi.cos() + (l * l - (r * phi.sin()).powi(2)).sqrt();
+        out.max_error = out.max_error.max((x - want).abs());
+        out.x_range = (out.x_range.0.min(x), out.x_range.1.max(x));
+        out.drift = out.drift.max(w.joint_drift());
+    }
+    out.turns = unwrapped / (2.0 * std::f64::consts::PI);
+    Ok(out)
+}
+
 /// The joints' checks of `coulomb validate` (section "Joints"); `quick`: the double pendulum
 /// over 2 s instead of 10 s.
 pub fn checks(quick: bool) -> Result<Vec<(String, Check)>, RigidError> {
@@ -193,6 +372,25 @@ pub fn checks(quick: bool) -> Result<Vec<(String, Check)>, RigidError> {
         acc,
         1e-6 * expected,
         bad,
+    ));
+    let c = newtons_cradle(0.5, 1e-3, 500, RigidSettings::default())?;
+    out.push(check(
+        "Newton's cradle, 5 balls 1 mm apart, e = 1: the last ball leaves with ≥ 95 % of the first ball's speed (m/s)",
+        c.first_speed,
+        c.last_speed,
+        0.05 * c.first_speed,
+        c.not_converged,
+    ));
+    let sc = slider_crank(3_000)?;
+    out.push(check(
+        &format!(
+            "slider-crank, {:.2} turns: piston x − (r cos φ + √(l² − r² sin² φ)), largest (m, < 1e-6)",
+            sc.turns
+        ),
+        0.0,
+        sc.max_error,
+        1e-6,
+        sc.not_converged,
     ));
     let steps = if quick { 2_000 } else { 10_000 };
     let (drift, energy, bad) = double_pendulum(steps)?;

@@ -36,9 +36,16 @@
 //! # Motors and limits
 //! A motor is one more row on the joint coordinate's rate with b = −velocity and the impulse
 //! bounded, |λ| ≤ h · max_force (a torque for a revolute joint, a force for a prismatic one):
-//! clamped in the sweep. A limit lo ≤ coordinate ≤ hi is a unilateral row (λ ≥ 0, like a
-//! frictionless contact, without restitution), active when the coordinate is at or beyond
-//! the limit or reaches it within the step at its current rate, with b = gap/h.
+//! clamped in the sweep. A position servo is the same row with the target rate
+//! gain · (position − c_k) from the coordinate c_k at t_k (the angle error wrapped to
+//! (−π, π]): below its bound the error decays as (1 − gain h)-like steps of e^(−gain t).
+//! Joint friction is a row like a motor's with target rate 0 and |λ| ≤ h · friction: it
+//! stops (sticks) the coordinate when that impulse suffices and brakes it otherwise. A limit lo ≤ coordinate ≤ hi is a unilateral row (λ ≥ 0, like a
+//! frictionless contact), active when the coordinate is at or beyond the limit or reaches it
+//! within the step at its current rate, with b = e min(u_k, 0) + (1 − e) gap/h: Newton's
+//! impact law with the restitution e = `limit_restitution` on the row's rate u_k at t_k, as
+//! the contacts' impact offset and gap closure (e = 0, the default: the step ends at the
+//! limit; e = 1: the rate after the impact is minus the rate before).
 
 use super::body::BodyState;
 use super::parry::math::{Rotation, Vector};
@@ -90,14 +97,68 @@ impl JointKind {
     }
 }
 
-/// A motor: target rate of the joint coordinate with a bounded force (or torque).
+/// Default gain of a position servo (1/s): the target rate is gain · (position − coordinate),
+/// so that the error decays as e^(−gain t) (time constant 0.1 s) while the force is within
+/// its bound.
+pub const SERVO_GAIN: f64 = 10.0;
+
+/// A motor: a target rate of the joint coordinate (`velocity`), or a position servo
+/// (`position`: target rate gain · (position − coordinate)), with a bounded force (or
+/// torque). Exactly one of `velocity` and `position`; `gain` only with `position`.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Motor {
     /// target rate (rad/s for a revolute joint, m/s for a prismatic one)
-    pub velocity: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub velocity: Option<f64>,
+    /// target coordinate of a position servo (rad, in [−π, π], or m)
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position: Option<f64>,
+    /// the servo's gain (1/s, > 0; default [`SERVO_GAIN`])
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gain: Option<f64>,
     /// largest torque (N m) or force (N) the motor gives, ≥ 0
     pub max_force: f64,
+}
+
+impl Motor {
+    /// A motor driving the rate to `velocity` with at most `max_force`.
+    pub fn with_velocity(velocity: f64, max_force: f64) -> Self {
+        Self {
+            velocity: Some(velocity),
+            position: None,
+            gain: None,
+            max_force,
+        }
+    }
+    /// A position servo to `position` with at most `max_force` (default gain).
+    pub fn with_position(position: f64, max_force: f64) -> Self {
+        Self {
+            velocity: None,
+            position: Some(position),
+            gain: None,
+            max_force,
+        }
+    }
+    /// The target rate at the coordinate `c` (a revolute joint's angle error wrapped to
+    /// (−π, π]).
+    fn target_rate(&self, kind: JointKind, c: f64) -> f64 {
+        match (self.velocity, self.position) {
+            (Some(v), _) => v,
+            (None, Some(p)) => {
+                let mut e = p - c;
+                if kind == JointKind::Revolute {
+                    let tau = 2.0 * std::f64::consts::PI;
+                    e -= tau * ((e + std::f64::consts::PI) / tau).floor();
+                    if e <= -std::f64::consts::PI {
+                        e += tau;
+                    }
+                }
+                self.gain.unwrap_or(SERVO_GAIN) * e
+            }
+            (None, None) => 0.0,
+        }
+    }
 }
 
 /// A joint as given: bodies by index (insertion order), anchor and axis in world coordinates
@@ -123,13 +184,23 @@ pub struct JointDesc {
     /// motor on the coordinate
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub motor: Option<Motor>,
+    /// Newton restitution e ∈ [0, 1] of the limits (with `limits`; default 0: a limit
+    /// stops the coordinate)
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub limit_restitution: Option<f64>,
+    /// joint friction: the largest torque (N m) or force (N) opposing the coordinate's rate,
+    /// ≥ 0 (revolute and prismatic joints)
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub friction: Option<f64>,
 }
 
-/// Row slots of a joint (warm start): 0..6 the equality rows, then motor, lower, upper limit.
-pub(crate) const SLOTS: usize = 9;
+/// Row slots of a joint (warm start): 0..6 the equality rows, then motor, lower, upper limit,
+/// friction.
+pub(crate) const SLOTS: usize = 10;
 const MOTOR: usize = 6;
 const LOWER: usize = 7;
 const UPPER: usize = 8;
+const FRICTION: usize = 9;
 
 /// What a row's multiplier may be.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -288,6 +359,37 @@ impl Joint {
                 ));
             }
         }
+        if let Some(f) = d.friction {
+            if !d.kind.has_coordinate() {
+                return Err(bad(
+                    i,
+                    "friction",
+                    format!(
+                        "friction does not apply to a {} joint (revolute and prismatic joints have it)",
+                        d.kind.name()
+                    ),
+                ));
+            }
+            if !(f.is_finite() && f >= 0.0) {
+                return Err(bad(i, "friction", format!("{f} must be finite and >= 0")));
+            }
+        }
+        if let Some(e) = d.limit_restitution {
+            if d.limits.is_none() {
+                return Err(bad(
+                    i,
+                    "limit_restitution",
+                    "applies to limits: give limits = (lo, hi) too".to_string(),
+                ));
+            }
+            if !(0.0..=1.0).contains(&e) {
+                return Err(bad(
+                    i,
+                    "limit_restitution",
+                    format!("{e} must lie in [0, 1]"),
+                ));
+            }
+        }
         if let Some(m) = d.motor {
             if !d.kind.has_coordinate() {
                 return Err(bad(
@@ -299,12 +401,56 @@ impl Joint {
                     ),
                 ));
             }
-            if !m.velocity.is_finite() {
-                return Err(bad(
-                    i,
-                    "motor.velocity",
-                    format!("{} is not finite", m.velocity),
-                ));
+            match (m.velocity, m.position) {
+                (Some(_), Some(_)) => {
+                    return Err(bad(
+                        i,
+                        "motor",
+                        "velocity and position both given: a motor drives the rate (velocity) or is a position servo (position), not both".to_string(),
+                    ))
+                }
+                (None, None) => {
+                    return Err(bad(
+                        i,
+                        "motor",
+                        "give velocity (target rate) or position (servo)".to_string(),
+                    ))
+                }
+                (Some(v), None) => {
+                    if !v.is_finite() {
+                        return Err(bad(i, "motor.velocity", format!("{v} is not finite")));
+                    }
+                    if m.gain.is_some() {
+                        return Err(bad(
+                            i,
+                            "motor.gain",
+                            "applies to a position servo: give position instead of velocity"
+                                .to_string(),
+                        ));
+                    }
+                }
+                (None, Some(p)) => {
+                    let pi = std::f64::consts::PI;
+                    if !p.is_finite() {
+                        return Err(bad(i, "motor.position", format!("{p} is not finite")));
+                    }
+                    if d.kind == JointKind::Revolute && !(-pi..=pi).contains(&p) {
+                        return Err(bad(
+                            i,
+                            "motor.position",
+                            format!("angle {p} must lie in [-pi, pi]"),
+                        ));
+                    }
+                    if let Some(g) = m.gain {
+                        if !(g.is_finite() && g > 0.0) {
+                            return Err(bad(
+                                i,
+                                "motor.gain",
+                                format!("{g} must be finite and > 0"),
+                            ));
+                        }
+                    }
+                }
             }
             if !(m.max_force.is_finite() && m.max_force >= 0.0) {
                 return Err(bad(
@@ -480,12 +626,25 @@ impl Joint {
                     slot: MOTOR,
                     ja,
                     jb,
-                    b: -m.velocity,
+                    b: -m.target_rate(self.desc.kind, c),
+                    kind: RowKind::Box(-bound, bound),
+                });
+            }
+            if let Some(f) = self.desc.friction {
+                // a motor with target rate 0 and bound h · friction: the impulse that
+                // opposes the coordinate's motion, sticking below it
+                let bound = h * f;
+                rows.push(JointRow {
+                    slot: FRICTION,
+                    ja,
+                    jb,
+                    b: 0.0,
                     kind: RowKind::Box(-bound, bound),
                 });
             }
             if let Some((lo, hi)) = self.desc.limits {
                 let neg = |j: [f64; 6]| j.map(|x| -x);
+                let e = self.desc.limit_restitution.unwrap_or(0.0);
                 for (slot, gap, sign) in [(LOWER, c - lo, 1.0), (UPPER, hi - c, -1.0)] {
                     let approach = (sign * rate).min(0.0);
                     if gap + h * approach <= delta {
@@ -494,11 +653,14 @@ impl Joint {
                         } else {
                             (neg(ja), neg(jb))
                         };
+                        // Newton's law as the contacts' (impact offset e u_k, gap closure
+                        // (1 − e) g / h): e = 0 ends the step at the limit, e = 1 gives
+                        // the coordinate back its approach rate
                         rows.push(JointRow {
                             slot,
                             ja,
                             jb,
-                            b: gap / h,
+                            b: e * approach + (1.0 - e) * gap / h,
                             kind: RowKind::Unilateral,
                         });
                     }

@@ -143,7 +143,8 @@ pub struct SceneFile {
     #[serde(default)]
     pub inlets: Vec<InletSection>,
     /// `[[joints]]`: joints between bodies (issue 53; keys kind, body_a, body_b (absent: the
-    /// world), anchor, axis, limits = [lo, hi], motor = {velocity, max_force}); bodies are
+    /// world), anchor, axis, limits = [lo, hi], limit_restitution, friction, motor = {velocity or
+    /// position (+ gain), max_force}); bodies are
     /// numbered from 0 in file order over every `[[bodies]]` group
     #[serde(default)]
     pub joints: Vec<crate::rigid::joints::JointDesc>,

@@ -603,10 +603,9 @@ mod tests {
             anchor: [0.5, 0.0, 0.5],
             axis: Some([0.0, 1.0, 0.0]),
             limits: Some((-0.5, 0.25)),
-            motor: Some(crate::rigid::joints::Motor {
-                velocity: 1.5,
-                max_force: 2.0,
-            }),
+            motor: Some(crate::rigid::joints::Motor::with_velocity(1.5, 2.0)),
+            limit_restitution: Some(0.5),
+            friction: Some(0.25),
         });
         let (_, built) = round_trip(&m, "r.toml");
         assert_eq!(built.model.bodies, m.bodies);

@@ -496,15 +496,22 @@ class Scene:
     def add_joint(self, kind: str, body_a: int, body_b: Optional[int], anchor: Sequence[float],
                   axis: Optional[Sequence[float]] = None,
                   limits: Optional[Sequence[float]] = None,
-                  motor: Optional[Mapping[str, float]] = None) -> "Scene":
+                  motor: Optional[Mapping[str, float]] = None,
+                  limit_restitution: Optional[float] = None,
+                  friction: Optional[float] = None) -> "Scene":
         """Adds a joint between bodies ``body_a`` and ``body_b`` (indices in insertion order,
         :attr:`body_count`; ``body_b=None``: the world). ``kind``: ``"revolute"`` (hinge),
         ``"spherical"`` (ball), ``"prismatic"`` (slider), ``"cylindrical"``, ``"fixed"``
         (weld). ``anchor`` and ``axis`` (revolute, prismatic, cylindrical) are in world
         coordinates at the initial configuration. ``limits=(lo, hi)`` bounds the joint
         coordinate of a revolute (angle of A relative to B about the axis, rad, within
-        [−π, π]) or prismatic joint (travel, m); ``motor=dict(velocity=..., max_force=...)``
-        drives its rate with at most ``max_force`` (N m or N). The joint's two bodies do not
+        [−π, π]) or prismatic joint (travel, m); ``limit_restitution`` ∈ [0, 1] (with
+        ``limits``, default 0) is the limits' Newton restitution: 0 stops the coordinate, 1
+        sends it back at its speed. ``motor=dict(velocity=..., max_force=...)`` drives its
+        rate with at most ``max_force`` (N m or N); ``motor=dict(position=..., max_force=...,
+        gain=...)`` is a position servo, target rate ``gain * (position - coordinate)``
+        (``gain`` in 1/s, default 10). ``friction`` (N m or N, ≥ 0) is a friction torque or
+        force opposing the coordinate's rate (revolute, prismatic). The joint's two bodies do not
         collide with each other. A scene with joints runs in the rigid-body simulator
         (spheres become balls). Bad input raises :class:`coulomb.SceneError` (a
         ``ValueError``) naming the field; the rest (zero axis, lo > hi, both bodies fixed, …)
@@ -535,11 +542,24 @@ class Scene:
             if not np.all(np.isfinite(lim)):
                 raise _arg_error("limits", f"joint {k}: limits {lim.tolist()} are not finite", k)
             j["limits"] = [float(lim[0]), float(lim[1])]
+        for name, x in (("limit_restitution", limit_restitution), ("friction", friction)):
+            if x is None:
+                continue
+            try:
+                j[name] = float(x)
+            except (TypeError, ValueError):
+                raise _arg_error(name, f"joint {k}: {name} must be a number, got {x!r}",
+                                 k) from None
+            if not np.isfinite(j[name]):
+                raise _arg_error(name, f"joint {k}: {name} {j[name]} is not finite", k)
         if motor is not None:
-            if not isinstance(motor, Mapping) or set(motor) != {"velocity", "max_force"}:
-                raise _arg_error("motor", f"joint {k}: motor must be "
-                                 f"dict(velocity=..., max_force=...), got {motor!r}", k)
-            mv = {"velocity": float(motor["velocity"]), "max_force": float(motor["max_force"])}
+            allowed = {"velocity", "position", "gain", "max_force"}
+            if (not isinstance(motor, Mapping) or "max_force" not in motor
+                    or not set(motor) <= allowed):
+                raise _arg_error("motor", f"joint {k}: motor must be dict(velocity=..., "
+                                 f"max_force=...) or dict(position=..., max_force=..., "
+                                 f"gain=...), got {motor!r}", k)
+            mv = {name: float(x) for name, x in motor.items()}
             for name, x in mv.items():
                 if not np.isfinite(x):
                     raise _arg_error(f"motor.{name}", f"joint {k}: motor {name} {x} is not finite",

@@ -11,5 +11,6 @@ mod joints;
 mod physics;
 mod rigid_contacts;
 mod rigid_scenes;
+mod rigid_threads;
 mod rolling;
 mod scene_model;

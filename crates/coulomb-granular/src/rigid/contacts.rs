@@ -214,9 +214,17 @@ impl Detector {
         let obstacle_polytopes: Vec<Option<Polytope>> =
             obstacles.iter().map(|o| Polytope::of(o.shape)).collect();
         let dispatcher = DefaultQueryDispatcher;
-        let mut points = Vec::new();
-        for &(a, b) in &pairs {
-            let mut cache = old.remove(&(a, b)).unwrap_or_default();
+        // the narrow phase of every pair in parallel (rayon): each pair owns its cache, the
+        // points are gathered in pair order and sorted by key, so the result does not depend
+        // on the number of threads; the first error in pair order is returned
+        let jobs: Vec<((usize, RigidPartner), PairCache)> = pairs
+            .iter()
+            .map(|&p| (p, old.remove(&p).unwrap_or_default()))
+            .collect();
+        let polytopes = &self.polytopes;
+        let narrow = |((a, b), mut cache): ((usize, RigidPartner), PairCache)|
+         -> Result<(Vec<ContactPoint>, Option<PairCache>), RigidError> {
+            let mut points = Vec::new();
             let (shape_b, pose_b, margin_b): (&SharedShape, Pose, f64) = match b {
                 RigidPartner::Body(j) => (&shapes[j], poses[j], margins[j]),
                 RigidPartner::Obstacle(o) => (obstacles[o].shape, obstacles[o].pose, 0.0),
@@ -225,12 +233,12 @@ impl Detector {
             let prediction = margins[a] + margin_b;
             // two convex polyhedra (not two cuboids): separating axes and face clipping
             let poly_b = match b {
-                RigidPartner::Body(j) => self.polytopes[j].as_ref(),
+                RigidPartner::Body(j) => polytopes[j].as_ref(),
                 RigidPartner::Obstacle(o) => obstacle_polytopes[o].as_ref(),
             };
             let hull = shapes[a].as_convex_polyhedron().is_some()
                 || shape_b.as_convex_polyhedron().is_some();
-            if let (Some(pa), Some(pb), true) = (self.polytopes[a].as_ref(), poly_b, hull) {
+            if let (Some(pa), Some(pb), true) = (polytopes[a].as_ref(), poly_b, hull) {
                 let mut seen: BTreeMap<(u32, u32, u32), u32> = BTreeMap::new();
                 for c in polytope::manifold(pa, &pose_a, pb, &pose_b, prediction) {
                     let ids = (c.sub1, c.sub2, c.feature);
@@ -249,7 +257,7 @@ impl Detector {
                         gap: c.gap,
                     });
                 }
-                continue;
+                return Ok((points, None));
             }
             let pos12 = pose_a.inv_mul(&pose_b);
             dispatcher
@@ -301,7 +309,19 @@ impl Detector {
                     });
                 }
             }
-            self.pairs.insert((a, b), cache);
+            Ok((points, Some(cache)))
+        };
+        let results: Vec<_> = {
+            use rayon::prelude::*;
+            jobs.into_par_iter().map(narrow).collect()
+        };
+        let mut points = Vec::new();
+        for (result, &pair) in results.into_iter().zip(&pairs) {
+            let (found, cache) = result?;
+            points.extend(found);
+            if let Some(cache) = cache {
+                self.pairs.insert(pair, cache);
+            }
         }
         points.sort_by_key(|x| x.key);
         Ok(points)

@@ -1457,6 +1457,36 @@ pub mod nsgs {
         q_norm: f64,
         /// the joints' blocks (equality rows, [`crate::rigid::joints`])
         pub joints: Vec<JointBlock>,
+        /// the contacts coloured so that no two of one colour share a moving body (the
+        /// sphere engine's [`crate::nsgs::Colouring`]); a sweep visits the colours in order
+        colouring: crate::nsgs::Colouring,
+    }
+
+    /// Raw storage shared by the updates of one colour, which touch disjoint bodies and
+    /// disjoint impulses.
+    #[derive(Clone, Copy)]
+    struct Raw<T>(*mut T);
+    // SAFETY: used only by `Problem::sweep` inside one colour of a colouring checked by
+    // `Colouring::is_valid_pairs` (every block index in bounds, no two rows of one colour
+    // on one block, A ≠ B): two updates running at once never touch the same element.
+    unsafe impl<T> Send for Raw<T> {}
+    unsafe impl<T> Sync for Raw<T> {}
+    impl<T> Raw<T> {
+        /// The pointer (a method, so that closures capture the whole wrapper).
+        #[inline]
+        fn get(self) -> *mut T {
+            self.0
+        }
+    }
+
+    /// The blocks a row touches: (first, second), for the colouring.
+    fn ends(row: &Row) -> (usize, Option<usize>) {
+        match (&row.a, &row.b) {
+            (Some((a, _)), b) => (*a, b.as_ref().map(|(b, _)| *b)),
+            (None, Some((b, _))) => (*b, None),
+            // no moving body: refused by `Problem::new` (W_ii = 0)
+            (None, None) => (usize::MAX, None),
+        }
     }
 
     /// One joint's rows of Gᵀ on its bodies' dofs, b, the kinds of their multipliers, and
@@ -1518,6 +1548,15 @@ pub mod nsgs {
             if mass.iter().flatten().any(|m| !(m.is_finite() && *m > 0.0)) {
                 return Err("a mass or principal inertia is not positive".into());
             }
+            if f.len() != mass.len() {
+                return Err(format!("{} momenta for {} bodies", f.len(), mass.len()));
+            }
+            if let Some(i) = rows.iter().position(|r| match (&r.a, &r.b) {
+                (Some((a, _)), Some((b, _))) => a == b,
+                _ => false,
+            }) {
+                return Err(format!("contact {i}: both sides are the same body"));
+            }
             let mut w_ii = Vec::with_capacity(rows.len());
             let mut w_inv = Vec::with_capacity(rows.len());
             for (i, row) in rows.iter().enumerate() {
@@ -1538,6 +1577,11 @@ pub mod nsgs {
                 w_ii.push(w);
                 w_inv.push(inv);
             }
+            let colouring =
+                crate::nsgs::Colouring::greedy_pairs(rows.len(), mass.len(), |i| ends(&rows[i]));
+            if !colouring.is_valid_pairs(rows.len(), mass.len(), |i| ends(&rows[i])) {
+                return Err("the contacts could not be coloured".into());
+            }
             let mut p = Self {
                 rows,
                 mass,
@@ -1546,6 +1590,7 @@ pub mod nsgs {
                 w_inv,
                 q_norm: 0.0,
                 joints: Vec::new(),
+                colouring,
             };
             let v0 = p.velocities(&[]);
             let q: Vec<f64> = (0..p.rows.len()).flat_map(|i| p.u(i, &v0)).collect();
@@ -1814,9 +1859,7 @@ pub mod nsgs {
             }
             let mut history: Vec<(usize, f64)> = Vec::new();
             for sweep in 1..=max_sweeps {
-                for i in 0..n {
-                    self.update(i, &mut v, &mut r);
-                }
+                self.sweep(&mut v, &mut r);
                 for j in 0..self.joints.len() {
                     self.update_joint(j, &mut v, &mut lambda);
                 }
@@ -1849,12 +1892,52 @@ pub mod nsgs {
             best
         }
 
+        /// One sweep over the contacts, colour by colour: the rows of one colour touch
+        /// disjoint bodies, so they are updated in parallel (rayon) where the colour is large,
+        /// with the same numbers as one after the other: the result does not depend on the
+        /// number of threads.
+        fn sweep(&self, v: &mut [[f64; 6]], r: &mut [f64]) {
+            use rayon::prelude::*;
+            assert!(v.len() == self.mass.len() && r.len() == 3 * self.rows.len());
+            let (vp, rp) = (Raw(v.as_mut_ptr()), Raw(r.as_mut_ptr()));
+            let c = &self.colouring;
+            for k in 0..c.colours() {
+                let ids = &c.order[c.starts[k]..c.starts[k + 1]];
+                // SAFETY: one colour of a valid colouring (checked in `Problem::new`), v and
+                // r of the lengths asserted above
+                let run = |chunk: &[usize]| {
+                    for &i in chunk {
+                        unsafe { self.update(i, vp.get(), rp.get()) }
+                    }
+                };
+                if ids.len() >= crate::nsgs::PARALLEL_MIN {
+                    ids.par_chunks(crate::nsgs::colour_chunk(ids.len()))
+                        .for_each(run);
+                } else {
+                    run(ids);
+                }
+            }
+        }
+
         /// One Gauss–Seidel update of contact i (the others frozen), v kept = M⁻¹(f + H r).
-        fn update(&self, i: usize, v: &mut [[f64; 6]], r: &mut [f64]) {
+        ///
+        /// # Safety
+        /// `v` points to one velocity per body block and `r` to 3 impulses per contact; no
+        /// other thread reads or writes the velocities of contact i's bodies or r_i meanwhile.
+        unsafe fn update(&self, i: usize, v: *mut [f64; 6], r: *mut f64) {
             let row = &self.rows[i];
-            let u = self.u(i, v);
+            let mut u = row.w;
+            for (blk, j) in row.a.iter().chain(row.b.iter()) {
+                // SAFETY: by the caller's contract
+                let vb = unsafe { &*v.add(*blk) };
+                for k in 0..3 {
+                    u[k] += (0..6).map(|d| j[k][d] * vb[d]).sum::<f64>();
+                }
+            }
+            // SAFETY: by the caller's contract
+            let ri = unsafe { &mut *r.add(3 * i).cast::<[f64; 3]>() };
             let a = &self.w_ii[i];
-            let old = [r[3 * i], r[3 * i + 1], r[3 * i + 2]];
+            let old = *ri;
             let mut c = u;
             for k in 0..3 {
                 c[k] -= a[3 * k] * old[0] + a[3 * k + 1] * old[1] + a[3 * k + 2] * old[2];
@@ -1876,12 +1959,13 @@ pub mod nsgs {
             }
             for (blk, j) in row.a.iter().chain(row.b.iter()) {
                 let m = &self.mass[*blk];
+                // SAFETY: by the caller's contract
+                let vb = unsafe { &mut *v.add(*blk) };
                 for d in 0..6 {
-                    v[*blk][d] +=
-                        (j[0][d] * delta[0] + j[1][d] * delta[1] + j[2][d] * delta[2]) / m[d];
+                    vb[d] += (j[0][d] * delta[0] + j[1][d] * delta[1] + j[2][d] * delta[2]) / m[d];
                 }
             }
-            r[3 * i..3 * i + 3].copy_from_slice(&new);
+            *ri = new;
         }
 
         /// The same problem as a library global problem (M diagonal, H sparse).

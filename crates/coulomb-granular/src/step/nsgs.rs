@@ -508,7 +508,18 @@ impl Colouring {
     /// contacts in which no colour holds two contacts on one sphere, every sphere index
     /// valid and A ≠ B. The parallel sweep relies on it (checked before every solve).
     pub fn is_valid(&self, rows: &[ContactRow], bodies: usize) -> bool {
-        let n = rows.len();
+        self.is_valid_pairs(rows.len(), bodies, |i| (rows[i].a, rows[i].b))
+    }
+
+    /// [`Colouring::is_valid`] of `n` items, item i touching bodies `ends(i)` = (A, B) (the
+    /// rigid engine's rows, [`crate::rigid`]): a permutation of the items in which no colour
+    /// holds two items on one body, every body index below `bodies` and A ≠ B.
+    pub fn is_valid_pairs(
+        &self,
+        n: usize,
+        bodies: usize,
+        ends: impl Fn(usize) -> (usize, Option<usize>),
+    ) -> bool {
         if self.order.len() != n
             || self.starts.first() != Some(&0)
             || self.starts.last() != Some(&n)
@@ -520,20 +531,18 @@ impl Colouring {
         let mut stamp = vec![usize::MAX; bodies];
         for c in 0..self.colours() {
             for &i in &self.order[self.starts[c]..self.starts[c + 1]] {
-                let Some(row) = rows.get(i) else {
-                    return false;
-                };
-                if std::mem::replace(&mut seen[i], true) {
+                if i >= n || std::mem::replace(&mut seen[i], true) {
                     return false;
                 }
-                for b in std::iter::once(row.a).chain(row.b) {
+                let (a, b) = ends(i);
+                if b == Some(a) {
+                    return false;
+                }
+                for b in std::iter::once(a).chain(b) {
                     if b >= bodies || stamp[b] == c {
                         return false;
                     }
                     stamp[b] = c;
-                }
-                if row.b == Some(row.a) {
-                    return false;
                 }
             }
         }

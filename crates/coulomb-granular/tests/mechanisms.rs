@@ -96,3 +96,62 @@ fn the_ball_mill_turns_at_its_motor_speed_and_lifts_its_load() {
     assert!(x < -0.02, "load centre x = {x}");
     assert!(z > z0, "load centre z {z} vs {z0} at the start");
 }
+
+/// The vehicle on granular ground with a bed of 264 spheres (the shipped file's bed of 10⁴
+/// spheres of r = 10 mm with the spheres' radius set to 30 mm and the lattice's pitch to 66 mm:
+/// one layer of 33 × 8): the chassis (body 0) on four wheels (bodies 1–4, cylinders r = 0.1 m)
+/// driven at 5 rad/s by motors of at most 20 N m drops onto the bed and drives along +x; no
+/// wheel sinks through the bed (every wheel's lowest point stays above the floor by more than
+/// a sphere's radius); every step is solved and the joints do not drift.
+#[test]
+fn the_vehicle_drives_over_a_bed_of_spheres() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/scenes/rigid/vehicle-on-spheres.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let small = text
+        .replace("count = 10000", "count = 264")
+        .replace(
+            "sizes = { kind = \"mono\", radius = 0.01 }",
+            "sizes = { kind = \"mono\", radius = 0.03 }",
+        )
+        .replace("pitch = 0.022,", "pitch = 0.066,");
+    assert_ne!(small, text);
+    let built = LoadedScene::parse(&path, small, true)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .build(&BuildOptions::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let tol = built.model.step.tol;
+    let mut s = RigidScene::new(&built.model).unwrap();
+    assert_eq!(s.world.len(), 5 + 264);
+    assert_eq!(s.world.joint_count(), 4);
+    let (wheel, ball) = (0.1, 0.03);
+    let x0 = s.world.centres_of_mass()[0][0];
+    let mut drift: f64 = 0.0;
+    let mut lowest = f64::MAX;
+    let steps = 600;
+    for k in 0..steps {
+        let r = s.step().unwrap();
+        assert!(
+            r.status != RigidStatus::NotConverged && r.error <= tol,
+            "step {k}: {r:?}"
+        );
+        drift = drift.max(s.world.joint_drift());
+        let c = s.world.centres_of_mass();
+        for p in &c[1..5] {
+            lowest = lowest.min(p[2] - wheel);
+        }
+    }
+    let c = s.world.centres_of_mass();
+    let advance = c[0][0] - x0;
+    let rates: Vec<f64> = (0..4)
+        .map(|j| s.world.joint_coordinate(j).unwrap().1)
+        .collect();
+    eprintln!(
+        "vehicle: advanced {advance:.4} m in {steps} steps (0.5 m/s without slip: {:.3} m); \
+         lowest wheel bottom {lowest:.4} m; drift {drift:.2e}; wheel rates {rates:?}",
+        0.5 * steps as f64 * 1e-3
+    );
+    assert!(advance > 0.05, "advanced {advance} m");
+    assert!(lowest > ball, "a wheel's bottom reached {lowest} m");
+    assert!(drift < 1e-6, "{drift}");
+}

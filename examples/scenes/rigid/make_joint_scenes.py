@@ -147,18 +147,18 @@ def vehicle(nx=100, ny=25, layers=4, ball=0.01, pitch=0.022,
     (HERE / "vehicle-on-spheres.toml").write_text(text)
 
 
-def chain(links=1000, path=None, steps=500):
+def chain(links=1000, path=None, steps=500, height=0.05):
     """The benchmark chain (scripts/bench_chain.sh; not shipped): `links` bars 0.1 x 0.02 x
     0.02 m (1000 kg/m^3) end to end on revolute joints (axis y), laid along a wave in the x-z
     plane (link i at the angle 0.3 sin(2 pi i / 50) from the horizontal, the lowest point
-    0.2 m above the floor), released at rest: it falls onto the floor, where its links land at
+    `height` above the floor), released at rest: it falls onto the floor, where its links land at
     different times and the chain folds."""
     pts = [[0.0, 0.0, 0.0]]
     for i in range(links):
         phi = 0.3 * math.sin(2 * math.pi * i / 50)
         p = pts[-1]
         pts.append([p[0] + 0.1 * math.cos(phi), 0.0, p[2] + 0.1 * math.sin(phi)])
-    lift = 0.2 + 0.01 - min(p[2] for p in pts)
+    lift = height + 0.01 - min(p[2] for p in pts)
     pts = [[p[0], 0.0, p[2] + lift] for p in pts]
     pos, ori = [], []
     for i in range(links):

@@ -8,6 +8,7 @@ mod example_scenes;
 mod fuzz_inputs;
 mod impulse_balance;
 mod joints;
+mod mechanisms;
 mod physics;
 mod rigid_contacts;
 mod rigid_scenes;

@@ -30,6 +30,7 @@
 
 pub mod assembly;
 pub mod checkpoint;
+pub mod coarse;
 mod colour_progress;
 pub mod contact;
 #[cfg(feature = "mpi")]

@@ -163,9 +163,9 @@ pub(crate) fn correction(
     for (body, j, g) in blocks {
         match merged.last_mut() {
             Some(last) if last.0 == body && last.1 == j => {
-                for d in 0..3 {
-                    for e in 0..6 {
-                        last.2[d][e] += g[d][e];
+                for (ld, gd) in last.2.iter_mut().zip(&g) {
+                    for (x, y) in ld.iter_mut().zip(gd) {
+                        *x += y;
                     }
                 }
             }

@@ -22,7 +22,7 @@ pub enum Method {
 
 /// The options that a checkpoint fixes (the parameters): refused with --restart. A scene is
 /// refused too, unless it is the scene file of the stored run (its inlets continue).
-const RESTART_CONFLICTS: [&str; 26] = [
+const RESTART_CONFLICTS: [&str; 27] = [
     "beads",
     "mu",
     "rolling_friction",
@@ -33,6 +33,7 @@ const RESTART_CONFLICTS: [&str; 26] = [
     "max_sweeps",
     "relaxation",
     "subspace_every",
+    "coarse_every",
     "inner",
     "outer",
     "tol",
@@ -106,6 +107,11 @@ pub struct Args {
     /// decreased (--method nsgs; docs/scaling.md, "Depth"); 0: never
     #[arg(long, default_value_t = 0, value_parser = crate::values::count0)]
     pub subspace_every: usize,
+    /// every K Gauss–Seidel sweeps, a two-level (coarse) correction: one Galerkin solve of
+    /// 3 unknowns per layer of the contact graph, kept only if the step's error decreased
+    /// (--method nsgs; docs/scaling.md, "Depth"); 0: never
+    #[arg(long, default_value_t = 0, value_parser = crate::values::count0)]
+    pub coarse_every: usize,
     /// worker threads (default: all cores); results do not depend on it
     #[arg(long, value_parser = crate::values::threads)]
     pub threads: Option<usize>,
@@ -266,6 +272,7 @@ impl Args {
                     max_sweeps: self.max_sweeps,
                     relaxation: self.relaxation,
                     subspace_every: self.subspace_every,
+                    coarse_every: self.coarse_every,
                     time_limit: Some(step_time_limit(self.beads)),
                     ..NsgsSettings::default()
                 }),

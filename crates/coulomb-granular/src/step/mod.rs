@@ -1,9 +1,11 @@
 //! The Moreau–Jean step (2.5)–(2.7) of sphere scenes as named phases: assemble the problem
 //! (2.10) (`assembly`), solve it by body-level Gauss–Seidel (`nsgs`, `subspace`, `rolling`)
 //! with the library as fallback, correct positions (`projection`), integrate
-//! (`simulation`), and whole runs (`run`).
+//! (`simulation`), and whole runs (`run`); `coarse` is a two-level correction of the sweeps
+//! (off by default).
 
 pub mod assembly;
+pub mod coarse;
 pub(crate) mod colour_progress;
 pub mod nsgs;
 pub mod projection;

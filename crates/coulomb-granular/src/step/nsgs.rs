@@ -686,7 +686,15 @@ pub struct NsgsSettings {
     /// result kept only if the error on the stored problem decreased; 0: never
     #[serde(default)]
     pub subspace_every: usize,
+    /// every this many sweeps, a two-level (coarse) correction ([`crate::coarse`]): one
+    /// Galerkin solve of 3 unknowns per layer of the contact graph, kept only if the error on
+    /// the stored problem decreased; 0: never (docs/scaling.md, "Depth")
+    #[serde(default)]
+    pub coarse_every: usize,
 }
+
+/// Levels of the contact graph per aggregate of the coarse correction.
+pub const COARSE_LEVELS: usize = 1;
 
 /// Subspace corrections tried in a row while each one lowers the error.
 pub const SUBSPACE_REPEAT: usize = 4;
@@ -709,6 +717,7 @@ impl Default for NsgsSettings {
             serial_below: 1_500,
             library_finish: true,
             subspace_every: 0,
+            coarse_every: 0,
         }
     }
 }
@@ -750,6 +759,8 @@ pub struct NsgsSolution {
     pub colours: usize,
     /// subspace corrections kept (`NsgsSettings::subspace_every`)
     pub subspace: usize,
+    /// coarse corrections kept (`NsgsSettings::coarse_every`)
+    pub coarse: usize,
 }
 
 /// Raw velocity storage shared by the updates of one colour, which touch disjoint spheres.
@@ -1206,6 +1217,7 @@ pub fn solve_coloured(
             evaluations: 0,
             colours: 0,
             subspace: 0,
+            coarse: 0,
         };
     }
     let sequential;
@@ -1265,6 +1277,9 @@ pub fn solve_coloured(
     };
     let mut window_start = f64::INFINITY;
     let mut subspace = 0usize;
+    let mut coarse = 0usize;
+    let aggregates = (settings.coarse_every > 0)
+        .then(|| crate::coarse::Aggregates::new(&state.rows, bodies, COARSE_LEVELS));
     let ok = |e: &Evaluation| e.error.is_finite() && e.error <= tol && e.balance <= tol;
     let status = loop {
         if !eval.error.is_finite() {
@@ -1282,16 +1297,30 @@ pub fn solve_coloured(
         // the first sweep is plain Gauss–Seidel: it solves isolated contacts exactly
         let s = state.sweep(if sweeps == 0 { 1.0 } else { omega });
         sweeps += 1;
-        if settings.subspace_every > 0 && sweeps % settings.subspace_every == 0 {
+        let due_subspace = settings.subspace_every > 0 && sweeps % settings.subspace_every == 0;
+        let due_coarse = settings.coarse_every > 0 && sweeps % settings.coarse_every == 0;
+        if due_subspace || due_coarse {
             eval = state.evaluate(qn);
             evaluations += 1;
             for _ in 0..SUBSPACE_REPEAT {
                 if ok(&eval) || !eval.error.is_finite() {
                     break;
                 }
-                let Some((target, _)) =
+                let target = if due_subspace {
                     crate::subspace::correction(&state.rows, &problem.inv_mass, &state.r, &state.v)
-                else {
+                        .map(|t| t.0)
+                } else {
+                    aggregates.as_ref().and_then(|agg| {
+                        crate::coarse::correction(
+                            &state.rows,
+                            &problem.inv_mass,
+                            agg,
+                            &state.r,
+                            &state.v,
+                        )
+                    })
+                };
+                let Some(target) = target else {
                     break;
                 };
                 // projected line search on the error: Π(r + α (target − r)), α = 1, ½, …
@@ -1326,7 +1355,11 @@ pub fn solve_coloured(
                         state.r = r;
                         state.recompute_velocity();
                         eval = e;
-                        subspace += 1;
+                        if due_subspace {
+                            subspace += 1;
+                        } else {
+                            coarse += 1;
+                        }
                     }
                     None => {
                         state.r = saved;
@@ -1383,6 +1416,7 @@ pub fn solve_coloured(
         evaluations,
         colours: colouring.colours(),
         subspace,
+        coarse,
     }
 }
 

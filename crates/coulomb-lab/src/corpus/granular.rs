@@ -25,6 +25,7 @@ pub const STEP_SOLVER: NsgsSettings = NsgsSettings {
     serial_below: 1_500,
     library_finish: false,
     subspace_every: 0,
+    coarse_every: 0,
 };
 
 /// (phase, step index) pairs; a step with fewer than [`min_contacts`] contacts is replaced by

@@ -165,9 +165,10 @@ pub struct Args {
     /// heap structure of `paper scaling --accurate`, docs/scaling.md)
     #[arg(long)]
     pub spread_top: bool,
-    /// scene files: relax the spheres that overlap at the start (or sit in an obstacle) by at
-    /// most this many Gauss–Seidel sweeps of pairwise separation, instead of refusing them
-    /// (`coulomb_granular::model::resolve_overlaps`); the run is refused if overlaps remain
+    /// scene files: relax the bodies that overlap at the start (or sit in an obstacle) by at
+    /// most this many Gauss–Seidel sweeps, instead of refusing them (spheres: pairwise
+    /// separation, `coulomb_granular::model::relax`; other shapes: the rigid step's position
+    /// correction, `RigidWorld::relaxed`); the run is refused if overlaps remain
     #[arg(long, value_name = "SWEEPS", num_args = 0..=1, default_missing_value = "1000")]
     pub resolve_overlaps: Option<usize>,
     /// output folder: stats.csv, stats.json, summary.json, bodies.pvd, contacts.pvd, frames/

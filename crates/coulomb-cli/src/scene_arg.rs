@@ -245,6 +245,11 @@ pub fn run(args: &Args) -> anyhow::Result<Outcome> {
         if args.mpi || crate::sim_args::under_launcher() {
             bail!("{file}: scenes with bodies of other shapes than spheres run in one process, not distributed");
         }
+        if args.subspace_every > 0 || args.coarse_every > 0 {
+            bail!(
+                "{file}: --subspace-every and --coarse-every act on the sphere engine's Gauss–Seidel; this scene has bodies of other shapes"
+            );
+        }
         return crate::cmd::simulate_rigid::run(
             &file_args(args, &scene),
             &scene,

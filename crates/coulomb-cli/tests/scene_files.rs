@@ -275,5 +275,12 @@ fn resolve_overlaps_relaxes_bodies_of_any_shape() {
     assert!(j["max_penetration"].as_f64().unwrap() < 1e-6, "{j}");
     let out = coulomb(&["simulate", scene, "--resolve-overlaps", "0"]);
     assert_eq!(out.status.code(), Some(2));
+    // the sphere engine's sweep accelerations are refused, not dropped
+    for opt in ["--subspace-every", "--coarse-every"] {
+        let out = coulomb(&["simulate", scene, "--resolve-overlaps", opt, "10"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(err.contains("other shapes"), "{err}");
+    }
     std::fs::remove_dir_all(&dir).ok();
 }

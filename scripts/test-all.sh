@@ -54,34 +54,53 @@ fi
 # docs/testing.md); a developer's own setting is kept.
 export CARGO_INCREMENTAL="${CARGO_INCREMENTAL:-0}"
 
-# Unit and integration tests, then the doc tests: `--tests` leaves out the examples, which a
-# plain `cargo test` would also compile and link at opt-level 2 only to check that they build
-# (one of them took over a minute); clippy --all-targets (.ci/run) checks that they compile.
-# --no-fail-fast: every test binary runs even when an earlier one fails, so that the counts
-# are complete.
-cargo test --workspace "${FEATURES[@]}" --tests --no-fail-fast 2>&1 | tee -a "$LOG"
-cargo test --workspace "${FEATURES[@]}" --doc --no-fail-fast 2>&1 | tee -a "$LOG"
-
+# The Python side first, so that it overlaps the build: the virtual environment (seconds), then
+# its packages installed in the background (downloads and unpacking, ~15 s, mostly waiting)
+# while cargo compiles; the script waits for them before pytest.
 VENV=${COULOMB_PY_VENV:-target/py-venv}
 PYTHON=${PYTHON:-python3}
 if [ ! -x "$VENV/bin/python" ]; then
   "$PYTHON" -m venv "$VENV"
 fi
 PY="$(cd "$VENV" && pwd)/bin/python"
-"$PY" -m pip install --quiet --disable-pip-version-check numpy scipy pytest h5py
+"$PY" -m pip install --quiet --disable-pip-version-check numpy scipy pytest h5py \
+  >target/pip-install.log 2>&1 &
+PIP_PID=$!
+# pyo3 reads the interpreter from PYO3_PYTHON and rebuilds when it changes: one value for every
+# cargo command below, so that each reuses the artifacts of the first.
+export PYO3_PYTHON="$PY"
 
-# The extension: the binding crate built by cargo within the workspace, in the test profile,
-# so that it reuses every artifact `cargo test --workspace` just built (only pyo3 and the
-# binding crate compile, ~15 s). `maturin develop` builds the crate alone, for which cargo
-# resolves other features (the other members' dev-dependencies turn on serde's `alloc` and
-# zerocopy's `derive`), and so compiled faer, Clarabel and coulomb a second time (~2 min of CI).
-# The library then goes where `maturin develop` puts it in this mixed Rust/Python layout: next
-# to the package's Python sources (python/coulomb/_coulomb.abi3.so, git-ignored), which a .pth
-# file in the venv puts on Python's path.
-PYO3_PYTHON="$PY" cargo build --workspace "${FEATURES[@]}" --lib --tests --profile test 2>&1 | tee -a "$LOG"
+# One build of everything the tests use, the Python extension included: `--lib` adds the binding
+# crate's cdylib and pyo3 (not built by `cargo test --tests`, since that crate has no tests of
+# its own), compiled in the same cargo run as the rest, on the core the long compile of
+# coulomb-granular leaves idle at the end, instead of afterwards on their own (~40 s).
+cargo build --workspace "${FEATURES[@]}" --lib --tests --profile test 2>&1 | tee -a "$LOG"
+
+# Unit and integration tests, then the doc tests: `--tests` leaves out the examples, which a
+# plain `cargo test` would also compile and link at opt-level 2 only to check that they build
+# (one of them took over a minute); clippy --all-targets (.ci/run) checks that they compile.
+# --no-fail-fast: every test binary runs even when an earlier one fails, so that the counts
+# are complete. The doc tests leave out coulomb-bench: it has none, and building its library
+# for them compiled criterion and its dependencies (22 s of CI, more on a fresh clone), which
+# only `cargo bench` needs.
+cargo test --workspace "${FEATURES[@]}" --tests --no-fail-fast 2>&1 | tee -a "$LOG"
+cargo test --workspace --exclude coulomb-bench "${FEATURES[@]}" --doc --no-fail-fast 2>&1 | tee -a "$LOG"
+
+# The extension: the binding crate built above by cargo within the workspace, in the test
+# profile, reusing every artifact the tests use. `maturin develop` builds the crate alone, for
+# which cargo resolves other features (the other members' dev-dependencies turn on serde's
+# `alloc` and zerocopy's `derive`), and so compiled faer, Clarabel and coulomb a second time
+# (~2 min of CI). The library then goes where `maturin develop` puts it in this mixed
+# Rust/Python layout: next to the package's Python sources (python/coulomb/_coulomb.abi3.so,
+# git-ignored), which a .pth file in the venv puts on Python's path.
 lib=target/debug/lib_coulomb.so
 [ -f "$lib" ] || lib=target/debug/lib_coulomb.dylib
 cp "$lib" crates/coulomb-py/python/coulomb/_coulomb.abi3.so
+if ! wait "$PIP_PID"; then
+  cat target/pip-install.log
+  echo "error: pip could not install numpy, scipy, pytest and h5py into $VENV"
+  exit 1
+fi
 site=$("$PY" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
 echo "$PWD/crates/coulomb-py/python" >"$site/coulomb-dev.pth"
 

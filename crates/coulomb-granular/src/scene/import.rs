@@ -70,8 +70,8 @@ pub fn read_particles(path: &Path) -> Result<Vec<ParticleRecord>, ImportError> {
 }
 
 /// The records [`read_particles`] returns, handed to `emit` one at a time in the same order
-/// and to the bit, holding none of them (a CSV file or a C-order NPY file is read row by row;
-/// a Fortran-order NPY file is read whole first); returns their number. An error where
+/// and to the bit, holding none of them (a CSV file is read row by row; an NPY file's bytes are
+/// read whole, its records built one at a time); returns their number. An error where
 /// [`read_particles`] gives one (not necessarily the same: the caller reads the file with
 /// [`read_particles`] to say why), possibly after some records were emitted.
 pub fn for_each_particle(
@@ -85,50 +85,55 @@ pub fn for_each_particle(
     }
 }
 
-/// The NPY file at `path`, its header read (an I/O error or a file that is not NPY: typed).
-fn open_npy(path: &Path) -> Result<npyz::NpyFile<std::io::Cursor<Vec<u8>>>, ImportError> {
-    let bytes = coulomb::input::read(path, coulomb::input::Kind::Particles)?;
-    match npyz::NpyFile::new(std::io::Cursor::new(bytes)) {
-        Ok(f) => Ok(f),
-        Err(e) => format_err(path, None, format!("not an NPY file: {e}")),
-    }
-}
-
-/// [`read_npy`] row by row for C order (the same checks), whole for Fortran order.
+/// [`read_npy`]'s records handed to `emit` one at a time, in order; their number.
 fn npy_each(path: &Path, emit: &mut dyn FnMut(ParticleRecord)) -> Result<usize, ImportError> {
-    let npy = open_npy(path)?;
-    let shape = npy.shape().to_vec();
-    let ok_type = matches!(&npy.dtype(), npyz::DType::Plain(t) if t.to_string().ends_with("f8"));
-    let c_order = matches!(npy.order(), npyz::Order::C);
-    if !ok_type || !c_order || shape.len() != 2 || !(shape[1] == 4 || shape[1] == 7) {
-        let all = read_npy(path)?;
-        let n = all.len();
-        all.into_iter().for_each(emit);
-        return Ok(n);
+    let bytes = coulomb::input::read(path, coulomb::input::Kind::Particles)?;
+    let npy = match Npy::parse(&bytes) {
+        Ok(npy) => npy,
+        Err(e) => return format_err(path, None, format!("not an NPY file: {e}")),
+    };
+    if !matches!(npy.descr.as_str(), "<f8" | ">f8" | "=f8") {
+        return format_err(path, None, format!("dtype {} must be float64", npy.descr));
     }
-    let (n, w) = (shape[0] as usize, shape[1] as usize);
+    let shape = &npy.shape;
+    if shape.len() != 2 || !(shape[1] == 4 || shape[1] == 7) {
+        return format_err(
+            path,
+            None,
+            format!("shape {shape:?} must be (n, 4) or (n, 7)"),
+        );
+    }
+    let (n, w) = (shape[0], shape[1] as usize);
     if n > 100_000_000 {
         return format_err(path, None, format!("{n} rows: above the limit of 1e8"));
     }
-    let mut data = match npy.data::<f64>() {
-        Ok(d) => d,
-        Err(e) => return format_err(path, None, format!("cannot read the data: {e}")),
-    };
-    let mut row = [0.0f64; 7];
-    for i in 0..n {
-        for x in row.iter_mut().take(w) {
-            *x = match data.next() {
-                Some(Ok(v)) => v,
-                Some(Err(e)) => {
-                    return format_err(path, None, format!("cannot read the data: {e}"))
-                }
-                None => return format_err(path, None, format!("row {i}: the data end early")),
-            };
+    let n = n as usize;
+    let data = &bytes[npy.data_at..];
+    if data.len() != n * w * 8 {
+        return format_err(
+            path,
+            None,
+            format!(
+                "{} bytes of data for shape {shape:?} of float64 ({} expected)",
+                data.len(),
+                n * w * 8
+            ),
+        );
+    }
+    let at = |i: usize, j: usize| {
+        let k = if npy.fortran { j * n + i } else { i * w + j };
+        let b: [u8; 8] = data[8 * k..8 * k + 8].try_into().expect("8 bytes");
+        if npy.descr.starts_with('>') {
+            f64::from_be_bytes(b)
+        } else {
+            f64::from_le_bytes(b)
         }
+    };
+    for i in 0..n {
         let r = ParticleRecord {
-            position: Vec3::new(row[0], row[1], row[2]),
-            radius: row[3],
-            velocity: (w == 7).then(|| Vec3::new(row[4], row[5], row[6])),
+            position: Vec3::new(at(i, 0), at(i, 1), at(i, 2)),
+            radius: at(i, 3),
+            velocity: (w == 7).then(|| Vec3::new(at(i, 4), at(i, 5), at(i, 6))),
             material: None,
         };
         if let Err(ImportError::Format { message, .. }) = check_record(path, None, &r) {
@@ -137,6 +142,142 @@ fn npy_each(path: &Path, emit: &mut dyn FnMut(ParticleRecord)) -> Result<usize, 
         emit(r);
     }
     Ok(n)
+}
+
+/// The header of an NPY file (NumPy's `.npy` format, versions 1 to 3): the magic string
+/// `\x93NUMPY`, the version, the header's length, then the header, a Python dict literal
+/// `{'descr': '<f8', 'fortran_order': False, 'shape': (n, 4), }`, then the array's bytes.
+///
+/// Read here rather than with the `npyz` crate, which this project used before: for these
+/// three keys of a fixed dict, npyz parses any Python literal with a pest grammar and big
+/// integers (py_literal, num-bigint, pest), dependencies that took a noticeable share of a
+/// fresh build (docs/testing.md).
+#[derive(Debug, PartialEq)]
+struct Npy {
+    /// the dtype string, e.g. `<f8`
+    descr: String,
+    /// column-major (Fortran) order
+    fortran: bool,
+    /// the array's shape
+    shape: Vec<u64>,
+    /// where the array's bytes start
+    data_at: usize,
+}
+
+impl Npy {
+    /// Parses the header of `bytes`; an error says what is wrong.
+    fn parse(bytes: &[u8]) -> Result<Npy, String> {
+        if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
+            return Err("no NPY magic string".into());
+        }
+        let (len, start) = match bytes[6] {
+            1 => (u16::from_le_bytes([bytes[8], bytes[9]]) as usize, 10usize),
+            2 | 3 if bytes.len() >= 12 => (
+                u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
+                12,
+            ),
+            v => return Err(format!("NPY version {v} (1 to 3 are read)")),
+        };
+        let end = start
+            .checked_add(len)
+            .filter(|&e| e <= bytes.len())
+            .ok_or("the header runs past the end of the file")?;
+        let text = std::str::from_utf8(&bytes[start..end]).map_err(|_| "a header not UTF-8")?;
+        let mut p = DictParser { s: text.trim_end() };
+        let (mut descr, mut fortran, mut shape) = (None, None, None);
+        p.expect('{')?;
+        while !p.eat('}') {
+            let key = p.string()?;
+            p.expect(':')?;
+            match key.as_str() {
+                "descr" => descr = Some(p.string()?),
+                "fortran_order" => fortran = Some(p.boolean()?),
+                "shape" => shape = Some(p.tuple()?),
+                k => return Err(format!("an unknown header key '{k}'")),
+            }
+            if !p.eat(',') {
+                p.expect('}')?;
+                break;
+            }
+        }
+        if !p.s.trim().is_empty() {
+            return Err("text after the header's dict".into());
+        }
+        Ok(Npy {
+            descr: descr.ok_or("no 'descr' in the header")?,
+            fortran: fortran.ok_or("no 'fortran_order' in the header")?,
+            shape: shape.ok_or("no 'shape' in the header")?,
+            data_at: end,
+        })
+    }
+}
+
+/// The few tokens of an NPY header: quoted strings, `True`/`False`, tuples of integers.
+struct DictParser<'a> {
+    s: &'a str,
+}
+
+impl DictParser<'_> {
+    fn eat(&mut self, c: char) -> bool {
+        self.s = self.s.trim_start();
+        match self.s.strip_prefix(c) {
+            Some(rest) => {
+                self.s = rest;
+                true
+            }
+            None => false,
+        }
+    }
+
+    fn expect(&mut self, c: char) -> Result<(), String> {
+        if self.eat(c) {
+            Ok(())
+        } else {
+            Err(format!("'{c}' expected in the header"))
+        }
+    }
+
+    fn string(&mut self) -> Result<String, String> {
+        self.s = self.s.trim_start();
+        let q = match self.s.chars().next() {
+            Some(q @ ('\'' | '"')) => q,
+            _ => return Err("a quoted string expected in the header".into()),
+        };
+        let body = &self.s[1..];
+        let close = body.find(q).ok_or("an unterminated string in the header")?;
+        self.s = &body[close + 1..];
+        Ok(body[..close].to_string())
+    }
+
+    fn boolean(&mut self) -> Result<bool, String> {
+        self.s = self.s.trim_start();
+        for (word, value) in [("True", true), ("False", false)] {
+            if let Some(rest) = self.s.strip_prefix(word) {
+                self.s = rest;
+                return Ok(value);
+            }
+        }
+        Err("True or False expected in the header".into())
+    }
+
+    fn tuple(&mut self) -> Result<Vec<u64>, String> {
+        self.expect('(')?;
+        let mut out = Vec::new();
+        while !self.eat(')') {
+            self.s = self.s.trim_start();
+            let digits = self.s.bytes().take_while(u8::is_ascii_digit).count();
+            let n = self.s[..digits]
+                .parse::<u64>()
+                .map_err(|_| "a shape of non-negative integers expected in the header")?;
+            out.push(n);
+            self.s = &self.s[digits..];
+            if !self.eat(',') {
+                self.expect(')')?;
+                break;
+            }
+        }
+        Ok(out)
+    }
 }
 
 fn extension(path: &Path) -> Option<String> {
@@ -247,57 +388,8 @@ fn csv_each(path: &Path, emit: &mut dyn FnMut(ParticleRecord)) -> Result<usize, 
 /// Reads an NPY file holding a float64 array of shape (n, 4) — x, y, z, r — or (n, 7) —
 /// x, y, z, r, vx, vy, vz — in C or Fortran order, either byte order.
 pub fn read_npy(path: &Path) -> Result<Vec<ParticleRecord>, ImportError> {
-    let npy = open_npy(path)?;
-    let shape = npy.shape().to_vec();
-    let order = npy.order();
-    let dtype = npy.dtype();
-    let ok_type = matches!(&dtype, npyz::DType::Plain(t) if t.to_string().ends_with("f8"));
-    if !ok_type {
-        return format_err(
-            path,
-            None,
-            format!("dtype {} must be float64", dtype.descr()),
-        );
-    }
-    if shape.len() != 2 || !(shape[1] == 4 || shape[1] == 7) {
-        return format_err(
-            path,
-            None,
-            format!("shape {shape:?} must be (n, 4) or (n, 7)"),
-        );
-    }
-    let (n, w) = (shape[0] as usize, shape[1] as usize);
-    if n > 100_000_000 {
-        return format_err(path, None, format!("{n} rows: above the limit of 1e8"));
-    }
-    let data: Vec<f64> = match npy.into_vec::<f64>() {
-        Ok(d) => d,
-        Err(e) => return format_err(path, None, format!("cannot read the data: {e}")),
-    };
-    if data.len() != n * w {
-        return format_err(
-            path,
-            None,
-            format!("{} values for shape {shape:?}", data.len()),
-        );
-    }
-    let at = |i: usize, j: usize| match order {
-        npyz::Order::C => data[i * w + j],
-        npyz::Order::Fortran => data[j * n + i],
-    };
-    let mut out = Vec::with_capacity(n);
-    for i in 0..n {
-        let r = ParticleRecord {
-            position: Vec3::new(at(i, 0), at(i, 1), at(i, 2)),
-            radius: at(i, 3),
-            velocity: (w == 7).then(|| Vec3::new(at(i, 4), at(i, 5), at(i, 6))),
-            material: None,
-        };
-        if let Err(ImportError::Format { message, .. }) = check_record(path, None, &r) {
-            return format_err(path, None, format!("row {i}: {message}"));
-        }
-        out.push(r);
-    }
+    let mut out = Vec::new();
+    npy_each(path, &mut |r| out.push(r))?;
     Ok(out)
 }
 
@@ -679,6 +771,106 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("row 0"), "{e}");
+    }
+
+    /// The NPY header of every version, both orders and byte orders; every malformed header
+    /// refused with its reason.
+    #[test]
+    fn npy_headers_orders_and_byte_orders() {
+        let npy = Npy::parse(&npy_bytes((2, 4), &[0.0; 8])).unwrap();
+        assert_eq!(
+            npy,
+            Npy {
+                descr: "<f8".into(),
+                fortran: false,
+                shape: vec![2, 4],
+                data_at: 128,
+            }
+        );
+        // version 2, Fortran order, big-endian, a 1-tuple-style trailing comma, double quotes
+        let with = |version: u8, dict: &str, data: &[u8]| {
+            let mut out = b"\x93NUMPY".to_vec();
+            out.extend_from_slice(&[version, 0]);
+            if version == 1 {
+                out.extend_from_slice(&(dict.len() as u16).to_le_bytes());
+            } else {
+                out.extend_from_slice(&(dict.len() as u32).to_le_bytes());
+            }
+            out.extend_from_slice(dict.as_bytes());
+            out.extend_from_slice(data);
+            out
+        };
+        // the (2, 4) array [[0, 0, 1, 0.1], [1, 0, 1, 0.2]] stored column by column, big-endian
+        let columns = [0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.1, 0.2];
+        let be: Vec<u8> = columns.iter().flat_map(|x: &f64| x.to_be_bytes()).collect();
+        let dict = "{\"descr\": '>f8', 'shape': (2, 4,), 'fortran_order': True}\n";
+        let p = tmp("f.npy", &with(2, dict, &be));
+        let r = read_particles(&p).unwrap();
+        assert_eq!(r[1].position, Vec3::new(1.0, 0.0, 1.0));
+        assert_eq!(r[1].radius, 0.2);
+        assert_eq!(r[0].radius, 0.1);
+        let cases: [(&str, Vec<u8>, &str); 8] = [
+            ("h1.npy", b"\x93NUMPY".to_vec(), "no NPY magic"),
+            ("h2.npy", with(4, "{}", &[]), "version 4"),
+            (
+                "h3.npy",
+                {
+                    let mut b = with(
+                        1,
+                        "{'descr': '<f8', 'fortran_order': False, 'shape': (0, 4), }",
+                        &[],
+                    );
+                    b.truncate(20);
+                    b
+                },
+                "runs past the end",
+            ),
+            (
+                "h4.npy",
+                with(
+                    1,
+                    "{'descr': '<f8', 'fortran_order': False, 'shape': (1, 4), 'x': 1}",
+                    &[],
+                ),
+                "unknown header key 'x'",
+            ),
+            (
+                "h5.npy",
+                with(1, "{'descr': '<f8', 'shape': (1, 4)}", &[0; 32]),
+                "no 'fortran_order'",
+            ),
+            (
+                "h6.npy",
+                with(
+                    1,
+                    "{'descr': '<i4', 'fortran_order': False, 'shape': (1, 4)}",
+                    &[0; 16],
+                ),
+                "dtype <i4 must be float64",
+            ),
+            (
+                "h7.npy",
+                with(
+                    1,
+                    "{'descr': '<f8', 'fortran_order': False, 'shape': (2, 4)}",
+                    &[0; 32],
+                ),
+                "32 bytes of data",
+            ),
+            (
+                "h8.npy",
+                with(
+                    1,
+                    "{'descr': '<f8', 'fortran_order': Maybe, 'shape': (1, 4)}",
+                    &[0; 32],
+                ),
+                "True or False",
+            ),
+        ];
+        for (name, bytes, want) in cases {
+            let e = read_particles(&tmp(name, &bytes)).unwrap_err().to_string();
+            assert!(e.contains(name) && e.contains(want), "{name}: {e}");
+        }
     }
 
     /// [`for_each_particle`] hands out the records of [`read_particles`], in order, and fails

@@ -374,6 +374,10 @@ pub struct BodiesSection {
     /// shape's (with `shape`, not a sphere)
     #[serde(default)]
     pub inertia: Option<[[f64; 3]; 3]>,
+    /// centre of mass in the shape frame (m), instead of the shape's centroid (with `shape`,
+    /// not a sphere, and `inertia`: the tensor about it)
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub centre_of_mass: Option<[f64; 3]>,
 }
 
 /// A generated group: `count` spheres with radii from `sizes` placed in `region` (or in the
@@ -1277,12 +1281,19 @@ impl LoadedScene {
                 ));
             }
             if g.shape.is_none() {
-                for k in ["positions", "orientations", "mass", "inertia"] {
+                for k in [
+                    "positions",
+                    "orientations",
+                    "mass",
+                    "inertia",
+                    "centre_of_mass",
+                ] {
                     let given = match k {
                         "positions" => g.positions.is_some(),
                         "orientations" => g.orientations.is_some(),
                         "mass" => g.mass.is_some(),
-                        _ => g.inertia.is_some(),
+                        "inertia" => g.inertia.is_some(),
+                        _ => g.centre_of_mass.is_some(),
                     };
                     if given {
                         return Err(self.invalid(&at(k), "only for a group with `shape`"));
@@ -1610,6 +1621,23 @@ impl LoadedScene {
                 "a sphere's inertia is 2/5 m R²: `inertia` is for other shapes",
             ));
         }
+        if let Some(c) = g.centre_of_mass {
+            if shape.is_sphere() {
+                return Err(self.invalid(
+                    &at("centre_of_mass"),
+                    "a sphere's centre of mass is its centre: `centre_of_mass` is for other shapes",
+                ));
+            }
+            if g.inertia.is_none() {
+                return Err(self.invalid(
+                    &at("centre_of_mass"),
+                    "needs `inertia` (the tensor about that centre of mass)",
+                ));
+            }
+            if !c.iter().all(|x| x.is_finite()) {
+                return Err(self.invalid(&at("centre_of_mass"), "must be finite"));
+            }
+        }
         if g.fixed && (v0 != [0.0; 3] || g.angular_velocity != [0.0; 3]) {
             return Err(self.invalid(p, "fixed bodies cannot have velocities"));
         }
@@ -1635,6 +1663,7 @@ impl LoadedScene {
                 mass: g.mass,
                 density: g.mass.is_none().then_some(density),
                 inertia: g.inertia,
+                centre_of_mass: g.centre_of_mass,
                 material: g.material.clone(),
                 fixed: g.fixed,
             });

@@ -140,6 +140,7 @@ pub fn scene_file_of(
         orientations: None,
         mass: None,
         inertia: None,
+        centre_of_mass: None,
     };
     let mut bodies = Vec::new();
     // bodies one by one (they come first in the world, as in the model)
@@ -153,6 +154,7 @@ pub fn scene_file_of(
             orientations: Some(vec![b.orientation]),
             mass: b.mass,
             inertia: b.inertia,
+            centre_of_mass: b.centre_of_mass,
             ..group(&b.material, b.fixed)
         });
     }

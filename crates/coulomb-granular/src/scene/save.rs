@@ -365,6 +365,8 @@ pub fn scene_file_of(
         // the file's bodies are written in the model's order (bodies, then each batch's
         // spheres), the numbering the joints use
         joints: model.joints.clone(),
+        // a robot imported from URDF is in the model as its bodies and joints: written so
+        urdf: Vec::new(),
     })
 }
 

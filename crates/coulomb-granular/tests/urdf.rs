@@ -431,6 +431,28 @@ fn bad_urdf_inputs_are_refused_with_their_typed_error() {
     assert!(e.to_string().contains("robot.urdf"), "{e}");
     let e = err("not xml at all".into());
     assert!(matches!(e, UrdfError::Xml { .. }), "{e}");
+    // elements nested deeper than a robot's: refused at once (the XML reader slows down
+    // quadratically with the depth)
+    let deep = format!(
+        "<robot name=\"r\">{}{}</robot>",
+        "<a>".repeat(200_000),
+        "</a>".repeat(200_000)
+    );
+    let t = std::time::Instant::now();
+    let e = err(deep);
+    assert!(
+        matches!(&e, UrdfError::Xml { message, .. } if message.contains("nested")),
+        "{e}"
+    );
+    assert!(t.elapsed().as_secs() < 10);
+    // markup in comments, CDATA and attribute values does not count
+    let commented = format!(
+        "<?xml version=\"1.0\"?><!-- {} --><robot name=\"r>\">{}<![CDATA[{}]]></robot>",
+        "<a>".repeat(100),
+        good("a"),
+        "<b>".repeat(100)
+    );
+    parse(&dir.0, &commented).unwrap_or_else(|e| panic!("{e}"));
     // a joint naming an unknown link
     let e = err(robot(&(good("a") + &joint("j", "revolute", "a", "ghost"))));
     match &e {
@@ -669,4 +691,81 @@ fn a_scene_file_names_its_urdf_and_is_refused_where_it_is_bad() {
         LoadedScene::load(&unknown),
         Err(SceneFileError::Syntax { .. })
     ));
+}
+
+/// Mutated URDF documents (bytes replaced, deleted, inserted: markup, digits, signs, `nan`,
+/// `inf`) are imported or refused with a typed error, never a panic, and the imported ones
+/// build a rigid scene or are refused by it.
+#[test]
+fn mutated_urdf_documents_are_imported_or_refused_never_a_panic() {
+    use rand::{Rng, SeedableRng};
+    let dir = Scratch::new("mutants");
+    let shipped = std::fs::read_to_string(rigid_dir().join("double-pendulum.urdf")).unwrap();
+    let alphabet: &[&str] = &[
+        "<",
+        ">",
+        "/",
+        "\"",
+        "=",
+        " ",
+        "0",
+        "1",
+        "-",
+        ".",
+        "e9",
+        "nan",
+        "inf",
+        "-1",
+        "link",
+        "joint",
+        "</robot>",
+        "<link name=\"a\"/>",
+        "type=\"planar\"",
+    ];
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(53);
+    let (mut imported, mut refused) = (0, 0);
+    for k in 0..1500 {
+        let base = if k % 2 == 0 { PENDULUM } else { &shipped };
+        let mut text = base.to_string();
+        for _ in 0..rng.random_range(1..4) {
+            let mut at = rng.random_range(0..text.len());
+            while !text.is_char_boundary(at) {
+                at -= 1;
+            }
+            let mut end = (at + rng.random_range(0..4)).min(text.len());
+            while !text.is_char_boundary(end) {
+                end -= 1;
+            }
+            let with = alphabet[rng.random_range(0..alphabet.len())];
+            match rng.random_range(0..3) {
+                0 => text.replace_range(at..end, with),
+                1 => text.replace_range(at..end, ""),
+                _ => text.insert_str(at, with),
+            }
+        }
+        let placement = UrdfPlacement {
+            fixed_base: k % 3 == 0,
+            ..UrdfPlacement::default()
+        };
+        match urdf::parse(&dir.0.join("mutant.urdf"), &text, &placement) {
+            Ok(r) => {
+                imported += 1;
+                let model = SceneModel {
+                    bodies: r.bodies,
+                    joints: r.joints,
+                    ..SceneModel::default()
+                };
+                let _ = RigidScene::new(&model);
+            }
+            Err(e) => {
+                refused += 1;
+                assert!(e.to_string().contains("mutant.urdf"), "{e}");
+            }
+        }
+    }
+    // both outcomes are exercised
+    assert!(
+        imported > 50 && refused > 50,
+        "{imported} imported, {refused} refused"
+    );
 }

@@ -24,7 +24,8 @@
 //!   or fixed (`fixed_base`).
 //!
 //! # Refused ([`UrdfError`], each naming the file and the element)
-//! A missing, non-regular or oversized file; malformed XML or a document `urdf-rs` refuses;
+//! A missing, non-regular or oversized file; malformed XML or a document `urdf-rs` refuses,
+//! elements nested deeper than [`MAX_DEPTH`];
 //! two links of one name; a joint naming an unknown link; a link with two parents; a cycle, no
 //! root or several roots; `floating` and `planar` joints; a link with no `inertial`
 //! (zero mass), a non-positive or non-finite mass, an inertia tensor that is not symmetric
@@ -288,6 +289,74 @@ const Y_TO_Z: [f64; 4] = [
     0.0,
 ];
 
+/// The deepest nesting of elements a URDF document may have. A URDF robot is 4 or 5 deep
+/// (robot, link, collision, geometry, box); the XML reader and writer `urdf-rs` runs recurse
+/// (or slow down quadratically) with the depth: 2·10⁵ nested elements did not finish in a
+/// minute.
+pub const MAX_DEPTH: usize = 32;
+
+/// Refuses a document whose elements nest deeper than [`MAX_DEPTH`], by one linear scan of
+/// its tags (comments, CDATA, processing instructions and declarations skipped, quoted
+/// attribute values respected); malformed markup is left to the XML reader.
+fn nesting(text: &str) -> Result<(), String> {
+    let b = text.as_bytes();
+    let find = |from: usize, pat: &[u8]| {
+        b[from.min(b.len())..]
+            .windows(pat.len())
+            .position(|w| w == pat)
+            .map(|k| from + k + pat.len())
+    };
+    let (mut i, mut depth, mut line) = (0, 0usize, 1usize);
+    while i < b.len() {
+        if b[i] == b'\n' {
+            line += 1;
+        }
+        if b[i] != b'<' {
+            i += 1;
+            continue;
+        }
+        let rest = &b[i..];
+        let end = if rest.starts_with(b"<!--") {
+            find(i + 4, b"-->")
+        } else if rest.starts_with(b"<![CDATA[") {
+            find(i + 9, b"]]>")
+        } else if rest.starts_with(b"<?") {
+            find(i + 2, b"?>")
+        } else if rest.starts_with(b"<!") || rest.starts_with(b"</") {
+            if rest.starts_with(b"</") {
+                depth = depth.saturating_sub(1);
+            }
+            find(i + 1, b">")
+        } else {
+            // a start tag: to its '>' outside quotes; `/>` closes it at once
+            let mut j = i + 1;
+            let mut quote = None;
+            while j < b.len() {
+                match (quote, b[j]) {
+                    (None, b'"' | b'\'') => quote = Some(b[j]),
+                    (Some(q), c) if c == q => quote = None,
+                    (None, b'>') => break,
+                    _ => {}
+                }
+                j += 1;
+            }
+            if j < b.len() && b[j - 1] != b'/' {
+                depth += 1;
+                if depth > MAX_DEPTH {
+                    return Err(format!(
+                        "line {line}: elements nested more than {MAX_DEPTH} deep (a URDF robot is about 5 deep)"
+                    ));
+                }
+            }
+            (j < b.len()).then_some(j + 1)
+        };
+        let next = end.unwrap_or(b.len());
+        line += b[i..next].iter().filter(|&&c| c == b'\n').count();
+        i = next;
+    }
+    Ok(())
+}
+
 /// Reads the URDF file `path` (a regular file of at most 16 MiB, [`coulomb::input`]); mesh
 /// files it names are resolved against its folder.
 pub fn read(path: &Path, placement: &UrdfPlacement) -> Result<UrdfRobot, UrdfError> {
@@ -310,6 +379,10 @@ pub fn parse(path: &Path, text: &str, placement: &UrdfPlacement) -> Result<UrdfR
         )));
     }
     check_quaternion("orientation", placement.orientation).map_err(|e| options(e.to_string()))?;
+    nesting(text).map_err(|message| UrdfError::Xml {
+        path: file.clone(),
+        message,
+    })?;
     let robot = urdf_rs::read_from_string(text).map_err(|e| UrdfError::Xml {
         path: file.clone(),
         message: e.to_string(),

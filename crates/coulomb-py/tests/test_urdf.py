@@ -147,3 +147,16 @@ def test_malformed_missing_and_misplaced_urdf_are_refused(tmp_path):
     with pytest.raises(SceneError):
         s.add_urdf(path)
     assert s.body_count == 0 and s.joint_count == 0
+
+
+def test_a_scene_with_a_urdf_robot_saves_as_its_bodies_and_joints(tmp_path):
+    s = Scene()
+    s.add_urdf(URDF, position=P, orientation=Q, fixed_base=True)
+    path = tmp_path / "robot.toml"
+    s.save(path)
+    text = path.read_text()
+    assert "centre_of_mass" in text and "[[joints]]" in text and "[[urdf]]" not in text
+    a, b = Simulation(s), Simulation.from_file(path)
+    a.run(50)
+    b.run(50)
+    np.testing.assert_array_equal(a.body_positions, b.body_positions)

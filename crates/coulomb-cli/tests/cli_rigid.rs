@@ -2,7 +2,7 @@
 //! runs in the rigid-body simulator with VTK frames of the bodies as polygons, stats and the
 //! steps' problems in FCLIB; a non-unit quaternion or a degenerate hull exits with status 2
 //! naming the file, line and key; a run with `--checkpoint-every` continued by `--restart`
-//! ends in the state of the uninterrupted run to the bit.
+//! ends in the state of the uninterrupted run to the bit; URDF robots run, bad ones exit 2.
 
 use crate::common;
 use common::{coulomb, ok, temp_dir};
@@ -261,5 +261,75 @@ fn bad_joints_exit_2_and_a_sphere_pendulum_runs() {
     // each step's problem, with the joint's equality rows, is written
     let dumped = std::fs::read_dir(&fc).unwrap().count();
     assert!(dumped >= 1, "{dumped}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 53, URDF import: the shipped URDF double pendulum runs; a scene whose `[[urdf]]`
+/// names a missing file, a URDF with a floating joint or a `package://` mesh exits with
+/// status 2 naming the scene file, the URDF file and the element, and writes nothing.
+#[test]
+fn urdf_robots_run_and_bad_ones_exit_2_naming_the_element() {
+    let dir = temp_dir("rigid-urdf");
+    let out = dir.join("out");
+    ok(&coulomb(&[
+        "simulate",
+        &scene("double-pendulum-urdf.toml"),
+        "--steps",
+        "5",
+        "--output",
+        out.to_str().unwrap(),
+    ]));
+    let link = |name: &str, geometry: &str| {
+        format!(
+            r#"<link name="{name}"><inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial><collision><geometry>{geometry}</geometry></collision></link>"#
+        )
+    };
+    let cube = r#"<box size="0.1 0.1 0.1"/>"#;
+    for (name, urdf, words) in [
+        (
+            "floating",
+            format!(
+                r#"<robot name="r">{}{}<joint name="free" type="floating"><parent link="a"/><child link="b"/></joint></robot>"#,
+                link("a", cube),
+                link("b", cube)
+            ),
+            "joint 'free'",
+        ),
+        (
+            "package",
+            format!(
+                r#"<robot name="r">{}</robot>"#,
+                link("arm", r#"<mesh filename="package://arm/arm.stl"/>"#)
+            ),
+            "package://",
+        ),
+        ("missing", String::new(), "missing.urdf"),
+    ] {
+        let urdf_path = dir.join(format!("{name}.urdf"));
+        if !urdf.is_empty() {
+            std::fs::write(&urdf_path, urdf).unwrap();
+        }
+        let path = dir.join(format!("{name}.toml"));
+        std::fs::write(
+            &path,
+            format!("[step]\nh = 0.001\n\n[[urdf]]\nfile = \"{name}.urdf\"\n"),
+        )
+        .unwrap();
+        let o = coulomb(&[
+            "simulate",
+            path.to_str().unwrap(),
+            "--output",
+            dir.join(format!("{name}.out")).to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
+        assert!(
+            err.contains(&format!("{name}.toml:4:1"))
+                && err.contains(&format!("{name}.urdf"))
+                && err.contains(words),
+            "{name}: {err}"
+        );
+        assert!(!dir.join(format!("{name}.out")).exists(), "{name}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -45,7 +45,7 @@ pub use bodies::{mesh, shape, world};
 pub use collision::{contact, tunnelling};
 pub use io::{checkpoint, output, output_dir, report};
 pub use rigid::{checkpoint as rigid_checkpoint, scene as rigid_scene};
-pub use scene::{file as scene_file, generate, import, model, save as scene_save};
+pub use scene::{file as scene_file, generate, import, model, save as scene_save, urdf};
 use step::colour_progress;
 pub use step::{assembly, coarse, nsgs, projection, rolling, run, simulation, subspace};
 pub use validation::laws;

@@ -15,3 +15,4 @@ mod rigid_scenes;
 mod rigid_threads;
 mod rolling;
 mod scene_model;
+mod urdf;

@@ -54,7 +54,7 @@ fn parse_location(py: Python<'_>, location: &str) -> Py<PyAny> {
 }
 
 /// The Debug name of an enum variant in snake_case (`NonFinite { .. }` → `non_finite`).
-fn variant_name<E: std::fmt::Debug>(e: &E) -> String {
+pub(crate) fn variant_name<E: std::fmt::Debug>(e: &E) -> String {
     let debug = format!("{e:?}");
     let name: String = debug.chars().take_while(|c| c.is_alphanumeric()).collect();
     let mut out = String::new();
@@ -346,6 +346,12 @@ pub fn scene_file_error(py: Python<'_>, e: &coulomb_granular::scene_file::SceneF
             source: coulomb_granular::import::ImportError::Input(i),
             ..
         } => input_file_error(py, i),
+        E::Urdf { source, .. }
+            if matches!(**source, coulomb_granular::urdf::UrdfError::Input(_)) =>
+        {
+            crate::scene::urdf_error(py, source)
+        }
+        E::Urdf { key, .. } => scene_input_error(py, "urdf", Some(key), py.None(), msg),
         E::Model { source, .. } => {
             let err = scene_error(py, source);
             // the model's field and index, the message with the file's name

@@ -419,6 +419,7 @@ fn _coulomb(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(check, m)?)?;
     m.add_function(wrap_pyfunction!(scene::scene_fill, m)?)?;
     m.add_function(wrap_pyfunction!(scene::scene_save, m)?)?;
+    m.add_function(wrap_pyfunction!(scene::urdf_robot, m)?)?;
     m.add_function(wrap_pyfunction!(fclib_read, m)?)?;
     m.add_function(wrap_pyfunction!(fclib_write, m)?)?;
     m.add_class::<granular::PySimulation>()?;

@@ -326,16 +326,18 @@ pub fn _checkpoint_is_rigid(py: Python<'_>, path: PathBuf) -> bool {
     })
 }
 
-/// Whether the scene file at `path` has bodies of another shape than the sphere (then it
-/// runs in the rigid-body simulator).
+/// Whether the scene file at `path` has bodies of another shape than the sphere, joints or
+/// URDF robots (then it runs in the rigid-body simulator, as `SceneModel::has_shapes` says
+/// of its model).
 #[pyfunction]
 pub fn _scene_file_has_shapes(py: Python<'_>, path: PathBuf) -> PyResult<bool> {
     let loaded = py
         .detach(|| LoadedScene::load(&path))
         .map_err(|e| crate::errors::scene_file_error(py, &e))?;
-    Ok(loaded
-        .file
-        .bodies
-        .iter()
-        .any(|g| g.shape.as_ref().is_some_and(|s| !s.is_sphere())))
+    let f = &loaded.file;
+    Ok(!f.joints.is_empty()
+        || !f.urdf.is_empty()
+        || f.bodies
+            .iter()
+            .any(|g| g.shape.as_ref().is_some_and(|s| !s.is_sphere())))
 }

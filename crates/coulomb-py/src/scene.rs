@@ -401,3 +401,44 @@ pub(crate) fn scene_save(
             other => describe_error(py, Some("scene"), other.to_string()),
         })
 }
+
+/// A URDF import error as Python's: the file cannot be read → `OSError` (or
+/// `coulomb.InputError`, as for every input file); otherwise `coulomb.SceneError` with the
+/// message (it names the URDF file and the element) and `kind` the variant (`xml`, `link`,
+/// `joint`, `unknown_link`, `unsupported_joint`, `unsupported_geometry`, `package_uri`,
+/// `tree`, `options`).
+pub(crate) fn urdf_error(py: Python<'_>, e: &coulomb_granular::urdf::UrdfError) -> PyErr {
+    use coulomb_granular::urdf::UrdfError as E;
+    match e {
+        E::Input(i) => errors::input_file_error(py, i),
+        _ => {
+            let kind = errors::variant_name(e);
+            errors::scene_input_error(py, &kind, Some("path"), py.None(), e.to_string())
+        }
+    }
+}
+
+/// Reads the URDF file `path` placed as `placement` says (JSON of
+/// `coulomb_granular::urdf::UrdfPlacement`: position, orientation, fixed_base, material) for
+/// `Scene.add_urdf`: returns the JSON `{"links": [names], "bodies": [BodySpec], "joints":
+/// [JointDesc]}`, the joints' bodies numbered from 0 over the robot's links (the file's
+/// order). The same import as a scene file's `[[urdf]]`.
+#[pyfunction]
+pub(crate) fn urdf_robot(
+    py: Python<'_>,
+    path: std::path::PathBuf,
+    placement: &str,
+) -> PyResult<String> {
+    let placement: coulomb_granular::urdf::UrdfPlacement = serde_json::from_str(placement)
+        .map_err(|e| describe_error(py, Some("placement"), format!("add_urdf: {e}")))?;
+    let robot = py
+        .detach(|| coulomb_granular::urdf::read(&path, &placement))
+        .map_err(|e| urdf_error(py, &e))?;
+    let out = serde_json::json!({
+        "links": robot.links,
+        "bodies": robot.bodies,
+        "joints": robot.joints,
+    });
+    serde_json::to_string(&out)
+        .map_err(|e| describe_error(py, Some("path"), format!("add_urdf: {e}")))
+}

@@ -46,13 +46,26 @@ pub fn pendulum_period() -> Result<(f64, f64, usize), RigidError> {
     bar.velocity = [-w0 * c, 0.0, 0.0];
     let joints = [hinge(0, None, [0.0; 3], [0.0, 1.0, 0.0])];
     let settings = RigidSettings::default();
-    let h = settings.h;
     let mut w = RigidWorld::with_joints(vec![bar], vec![], one_material(0.3), settings, &joints)?;
     let period = 2.0 * std::f64::consts::PI * (i / (m * GRAVITY * c)).sqrt();
+    let (measured, bad) = measured_period(&mut w, 0, 3.2 * period)?;
+    Ok((measured, period, bad))
+}
+
+/// Steps `w` for `duration` s and measures the period of joint `j`'s oscillation: the mean
+/// interval between the upward zero crossings of its coordinate (each crossing time
+/// interpolated linearly within its step); (period (NaN with fewer than two crossings),
+/// steps not converged). The simple pendulum's check and the URDF pendulum's test use it.
+pub fn measured_period(
+    w: &mut RigidWorld,
+    j: usize,
+    duration: f64,
+) -> Result<(f64, usize), RigidError> {
+    let h = w.settings().h;
     let (mut crossings, mut prev, mut bad) = (Vec::new(), 0.0, 0);
-    for _ in 0..(3.2 * period / h) as usize {
-        bad += run(&mut w, 1)?;
-        let theta = w.joint_coordinate(0).map_or(0.0, |c| c.0);
+    for _ in 0..(duration / h) as usize {
+        bad += run(w, 1)?;
+        let theta = w.joint_coordinate(j).map_or(0.0, |c| c.0);
         if prev < 0.0 && theta >= 0.0 {
             crossings.push(w.time() - h * theta / (theta - prev));
         }
@@ -62,7 +75,7 @@ pub fn pendulum_period() -> Result<(f64, f64, usize), RigidError> {
         [first, .., last] => (last - first) / (crossings.len() - 1) as f64,
         _ => f64::NAN,
     };
-    Ok((measured, period, bad))
+    Ok((measured, bad))
 }
 
 /// 20 links 0.02 × 0.02 × 0.1 m hanging from spherical joints, solved to 1e-13: (top joint's

@@ -3,7 +3,8 @@
 //!
 //! - every body becomes a [`RigidBodyDesc`]: its shape's parry3d shape
 //!   ([`BodyShape::to_parry`]), its mass properties from the density (or, with `mass`, those
-//!   of a uniform body of that mass; `inertia` replaces the tensor), its position, orientation
+//!   of a uniform body of that mass; `inertia` replaces the tensor, `centre_of_mass` the
+//!   centroid), its position, orientation
 //!   (w, x, y, z), velocities and material; spheres (bodies and batches) are balls; fixed
 //!   bodies stay bodies that do not move;
 //! - every obstacle becomes one or more [`RigidObstacle`]s with its [`Motion`]: a plane a
@@ -124,7 +125,7 @@ pub fn check_step_section(step: &crate::scene_file::StepSection) -> Result<(), S
 }
 
 /// The mass properties of a body spec: from the density, or scaled to `mass`, its inertia
-/// replaced by `inertia`.
+/// replaced by `inertia` and its centre of mass by `centre_of_mass`.
 fn body_mass(b: &BodySpec, shape: &SharedShape, what: &str) -> Result<MassProperties, SceneError> {
     let positive = |x: f64| x.is_finite() && x > 0.0;
     let from =
@@ -145,6 +146,24 @@ fn body_mass(b: &BodySpec, shape: &SharedShape, what: &str) -> Result<MassProper
         (Some(_), Some(_)) => return Err(invalid(what, "give a mass or a density, not both")),
         (None, None) => return Err(invalid(what, "give a mass or a density")),
     };
+    if let Some(c) = b.centre_of_mass {
+        if b.shape.is_sphere() {
+            return Err(invalid(
+                what,
+                "a sphere's centre of mass is its centre: `centre_of_mass` is for other shapes",
+            ));
+        }
+        if b.inertia.is_none() {
+            return Err(invalid(
+                what,
+                "`centre_of_mass` needs `inertia` (the tensor about that centre of mass)",
+            ));
+        }
+        if !c.iter().all(|x| x.is_finite()) {
+            return Err(invalid(what, format!("centre_of_mass {c:?} is not finite")));
+        }
+        m.local_com = c;
+    }
     if let Some(i) = b.inertia {
         if b.shape.is_sphere() {
             return Err(invalid(

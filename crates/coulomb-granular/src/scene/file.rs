@@ -78,6 +78,18 @@ pub enum SceneFileError {
         /// the model's error
         source: SceneError,
     },
+    /// a URDF file named by `[[urdf]]` could not be imported
+    #[error("{}{}: {key}: {source}", path.display(), at.map(|(l, c)| format!(":{l}:{c}")).unwrap_or_default())]
+    Urdf {
+        /// the scene file
+        path: PathBuf,
+        /// line and column of the `[[urdf]]` entry, when the format gives them
+        at: Option<(usize, usize)>,
+        /// the entry, e.g. `urdf[0]`
+        key: String,
+        /// the importer's error (it names the URDF file and the element)
+        source: Box<crate::urdf::UrdfError>,
+    },
     /// a particle or mesh file named by the scene could not be read
     #[error("{}: {key}: {source}", path.display())]
     Import {
@@ -148,6 +160,38 @@ pub struct SceneFile {
     /// numbered from 0 in file order over every `[[bodies]]` group
     #[serde(default)]
     pub joints: Vec<crate::rigid::joints::JointDesc>,
+    /// `[[urdf]]`: robots read from URDF files (issue 53, [`crate::urdf`]); their links are
+    /// bodies numbered after every `[[bodies]]` group's (robot after robot, each robot's
+    /// links in its file's order), their joints come after `[[joints]]`
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub urdf: Vec<UrdfSection>,
+}
+
+/// `[[urdf]]`: a robot from a URDF file, placed in the world ([`crate::urdf::UrdfPlacement`]:
+/// the same keys as Python's `Scene.add_urdf`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UrdfSection {
+    /// the URDF file, relative to the scene file (`path` is accepted for it too)
+    #[serde(alias = "path")]
+    pub file: String,
+    /// world position of the root link's frame (m, default the origin)
+    #[serde(default)]
+    pub position: [f64; 3],
+    /// unit quaternion (w, x, y, z) turning the root link's frame into the world's (default
+    /// identity)
+    #[serde(default = "identity_quaternion")]
+    pub orientation: [f64; 4],
+    /// the root link fixed to the world (default false: free)
+    #[serde(default)]
+    pub fixed_base: bool,
+    /// the material of every link (default `default`)
+    #[serde(default = "default_material")]
+    pub material: String,
+}
+
+fn identity_quaternion() -> [f64; 4] {
+    crate::shape::IDENTITY
 }
 
 /// Which solver takes each step.
@@ -374,6 +418,10 @@ pub struct BodiesSection {
     /// shape's (with `shape`, not a sphere)
     #[serde(default)]
     pub inertia: Option<[[f64; 3]; 3]>,
+    /// centre of mass in the shape frame (m), instead of the shape's centroid (with `shape`,
+    /// not a sphere, and `inertia`: the tensor about it)
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub centre_of_mass: Option<[f64; 3]>,
 }
 
 /// A generated group: `count` spheres with radii from `sizes` placed in `region` (or in the
@@ -1277,12 +1325,19 @@ impl LoadedScene {
                 ));
             }
             if g.shape.is_none() {
-                for k in ["positions", "orientations", "mass", "inertia"] {
+                for k in [
+                    "positions",
+                    "orientations",
+                    "mass",
+                    "inertia",
+                    "centre_of_mass",
+                ] {
                     let given = match k {
                         "positions" => g.positions.is_some(),
                         "orientations" => g.orientations.is_some(),
                         "mass" => g.mass.is_some(),
-                        _ => g.inertia.is_some(),
+                        "inertia" => g.inertia.is_some(),
+                        _ => g.centre_of_mass.is_some(),
                     };
                     if given {
                         return Err(self.invalid(&at(k), "only for a group with `shape`"));
@@ -1429,6 +1484,29 @@ impl LoadedScene {
             }
             order.extend((first..bodies.len()).map(Ok));
         }
+        // robots: their links after every group's bodies, their joints after [[joints]]
+        let mut joints = f.joints.clone();
+        for (i, u) in f.urdf.iter().enumerate() {
+            let p = vec![key("urdf"), Seg::Index(i)];
+            known(&[&p[..], &[key("material")]].concat(), &u.material)?;
+            let placement = crate::urdf::UrdfPlacement {
+                position: u.position,
+                orientation: u.orientation,
+                fixed_base: u.fixed_base,
+                material: u.material.clone(),
+            };
+            let robot =
+                crate::urdf::read(&self.resolve(&u.file), &placement).map_err(|source| {
+                    SceneFileError::Urdf {
+                        path: self.path.clone(),
+                        at: self.locate(&p),
+                        key: path_string(&p),
+                        source: Box::new(source),
+                    }
+                })?;
+            joints.extend(robot.joints_from(order.len()));
+            order.extend(robot.bodies.into_iter().map(Err));
+        }
         // obstacles
         let mut obstacles = Vec::new();
         for (i, o) in f.obstacles.iter().enumerate() {
@@ -1522,7 +1600,7 @@ impl LoadedScene {
         }
         // with shaped bodies, every body is a body spec in file order (the rigid-body
         // simulator's indices); else the spheres are batches (the sphere simulator's path)
-        let (specs, sphere_batches) = if order.iter().any(|e| e.is_err()) || !f.joints.is_empty() {
+        let (specs, sphere_batches) = if order.iter().any(|e| e.is_err()) || !joints.is_empty() {
             let specs = order
                 .into_iter()
                 .map(|e| match e {
@@ -1551,7 +1629,7 @@ impl LoadedScene {
                 max_sweeps: f.step.max_sweeps,
                 relaxation: f.step.relaxation,
             },
-            joints: f.joints.clone(),
+            joints,
         };
         Ok(BuiltScene {
             path: self.path.clone(),
@@ -1610,6 +1688,23 @@ impl LoadedScene {
                 "a sphere's inertia is 2/5 m R²: `inertia` is for other shapes",
             ));
         }
+        if let Some(c) = g.centre_of_mass {
+            if shape.is_sphere() {
+                return Err(self.invalid(
+                    &at("centre_of_mass"),
+                    "a sphere's centre of mass is its centre: `centre_of_mass` is for other shapes",
+                ));
+            }
+            if g.inertia.is_none() {
+                return Err(self.invalid(
+                    &at("centre_of_mass"),
+                    "needs `inertia` (the tensor about that centre of mass)",
+                ));
+            }
+            if !c.iter().all(|x| x.is_finite()) {
+                return Err(self.invalid(&at("centre_of_mass"), "must be finite"));
+            }
+        }
         if g.fixed && (v0 != [0.0; 3] || g.angular_velocity != [0.0; 3]) {
             return Err(self.invalid(p, "fixed bodies cannot have velocities"));
         }
@@ -1635,6 +1730,7 @@ impl LoadedScene {
                 mass: g.mass,
                 density: g.mass.is_none().then_some(density),
                 inertia: g.inertia,
+                centre_of_mass: g.centre_of_mass,
                 material: g.material.clone(),
                 fixed: g.fixed,
             });

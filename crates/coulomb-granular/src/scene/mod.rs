@@ -1,5 +1,5 @@
 //! Scenes: the model (`model`), its files (`file`, `save`), fills and particle files
-//! (`generate`, `import`) and the built-in scenes (`builtin`, re-exported here).
+//! (`generate`, `import`), URDF robots (`urdf`) and the built-in scenes (`builtin`, re-exported here).
 
 pub mod builtin;
 pub mod file;
@@ -7,5 +7,6 @@ pub mod generate;
 pub mod import;
 pub mod model;
 pub mod save;
+pub mod urdf;
 
 pub use builtin::*;

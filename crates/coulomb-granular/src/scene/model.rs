@@ -207,6 +207,11 @@ pub struct BodySpec {
     /// shape's (non-sphere shapes only: symmetric positive definite)
     #[serde(default)]
     pub inertia: Option<[[f64; 3]; 3]>,
+    /// centre of mass in the shape frame (m), replacing the shape's centroid (non-sphere
+    /// shapes only, with `inertia`, the tensor about it): a body whose mass is not
+    /// distributed as its collision shape's volume (a URDF link's `inertial` origin)
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub centre_of_mass: Option<[f64; 3]>,
     /// material name
     #[serde(default = "default_material")]
     pub material: String,
@@ -227,6 +232,7 @@ impl BodySpec {
             mass: None,
             density: Some(density),
             inertia: None,
+            centre_of_mass: None,
             material: default_material(),
             fixed: false,
         }
@@ -1032,6 +1038,11 @@ fn body_sphere(b: &BodySpec, material: u32) -> Result<Sphere, String> {
     crate::shape::check_quaternion("orientation", b.orientation).map_err(|e| e.to_string())?;
     if b.inertia.is_some() {
         return Err("a sphere's inertia is 2/5 m R²: `inertia` is for other shapes".into());
+    }
+    if b.centre_of_mass.is_some() {
+        return Err(
+            "a sphere's centre of mass is its centre: `centre_of_mass` is for other shapes".into(),
+        );
     }
     if !positive(radius) {
         return Err(format!("radius {radius} is not a finite positive number"));

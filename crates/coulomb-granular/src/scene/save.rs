@@ -140,6 +140,7 @@ pub fn scene_file_of(
         orientations: None,
         mass: None,
         inertia: None,
+        centre_of_mass: None,
     };
     let mut bodies = Vec::new();
     // bodies one by one (they come first in the world, as in the model)
@@ -153,6 +154,7 @@ pub fn scene_file_of(
             orientations: Some(vec![b.orientation]),
             mass: b.mass,
             inertia: b.inertia,
+            centre_of_mass: b.centre_of_mass,
             ..group(&b.material, b.fixed)
         });
     }
@@ -363,6 +365,8 @@ pub fn scene_file_of(
         // the file's bodies are written in the model's order (bodies, then each batch's
         // spheres), the numbering the joints use
         joints: model.joints.clone(),
+        // a robot imported from URDF is in the model as its bodies and joints: written so
+        urdf: Vec::new(),
     })
 }
 

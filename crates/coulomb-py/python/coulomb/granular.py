@@ -453,7 +453,8 @@ class Scene:
                  orientation: Sequence[float] = (1, 0, 0, 0), velocity: Any = None,
                  angular_velocity: Any = None, density: Optional[float] = 2500.0,
                  material: str = "default", mass: Optional[float] = None,
-                 inertia: Any = None, fixed: bool = False) -> "Scene":
+                 inertia: Any = None, fixed: bool = False,
+                 centre_of_mass: Optional[Sequence[float]] = None) -> "Scene":
         """Adds one body of any shape (:class:`Cuboid`, :class:`Capsule`, :class:`Cylinder`,
         :class:`Cone`, :class:`ConvexHull`, :class:`ConvexPolyhedron`, :class:`Compound`,
         :class:`Sphere`): the origin of its shape frame at ``position``, turned by the unit
@@ -461,7 +462,9 @@ class Scene:
         normalized), with ``velocity`` (of the centre of mass) and ``angular_velocity``
         (world frame). Mass and inertia from ``density`` (kg/m³), or ``mass`` (kg, a uniform
         body of that mass); ``inertia`` (3 × 3, about the centre of mass, shape-frame axes)
-        replaces the shape's. A scene with any body that is not a sphere runs in the
+        replaces the shape's, and ``centre_of_mass`` (shape frame, with ``inertia``: the
+        tensor about it; not for spheres) the shape's centroid (the scene files'
+        ``centre_of_mass``). A scene with any body that is not a sphere runs in the
         rigid-body simulator (spheres become balls there)."""
         body: Dict[str, Any] = {
             "shape": _shape_spec(shape), "position": _vec3("position", position),
@@ -482,6 +485,8 @@ class Scene:
             if i.shape != (3, 3):
                 raise _arg_error("inertia", f"inertia must be 3 x 3, got shape {i.shape}")
             body["inertia"] = i.tolist()
+        if centre_of_mass is not None:
+            body["centre_of_mass"] = _vec3("centre_of_mass", centre_of_mass)
         self._order.append(("body", len(self._bodies), 0))
         self._bodies.append(body)
         return self
@@ -567,6 +572,44 @@ class Scene:
             j["motor"] = mv
         self._joints.append(j)
         return self
+
+    def add_urdf(self, path: Union[str, "os.PathLike[str]"],
+                 position: Sequence[float] = (0.0, 0.0, 0.0),
+                 orientation: Sequence[float] = (1, 0, 0, 0), fixed_base: bool = False,
+                 material: str = "default") -> List[int]:
+        """Adds the robot of the URDF file ``path`` (issue 53; docs/joints.md, "URDF import";
+        the same import as a scene file's ``[[urdf]]``): each ``<link>`` becomes a body (its
+        ``inertial`` mass, centre of mass and inertia tensor, its ``<collision>`` box,
+        cylinder, capsule, sphere and ``.stl``/``.obj`` mesh (convex hull; relative paths
+        from the URDF file's folder) as its shape), each joint a joint (``revolute`` and
+        ``continuous``: revolute, ``prismatic``, ``fixed``; ``limit lower/upper`` as limits,
+        ``effort``/``velocity`` unused: add a motor with :meth:`add_joint` if you want one).
+        The root link's frame is put at ``position``, turned by the unit quaternion
+        ``orientation`` (w, x, y, z), and is free, or fixed to the world with
+        ``fixed_base=True``; every link gets ``material``.
+
+        Returns the body indices (insertion order, :attr:`body_count`) of the links, in the
+        order of the file's ``<link>`` elements. Bad input raises
+        :class:`coulomb.SceneError` naming the URDF file and the element (``kind``: ``xml``,
+        ``link``, ``joint``, ``unknown_link``, ``unsupported_joint`` (floating, planar),
+        ``unsupported_geometry``, ``package_uri``, ``tree`` (cycle, two parents, several
+        roots), ``options``), an unreadable file ``OSError``."""
+        placement = {"position": _vec3("position", position),
+                     "orientation": _quaternion("orientation", orientation),
+                     "fixed_base": bool(fixed_base), "material": _material(material)}
+        robot = json.loads(_coulomb.urdf_robot(os.fspath(path),
+                                               json.dumps(placement, allow_nan=False)))
+        self._use(material)
+        first = self.body_count
+        for body in robot["bodies"]:
+            self._order.append(("body", len(self._bodies), 0))
+            self._bodies.append(body)
+        for j in robot["joints"]:
+            j = dict(j, body_a=first + int(j["body_a"]))
+            if j.get("body_b") is not None:
+                j["body_b"] = first + int(j["body_b"])
+            self._joints.append(j)
+        return list(range(first, first + len(robot["bodies"])))
 
     @property
     def joint_count(self) -> int:

@@ -409,6 +409,18 @@ pub enum RigidError {
         /// the limit (`RigidSettings::max_initial_penetration`)
         limit: f64,
     },
+    /// the overlap relaxation reached its time cap with interpenetrations left
+    #[error("the overlap relaxation stopped at its time limit of {seconds} s after {sweeps} sweeps, {count} contact point(s) still interpenetrating (the deepest by {depth:.3e} m): start from fewer or shallower overlaps")]
+    RelaxationTimedOut {
+        /// the time cap (s)
+        seconds: f64,
+        /// sweeps done
+        sweeps: usize,
+        /// contact points deeper than the limit left
+        count: usize,
+        /// deepest penetration left (m)
+        depth: f64,
+    },
     /// parry has no contact-manifold algorithm for this pair of shapes
     #[error("no contact manifold between body {a} ({shape_a}) and {b:?} ({shape_b})")]
     Unsupported {

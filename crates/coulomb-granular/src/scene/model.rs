@@ -531,6 +531,18 @@ pub enum SceneError {
         /// the worst pair (world sphere indices)
         pair: (usize, usize),
     },
+    /// the overlap relaxation reached its time cap with overlaps left
+    #[error("the overlap relaxation stopped at its time limit of {seconds} s after {sweeps} sweeps, {count} pair(s) still overlapping (the worst by {worst:.3e} m): start from fewer or shallower overlaps")]
+    RelaxationTimedOut {
+        /// the time cap (s)
+        seconds: f64,
+        /// sweeps done
+        sweeps: usize,
+        /// overlapping pairs left
+        count: usize,
+        /// largest overlap left (m)
+        worst: f64,
+    },
     /// free spheres overlap an obstacle at the start (centre on the free side, but closer to
     /// it than their radius): released, they would be pushed out with energy from nowhere
     #[error("{count} sphere(s) overlap an obstacle at the start, the worst sphere {sphere} by {depth:.3e} m into obstacle {obstacle} ('{name}'); move them out, or relax them first (resolve_overlaps, `coulomb simulate --resolve-overlaps N`)")]
@@ -713,7 +725,15 @@ pub struct Resolved {
     pub sweeps: usize,
     /// overlaps left (none when `count` is 0)
     pub left: Overlaps,
+    /// the relaxation stopped at its time limit ([`RELAXATION_TIME_LIMIT`]) with sweeps left
+    pub timed_out: bool,
 }
+
+/// The time cap of an overlap relaxation (`--resolve-overlaps`, Python's `resolve_overlaps=`),
+/// besides its sweep cap: spheres ([`resolve_overlaps`]) and bodies of any shape
+/// ([`crate::rigid::RigidWorld::relax_overlaps`]). A relaxation that reaches it with overlaps
+/// left is refused, saying so.
+pub const RELAXATION_TIME_LIMIT: std::time::Duration = std::time::Duration::from_secs(300);
 
 /// Relaxes the overlaps of the spheres of `world`: Gauss–Seidel sweeps over the overlapping
 /// pairs (each moves both centres apart along their line by half the overlap, and 0.1 % more)
@@ -721,9 +741,25 @@ pub struct Resolved {
 /// normal), at most `max_sweeps` sweeps; the velocities are not changed. Deterministic (pairs
 /// in (i, j) order).
 pub fn resolve_overlaps(world: &mut World, max_sweeps: usize) -> Resolved {
+    resolve_overlaps_within(world, max_sweeps, RELAXATION_TIME_LIMIT)
+}
+
+/// [`resolve_overlaps`] stopped after `time_limit` (checked before each sweep, so that the
+/// sweeps done are whole and the same on every machine that finishes them in time).
+pub fn resolve_overlaps_within(
+    world: &mut World,
+    max_sweeps: usize,
+    time_limit: std::time::Duration,
+) -> Resolved {
+    let start = std::time::Instant::now();
     let mut sweeps = 0;
     let mut buf = Vec::new();
+    let mut timed_out = false;
     while sweeps < max_sweeps {
+        if start.elapsed() >= time_limit {
+            timed_out = true;
+            break;
+        }
         let pairs = candidate_pairs(world, 0.0);
         let mut moved = false;
         for (i, j) in pairs {
@@ -756,9 +792,11 @@ pub fn resolve_overlaps(world: &mut World, max_sweeps: usize) -> Resolved {
             break;
         }
     }
+    let left = overlaps(world);
     Resolved {
         sweeps,
-        left: overlaps(world),
+        left,
+        timed_out: timed_out && left.count > 0,
     }
 }
 
@@ -776,8 +814,25 @@ pub struct Relaxation {
 /// the checks the build skipped: containment ([`check_containment`]), spheres still inside an
 /// obstacle ([`obstacle_penetration`]) and overlaps left ([`SceneError::Overlaps`]).
 pub fn relax(world: &mut World, max_sweeps: usize) -> Result<Relaxation, SceneError> {
+    relax_within(world, max_sweeps, RELAXATION_TIME_LIMIT)
+}
+
+/// [`relax`] with the time cap `time_limit` instead of [`RELAXATION_TIME_LIMIT`].
+pub fn relax_within(
+    world: &mut World,
+    max_sweeps: usize,
+    time_limit: std::time::Duration,
+) -> Result<Relaxation, SceneError> {
     let before = overlaps(world);
-    let done = resolve_overlaps(world, max_sweeps);
+    let done = resolve_overlaps_within(world, max_sweeps, time_limit);
+    if done.timed_out {
+        return Err(SceneError::RelaxationTimedOut {
+            seconds: time_limit.as_secs_f64(),
+            sweeps: done.sweeps,
+            count: done.left.count,
+            worst: done.left.worst,
+        });
+    }
     check_containment(world)?;
     if let Some(e) = obstacle_penetration(world) {
         return Err(e);
@@ -1697,9 +1752,25 @@ mod tests {
             overlaps: false,
             ..BuildChecks::default()
         };
+        // the time cap: reached with overlaps left, the relaxation is refused, saying so
+        let (mut world, _) = m.build_with(&checks).unwrap();
+        let e = relax_within(&mut world, 1000, std::time::Duration::ZERO).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                SceneError::RelaxationTimedOut {
+                    sweeps: 0,
+                    count: 3,
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        assert!(e.to_string().contains("time limit"), "{e}");
         let (mut world, _) = m.build_with(&checks).unwrap();
         let r = resolve_overlaps(&mut world, 1000);
         assert_eq!(r.left.count, 0, "{r:?}");
+        assert!(!r.timed_out);
         assert!(r.sweeps >= 2 && r.sweeps < 1000);
         assert_eq!(overlaps(&world).count, 0);
         // outside the container, and inside a solid

@@ -25,6 +25,9 @@ pub struct Relaxed {
     pub sweeps: usize,
     /// left after it (count 0 when the world is free of them)
     pub left: Overlaps,
+    /// it stopped at its time cap with overlaps left
+    /// ([`crate::model::RELAXATION_TIME_LIMIT`])
+    pub timed_out: bool,
 }
 
 /// Sweeps of one round's position correction at most.
@@ -57,6 +60,17 @@ impl RigidWorld {
     /// every linearized gap g_i + (H_Nᵀ Δq)_i reaches half the limit (the step's position
     /// correction), and the joints are projected back. Deterministic (the detector's order).
     pub fn relax_overlaps(&mut self, max_sweeps: usize) -> Result<Relaxed, RigidError> {
+        self.relax_overlaps_within(max_sweeps, crate::model::RELAXATION_TIME_LIMIT)
+    }
+
+    /// [`RigidWorld::relax_overlaps`] stopped after `time_limit` (checked before each round).
+    pub fn relax_overlaps_within(
+        &mut self,
+        max_sweeps: usize,
+        time_limit: std::time::Duration,
+    ) -> Result<Relaxed, RigidError> {
+        let start = std::time::Instant::now();
+        let mut timed_out = false;
         let limit = self.settings.max_initial_penetration;
         let mut points = self.points_now()?;
         let before = Self::overlaps_in(&points, limit);
@@ -64,6 +78,10 @@ impl RigidWorld {
         let moving = self.dof.iter().filter(|d| d.is_some()).count();
         let omega = vec![Vector::ZERO; self.bodies.len()];
         while sweeps < max_sweeps && Self::overlaps_in(&points, limit).count > 0 {
+            if start.elapsed() >= time_limit {
+                timed_out = true;
+                break;
+            }
             let mut mass = vec![[0.0; 6]; moving];
             for (i, b) in self.bodies.iter().enumerate() {
                 if let Some(d) = self.dof[i] {
@@ -113,10 +131,20 @@ impl RigidWorld {
             }
             points = self.points_now()?;
         }
+        let left = Self::overlaps_in(&points, limit);
+        if timed_out && left.count > 0 {
+            return Err(RigidError::RelaxationTimedOut {
+                seconds: time_limit.as_secs_f64(),
+                sweeps,
+                count: left.count,
+                depth: left.worst,
+            });
+        }
         Ok(Relaxed {
             before,
             sweeps,
-            left: Self::overlaps_in(&points, limit),
+            left,
+            timed_out: false,
         })
     }
 }
@@ -192,6 +220,35 @@ mod tests {
         assert!(z[0] >= 0.05 - 1e-8 && z[1] >= z[0] + 0.1 - 1e-8, "{z:?}");
         assert!(w.velocities().iter().flatten().all(|v| *v == 0.0));
         assert!(w.step().is_ok());
+    }
+
+    /// A relaxation that reaches its time cap with overlaps left is refused, saying so.
+    #[test]
+    fn a_relaxation_past_its_time_cap_is_refused() {
+        let settings = RigidSettings {
+            h: 1e-3,
+            ..RigidSettings::default()
+        };
+        let mut w = RigidWorld::overlapping(
+            vec![cube(0.045), cube(0.135)],
+            vec![crate::rigid::validation::floor()],
+            table(),
+            settings,
+            &[],
+        )
+        .unwrap();
+        let e = w
+            .relax_overlaps_within(1000, std::time::Duration::ZERO)
+            .expect_err("no time");
+        assert!(
+            matches!(e, crate::rigid::RigidError::RelaxationTimedOut { sweeps: 0, count, .. } if count > 0),
+            "{e}"
+        );
+        assert!(e.to_string().contains("time limit"), "{e}");
+        let r = w
+            .relax_overlaps_within(1000, std::time::Duration::from_secs(600))
+            .expect("in time");
+        assert_eq!(r.left.count, 0, "{r:?}");
     }
 
     /// A budget too small leaves overlaps: the world is refused with the typed error.

@@ -56,6 +56,10 @@ fn refused_options(args: &Args) -> Vec<&'static str> {
     check(args.relaxation != d.relaxation, "--relaxation");
     check(args.gamma != d.gamma, "--gamma");
     check(args.no_projection, "--no-projection");
+    check(
+        args.projection_velocities.is_some(),
+        "--projection-velocities",
+    );
     check(args.no_gap_closure, "--no-gap-closure");
     check(args.cold, "--cold");
     check(args.rest_speed != d.rest_speed, "--rest-speed");
@@ -83,6 +87,9 @@ fn file_args(args: &Args, scene: &BuiltScene) -> Args {
     a.relaxation = s.relaxation;
     a.gamma = s.gamma;
     a.no_projection = !s.projection;
+    a.projection_velocities = s
+        .projection_velocities
+        .map(crate::sim_args::ProjectionVelocities::of);
     a.no_gap_closure = !s.gap_closure;
     a.cold = !s.warm_start;
     let law = scene.model.materials.default;

@@ -6,7 +6,7 @@ use anyhow::bail;
 use coulomb::{InnerKind, OuterKind, Settings};
 use coulomb_granular::scene::BoxLayout;
 use coulomb_granular::{
-    Activation, NsgsSettings, Params, Projection, Scene, StepMethod, Stop, Summary,
+    Activation, NsgsSettings, Params, Projection, Scene, StepMethod, Stop, Summary, Velocities,
 };
 use std::path::PathBuf;
 
@@ -20,9 +20,39 @@ pub enum Method {
     Library,
 }
 
+/// What the position correction does to velocities (`--projection-velocities`).
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ProjectionVelocities {
+    /// v and ω scaled by √(1 − ΔE_p / E_k)
+    Rescale,
+    /// velocities untouched
+    PositionsOnly,
+    /// Moreau's inelastic velocity projection on the corrected contacts
+    Inelastic,
+}
+
+impl ProjectionVelocities {
+    /// The library's setting.
+    pub fn velocities(self) -> Velocities {
+        match self {
+            Self::Rescale => Velocities::Rescale,
+            Self::PositionsOnly => Velocities::PositionsOnly,
+            Self::Inelastic => Velocities::Inelastic,
+        }
+    }
+    /// The option's value for a library setting.
+    pub fn of(v: Velocities) -> Self {
+        match v {
+            Velocities::Rescale => Self::Rescale,
+            Velocities::PositionsOnly => Self::PositionsOnly,
+            Velocities::Inelastic => Self::Inelastic,
+        }
+    }
+}
+
 /// The options that a checkpoint fixes (the parameters): refused with --restart. A scene is
 /// refused too, unless it is the scene file of the stored run (its inlets continue).
-const RESTART_CONFLICTS: [&str; 27] = [
+const RESTART_CONFLICTS: [&str; 28] = [
     "beads",
     "mu",
     "rolling_friction",
@@ -42,6 +72,7 @@ const RESTART_CONFLICTS: [&str; 27] = [
     "max_inner",
     "gamma",
     "no_projection",
+    "projection_velocities",
     "no_gap_closure",
     "cold",
     "seed",
@@ -142,6 +173,13 @@ pub struct Args {
     /// no position correction (the plain Moreau–Jean scheme: penetrations stay)
     #[arg(long)]
     pub no_projection: bool,
+    /// what the position correction does to the velocities of the beads it moves: rescale
+    /// (default: v, ω scaled to pay the lift's potential energy; its momentum change carries
+    /// some weight), positions-only, or inelastic (Moreau's inelastic velocity projection on
+    /// the corrected contacts, its impulses added to the exported ones); docs/granular.md,
+    /// "Position correction"
+    #[arg(long, value_enum, conflicts_with = "no_projection")]
+    pub projection_velocities: Option<ProjectionVelocities>,
     /// no gap closure: a sphere at rest may stay up to h² g above an obstacle, held by the
     /// activation rule's look-ahead (docs/granular.md, "Resting on an obstacle")
     #[arg(long)]
@@ -266,7 +304,12 @@ impl Args {
                 )
             },
             warm_start: !self.cold,
-            projection: (!self.no_projection).then(Projection::default),
+            projection: (!self.no_projection).then(|| Projection {
+                velocities: self
+                    .projection_velocities
+                    .map_or(Velocities::Rescale, ProjectionVelocities::velocities),
+                ..Projection::default()
+            }),
             method: match self.method {
                 Method::Nsgs => StepMethod::Nsgs(NsgsSettings {
                     tol: self.tol,

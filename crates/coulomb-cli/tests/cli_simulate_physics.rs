@@ -50,6 +50,43 @@ fn simulate_elastic_frictionless_box_does_not_gain_energy() {
     assert!((e1 - e0).abs() <= 5e-3 * e0.abs(), "{e0} → {e1}");
 }
 
+/// `--projection-velocities` runs each variant (the same `Velocities` as the scene files'
+/// `[step] projection_velocities`), and is refused (exit 2) with `--no-projection`.
+#[test]
+fn simulate_chooses_what_the_correction_does_to_velocities() {
+    for v in ["rescale", "positions-only", "inelastic"] {
+        let out = coulomb(&[
+            "simulate",
+            "box",
+            "--beads",
+            "20",
+            "--steps",
+            "40",
+            "--projection-velocities",
+            v,
+            "--json",
+        ]);
+        let j = stdout_json(&out);
+        assert_eq!(j["not_converged_steps"].as_u64(), Some(0), "{v}: {j}");
+        assert!(
+            j["end_max_penetration"].as_f64().unwrap() <= 5e-4,
+            "{v}: {j}"
+        );
+    }
+    let out = coulomb(&[
+        "simulate",
+        "box",
+        "--beads",
+        "5",
+        "--no-projection",
+        "--projection-velocities",
+        "inelastic",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--projection-velocities"), "{err}");
+}
+
 #[test]
 fn simulate_refuses_a_time_step_too_large_for_contact_detection() {
     let out = coulomb(&["simulate", "box", "--beads", "5", "--dt", "10"]);

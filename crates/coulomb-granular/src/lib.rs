@@ -59,7 +59,7 @@ pub use model::{
     SceneError, SceneModel, SphereBatch, StepChoice, StepSettings,
 };
 pub use nsgs::{NsgsSettings, NsgsStatus, StepProblem};
-pub use projection::{Penetration, Projection, ProjectionStats};
+pub use projection::{Penetration, Projection, ProjectionStats, Velocities};
 pub use report::StepRecord;
 pub use run::{run, run_with, SimulationSettings, Stop, Stopped, Summary};
 pub use scene::Scene;

@@ -109,6 +109,10 @@ fn settings_a_scene_with_other_shapes_cannot_honour_are_refused() {
         ("gamma = 0.5", "gamma = 0.5"),
         ("projection = false", "projection = false"),
         ("gap_closure = false", "gap_closure = false"),
+        (
+            "projection_velocities = \"inelastic\"",
+            "projection_velocities",
+        ),
         ("warm_start = false", "warm_start = false"),
     ] {
         let e = step(line).unwrap_err();

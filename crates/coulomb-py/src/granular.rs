@@ -10,7 +10,7 @@ use coulomb_granular::scene::BoxLayout;
 use coulomb_granular::scene_file::{BuildOptions, InletRun, LoadedScene, SceneFileError};
 use coulomb_granular::{
     BuildChecks, Params, Scene, SceneModel, Simulation, SimulationError, StepChoice, StepMethod,
-    Vec3, World,
+    Vec3, Velocities, World,
 };
 use numpy::{PyReadonlyArray1, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
@@ -40,6 +40,32 @@ fn step_choice(v: &Bound<'_, PyAny>) -> PyResult<StepChoice> {
     }
 }
 
+/// The `projection_velocities` parameter: "rescale", "positions_only" or "inelastic"
+/// (`coulomb_granular::Velocities`, the `[step]` key of scene files).
+pub(crate) fn projection_velocities(v: &Bound<'_, PyAny>) -> PyResult<Velocities> {
+    let s: String = v.extract().map_err(|_| {
+        PyTypeError::new_err(
+            "projection_velocities must be a str: rescale, positions_only or inelastic",
+        )
+    })?;
+    match s.as_str() {
+        "rescale" => Ok(Velocities::Rescale),
+        "positions_only" => Ok(Velocities::PositionsOnly),
+        "inelastic" => Ok(Velocities::Inelastic),
+        other => Err(PyValueError::new_err(format!(
+            "projection_velocities '{other}': expected rescale, positions_only or inelastic"
+        ))),
+    }
+}
+
+fn velocities_name(v: Velocities) -> &'static str {
+    match v {
+        Velocities::Rescale => "rescale",
+        Velocities::PositionsOnly => "positions_only",
+        Velocities::Inelastic => "inelastic",
+    }
+}
+
 fn real(name: &str, v: &Bound<'_, PyAny>) -> PyResult<f64> {
     v.extract()
         .map_err(|_| PyTypeError::new_err(format!("{name} must be a float")))
@@ -51,7 +77,7 @@ fn count(name: &str, v: &Bound<'_, PyAny>) -> PyResult<usize> {
 }
 
 const PARAM_NAMES: &str = "h, theta, tol, method, max_sweeps, relaxation, restitution, mu, \
-rolling_friction, warm_start, gap_closure; solver settings go in solver=";
+rolling_friction, warm_start, gap_closure, projection_velocities; solver settings go in solver=";
 
 /// The keyword parameters in the order they are applied: `method` first (so that `tol`,
 /// `max_sweeps` and `relaxation` apply to the method chosen in the same call).
@@ -88,7 +114,7 @@ pub(crate) fn apply_to_model<'py>(
             "mu" => law.mu = real(&name, &v)?,
             "restitution" => law.restitution = real(&name, &v)?,
             "rolling_friction" => law.rolling_friction = real(&name, &v)?,
-            "warm_start" | "gap_closure" => rest.push((name, v)),
+            "warm_start" | "gap_closure" | "projection_velocities" => rest.push((name, v)),
             other => {
                 return Err(PyTypeError::new_err(format!(
                     "unexpected simulation parameter '{other}' (parameters: {PARAM_NAMES})"
@@ -113,6 +139,17 @@ fn set_param(p: &mut Params, name: &str, v: &Bound<'_, PyAny>) -> PyResult<()> {
             p.warm_start = v
                 .extract()
                 .map_err(|_| PyTypeError::new_err("warm_start must be a bool"))?
+        }
+        "projection_velocities" => {
+            let v = projection_velocities(v)?;
+            match &mut p.projection {
+                Some(pr) => pr.velocities = v,
+                None => {
+                    return Err(PyValueError::new_err(
+                        "projection_velocities: there is no position correction (projection = false) to apply it to",
+                    ))
+                }
+            }
         }
         "gap_closure" => {
             p.activation.close_gaps = v
@@ -490,6 +527,10 @@ impl PySimulation {
         d.set_item("rolling_friction", p.rolling_friction)?;
         d.set_item("warm_start", p.warm_start)?;
         d.set_item("gap_closure", p.activation.close_gaps)?;
+        d.set_item(
+            "projection_velocities",
+            p.projection.map(|pr| velocities_name(pr.velocities)),
+        )?;
         match &p.method {
             StepMethod::Nsgs(s) => {
                 d.set_item("method", "nsgs")?;

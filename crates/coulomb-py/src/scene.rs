@@ -378,6 +378,15 @@ pub(crate) fn scene_save(
     let mut file = scene_save::scene_file_of(&model, &inlets)
         .map_err(|e| describe_error(py, Some("scene"), e.to_string()))?;
     for (k, v) in rest {
+        if k == "projection_velocities" {
+            if model.has_shapes() {
+                return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+                    "'{k}' is not a parameter of rigid-body scenes"
+                )));
+            }
+            file.step.projection_velocities = Some(crate::granular::projection_velocities(&v)?);
+            continue;
+        }
         let b: bool = v
             .extract()
             .map_err(|_| pyo3::exceptions::PyTypeError::new_err(format!("{k} must be a bool")))?;

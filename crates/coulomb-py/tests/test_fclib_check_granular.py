@@ -129,3 +129,21 @@ def test_beads_at_rest_touch_the_floor_unless_the_gap_closure_is_off():
     assert top[False] > 0.02 * r, top
     with pytest.raises(TypeError):
         coulomb.granular.Simulation("box", beads=10, gap_closure="yes")
+
+
+def test_projection_velocities_chooses_what_the_correction_does_to_velocities():
+    # the `[step] projection_velocities` of scene files and `simulate --projection-velocities`
+    # (docs/granular.md, "Position correction")
+    for v in ("rescale", "positions_only", "inelastic"):
+        sim = coulomb.granular.Simulation("box", beads=20, seed=1, projection_velocities=v)
+        assert sim.params["projection_velocities"] == v
+        assert all(s["converged"] for s in sim.run(40))
+        assert sim.step()["max_penetration"] <= 5e-4
+    sim = coulomb.granular.Simulation("box", beads=10)
+    assert sim.params["projection_velocities"] == "rescale"
+    sim.set_params(projection_velocities="inelastic")
+    assert sim.params["projection_velocities"] == "inelastic"
+    with pytest.raises(ValueError, match="projection_velocities"):
+        coulomb.granular.Simulation("box", beads=10, projection_velocities="elastic")
+    with pytest.raises(TypeError, match="projection_velocities"):
+        coulomb.granular.Simulation("box", beads=10, projection_velocities=True)

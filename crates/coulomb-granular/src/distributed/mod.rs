@@ -324,6 +324,17 @@ impl DistributedSimulation {
                 params.rolling_friction
             )));
         }
+        if params
+            .projection
+            .is_some_and(|p| p.velocities == crate::projection::Velocities::Inelastic)
+        {
+            // the velocity projection adds impulses to the step's contacts, which the
+            // subdomain correction does not hold; ignoring it silently would change the physics
+            return Err(SimulationError::Parameter(
+                "projection velocities = inelastic is not supported by the distributed step (use one process)"
+                    .into(),
+            ));
+        }
         let skeleton = World {
             bodies: Vec::new(),
             ..skeleton

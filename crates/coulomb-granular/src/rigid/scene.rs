@@ -115,6 +115,9 @@ pub fn check_step_section(step: &crate::scene_file::StepSection) -> Result<(), S
     if !step.projection {
         return no("projection = false (their positions are always corrected)".into());
     }
+    if step.projection_velocities.is_some() {
+        return no("projection_velocities (their correction moves positions only)".into());
+    }
     if !step.gap_closure {
         return no("gap_closure = false (their resting contacts always close their gaps)".into());
     }

@@ -273,6 +273,11 @@ pub struct StepSection {
     /// position correction after each step
     #[serde(default = "yes")]
     pub projection: bool,
+    /// what the position correction does to velocities ("rescale", the default,
+    /// "positions_only" or "inelastic": `crate::projection::Velocities`); refused with
+    /// `projection = false`
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub projection_velocities: Option<crate::projection::Velocities>,
     /// gap closure of resting contacts
     #[serde(default = "yes")]
     pub gap_closure: bool,
@@ -297,6 +302,7 @@ impl Default for StepSection {
             relaxation: d_relaxation(),
             gamma: d_gamma(),
             projection: true,
+            projection_velocities: None,
             gap_closure: true,
             warm_start: true,
         }
@@ -1774,6 +1780,12 @@ impl LoadedScene {
         if !(s.gamma.is_finite() && s.gamma >= 0.0) {
             return Err(self.invalid(&at("gamma"), "must be ≥ 0"));
         }
+        if s.projection_velocities.is_some() && !s.projection {
+            return Err(self.invalid(
+                &at("projection_velocities"),
+                "there is no position correction (projection = false) to apply it to",
+            ));
+        }
         if s.max_sweeps == 0 || s.max_steps == 0 {
             return Err(self.invalid(&[key("step")], "max_sweeps and max_steps must be ≥ 1"));
         }
@@ -2006,6 +2018,9 @@ impl BuiltScene {
         params.warm_start = self.step.warm_start;
         if !self.step.projection {
             params.projection = None;
+        }
+        if let (Some(p), Some(v)) = (&mut params.projection, self.step.projection_velocities) {
+            p.velocities = v;
         }
         Ok((world, params))
     }

@@ -10,15 +10,18 @@
 //! constraint's gap g_α and normal n_α evaluated *exactly* at the current positions (sphere
 //! distance, plane, rectangle, inside of a cylinder), so that curved walls are handled without
 //! linearisation: λ_α ← max(0, λ_α − g_α / w_α), w_α = 1/m_A + 1/m_B, the centres moved by
-//! ±n_α Δλ_α / m. The normal of a sphere contact passes through the centres, so rotations and
-//! velocities are untouched. The correction starts only when some penetration exceeds
-//! `trigger` and stops when every penetration is below `target` (or after `max_sweeps`).
+//! ±n_α Δλ_α / m. The normal of a sphere contact passes through the centres, so the moves
+//! turn no sphere. The correction starts only when some penetration exceeds `trigger` and
+//! stops when every penetration is below `target` (or after `max_sweeps`). What it then does to
+//! the velocities is [`Velocities`]: rescale them to pay the lift's potential energy (the
+//! default), nothing, or Moreau's inelastic projection on the corrected contacts, whose
+//! impulses are added to the step's exported ones ([`inelastic_projection`]).
 //!
 //! The projection changes the potential energy by W_p = −Σ m g·Δx (reported as
 //! [`ProjectionStats::work`]): the energy balance of a step is then
 //! E_{k+1} − E_k = (dissipation of the velocity step, ≤ 0) + W_p (docs/granular.md).
 
-use crate::contact::{par_chunked, BroadPhase, ObstacleIndex, Partner, SPHERE_CHUNK};
+use crate::contact::{par_chunked, BroadPhase, Contact, ObstacleIndex, Partner, SPHERE_CHUNK};
 use crate::math::Vec3;
 use crate::world::World;
 use rayon::prelude::*;
@@ -26,6 +29,7 @@ use serde::Serialize;
 
 /// Settings of the position correction.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
+#[serde(from = "StoredProjection")]
 pub struct Projection {
     /// start correcting when some penetration exceeds `trigger` × R_min (m/m)
     pub trigger: f64,
@@ -33,10 +37,57 @@ pub struct Projection {
     pub target: f64,
     /// cap on Gauss–Seidel sweeps
     pub max_sweeps: usize,
+    /// what the correction does to the velocities ([`Velocities`])
+    pub velocities: Velocities,
+}
+
+/// [`Projection`] as stored (checkpoints): before `velocities` existed a boolean
+/// `conserve_energy` chose between [`Velocities::Rescale`] (true) and
+/// [`Velocities::PositionsOnly`] (false); both are read.
+#[derive(serde::Deserialize)]
+struct StoredProjection {
+    trigger: f64,
+    target: f64,
+    max_sweeps: usize,
+    #[serde(default)]
+    velocities: Option<Velocities>,
+    #[serde(default)]
+    conserve_energy: Option<bool>,
+}
+
+impl From<StoredProjection> for Projection {
+    fn from(s: StoredProjection) -> Self {
+        let old = s.conserve_energy.map(|c| {
+            if c {
+                Velocities::Rescale
+            } else {
+                Velocities::PositionsOnly
+            }
+        });
+        Self {
+            trigger: s.trigger,
+            target: s.target,
+            max_sweeps: s.max_sweeps,
+            velocities: s.velocities.or(old).unwrap_or(Velocities::Rescale),
+        }
+    }
+}
+
+/// What the position correction does to the velocities of the beads it moves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Velocities {
     /// balance the potential energy ΔE_p a moving bead gains (or loses) by the correction with
-    /// its own kinetic energy E_k: v and ω scaled by √(1 − ΔE_p / E_k), at most down to rest,
-    /// so that the correction neither feeds nor drains the energy of moving beads
-    pub conserve_energy: bool,
+    /// its own kinetic energy E_k: v and ω scaled by √(1 − ΔE_p / E_k), at most down to rest
+    /// (a momentum change with no contact impulse: it carries weight, issue 52 bug 4)
+    Rescale,
+    /// velocities untouched (positions only, as the rigid engine's correction)
+    PositionsOnly,
+    /// Moreau's inelastic velocity projection on the corrected contacts of the step: an
+    /// impulse p_α ≥ 0 along the normal of each contact of the index set that the correction
+    /// moved (λ_α > 0), p ⊥ (u_N ≥ 0), which removes its approaching normal velocity; p is added
+    /// to the contact's exported impulse
+    Inelastic,
 }
 
 impl Default for Projection {
@@ -46,7 +97,7 @@ impl Default for Projection {
             trigger: 1e-3,
             target: 1e-4,
             max_sweeps: 200,
-            conserve_energy: true,
+            velocities: Velocities::Rescale,
         }
     }
 }
@@ -61,7 +112,7 @@ pub struct ProjectionStats {
     /// sweeps done (0: nothing to correct)
     pub sweeps: usize,
     /// change of kinetic + potential energy caused by the correction (J): −Σ m g·Δx, less the
-    /// kinetic energy taken back with `conserve_energy`
+    /// kinetic energy taken back by the velocity rescaling or projection ([`Velocities`])
     pub work: f64,
 }
 
@@ -253,6 +304,18 @@ pub fn project_measured(
     t: f64,
     settings: &Projection,
 ) -> (ProjectionStats, Penetration) {
+    project_contacts(world, t, settings, &mut [])
+}
+
+/// [`project_measured`] after a step whose active contacts, sorted by key, are `contacts`:
+/// with [`Velocities::Inelastic`] the impulses of the velocity projection are added to
+/// theirs ([`inelastic_projection`]).
+pub fn project_contacts(
+    world: &mut World,
+    t: f64,
+    settings: &Projection,
+    contacts: &mut [Contact],
+) -> (ProjectionStats, Penetration) {
     let rmin = world
         .bodies
         .iter()
@@ -378,7 +441,7 @@ pub fn project_measured(
         moved = moved.max((*x - *x0).norm());
         let gained = -b.mass * gravity.dot(b.position - *x0);
         work += gained;
-        if settings.conserve_energy && gained != 0.0 {
+        if settings.velocities == Velocities::Rescale && gained != 0.0 {
             let ke = b.kinetic_energy();
             if ke > 0.0 {
                 let f = (1.0 - gained / ke).max(0.0).sqrt();
@@ -391,6 +454,15 @@ pub fn project_measured(
                 b.angular_velocity = b.angular_velocity * f;
             }
         }
+    }
+    if settings.velocities == Velocities::Inelastic {
+        let mut corrected: Vec<(usize, Partner)> = cons
+            .iter()
+            .filter(|c| c.lambda > 0.0)
+            .map(|c| (c.a, c.partner))
+            .collect();
+        corrected.sort_unstable();
+        work -= inelastic_projection(world, t, contacts, &corrected);
     }
     stats.work = work;
     let world_ref: &World = world;
@@ -406,6 +478,107 @@ pub fn project_measured(
         penetrations(world_ref, t)
     };
     (stats, pen)
+}
+
+/// Largest number of Gauss–Seidel sweeps of the inelastic velocity projection.
+const INELASTIC_SWEEPS: usize = 200;
+
+/// Moreau's inelastic velocity projection on the contacts of `contacts` (sorted by key) whose
+/// keys are in `corrected` (sorted): impulses p_α ≥ 0 along each contact's normal n_α such
+/// that u_α = n_α·(v_A − v_B − V_B(x_α, t)) ≥ 0 and p_α u_α = 0 (the linear complementarity
+/// problem of an impact with e = 0 on these contacts, solved by projected Gauss–Seidel in
+/// the order of `contacts`, at most [`INELASTIC_SWEEPS`] sweeps). The normal of a sphere
+/// contact passes through the centre, so only v changes. Each p_α is added to the contact's
+/// normal impulse, so that the impulses stored are those that acted. Returns the kinetic
+/// energy removed (≥ 0: an inelastic impact).
+pub fn inelastic_projection(
+    world: &mut World,
+    t: f64,
+    contacts: &mut [Contact],
+    corrected: &[(usize, Partner)],
+) -> f64 {
+    let nb = world.bodies.len();
+    let rows: Vec<usize> = (0..contacts.len())
+        .filter(|&i| corrected.binary_search(&contacts[i].key()).is_ok())
+        .filter(|&i| {
+            let c = &contacts[i];
+            c.body < nb
+                && match c.partner {
+                    Partner::Body(j) => j < nb && j != c.body,
+                    Partner::Obstacle(o, _) => o < world.obstacles.len(),
+                }
+        })
+        .collect();
+    if rows.is_empty() {
+        return 0.0;
+    }
+    let mut touched: Vec<usize> = rows
+        .iter()
+        .flat_map(|&i| {
+            let c = &contacts[i];
+            [
+                Some(c.body),
+                match c.partner {
+                    Partner::Body(j) => Some(j),
+                    Partner::Obstacle(..) => None,
+                },
+            ]
+        })
+        .flatten()
+        .collect();
+    touched.sort_unstable();
+    touched.dedup();
+    let energy = |w: &World| -> f64 {
+        touched
+            .iter()
+            .map(|&i| 0.5 * w.bodies[i].mass * w.bodies[i].velocity.norm_sq())
+            .sum()
+    };
+    let before = energy(world);
+    // obstacle velocity at each contact point, and the scale of the velocities
+    let wall: Vec<Vec3> = rows
+        .iter()
+        .map(|&i| {
+            let c = &contacts[i];
+            match c.partner {
+                Partner::Obstacle(o, _) => world.obstacles[o].motion.velocity_at(c.point, t),
+                Partner::Body(_) => Vec3::ZERO,
+            }
+        })
+        .collect();
+    let mut p = vec![0.0; rows.len()];
+    for _ in 0..INELASTIC_SWEEPS {
+        let mut change: f64 = 0.0;
+        let mut speed: f64 = 0.0;
+        for (k, &i) in rows.iter().enumerate() {
+            let c = &contacts[i];
+            let a = c.body;
+            let (vb, wb) = match c.partner {
+                Partner::Body(j) => (world.bodies[j].velocity, 1.0 / world.bodies[j].mass),
+                Partner::Obstacle(..) => (wall[k], 0.0),
+            };
+            let wa = 1.0 / world.bodies[a].mass;
+            let u = c.normal.dot(world.bodies[a].velocity - vb);
+            speed = speed.max(u.abs());
+            let new = (p[k] - u / (wa + wb)).max(0.0);
+            let d = new - p[k];
+            if d != 0.0 {
+                p[k] = new;
+                world.bodies[a].velocity += c.normal * (d * wa);
+                if let Partner::Body(j) = c.partner {
+                    world.bodies[j].velocity += c.normal * (-d * wb);
+                }
+                change = change.max(d.abs() * (wa + wb));
+            }
+        }
+        if change <= 1e-14 * speed {
+            break;
+        }
+    }
+    for (k, &i) in rows.iter().enumerate() {
+        contacts[i].impulse[0] += p[k];
+    }
+    (before - energy(world)).max(0.0)
 }
 
 #[cfg(test)]
@@ -468,6 +641,76 @@ mod tests {
         assert!((w.bodies[1].position.z - 0.15).abs() < 1e-5);
         // lifting both: ΔE_p = m g (0.005 + 0.015)
         assert!((s.work - 9.81 * 0.02).abs() < 1e-3, "{s:?}");
+    }
+
+    /// The inelastic velocity projection stops the sinking of a sphere it lifts out of the
+    /// floor with a floor impulse added to the contact's: the momentum change equals the
+    /// exported impulse, the tangential velocity is kept, and the kinetic energy removed is
+    /// ½ m v_z² (reported as negative work next to the lift's m g d).
+    #[test]
+    fn inelastic_projection_exports_the_impulse_it_applies() {
+        let mut w = World::new();
+        w.obstacles.push(Obstacle::fixed(
+            "ground",
+            Shape::Plane {
+                point: Vec3::ZERO,
+                normal: Vec3::Z,
+            },
+        ));
+        let mut b = Sphere::new(Vec3::new(0.0, 0.0, 0.048), 0.05, 2.0);
+        b.velocity = Vec3::new(0.3, 0.0, -0.1);
+        w.bodies.push(b);
+        let (a, partner, gap) = pairs_within(&w, 0.0, 0.0)[0];
+        let mut contacts = vec![Contact {
+            body: a,
+            partner,
+            normal: Vec3::Z,
+            t1: Vec3::X,
+            t2: Vec3::Y,
+            point: Vec3::ZERO,
+            gap,
+            normal_velocity: -0.1,
+            impulse: [1.5, 0.0, 0.0],
+        }];
+        let settings = Projection {
+            velocities: Velocities::Inelastic,
+            ..Projection::default()
+        };
+        let m0 = w.bodies[0].velocity * w.bodies[0].mass;
+        let (s, _) = project_contacts(&mut w, 0.0, &settings, &mut contacts);
+        let v = w.bodies[0].velocity;
+        assert!((w.bodies[0].position.z - 0.05).abs() < 1e-5);
+        assert_eq!((v.x, v.y), (0.3, 0.0));
+        assert!(v.z.abs() < 1e-15, "{v:?}");
+        let dp = v * w.bodies[0].mass - m0;
+        assert!((contacts[0].impulse[0] - 1.5 - dp.z).abs() < 1e-15);
+        assert!((dp.z - 0.2).abs() < 1e-15);
+        let lift = 2.0 * 9.81 * (w.bodies[0].position.z - 0.048);
+        assert!((s.work - (lift - 0.5 * 2.0 * 0.01)).abs() < 1e-9, "{s:?}");
+        // a separating sphere keeps its velocity and the impulse is unchanged
+        w.bodies[0].position.z = 0.048;
+        w.bodies[0].velocity = Vec3::new(0.0, 0.0, 0.1);
+        let (s, _) = project_contacts(&mut w, 0.0, &settings, &mut contacts);
+        assert_eq!(w.bodies[0].velocity, Vec3::new(0.0, 0.0, 0.1));
+        assert!((contacts[0].impulse[0] - 1.7).abs() < 1e-15);
+        assert!(s.sweeps >= 1);
+    }
+
+    #[test]
+    fn stored_settings_without_velocities_read_as_before() {
+        let old = |c: bool| {
+            format!(r#"{{"trigger":0.001,"target":0.0001,"max_sweeps":200,"conserve_energy":{c}}}"#)
+        };
+        let p: Projection = serde_json::from_str(&old(true)).unwrap();
+        assert_eq!(p, Projection::default());
+        let p: Projection = serde_json::from_str(&old(false)).unwrap();
+        assert_eq!(p.velocities, Velocities::PositionsOnly);
+        let q = Projection {
+            velocities: Velocities::Inelastic,
+            ..Projection::default()
+        };
+        let back: Projection = serde_json::from_str(&serde_json::to_string(&q).unwrap()).unwrap();
+        assert_eq!(back, q);
     }
 
     /// A layer of side × side beads sunk 1–2 mm into the floor (1 mm apart) and a layer of

@@ -5,7 +5,7 @@
 use crate::assembly::{assemble, free_momentum, mass_diagonal, StepData};
 use crate::contact::{detect_with, Activation, Contact, Partner};
 use crate::nsgs::{self, NsgsSettings, NsgsStatus, StepProblem, StepProblemError};
-use crate::projection::{penetrations, project_measured, Projection};
+use crate::projection::{penetrations, project_contacts, Projection};
 use crate::world::World;
 use coulomb::problem::{GlobalProblem, Problem, ProblemError};
 use coulomb::solver::{self, Guess, OuterRecord, Settings, SolveError, Status};
@@ -470,7 +470,7 @@ impl Simulation {
         self.time += h;
         let pen = match &self.params.projection {
             Some(pr) => {
-                let (p, pen) = project_measured(&mut self.world, self.time, pr);
+                let (p, pen) = project_contacts(&mut self.world, self.time, pr, &mut self.contacts);
                 stats.projection_work = p.work;
                 stats.projection_sweeps = p.sweeps;
                 pen

@@ -917,7 +917,7 @@ pub(crate) fn project(joints: &[Joint], bodies: &mut [BodyState], target: f64) -
             break;
         }
         let now = error(bodies);
-        if !(now < worst) {
+        if now.is_nan() || now >= worst {
             for (b, (x, q)) in bodies.iter_mut().zip(saved) {
                 b.x = x;
                 b.q = q;

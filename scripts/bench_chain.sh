@@ -5,9 +5,11 @@
 # for STEPS steps and prints its summary (--json), the wall-clock and CPU seconds per step, the
 # per-step detection and solve seconds of stats.json, and, where `perf` works, the share of
 # the CPU samples in the joints' code (coulomb_granular::rigid::joints, the Gauss–Seidel's
-# joint updates, and the library's elimination of the equality rows, coulomb::equality), in
-# the contacts' (the Gauss–Seidel's contact updates and the contact law), in the library's
-# linear algebra (coulomb::linalg, faer) and in the collision detection (parry3d).
+# joint updates, the step's solve of all the equality rows together, rigid::step::equality,
+# and the library's elimination of the equality rows, coulomb::equality), in the contacts'
+# (the Gauss–Seidel's contact updates and the contact law), in faer (the sparse Cholesky of
+# the step's equality rows, and the library's factorizations), in the library's own linear
+# algebra (coulomb::linalg) and in the collision detection (parry3d).
 #
 # Usage: scripts/bench_chain.sh [LINKS] [STEPS]     (defaults 1000 and 250)
 # Environment: COULOMB (the binary; default: build the dev profile, opt-level 2, and use
@@ -50,17 +52,21 @@ print(f"steps {len(rows)}: wall {1e3 * real / steps:.1f} ms/step, cpu {1e3 * use
 if perf:
     out = subprocess.run(["perf", "report", "-i", f"{tmp}/perf.data", "--sort", "sym", "--stdio"],
                          capture_output=True, text=True).stdout
-    groups = {"joints": 0.0, "contacts": 0.0, "library linalg": 0.0, "detection": 0.0, "other": 0.0}
+    groups = {"joints": 0.0, "contacts": 0.0, "faer": 0.0, "library linalg": 0.0,
+              "detection": 0.0, "other": 0.0}
     for line in out.splitlines():
         if line.startswith("#") or "%" not in line:
             continue
         pct, sym = line.split("%", 1)
         share = float(pct)
-        if "rigid::joints" in sym or "update_joint" in sym or "coulomb::equality" in sym:
+        if ("rigid::joints" in sym or "update_joint" in sym or "coulomb::equality" in sym
+                or "step::equality" in sym):
             g = "joints"
         elif "Problem::update" in sym or "contact" in sym or "cone::" in sym:
             g = "contacts"
-        elif "coulomb::linalg" in sym or "faer" in sym or "gemm" in sym:
+        elif "faer" in sym:
+            g = "faer"
+        elif "coulomb::linalg" in sym or "gemm" in sym:
             g = "library linalg"
         elif "parry" in sym:
             g = "detection"

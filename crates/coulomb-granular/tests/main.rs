@@ -8,6 +8,7 @@ mod example_scenes;
 mod fuzz_inputs;
 mod impulse_balance;
 mod joints;
+mod long_chains;
 mod mechanisms;
 mod physics;
 mod rigid_contacts;

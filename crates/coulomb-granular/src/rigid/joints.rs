@@ -839,16 +839,93 @@ pub fn solve_spd(w: &[f64], rhs: &[f64], k: usize) -> Vec<f64> {
     x
 }
 
-/// Projects the positions of `bodies` back on the joints' equality constraints C(q) = 0 by
-/// Gauss–Seidel Newton steps: per joint, Δq = M⁻¹ Jᵀ δ with J M⁻¹ Jᵀ δ = −C (translations and
-/// body-frame rotation vectors, the metric of M), sweeps until every |C| ≤ `target` or 100
-/// sweeps; a limit the coordinate is beyond is brought back to it the same way. Positions
-/// only. Returns the largest |C| left.
-pub(crate) fn project(joints: &[Joint], bodies: &mut [BodyState], target: f64) -> f64 {
-    let mut worst = joints
+/// Newton steps with all the joints' rows together in [`project`] at most.
+pub const GLOBAL_NEWTON_STEPS: usize = 4;
+
+/// One Newton step on all the joints' projection rows together: Δq = M⁻¹ Jᵀ δ with
+/// (J M⁻¹ Jᵀ) δ = −C over every row of every joint (the sparse factor of
+/// [`crate::rigid::step::equality`], dependent rows given no update). False, nothing moved,
+/// when the factor is refused or a value is not finite.
+fn global_newton_step(joints: &[Joint], bodies: &mut [BodyState]) -> bool {
+    use crate::rigid::step::equality::{EqRow, EqualitySolve};
+    let mass: Vec<[f64; 6]> = bodies
         .iter()
-        .map(|j| j.projection_error(bodies))
-        .fold(0.0, f64::max);
+        .map(|b| {
+            [
+                b.mass,
+                b.mass,
+                b.mass,
+                b.inertia[0],
+                b.inertia[1],
+                b.inertia[2],
+            ]
+        })
+        .collect();
+    let moving = |p: Option<usize>| p.filter(|&i| !bodies[i].fixed);
+    let mut rows = Vec::new();
+    for j in joints {
+        for (_, ja, jb, c) in j.projection_rows(bodies) {
+            rows.push(EqRow {
+                lambda: rows.len(),
+                a: moving(Some(j.desc.body_a)).map(|i| (i, ja)),
+                b: moving(j.desc.body_b).map(|i| (i, jb)),
+                rhs: c,
+            });
+        }
+    }
+    let n = rows.len();
+    let Some(eq) = EqualitySolve::new(rows, &mass) else {
+        return false;
+    };
+    let mut dq = vec![[0.0; 6]; bodies.len()];
+    let mut delta = vec![0.0; n];
+    eq.update(&mass, &mut dq, &mut delta);
+    if !dq.iter().flatten().all(|x| x.is_finite()) {
+        return false;
+    }
+    for (b, d) in bodies.iter_mut().zip(&dq) {
+        if b.fixed || d.iter().all(|x| *x == 0.0) {
+            continue;
+        }
+        b.x += Vector::new(d[0], d[1], d[2]);
+        b.q = super::body::integrate_orientation(b.q, Vector::new(d[3], d[4], d[5]));
+    }
+    true
+}
+
+/// Projects the positions of `bodies` back on the joints' equality constraints C(q) = 0:
+/// first up to [`GLOBAL_NEWTON_STEPS`] Newton steps on all the rows together
+/// (`global_newton_step`; one is undone and the loop left if it does not lower the largest
+/// |C|), then Gauss–Seidel Newton steps: per joint, Δq = M⁻¹ Jᵀ δ with J M⁻¹ Jᵀ δ = −C
+/// (translations and body-frame rotation vectors, the metric of M), sweeps until every
+/// |C| ≤ `target` or 100 sweeps; a limit the coordinate is beyond is brought back to it the
+/// same way. Positions only. Returns the largest |C| left.
+pub(crate) fn project(joints: &[Joint], bodies: &mut [BodyState], target: f64) -> f64 {
+    let error = |bodies: &[BodyState]| {
+        joints
+            .iter()
+            .map(|j| j.projection_error(bodies))
+            .fold(0.0, f64::max)
+    };
+    let mut worst = error(bodies);
+    for _ in 0..GLOBAL_NEWTON_STEPS {
+        if worst.is_nan() || worst <= target {
+            break;
+        }
+        let saved: Vec<(Vector, Rotation)> = bodies.iter().map(|b| (b.x, b.q)).collect();
+        if !global_newton_step(joints, bodies) {
+            break;
+        }
+        let now = error(bodies);
+        if now.is_nan() || now >= worst {
+            for (b, (x, q)) in bodies.iter_mut().zip(saved) {
+                b.x = x;
+                b.q = q;
+            }
+            break;
+        }
+        worst = now;
+    }
     for _ in 0..100 {
         if worst.is_nan() || worst <= target {
             break;

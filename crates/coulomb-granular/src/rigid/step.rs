@@ -44,7 +44,9 @@ use coulomb::problem::GlobalProblem;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
+pub(crate) mod equality;
 mod relax;
+pub use equality::{DEPENDENT_PIVOT, DROPPED_PIVOT};
 pub use relax::{Overlaps, Relaxed};
 
 /// A world of rigid bodies and obstacles advanced by [`RigidWorld::step`].
@@ -1430,6 +1432,11 @@ pub mod nsgs {
     /// Exact error evaluations: every this many sweeps.
     pub const CHECK_EVERY: usize = 5;
 
+    /// A step whose joints have at least this many equality rows in all solves them together
+    /// in each sweep (W_EE factored once per step, [`super::equality`]); below it, joint by
+    /// joint (the block solve of [`Problem::solve`]'s per-joint update).
+    pub const GLOBAL_EQUALITY_MIN_ROWS: usize = 1;
+
     /// One contact: (body block, J) per side, w, μ.
     #[derive(Debug, Clone, PartialEq)]
     pub struct Row {
@@ -1457,6 +1464,9 @@ pub mod nsgs {
         q_norm: f64,
         /// the joints' blocks (equality rows, [`crate::rigid::joints`])
         pub joints: Vec<JointBlock>,
+        /// the equality rows of all the joints factored together (W_EE, [`super::equality`]),
+        /// when the step solves them together ([`GLOBAL_EQUALITY_MIN_ROWS`])
+        equality: Option<std::sync::Arc<super::equality::EqualitySolve>>,
         /// the contacts coloured so that no two of one colour share a moving body (the
         /// sphere engine's [`crate::nsgs::Colouring`]); a sweep visits the colours in order
         colouring: crate::nsgs::Colouring,
@@ -1590,6 +1600,7 @@ pub mod nsgs {
                 w_inv,
                 q_norm: 0.0,
                 joints: Vec::new(),
+                equality: None,
                 colouring,
             };
             let v0 = p.velocities(&[]);
@@ -1648,7 +1659,29 @@ pub mod nsgs {
                 });
                 offset += k;
             }
+            let rows: Vec<super::equality::EqRow> = self
+                .joints
+                .iter()
+                .flat_map(|jb| {
+                    jb.eq.iter().map(|&r| super::equality::EqRow {
+                        lambda: jb.offset + r,
+                        a: jb.a.map(|a| (a, jb.rows[r].ja)),
+                        b: jb.b.map(|b| (b, jb.rows[r].jb)),
+                        rhs: jb.rows[r].b,
+                    })
+                })
+                .collect();
+            if !rows.is_empty() && rows.len() >= GLOBAL_EQUALITY_MIN_ROWS {
+                self.equality =
+                    super::equality::EqualitySolve::new(rows, &self.mass).map(std::sync::Arc::new);
+            }
             Ok(self)
+        }
+
+        /// Whether the equality rows are solved together (W_EE factored) in this step, and
+        /// how many of them were found dependent on the others.
+        pub fn global_equality(&self) -> Option<usize> {
+            self.equality.as_ref().map(|e| e.dependent())
         }
 
         /// Number of joint rows (the length of λ).
@@ -1738,6 +1771,16 @@ pub mod nsgs {
         /// bound, a limit carrying load: the equality residual of docs/error.md on those rows)
         /// and its violation of the sign condition where the multiplier sits at a bound.
         pub fn error_with(&self, r: &[f64], lambda: &[f64]) -> f64 {
+            let (contact, joint) = self.error_parts(r, lambda);
+            if joint.is_nan() {
+                return f64::NAN;
+            }
+            contact.max(joint)
+        }
+
+        /// The two parts of [`Problem::error_with`]: (the contacts' error of docs/error.md,
+        /// the joints' residual).
+        pub fn error_parts(&self, r: &[f64], lambda: &[f64]) -> (f64, f64) {
             let v = self.velocities_with(r, lambda);
             let u: Vec<f64> = (0..self.rows.len()).flat_map(|i| self.u(i, &v)).collect();
             let mu: Vec<f64> = self.rows.iter().map(|r| r.mu).collect();
@@ -1747,7 +1790,7 @@ pub mod nsgs {
                 law::error_measure(3, &mu, r, &u, self.q_norm).error
             };
             if self.joints.is_empty() {
-                return contact;
+                return (contact, 0.0);
             }
             let (mut res, mut b2) = (0.0, 0.0);
             for (j, jb) in self.joints.iter().enumerate() {
@@ -1765,17 +1808,19 @@ pub mod nsgs {
                     b2 += row.b * row.b;
                 }
             }
-            let joint = res.sqrt() / b2.sqrt().max(1.0);
-            if joint.is_nan() {
-                return f64::NAN;
-            }
-            contact.max(joint)
+            (contact, res.sqrt() / b2.sqrt().max(1.0))
         }
 
         /// One exact update of joint block j (the others frozen): its equality rows by the
         /// small dense solve of W_EE δ = −u_E (pivoted: dependent rows get no update), then
         /// each motor and limit row projected on its bound.
-        fn update_joint(&self, j: usize, v: &mut [[f64; 6]], lambda: &mut [f64]) {
+        fn update_joint(
+            &self,
+            j: usize,
+            v: &mut [[f64; 6]],
+            lambda: &mut [f64],
+            with_equality: bool,
+        ) {
             let jb = &self.joints[j];
             let k = jb.rows.len();
             let apply = |v: &mut [[f64; 6]], row: &JointRow, d: f64| {
@@ -1786,7 +1831,7 @@ pub mod nsgs {
                     (0..6).for_each(|c| v[b][c] += row.jb[c] * d / self.mass[b][c]);
                 }
             };
-            if !jb.eq.is_empty() {
+            if with_equality && !jb.eq.is_empty() {
                 let u = self.joint_u(j, v);
                 let rhs: Vec<f64> = jb.eq.iter().map(|&r| -u[r]).collect();
                 let delta = crate::rigid::joints::solve_spd(&jb.w_eq, &rhs, jb.eq.len());
@@ -1858,10 +1903,21 @@ pub mod nsgs {
                 return best;
             }
             let mut history: Vec<(usize, f64)> = Vec::new();
+
             for sweep in 1..=max_sweeps {
                 self.sweep(&mut v, &mut r);
-                for j in 0..self.joints.len() {
-                    self.update_joint(j, &mut v, &mut lambda);
+                match &self.equality {
+                    Some(eq) => {
+                        for j in 0..self.joints.len() {
+                            self.update_joint(j, &mut v, &mut lambda, false);
+                        }
+                        eq.update(&self.mass, &mut v, &mut lambda);
+                    }
+                    None => {
+                        for j in 0..self.joints.len() {
+                            self.update_joint(j, &mut v, &mut lambda, true);
+                        }
+                    }
                 }
                 if sweep % CHECK_EVERY == 0 || sweep == max_sweeps || sweep == 1 {
                     // exact evaluation on the stored problem (v from scratch)

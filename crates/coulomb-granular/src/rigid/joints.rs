@@ -839,7 +839,7 @@ pub fn solve_spd(w: &[f64], rhs: &[f64], k: usize) -> Vec<f64> {
     x
 }
 
-/// Newton steps with all the joints' rows together in [`project`] at most.
+/// Newton steps with all the joints' rows together in `project` at most.
 pub const GLOBAL_NEWTON_STEPS: usize = 4;
 
 /// One Newton step on all the joints' projection rows together: Δq = M⁻¹ Jᵀ δ with

@@ -1433,7 +1433,7 @@ pub mod nsgs {
     pub const CHECK_EVERY: usize = 5;
 
     /// A step whose joints have at least this many equality rows in all solves them together
-    /// in each sweep (W_EE factored once per step, [`super::equality`]); below it, joint by
+    /// in each sweep (W_EE factored once per step, `rigid::step::equality`); below it, joint by
     /// joint (the block solve of [`Problem::solve`]'s per-joint update).
     pub const GLOBAL_EQUALITY_MIN_ROWS: usize = 1;
 

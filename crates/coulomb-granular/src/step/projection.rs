@@ -487,7 +487,7 @@ const INELASTIC_SWEEPS: usize = 200;
 /// keys are in `corrected` (sorted): impulses p_α ≥ 0 along each contact's normal n_α such
 /// that u_α = n_α·(v_A − v_B − V_B(x_α, t)) ≥ 0 and p_α u_α = 0 (the linear complementarity
 /// problem of an impact with e = 0 on these contacts, solved by projected Gauss–Seidel in
-/// the order of `contacts`, at most [`INELASTIC_SWEEPS`] sweeps). The normal of a sphere
+/// the order of `contacts`, at most `INELASTIC_SWEEPS` sweeps). The normal of a sphere
 /// contact passes through the centre, so only v changes. Each p_α is added to the contact's
 /// normal impulse, so that the impulses stored are those that acted. Returns the kinetic
 /// energy removed (≥ 0: an inelastic impact).

@@ -70,21 +70,26 @@ PIP_PID=$!
 # cargo command below, so that each reuses the artifacts of the first.
 export PYO3_PYTHON="$PY"
 
+# The packages: the workspace without coulomb-bench, the criterion benchmarks' crate, which has
+# no tests: its library would compile criterion and its dependencies (22 s of CI, more on a
+# fresh clone) that only `cargo bench` needs. It is left out of every cargo command below, so
+# that all of them resolve the same features (with it in one and not another, plotters, whose
+# features criterion widens, and coulomb-lab compiled a second time).
+PACKAGES=(--workspace --exclude coulomb-bench)
+
 # One build of everything the tests use, the Python extension included: `--lib` adds the binding
 # crate's cdylib and pyo3 (not built by `cargo test --tests`, since that crate has no tests of
 # its own), compiled in the same cargo run as the rest, on the core the long compile of
 # coulomb-granular leaves idle at the end, instead of afterwards on their own (~40 s).
-cargo build --workspace "${FEATURES[@]}" --lib --tests --profile test 2>&1 | tee -a "$LOG"
+cargo build "${PACKAGES[@]}" "${FEATURES[@]}" --lib --tests --profile test 2>&1 | tee -a "$LOG"
 
 # Unit and integration tests, then the doc tests: `--tests` leaves out the examples, which a
 # plain `cargo test` would also compile and link at opt-level 2 only to check that they build
 # (one of them took over a minute); clippy --all-targets (.ci/run) checks that they compile.
 # --no-fail-fast: every test binary runs even when an earlier one fails, so that the counts
-# are complete. The doc tests leave out coulomb-bench: it has none, and building its library
-# for them compiled criterion and its dependencies (22 s of CI, more on a fresh clone), which
-# only `cargo bench` needs.
-cargo test --workspace "${FEATURES[@]}" --tests --no-fail-fast 2>&1 | tee -a "$LOG"
-cargo test --workspace --exclude coulomb-bench "${FEATURES[@]}" --doc --no-fail-fast 2>&1 | tee -a "$LOG"
+# are complete.
+cargo test "${PACKAGES[@]}" "${FEATURES[@]}" --tests --no-fail-fast 2>&1 | tee -a "$LOG"
+cargo test "${PACKAGES[@]}" "${FEATURES[@]}" --doc --no-fail-fast 2>&1 | tee -a "$LOG"
 
 # The extension: the binding crate built above by cargo within the workspace, in the test
 # profile, reusing every artifact the tests use. `maturin develop` builds the crate alone, for

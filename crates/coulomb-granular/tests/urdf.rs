@@ -339,6 +339,17 @@ fn collision_geometries_become_body_shapes() {
     .concat());
     let r = parse(&dir.0, &text).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(r.links, ["box", "cylinder", "ball", "mesh", "two"]);
+    // the mesh a link names is one of the run's inputs (outputs never replace it), through
+    // the URDF file and through a scene file naming the URDF file
+    let urdf_path = dir.write("robot.urdf", &text);
+    let meshes = urdf::mesh_files(&urdf_path);
+    assert_eq!(meshes, [dir.0.join("meshes/cube.stl")]);
+    let scene = dir.write("scene.toml", "[[urdf]]\nfile = \"robot.urdf\"\n");
+    let inputs = LoadedScene::load(&scene).unwrap().input_files();
+    assert!(
+        inputs.iter().any(|p| p.ends_with("meshes/cube.stl")),
+        "{inputs:?}"
+    );
     let s: Vec<&BodyShape> = r.bodies.iter().map(|b| &b.shape).collect();
     assert_eq!(
         s[0],

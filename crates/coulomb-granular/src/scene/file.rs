@@ -964,7 +964,7 @@ impl LoadedScene {
     }
 
     /// The files this scene reads: the scene file and every `file` it names (particle,
-    /// mesh and shape files), resolved as they are read. The outputs of a run never replace
+    /// mesh, shape and URDF files, and the meshes a URDF file names), resolved as they are read. The outputs of a run never replace
     /// one of them (`coulomb_granular::output_dir`).
     pub fn input_files(&self) -> Vec<PathBuf> {
         fn walk(v: &serde_json::Value, out: &mut Vec<String>) {
@@ -987,6 +987,10 @@ impl LoadedScene {
         }
         let mut files = vec![self.path.clone()];
         files.extend(names.iter().map(|n| self.resolve(n)));
+        // the meshes a `[[urdf]]` robot's links name
+        for u in &self.file.urdf {
+            files.extend(crate::urdf::mesh_files(&self.resolve(&u.file)));
+        }
         files
     }
 

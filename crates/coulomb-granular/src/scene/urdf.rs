@@ -364,6 +364,45 @@ pub fn read(path: &Path, placement: &UrdfPlacement) -> Result<UrdfRobot, UrdfErr
     parse(path, &text, placement)
 }
 
+/// A mesh file named `name` (a path, `file://` already stripped) in a URDF file of folder `dir`.
+fn mesh_path(dir: &Path, name: &str) -> std::path::PathBuf {
+    let p = Path::new(name);
+    if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        dir.join(p)
+    }
+}
+
+/// The mesh files the URDF file `path` names in its links' collision elements, resolved as
+/// [`read`] resolves them (the run's inputs, which its outputs never replace); none when the
+/// file cannot be read or parsed ([`read`] then says why). URIs other than `file://` are left
+/// out: [`read`] refuses them.
+pub fn mesh_files(path: &Path) -> Vec<std::path::PathBuf> {
+    let Ok(text) = coulomb::input::read_to_string(path, coulomb::input::Kind::Text) else {
+        return Vec::new();
+    };
+    if nesting(&text).is_err() {
+        return Vec::new();
+    }
+    let Ok(robot) = urdf_rs::read_from_string(&text) else {
+        return Vec::new();
+    };
+    let dir = path.parent().unwrap_or_else(|| Path::new("."));
+    let mut files = Vec::new();
+    for link in &robot.links {
+        for c in &link.collision {
+            if let urdf_rs::Geometry::Mesh { filename, .. } = &c.geometry {
+                let name = filename.strip_prefix("file://").unwrap_or(filename);
+                if !name.contains("://") {
+                    files.push(mesh_path(dir, name));
+                }
+            }
+        }
+    }
+    files
+}
+
 /// Imports the URDF document `text`, read from `path` (named in errors, its folder resolves
 /// the meshes' relative paths).
 pub fn parse(path: &Path, text: &str, placement: &UrdfPlacement) -> Result<UrdfRobot, UrdfError> {
@@ -724,12 +763,7 @@ fn geometry(
                     "mesh '{filename}': only .stl and .obj meshes are read (convert it, e.g. a .dae, to one of them)"
                 )));
             }
-            let p = Path::new(name);
-            let resolved = if p.is_absolute() {
-                p.to_path_buf()
-            } else {
-                dir.join(p)
-            };
+            let resolved = mesh_path(dir, name);
             let transform = Transform {
                 scale: Scale::PerAxis(scale.map(|s| s.0).unwrap_or([1.0; 3])),
                 ..Transform::default()

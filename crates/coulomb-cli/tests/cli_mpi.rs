@@ -184,6 +184,32 @@ fn distributed_refuses_rolling_friction() {
     assert!(err.contains("rolling friction"), "{err}");
 }
 
+/// The inelastic velocity projection adds impulses to the step's contacts, which the subdomain
+/// correction does not hold: the distributed step refuses it, naming the setting.
+#[test]
+fn distributed_refuses_the_inelastic_velocity_projection() {
+    let out = mpirun(
+        1,
+        &[
+            "simulate",
+            "box",
+            "--beads",
+            "20",
+            "--steps",
+            "1",
+            "--projection-velocities",
+            "inelastic",
+            "--mpi",
+        ],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(
+        err.contains("projection velocities = inelastic is not supported by the distributed step"),
+        "{err}"
+    );
+}
+
 /// `--until-rest` stopped at its step cap before rest is a negative answer on every rank: the
 /// launcher exits non-zero and the summary says why.
 #[test]

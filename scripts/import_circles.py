@@ -5,7 +5,8 @@
 
 Each .rs file is a module (foo.rs and foo/mod.rs: `foo`; foo/bar.rs: `foo::bar`). A module
 depends on another when its text (tests included, comments excluded) names `crate::a::b…`
-or `super::…` leading to it: the longest prefix of the path that is a module. Prints every
+or `super::…` leading to it: the longest prefix of the path that is a module (in the file's
+inline test module, `super` is the file's own module). Prints every
 strongly connected component of two or more modules (an import circle), largest first, then
 the edges inside each, and exits 1 when there is one (0 otherwise).
 """
@@ -83,26 +84,40 @@ def resolve(path, mods, aliases=None, globs=None):
     return None
 
 
+def paths_of(text, base, use_group, inline):
+    """The `crate::…` and `super::…` paths that `text` names, `base` giving each root's path."""
+    paths = []
+    for root, rest in use_group.findall(text):
+        # use crate::a::{b, c::d}: the prefix and each item of the group
+        head, _, group = rest.partition("{")
+        head = [p for p in head.strip().strip(":").split("::") if p]
+        items = [g.strip() for g in group.rstrip("}").split(",")] if group else [""]
+        for item in items:
+            tail = [p for p in re.split(r"::|\s+as\s+", item)[:2] if p and p != "self"]
+            paths.append(base[root] + head + tail)
+    for root, rest in inline.findall(text):
+        paths.append(base[root] + rest.strip(":").split("::"))
+    return paths
+
+
 def edges(mods):
     out = {m: set() for m in mods}
     aliases, globs = reexports(mods)
     use_group = re.compile(r"\buse\s+(crate|super)::([^;]*);", re.S)
     inline = re.compile(r"\b(crate|super)((?:::[A-Za-z_][A-Za-z0-9_]*)+)")
+    test_mod = re.compile(r"#\[cfg\(test\)\]\s*(?:pub(?:\([a-z]+\))?\s+)?mod\s+\w+\s*\{")
     for m, path in mods.items():
         text = strip_comments(open(path, encoding="utf-8").read())
         parent = m.split("::")[:-1] if m else []
-        base = {"crate": [], "super": parent}
+        # inside the file's inline test module (`#[cfg(test)] mod tests { … }`, at its end),
+        # `super` is the file's own module
+        inner = test_mod.search(text)
+        parts = [(text, parent)]
+        if inner is not None:
+            parts = [(text[: inner.start()], parent), (text[inner.start():], m.split("::") if m else [])]
         paths = []
-        for root, rest in use_group.findall(text):
-            # use crate::a::{b, c::d}: the prefix and each item of the group
-            head, _, group = rest.partition("{")
-            head = [p for p in head.strip().strip(":").split("::") if p]
-            items = [g.strip() for g in group.rstrip("}").split(",")] if group else [""]
-            for item in items:
-                tail = [p for p in re.split(r"::|\s+as\s+", item)[:2] if p and p != "self"]
-                paths.append(base[root] + head + tail)
-        for root, rest in inline.findall(text):
-            paths.append(base[root] + rest.strip(":").split("::"))
+        for part, sup in parts:
+            paths += paths_of(part, {"crate": [], "super": sup}, use_group, inline)
         for p in paths:
             target = resolve(p, mods, aliases, globs)
             if target is not None and target != m and not m.startswith(target + "::") and target != "":

@@ -8,7 +8,7 @@
 //! closest-point query ([`Obstacle::proximities`]): one [`Proximity`] per touching *feature*
 //! (a wall of a box, the lateral wall or a cap of a cylinder, a triangle of a mesh; one
 //! feature for the other shapes), the feature's index completing the contact's key
-//! ([`crate::contact::Partner::Obstacle`]) so that warm starts follow it across steps.
+//! (the contact partner `Partner::Obstacle` of the collision module) so that warm starts follow it across steps.
 //!
 //! Motions and shapes combine freely. Translations ([`Motion::Translate`],
 //! [`Motion::Oscillate`]) move the shape rigidly: exact for every shape. A rotation
@@ -1134,29 +1134,6 @@ impl World {
             v.extend_from_slice(&b.angular_velocity.to_array());
         }
         v
-    }
-    /// The contact law of sphere `a` with `partner`: the pair of their materials in
-    /// [`World::materials`], or `default` (the parameters' law) without a table or for an
-    /// index out of range.
-    #[inline]
-    pub fn contact_law(
-        &self,
-        a: usize,
-        partner: crate::contact::Partner,
-        default: ContactLaw,
-    ) -> ContactLaw {
-        let Some(table) = &self.materials else {
-            return default;
-        };
-        let ma = self.bodies.get(a).map(|b| b.material);
-        let mb = match partner {
-            crate::contact::Partner::Body(j) => self.bodies.get(j).map(|b| b.material),
-            crate::contact::Partner::Obstacle(o, _) => self.obstacles.get(o).map(|b| b.material),
-        };
-        match (ma, mb) {
-            (Some(ma), Some(mb)) => table.law(ma, mb).unwrap_or(default),
-            _ => default,
-        }
     }
     /// Whether some contact of this world may have rolling friction, given the parameters'
     /// μ_r.

@@ -3,7 +3,7 @@
 //! activation rule (the index set of active contacts).
 
 use crate::math::Vec3;
-use crate::world::World;
+use crate::world::{ContactLaw, World};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::HashMap;
@@ -567,6 +567,28 @@ pub fn detect_with_speed(
             }
         }
     })
+}
+
+/// The contact laws of a world's sphere pairs (kept beside [`Partner`], which names them).
+impl World {
+    /// The contact law of sphere `a` with `partner`: the pair of their materials in
+    /// [`World::materials`], or `default` (the parameters' law) without a table or for an
+    /// index out of range.
+    #[inline]
+    pub fn contact_law(&self, a: usize, partner: Partner, default: ContactLaw) -> ContactLaw {
+        let Some(table) = &self.materials else {
+            return default;
+        };
+        let ma = self.bodies.get(a).map(|b| b.material);
+        let mb = match partner {
+            Partner::Body(j) => self.bodies.get(j).map(|b| b.material),
+            Partner::Obstacle(o, _) => self.obstacles.get(o).map(|b| b.material),
+        };
+        match (ma, mb) {
+            (Some(ma), Some(mb)) => table.law(ma, mb).unwrap_or(default),
+            _ => default,
+        }
+    }
 }
 
 #[cfg(test)]

@@ -21,7 +21,7 @@
 //! only if the error of docs/error.md on the stored problem decreased
 //! ([`crate::nsgs::solve_coloured`]); every verdict stays that of the stored problem.
 
-use crate::nsgs::ContactRow;
+use crate::step::rows::ContactRow;
 
 /// Relative shift of the coarse system's diagonal (it is singular when an aggregate has no
 /// closed contact or its contacts cannot carry an impulse in some direction).

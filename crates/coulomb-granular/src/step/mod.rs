@@ -1,5 +1,6 @@
 //! The Moreau–Jean step (2.5)–(2.7) of sphere scenes as named phases: assemble the problem
-//! (2.10) (`assembly`), solve it by body-level Gauss–Seidel (`nsgs`, `subspace`, `rolling`)
+//! (2.10) (`assembly`, its contacts' rows `rows`), solve it by body-level Gauss–Seidel
+//! (`nsgs`, `subspace`, `rolling`)
 //! with the library as fallback, correct positions (`projection`), integrate
 //! (`simulation`), and whole runs (`run`); `coarse` is a two-level correction of the sweeps
 //! (off by default).
@@ -10,6 +11,7 @@ pub(crate) mod colour_progress;
 pub mod nsgs;
 pub mod projection;
 pub mod rolling;
+pub mod rows;
 pub mod run;
 pub mod simulation;
 pub mod subspace;

@@ -924,28 +924,35 @@ mod tests {
         assert_eq!(ball_qp(&s, &[1.0, 0.0, 0.0], 0.0), Some([0.0; 3]));
     }
 
-    /// A sphere (R = 0.05 m, m = 1 kg) on the floor: the 6-component block of its contact.
+    /// A sphere (R = 0.05 m, m = 1 kg) on the floor: the 6-component block of its contact
+    /// in the problem (2.10) of one step (h = 0.02 s).
     fn floor_block(mu: f64) -> Block {
-        let mut world = crate::validation::ground_world(Vec3::new(0.0, 0.0, -9.81));
+        let mut world = World::new();
+        world.gravity = Vec3::new(0.0, 0.0, -9.81);
+        world.obstacles.push(crate::world::Obstacle::fixed(
+            "ground",
+            crate::world::Shape::Plane {
+                point: Vec3::ZERO,
+                normal: Vec3::Z,
+            },
+        ));
         world.bodies.push(crate::world::Sphere::new(
             Vec3::new(0.0, 0.0, 0.05),
             0.05,
             1.0,
         ));
-        let params = crate::Params {
+        let h = 0.02;
+        let contacts =
+            crate::contact::detect(&world, 0.0, h, &crate::contact::Activation::default());
+        let data = crate::assembly::StepData {
+            h,
+            t_end: h,
+            restitution: 0.0,
             mu,
-            rolling_friction: 0.1,
-            method: crate::simulation::StepMethod::Library,
-            ..crate::Params::default()
+            close_gaps: true,
         };
-        let mut sim = crate::Simulation::new(world, params).unwrap();
-        sim.keep_problem = true;
-        sim.step().unwrap();
-        let problem = sim.last_problem.clone().unwrap();
-        let contacts = sim.contacts.clone();
-        blocks(&sim.world, &contacts, &problem, 0.1)
-            .unwrap()
-            .remove(0)
+        let problem = crate::assembly::assemble(&world, &contacts, &data).unwrap();
+        blocks(&world, &contacts, &problem, 0.1).unwrap().remove(0)
     }
 
     #[test]

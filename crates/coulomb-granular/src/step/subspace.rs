@@ -18,7 +18,7 @@
 //! keeps the best only if the error of docs/error.md on the stored problem decreased
 //! ([`crate::nsgs::solve_coloured`]); every verdict stays that of the stored problem.
 
-use crate::nsgs::ContactRow;
+use crate::step::rows::ContactRow;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::sparse::linalg::cholesky::factorize_symbolic_cholesky;
 use faer::sparse::{SparseColMat, Triplet};

@@ -114,6 +114,7 @@ def main():
     ap.add_argument("--tol", type=float, default=1e-8)
     ap.add_argument("--time-limit", type=float, default=20.0)
     ap.add_argument("--json")
+    ap.add_argument("--solvers", help="comma-separated subset of the solvers (default: all of the problem's kind)")
     ap.add_argument("--one", nargs=2, help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.one:
@@ -129,7 +130,10 @@ def main():
     for path in files:
         kind = load(path)[0]
         best = None
-        for s in LOCAL_SOLVERS if kind == "local" else GLOBAL_SOLVERS:
+        solvers = LOCAL_SOLVERS if kind == "local" else GLOBAL_SOLVERS
+        if a.solvers:
+            solvers = [s for s in a.solvers.split(",") if s in solvers]
+        for s in solvers:
             try:
                 out = subprocess.run([sys.executable, __file__, ".", "--tol", str(a.tol), "--one", path, s],
                                      capture_output=True, text=True, timeout=a.time_limit)

@@ -1,6 +1,9 @@
-//! The rigid engine's coloured parallel Gauss–Seidel (issue 52, item 2): the same bits
-//! whatever the number of threads, on scenes whose colours are large enough to be swept in
-//! parallel ([`coulomb_granular::nsgs::PARALLEL_MIN`] rows and more).
+//! The rigid engine's coloured parallel Gauss–Seidel (issue 52, item 2) and its parallel
+//! exact evaluations (v gathered per body, u per contact): the same bits whatever the number
+//! of threads, on scenes whose colours are large enough to be swept in parallel
+//! ([`coulomb_granular::nsgs::PARALLEL_MIN`] rows and more) and whose steps have enough
+//! contacts to be evaluated in parallel
+//! ([`coulomb_granular::rigid::step::nsgs::EVAL_PARALLEL_MIN`] and more).
 
 use coulomb_granular::rigid::validation::{cube_pyramid, floor, one_material, rock_pile};
 use coulomb_granular::rigid::{RigidBodyDesc, RigidObstacle, RigidSettings, RigidWorld};
@@ -55,6 +58,10 @@ fn a_cube_pyramid_gives_the_same_bits_on_one_and_two_threads() {
     assert!(
         contacts > 4 * coulomb_granular::nsgs::PARALLEL_MIN,
         "{contacts} contacts: too few for parallel colours"
+    );
+    assert!(
+        contacts >= coulomb_granular::rigid::step::nsgs::EVAL_PARALLEL_MIN,
+        "{contacts} contacts: too few for the parallel evaluation"
     );
     let (two, _) = run(&bodies, &obstacles, 20, 2);
     assert_eq!(one.len(), two.len());

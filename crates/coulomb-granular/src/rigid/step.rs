@@ -1432,6 +1432,17 @@ pub mod nsgs {
     /// Exact error evaluations: every this many sweeps.
     pub const CHECK_EVERY: usize = 5;
 
+    /// A problem with at least this many contacts evaluates v = M⁻¹(f + H r + G λ) and
+    /// u = Hᵀ v + w in parallel (rayon), [`EVAL_CHUNK`] bodies or contacts per task: each
+    /// body's velocity gathers its own contacts in contact order, each contact's u is its
+    /// own, so the numbers are those of the sequential loops whatever the number of threads.
+    /// Below it (under ~10 µs of work) the evaluation stays on one thread.
+    pub const EVAL_PARALLEL_MIN: usize = 128;
+
+    /// Bodies (for v) or contacts (for u) per task of a parallel evaluation: a constant,
+    /// never a function of the number of threads.
+    pub const EVAL_CHUNK: usize = 64;
+
     /// A step whose joints have at least this many equality rows in all solves them together
     /// in each sweep (W_EE factored once per step, `rigid::step::equality`); below it, joint by
     /// joint (the block solve of [`Problem::solve`]'s per-joint update).
@@ -1470,6 +1481,11 @@ pub mod nsgs {
         /// the contacts coloured so that no two of one colour share a moving body (the
         /// sphere engine's [`crate::nsgs::Colouring`]); a sweep visits the colours in order
         colouring: crate::nsgs::Colouring,
+        /// each body block's contacts, in contact order: (contact, whether the body is its
+        /// side B), those of block b at `incident[incident_start[b]..incident_start[b + 1]]`
+        /// (the gather of [`Problem::velocities_with`])
+        incident: Vec<(usize, bool)>,
+        incident_start: Vec<usize>,
     }
 
     /// Raw storage shared by the updates of one colour, which touch disjoint bodies and
@@ -1592,6 +1608,29 @@ pub mod nsgs {
             if !colouring.is_valid_pairs(rows.len(), mass.len(), |i| ends(&rows[i])) {
                 return Err("the contacts could not be coloured".into());
             }
+            // each block's contacts in contact order (a counting sort: blocks in bounds, checked
+            // above when W_ii was built)
+            let mut incident_start = vec![0usize; mass.len() + 1];
+            for row in &rows {
+                for (blk, _) in row.a.iter().chain(row.b.iter()) {
+                    incident_start[blk + 1] += 1;
+                }
+            }
+            for b in 0..mass.len() {
+                incident_start[b + 1] += incident_start[b];
+            }
+            let mut next = incident_start.clone();
+            let mut incident = vec![(0, false); incident_start[mass.len()]];
+            for (i, row) in rows.iter().enumerate() {
+                let sides = [(&row.a, false), (&row.b, true)];
+                for (blk, side_b) in sides
+                    .into_iter()
+                    .filter_map(|(s, b)| s.as_ref().map(|(blk, _)| (*blk, b)))
+                {
+                    incident[next[blk]] = (i, side_b);
+                    next[blk] += 1;
+                }
+            }
             let mut p = Self {
                 rows,
                 mass,
@@ -1602,10 +1641,11 @@ pub mod nsgs {
                 joints: Vec::new(),
                 equality: None,
                 colouring,
+                incident,
+                incident_start,
             };
             let v0 = p.velocities(&[]);
-            let q: Vec<f64> = (0..p.rows.len()).flat_map(|i| p.u(i, &v0)).collect();
-            p.q_norm = law::norm(&q);
+            p.q_norm = law::norm(&p.u_all(&v0));
             Ok(p)
         }
 
@@ -1710,24 +1750,65 @@ pub mod nsgs {
                     }
                 }
             }
-            for (i, row) in self.rows.iter().enumerate() {
-                if r.len() < 3 * i + 3 {
-                    break;
-                }
-                for (blk, j) in row.a.iter().chain(row.b.iter()) {
+            // the contacts r holds (r short: the first r.len() / 3)
+            let n = (r.len() / 3).min(self.rows.len());
+            // body b: its contacts in contact order, then M⁻¹: for each entry the additions
+            // of the contact-by-contact scatter, in the same order (the same bits)
+            let gather = |b: usize, pb: &mut [f64; 6]| {
+                let ids = &self.incident[self.incident_start[b]..self.incident_start[b + 1]];
+                for &(i, side_b) in ids {
+                    if i >= n {
+                        break;
+                    }
+                    let row = &self.rows[i];
+                    let side = if side_b { &row.b } else { &row.a };
+                    let Some((_, j)) = side else { continue };
                     for k in 0..3 {
                         for d in 0..6 {
-                            p[*blk][d] += j[k][d] * r[3 * i + k];
+                            pb[d] += j[k][d] * r[3 * i + k];
                         }
                     }
                 }
-            }
-            for (pb, m) in p.iter_mut().zip(&self.mass) {
+                let m = &self.mass[b];
                 for d in 0..6 {
                     pb[d] /= m[d];
                 }
+            };
+            if self.rows.len() >= EVAL_PARALLEL_MIN {
+                use rayon::prelude::*;
+                p.par_chunks_mut(EVAL_CHUNK)
+                    .enumerate()
+                    .for_each(|(c, chunk)| {
+                        for (o, pb) in chunk.iter_mut().enumerate() {
+                            gather(c * EVAL_CHUNK + o, pb);
+                        }
+                    });
+            } else {
+                for (b, pb) in p.iter_mut().enumerate() {
+                    gather(b, pb);
+                }
             }
             p
+        }
+
+        /// u = Hᵀ v + w of every contact, 3 per contact ([`Problem::u`]; in parallel chunks of
+        /// [`EVAL_CHUNK`] contacts from [`EVAL_PARALLEL_MIN`] contacts: each its own numbers).
+        pub fn u_all(&self, v: &[[f64; 6]]) -> Vec<f64> {
+            let mut u = vec![0.0; 3 * self.rows.len()];
+            let fill = |first: usize, out: &mut [f64]| {
+                for (o, ui) in out.chunks_exact_mut(3).enumerate() {
+                    ui.copy_from_slice(&self.u(first + o, v));
+                }
+            };
+            if self.rows.len() >= EVAL_PARALLEL_MIN {
+                use rayon::prelude::*;
+                u.par_chunks_mut(3 * EVAL_CHUNK)
+                    .enumerate()
+                    .for_each(|(c, out)| fill(c * EVAL_CHUNK, out));
+            } else {
+                fill(0, &mut u);
+            }
+            u
         }
 
         /// u_i = J_A v_A + J_B v_B + w_i.
@@ -1771,7 +1852,13 @@ pub mod nsgs {
         /// bound, a limit carrying load: the equality residual of docs/error.md on those rows)
         /// and its violation of the sign condition where the multiplier sits at a bound.
         pub fn error_with(&self, r: &[f64], lambda: &[f64]) -> f64 {
-            let (contact, joint) = self.error_parts(r, lambda);
+            self.error_at(r, lambda, &self.velocities_with(r, lambda))
+        }
+
+        /// [`Problem::error_with`] with v = [`Problem::velocities_with`]`(r, lambda)` already
+        /// computed (the same number, v computed once).
+        fn error_at(&self, r: &[f64], lambda: &[f64], v: &[[f64; 6]]) -> f64 {
+            let (contact, joint) = self.error_parts_at(r, lambda, v);
             if joint.is_nan() {
                 return f64::NAN;
             }
@@ -1781,8 +1868,12 @@ pub mod nsgs {
         /// The two parts of [`Problem::error_with`]: (the contacts' error of docs/error.md,
         /// the joints' residual).
         pub fn error_parts(&self, r: &[f64], lambda: &[f64]) -> (f64, f64) {
-            let v = self.velocities_with(r, lambda);
-            let u: Vec<f64> = (0..self.rows.len()).flat_map(|i| self.u(i, &v)).collect();
+            self.error_parts_at(r, lambda, &self.velocities_with(r, lambda))
+        }
+
+        /// [`Problem::error_parts`] at v = [`Problem::velocities_with`]`(r, lambda)`.
+        fn error_parts_at(&self, r: &[f64], lambda: &[f64], v: &[[f64; 6]]) -> (f64, f64) {
+            let u = self.u_all(v);
             let mu: Vec<f64> = self.rows.iter().map(|r| r.mu).collect();
             let contact = if self.rows.is_empty() {
                 0.0
@@ -1794,7 +1885,7 @@ pub mod nsgs {
             }
             let (mut res, mut b2) = (0.0, 0.0);
             for (j, jb) in self.joints.iter().enumerate() {
-                for (k, (row, uk)) in jb.rows.iter().zip(self.joint_u(j, &v)).enumerate() {
+                for (k, (row, uk)) in jb.rows.iter().zip(self.joint_u(j, v)).enumerate() {
                     let l = lambda.get(jb.offset + k).copied().unwrap_or(0.0);
                     let rho = match row.kind {
                         RowKind::Equality => uk,
@@ -1922,7 +2013,7 @@ pub mod nsgs {
                 if sweep % CHECK_EVERY == 0 || sweep == max_sweeps || sweep == 1 {
                     // exact evaluation on the stored problem (v from scratch)
                     v = self.velocities_with(&r, &lambda);
-                    let err = self.error_with(&r, &lambda);
+                    let err = self.error_at(&r, &lambda, &v);
                     best.sweeps = sweep;
                     if err < best.error || !best.error.is_finite() {
                         best.error = err;
@@ -2274,6 +2365,84 @@ mod tests {
         };
         let e = coulomb::law::error_measure(3, &p.mu, &rr, &u, q_norm).error;
         assert!((e - r.error).abs() <= 1e-12, "{e} vs {}", r.error);
+    }
+
+    /// The parallel gather of v = M⁻¹(f + H r) and u = Hᵀ v + w: bitwise the numbers of the
+    /// contact-by-contact scatter, on 1, 2 and 3 threads, r full or short.
+    #[test]
+    fn parallel_evaluation_is_the_sequential_scatter_bit_for_bit() {
+        let bodies = 40;
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut rnd = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let mut jac =
+            || -> [[f64; 6]; 3] { std::array::from_fn(|_| std::array::from_fn(|_| rnd())) };
+        let n = 3 * nsgs::EVAL_PARALLEL_MIN;
+        let rows: Vec<nsgs::Row> = (0..n)
+            .map(|i| {
+                let a = (7 * i) % bodies;
+                let b = (a + 1 + (11 * i) % (bodies - 1)) % bodies;
+                nsgs::Row {
+                    a: Some((a, jac())),
+                    b: (i % 3 != 0).then(|| (b, jac())),
+                    w: [0.1, -0.2, 0.3],
+                    mu: 0.5,
+                }
+            })
+            .collect();
+        // Delassus blocks: J J^T / m with random J, positive definite almost surely
+        let mass: Vec<[f64; 6]> = (0..bodies)
+            .map(|b| std::array::from_fn(|d| 1.0 + 0.1 * (b + d) as f64))
+            .collect();
+        let f: Vec<[f64; 6]> = (0..bodies)
+            .map(|b| std::array::from_fn(|d| (b * 6 + d) as f64 * 0.01 - 1.0))
+            .collect();
+        let problem = nsgs::Problem::new(rows.clone(), mass.clone(), f.clone()).unwrap();
+        let r: Vec<f64> = (0..3 * n)
+            .map(|i| ((i * 37) % 101) as f64 * 0.013 - 0.4)
+            .collect();
+        for len in [3 * n, 3 * n - 5, 0] {
+            let r = &r[..len];
+            // the scatter, contact by contact
+            let mut p = f.clone();
+            for (i, row) in rows.iter().enumerate().take(len / 3) {
+                for (blk, j) in row.a.iter().chain(row.b.iter()) {
+                    for k in 0..3 {
+                        for d in 0..6 {
+                            p[*blk][d] += j[k][d] * r[3 * i + k];
+                        }
+                    }
+                }
+            }
+            for (pb, m) in p.iter_mut().zip(&mass) {
+                for d in 0..6 {
+                    pb[d] /= m[d];
+                }
+            }
+            let u: Vec<f64> = (0..n).flat_map(|i| problem.u(i, &p)).collect();
+            for threads in [1, 2, 3] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let (v, uu) = pool.install(|| {
+                    let v = problem.velocities(r);
+                    let uu = problem.u_all(&v);
+                    (v, uu)
+                });
+                let bits = |x: &[[f64; 6]]| -> Vec<u64> {
+                    x.iter().flatten().map(|x| x.to_bits()).collect()
+                };
+                assert_eq!(bits(&v), bits(&p), "v, {threads} threads, r of {len}");
+                let ub: Vec<u64> = uu.iter().map(|x| x.to_bits()).collect();
+                let ur: Vec<u64> = u.iter().map(|x| x.to_bits()).collect();
+                assert_eq!(ub, ur, "u, {threads} threads, r of {len}");
+            }
+        }
     }
 
     #[test]

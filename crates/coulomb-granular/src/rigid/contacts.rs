@@ -129,7 +129,7 @@ pub(crate) fn ball_ball(
     let d = cb - ca;
     let dist = d.length();
     let gap = dist - ra - rb;
-    if !(gap < prediction) {
+    if gap.is_nan() || gap >= prediction {
         return None;
     }
     let n1 = if dist != 0.0 {
@@ -167,7 +167,8 @@ pub(crate) fn ball_half_space(
 ) -> Option<ContactPoint> {
     let s = n.dot(ca - origin);
     let gap = s - ra;
-    if !(s <= ra + prediction && gap <= prediction && gap.is_finite()) {
+    let accepted = s <= ra + prediction && gap <= prediction && gap.is_finite();
+    if !accepted {
         return None;
     }
     let (t1, t2) = tangent_frame(n);

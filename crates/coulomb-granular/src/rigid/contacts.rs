@@ -722,4 +722,64 @@ mod tests {
         let v = w.velocities();
         assert!(v[0][0] < 0.5 && v[1][0] < 0.5, "{v:?}");
     }
+
+    #[test]
+    fn a_ball_pile_with_a_cuboid_gives_the_same_bits_on_one_and_two_threads() {
+        // 180 balls stacked in touching layers (jittered) on the floor around one cuboid:
+        // fast-path pairs beside parry's (cuboid–ball, cuboid–floor), swept in parallel
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let mut bodies =
+            vec![
+                crate::rigid::validation::cuboid([0.1, 0.1, 0.05], 1000.0, [0.3, 0.3, 0.05])
+                    .unwrap(),
+            ];
+        for k in 0..5 {
+            for i in 0..6 {
+                for j in 0..6 {
+                    let (x, y) = (0.11 * i as f64, 0.11 * j as f64);
+                    if k == 0 && (0.15..0.45).contains(&x) && (0.15..0.45).contains(&y) {
+                        continue;
+                    }
+                    let dx = rng.random_range(-0.005..0.005);
+                    let dy = rng.random_range(-0.005..0.005);
+                    // layer 1 just above the cuboid's top (z = 0.1), each 1 mm above the last
+                    let z = if k == 0 {
+                        0.05
+                    } else {
+                        0.151 + 0.101 * (k - 1) as f64
+                    };
+                    bodies.push(ball_desc(0.05, [x + dx, y + dy, z], [0.0; 3], [0.0; 3]));
+                }
+            }
+        }
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let settings = RigidSettings {
+                    tolerance: 1e-6,
+                    ..RigidSettings::default()
+                };
+                let mut w =
+                    RigidWorld::new(bodies.clone(), vec![floor()], one_material(0.5), settings)
+                        .unwrap();
+                let mut most = 0;
+                for _ in 0..80 {
+                    most = most.max(w.step().unwrap().contacts);
+                }
+                let mut bits: Vec<u64> = Vec::new();
+                for v in [w.positions(), w.velocities(), w.angular_velocities()] {
+                    bits.extend(v.iter().flatten().map(|x| x.to_bits()));
+                }
+                bits.extend(w.orientations().iter().flatten().map(|x| x.to_bits()));
+                (bits, most)
+            })
+        };
+        let (one, most) = run(1);
+        assert!(most > 100, "{most} contacts");
+        let (two, _) = run(2);
+        assert!(one == two, "1 and 2 threads differ");
+    }
 }

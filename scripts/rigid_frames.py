@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Reads the body frames that `coulomb simulate SCENE.toml --output DIR` writes for a
 rigid scene (DIR/frames/bodies_KKKKKK.vtp: VTK XML PolyData, raw appended binary with UInt64
-headers, or ASCII; each body as its shape's polygons with the cell array `body`), with numpy
-only.
+headers, or ASCII; each body as its shape's polygons with the cell array `body`; the balls as
+points with the point arrays `radius` and `body` in DIR/frames/balls_KKKKKK.vtp beside it),
+with numpy only.
 
     rigid_frames.py displacement DIR      largest displacement of a body's centre (the mean
                                           of its vertices) between the first and the last
@@ -77,7 +78,22 @@ def body_centres(path):
     for b, end in zip(body, offsets):
         verts.setdefault(int(b), set()).update(int(k) for k in conn[start:end])
         start = end
-    return {b: points[sorted(v)].mean(axis=0) for b, v in verts.items()}, points, conn, offsets, body
+    centres = {b: points[sorted(v)].mean(axis=0) for b, v in verts.items()}
+    for b, c, _ in balls(path):
+        centres[b] = c
+    return centres, points, conn, offsets, body
+
+
+def balls(path):
+    """[(body index, centre, radius)] of the balls file beside a bodies frame (none if absent)."""
+    other = Path(path).with_name(Path(path).name.replace("bodies_", "balls_"))
+    if not other.exists():
+        return []
+    d = read_vtp(other)
+    points = next(v for (s, _), v in d.items() if s == "Points").reshape(-1, 3)
+    body = d[("PointData", "body")].astype(int)
+    radius = d[("PointData", "radius")]
+    return list(zip((int(b) for b in body), points, radius))
 
 
 def frames(directory):
@@ -103,7 +119,9 @@ def render(directory, out, picks):
     if not picks:
         picks = sorted({round(i * (len(fs) - 1) / 3) for i in range(4)})
     fig, axes = plt.subplots(2, len(picks), figsize=(2.6 * len(picks), 3.6), squeeze=False)
-    everything = np.concatenate([body_centres(fs[k])[1] for k in picks])
+    everything = np.concatenate([body_centres(fs[k])[1].reshape(-1, 3) for k in picks]
+                                + [np.array([c for _, c, _ in balls(fs[k])]).reshape(-1, 3)
+                                   for k in picks])
     lo, hi = everything.min(axis=0), everything.max(axis=0)
     for col, k in enumerate(picks):
         _, points, conn, offsets, body = body_centres(fs[k])
@@ -116,6 +134,9 @@ def render(directory, out, picks):
             ax.add_collection(PolyCollection([p[:, [i, j]] for p in polys],
                                              facecolors=plt.cm.tab20(body % 20),
                                              edgecolors="k", linewidths=0.1, alpha=0.6))
+            for b, c, r in balls(fs[k]):
+                ax.add_patch(plt.Circle((c[i], c[j]), r, facecolor=plt.cm.tab20(b % 20),
+                                        edgecolor="k", linewidth=0.1, alpha=0.6))
             ax.set_xlim(lo[i], hi[i])
             ax.set_ylim(max(lo[j], -0.05) if j == 2 else lo[j], hi[j])
             ax.set_aspect("equal")

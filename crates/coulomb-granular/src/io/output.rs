@@ -10,6 +10,7 @@
 pub use crate::bodies::surface::{obstacle_surface, Extent, CYLINDER_SEGMENTS};
 use crate::math::Vec3;
 use crate::output_dir::OutputDir;
+use crate::shape::BodyShape;
 use crate::simulation::{Simulation, StepStats};
 use crate::world::{Motion, Obstacle};
 use std::fmt::Write as _;
@@ -410,6 +411,9 @@ struct FrameFiles {
     beads: String,
     contacts: String,
     obstacles: String,
+    /// a rigid scene's balls as points (`frames/balls_KKKKKK.vtp`, part 1 of `bodies.pvd`);
+    /// empty when none
+    balls: String,
 }
 
 /// Writes VTK frames into a directory and the ParaView collections `bodies.pvd`,
@@ -481,6 +485,7 @@ impl VtkWriter {
             beads: b,
             contacts: c,
             obstacles: o,
+            balls: String::new(),
         });
         self.write_collections()
     }
@@ -532,8 +537,12 @@ fn frames_before(dir: &OutputDir, bodies: &str, first_step: usize) -> Vec<FrameF
     };
     let contacts = listed("contacts.pvd");
     let obstacles = listed("obstacles.pvd");
+    // bodies.pvd lists a rigid scene's ball files (part 1) beside its body files
+    let (balls, bodies): (Vec<_>, Vec<_>) = listed(bodies)
+        .into_iter()
+        .partition(|(_, f)| f.starts_with("frames/balls_"));
     let mut frames = Vec::new();
-    for (k, (time, beads)) in listed(bodies).into_iter().enumerate() {
+    for (k, (time, beads)) in bodies.into_iter().enumerate() {
         let step = beads
             .rsplit('_')
             .next()
@@ -542,14 +551,25 @@ fn frames_before(dir: &OutputDir, bodies: &str, first_step: usize) -> Vec<FrameF
             continue;
         }
         let file = |list: &[(f64, String)]| list.get(k).map(|x| x.1.clone()).unwrap_or_default();
+        let ball_file = balls
+            .iter()
+            .find(|(_, f)| f.trim_start_matches("frames/balls_") == step_suffix(&beads))
+            .map(|x| x.1.clone())
+            .unwrap_or_default();
         frames.push(FrameFiles {
             time,
             beads,
             contacts: file(&contacts),
             obstacles: file(&obstacles),
+            balls: ball_file,
         });
     }
     frames
+}
+
+/// The `KKKKKK.vtp` end of a frame file's name.
+fn step_suffix(file: &str) -> &str {
+    file.rsplit('_').next().unwrap_or("")
 }
 
 /// The three .pvd collections of a run's frames in `dir`: `bodies` (the beads' or bodies'
@@ -561,19 +581,21 @@ fn write_collections(dir: &OutputDir, bodies: &str, frames: &[FrameFiles]) -> io
             "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n",
         );
         for f in frames {
-            let file = match name {
-                "contacts.pvd" => &f.contacts,
-                "obstacles.pvd" => &f.obstacles,
-                _ => &f.beads,
+            let files: [&str; 2] = match name {
+                "contacts.pvd" => [&f.contacts, ""],
+                "obstacles.pvd" => [&f.obstacles, ""],
+                _ => [&f.beads, &f.balls],
             };
-            if file.is_empty() {
-                continue;
+            for (part, file) in files.iter().enumerate() {
+                if file.is_empty() {
+                    continue;
+                }
+                let _ = writeln!(
+                    s,
+                    "<DataSet timestep=\"{}\" group=\"\" part=\"{part}\" file=\"{file}\"/>",
+                    f.time
+                );
             }
-            let _ = writeln!(
-                s,
-                "<DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{file}\"/>",
-                f.time
-            );
         }
         s.push_str("</Collection>\n</VTKFile>\n");
         dir.write(name, s.as_bytes())?;
@@ -622,6 +644,9 @@ fn rigid_bodies_polydata(
     let mut polygons = Vec::new();
     let (mut body, mut vel, mut ang) = (Vec::new(), Vec::new(), Vec::new());
     for (i, t) in shapes.iter().enumerate() {
+        if matches!(scene.shapes.get(i), Some(BodyShape::Sphere { .. })) {
+            continue;
+        }
         let base = points.len() as u32;
         for p in &t.vertices {
             let r = crate::shape::rotate(q[i], *p);
@@ -645,6 +670,38 @@ fn rigid_bodies_polydata(
         triangles: None,
         polygons: Some(polygons),
     }
+}
+
+/// The balls of a rigid scene as glyph-ready points (as the sphere scenes' beads): the
+/// centres, point data `radius`, `body` (the body's index), `velocity` and
+/// `angular_velocity`; `None` when the scene has no ball.
+fn rigid_balls_polydata(scene: &crate::rigid_scene::RigidScene) -> Option<PolyData> {
+    let balls: Vec<(usize, f64)> = scene
+        .shapes
+        .iter()
+        .enumerate()
+        .filter_map(|(i, s)| match s {
+            BodyShape::Sphere { radius } => Some((i, *radius)),
+            _ => None,
+        })
+        .collect();
+    if balls.is_empty() {
+        return None;
+    }
+    let w = &scene.world;
+    let (x, v, om) = (w.positions(), w.velocities(), w.angular_velocities());
+    Some(PolyData {
+        points: balls.iter().map(|&(i, _)| v3a(x[i])).collect(),
+        point_data: vec![
+            Array::scalars("radius", balls.iter().map(|b| b.1)),
+            Array::scalars("body", balls.iter().map(|b| b.0 as f64)),
+            Array::vectors("velocity", balls.iter().map(|&(i, _)| v3a(v[i]))),
+            Array::vectors("angular_velocity", balls.iter().map(|&(i, _)| v3a(om[i]))),
+        ],
+        cell_data: Vec::new(),
+        triangles: None,
+        polygons: None,
+    })
 }
 
 /// The last step's contacts of a rigid scene as points (one per manifold point): the normal
@@ -671,7 +728,9 @@ fn rigid_contacts_polydata(scene: &crate::rigid_scene::RigidScene) -> PolyData {
 }
 
 /// Writes the frames of a rigid scene into a directory: `frames/bodies_KKKKKK.vtp` (each body
-/// as its shape's polygons), `frames/contacts_KKKKKK.vtp` (contact points, normals, forces)
+/// but the balls as its shape's polygons), `frames/balls_KKKKKK.vtp` (the balls as points
+/// with a `radius` array, for glyphs; part 1 of the same frame in `bodies.pvd`, only when the
+/// scene has balls), `frames/contacts_KKKKKK.vtp` (contact points, normals, forces)
 /// and the obstacles (`frames/obstacles_KKKKKK.vtp`, written again only when one moves), with
 /// the collections `bodies.pvd`, `contacts.pvd` and `obstacles.pvd`.
 #[derive(Debug)]
@@ -733,6 +792,15 @@ impl RigidVtkWriter {
         let c = format!("frames/contacts_{k:06}.vtp");
         let bodies = rigid_bodies_polydata(scene, &self.shapes);
         self.dir.write(&b, &bodies.to_vtp(self.format))?;
+        let balls = rigid_balls_polydata(scene);
+        let ball_file = match &balls {
+            Some(poly) => {
+                let f = format!("frames/balls_{k:06}.vtp");
+                self.dir.write(&f, &poly.to_vtp(self.format))?;
+                f
+            }
+            None => String::new(),
+        };
         self.dir
             .write(&c, &rigid_contacts_polydata(scene).to_vtp(self.format))?;
         let moving = scene.obstacles.iter().any(|o| o.motion != Motion::Fixed);
@@ -746,6 +814,17 @@ impl RigidVtkWriter {
                 for p in &bodies.points {
                     lo = lo.min(*p);
                     hi = hi.max(*p);
+                }
+                if let Some(poly) = &balls {
+                    let radii = match &poly.point_data[0].values {
+                        Values::F64(r) => r.as_slice(),
+                        Values::I64(_) => &[],
+                    };
+                    for (p, r) in poly.points.iter().zip(radii) {
+                        let r = Vec3::new(*r, *r, *r);
+                        lo = lo.min(*p - r);
+                        hi = hi.max(*p + r);
+                    }
                 }
                 let extent = if lo.x.is_finite() {
                     Extent { lo, hi }.grown(0.25)
@@ -767,6 +846,7 @@ impl RigidVtkWriter {
             beads: b,
             contacts: c,
             obstacles: o,
+            balls: ball_file,
         });
         write_collections(&self.dir, "bodies.pvd", &self.frames)
     }
@@ -1059,6 +1139,95 @@ mod tests {
         }
         let contacts = fs::read_to_string(dir.join("frames/contacts_000001.vtp")).unwrap();
         assert!(contacts.contains("Name=\"force\""));
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn rigid_frames_hold_balls_as_points_with_radii_in_the_same_collection() {
+        use crate::model::{BodySpec, ObstacleSpec, SceneModel};
+        use crate::shape::IDENTITY;
+        let mut m = SceneModel::default();
+        m.step.h = 1e-3;
+        m.obstacles.push(ObstacleSpec::fixed(
+            "floor",
+            Shape::Plane {
+                point: Vec3::ZERO,
+                normal: Vec3::Z,
+            },
+        ));
+        m.bodies.push(BodySpec::new(
+            BodyShape::Cuboid {
+                half_extents: [0.1, 0.2, 0.05],
+            },
+            Vec3::new(1.0, 2.0, 0.05),
+            IDENTITY,
+            1000.0,
+        ));
+        for (x, r) in [(0.0, 0.05), (0.5, 0.08)] {
+            m.bodies.push(BodySpec::new(
+                BodyShape::Sphere { radius: r },
+                Vec3::new(x, 0.0, 0.5),
+                IDENTITY,
+                1000.0,
+            ));
+        }
+        let mut scene = crate::rigid_scene::RigidScene::new(&m).unwrap();
+        let dir = std::env::temp_dir().join(format!("coulomb-rigid-balls-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        let mut w = RigidVtkWriter::new(&dir, &scene).unwrap();
+        for _ in 0..2 {
+            scene.step().unwrap();
+            w.frame(&scene).unwrap();
+        }
+        // the cuboid alone as polygons
+        let body =
+            String::from_utf8_lossy(&fs::read(dir.join("frames/bodies_000002.vtp")).unwrap())
+                .into_owned();
+        assert!(body.contains("NumberOfPolys=\"6\""), "{body}");
+        // the balls as two points: centres exact, radii and velocities as point data
+        let file = fs::read(dir.join("frames/balls_000002.vtp")).unwrap();
+        let text = String::from_utf8_lossy(&file).into_owned();
+        assert!(
+            text.contains("NumberOfPoints=\"2\" NumberOfVerts=\"2\""),
+            "{text}"
+        );
+        let at = |name: &str| {
+            text.find(&format!("Name=\"{name}\"")).unwrap() - "<DataArray type=\"Float64\" ".len()
+        };
+        let radius = appended_f64(&file, at("radius"));
+        assert_eq!(radius, [0.05, 0.08]);
+        let points = appended_f64(&file, at("points"));
+        let x = scene.world.positions();
+        assert_eq!(points, [x[1], x[2]].concat());
+        let v = appended_f64(&file, at("velocity"));
+        assert_eq!(
+            v,
+            [scene.world.velocities()[1], scene.world.velocities()[2]].concat()
+        );
+        // one collection: part 0 the meshes, part 1 the balls, per frame
+        let pvd = fs::read_to_string(dir.join("bodies.pvd")).unwrap();
+        assert!(
+            pvd.contains("part=\"1\" file=\"frames/balls_000001.vtp\""),
+            "{pvd}"
+        );
+        assert!(
+            pvd.contains("part=\"0\" file=\"frames/bodies_000002.vtp\""),
+            "{pvd}"
+        );
+        // a restart from step 2 keeps frame 1's two parts and drops frame 2's
+        let mut w = RigidVtkWriter::resume(&dir, &scene, 2).unwrap();
+        scene.step().unwrap();
+        w.frame(&scene).unwrap();
+        let pvd = fs::read_to_string(dir.join("bodies.pvd")).unwrap();
+        for f in [
+            "balls_000001",
+            "bodies_000001",
+            "balls_000003",
+            "bodies_000003",
+        ] {
+            assert!(pvd.contains(f), "{f}: {pvd}");
+        }
+        assert!(!pvd.contains("balls_000002"), "{pvd}");
         let _ = fs::remove_dir_all(&dir);
     }
 }

@@ -23,6 +23,15 @@
 //! parry's [`Bvh`] of the bodies' AABBs, each enlarged by the distance the body can travel
 //! in the step (`margin`), traversed against itself for body pairs; bounded obstacles query
 //! it with their AABB, half-spaces (unbounded) meet every body.
+//!
+//! # Balls: the analytic fast path
+//! A pair of two balls, and a ball against a half-space obstacle, is not handed to parry:
+//! its one contact point is computed in closed form ([`ball_ball`], [`ball_half_space`]) with
+//! exactly parry's frame, gap, acceptance test (`prediction`) and warm-start key (sub-shapes
+//! 0, the face-0 feature of each shape, rank 0), and it keeps no pair cache (parry keeps no
+//! state of such a pair that changes its next result). The points are then the same as
+//! parry's up to round-off (tests below), in the same order. Ball–half-space pairs are
+//! found by one loop over the balls, outside the per-pair machinery.
 
 use super::body::BodyState;
 use super::parry::bounding_volume::{Aabb, BoundingVolume};
@@ -31,7 +40,7 @@ use super::parry::partitioning::{Bvh, BvhBuildStrategy, BvhWorkspace};
 use super::parry::query::{
     ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher, PersistentQueryDispatcher,
 };
-use super::parry::shape::SharedShape;
+use super::parry::shape::{PackedFeatureId, SharedShape};
 use super::polytope::{self, Polytope};
 use super::{RigidError, RigidPartner};
 use std::collections::BTreeMap;
@@ -77,6 +86,8 @@ pub struct Detector {
     bvh_workspace: BvhWorkspace,
     /// each body's polytope (cuboids and convex polyhedra), built at the first detection
     polytopes: Vec<Option<Polytope>>,
+    /// every pair through parry, balls included (the reference of the fast path's tests)
+    parry_only: bool,
 }
 
 impl std::fmt::Debug for Detector {
@@ -91,6 +102,87 @@ impl std::fmt::Debug for Detector {
 struct PairCache {
     manifolds: Vec<ContactManifold<(), ()>>,
     workspace: Option<ContactManifoldsWorkspace>,
+}
+
+/// The warm-start key of the one contact of a ball with a body or a half-space: parry's
+/// (sub-shape 0, sub-shape 0, face 0, face 0, rank 0).
+fn ball_key(a: usize, b: RigidPartner) -> ContactKey {
+    let face = PackedFeatureId::face(0).0;
+    (a, b, 0, 0, face, face, 0)
+}
+
+/// The contact of ball A (centre `ca`, radius `ra`, shape pose `pose_a`) with ball B (body
+/// `b` > `a`, centre `cb`, radius `rb`) when its gap g = |c_B − c_A| − r_A − r_B is below
+/// `prediction` (parry's test): normal n = (c_A − c_B)/|c_A − c_B| (B → A; concentric balls:
+/// −R_A e_y, parry's choice), point midway between c_A − r_A n and c_B + r_B n.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn ball_ball(
+    a: usize,
+    pose_a: &Pose,
+    ra: f64,
+    b: usize,
+    cb: Vector,
+    rb: f64,
+    prediction: f64,
+) -> Option<ContactPoint> {
+    let ca = pose_a.translation;
+    let d = cb - ca;
+    let dist = d.length();
+    let gap = dist - ra - rb;
+    if gap.is_nan() || gap >= prediction {
+        return None;
+    }
+    let n1 = if dist != 0.0 {
+        d / dist
+    } else {
+        pose_a.rotation * Vector::Y
+    };
+    let normal = -n1;
+    let (t1, t2) = tangent_frame(normal);
+    let bp = RigidPartner::Body(b);
+    Some(ContactPoint {
+        a,
+        b: bp,
+        key: ball_key(a, bp),
+        point: 0.5 * ((ca + ra * n1) + (cb - rb * n1)),
+        normal,
+        t1,
+        t2,
+        gap,
+    })
+}
+
+/// The contact of ball A (centre `ca`, radius `ra`) with half-space obstacle `o` (outward
+/// unit normal `n` and boundary point `origin`, world) when its gap g = n·(c_A − origin) − r_A
+/// is at most `prediction` (parry's test): normal n (B → A), point midway between the ball's
+/// lowest point c_A − r_A n and the centre's projection on the plane.
+pub(crate) fn ball_half_space(
+    a: usize,
+    ca: Vector,
+    ra: f64,
+    o: usize,
+    n: Vector,
+    origin: Vector,
+    prediction: f64,
+) -> Option<ContactPoint> {
+    let s = n.dot(ca - origin);
+    let gap = s - ra;
+    let accepted = s <= ra + prediction && gap <= prediction && gap.is_finite();
+    if !accepted {
+        return None;
+    }
+    let (t1, t2) = tangent_frame(n);
+    let bp = RigidPartner::Obstacle(o);
+    Some(ContactPoint {
+        a,
+        b: bp,
+        key: ball_key(a, bp),
+        point: 0.5 * ((ca - ra * n) + (ca - s * n)),
+        normal: n,
+        t1,
+        t2,
+        gap,
+    })
 }
 
 /// t₁ ⟂ n from the world axis least aligned with n, and t₂ = n × t₁.
@@ -156,6 +248,16 @@ impl Detector {
         })
     }
 
+    /// The detector that hands every pair to parry, balls included (no fast path): the
+    /// reference the fast path is tested against.
+    #[cfg(test)]
+    pub(crate) fn parry_only() -> Self {
+        Self {
+            parry_only: true,
+            ..Self::default()
+        }
+    }
+
     /// The manifold points of every pair whose shapes are closer than the sum of their
     /// margins (`margins[i]`: how far body i may travel in the step, 0 for a fixed body), at
     /// the bodies' current poses and the obstacles' `obstacles`, sorted by key. Pairs of two
@@ -174,13 +276,34 @@ impl Detector {
             .zip(margins)
             .map(|((s, p), m)| s.compute_aabb(p).loosened(*m))
             .collect();
+        // the balls (radius) and the half-space obstacles (world normal, boundary point) of
+        // the fast path
+        let fast = !self.parry_only;
+        let balls: Vec<Option<f64>> = shapes
+            .iter()
+            .map(|s| s.as_ball().filter(|_| fast).map(|b| b.radius))
+            .collect();
+        let planes: Vec<Option<(Vector, Vector)>> = obstacles
+            .iter()
+            .map(|o| {
+                let hs = o.shape.as_halfspace().filter(|_| fast)?;
+                Some((o.pose.rotation * hs.normal, o.pose.translation))
+            })
+            .collect();
         let mut pairs: Vec<(usize, RigidPartner)> = Vec::new();
+        let mut fast_points: Vec<ContactPoint> = Vec::new();
         if !aabbs.is_empty() {
             let bvh = Bvh::from_leaves(BvhBuildStrategy::default(), &aabbs);
             bvh.traverse_bvtt_single_tree::<false>(&mut self.bvh_workspace, &mut |i, j| {
                 let (i, j) = (i.min(j) as usize, i.max(j) as usize);
                 if i != j && !(bodies[i].fixed && bodies[j].fixed) {
-                    pairs.push((i, RigidPartner::Body(j)));
+                    if let (Some(ri), Some(rj)) = (balls[i], balls[j]) {
+                        let prediction = margins[i] + margins[j];
+                        let cj = poses[j].translation;
+                        fast_points.extend(ball_ball(i, &poses[i], ri, j, cj, rj, prediction));
+                    } else {
+                        pairs.push((i, RigidPartner::Body(j)));
+                    }
                 }
             });
             for (o, ob) in obstacles.iter().enumerate() {
@@ -197,7 +320,13 @@ impl Detector {
                     }
                 } else {
                     for (i, b) in bodies.iter().enumerate() {
-                        if !b.fixed {
+                        if b.fixed {
+                            continue;
+                        }
+                        if let (Some(r), Some((n, origin))) = (balls[i], planes[o]) {
+                            let c = poses[i].translation;
+                            fast_points.extend(ball_half_space(i, c, r, o, n, origin, margins[i]));
+                        } else {
                             pairs.push((i, RigidPartner::Obstacle(o)));
                         }
                     }
@@ -315,7 +444,7 @@ impl Detector {
             use rayon::prelude::*;
             jobs.into_par_iter().map(narrow).collect()
         };
-        let mut points = Vec::new();
+        let mut points = fast_points;
         for (result, &pair) in results.into_iter().zip(&pairs) {
             let (found, cache) = result?;
             points.extend(found);
@@ -325,5 +454,332 @@ impl Detector {
         }
         points.sort_by_key(|x| x.key);
         Ok(points)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rigid::parry::math::Rotation;
+    use rand::{Rng, SeedableRng};
+
+    fn body(x: Vector, q: Rotation) -> BodyState {
+        BodyState {
+            mass: 1.0,
+            inertia: [1.0; 3],
+            local_com: Vector::ZERO,
+            principal: Rotation::IDENTITY,
+            x,
+            q,
+            v: Vector::ZERO,
+            omega: Vector::ZERO,
+            material: 0,
+            fixed: false,
+            reach: 1.0,
+        }
+    }
+
+    fn unit(rng: &mut impl Rng) -> Vector {
+        loop {
+            let v = Vector::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            );
+            if v.length() > 0.1 && v.length() < 1.0 {
+                return v.normalize();
+            }
+        }
+    }
+
+    fn rotation(rng: &mut impl Rng) -> Rotation {
+        let v = unit(rng);
+        Rotation::from_xyzw(v.x, v.y, v.z, rng.random_range(-1.0..1.0)).normalize()
+    }
+
+    /// The points of the fast path and of parry on the same scene: same keys in the same
+    /// order, gap, normal and point within 1e-12, and the fast path's tangents those of
+    /// [`tangent_frame`] (parry's normal of an axis-aligned plane carries round-off of 1e-16
+    /// off the axis, on which `tangent_frame` may choose another axis: the same frame turned
+    /// about n). Against a half-space parry's normal is (c − proj)/|c − proj| in the plane's
+    /// frame, whose round-off grows as ε|c|/s when the centre nears the plane (s its
+    /// distance): the tolerance there is 1e-12 max(1, r/s).
+    fn same_points(
+        bodies: &[BodyState],
+        shapes: &[SharedShape],
+        obstacles: &[PlacedObstacle<'_>],
+        margins: &[f64],
+    ) -> usize {
+        let fast = Detector::default()
+            .detect(bodies, shapes, obstacles, margins)
+            .unwrap();
+        let parry = Detector::parry_only()
+            .detect(bodies, shapes, obstacles, margins)
+            .unwrap();
+        assert_eq!(fast.len(), parry.len());
+        for (f, p) in fast.iter().zip(&parry) {
+            assert_eq!(f.key, p.key);
+            assert_eq!((f.a, f.b), (p.a, p.b));
+            let tol = match (f.b, shapes[f.a].as_ball()) {
+                (RigidPartner::Obstacle(_), Some(ball)) => {
+                    1e-12 * (ball.radius / (f.gap + ball.radius).abs()).max(1.0)
+                }
+                _ => 1e-12,
+            };
+            assert!((f.gap - p.gap).abs() <= 1e-12, "{f:?} {p:?}");
+            assert!((f.normal - p.normal).length() <= tol, "{f:?} {p:?}");
+            assert!((f.point - p.point).length() <= 1e-12, "{f:?} {p:?}");
+            assert_eq!((f.t1, f.t2), tangent_frame(f.normal));
+            assert!(f.t1.dot(f.normal).abs() <= 1e-15 && (f.t1.length() - 1.0).abs() <= 1e-15);
+            assert!((f.t1.cross(f.t2) - f.normal).length() <= 1e-15);
+        }
+        fast.len()
+    }
+
+    #[test]
+    fn ball_pairs_match_parry_on_random_pairs() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(52);
+        let (mut ball_ball_points, mut plane_points) = (0, 0);
+        for _ in 0..2000 {
+            // two balls with a gap in [−r_min/2, 2 prediction], one random half-space
+            let (ra, rb): (f64, f64) = (rng.random_range(0.01..0.2), rng.random_range(0.01..0.2));
+            let margin: f64 = rng.random_range(0.0..0.02);
+            let gap = rng.random_range(-0.5 * ra.min(rb)..4.0 * margin + 1e-3);
+            let ca = Vector::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            );
+            let cb = ca + (ra + rb + gap) * unit(&mut rng);
+            let bodies = [body(ca, rotation(&mut rng)), body(cb, rotation(&mut rng))];
+            let shapes = [SharedShape::ball(ra), SharedShape::ball(rb)];
+            let n = unit(&mut rng);
+            let plane = SharedShape::halfspace(n);
+            // the plane's boundary at a random signed distance from ball A's surface
+            let s = ra + rng.random_range(-0.5 * ra..4.0 * margin + 1e-3);
+            let origin_offset = unit(&mut rng).cross(n);
+            let obstacle_pose = Pose::from_parts(ca - s * n + origin_offset, Rotation::IDENTITY);
+            let obstacles = [PlacedObstacle {
+                shape: &plane,
+                pose: obstacle_pose,
+            }];
+            let found = Detector::default()
+                .detect(&bodies, &shapes, &obstacles, &[margin, margin])
+                .unwrap();
+            ball_ball_points += found
+                .iter()
+                .filter(|c| matches!(c.b, RigidPartner::Body(_)))
+                .count();
+            plane_points += found
+                .iter()
+                .filter(|c| c.a == 0 && matches!(c.b, RigidPartner::Obstacle(_)))
+                .count();
+            same_points(&bodies, &shapes, &obstacles, &[margin, margin]);
+        }
+        // both kinds of pairs were met often, in and out of the prediction
+        assert!(
+            ball_ball_points > 500 && ball_ball_points < 1900,
+            "{ball_ball_points}"
+        );
+        assert!(plane_points > 500 && plane_points < 1900, "{plane_points}");
+    }
+
+    #[test]
+    fn a_box_of_balls_and_cuboids_gives_parry_points_in_parry_order() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let mut bodies = Vec::new();
+        let mut shapes = Vec::new();
+        for i in 0..6 {
+            for j in 0..6 {
+                for k in 0..4 {
+                    let x = Vector::new(0.1 * i as f64, 0.1 * j as f64, 0.05 + 0.1 * k as f64)
+                        + 0.01 * unit(&mut rng);
+                    bodies.push(body(x, rotation(&mut rng)));
+                    shapes.push(if (i + j + k) % 7 == 0 {
+                        SharedShape::cuboid(0.03, 0.04, 0.035)
+                    } else {
+                        SharedShape::ball(rng.random_range(0.04..0.055))
+                    });
+                }
+            }
+        }
+        bodies[5].fixed = true;
+        let planes: Vec<SharedShape> = [Vector::Z, Vector::X, -Vector::X]
+            .iter()
+            .map(|n| SharedShape::halfspace(*n))
+            .collect();
+        let cuboid = SharedShape::cuboid(0.1, 0.1, 0.1);
+        let mut obstacles: Vec<PlacedObstacle<'_>> = planes
+            .iter()
+            .zip([0.0, 0.0, 0.5])
+            .map(|(shape, x)| PlacedObstacle {
+                shape,
+                pose: Pose::from_parts(Vector::new(x, 0.0, 0.0), Rotation::IDENTITY),
+            })
+            .collect();
+        obstacles.push(PlacedObstacle {
+            shape: &cuboid,
+            pose: Pose::from_parts(Vector::new(0.25, 0.25, 0.6), rotation(&mut rng)),
+        });
+        let margins: Vec<f64> = (0..bodies.len())
+            .map(|_| rng.random_range(0.0..0.01))
+            .collect();
+        let n = same_points(&bodies, &shapes, &obstacles, &margins);
+        assert!(n > 100, "{n}");
+    }
+
+    use crate::rigid::validation::{floor, one_material};
+    use crate::rigid::{MassProperties, RigidBodyDesc, RigidSettings, RigidWorld};
+
+    fn ball_desc(r: f64, x: [f64; 3], v: [f64; 3], w: [f64; 3]) -> RigidBodyDesc {
+        let shape = SharedShape::ball(r);
+        let mass = MassProperties::from_shape(&shape, 1000.0).unwrap();
+        RigidBodyDesc {
+            shape,
+            mass,
+            position: x,
+            orientation: [1.0, 0.0, 0.0, 0.0],
+            velocity: v,
+            angular_velocity: w,
+            material: 0,
+            fixed: false,
+        }
+    }
+
+    /// The run of `steps` steps with the fast path and with parry only: the same contacts,
+    /// statuses and warm starts each step, and positions, orientations, velocities and
+    /// angular velocities within `tol` (absolute; both runs solve each step to the settings'
+    /// tolerance from tangent frames that may differ by a turn about n, see
+    /// [`same_points`]); returns the fast run's last state and the largest difference.
+    fn same_run(
+        bodies: Vec<RigidBodyDesc>,
+        settings: RigidSettings,
+        steps: usize,
+        tol: f64,
+    ) -> (RigidWorld, f64) {
+        let make = || {
+            RigidWorld::new(
+                bodies.clone(),
+                vec![floor()],
+                one_material(0.5),
+                settings.clone(),
+            )
+            .unwrap()
+        };
+        let (mut fast, mut parry) = (make(), make().parry_only_detection());
+        let (mut contacts, mut worst) = (0, 0.0f64);
+        for _ in 0..steps {
+            let (rf, rp) = (fast.step().unwrap(), parry.step().unwrap());
+            assert_eq!(rf.contacts, rp.contacts);
+            assert_eq!(rf.status, rp.status);
+            assert_eq!(rf.warm_started, rp.warm_started);
+            contacts += rf.contacts;
+            let state = |w: &RigidWorld| -> Vec<f64> {
+                let mut s: Vec<f64> = w.positions().into_iter().flatten().collect();
+                s.extend(w.velocities().into_iter().flatten());
+                s.extend(w.angular_velocities().into_iter().flatten());
+                s.extend(w.orientations().into_iter().flatten());
+                s
+            };
+            let d = state(&fast)
+                .iter()
+                .zip(state(&parry))
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max);
+            worst = worst.max(d);
+        }
+        assert!(contacts > 0);
+        assert!(worst <= tol, "largest difference {worst:e}");
+        (fast, worst)
+    }
+
+    #[test]
+    fn a_ball_sliding_then_rolling_on_the_floor_moves_as_with_parry() {
+        // thrown along x without spin: it slides, friction spins it up until it rolls
+        let r = 0.1;
+        let b = ball_desc(r, [0.0, 0.0, r], [1.0, 0.0, 0.0], [0.0; 3]);
+        // measured: 4.8e-12
+        let (w, _) = same_run(vec![b], RigidSettings::default(), 400, 1e-9);
+        // rolling without slipping at the end: v_x = ω_y r = 5/7 of the throw
+        let (v, om) = (w.velocities()[0], w.angular_velocities()[0]);
+        assert!((v[0] - 5.0 / 7.0).abs() < 1e-3, "{v:?}");
+        assert!((v[0] - om[1] * r).abs() < 1e-6, "{v:?} {om:?}");
+    }
+
+    #[test]
+    fn two_balls_colliding_above_the_floor_move_as_with_parry() {
+        // head-on and off-centre, in free fall above the floor, then resting on it
+        let a = ball_desc(0.05, [0.0, 0.0, 0.3], [2.0, 0.0, 0.0], [0.0, 0.0, 3.0]);
+        let b = ball_desc(0.07, [0.3, 0.03, 0.3], [-1.0, 0.0, 0.0], [0.0; 3]);
+        let settings = RigidSettings {
+            h: 2e-3,
+            ..RigidSettings::default()
+        };
+        // measured: 3.6e-9 (each step solved to 1e-8 from frames turned about n)
+        let (w, _) = same_run(vec![a, b], settings, 300, 1e-7);
+        // perfectly inelastic (e = 0): A (2 m/s) meets the 2.7 times heavier B (−1 m/s)
+        // and both leave at (2 m_A − m_B)/(m_A + m_B) ≈ −0.2 m/s, then friction acts
+        let v = w.velocities();
+        assert!(v[0][0] < 0.5 && v[1][0] < 0.5, "{v:?}");
+    }
+
+    #[test]
+    fn a_ball_pile_with_a_cuboid_gives_the_same_bits_on_one_and_two_threads() {
+        // 180 balls stacked in touching layers (jittered) on the floor around one cuboid:
+        // fast-path pairs beside parry's (cuboid–ball, cuboid–floor), swept in parallel
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let mut bodies =
+            vec![
+                crate::rigid::validation::cuboid([0.1, 0.1, 0.05], 1000.0, [0.3, 0.3, 0.05])
+                    .unwrap(),
+            ];
+        for k in 0..5 {
+            for i in 0..6 {
+                for j in 0..6 {
+                    let (x, y) = (0.11 * i as f64, 0.11 * j as f64);
+                    if k == 0 && (0.15..0.45).contains(&x) && (0.15..0.45).contains(&y) {
+                        continue;
+                    }
+                    let dx = rng.random_range(-0.005..0.005);
+                    let dy = rng.random_range(-0.005..0.005);
+                    // layer 1 just above the cuboid's top (z = 0.1), each 1 mm above the last
+                    let z = if k == 0 {
+                        0.05
+                    } else {
+                        0.151 + 0.101 * (k - 1) as f64
+                    };
+                    bodies.push(ball_desc(0.05, [x + dx, y + dy, z], [0.0; 3], [0.0; 3]));
+                }
+            }
+        }
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let settings = RigidSettings {
+                    tolerance: 1e-6,
+                    ..RigidSettings::default()
+                };
+                let mut w =
+                    RigidWorld::new(bodies.clone(), vec![floor()], one_material(0.5), settings)
+                        .unwrap();
+                let mut most = 0;
+                for _ in 0..80 {
+                    most = most.max(w.step().unwrap().contacts);
+                }
+                let mut bits: Vec<u64> = Vec::new();
+                for v in [w.positions(), w.velocities(), w.angular_velocities()] {
+                    bits.extend(v.iter().flatten().map(|x| x.to_bits()));
+                }
+                bits.extend(w.orientations().iter().flatten().map(|x| x.to_bits()));
+                (bits, most)
+            })
+        };
+        let (one, most) = run(1);
+        assert!(most > 100, "{most} contacts");
+        let (two, _) = run(2);
+        assert!(one == two, "1 and 2 threads differ");
     }
 }

@@ -354,6 +354,14 @@ impl RigidWorld {
         Ok((world, relaxed))
     }
 
+    /// The same world with every contact pair through parry, balls included (no analytic
+    /// fast path, `contacts`): the reference of the fast path's tests.
+    #[cfg(test)]
+    pub(crate) fn parry_only_detection(mut self) -> Self {
+        self.detector = Detector::parry_only();
+        self
+    }
+
     /// [`RigidWorld::with_joints`] without the check of initial interpenetrations (a world
     /// whose state a checkpoint then replaces, or that [`RigidWorld::relaxed`] relaxes).
     pub(crate) fn overlapping(

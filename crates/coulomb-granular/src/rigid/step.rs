@@ -799,6 +799,10 @@ impl RigidWorld {
         let mut rows = Vec::with_capacity(points.len());
         // (u_{N,k}, −n·V_B(t_{k+1})) of each active point, for the end gaps
         let mut normal_parts = Vec::with_capacity(points.len());
+        // the detected points left out of the index set, (row, g_k, u_{N,k}, −n·V_B): the
+        // position correction watches their end gaps too (a body pushed within the step by
+        // its other contacts may close them), as the spheres' correction detects anew
+        let mut inactive = Vec::new();
         let look_ahead = h * self.gravity.length();
         for c in points {
             let (row, u_nk, u_free, w_obstacle) = self.row(&c, &omega_free, t_end);
@@ -814,6 +818,8 @@ impl RigidWorld {
                 rows.push(row);
                 normal_parts.push((u_nk, w_obstacle));
                 active.push(c);
+            } else if self.settings.position_correction {
+                inactive.push((row, c.gap, u_nk, w_obstacle));
             }
         }
         let moving = self.dof.iter().filter(|d| d.is_some()).count();
@@ -960,28 +966,34 @@ impl RigidWorld {
         let solve_seconds = ts.elapsed().as_secs_f64();
         let (kinetic_before, potential_before) = (self.kinetic_energy(), self.potential_energy());
         // 5. position correction on the linearized end gaps
-        let correction = if self.settings.position_correction && !active.is_empty() {
-            let end_gaps: Vec<f64> = active
-                .iter()
-                .zip(&normal_parts)
-                .enumerate()
-                .map(|(i, (c, (u_nk, w_obstacle)))| {
-                    let u_end = problem.u(i, &v)[0] - problem.rows[i].w[0] + w_obstacle;
-                    c.gap + h * ((1.0 - theta) * u_nk + theta * u_end)
-                })
-                .collect();
-            let scale = self
-                .half_width
-                .iter()
-                .zip(&self.bodies)
-                .filter(|(_, b)| !b.fixed)
-                .map(|(w, _)| *w)
-                .fold(f64::INFINITY, f64::min);
-            correct_positions(&problem, &end_gaps, 1e-3 * scale, 1e-4 * scale, 200)
-                .map(|(dq, _)| dq)
-        } else {
-            None
-        };
+        let correction =
+            if self.settings.position_correction && !(active.is_empty() && inactive.is_empty()) {
+                let mut end_gaps: Vec<f64> = active
+                    .iter()
+                    .zip(&normal_parts)
+                    .enumerate()
+                    .map(|(i, (c, (u_nk, w_obstacle)))| {
+                        let u_end = problem.u(i, &v)[0] - problem.rows[i].w[0] + w_obstacle;
+                        c.gap + h * ((1.0 - theta) * u_nk + theta * u_end)
+                    })
+                    .collect();
+                end_gaps.extend(inactive.iter().map(|(row, gap, u_nk, w_obstacle)| {
+                    let u_end = nsgs::normal_velocity(row, &v) + w_obstacle;
+                    gap + h * ((1.0 - theta) * u_nk + theta * u_end)
+                }));
+                let extra: Vec<&nsgs::Row> = inactive.iter().map(|(row, ..)| row).collect();
+                let scale = self
+                    .half_width
+                    .iter()
+                    .zip(&self.bodies)
+                    .filter(|(_, b)| !b.fixed)
+                    .map(|(w, _)| *w)
+                    .fold(f64::INFINITY, f64::min);
+                correct_positions(&problem, &extra, &end_gaps, 1e-3 * scale, 1e-4 * scale, 200)
+                    .map(|(dq, _)| dq)
+            } else {
+                None
+            };
         // 4. position update (2.7)
         for (i, b) in self.bodies.iter_mut().enumerate() {
             let Some(d) = self.dof[i] else {
@@ -1206,9 +1218,11 @@ impl RigidWorld {
 /// Gauss–Seidel on λ until every gap is ≥ −`target` (at most 200 sweeps). Positions only: the
 /// velocities and the impulses are untouched, so the correction carries no load (the
 /// impulses written out balance the weight). None when nothing is below −`trigger`; else the
-/// displacements and the sweeps done (at most `max_sweeps`).
+/// displacements and the sweeps done (at most `max_sweeps`). The constraints are the rows of
+/// `problem` then those of `extra` (points outside the index set), `end_gaps` in that order.
 fn correct_positions(
     problem: &nsgs::Problem,
+    extra: &[&nsgs::Row],
     end_gaps: &[f64],
     trigger: f64,
     target: f64,
@@ -1220,8 +1234,8 @@ fn correct_positions(
     }
     let mut dq = vec![[0.0; 6]; problem.mass.len()];
     let mut lambda = vec![0.0; end_gaps.len()];
-    let w: Vec<f64> = problem
-        .rows
+    let rows: Vec<&nsgs::Row> = problem.rows.iter().chain(extra.iter().copied()).collect();
+    let w: Vec<f64> = rows
         .iter()
         .map(|row| {
             row.a
@@ -1239,7 +1253,7 @@ fn correct_positions(
     while sweeps < max_sweeps {
         sweeps += 1;
         let mut worst: f64 = 0.0;
-        for (i, row) in problem.rows.iter().enumerate() {
+        for (i, row) in rows.iter().enumerate() {
             if w[i].is_nan() || w[i] <= 0.0 {
                 continue;
             }
@@ -1467,6 +1481,15 @@ pub mod nsgs {
         pub w: [f64; 3],
         /// μ_i
         pub mu: f64,
+    }
+
+    /// J_N v: the normal relative velocity of `row` for the body velocities `v`, without w_N.
+    pub fn normal_velocity(row: &Row, v: &[[f64; 6]]) -> f64 {
+        row.a
+            .iter()
+            .chain(row.b.iter())
+            .map(|(blk, j)| (0..6).map(|d| j[0][d] * v[*blk][d]).sum::<f64>())
+            .sum()
     }
 
     /// The step problem in body-block form.

@@ -103,7 +103,7 @@ impl RigidWorld {
             let problem = nsgs::Problem::new(rows, mass, vec![[0.0; 6]; moving])
                 .map_err(|detail| RigidError::Solve { step: 0, detail })?;
             let budget = SWEEPS_PER_ROUND.min(max_sweeps - sweeps);
-            let Some((dq, done)) = correct_positions(&problem, &gaps, 0.0, 0.0, budget) else {
+            let Some((dq, done)) = correct_positions(&problem, &[], &gaps, 0.0, 0.0, budget) else {
                 break;
             };
             sweeps += done.max(1);

@@ -141,7 +141,8 @@ pub struct Args {
     #[arg(long, default_value_t = 0, value_parser = crate::values::count0)]
     pub subspace_every: usize,
     /// every K Gauss–Seidel sweeps, a two-level (coarse) correction: one Galerkin solve of
-    /// 3 unknowns per layer of the contact graph, kept only if the step's error decreased
+    /// 3 unknowns per layer of the contact graph (or per interface, --coarse-cell), kept only
+    /// if the step's error decreased
     /// (--method nsgs; docs/scaling.md, "Depth"); 0: never
     #[arg(long, default_value_t = 0, value_parser = crate::values::count0)]
     pub coarse_every: usize,

@@ -692,8 +692,9 @@ pub struct NsgsSettings {
     #[serde(default)]
     pub subspace_every: usize,
     /// every this many sweeps, a two-level (coarse) correction ([`crate::coarse`]): one
-    /// Galerkin solve of 3 unknowns per layer of the contact graph, kept only if the error on
-    /// the stored problem decreased; 0: never (docs/scaling.md, "Depth")
+    /// Galerkin solve of 3 unknowns per layer of the contact graph (or per interface of
+    /// `coarse_cell`), kept only if the error on the stored problem decreased; 0: never
+    /// (docs/scaling.md, "Depth")
     #[serde(default)]
     pub coarse_every: usize,
     /// the coarse space of `coarse_every` ([`crate::coarse`]): 0 (default), the layers of the

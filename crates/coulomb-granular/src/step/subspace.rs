@@ -157,6 +157,55 @@ pub(crate) fn correction(
     Some((out, stats))
 }
 
+/// Solves A x = b in place for a sparse symmetric positive definite A of order `n` given by
+/// its lower triangle (`lower`: triplets, duplicates summed), by faer's sparse Cholesky
+/// factorization run sequentially (the same bits whatever the thread count); `None` when
+/// the matrix cannot be built or factored, or x is not finite. Shared by the subspace
+/// minimization and the coarse correction ([`crate::coarse`]).
+pub(crate) fn cholesky_solve(
+    n: usize,
+    lower: Vec<Triplet<usize, usize, f64>>,
+    b: &mut [f64],
+) -> Option<()> {
+    if b.len() != n {
+        return None;
+    }
+    let mat = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &lower).ok()?;
+    drop(lower);
+    let symbolic = factorize_symbolic_cholesky(
+        mat.symbolic(),
+        Side::Lower,
+        Default::default(),
+        Default::default(),
+    )
+    .ok()?;
+    let par = faer::Par::Seq;
+    let mut l_values = vec![0.0; symbolic.len_val()];
+    let scratch = StackReq::any_of(&[
+        symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+        symbolic.solve_in_place_scratch::<f64>(1, par),
+    ]);
+    let mut mem = MemBuffer::try_new(scratch).ok()?;
+    let llt = symbolic
+        .factorize_numeric_llt(
+            &mut l_values,
+            mat.as_ref(),
+            Side::Lower,
+            Default::default(),
+            par,
+            MemStack::new(&mut mem),
+            Default::default(),
+        )
+        .ok()?;
+    llt.solve_in_place_with_conj(
+        faer::Conj::No,
+        faer::MatMut::from_column_major_slice_mut(b, n, 1),
+        par,
+        MemStack::new(&mut mem),
+    );
+    b.iter().all(|x| x.is_finite()).then_some(())
+}
+
 #[cfg(test)]
 mod tests {
     use crate::assembly::StepData;
@@ -271,53 +320,4 @@ mod tests {
         assert_eq!(one.r, two.r);
         assert_eq!(one.sweeps, two.sweeps);
     }
-}
-
-/// Solves A x = b in place for a sparse symmetric positive definite A of order `n` given by
-/// its lower triangle (`lower`: triplets, duplicates summed), by faer's sparse Cholesky
-/// factorization run sequentially (the same bits whatever the thread count); `None` when
-/// the matrix cannot be built or factored, or x is not finite. Shared by the subspace
-/// minimization and the coarse correction ([`crate::coarse`]).
-pub(crate) fn cholesky_solve(
-    n: usize,
-    lower: Vec<Triplet<usize, usize, f64>>,
-    b: &mut [f64],
-) -> Option<()> {
-    if b.len() != n {
-        return None;
-    }
-    let mat = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &lower).ok()?;
-    drop(lower);
-    let symbolic = factorize_symbolic_cholesky(
-        mat.symbolic(),
-        Side::Lower,
-        Default::default(),
-        Default::default(),
-    )
-    .ok()?;
-    let par = faer::Par::Seq;
-    let mut l_values = vec![0.0; symbolic.len_val()];
-    let scratch = StackReq::any_of(&[
-        symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
-        symbolic.solve_in_place_scratch::<f64>(1, par),
-    ]);
-    let mut mem = MemBuffer::try_new(scratch).ok()?;
-    let llt = symbolic
-        .factorize_numeric_llt(
-            &mut l_values,
-            mat.as_ref(),
-            Side::Lower,
-            Default::default(),
-            par,
-            MemStack::new(&mut mem),
-            Default::default(),
-        )
-        .ok()?;
-    llt.solve_in_place_with_conj(
-        faer::Conj::No,
-        faer::MatMut::from_column_major_slice_mut(b, n, 1),
-        par,
-        MemStack::new(&mut mem),
-    );
-    b.iter().all(|x| x.is_finite()).then_some(())
 }

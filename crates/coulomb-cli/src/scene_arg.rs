@@ -228,6 +228,7 @@ pub fn run(args: &Args) -> anyhow::Result<Outcome> {
         );
     }
     let file = args.scene.as_deref().unwrap_or_default();
+    args.check_coarse()?;
     let loaded = LoadedScene::load(Path::new(file))?;
     let opts = BuildOptions {
         seed: (args.seed != 1).then_some(args.seed),
@@ -252,9 +253,13 @@ pub fn run(args: &Args) -> anyhow::Result<Outcome> {
         if args.mpi || crate::sim_args::under_launcher() {
             bail!("{file}: scenes with bodies of other shapes than spheres run in one process, not distributed");
         }
-        if args.subspace_every > 0 || args.coarse_every > 0 {
+        if args.subspace_every > 0
+            || args.coarse_every > 0
+            || args.coarse_cell > 0
+            || args.coarse_smooth > 0
+        {
             bail!(
-                "{file}: --subspace-every and --coarse-every act on the sphere engine's Gauss–Seidel; this scene has bodies of other shapes"
+                "{file}: --subspace-every and --coarse-every (--coarse-cell, --coarse-smooth) act on the sphere engine's Gauss–Seidel; this scene has bodies of other shapes"
             );
         }
         return crate::cmd::simulate_rigid::run(

@@ -52,7 +52,7 @@ impl ProjectionVelocities {
 
 /// The options that a checkpoint fixes (the parameters): refused with --restart. A scene is
 /// refused too, unless it is the scene file of the stored run (its inlets continue).
-const RESTART_CONFLICTS: [&str; 28] = [
+const RESTART_CONFLICTS: [&str; 30] = [
     "beads",
     "mu",
     "rolling_friction",
@@ -64,6 +64,8 @@ const RESTART_CONFLICTS: [&str; 28] = [
     "relaxation",
     "subspace_every",
     "coarse_every",
+    "coarse_cell",
+    "coarse_smooth",
     "inner",
     "outer",
     "tol",
@@ -139,10 +141,21 @@ pub struct Args {
     #[arg(long, default_value_t = 0, value_parser = crate::values::count0)]
     pub subspace_every: usize,
     /// every K Gauss–Seidel sweeps, a two-level (coarse) correction: one Galerkin solve of
-    /// 3 unknowns per layer of the contact graph, kept only if the step's error decreased
+    /// 3 unknowns per layer of the contact graph (or per interface, --coarse-cell), kept only
+    /// if the step's error decreased
     /// (--method nsgs; docs/scaling.md, "Depth"); 0: never
     #[arg(long, default_value_t = 0, value_parser = crate::values::count0)]
     pub coarse_every: usize,
+    /// the coarse space of --coarse-every: 0 (default), the layers of the contact graph;
+    /// k ≥ 1, one impulse per interface between aggregates of the beads in cells of a grid of
+    /// side k bead diameters (docs/scaling.md, "Depth: aggregates of a coarse grid"); needs
+    /// --coarse-every
+    #[arg(long, default_value_t = 0, value_parser = crate::values::count0)]
+    pub coarse_cell: usize,
+    /// damped-Jacobi smoothing steps of the coarse prolongation of --coarse-every (smoothed
+    /// aggregation); 0 (default): none; needs --coarse-every
+    #[arg(long, default_value_t = 0, value_parser = crate::values::count0)]
+    pub coarse_smooth: usize,
     /// worker threads (default: all cores); results do not depend on it
     #[arg(long, value_parser = crate::values::threads)]
     pub threads: Option<usize>,
@@ -317,6 +330,8 @@ impl Args {
                     relaxation: self.relaxation,
                     subspace_every: self.subspace_every,
                     coarse_every: self.coarse_every,
+                    coarse_cell: self.coarse_cell,
+                    coarse_smooth: self.coarse_smooth,
                     time_limit: Some(step_time_limit(self.beads)),
                     ..NsgsSettings::default()
                 }),
@@ -356,6 +371,21 @@ impl Args {
         }
         if self.outer == OuterKind::Fused && self.inner != InnerKind::Pgs {
             bail!("--outer fused needs --inner pgs");
+        }
+        self.check_coarse()
+    }
+
+    /// Refuses the coarse space's options without the coarse correction they shape.
+    pub(crate) fn check_coarse(&self) -> anyhow::Result<()> {
+        if self.coarse_every == 0 {
+            for (value, name) in [
+                (self.coarse_cell, "--coarse-cell"),
+                (self.coarse_smooth, "--coarse-smooth"),
+            ] {
+                if value > 0 {
+                    bail!("{name} {value} shapes the coarse correction of --coarse-every, which is off (0)");
+                }
+            }
         }
         Ok(())
     }

@@ -101,6 +101,43 @@ fn simulate_refuses_a_time_step_too_large_for_contact_detection() {
 }
 
 #[test]
+fn simulate_refuses_a_coarse_space_without_the_coarse_correction() {
+    // --coarse-cell and --coarse-smooth shape the correction of --coarse-every: refused,
+    // not dropped, when it is off
+    for opt in ["--coarse-cell", "--coarse-smooth"] {
+        let out = coulomb(&["simulate", "box", "--beads", "5", "--steps", "2", opt, "2"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(err.contains(opt) && err.contains("--coarse-every"), "{err}");
+    }
+    let dir = temp_dir("sim-coarse-cells");
+    let out = coulomb(&[
+        "simulate",
+        "box",
+        "--beads",
+        "40",
+        "--steps",
+        "15",
+        "--coarse-every",
+        "5",
+        "--coarse-cell",
+        "2",
+        "--coarse-smooth",
+        "1",
+        "--frames-every",
+        "0",
+        "--json",
+        "--output",
+        dir.to_str().unwrap(),
+    ]);
+    ok(&out);
+    let j = stdout_json(&out);
+    assert_eq!(j["steps"], 15, "{j}");
+    assert_eq!(j["not_converged_steps"].as_u64(), Some(0), "{j}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
 fn simulate_writes_the_last_frame_between_two_frame_steps() {
     let dir = temp_dir("sim-last-frame");
     let out = coulomb(&[

@@ -101,6 +101,9 @@ pub struct StepProblem {
     pub inv_mass: Vec<[f64; 6]>,
     /// f = M v_k + h F_ext per sphere
     pub f: Vec<[f64; 6]>,
+    /// the centre of each sphere (world axes): the cells of the coarse correction
+    /// ([`crate::coarse`], `NsgsSettings::coarse_cell`); not part of the problem (2.10)
+    pub position: Vec<[f64; 3]>,
 }
 
 impl StepProblem {
@@ -175,11 +178,13 @@ impl StepProblem {
                 StepProblemError::Singular(i)
             });
         }
+        let position = world.bodies.iter().map(|b| b.position.to_array()).collect();
         Ok(Self {
             rows,
             mass,
             inv_mass,
             f,
+            position,
         })
     }
 
@@ -486,10 +491,21 @@ pub struct NsgsSettings {
     #[serde(default)]
     pub subspace_every: usize,
     /// every this many sweeps, a two-level (coarse) correction ([`crate::coarse`]): one
-    /// Galerkin solve of 3 unknowns per layer of the contact graph, kept only if the error on
-    /// the stored problem decreased; 0: never (docs/scaling.md, "Depth")
+    /// Galerkin solve of 3 unknowns per layer of the contact graph (or per interface of
+    /// `coarse_cell`), kept only if the error on the stored problem decreased; 0: never
+    /// (docs/scaling.md, "Depth")
     #[serde(default)]
     pub coarse_every: usize,
+    /// the coarse space of `coarse_every` ([`crate::coarse`]): 0 (default), the layers of the
+    /// contact graph; k ≥ 1, one impulse per interface between aggregates of the spheres in
+    /// cells of a grid of side k bead diameters (the obstacles 6 more aggregates). Used only
+    /// with `coarse_every` > 0
+    #[serde(default)]
+    pub coarse_cell: usize,
+    /// damped-Jacobi smoothing steps of the coarse prolongation (smoothed aggregation,
+    /// [`crate::coarse`]); 0 (default): none. Used only with `coarse_every` > 0
+    #[serde(default)]
+    pub coarse_smooth: usize,
 }
 
 /// Levels of the contact graph per aggregate of the coarse correction.
@@ -517,6 +533,8 @@ impl Default for NsgsSettings {
             library_finish: true,
             subspace_every: 0,
             coarse_every: 0,
+            coarse_cell: 0,
+            coarse_smooth: 0,
         }
     }
 }
@@ -1077,8 +1095,14 @@ pub fn solve_coloured(
     let mut window_start = f64::INFINITY;
     let mut subspace = 0usize;
     let mut coarse = 0usize;
-    let aggregates = (settings.coarse_every > 0)
-        .then(|| crate::coarse::Aggregates::new(&state.rows, bodies, COARSE_LEVELS));
+    let aggregates = (settings.coarse_every > 0).then(|| {
+        let space = if settings.coarse_cell == 0 {
+            crate::coarse::Aggregates::new(&state.rows, bodies, COARSE_LEVELS)
+        } else {
+            crate::coarse::Aggregates::cells(&state.rows, &problem.position, settings.coarse_cell)
+        };
+        space.smoothed(&state.rows, &problem.inv_mass, settings.coarse_smooth)
+    });
     let ok = |e: &Evaluation| e.error.is_finite() && e.error <= tol && e.balance <= tol;
     let status = loop {
         if !eval.error.is_finite() {

@@ -135,47 +135,7 @@ pub(crate) fn correction(
     for (p, d) in diag.iter().enumerate() {
         trip.push(Triplet::new(p, p, SHIFT * d.max(f64::MIN_POSITIVE)));
     }
-    let mat = SparseColMat::<usize, f64>::try_new_from_triplets(unknowns, unknowns, &trip).ok()?;
-    drop(trip);
-    let symbolic = factorize_symbolic_cholesky(
-        mat.symbolic(),
-        Side::Lower,
-        Default::default(),
-        Default::default(),
-    )
-    .ok()?;
-    // sequential: the same bits whatever the thread count
-    let par = faer::Par::Seq;
-    let mut l_values = vec![0.0; symbolic.len_val()];
-    let scratch = StackReq::any_of(&[
-        symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
-        symbolic.solve_in_place_scratch::<f64>(1, par),
-    ]);
-    let mut mem = MemBuffer::try_new(scratch).ok()?;
-    let llt = symbolic
-        .factorize_numeric_llt(
-            &mut l_values,
-            mat.as_ref(),
-            Side::Lower,
-            Default::default(),
-            par,
-            MemStack::new(&mut mem),
-            Default::default(),
-        )
-        .ok()?;
-    // proximal (iterated Tikhonov) refinement with the one factorization:
-    // Δ_{j+1} = Δ_j + (W + εD)⁻¹ (−u_A − W Δ_j); the rows that W_AA can zero converge,
-    // those it cannot (a misjudged contact: −u_A outside the range of W_AA) grow only
-    // linearly in j instead of as 1/ε
-    llt.solve_in_place_with_conj(
-        faer::Conj::No,
-        faer::MatMut::from_column_major_slice_mut(&mut rhs, unknowns, 1),
-        par,
-        MemStack::new(&mut mem),
-    );
-    if !rhs.iter().all(|x| x.is_finite()) {
-        return None;
-    }
+    cholesky_solve(unknowns, trip, &mut rhs)?;
     let out = rows
         .iter()
         .zip(r)
@@ -195,6 +155,55 @@ pub(crate) fn correction(
         })
         .collect();
     Some((out, stats))
+}
+
+/// Solves A x = b in place for a sparse symmetric positive definite A of order `n` given by
+/// its lower triangle (`lower`: triplets, duplicates summed), by faer's sparse Cholesky
+/// factorization run sequentially (the same bits whatever the thread count); `None` when
+/// the matrix cannot be built or factored, or x is not finite. Shared by the subspace
+/// minimization and the coarse correction ([`crate::coarse`]).
+pub(crate) fn cholesky_solve(
+    n: usize,
+    lower: Vec<Triplet<usize, usize, f64>>,
+    b: &mut [f64],
+) -> Option<()> {
+    if b.len() != n {
+        return None;
+    }
+    let mat = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &lower).ok()?;
+    drop(lower);
+    let symbolic = factorize_symbolic_cholesky(
+        mat.symbolic(),
+        Side::Lower,
+        Default::default(),
+        Default::default(),
+    )
+    .ok()?;
+    let par = faer::Par::Seq;
+    let mut l_values = vec![0.0; symbolic.len_val()];
+    let scratch = StackReq::any_of(&[
+        symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+        symbolic.solve_in_place_scratch::<f64>(1, par),
+    ]);
+    let mut mem = MemBuffer::try_new(scratch).ok()?;
+    let llt = symbolic
+        .factorize_numeric_llt(
+            &mut l_values,
+            mat.as_ref(),
+            Side::Lower,
+            Default::default(),
+            par,
+            MemStack::new(&mut mem),
+            Default::default(),
+        )
+        .ok()?;
+    llt.solve_in_place_with_conj(
+        faer::Conj::No,
+        faer::MatMut::from_column_major_slice_mut(b, n, 1),
+        par,
+        MemStack::new(&mut mem),
+    );
+    b.iter().all(|x| x.is_finite()).then_some(())
 }
 
 #[cfg(test)]

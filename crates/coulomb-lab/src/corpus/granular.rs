@@ -26,6 +26,8 @@ pub const STEP_SOLVER: NsgsSettings = NsgsSettings {
     library_finish: false,
     subspace_every: 0,
     coarse_every: 0,
+    coarse_cell: 0,
+    coarse_smooth: 0,
 };
 
 /// (phase, step index) pairs; a step with fewer than [`min_contacts`] contacts is replaced by

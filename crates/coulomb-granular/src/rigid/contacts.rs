@@ -26,7 +26,7 @@
 //!
 //! # Balls: the analytic fast path
 //! A pair of two balls, and a ball against a half-space obstacle, is not handed to parry:
-//! its one contact point is computed in closed form ([`ball_ball`], [`ball_half_space`]) with
+//! its one contact point is computed in closed form (`ball_ball`, `ball_half_space`) with
 //! exactly parry's frame, gap, acceptance test (`prediction`) and warm-start key (sub-shapes
 //! 0, the face-0 feature of each shape, rank 0), and it keeps no pair cache (parry keeps no
 //! state of such a pair that changes its next result). The points are then the same as

@@ -29,7 +29,7 @@
 //! With Q fixed, the correction is the Galerkin (energy-minimizing) one of the global problem
 //! (2.10) read as equalities on the closed rows: (Qᵀ W Q) δ = −Qᵀ u, W = Hᵀ M⁻¹ H, assembled
 //! exactly as Gᵀ M⁻¹ G with G = H Q (M is diagonal per sphere), factored by a sparse
-//! Cholesky ([`crate::subspace::cholesky_solve`]) with a shift of 10⁻⁹ times its largest
+//! Cholesky (`subspace::cholesky_solve`) with a shift of 10⁻⁹ times its largest
 //! diagonal entry. The caller projects r + α Q δ on the cones and keeps it only if the error
 //! of docs/error.md on the stored problem decreased ([`crate::nsgs::solve_coloured`]); every
 //! verdict stays that of the stored problem.

@@ -8,6 +8,8 @@
 pub mod assembly;
 pub mod coarse;
 pub(crate) mod colour_progress;
+#[cfg(test)]
+pub(crate) mod fixtures;
 pub mod nsgs;
 pub mod projection;
 pub mod rolling;

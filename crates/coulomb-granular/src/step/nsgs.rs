@@ -102,7 +102,9 @@ pub struct StepProblem {
     /// f = M v_k + h F_ext per sphere
     pub f: Vec<[f64; 6]>,
     /// the centre of each sphere (world axes): the cells of the coarse correction
-    /// ([`crate::coarse`], `NsgsSettings::coarse_cell`); not part of the problem (2.10)
+    /// ([`crate::coarse`], `NsgsSettings::coarse_cell`); not part of the problem (2.10).
+    /// Empty unless filled by [`StepProblem::with_positions`] (a grid coarse space without
+    /// them is empty: no correction)
     pub position: Vec<[f64; 3]>,
 }
 
@@ -178,14 +180,20 @@ impl StepProblem {
                 StepProblemError::Singular(i)
             });
         }
-        let position = world.bodies.iter().map(|b| b.position.to_array()).collect();
         Ok(Self {
             rows,
             mass,
             inv_mass,
             f,
-            position,
+            position: Vec::new(),
         })
+    }
+
+    /// The problem with the centres of `world`'s spheres, which only the grid coarse space
+    /// reads (`NsgsSettings::coarse_cell` > 0): one n × 24-byte copy, made only then.
+    pub fn with_positions(mut self, world: &World) -> Self {
+        self.position = world.bodies.iter().map(|b| b.position.to_array()).collect();
+        self
     }
 
     /// Number of contacts.

@@ -551,8 +551,11 @@ impl Simulation {
         t0: Instant,
     ) -> Result<Vec<f64>, SimulationError> {
         let k = self.steps_done;
-        let problem = StepProblem::new(&self.world, contacts, data)
+        let mut problem = StepProblem::new(&self.world, contacts, data)
             .map_err(|source| SimulationError::StepProblem { step: k, source })?;
+        if settings.coarse_every > 0 && settings.coarse_cell > 0 {
+            problem = problem.with_positions(&self.world);
+        }
         let r0 = self.warm_start(contacts, stats);
         stats.assembly_ms = t0.elapsed().as_secs_f64() * 1e3;
         let t1 = Instant::now();

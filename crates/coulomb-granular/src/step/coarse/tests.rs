@@ -1,46 +1,8 @@
 //! Tests of [`super`] driven through the Gauss–Seidel solve of [`crate::nsgs`] (a
 //! child module: the correction itself does not depend on the solve that calls it).
 
-use crate::assembly::StepData;
-use crate::contact::{detect, Activation};
-use crate::math::Vec3;
 use crate::nsgs::{evaluate, solve, NsgsSettings, NsgsStatus, StepProblem};
-use crate::world::{Obstacle, Shape, Sphere, World};
-
-/// A `nx × ny × layers` simple-cubic stack of touching spheres at rest on a floor
-/// (h = 0.02, μ = 0.5, e = 0).
-fn stack(nx: usize, ny: usize, layers: usize) -> StepProblem {
-    let mut w = World::new();
-    w.obstacles.push(Obstacle::fixed(
-        "ground",
-        Shape::Plane {
-            point: Vec3::ZERO,
-            normal: Vec3::Z,
-        },
-    ));
-    let r = 0.05;
-    for k in 0..layers {
-        for j in 0..ny {
-            for i in 0..nx {
-                let p = Vec3::new(
-                    2.0 * r * i as f64,
-                    2.0 * r * j as f64,
-                    r + 2.0 * r * k as f64,
-                );
-                w.bodies.push(Sphere::new(p, r, 1.0));
-            }
-        }
-    }
-    let contacts = detect(&w, 0.0, 0.02, &Activation::accurate());
-    let data = StepData {
-        h: 0.02,
-        t_end: 0.02,
-        restitution: 0.0,
-        mu: 0.5,
-        close_gaps: true,
-    };
-    StepProblem::new(&w, &contacts, &data).unwrap()
-}
+use crate::step::fixtures::stack;
 
 /// Sweeps of plain Gauss–Seidel and with a coarse correction every `every` sweeps, cold,
 /// to `tol`; both verdicts checked on the stored problem.
@@ -139,14 +101,16 @@ fn random_heap(beads: usize, steps: usize) -> StepProblem {
     let delta = sim.activation_threshold();
     let contacts =
         crate::contact::detect_with(&sim.world, sim.time, params.h, &params.activation, delta);
-    let data = StepData {
+    let data = crate::assembly::StepData {
         h: params.h,
         t_end: sim.time + params.h,
         restitution: params.restitution,
         mu: params.mu,
         close_gaps: params.activation.close_gaps,
     };
-    StepProblem::new(&sim.world, &contacts, &data).unwrap()
+    StepProblem::new(&sim.world, &contacts, &data)
+        .unwrap()
+        .with_positions(&sim.world)
 }
 
 #[test]

@@ -34,7 +34,7 @@ for np in ranks:
     # skip the first 10 steps (free fall, few contacts)
     d = d[10:] or d
     m = lambda f: st.median(f(x) for x in d)
-    print(f"{np:>5} {s['beads']:>6} {m(lambda x: x['step']['contacts']):>8.0f} "
+    print(f"{np:>5} {s['bodies']:>6} {m(lambda x: x['step']['contacts']):>8.0f} "
           f"{m(lambda x: x['interface_contacts']):>6.0f} {m(lambda x: x['sweeps']):>6.0f} "
           f"{m(lambda x: x['step_ms']):>8.1f} {m(lambda x: x['step']['solve_ms']):>8.1f} "
           f"{m(lambda x: x['comm_ms']):>8.2f} {m(lambda x: x['comm_mean_ms']):>9.2f} "

@@ -43,9 +43,9 @@ import json, subprocess, sys
 tmp, steps, perf = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]) > 0
 real, user = (float(x) for x in open(f"{tmp}/time").read().split())
 rows = json.load(open(f"{tmp}/out/stats.json"))
-det = sum(r["detection_seconds"] for r in rows) / len(rows)
+det = sum(r["details"]["detection_seconds"] for r in rows) / len(rows)
 sol = sum(r["solve_seconds"] for r in rows) / len(rows)
-lib = sum(1 for r in rows if r["method"] == "nsgs+library")
+lib = sum(1 for r in rows if r["details"]["method"] == "nsgs+library")
 print(f"steps {len(rows)}: wall {1e3 * real / steps:.1f} ms/step, cpu {1e3 * user / steps:.1f} ms/step "
       f"(whole run); detection {1e3 * det:.2f} ms/step, solve {1e3 * sol:.1f} ms/step; "
       f"steps finished by the library: {lib}")

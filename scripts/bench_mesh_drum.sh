@@ -49,8 +49,8 @@ s = json.load(open(sys.argv[2]))
 t0, t1, t2 = (float(x) for x in sys.argv[3:6])
 n = max(s["steps"], 1)
 per_step = 1e3 * ((t2 - t1) - (t1 - t0)) / max(n - 1, 1)
-print(f"{sys.argv[1]:>8}: {s['beads']} beads, {s['mean_contacts']:8.1f} contacts/step, "
-      f"{s['mean_solve_ms']:7.2f} ms solve/step, {per_step:7.2f} ms/step without the build "
+print(f"{sys.argv[1]:>8}: {s['bodies']} beads, {s['mean_contacts']:8.1f} contacts/step, "
+      f"{1e3 * s['mean_solve_seconds']:7.2f} ms solve/step, {per_step:7.2f} ms/step without the build "
       f"((run of {n} − run of 1) / {n - 1}), {1e3 * (t1 - t0):7.1f} ms build + 1 step, "
       f"{s['converged_steps']}/{s['steps']} steps converged")
 PY

@@ -56,7 +56,7 @@ for scene in "${scenes[@]}"; do
 import json, sys
 s = json.load(open(sys.argv[1])); d = json.load(open(sys.argv[2]))
 ms = 1e3 * (float(sys.argv[4]) - float(sys.argv[3])) / max(s["steps"], 1)
-print(f'{sys.argv[5]:<18} {"coulomb":<8} {s["bodies"]:>6} {s["steps"]:>6} {s["mean_contacts"]:>10.1f} {s["mean_loaded_contacts"]:>8.1f} '
+print(f'{sys.argv[5]:<18} {"coulomb":<8} {s["bodies"]:>6} {s["steps"]:>6} {s["mean_contacts"]:>10.1f} {s["details"]["mean_loaded_contacts"]:>8.1f} '
       f'{d["max_displacement"]:>14.2e} {ms:>12.1f} {s["not_converged_steps"]:>8} ({sys.argv[6]})')
 EOF
   "$py" scripts/siconos_rigid.py "$scene" --steps "$n" --tol "$tol" --itermax "$itermax" \

@@ -70,10 +70,10 @@ def analyse(run, a, b):
     row = dict(
         run=os.path.basename(os.path.normpath(run)), steps=n,
         conv=sum(s["converged"] for s in st), max_err=max(s["error"] for s in st),
-        sweeps=np.mean([s["inner_iterations"] for s in st]),
+        sweeps=np.mean([s["iterations"] for s in st]),
         contacts_all=np.mean([s["contacts"] for s in st]),
         contacts_win=np.mean([s["contacts"] for s in win]),
-        pen_after=np.mean([s["end_mean_penetration"] for s in win]))
+        pen_after=np.mean([s["details"]["end_mean_penetration"] for s in win]))
     k, pos, rad = frame(run)
     if pos is not None:
         # mean centre height over the window from the potential energy, scaled by the frame's

@@ -48,5 +48,5 @@ for np in ranks:
         held = "/".join(str(m["held_at_build"]) for m in pr)
         end = "/".join(str(m["beads_end"]) for m in pr)
         rss = "/".join(f"{m['peak_rss_mib']:.0f}" for m in pr)
-        print(f"{np:>5} {path:>8} {s['beads']:>7} {held:>22} {end:>16} {rss:>28}")
+        print(f"{np:>5} {path:>8} {s['bodies']:>7} {held:>22} {end:>16} {rss:>28}")
 PY

@@ -45,7 +45,9 @@ import json, sys
 out, steps, repeat, sizes = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4:]
 def numbers(d):
     rows = json.load(open(f"{d}/stats.json"))
-    return [{k: v for k, v in r.items() if not k.endswith("_ms")} for r in rows]
+    # the clock's fields left out: solve_seconds, and the engine's *_ms under "details"
+    return [{k: ({d: x for d, x in v.items() if not d.endswith("_ms")} if k == "details" else v)
+             for k, v in r.items() if k != "solve_seconds"} for r in rows]
 print("| beads | threads | wall s (best) | CPU s (best) | speed-up (wall) | same state as 1 thread |")
 print("|---|---|---|---|---|---|")
 for n in sizes:

@@ -81,9 +81,9 @@ pub fn cancel() -> Option<coulomb::deadline::Cancel> {
 /// what an interrupted simulation does besides a normal end.
 ///
 /// The last checkpoint (`OUTPUT/checkpoint.h5`) is written with the other outputs, before
-/// this (`cmd::simulate::steps`), so that an interrupted run can be resumed with `--restart`.
+/// this (`run_loop::steps`), so that an interrupted run can be resumed with `--restart`.
 pub fn simulation_interrupted(
-    sim: &coulomb_granular::Simulation,
+    steps_done: usize,
     output: Option<&std::path::Path>,
     signal: Signal,
 ) -> anyhow::Result<Outcome> {
@@ -91,14 +91,10 @@ pub fn simulation_interrupted(
         Some(dir) => eprintln!(
             "interrupted by {} after {} steps: frames, stats.csv, stats.json, summary.json and checkpoint.h5 (resume with --restart) in {} cover those steps",
             signal.name(),
-            sim.steps_done,
+            steps_done,
             dir.display()
         ),
-        None => eprintln!(
-            "interrupted by {} after {} steps",
-            signal.name(),
-            sim.steps_done
-        ),
+        None => eprintln!("interrupted by {} after {} steps", signal.name(), steps_done),
     }
     Ok(Outcome::Interrupted(signal))
 }
@@ -109,7 +105,7 @@ pub fn simulation_interrupted(
 pub fn simulation_outcome(summary: &coulomb_granular::Summary, max_steps: usize) -> Outcome {
     if summary.stopped == coulomb_granular::Stopped::StepCap {
         eprintln!(
-            "not at rest: --until-rest stopped at its step cap ({max_steps} steps, --max-steps) with beads still moving faster than --rest-speed"
+            "not at rest: --until-rest stopped at its step cap ({max_steps} steps, --max-steps) with bodies still moving faster than --rest-speed"
         );
         Outcome::No
     } else {

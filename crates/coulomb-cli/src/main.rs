@@ -9,6 +9,7 @@ mod interrupt;
 mod method;
 mod progress;
 mod read;
+mod run_loop;
 mod run_output;
 mod scene_arg;
 mod sim_args;
@@ -212,13 +213,21 @@ mod tests {
         allow_negative_numbers(Cli::command()).debug_assert();
     }
 
-    /// No import circle between the two simulate loops (issue 52): the rigid one takes the
-    /// shared output pieces from `run_output`, never from `cmd::simulate`.
+    /// One run loop for every scene (issue 52): `run_loop::steps`; the two simulate files
+    /// build their scenes and hand them to it, and the rigid one imports nothing of the
+    /// sphere one (no import circle).
     #[test]
-    fn the_rigid_simulate_loop_does_not_import_the_sphere_one() {
+    fn the_simulate_files_share_one_loop_without_an_import_circle() {
         let rigid = include_str!("cmd/simulate_rigid.rs");
+        let spheres = include_str!("cmd/simulate.rs");
+        let run_loop = include_str!("run_loop.rs");
         assert!(!rigid.contains(concat!("cmd::", "simulate::")));
         assert!(!rigid.contains(concat!("use super::", "simulate")));
-        assert!(rigid.contains("run_output::"));
+        assert!(!run_loop.contains(concat!("cmd::", "simulate")));
+        for file in [rigid, spheres] {
+            assert!(file.contains(concat!("run_loop::", "steps(")));
+            assert!(!file.contains(concat!("fn ", "steps")));
+            assert!(!file.contains(concat!(".step", "()")));
+        }
     }
 }

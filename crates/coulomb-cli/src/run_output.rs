@@ -1,6 +1,5 @@
 //! The pieces of a simulation run's outputs that every `coulomb simulate` engine shares (the
-//! sphere loop `cmd::simulate` and the rigid one `cmd::simulate_rigid` both use them; neither
-//! imports the other's, issue 52): the output folder opened and checked once, the statistics,
+//! one run loop [`crate::run_loop`] and the distributed run use them, issue 52): the output folder opened and checked once, the statistics,
 //! summary and checkpoint files, the FCLIB dumps, and the exit status of a failed write.
 
 use anyhow::Context;

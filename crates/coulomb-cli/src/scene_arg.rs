@@ -8,8 +8,8 @@
 //! file sets (`--dt`, `--mu`, …) are refused when given, rather than silently ignored.
 //! Every error in the file exits with status 2 before anything is written.
 
-use crate::cmd::simulate::StepHook;
 use crate::exit::Outcome;
+use crate::run_loop::StepHook;
 use crate::sim_args::{Args, Method};
 use anyhow::{bail, Context};
 use clap::Parser;
@@ -301,7 +301,7 @@ pub fn run(args: &Args) -> anyhow::Result<Outcome> {
     };
     let name = inlets.scene.name.clone();
     let inputs = loaded.input_files();
-    crate::cmd::simulate::steps(&a, sim, &name, false, &inputs, &mut inlets)
+    crate::run_loop::steps(&a, sim, &name, false, &inputs, &mut inlets)
 }
 
 /// Environment variable that, set, makes a distributed run build a scene file whole on every
@@ -435,7 +435,7 @@ pub fn restart(args: &Args) -> anyhow::Result<Outcome> {
     };
     let name = inlets.scene.name.clone();
     let inputs = loaded.input_files();
-    crate::cmd::simulate::steps(args, sim, &name, true, &inputs, &mut inlets)
+    crate::run_loop::steps(args, sim, &name, true, &inputs, &mut inlets)
 }
 
 /// The inlets of a scene file, driven after each step: the spheres they owe for
@@ -448,7 +448,7 @@ struct Inlets<'a> {
     warned_full: bool,
 }
 
-impl StepHook for Inlets<'_> {
+impl StepHook<Simulation> for Inlets<'_> {
     fn after_step(&mut self, sim: &mut Simulation, t0: f64, t1: f64) -> anyhow::Result<()> {
         let model = &self.scene.model;
         for (j, inlet) in self.scene.inlets.iter_mut().enumerate() {

@@ -494,27 +494,11 @@ pub(crate) fn summary_json(
     end_energy: f64,
     extra: serde_json::Map<String, serde_json::Value>,
 ) -> serde_json::Value {
-    let mut obj = serde_json::json!({
-        "scene": summary.scene,
-        "beads": summary.beads,
-        "steps": summary.steps,
-        "mean_contacts": summary.mean_contacts,
-        "mean_subproblems": summary.mean_subproblems,
-        "mean_solve_ms": summary.mean_solve_ms,
-        "max_penetration": summary.max_penetration,
-        "end_mean_penetration": summary.end_mean_penetration,
-        "end_max_penetration": summary.end_max_penetration,
-        "projection_work": summary.projection_work,
-        "start_energy": start_energy,
-        "end_energy": end_energy,
-        "converged_steps": summary.converged_steps,
-        "not_converged_steps": summary.not_converged_steps,
-        "mean_error": summary.mean_error,
-        "max_error": summary.max_error,
-        "at_rest": summary.at_rest,
-        "stopped": summary.stopped,
-        "signal": summary.signal,
-    });
+    let mut obj = serde_json::to_value(summary).unwrap_or_default();
+    if let Some(map) = obj.as_object_mut() {
+        map.insert("start_energy".into(), start_energy.into());
+        map.insert("end_energy".into(), end_energy.into());
+    }
     if let Some(map) = obj.as_object_mut() {
         map.extend(extra);
     }

@@ -119,7 +119,7 @@ fn bad_restarts_are_refused() {
     let r = coulomb(&["simulate", "--restart", c, "--steps", "2", "--json"]);
     let v: serde_json::Value = serde_json::from_str(&ok(&r)).unwrap();
     assert_eq!(v["steps"], 2);
-    assert_eq!(v["beads"], 10);
+    assert_eq!(v["bodies"], 10);
     std::fs::remove_dir_all(&root).ok();
 }
 
@@ -137,7 +137,7 @@ fn restart_with_its_scene_file_keeps_the_inlets_pouring() {
     let run = [s, "--beads", "60", "--checkpoint-every", "10"];
     simulate(&[&run[..], &["--steps", "20"]].concat(), &a);
     simulate(&[&run[..], &["--steps", "30"]].concat(), &c);
-    let beads = |dir: &Path| common::read_json(&dir.join("summary.json"))["beads"].clone();
+    let beads = |dir: &Path| common::read_json(&dir.join("summary.json"))["bodies"].clone();
     let at_20 = beads(&a).as_u64().unwrap();
     let ckpt = a.join("checkpoint.h5");
     let k = ckpt.to_str().unwrap();

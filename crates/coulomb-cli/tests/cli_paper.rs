@@ -43,7 +43,7 @@ fn table1_tiny_runs_both_solvers_and_writes_markdown_and_stats() {
             assert!(err.is_finite() && err >= 0.0);
             let contacts = s["contacts"].as_u64().unwrap();
             // the (6.1) rule or the cap of 20 ends every step with contacts
-            let sub = s["subproblems"].as_u64().unwrap();
+            let sub = s["details"]["subproblems"].as_u64().unwrap();
             assert!(sub <= 20);
             if contacts == 0 {
                 assert_eq!(sub, 0);
@@ -199,7 +199,7 @@ fn simulate_box_layout_overrides_are_checked() {
         "--json",
     ]);
     let v: Value = serde_json::from_str(ok(&out).trim()).expect("one JSON summary");
-    assert_eq!(v["beads"], 8);
+    assert_eq!(v["bodies"], 8);
     assert_eq!(v["steps"], 3);
     // dropped from 0.2 m: no bead reaches the ground within 3 steps (it falls ≈ 0.02 m), so at
     // most the four walls touch each bead

@@ -97,6 +97,103 @@ fn the_incline_runs_with_frames_stats_and_fclib_dumps() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// One summary for every scene (issue 52): a rigid scene and a sphere scene, run by the one
+/// run loop, write `summary.json` with the same keys, their engine named under `details`, and
+/// print the same keys with `--json`; their `stats.json` rows have the same keys too.
+#[test]
+fn a_rigid_and_a_sphere_run_write_the_same_summary_and_stats_keys() {
+    let dir = temp_dir("rigid-same-keys");
+    let (rigid, spheres) = (dir.join("rigid"), dir.join("spheres"));
+    let rigid_json = ok(&coulomb(&[
+        "simulate",
+        &scene("incline.toml"),
+        "--steps",
+        "3",
+        "--json",
+        "--output",
+        rigid.to_str().unwrap(),
+    ]));
+    let spheres_json = ok(&coulomb(&[
+        "simulate",
+        "box",
+        "--beads",
+        "10",
+        "--steps",
+        "3",
+        "--json",
+        "--output",
+        spheres.to_str().unwrap(),
+    ]));
+    let keys = |v: &serde_json::Value| -> Vec<String> {
+        let mut k: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
+        k.sort();
+        k
+    };
+    let read = |d: &std::path::Path, f: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(d.join(f)).unwrap()).unwrap()
+    };
+    let (sr, ss) = (read(&rigid, "summary.json"), read(&spheres, "summary.json"));
+    assert_eq!(keys(&sr), keys(&ss), "{sr}\n{ss}");
+    for key in [
+        "bodies",
+        "time",
+        "mean_iterations",
+        "mean_solve_seconds",
+        "kinetic_energy",
+    ] {
+        assert!(
+            sr[key].is_number() && ss[key].is_number(),
+            "{key}: {sr}\n{ss}"
+        );
+    }
+    assert!(sr.get("beads").is_none() && ss.get("mean_solve_ms").is_none());
+    assert_eq!(
+        (sr["bodies"].as_u64(), ss["bodies"].as_u64()),
+        (Some(1), Some(10))
+    );
+    assert_eq!(sr["steps"], 3);
+    assert_eq!(ss["steps"], 3);
+    assert_eq!(sr["details"]["engine"], "rigid");
+    assert_eq!(ss["details"]["engine"], "spheres");
+    assert!(
+        sr["details"]["mean_loaded_contacts"].as_f64().unwrap() >= 3.0,
+        "{sr}"
+    );
+    assert!(ss["details"]["mean_subproblems"].is_number(), "{ss}");
+    // what the rigid engine does not measure is null, not a made-up 0
+    assert!(sr["end_max_penetration"].is_null() && sr["projection_work"].is_null());
+    assert!(ss["end_max_penetration"].is_number() && ss["projection_work"].is_number());
+    // --json: the summary's keys and the energies at the start and the end
+    let (jr, js): (serde_json::Value, serde_json::Value) = (
+        serde_json::from_str(rigid_json.trim()).unwrap(),
+        serde_json::from_str(spheres_json.trim()).unwrap(),
+    );
+    assert_eq!(keys(&jr), keys(&js));
+    let mut with_energies = keys(&sr);
+    with_energies.extend(["end_energy".to_string(), "start_energy".to_string()]);
+    with_energies.sort();
+    assert_eq!(keys(&jr), with_energies);
+    assert_eq!(jr["mean_contacts"], sr["mean_contacts"]);
+    // stats.json: the same row keys for every scene (the stats.csv columns and "details", the
+    // engine's own report without the keys the record has)
+    let (tr, ts) = (read(&rigid, "stats.json"), read(&spheres, "stats.json"));
+    let (tr, ts) = (tr.as_array().unwrap(), ts.as_array().unwrap());
+    assert_eq!((tr.len(), ts.len()), (3, 3));
+    let mut columns: Vec<String> = coulomb_granular::report::CSV_HEADER
+        .split(',')
+        .map(String::from)
+        .chain(["details".to_string()])
+        .collect();
+    columns.sort();
+    for row in tr.iter().chain(ts) {
+        assert_eq!(keys(row), columns, "{row}");
+        assert!(row["details"].get("contacts").is_none(), "{row}");
+    }
+    assert!(tr[2]["details"]["loaded_contacts"].is_number(), "{}", tr[2]);
+    assert!(ts[2]["details"]["subproblems"].is_number(), "{}", ts[2]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn bad_shapes_exit_2_with_file_line_and_key() {
     let dir = temp_dir("rigid-bad");

@@ -97,7 +97,10 @@ positions = [[0.0, 0.0, 0.05]]
     for k in 1..=4 {
         assert!(err.contains(&format!("cube 1: step {k}/4, ")), "{err}");
     }
-    assert!(err.contains("contacts") && err.contains("sweeps"), "{err}");
+    assert!(
+        err.contains("contacts") && err.contains("iterations"),
+        "{err}"
+    );
     // --json: stderr without progress
     let out = run(
         &[

@@ -35,7 +35,7 @@ fn box_file_gives_the_built_in_box_to_the_bit() {
     let mut ja = run(file.to_str().unwrap(), &a);
     let mut jb = run("box", &b);
     for j in [&mut ja, &mut jb] {
-        j.as_object_mut().unwrap().remove("mean_solve_ms");
+        j.as_object_mut().unwrap().remove("mean_solve_seconds");
     }
     assert_eq!(ja, jb);
     assert!(ja["mean_contacts"].as_f64().unwrap() > 10.0);
@@ -88,7 +88,7 @@ velocity = [0, 0, -1]
     let poured = j["poured"].as_u64().unwrap();
     assert_eq!(poured + j["inlet_skipped"].as_u64().unwrap(), 20);
     assert!(poured >= 18, "{j}");
-    assert_eq!(j["beads"].as_u64().unwrap(), 2 + poured);
+    assert_eq!(j["bodies"].as_u64().unwrap(), 2 + poured);
     assert_eq!(j["steps"].as_u64().unwrap(), 30);
     // the same run twice: the same numbers
     let mut k = json(&ok(&coulomb(&[
@@ -98,7 +98,7 @@ velocity = [0, 0, -1]
     ])));
     let mut j = j;
     for x in [&mut j, &mut k] {
-        x.as_object_mut().unwrap().remove("mean_solve_ms");
+        x.as_object_mut().unwrap().remove("mean_solve_seconds");
     }
     assert_eq!(j, k);
 }
@@ -185,7 +185,7 @@ fn beads_caps_the_fills_and_json_scenes_run() {
         "2",
         "--json",
     ])));
-    assert_eq!(j["beads"].as_u64(), Some(20));
+    assert_eq!(j["bodies"].as_u64(), Some(20));
     assert_eq!(j["steps"].as_u64(), Some(2));
     assert_eq!(j["scene"].as_str(), Some("rotating-drum"));
     let dir = temp_dir("scene-json");
@@ -202,7 +202,7 @@ fn beads_caps_the_fills_and_json_scenes_run() {
         scene.to_str().unwrap(),
         "--json",
     ])));
-    assert_eq!(j["beads"].as_u64(), Some(2));
+    assert_eq!(j["bodies"].as_u64(), Some(2));
     assert_eq!(j["steps"].as_u64(), Some(5));
     assert_eq!(j["not_converged_steps"].as_u64(), Some(0));
 }

@@ -35,6 +35,7 @@ pub mod distributed;
 pub mod io;
 pub mod math;
 pub mod rigid;
+pub mod run;
 pub mod scene;
 pub mod step;
 pub mod validation;
@@ -45,13 +46,15 @@ pub use bodies::{mesh, shape, world};
 pub use collision::{contact, tunnelling};
 pub use io::{checkpoint, output, output_dir, report};
 pub use rigid::{checkpoint as rigid_checkpoint, scene as rigid_scene};
+pub use run::engine;
 pub use scene::{file as scene_file, generate, import, model, save as scene_save, urdf};
 use step::colour_progress;
-pub use step::{assembly, coarse, nsgs, projection, rolling, run, simulation, subspace};
+pub use step::{assembly, coarse, nsgs, projection, rolling, simulation, subspace};
 pub use validation::laws;
 
 pub use checkpoint::CheckpointError;
 pub use contact::{Activation, Contact, Partner};
+pub use engine::{Engine, EngineError};
 pub use math::Vec3;
 pub use mesh::{MeshError, TriangleMesh};
 pub use model::{
@@ -60,8 +63,10 @@ pub use model::{
 };
 pub use nsgs::{NsgsSettings, NsgsStatus, StepProblem};
 pub use projection::{Penetration, Projection, ProjectionStats, Velocities};
-pub use report::StepRecord;
-pub use run::{run, run_with, SimulationSettings, Stop, Stopped, Summary};
+pub use report::{EngineStep, StepDetails, StepRecord};
+pub use run::{
+    run, run_with, EndState, SimulationSettings, Stop, Stopped, Summary, SummaryDetails,
+};
 pub use scene::Scene;
 pub use simulation::{Params, Simulation, SimulationError, StepMethod, StepStats};
 pub use world::{ContactLaw, MaterialTable, MeshSide, Motion, Obstacle, Shape, Sphere, World};

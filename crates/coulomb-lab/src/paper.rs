@@ -279,8 +279,8 @@ pub fn table1(a: Table1, bars: NewSteps<'_>, show: &mut dyn FnMut(&str)) -> anyh
                 inner_label(inner),
                 s.steps,
                 s.mean_contacts,
-                s.mean_subproblems,
-                s.mean_solve_ms,
+                s.mean_subproblems().unwrap_or(0.0),
+                s.mean_solve_seconds * 1e3,
                 asm,
                 s.mean_error,
                 s.max_error,
@@ -290,7 +290,11 @@ pub fn table1(a: Table1, bars: NewSteps<'_>, show: &mut dyn FnMut(&str)) -> anyh
             );
             eprintln!(
                 "{label}: {} TS, {:.0} contacts/TS, {:.2} subproblems/TS, {:.1} ms/TS, mean err {:.1e}",
-                s.steps, s.mean_contacts, s.mean_subproblems, s.mean_solve_ms, s.mean_error
+                s.steps,
+                s.mean_contacts,
+                s.mean_subproblems().unwrap_or(0.0),
+                s.mean_solve_seconds * 1e3,
+                s.mean_error
             );
         }
     }
@@ -312,10 +316,12 @@ fn read_stats(path: &Path) -> anyhow::Result<Vec<(usize, f64)>> {
     Ok(arr
         .iter()
         .filter_map(|r| {
-            Some((
-                r.get("contacts")?.as_u64()? as usize,
-                r.get("solve_ms")?.as_f64()?,
-            ))
+            // the record of every scene has solve_seconds (issue 52); older folders solve_ms
+            let ms = match r.get("solve_seconds") {
+                Some(s) => s.as_f64()? * 1e3,
+                None => r.get("solve_ms")?.as_f64()?,
+            };
+            Some((r.get("contacts")?.as_u64()? as usize, ms))
         })
         .collect())
 }

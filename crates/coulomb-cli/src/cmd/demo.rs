@@ -99,11 +99,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     write_stats(&frames, &stats).context("writing per-step statistics")?;
     say(format!(
         "simulate box: {} beads, {} steps, {:.1} contacts/step, {:.2} subproblems/step, {:.2} ms/step, {} of {} steps converged, max penetration {:.2e} m",
-        summary.beads,
+        summary.bodies,
         summary.steps,
         summary.mean_contacts,
-        summary.mean_subproblems,
-        summary.mean_solve_ms,
+        summary.mean_subproblems().unwrap_or(0.0),
+        summary.mean_solve_seconds * 1e3,
         summary.converged_steps,
         summary.steps,
         summary.max_penetration

@@ -278,7 +278,7 @@ fn run_source(
         println!(
             "{}: {} beads on {} ranks, {} steps{}, {:.1} contacts/step, {:.1} sweeps/step, {:.2} ms/step ({:.2} ms communication), mean error {:.2e} (max {:.2e}), {} / {} steps converged ({} not converged), max penetration during the run {:.2e} m, at the end: mean {:.2e} m, max {:.2e} m",
             summary.scene,
-            summary.beads,
+            summary.bodies,
             ranks,
             summary.steps,
             crate::interrupt::stopped_note(&summary),
@@ -292,8 +292,8 @@ fn run_source(
             summary.steps,
             summary.not_converged_steps,
             summary.max_penetration,
-            summary.end_mean_penetration,
-            summary.end_max_penetration
+            summary.end_mean_penetration.unwrap_or(0.0),
+            summary.end_max_penetration.unwrap_or(0.0)
         );
         let mem: Vec<String> = per_rank
             .iter()

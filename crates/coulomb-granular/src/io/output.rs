@@ -88,16 +88,13 @@ fn write_stats_after(
         csv.push('\n');
     }
     out.write("stats.csv", csv.as_bytes())?;
-    let json = if json_rows.is_empty() {
-        serde_json::to_string_pretty(stats)
-    } else {
-        let mut all = json_rows;
-        for s in stats {
-            all.push(serde_json::to_value(s).map_err(io::Error::other)?);
-        }
-        serde_json::to_string_pretty(&all)
+    // the rows of every scene's stats.json: the record's keys, the engine's under "details"
+    let mut all = json_rows;
+    for s in stats {
+        let row = crate::report::EngineStep::of_spheres(s.clone()).json_row();
+        all.push(row.map_err(io::Error::other)?);
     }
-    .map_err(io::Error::other)?;
+    let json = serde_json::to_string_pretty(&all).map_err(io::Error::other)?;
     out.write("stats.json", json.as_bytes())
 }
 
@@ -1065,6 +1062,15 @@ mod tests {
             serde_json::from_str(&fs::read_to_string(dir.join("stats.json")).unwrap()).unwrap();
         let steps: Vec<u64> = json.iter().map(|v| v["step"].as_u64().unwrap()).collect();
         assert_eq!(steps, [0, 1, 2, 3, 4, 5]);
+        // the rows of every scene: the record's keys, the sphere engine's under "details"
+        let row = json[5].as_object().unwrap();
+        assert_eq!(row.len(), CSV_HEADER.split(',').count() + 1);
+        assert!(CSV_HEADER.split(',').all(|k| row.contains_key(k)));
+        assert_eq!(
+            row["details"]["subproblems"].as_u64(),
+            Some(stats[5].subproblems as u64)
+        );
+        assert!(row["details"].get("contacts").is_none());
         fs::remove_dir_all(&dir).ok();
     }
     #[test]

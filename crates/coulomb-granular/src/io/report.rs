@@ -108,6 +108,80 @@ impl StepRecord {
     }
 }
 
+/// The engine's own report of one step, kept beside its [`StepRecord`]: the sphere engine's
+/// [`StepStats`] or the rigid engine's [`RigidStepReport`] (`"details"` of a `stats.json` row).
+#[derive(Debug, Clone, PartialEq)]
+pub enum StepDetails {
+    /// a step of the sphere engine
+    Spheres(StepStats),
+    /// a step of the rigid-body engine
+    Rigid(RigidStepReport),
+}
+
+/// One step of any scene as a run keeps it: the record every scene shares and its engine's
+/// report.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EngineStep {
+    /// the fields every scene has (`stats.csv`)
+    pub record: StepRecord,
+    /// the engine's report
+    pub details: StepDetails,
+}
+
+impl EngineStep {
+    /// A step of the sphere engine.
+    pub fn of_spheres(s: StepStats) -> Self {
+        Self {
+            record: StepRecord::of_spheres(&s),
+            details: StepDetails::Spheres(s),
+        }
+    }
+
+    /// A step of the rigid engine, with the world's potential energy after it.
+    pub fn of_rigid(r: RigidStepReport, potential_energy: f64) -> Self {
+        Self {
+            record: StepRecord::of_rigid(&r, potential_energy),
+            details: StepDetails::Rigid(r),
+        }
+    }
+
+    /// The mean and largest penetration over the pairs in touch at the end of the step,
+    /// after the position correction, where the engine measures them (the sphere engine;
+    /// the rigid engine does not detect contacts at the end of a step: `None`).
+    pub fn end_penetration(&self) -> Option<(f64, f64)> {
+        match &self.details {
+            StepDetails::Spheres(s) => Some((s.end_mean_penetration, s.end_max_penetration)),
+            StepDetails::Rigid(_) => None,
+        }
+    }
+
+    /// The change of potential energy caused by the step's position correction (J), where
+    /// the engine reports it (the sphere engine; `None` for the rigid engine, whose report
+    /// does not carry it).
+    pub fn projection_work(&self) -> Option<f64> {
+        match &self.details {
+            StepDetails::Spheres(s) => Some(s.projection_work),
+            StepDetails::Rigid(_) => None,
+        }
+    }
+
+    /// The row of `stats.json`: the record's fields (the columns of [`CSV_HEADER`]), then
+    /// `"details"`: the engine's report without the fields the record has under the same
+    /// name.
+    pub fn json_row(&self) -> serde_json::Result<serde_json::Value> {
+        let mut row = serde_json::to_value(&self.record)?;
+        let mut details = match &self.details {
+            StepDetails::Spheres(s) => serde_json::to_value(s)?,
+            StepDetails::Rigid(r) => serde_json::to_value(r)?,
+        };
+        if let (Some(row), Some(details)) = (row.as_object_mut(), details.as_object_mut()) {
+            details.retain(|k, _| !row.contains_key(k));
+            row.insert("details".into(), serde_json::Value::Object(details.clone()));
+        }
+        Ok(row)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -2,8 +2,8 @@
 //! (2.10) (`assembly`, its contacts' rows `rows`), solve it by body-level Gauss–Seidel
 //! (`nsgs`, `subspace`, `rolling`)
 //! with the library as fallback, correct positions (`projection`), integrate
-//! (`simulation`), and whole runs (`run`); `coarse` is a two-level correction of the sweeps
-//! (off by default).
+//! (`simulation`); `coarse` is a two-level correction of the sweeps (off by default). Whole
+//! runs of either engine are in [`crate::run`].
 
 pub mod assembly;
 pub mod coarse;
@@ -14,6 +14,5 @@ pub mod nsgs;
 pub mod projection;
 pub mod rolling;
 pub mod rows;
-pub mod run;
 pub mod simulation;
 pub mod subspace;

@@ -99,11 +99,18 @@ pub fn simulation_interrupted(
     Ok(Outcome::Interrupted(signal))
 }
 
-/// The exit of a run that was not interrupted: status 1 when `--until-rest` stopped at its
-/// step cap without reaching rest (said on stderr), as `solve` does when it does not
-/// converge; 0 otherwise.
+/// The exit of a run that was not interrupted, the same for every scene and for distributed
+/// runs: status 1 when a step ended above its tolerance or `--until-rest` stopped at its step
+/// cap without reaching rest (said on stderr), as `solve` does when it does not converge; 0
+/// otherwise.
 pub fn simulation_outcome(summary: &coulomb_granular::Summary, max_steps: usize) -> Outcome {
-    if summary.stopped == coulomb_granular::Stopped::StepCap {
+    if summary.not_converged_steps > 0 {
+        eprintln!(
+            "{} of {} step(s) ended above their tolerance (\"converged\": false in stats.csv)",
+            summary.not_converged_steps, summary.steps
+        );
+        Outcome::No
+    } else if summary.stopped == coulomb_granular::Stopped::StepCap {
         eprintln!(
             "not at rest: --until-rest stopped at its step cap ({max_steps} steps, --max-steps) with bodies still moving faster than --rest-speed"
         );

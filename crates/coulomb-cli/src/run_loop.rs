@@ -242,13 +242,6 @@ pub(crate) fn steps<E: Engine>(
     if let Some(signal) = interrupted {
         return crate::interrupt::simulation_interrupted(k, args.output.as_deref(), signal);
     }
-    if summary.not_converged_steps > 0 {
-        eprintln!(
-            "{} of {} step(s) ended above their tolerance (\"converged\": false in stats.csv)",
-            summary.not_converged_steps, summary.steps
-        );
-        return Ok(Outcome::No);
-    }
     Ok(crate::interrupt::simulation_outcome(
         &summary,
         stop.max_steps(),

@@ -203,7 +203,8 @@ pub struct RigidSettings {
     /// default, the same cap as the sphere engine's [`crate::nsgs::NsgsSettings::max_sweeps`])
     pub max_sweeps: usize,
     /// Gauss–Seidel is judged stalled when the lowest error it has met has not halved over
-    /// this many sweeps (then the library's solver takes over); default 100
+    /// this many sweeps and, at that rate, would need more sweeps to reach the tolerance than
+    /// it has done (then the library's solver takes over); default 100
     pub stall_window: usize,
     /// over-relaxation ω ∈ [1, 2) of the contact updates from the second sweep on, the
     /// meaning of the sphere engine's [`crate::nsgs::NsgsSettings::relaxation`]: the first

@@ -2021,7 +2021,10 @@ pub mod nsgs {
         /// (ω halved towards 1 whenever the error of the checks has not decreased over
         /// [`crate::nsgs::RELAX_WINDOW`] sweeps, the sphere engine's rule), until the error
         /// on the stored problem is ≤ `rule.tol`, `rule.max_sweeps`, or a stall: the lowest
-        /// error met has not halved over `rule.stall_window` sweeps. Returns the iterate of
+        /// error met has not halved over `rule.stall_window` sweeps and, decreasing at the
+        /// rate of those sweeps, would need more sweeps to reach `rule.tol` than it has done
+        /// (a plateau goes to the library at once, a slow but steady finish near the
+        /// tolerance is left to Gauss–Seidel). Returns the iterate of
         /// lowest error (exactly evaluated: every [`CHECK_EVERY`] sweeps, the first and the
         /// last).
         pub fn solve(&self, r0: &[f64], lambda0: &[f64], rule: Rule) -> Solution {
@@ -2105,8 +2108,16 @@ pub mod nsgs {
                         .rev()
                         .find(|(s, _)| *s + stall_window <= sweep)
                         .map(|x| x.1);
+                    // stalled: the lowest error has not halved over the window, and at the
+                    // window's rate it would need more sweeps to reach tol than were done
                     if let Some(old) = back {
-                        if best.error > 0.5 * old {
+                        let ratio = best.error / old;
+                        let needed = if ratio < 1.0 {
+                            stall_window as f64 * (tol / best.error).ln() / ratio.ln()
+                        } else {
+                            f64::INFINITY
+                        };
+                        if ratio > 0.5 && needed > sweep as f64 {
                             break;
                         }
                     }

@@ -199,11 +199,21 @@ pub struct RigidSettings {
     /// tolerance on the error of docs/error.md of each step's problem; default 1e-8 (the
     /// rigid-body tolerance of the benchmarks)
     pub tolerance: f64,
-    /// cap on Gauss–Seidel sweeps per step; default 2 000
+    /// cap on Gauss–Seidel sweeps per step; default 2 000 (a scene's `max_sweeps`, 20 000 by
+    /// default, the same cap as the sphere engine's [`crate::nsgs::NsgsSettings::max_sweeps`])
     pub max_sweeps: usize,
-    /// Gauss–Seidel is judged stalled when its error has not halved over this many sweeps
-    /// (then the library's solver takes over); default 100
+    /// Gauss–Seidel is judged stalled when the lowest error it has met has not halved over
+    /// this many sweeps and, at that rate, would need more sweeps to reach the tolerance than
+    /// it has done (then the library's solver takes over); default 100
     pub stall_window: usize,
+    /// over-relaxation ω ∈ [1, 2) of the contact updates from the second sweep on, the
+    /// meaning of the sphere engine's [`crate::nsgs::NsgsSettings::relaxation`]: the first
+    /// sweep is plain, each update r_i' of a contact becomes P_{K_μ}(r_i + ω (r_i' − r_i)),
+    /// and ω is halved towards 1 (ω ← 1 + (ω − 1)/2, 1 below 1.01) whenever Gauss–Seidel has
+    /// not decreased over [`crate::nsgs::RELAX_WINDOW`] sweeps (judged on the exact error of
+    /// the checks, where the sphere engine judges its sweep residual); default 1.5 (a scene's
+    /// `relaxation`)
+    pub relaxation: f64,
     /// hand a step that Gauss–Seidel leaves above the tolerance to `coulomb::solver` on
     /// the step's global problem; default true
     pub library_finish: bool,
@@ -238,6 +248,7 @@ impl Default for RigidSettings {
             tolerance: 1e-8,
             max_sweeps: 2_000,
             stall_window: 100,
+            relaxation: 1.5,
             library_finish: true,
             solver: coulomb::solver::Settings::default(),
             activation_gamma: 1.0,

@@ -62,8 +62,8 @@ fn invalid(what: &str, reason: impl Into<String>) -> SceneError {
 /// a setting means the same in every scene, or is refused, never dropped): rolling friction
 /// (not modelled between bodies of a scene with other shapes; the refusal names the
 /// material pair), `method = "library"` (the rigid step is Gauss–Seidel finished by the
-/// library where it stalls: `nsgs`), and a `relaxation` other than the default 1.5 (the rigid
-/// Gauss–Seidel does not over-relax).
+/// library where it stalls: `nsgs`). `relaxation` and `max_sweeps` apply as in sphere scenes
+/// ([`RigidSettings::relaxation`], [`RigidSettings::max_sweeps`]).
 fn check_settings(
     model: &SceneModel,
     table: &crate::world::MaterialTable,
@@ -85,13 +85,6 @@ fn check_settings(
         return Err(SceneError::InvalidStep(
             "method = \"library\" cannot apply to a scene with bodies of other shapes than spheres: its steps are solved by nsgs, finished by the library where it stalls; use method = \"nsgs\"".into(),
         ));
-    }
-    let default_relaxation = crate::model::StepSettings::default().relaxation;
-    if model.step.relaxation != default_relaxation {
-        return Err(SceneError::InvalidStep(format!(
-            "relaxation = {} cannot apply to a scene with bodies of other shapes than spheres: their Gauss–Seidel does not over-relax; remove relaxation",
-            model.step.relaxation
-        )));
     }
     Ok(())
 }
@@ -470,6 +463,7 @@ impl RigidScene {
             gravity: g.to_array(),
             tolerance: model.step.tol,
             max_sweeps: model.step.max_sweeps,
+            relaxation: model.step.relaxation,
             ..RigidSettings::default()
         };
         let (world, relaxed) = match overlaps {

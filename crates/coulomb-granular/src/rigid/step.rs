@@ -158,6 +158,9 @@ fn check_settings(s: &RigidSettings) -> Result<(), RigidError> {
     if s.max_sweeps == 0 || s.stall_window == 0 {
         return bad("max_sweeps and stall_window must be positive".into());
     }
+    if !(s.relaxation.is_finite() && (1.0..2.0).contains(&s.relaxation)) {
+        return bad(format!("relaxation = {} is not in [1, 2)", s.relaxation));
+    }
     if !(0.0..=1.0).contains(&s.activation_gamma) {
         return bad(format!(
             "activation_gamma = {} is not in [0, 1]",
@@ -903,7 +906,16 @@ impl RigidWorld {
                 )
             } else {
                 let s = &self.settings;
-                let sol = problem.solve(&r0, &lambda0, s.tolerance, s.max_sweeps, s.stall_window);
+                let sol = problem.solve(
+                    &r0,
+                    &lambda0,
+                    nsgs::Rule {
+                        tol: s.tolerance,
+                        max_sweeps: s.max_sweeps,
+                        stall_window: s.stall_window,
+                        relaxation: s.relaxation,
+                    },
+                );
                 let mut lambda = sol.lambda;
                 let mut best = (sol.r, sol.error, "nsgs");
                 let library = s.library_finish;
@@ -1565,6 +1577,20 @@ pub mod nsgs {
         w_eq: Vec<f64>,
     }
 
+    /// When [`Problem::solve`] stops, and its over-relaxation ([`super::RigidSettings`]'s
+    /// fields of the same names).
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub struct Rule {
+        /// tolerance on the error on the stored problem
+        pub tol: f64,
+        /// cap on sweeps
+        pub max_sweeps: usize,
+        /// stalled when the lowest error has not halved over this many sweeps
+        pub stall_window: usize,
+        /// over-relaxation ω ∈ [1, 2) from the second sweep on
+        pub relaxation: f64,
+    }
+
     /// Result of [`Problem::solve`].
     #[derive(Debug, Clone, PartialEq)]
     pub struct Solution {
@@ -1991,17 +2017,29 @@ pub mod nsgs {
             }
         }
 
-        /// Gauss–Seidel from r0 until the error is ≤ tol, `max_sweeps`, or a stall (the
-        /// error has not halved over `stall_window` sweeps); returns the iterate of lowest
-        /// error.
-        pub fn solve(
-            &self,
-            r0: &[f64],
-            lambda0: &[f64],
-            tol: f64,
-            max_sweeps: usize,
-            stall_window: usize,
-        ) -> Solution {
+        /// Gauss–Seidel from r0, over-relaxed by `rule.relaxation` from the second sweep on
+        /// (ω halved towards 1 whenever the error of the checks has not decreased over
+        /// [`crate::nsgs::RELAX_WINDOW`] sweeps, the sphere engine's rule), until the error
+        /// on the stored problem is ≤ `rule.tol`, `rule.max_sweeps`, or a stall: the lowest
+        /// error met has not halved over `rule.stall_window` sweeps and, decreasing at the
+        /// rate of those sweeps, would need more sweeps to reach `rule.tol` than it has done
+        /// (a plateau goes to the library at once, a slow but steady finish near the
+        /// tolerance is left to Gauss–Seidel). Returns the iterate of
+        /// lowest error (exactly evaluated: every [`CHECK_EVERY`] sweeps, the first and the
+        /// last).
+        pub fn solve(&self, r0: &[f64], lambda0: &[f64], rule: Rule) -> Solution {
+            let Rule {
+                tol,
+                max_sweeps,
+                stall_window,
+                relaxation,
+            } = rule;
+            let mut omega = if relaxation.is_finite() {
+                relaxation.clamp(1.0, 1.99)
+            } else {
+                1.0
+            };
+            let mut window_start = f64::INFINITY;
             let n = self.rows.len();
             let nl = self.joint_rows();
             let mut r = if r0.len() == 3 * n && r0.iter().all(|x| x.is_finite()) {
@@ -2027,7 +2065,8 @@ pub mod nsgs {
             let mut history: Vec<(usize, f64)> = Vec::new();
 
             for sweep in 1..=max_sweeps {
-                self.sweep(&mut v, &mut r);
+                // the first sweep is plain Gauss–Seidel: it solves isolated contacts exactly
+                self.sweep(&mut v, &mut r, if sweep == 1 { 1.0 } else { omega });
                 match &self.equality {
                     Some(eq) => {
                         for j in 0..self.joints.len() {
@@ -2054,14 +2093,31 @@ pub mod nsgs {
                     if err <= tol || !err.is_finite() {
                         break;
                     }
-                    history.push((sweep, err));
+                    if sweep % crate::nsgs::RELAX_WINDOW == 0 {
+                        if omega > 1.0 && err >= window_start {
+                            omega = 1.0 + 0.5 * (omega - 1.0);
+                            if omega < 1.01 {
+                                omega = 1.0;
+                            }
+                        }
+                        window_start = err;
+                    }
+                    history.push((sweep, best.error));
                     let back = history
                         .iter()
                         .rev()
                         .find(|(s, _)| *s + stall_window <= sweep)
                         .map(|x| x.1);
+                    // stalled: the lowest error has not halved over the window, and at the
+                    // window's rate it would need more sweeps to reach tol than were done
                     if let Some(old) = back {
-                        if err > 0.5 * old {
+                        let ratio = best.error / old;
+                        let needed = if ratio < 1.0 {
+                            stall_window as f64 * (tol / best.error).ln() / ratio.ln()
+                        } else {
+                            f64::INFINITY
+                        };
+                        if ratio > 0.5 && needed > sweep as f64 {
                             break;
                         }
                     }
@@ -2074,7 +2130,7 @@ pub mod nsgs {
         /// disjoint bodies, so they are updated in parallel (rayon) where the colour is large,
         /// with the same numbers as one after the other: the result does not depend on the
         /// number of threads.
-        fn sweep(&self, v: &mut [[f64; 6]], r: &mut [f64]) {
+        fn sweep(&self, v: &mut [[f64; 6]], r: &mut [f64], omega: f64) {
             use rayon::prelude::*;
             assert!(v.len() == self.mass.len() && r.len() == 3 * self.rows.len());
             let (vp, rp) = (Raw(v.as_mut_ptr()), Raw(r.as_mut_ptr()));
@@ -2085,7 +2141,7 @@ pub mod nsgs {
                 // r of the lengths asserted above
                 let run = |chunk: &[usize]| {
                     for &i in chunk {
-                        unsafe { self.update(i, vp.get(), rp.get()) }
+                        unsafe { self.update(i, vp.get(), rp.get(), omega) }
                     }
                 };
                 if ids.len() >= crate::nsgs::PARALLEL_MIN {
@@ -2097,12 +2153,15 @@ pub mod nsgs {
             }
         }
 
-        /// One Gauss–Seidel update of contact i (the others frozen), v kept = M⁻¹(f + H r).
+        /// One Gauss–Seidel update of contact i (the others frozen), v kept = M⁻¹(f + H r);
+        /// with ω ≠ 1 the solution r_i' of the one-contact law becomes
+        /// P_{K_μ}(r_i + ω (r_i' − r_i)) (over-relaxation, as the sphere engine's
+        /// `crate::nsgs::update_contact`).
         ///
         /// # Safety
         /// `v` points to one velocity per body block and `r` to 3 impulses per contact; no
         /// other thread reads or writes the velocities of contact i's bodies or r_i meanwhile.
-        unsafe fn update(&self, i: usize, v: *mut [f64; 6], r: *mut f64) {
+        unsafe fn update(&self, i: usize, v: *mut [f64; 6], r: *mut f64, omega: f64) {
             let row = &self.rows[i];
             let mut u = row.w;
             for (blk, j) in row.a.iter().chain(row.b.iter()) {
@@ -2131,6 +2190,13 @@ pub mod nsgs {
                 contact.c[0] += row.mu * cone::tangent_norm(&u);
                 solve_contact(&contact, &old)
             });
+            let new = if omega != 1.0 {
+                let mut x: [f64; 3] = std::array::from_fn(|k| old[k] + omega * (new[k] - old[k]));
+                cone::project(row.mu, &mut x);
+                x
+            } else {
+                new
+            };
             let delta = [new[0] - old[0], new[1] - old[1], new[2] - old[2]];
             if delta.iter().all(|x| *x == 0.0) {
                 return;
@@ -2473,6 +2539,58 @@ mod tests {
                 let ur: Vec<u64> = u.iter().map(|x| x.to_bits()).collect();
                 assert_eq!(ub, ur, "u, {threads} threads, r of {len}");
             }
+        }
+    }
+
+    /// A column of `n` touching balls (radius 0.05 m) on the floor, at rest.
+    fn ball_column(n: usize, relaxation: f64) -> RigidWorld {
+        let shape = SharedShape::ball(0.05);
+        let mass = super::super::MassProperties::from_shape(&shape, 1000.0).unwrap();
+        let bodies = (0..n)
+            .map(|i| RigidBodyDesc {
+                shape: shape.clone(),
+                mass,
+                position: [0.0, 0.0, 0.05 + 0.1 * i as f64],
+                orientation: [1.0, 0.0, 0.0, 0.0],
+                velocity: [0.0; 3],
+                angular_velocity: [0.0; 3],
+                material: 0,
+                fixed: false,
+            })
+            .collect();
+        let settings = RigidSettings {
+            relaxation,
+            library_finish: false,
+            ..RigidSettings::default()
+        };
+        RigidWorld::new(bodies, vec![floor()], one_material(0.5), settings).unwrap()
+    }
+
+    /// `relaxation` means what the sphere engine's does (issue 52): over-relaxed sweeps
+    /// carry the weight of a column of balls down in fewer sweeps than plain Gauss–Seidel,
+    /// every verdict is the exact error on the stored problem, and ω outside [1, 2) is
+    /// refused.
+    #[test]
+    fn over_relaxation_finishes_a_ball_column_in_fewer_sweeps() {
+        let first = |relaxation: f64| ball_column(12, relaxation).step().unwrap();
+        let (plain, relaxed) = (first(1.0), first(1.5));
+        for r in [&plain, &relaxed] {
+            assert_eq!(r.contacts, 12, "{r:?}");
+            assert_eq!(r.method, "nsgs");
+            assert_eq!(r.status == RigidStatus::Converged, r.error <= 1e-8, "{r:?}");
+        }
+        assert_eq!(relaxed.status, RigidStatus::Converged, "{relaxed:?}");
+        assert!(relaxed.sweeps < plain.sweeps, "{relaxed:?} {plain:?}");
+        for bad in [0.9, 2.0, f64::NAN] {
+            let settings = RigidSettings {
+                relaxation: bad,
+                ..RigidSettings::default()
+            };
+            let b = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
+            let e = RigidWorld::new(vec![b], vec![floor()], one_material(0.5), settings)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("relaxation"), "{e}");
         }
     }
 

@@ -1,6 +1,6 @@
 //! URDF import (issue 53, item 4): a robot's links become bodies of the scene model and its
 //! joints joints, read by our own reader of the URDF elements used here
-//! ([`super::urdf_reader`], on `quick-xml`'s event reader).
+//! (`scene/urdf_reader.rs`, on `quick-xml`'s event reader).
 //!
 //! # Mapping (docs/joints.md, "URDF import")
 //! - each `<link>` is a body, in the order of the file's links: its shape frame is the link
@@ -27,7 +27,7 @@
 //! # Refused ([`UrdfError`], each naming the file and the element)
 //! A missing, non-regular or oversized file; malformed XML or a document the reader refuses (a
 //! missing required element or attribute, a number that does not parse, an unknown joint type
-//! or geometry: [`super::urdf_reader`]),
+//! or geometry: `scene/urdf_reader.rs`),
 //! elements nested deeper than [`MAX_DEPTH`];
 //! two links of one name; a joint naming an unknown link; a link with two parents; a cycle, no
 //! root or several roots; `floating` and `planar` joints; a link with no `inertial`
@@ -57,7 +57,7 @@ pub enum UrdfError {
     #[error(transparent)]
     Input(#[from] coulomb::input::InputError),
     /// the XML is malformed, or the document is not the URDF the reader reads
-    /// ([`super::urdf_reader`]); the message names the line
+    /// (`scene/urdf_reader.rs`); the message names the line
     #[error("{}: not a valid URDF document: {message}", path.display())]
     Xml {
         /// the URDF file
@@ -299,8 +299,8 @@ const Y_TO_Z: [f64; 4] = [
 
 /// The deepest nesting of elements a URDF document may have. A URDF robot is 4 or 5 deep
 /// (robot, link, collision, geometry, box). A deeper document is refused by one linear scan
-/// ([`nesting`]) before it is read (the XML reader of the `urdf-rs` crate, used before
-/// [`super::urdf_reader`], recursed or slowed down quadratically with the depth), and the
+/// (`nesting`) before it is read (the XML reader of the `urdf-rs` crate, used before
+/// `scene/urdf_reader.rs`, recursed or slowed down quadratically with the depth), and the
 /// reader refuses it too.
 pub const MAX_DEPTH: usize = 32;
 

@@ -8,5 +8,6 @@ pub mod import;
 pub mod model;
 pub mod save;
 pub mod urdf;
+mod urdf_reader;
 
 pub use builtin::*;

@@ -1,5 +1,6 @@
 //! URDF import (issue 53, item 4): a robot's links become bodies of the scene model and its
-//! joints joints, read with the `urdf-rs` crate (the openrr project's URDF parser).
+//! joints joints, read by our own reader of the URDF elements used here
+//! (`scene/urdf_reader.rs`, on `quick-xml`'s event reader).
 //!
 //! # Mapping (docs/joints.md, "URDF import")
 //! - each `<link>` is a body, in the order of the file's links: its shape frame is the link
@@ -11,7 +12,7 @@
 //!   origin is the shape itself (a sphere always becomes a one-part compound: a sphere body
 //!   has no inertia of its own), several (or one placed by its `origin`) a compound;
 //! - `revolute` and `continuous` joints are revolute joints, `prismatic` prismatic, `fixed`
-//!   fixed (and `spherical`, which `urdf-rs` reads, spherical); body A is the child link,
+//!   fixed (and `spherical`, a type some URDF readers accept, spherical); body A is the child link,
 //!   body B the parent, so that the joint coordinate is the child's relative to its parent
 //!   as in URDF; the anchor is the joint frame's origin (the child link's) and the axis the
 //!   joint's `axis` in the world, at the zero configuration. `limit lower/upper` become the
@@ -24,7 +25,9 @@
 //!   or fixed (`fixed_base`).
 //!
 //! # Refused ([`UrdfError`], each naming the file and the element)
-//! A missing, non-regular or oversized file; malformed XML or a document `urdf-rs` refuses,
+//! A missing, non-regular or oversized file; malformed XML or a document the reader refuses (a
+//! missing required element or attribute, a number that does not parse, an unknown joint type
+//! or geometry: `scene/urdf_reader.rs`),
 //! elements nested deeper than [`MAX_DEPTH`];
 //! two links of one name; a joint naming an unknown link; a link with two parents; a cycle, no
 //! root or several roots; `floating` and `planar` joints; a link with no `inertial`
@@ -35,6 +38,7 @@
 //! with lower = upper (a revolute joint without `<limit>`), a one-sided prismatic limit;
 //! `mimic` joints and nonzero `dynamics damping` (not modelled).
 
+use super::urdf_reader::{self as reader, Geometry};
 use crate::import::{self, Scale, Transform};
 use crate::model::{BodyShape, BodySpec, CompoundPart};
 use crate::rigid::joints::{JointDesc, JointKind};
@@ -52,7 +56,8 @@ pub enum UrdfError {
     /// ([`coulomb::input`])
     #[error(transparent)]
     Input(#[from] coulomb::input::InputError),
-    /// the XML is malformed, or `urdf-rs` refuses the document
+    /// the XML is malformed, or the document is not the URDF the reader reads
+    /// (`scene/urdf_reader.rs`); the message names the line
     #[error("{}: not a valid URDF document: {message}", path.display())]
     Xml {
         /// the URDF file
@@ -252,10 +257,13 @@ struct Pose {
 }
 
 impl Pose {
-    fn of(o: &urdf_rs::Pose) -> Self {
+    fn of(o: &reader::Origin) -> Self {
         Self {
-            p: o.xyz.0,
-            q: rpy_quaternion(o.rpy.0),
+            p: o.xyz,
+            q: match o.quat_xyzw {
+                Some([x, y, z, w]) => [w, x, y, z],
+                None => rpy_quaternion(o.rpy),
+            },
         }
     }
     /// self ∘ other: `other` expressed in `self`'s frame, in the frame `self` is in.
@@ -290,9 +298,10 @@ const Y_TO_Z: [f64; 4] = [
 ];
 
 /// The deepest nesting of elements a URDF document may have. A URDF robot is 4 or 5 deep
-/// (robot, link, collision, geometry, box); the XML reader and writer `urdf-rs` runs recurse
-/// (or slow down quadratically) with the depth: 2·10⁵ nested elements did not finish in a
-/// minute.
+/// (robot, link, collision, geometry, box). A deeper document is refused by one linear scan
+/// (`nesting`) before it is read (the XML reader of the `urdf-rs` crate, used before
+/// `scene/urdf_reader.rs`, recursed or slowed down quadratically with the depth), and the
+/// reader refuses it too.
 pub const MAX_DEPTH: usize = 32;
 
 /// Refuses a document whose elements nest deeper than [`MAX_DEPTH`], by one linear scan of
@@ -385,14 +394,14 @@ pub fn mesh_files(path: &Path) -> Vec<std::path::PathBuf> {
     if nesting(&text).is_err() {
         return Vec::new();
     }
-    let Ok(robot) = urdf_rs::read_from_string(&text) else {
+    let Ok(robot) = reader::read(&text) else {
         return Vec::new();
     };
     let dir = path.parent().unwrap_or_else(|| Path::new("."));
     let mut files = Vec::new();
     for link in &robot.links {
         for c in &link.collision {
-            if let urdf_rs::Geometry::Mesh { filename, .. } = &c.geometry {
+            if let Geometry::Mesh { filename, .. } = &c.geometry {
                 let name = filename.strip_prefix("file://").unwrap_or(filename);
                 if !name.contains("://") {
                     files.push(mesh_path(dir, name));
@@ -422,9 +431,9 @@ pub fn parse(path: &Path, text: &str, placement: &UrdfPlacement) -> Result<UrdfR
         path: file.clone(),
         message,
     })?;
-    let robot = urdf_rs::read_from_string(text).map_err(|e| UrdfError::Xml {
+    let robot = reader::read(text).map_err(|message| UrdfError::Xml {
         path: file.clone(),
-        message: e.to_string(),
+        message,
     })?;
     let tree = |message: String| UrdfError::Tree {
         path: file.clone(),
@@ -455,23 +464,23 @@ pub fn parse(path: &Path, text: &str, placement: &UrdfPlacement) -> Result<UrdfR
                     link: name.to_string(),
                 })
         };
-        let p = find("parent", &joint.parent.link)?;
-        let c = find("child", &joint.child.link)?;
+        let p = find("parent", &joint.parent)?;
+        let c = find("child", &joint.child)?;
         if p == c {
             return Err(UrdfError::Joint {
                 path: file.clone(),
                 joint: joint.name.clone(),
-                message: format!("joins link '{}' to itself", joint.parent.link),
+                message: format!("joins link '{}' to itself", joint.parent),
             });
         }
         if let Some(other) = parent_joint[c] {
             return Err(tree(format!(
                 "link '{}' has two parents: joint '{}' (parent '{}') and joint '{}' (parent '{}'); a URDF robot is a tree",
-                joint.child.link,
+                joint.child,
                 robot.joints[other].name,
-                robot.joints[other].parent.link,
+                robot.joints[other].parent,
                 joint.name,
-                joint.parent.link
+                joint.parent
             )));
         }
         parent_joint[c] = Some(j);
@@ -509,23 +518,20 @@ pub fn parse(path: &Path, text: &str, placement: &UrdfPlacement) -> Result<UrdfR
         });
         for &j in &children[k] {
             let joint = &robot.joints[j];
-            if !(finite(&joint.origin.xyz.0) && finite(&joint.origin.rpy.0)) {
+            if !(finite(&joint.origin.xyz) && finite(&joint.origin.rpy)) {
                 return Err(UrdfError::Joint {
                     path: file.clone(),
                     joint: joint.name.clone(),
                     message: format!(
                         "origin xyz {:?} rpy {:?} is not finite",
-                        joint.origin.xyz.0, joint.origin.rpy.0
+                        joint.origin.xyz, joint.origin.rpy
                     ),
                 });
             }
-            let c = index[joint.child.link.as_str()];
+            let c = index[joint.child.as_str()];
             if pose[c].is_some() {
                 // unreachable for a tree (one parent each), kept as the loop's guard
-                return Err(tree(format!(
-                    "link '{}' is reached twice",
-                    joint.child.link
-                )));
+                return Err(tree(format!("link '{}' is reached twice", joint.child)));
             }
             pose[c] = Some(here.then(&Pose::of(&joint.origin)));
             reached += 1;
@@ -561,8 +567,8 @@ pub fn parse(path: &Path, text: &str, placement: &UrdfPlacement) -> Result<UrdfR
     }
     let mut joints = Vec::with_capacity(robot.joints.len());
     for joint in &robot.joints {
-        let c = index[joint.child.link.as_str()];
-        let p = index[joint.parent.link.as_str()];
+        let c = index[joint.child.as_str()];
+        let p = index[joint.parent.as_str()];
         let frame = pose[c].unwrap_or(Pose {
             p: placement.position,
             q: placement.orientation,
@@ -581,7 +587,7 @@ pub fn parse(path: &Path, text: &str, placement: &UrdfPlacement) -> Result<UrdfR
 fn link_body(
     file: &Path,
     dir: &Path,
-    link: &urdf_rs::Link,
+    link: &reader::Link,
     at: Pose,
     fixed: bool,
     material: &str,
@@ -592,16 +598,16 @@ fn link_body(
         message,
     };
     let inertial = &link.inertial;
-    let m = inertial.mass.value;
+    let m = inertial.mass;
     if !(m.is_finite() && m > 0.0) {
         return Err(bad(format!(
             "mass {m} must be finite and positive (a link without <inertial> has mass 0: give every link its <inertial>)"
         )));
     }
-    if !(finite(&inertial.origin.xyz.0) && finite(&inertial.origin.rpy.0)) {
+    if !(finite(&inertial.origin.xyz) && finite(&inertial.origin.rpy)) {
         return Err(bad(format!(
             "inertial origin xyz {:?} rpy {:?} is not finite",
-            inertial.origin.xyz.0, inertial.origin.rpy.0
+            inertial.origin.xyz, inertial.origin.rpy
         )));
     }
     let t = &inertial.inertia;
@@ -611,7 +617,7 @@ fn link_body(
         [t.ixz, t.iyz, t.izz],
     ];
     // I_link = R I Rᵀ, R the inertial frame's rotation in the link frame
-    let r = matrix(rpy_quaternion(inertial.origin.rpy.0));
+    let r = matrix(rpy_quaternion(inertial.origin.rpy));
     let inertia: [[f64; 3]; 3] = std::array::from_fn(|a| {
         std::array::from_fn(|b| {
             let mut s = 0.0;
@@ -625,7 +631,7 @@ fn link_body(
     });
     let props = MassProperties {
         mass: m,
-        local_com: inertial.origin.xyz.0,
+        local_com: inertial.origin.xyz,
         inertia,
     };
     props.check().map_err(|e| {
@@ -655,10 +661,10 @@ fn link_body(
     }
     let mut parts = Vec::with_capacity(link.collision.len());
     for (index, c) in link.collision.iter().enumerate() {
-        if !(finite(&c.origin.xyz.0) && finite(&c.origin.rpy.0)) {
+        if !(finite(&c.origin.xyz) && finite(&c.origin.rpy)) {
             return Err(bad(format!(
                 "collision {index}: origin xyz {:?} rpy {:?} is not finite",
-                c.origin.xyz.0, c.origin.rpy.0
+                c.origin.xyz, c.origin.rpy
             )));
         }
         let place = Pose::of(&c.origin);
@@ -696,7 +702,7 @@ fn link_body(
         mass: Some(m),
         density: None,
         inertia: Some(inertia),
-        centre_of_mass: Some(inertial.origin.xyz.0),
+        centre_of_mass: Some(inertial.origin.xyz),
         material: material.to_string(),
         fixed,
     })
@@ -707,9 +713,9 @@ fn link_body(
 fn geometry(
     file: &Path,
     dir: &Path,
-    link: &urdf_rs::Link,
+    link: &reader::Link,
     index: usize,
-    g: &urdf_rs::Geometry,
+    g: &reader::Geometry,
 ) -> Result<(BodyShape, [f64; 4]), UrdfError> {
     let unsupported = |message: String| UrdfError::UnsupportedGeometry {
         path: file.to_path_buf(),
@@ -718,28 +724,28 @@ fn geometry(
         message,
     };
     Ok(match g {
-        urdf_rs::Geometry::Box { size } => (
+        Geometry::Box { size } => (
             BodyShape::Cuboid {
-                half_extents: size.0.map(|s| 0.5 * s),
+                half_extents: size.map(|s| 0.5 * s),
             },
             IDENTITY,
         ),
-        urdf_rs::Geometry::Cylinder { radius, length } => (
+        Geometry::Cylinder { radius, length } => (
             BodyShape::Cylinder {
                 radius: *radius,
                 half_height: 0.5 * length,
             },
             Y_TO_Z,
         ),
-        urdf_rs::Geometry::Capsule { radius, length } => (
+        Geometry::Capsule { radius, length } => (
             BodyShape::Capsule {
                 radius: *radius,
                 half_height: 0.5 * length,
             },
             Y_TO_Z,
         ),
-        urdf_rs::Geometry::Sphere { radius } => (BodyShape::Sphere { radius: *radius }, IDENTITY),
-        urdf_rs::Geometry::Mesh { filename, scale } => {
+        Geometry::Sphere { radius } => (BodyShape::Sphere { radius: *radius }, IDENTITY),
+        Geometry::Mesh { filename, scale } => {
             if filename.starts_with("package://") {
                 return Err(UrdfError::PackageUri {
                     path: file.to_path_buf(),
@@ -765,7 +771,7 @@ fn geometry(
             }
             let resolved = mesh_path(dir, name);
             let transform = Transform {
-                scale: Scale::PerAxis(scale.map(|s| s.0).unwrap_or([1.0; 3])),
+                scale: Scale::PerAxis(scale.unwrap_or([1.0; 3])),
                 ..Transform::default()
             };
             let mesh = import::read_mesh(&resolved, &transform).map_err(|e| UrdfError::Link {
@@ -787,7 +793,7 @@ fn geometry(
 /// (the joint frame at the zero configuration) at `frame` in the world.
 fn joint_desc(
     file: &Path,
-    joint: &urdf_rs::Joint,
+    joint: &reader::Joint,
     c: usize,
     p: usize,
     frame: Pose,
@@ -797,7 +803,7 @@ fn joint_desc(
         joint: joint.name.clone(),
         message,
     };
-    use urdf_rs::JointType as T;
+    use reader::JointType as T;
     let kind = match joint.joint_type {
         T::Revolute | T::Continuous => JointKind::Revolute,
         T::Prismatic => JointKind::Prismatic,
@@ -807,11 +813,11 @@ fn joint_desc(
             return Err(UrdfError::UnsupportedJoint {
                 path: file.to_path_buf(),
                 joint: joint.name.clone(),
-                kind: format!("{:?}", joint.joint_type).to_lowercase(),
+                kind: joint.joint_type.name().to_string(),
             })
         }
     };
-    if joint.mimic.is_some() {
+    if joint.mimic {
         return Err(bad(
             "<mimic> (a joint driven by another) is not modelled; remove it".into(),
         ));
@@ -843,7 +849,7 @@ fn joint_desc(
     }
     let axis = match kind {
         JointKind::Revolute | JointKind::Prismatic => {
-            let a = joint.axis.xyz.0;
+            let a = joint.axis;
             let len = a.iter().map(|x| x * x).sum::<f64>().sqrt();
             if !(finite(&a) && len > 1e-12 && len.is_finite()) {
                 return Err(bad(format!("axis {a:?} is zero or not finite")));
@@ -866,7 +872,7 @@ fn joint_desc(
             if lo == hi {
                 return Err(bad(format!(
                     "limit lower = upper = {lo}: no range of motion ({} joints need a <limit> with lower < upper; use a fixed joint, or a continuous one for no limits)",
-                    joint_type_name(&joint.joint_type)
+                    joint.joint_type.name()
                 )));
             }
             let pi = std::f64::consts::PI;
@@ -909,10 +915,6 @@ fn joint_desc(
         limit_restitution: None,
         friction,
     })
-}
-
-fn joint_type_name(t: &urdf_rs::JointType) -> String {
-    format!("{t:?}").to_lowercase()
 }
 
 #[cfg(test)]

@@ -214,6 +214,11 @@ pub struct RigidSettings {
     /// the checks, where the sphere engine judges its sweep residual); default 1.5 (a scene's
     /// `relaxation`)
     pub relaxation: f64,
+    /// wall-clock cap of one step's Gauss–Seidel, checked at its exact evaluations; reached,
+    /// the step goes on as a stall does (to the library's solver, itself time-capped by
+    /// `solver`); default 60 s, the sphere engine's
+    /// [`crate::nsgs::NsgsSettings::time_limit`]; `None`: no cap
+    pub time_limit: Option<std::time::Duration>,
     /// hand a step that Gauss–Seidel leaves above the tolerance to `coulomb::solver` on
     /// the step's global problem; default true
     pub library_finish: bool,
@@ -249,6 +254,7 @@ impl Default for RigidSettings {
             max_sweeps: 2_000,
             stall_window: 100,
             relaxation: 1.5,
+            time_limit: Some(std::time::Duration::from_secs(60)),
             library_finish: true,
             solver: coulomb::solver::Settings::default(),
             activation_gamma: 1.0,

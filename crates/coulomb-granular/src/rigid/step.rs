@@ -914,6 +914,7 @@ impl RigidWorld {
                         max_sweeps: s.max_sweeps,
                         stall_window: s.stall_window,
                         relaxation: s.relaxation,
+                        time_limit: s.time_limit,
                     },
                 );
                 let mut lambda = sol.lambda;
@@ -1589,6 +1590,8 @@ pub mod nsgs {
         pub stall_window: usize,
         /// over-relaxation ω ∈ [1, 2) from the second sweep on
         pub relaxation: f64,
+        /// wall-clock cap, checked at the exact evaluations (`None`: none)
+        pub time_limit: Option<std::time::Duration>,
     }
 
     /// Result of [`Problem::solve`].
@@ -2024,7 +2027,7 @@ pub mod nsgs {
         /// error met has not halved over `rule.stall_window` sweeps and, decreasing at the
         /// rate of those sweeps, would need more sweeps to reach `rule.tol` than it has done
         /// (a plateau goes to the library at once, a slow but steady finish near the
-        /// tolerance is left to Gauss–Seidel). Returns the iterate of
+        /// tolerance is left to Gauss–Seidel), or `rule.time_limit`. Returns the iterate of
         /// lowest error (exactly evaluated: every [`CHECK_EVERY`] sweeps, the first and the
         /// last).
         pub fn solve(&self, r0: &[f64], lambda0: &[f64], rule: Rule) -> Solution {
@@ -2033,7 +2036,9 @@ pub mod nsgs {
                 max_sweeps,
                 stall_window,
                 relaxation,
+                time_limit,
             } = rule;
+            let deadline = coulomb::deadline::deadline(std::time::Instant::now(), time_limit);
             let mut omega = if relaxation.is_finite() {
                 relaxation.clamp(1.0, 1.99)
             } else {
@@ -2091,6 +2096,10 @@ pub mod nsgs {
                         best.lambda.copy_from_slice(&lambda);
                     }
                     if err <= tol || !err.is_finite() {
+                        break;
+                    }
+                    // the time cap: the step goes on as after a stall
+                    if deadline.is_some_and(|d| std::time::Instant::now() >= d) {
                         break;
                     }
                     if sweep % crate::nsgs::RELAX_WINDOW == 0 {

@@ -297,12 +297,7 @@ const Y_TO_Z: [f64; 4] = [
     0.0,
 ];
 
-/// The deepest nesting of elements a URDF document may have. A URDF robot is 4 or 5 deep
-/// (robot, link, collision, geometry, box). A deeper document is refused by one linear scan
-/// (`nesting`) before it is read (the XML reader of the `urdf-rs` crate, used before
-/// `scene/urdf_reader.rs`, recursed or slowed down quadratically with the depth), and the
-/// reader refuses it too.
-pub const MAX_DEPTH: usize = 32;
+pub use super::urdf_reader::MAX_DEPTH;
 
 /// Refuses a document whose elements nest deeper than [`MAX_DEPTH`], by one linear scan of
 /// its tags (comments, CDATA, processing instructions and declarations skipped, quoted

@@ -25,11 +25,17 @@
 //!
 //! A missing required element or attribute, a number that does not parse, a single element
 //! given twice, an unknown joint type or geometry, and malformed XML are refused with the
-//! line they are on. Elements nest at most [`super::urdf::MAX_DEPTH`] deep.
+//! line they are on. Elements nest at most [`MAX_DEPTH`] deep.
 
-use super::urdf::MAX_DEPTH;
 use quick_xml::events::{BytesStart, Event};
 use quick_xml::Reader;
+
+/// The deepest nesting of elements a URDF document may have. A URDF robot is 4 or 5 deep
+/// (robot, link, collision, geometry, box). A deeper document is refused by one linear scan
+/// (`nesting`, in `scene/urdf.rs`) before it is read (the XML reader of the `urdf-rs`
+/// crate, used before this reader, recursed or slowed down quadratically with the depth),
+/// and this reader refuses it too.
+pub const MAX_DEPTH: usize = 32;
 
 /// A pose: `xyz`, and `rpy` or (URDF 1.1) the unit quaternion `quat_xyzw` (x, y, z, w).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

@@ -248,7 +248,7 @@ pub fn run(args: &Args) -> anyhow::Result<Outcome> {
     }
     let mut scene = loaded.build(&opts)?;
     refuse_unused_generators(args, &scene, file)?;
-    if scene.model.has_shapes() {
+    if scene.runs_rigid() {
         #[cfg(feature = "mpi")]
         if args.mpi || crate::sim_args::under_launcher() {
             bail!("{file}: scenes with bodies of other shapes than spheres run in one process, not distributed");

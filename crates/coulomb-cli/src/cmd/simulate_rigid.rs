@@ -65,12 +65,7 @@ pub fn run(a: &Args, scene: &BuiltScene, inputs: &[PathBuf]) -> anyhow::Result<O
             rigid
         }
     };
-    if !scene.inlets.is_empty() {
-        anyhow::bail!(
-            "{file}: inlets pour spheres into sphere-only scenes; this scene has other shapes"
-        );
-    }
-    steps(a, rigid, &scene.name, false, inputs)
+    steps(a, rigid, &scene.name, false, inputs, pour(scene))
 }
 
 /// `stats.json` of a rigid run: the rows kept from before a restart, then `reports`.
@@ -106,7 +101,7 @@ pub fn restart(
         .with_context(|| format!("cannot restart from {}", checkpoint.display()))?;
     let name = match scene {
         Some(s) => {
-            if s.model != rigid.model || !s.inlets.is_empty() {
+            if !rigid.is_built_from(&s.model, !s.inlets.is_empty()) {
                 anyhow::bail!(
                     "{} is not the scene of the checkpoint {}: its bodies, obstacles or settings differ",
                     s.path.display(),
@@ -117,17 +112,33 @@ pub fn restart(
         }
         None => "restart".to_string(),
     };
-    steps(a, rigid, &name, true, inputs)
+    steps(a, rigid, &name, true, inputs, scene.and_then(pour))
+}
+
+/// The scene whose inlets pour after each step ([`BuiltScene::pour_rigid`]), if it has some.
+fn pour(scene: &BuiltScene) -> Option<BuiltScene> {
+    (!scene.inlets.is_empty()).then(|| scene.clone())
+}
+
+/// The size of a body for `--until-rest`: the farthest vertex of its tessellation.
+fn size_of(s: &coulomb_granular::model::BodyShape) -> f64 {
+    let t = s.tessellation().unwrap_or_default();
+    t.vertices
+        .iter()
+        .map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt())
+        .fold(0.0, f64::max)
 }
 
 /// The time steps of `rigid` (new, or loaded by a restart when `restarted`) and their
-/// outputs.
+/// outputs; after each step t_k → t_{k+1} the inlets of `inlets` pour the bodies due in
+/// (t_k, t_{k+1}] (before the step's frame and checkpoint).
 fn steps(
     a: &Args,
     mut rigid: RigidScene,
     name: &str,
     restarted: bool,
     inputs: &[PathBuf],
+    mut inlets: Option<BuiltScene>,
 ) -> anyhow::Result<Outcome> {
     use crate::run_output::{write_checkpoint_bytes, write_failed};
     crate::interrupt::install().context("installing the SIGINT/SIGTERM handlers")?;
@@ -165,17 +176,8 @@ fn steps(
         a.steps.unwrap_or(200)
     };
     let max_steps = (first as usize).saturating_add(more);
-    let sizes: Vec<f64> = rigid
-        .shapes
-        .iter()
-        .map(|s| {
-            let t = s.tessellation().unwrap_or_default();
-            t.vertices
-                .iter()
-                .map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt())
-                .fold(0.0, f64::max)
-        })
-        .collect();
+    let mut sizes: Vec<f64> = rigid.shapes.iter().map(size_of).collect();
+    let mut warned_full = false;
     // the progress report of sphere runs: a bar on a terminal, plain lines on stderr every
     // few seconds otherwise (a log file, CI), nothing with --json
     let pb = crate::progress::bar(
@@ -189,9 +191,24 @@ fn steps(
     let mut run = || -> anyhow::Result<()> {
         while (rigid.world.steps() as usize) < max_steps {
             let k = rigid.world.steps() as usize;
+            let t0 = rigid.world.time();
             let r = rigid
                 .step()
                 .with_context(|| format!("{name}: time step failed"))?;
+            if let Some(scene) = inlets.as_mut() {
+                let t1 = rigid.world.time();
+                let p = scene
+                    .pour_rigid(&mut rigid, t0, t1)
+                    .with_context(|| format!("{name}: inlet at t = {t1}"))?;
+                if p.capped > 0 && !warned_full {
+                    warned_full = true;
+                    eprintln!(
+                        "warning: an inlet's region is full at t = {t1}: {} emission(s) of this step skipped without trying (an inlet adds at most what its region holds per step; lower its rate)",
+                        p.capped
+                    );
+                }
+                sizes.extend(rigid.shapes[sizes.len()..].iter().map(size_of));
+            }
             if let Some(o) = out.as_mut() {
                 let line =
                     coulomb_granular::StepRecord::of_rigid(&r, rigid.world.potential_energy())

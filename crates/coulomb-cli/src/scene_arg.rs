@@ -248,10 +248,10 @@ pub fn run(args: &Args) -> anyhow::Result<Outcome> {
     }
     let mut scene = loaded.build(&opts)?;
     refuse_unused_generators(args, &scene, file)?;
-    if scene.model.has_shapes() {
+    if scene.runs_rigid() {
         #[cfg(feature = "mpi")]
         if args.mpi || crate::sim_args::under_launcher() {
-            bail!("{file}: scenes with bodies of other shapes than spheres run in one process, not distributed");
+            bail!("{file}: scenes with bodies of other shapes than spheres, joints or an inlet pouring another shape run in the rigid-body simulator, in one process, not distributed");
         }
         if args.subspace_every > 0
             || args.coarse_every > 0

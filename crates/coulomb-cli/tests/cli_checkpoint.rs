@@ -175,3 +175,72 @@ fn restart_with_its_scene_file_keeps_the_inlets_pouring() {
     assert!(String::from_utf8_lossy(&r.stderr).contains("is not the scene of the checkpoint"));
     std::fs::remove_dir_all(&root).ok();
 }
+
+/// A sphere scene whose inlet pours capsules runs in the rigid-body simulator: 40 steps with
+/// checkpoints, continued for 20 steps from the checkpoint with the scene file given (the
+/// inlet keeps pouring), ends as the uninterrupted 60-step run to the bit, its frames drawing
+/// the poured capsules; a file with another body is refused.
+#[test]
+fn a_rigid_restart_with_its_scene_file_keeps_pouring_capsules() {
+    let root = temp_dir("checkpoint-rigid-inlet");
+    let scene = root.join("pour.toml");
+    let text = "name = \"pour\"\n[step]\nh = 0.002\ntol = 1e-8\n\
+        [[obstacles]]\nshape = { kind = \"plane\", point = [0, 0, 0], normal = [0, 0, 1] }\n\
+        [[bodies]]\nspheres = [[0.0, 0.0, 0.03, 0.03]]\n\
+        [[inlets]]\nregion = { kind = \"box\", lo = [-0.15, -0.15, 0.1], hi = [0.15, 0.15, 0.25] }\n\
+        sizes = { kind = \"uniform\", min = 0.015, max = 0.025 }\nrate = { count = 300.0 }\n\
+        velocity = [0.0, 0.0, -0.3]\nshape = { kind = \"capsule\", radius = 0.5, half_height = 1.0 }\n";
+    std::fs::write(&scene, text).unwrap();
+    let s = scene.to_str().unwrap();
+    let (a, c) = (root.join("a"), root.join("c"));
+    let run = [s, "--checkpoint-every", "20"];
+    simulate(&[&run[..], &["--steps", "40"]].concat(), &a);
+    simulate(&[&run[..], &["--steps", "60"]].concat(), &c);
+    let bodies = |dir: &Path| common::read_json(&dir.join("summary.json"))["bodies"].clone();
+    let at_40 = bodies(&a).as_u64().unwrap();
+    assert!(at_40 > 20, "{at_40} bodies after 40 steps");
+    let ckpt = a.join("checkpoint.h5");
+    let k = ckpt.to_str().unwrap();
+    simulate(
+        &[
+            s,
+            "--restart",
+            k,
+            "--steps",
+            "20",
+            "--checkpoint-every",
+            "20",
+        ],
+        &a,
+    );
+    assert!(bodies(&a).as_u64().unwrap() > at_40);
+    assert_eq!(bodies(&a), bodies(&c));
+    let read = |p: &Path| std::fs::read(p).unwrap();
+    assert_eq!(read(&ckpt), read(&c.join("checkpoint.h5")));
+    let f = "frames/bodies_000060.vtp";
+    assert_eq!(read(&a.join(f)), read(&c.join(f)), "{f}");
+    // the frame draws the capsules (one polygon set per body: far more than the first's)
+    let first = read(&c.join("frames/bodies_000000.vtp")).len();
+    assert!(read(&c.join(f)).len() > 10 * first);
+    // a file with one more body is not the checkpoint's scene
+    let other = root.join("other.toml");
+    std::fs::write(
+        &other,
+        text.replace(
+            "[0.0, 0.0, 0.03, 0.03]",
+            "[0.0, 0.0, 0.03, 0.03], [0.5, 0.0, 0.03, 0.03]",
+        ),
+    )
+    .unwrap();
+    let r = coulomb(&[
+        "simulate",
+        other.to_str().unwrap(),
+        "--restart",
+        k,
+        "--steps",
+        "1",
+    ]);
+    assert_eq!(r.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("is not the scene of the checkpoint"));
+    std::fs::remove_dir_all(&root).ok();
+}

@@ -12,6 +12,7 @@ mod long_chains;
 mod mechanisms;
 mod physics;
 mod rigid_contacts;
+mod rigid_inlets;
 mod rigid_scenes;
 mod rigid_threads;
 mod rolling;

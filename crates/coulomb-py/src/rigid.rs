@@ -104,6 +104,12 @@ impl PyRigidSimulation {
             max_fill: None,
         };
         let mut built = py.detach(|| loaded.build(&opts)).map_err(file_err)?;
+        if !built.inlets.is_empty() {
+            return Err(PyValueError::new_err(format!(
+                "{}: the inlets of a scene that runs in the rigid-body simulator (bodies of other shapes, joints, or an inlet with a shape) pour in `coulomb simulate` only, not yet in Python",
+                path.display()
+            )));
+        }
         let rest = crate::granular::apply_to_model(&mut built.model, params)?;
         if let Some((k, _)) = rest.first() {
             return Err(PyTypeError::new_err(format!(
@@ -339,5 +345,8 @@ pub fn _scene_file_has_shapes(py: Python<'_>, path: PathBuf) -> PyResult<bool> {
         || !f.urdf.is_empty()
         || f.bodies
             .iter()
-            .any(|g| g.shape.as_ref().is_some_and(|s| !s.is_sphere())))
+            .any(|g| g.shape.as_ref().is_some_and(|s| !s.is_sphere()))
+        || f.inlets
+            .iter()
+            .any(|i| i.shape.as_ref().is_some_and(|s| !s.is_sphere())))
 }

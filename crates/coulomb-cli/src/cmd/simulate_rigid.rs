@@ -11,7 +11,7 @@
 //! and exit status are those of every scene, [`crate::run_loop::steps`].
 
 use crate::exit::Outcome;
-use crate::run_loop::{self, NoHook};
+use crate::run_loop::{self, NoHook, StepHook};
 use crate::sim_args::Args;
 use anyhow::Context;
 use coulomb_granular::rigid_scene::RigidScene;
@@ -38,12 +38,7 @@ pub fn run(a: &Args, scene: &BuiltScene, inputs: &[PathBuf]) -> anyhow::Result<O
             rigid
         }
     };
-    if !scene.inlets.is_empty() {
-        anyhow::bail!(
-            "{file}: inlets pour spheres into sphere-only scenes; this scene has other shapes"
-        );
-    }
-    run_loop::steps(a, rigid, &scene.name, false, inputs, &mut NoHook)
+    run_loop::steps(a, rigid, &scene.name, false, inputs, &mut Pour::of(scene))
 }
 
 /// Whether `path` is a rigid-scene checkpoint ([`coulomb_granular::rigid_checkpoint`]), not
@@ -67,7 +62,7 @@ pub fn restart(
         .with_context(|| format!("cannot restart from {}", checkpoint.display()))?;
     let name = match scene {
         Some(s) => {
-            if s.model != rigid.model || !s.inlets.is_empty() {
+            if !rigid.is_built_from(&s.model, !s.inlets.is_empty()) {
                 anyhow::bail!(
                     "{} is not the scene of the checkpoint {}: its bodies, obstacles or settings differ",
                     s.path.display(),
@@ -78,5 +73,65 @@ pub fn restart(
         }
         None => "restart".to_string(),
     };
-    run_loop::steps(a, rigid, &name, true, inputs, &mut NoHook)
+    match scene {
+        Some(s) => run_loop::steps(a, rigid, &name, true, inputs, &mut Pour::of(s)),
+        None => run_loop::steps(a, rigid, &name, true, inputs, &mut NoHook),
+    }
+}
+
+/// The inlets of a rigid scene file, pouring after each step t_k → t_{k+1} the bodies due in
+/// (t_k, t_{k+1}] ([`BuiltScene::pour_rigid`], before the step's frame and checkpoint).
+struct Pour {
+    /// the scene file, whose inlets pour (none: nothing to do)
+    scene: BuiltScene,
+    /// bodies poured, and emissions skipped, over the run
+    poured: usize,
+    skipped: usize,
+    /// whether the warning about a full region was said (once per run)
+    warned_full: bool,
+}
+
+impl Pour {
+    fn of(scene: &BuiltScene) -> Self {
+        Self {
+            scene: scene.clone(),
+            poured: 0,
+            skipped: 0,
+            warned_full: false,
+        }
+    }
+}
+
+impl StepHook<RigidScene> for Pour {
+    fn after_step(&mut self, rigid: &mut RigidScene, t0: f64, t1: f64) -> anyhow::Result<()> {
+        if self.scene.inlets.is_empty() {
+            return Ok(());
+        }
+        let p = self
+            .scene
+            .pour_rigid(rigid, t0, t1)
+            .with_context(|| format!("{}: inlet at t = {t1}", self.scene.name))?;
+        self.poured += p.inserted;
+        self.skipped += p.skipped;
+        if p.capped > 0 && !self.warned_full {
+            self.warned_full = true;
+            eprintln!(
+                "warning: an inlet's region is full at t = {t1}: {} emission(s) of this step skipped without trying (an inlet adds at most what its region holds per step; lower its rate)",
+                p.capped
+            );
+        }
+        Ok(())
+    }
+
+    /// The same fields and note as the sphere scenes' inlets.
+    fn report(&self) -> (serde_json::Map<String, serde_json::Value>, String) {
+        let mut extra = serde_json::Map::new();
+        if self.scene.inlets.is_empty() {
+            return (extra, String::new());
+        }
+        extra.insert("poured".into(), self.poured.into());
+        extra.insert("inlet_skipped".into(), self.skipped.into());
+        let note = format!(" ({} poured, {} skipped)", self.poured, self.skipped);
+        (extra, note)
+    }
 }

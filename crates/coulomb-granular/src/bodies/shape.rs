@@ -803,6 +803,102 @@ impl BodyShape {
         Ok(self.mass_properties(1.0)?.mass)
     }
 
+    /// The radius of a ball about the shape frame's origin that holds the shape: the
+    /// smallest one, except for a compound with round parts (a part's origin distance plus
+    /// its own bounding radius). What an inlet scales to the sampled size
+    /// ([`crate::generate::Inlet::shape`]).
+    pub fn bounding_radius(&self) -> f64 {
+        let norm = |p: [f64; 3]| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+        let far = |pts: &[[f64; 3]]| pts.iter().map(|p| norm(*p)).fold(0.0, f64::max);
+        match self {
+            BodyShape::Sphere { radius } => *radius,
+            BodyShape::Cuboid { half_extents } => norm(*half_extents),
+            BodyShape::Capsule {
+                radius,
+                half_height,
+            } => radius + half_height,
+            // the rim of the base (and of the top) is the farthest point
+            BodyShape::Cylinder {
+                radius,
+                half_height,
+            }
+            | BodyShape::Cone {
+                radius,
+                half_height,
+            } => radius.hypot(*half_height),
+            BodyShape::ConvexHull { points } => far(points),
+            BodyShape::ConvexPolyhedron { vertices, .. } => far(vertices),
+            BodyShape::Compound { parts } => parts
+                .iter()
+                .map(|p| match &p.shape {
+                    BodyShape::ConvexHull { points: v }
+                    | BodyShape::ConvexPolyhedron { vertices: v, .. } => v
+                        .iter()
+                        .map(|x| {
+                            let r = rotate(p.orientation, *x);
+                            norm([
+                                r[0] + p.position[0],
+                                r[1] + p.position[1],
+                                r[2] + p.position[2],
+                            ])
+                        })
+                        .fold(0.0, f64::max),
+                    s => norm(p.position) + s.bounding_radius(),
+                })
+                .fold(0.0, f64::max),
+        }
+    }
+
+    /// The shape scaled by `s` about its frame's origin (every length times `s`; compound
+    /// parts' positions too, orientations kept).
+    pub fn scaled(&self, s: f64) -> BodyShape {
+        let p = |v: &[f64; 3]| v.map(|x| x * s);
+        match self {
+            BodyShape::Sphere { radius } => BodyShape::Sphere { radius: radius * s },
+            BodyShape::Cuboid { half_extents } => BodyShape::Cuboid {
+                half_extents: p(half_extents),
+            },
+            BodyShape::Capsule {
+                radius,
+                half_height,
+            } => BodyShape::Capsule {
+                radius: radius * s,
+                half_height: half_height * s,
+            },
+            BodyShape::Cylinder {
+                radius,
+                half_height,
+            } => BodyShape::Cylinder {
+                radius: radius * s,
+                half_height: half_height * s,
+            },
+            BodyShape::Cone {
+                radius,
+                half_height,
+            } => BodyShape::Cone {
+                radius: radius * s,
+                half_height: half_height * s,
+            },
+            BodyShape::ConvexHull { points } => BodyShape::ConvexHull {
+                points: points.iter().map(p).collect(),
+            },
+            BodyShape::ConvexPolyhedron { vertices, faces } => BodyShape::ConvexPolyhedron {
+                vertices: vertices.iter().map(p).collect(),
+                faces: faces.clone(),
+            },
+            BodyShape::Compound { parts } => BodyShape::Compound {
+                parts: parts
+                    .iter()
+                    .map(|c| CompoundPart {
+                        shape: c.shape.scaled(s),
+                        position: p(&c.position),
+                        orientation: c.orientation,
+                    })
+                    .collect(),
+            },
+        }
+    }
+
     /// The surface as polygons in the shape frame: polyhedra (cuboids, hulls, polyhedra) as
     /// their faces, curved shapes as [`CURVE_SEGMENTS`] segments around their axis,
     /// compounds as their parts' surfaces. Computed once per shape; the output moves it.
@@ -1395,5 +1491,82 @@ mod tests {
         let mut inward = octa.clone();
         inward[4] = [0.0, 0.0, -0.5];
         assert!(check_faces(&inward, &of).is_err());
+    }
+
+    #[test]
+    fn bounding_radius_holds_the_shape_and_scales_with_it() {
+        let shapes = [
+            BodyShape::Sphere { radius: 0.3 },
+            BodyShape::Cuboid {
+                half_extents: [0.1, 0.2, 0.3],
+            },
+            BodyShape::Capsule {
+                radius: 0.1,
+                half_height: 0.2,
+            },
+            BodyShape::Cylinder {
+                radius: 0.1,
+                half_height: 0.2,
+            },
+            BodyShape::Cone {
+                radius: 0.3,
+                half_height: 0.1,
+            },
+            BodyShape::ConvexHull {
+                points: vec![
+                    [0.0, 0.0, 0.0],
+                    [0.4, 0.0, 0.0],
+                    [0.0, 0.3, 0.0],
+                    [0.0, 0.0, 0.2],
+                ],
+            },
+            cube_polyhedron(0.2),
+            BodyShape::Compound {
+                parts: vec![
+                    CompoundPart {
+                        shape: BodyShape::Cuboid {
+                            half_extents: [0.1; 3],
+                        },
+                        position: [0.0; 3],
+                        orientation: IDENTITY,
+                    },
+                    CompoundPart {
+                        shape: BodyShape::ConvexHull {
+                            points: vec![
+                                [0.0, 0.0, 0.0],
+                                [0.1, 0.0, 0.0],
+                                [0.0, 0.1, 0.0],
+                                [0.0, 0.0, 0.1],
+                            ],
+                        },
+                        position: [0.0, 0.3, 0.0],
+                        orientation: [0.0, 1.0, 0.0, 0.0],
+                    },
+                ],
+            },
+        ];
+        for s in &shapes {
+            let r = s.bounding_radius();
+            // every point of the surface (the tessellation's vertices lie on it) is inside,
+            // and some vertex reaches the radius (all these shapes touch their ball)
+            let t = s.tessellation().unwrap();
+            let far = t
+                .vertices
+                .iter()
+                .map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt())
+                .fold(0.0, f64::max);
+            assert!(far <= r * (1.0 + 1e-12), "{}: {far} > {r}", s.kind());
+            assert!(close(far, r, 1e-12), "{}: {far} vs {r}", s.kind());
+            // scaled by 0.5: the radius halves, the volume is divided by 8
+            let h = s.scaled(0.5);
+            assert!(close(h.bounding_radius(), 0.5 * r, 1e-14), "{}", s.kind());
+            let (v, vh) = (s.volume().unwrap(), h.volume().unwrap());
+            assert!(
+                close(vh, v / 8.0, 1e-9),
+                "{}: {vh} vs {}",
+                s.kind(),
+                v / 8.0
+            );
+        }
     }
 }

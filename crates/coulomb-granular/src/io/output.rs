@@ -784,6 +784,13 @@ impl RigidVtkWriter {
 
     /// Writes the frame of the scene's current state.
     pub fn frame(&mut self, scene: &crate::rigid_scene::RigidScene) -> io::Result<()> {
+        // bodies inserted since the last frame (an inlet pouring): their shapes tessellated
+        let have = self.shapes.len().min(scene.shapes.len());
+        self.shapes.extend(
+            scene.shapes[have..]
+                .iter()
+                .map(|s| s.tessellation().unwrap_or_default()),
+        );
         let k = scene.world.steps();
         let b = format!("frames/bodies_{k:06}.vtp");
         let c = format!("frames/contacts_{k:06}.vtp");

@@ -337,9 +337,13 @@ impl Detector {
         pairs.dedup();
         // drop the caches of pairs that left the broad phase
         let mut old = std::mem::take(&mut self.pairs);
-        if self.polytopes.len() != shapes.len() {
-            self.polytopes = shapes.iter().map(Polytope::of).collect();
+        // bodies inserted between steps (an inlet) are appended: only theirs are built
+        if self.polytopes.len() > shapes.len() {
+            self.polytopes.clear();
         }
+        let have = self.polytopes.len();
+        self.polytopes
+            .extend(shapes[have..].iter().map(Polytope::of));
         let obstacle_polytopes: Vec<Option<Polytope>> =
             obstacles.iter().map(|o| Polytope::of(o.shape)).collect();
         let dispatcher = DefaultQueryDispatcher;

@@ -306,6 +306,44 @@ enum InitialOverlaps {
     Ignore,
 }
 
+/// The rigid body of the model's body `k` (validated: shape, quaternion, finite state, a
+/// fixed body at rest, mass properties, material).
+fn body_desc(
+    k: usize,
+    b: &BodySpec,
+    material: &dyn Fn(&str, &str) -> Result<u32, SceneError>,
+) -> Result<RigidBodyDesc, SceneError> {
+    let what = format!("body {k}");
+    let shape = b
+        .shape
+        .to_parry()
+        .map_err(|e| invalid(&what, format!("{} refused: {e}", b.shape.kind())))?;
+    check_quaternion("orientation", b.orientation).map_err(|e| invalid(&what, e.to_string()))?;
+    if !(b.position.is_finite() && b.velocity.is_finite() && b.angular_velocity.is_finite()) {
+        return Err(invalid(
+            &what,
+            "non-finite position, velocity or angular velocity",
+        ));
+    }
+    if b.fixed && (b.velocity != Vec3::ZERO || b.angular_velocity != Vec3::ZERO) {
+        return Err(invalid(
+            &what,
+            "a fixed body cannot have a velocity (use a moving obstacle)",
+        ));
+    }
+    let mass = body_mass(b, &shape, &what)?;
+    Ok(RigidBodyDesc {
+        shape,
+        mass,
+        position: arr(b.position),
+        orientation: b.orientation,
+        velocity: arr(b.velocity),
+        angular_velocity: arr(b.angular_velocity),
+        material: material(&what, &b.material)?,
+        fixed: b.fixed,
+    })
+}
+
 impl RigidScene {
     /// The rigid world of `model` (module docs), every body and obstacle validated; the
     /// world refuses bodies interpenetrating at the start (count and depth).
@@ -367,37 +405,7 @@ impl RigidScene {
         let mut bodies = Vec::new();
         let mut shapes = Vec::new();
         for (k, b) in model.bodies.iter().enumerate() {
-            let what = format!("body {k}");
-            let shape = b
-                .shape
-                .to_parry()
-                .map_err(|e| invalid(&what, format!("{} refused: {e}", b.shape.kind())))?;
-            check_quaternion("orientation", b.orientation)
-                .map_err(|e| invalid(&what, e.to_string()))?;
-            if !(b.position.is_finite() && b.velocity.is_finite() && b.angular_velocity.is_finite())
-            {
-                return Err(invalid(
-                    &what,
-                    "non-finite position, velocity or angular velocity",
-                ));
-            }
-            if b.fixed && (b.velocity != Vec3::ZERO || b.angular_velocity != Vec3::ZERO) {
-                return Err(invalid(
-                    &what,
-                    "a fixed body cannot have a velocity (use a moving obstacle)",
-                ));
-            }
-            let mass = body_mass(b, &shape, &what)?;
-            bodies.push(RigidBodyDesc {
-                shape,
-                mass,
-                position: arr(b.position),
-                orientation: b.orientation,
-                velocity: arr(b.velocity),
-                angular_velocity: arr(b.angular_velocity),
-                material: material(&what, &b.material)?,
-                fixed: b.fixed,
-            });
+            bodies.push(body_desc(k, b, &material)?);
             shapes.push(b.shape.clone());
         }
         for (k, batch) in model.sphere_batches.iter().enumerate() {
@@ -499,6 +507,64 @@ impl RigidScene {
             model: model.clone(),
         };
         Ok((scene, relaxed))
+    }
+
+    /// Inserts `bodies` between two steps (an inlet pouring,
+    /// [`crate::scene_file::InletRun::pour_rigid`]): each validated as the model's bodies are,
+    /// appended to the world ([`RigidWorld::insert_bodies`]: the indices, warm-start keys and
+    /// contacts of the bodies present unchanged) and to the model's `bodies`, so that a
+    /// checkpoint, which rebuilds the world from its model, holds them and a restart continues
+    /// to the bit. Refused, nothing inserted, when the model has sphere batches (the world
+    /// numbers their spheres after `bodies`: a body appended to `bodies` would take another
+    /// index when the model is rebuilt) and for the errors of the bodies. Overlaps are not
+    /// checked: the caller places the bodies apart. Returns the world indices given.
+    pub fn insert_bodies(
+        &mut self,
+        bodies: Vec<BodySpec>,
+    ) -> Result<std::ops::Range<usize>, SceneError> {
+        if !self.model.sphere_batches.is_empty() {
+            return Err(SceneError::InvalidStep(
+                "bodies cannot be inserted into a rigid scene built with sphere batches: give its spheres as bodies (BodySpec::sphere)".into(),
+            ));
+        }
+        let (table, _) = self.model.material_table()?;
+        let material = |what: &str, name: &str| {
+            table
+                .index(name)
+                .ok_or_else(|| SceneError::UnknownMaterial {
+                    what: what.to_string(),
+                    name: name.to_string(),
+                    known: table.names.join(", "),
+                })
+        };
+        let first = self.world.len();
+        let descs = bodies
+            .iter()
+            .enumerate()
+            .map(|(k, b)| body_desc(first + k, b, &material))
+            .collect::<Result<Vec<_>, _>>()?;
+        let range = self.world.insert_bodies(descs).map_err(SceneError::Rigid)?;
+        self.shapes.extend(bodies.iter().map(|b| b.shape.clone()));
+        self.model.bodies.extend(bodies);
+        Ok(range)
+    }
+
+    /// Whether this scene was built from `model`, with bodies appended since by
+    /// [`RigidScene::insert_bodies`] (`model`'s inlets pouring) when `poured` is true: what a
+    /// restart checks of the scene file it is given against the checkpoint.
+    pub fn is_built_from(&self, model: &SceneModel, poured: bool) -> bool {
+        let n = model.bodies.len();
+        let m = &self.model;
+        m.bodies.len() >= n
+            && (poured || m.bodies.len() == n)
+            && m.bodies[..n] == model.bodies[..]
+            && SceneModel {
+                bodies: Vec::new(),
+                ..m.clone()
+            } == SceneModel {
+                bodies: Vec::new(),
+                ..model.clone()
+            }
     }
 
     /// One Moreau–Jean step of the rigid world; its report is kept in `reports`.

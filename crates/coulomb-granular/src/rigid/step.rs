@@ -177,6 +177,76 @@ fn check_settings(s: &RigidSettings) -> Result<(), RigidError> {
     Ok(())
 }
 
+/// The state of body `i` described by `b` (validated: quaternion, mass properties, finite
+/// values, a material below `count`), half its thinnest width and its shape.
+fn body_state(
+    i: usize,
+    b: RigidBodyDesc,
+    count: usize,
+) -> Result<(BodyState, f64, SharedShape), RigidError> {
+    let what = format!("body {i}");
+    let q_shape = check_quaternion(&what, b.orientation)?;
+    b.mass.check().map_err(|detail| RigidError::Mass {
+        what: what.clone(),
+        detail,
+    })?;
+    check_finite(&what, "position", b.position)?;
+    check_finite(&what, "velocity", b.velocity)?;
+    check_finite(&what, "angular velocity", b.angular_velocity)?;
+    if b.material as usize >= count {
+        return Err(RigidError::Material {
+            what,
+            material: b.material,
+            count,
+        });
+    }
+    let (inertia, principal) = b.mass.principal().map_err(|detail| RigidError::Mass {
+        what: what.clone(),
+        detail,
+    })?;
+    let local_com = v3(b.mass.local_com);
+    let q = (q_shape * principal).normalize();
+    let x = v3(b.position) + q_shape * local_com;
+    let local_aabb = b.shape.compute_local_aabb();
+    let reach = [local_aabb.mins, local_aabb.maxs]
+        .iter()
+        .flat_map(|lo| {
+            let hi = [local_aabb.mins, local_aabb.maxs];
+            hi.into_iter().map(move |h| (*lo, h))
+        })
+        .map(|(a, c)| {
+            let corner = Vector::new(a.x, c.y, if a.z > c.z { a.z } else { c.z });
+            (corner - local_com).length()
+        })
+        .fold(0.0, f64::max)
+        .max(
+            (local_aabb.maxs - local_com)
+                .abs()
+                .max((local_aabb.mins - local_com).abs())
+                .length(),
+        );
+    let (v, omega) = if b.fixed {
+        (Vector::ZERO, Vector::ZERO)
+    } else {
+        (v3(b.velocity), q.conjugate() * v3(b.angular_velocity))
+    };
+    let state = BodyState {
+        mass: b.mass.mass,
+        inertia,
+        local_com,
+        principal,
+        x,
+        q,
+        v,
+        omega,
+        material: b.material,
+        fixed: b.fixed,
+        reach,
+    };
+    let half = half_thinnest_width(&b.shape);
+    Ok((state, half, b.shape))
+}
+
 impl RigidWorld {
     /// A world of `bodies` and `obstacles` at t = 0. Refuses, with a typed [`RigidError`]:
     /// invalid settings or material table, non-unit or non-finite quaternions, invalid mass
@@ -214,67 +284,10 @@ impl RigidWorld {
         let mut shapes = Vec::with_capacity(bodies.len());
         let mut half_width = Vec::with_capacity(bodies.len());
         for (i, b) in bodies.into_iter().enumerate() {
-            let what = format!("body {i}");
-            let q_shape = check_quaternion(&what, b.orientation)?;
-            b.mass.check().map_err(|detail| RigidError::Mass {
-                what: what.clone(),
-                detail,
-            })?;
-            check_finite(&what, "position", b.position)?;
-            check_finite(&what, "velocity", b.velocity)?;
-            check_finite(&what, "angular velocity", b.angular_velocity)?;
-            if b.material as usize >= count {
-                return Err(RigidError::Material {
-                    what,
-                    material: b.material,
-                    count,
-                });
-            }
-            let (inertia, principal) = b.mass.principal().map_err(|detail| RigidError::Mass {
-                what: what.clone(),
-                detail,
-            })?;
-            let local_com = v3(b.mass.local_com);
-            let q = (q_shape * principal).normalize();
-            let x = v3(b.position) + q_shape * local_com;
-            let local_aabb = b.shape.compute_local_aabb();
-            let reach = [local_aabb.mins, local_aabb.maxs]
-                .iter()
-                .flat_map(|lo| {
-                    let hi = [local_aabb.mins, local_aabb.maxs];
-                    hi.into_iter().map(move |h| (*lo, h))
-                })
-                .map(|(a, c)| {
-                    let corner = Vector::new(a.x, c.y, if a.z > c.z { a.z } else { c.z });
-                    (corner - local_com).length()
-                })
-                .fold(0.0, f64::max)
-                .max(
-                    (local_aabb.maxs - local_com)
-                        .abs()
-                        .max((local_aabb.mins - local_com).abs())
-                        .length(),
-                );
-            let (v, omega) = if b.fixed {
-                (Vector::ZERO, Vector::ZERO)
-            } else {
-                (v3(b.velocity), q.conjugate() * v3(b.angular_velocity))
-            };
-            states.push(BodyState {
-                mass: b.mass.mass,
-                inertia,
-                local_com,
-                principal,
-                x,
-                q,
-                v,
-                omega,
-                material: b.material,
-                fixed: b.fixed,
-                reach,
-            });
-            half_width.push(half_thinnest_width(&b.shape));
-            shapes.push(b.shape);
+            let (state, half, shape) = body_state(i, b, count)?;
+            states.push(state);
+            half_width.push(half);
+            shapes.push(shape);
         }
         let mut obstacle_base = Vec::with_capacity(obstacles.len());
         for (o, ob) in obstacles.iter().enumerate() {
@@ -383,6 +396,48 @@ impl RigidWorld {
         let mut world = Self::with_joints(bodies, obstacles, materials, unchecked, joints)?;
         world.settings.max_initial_penetration = limit;
         Ok(world)
+    }
+
+    /// Appends `bodies` between two steps (an inlet pouring), numbered after the bodies
+    /// present, whose indices, warm-start keys (pairs keyed by body index), contacts, joints
+    /// and detector caches are unchanged; the broad phase is rebuilt at every detection, so
+    /// the next step sees them. Each is validated as by [`RigidWorld::new`] and, if it moves,
+    /// the time step checked for it as at the start (its fall g h² and its travel at its
+    /// speed within half its thinnest width); on an error nothing is inserted. Overlaps are
+    /// not checked here: the caller places them apart. Returns the indices given to them.
+    pub fn insert_bodies(
+        &mut self,
+        bodies: Vec<RigidBodyDesc>,
+    ) -> Result<std::ops::Range<usize>, RigidError> {
+        let first = self.bodies.len();
+        let count = self.materials.len();
+        let (h, g) = (self.settings.h, self.gravity.length());
+        let mut new = Vec::with_capacity(bodies.len());
+        for (k, b) in bodies.into_iter().enumerate() {
+            let i = first + k;
+            let (state, w, shape) = body_state(i, b, count)?;
+            if !state.fixed {
+                let fall = g * h * h;
+                let travel = h * (state.v.length() + state.omega.length() * state.reach);
+                if fall > w || travel.is_nan() || travel > w {
+                    return Err(RigidError::Settings(format!(
+                        "time step h = {h} is too large for inserted body {i}: it falls g·h² = {fall:.3e} m and travels {travel:.3e} m in one step, more than half its thinnest width {w:.3e} m; use a smaller h, a lower speed or larger bodies"
+                    )));
+                }
+            }
+            new.push((state, w, shape));
+        }
+        let mut moving = self.dof.iter().filter(|d| d.is_some()).count();
+        for (state, w, shape) in new {
+            self.dof.push((!state.fixed).then(|| {
+                moving += 1;
+                moving - 1
+            }));
+            self.bodies.push(state);
+            self.half_width.push(w);
+            self.shapes.push(shape);
+        }
+        Ok(first..self.bodies.len())
     }
 
     /// Refuses a time step in which a body falls under gravity (g h²), or travels at its

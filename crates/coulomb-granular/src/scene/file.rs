@@ -18,6 +18,7 @@ use crate::model::{
     BodyShape, BodySpec, BuildChecks, MaterialPair, Materials, ObstacleSpec, SceneError,
     SceneModel, SphereBatch, StepChoice, StepSettings,
 };
+use crate::rigid_scene::RigidScene;
 use crate::simulation::{Params, Simulation, SimulationError};
 use crate::world::{MeshSide, Motion, Shape, Sphere, World};
 use serde::{Deserialize, Serialize};
@@ -622,7 +623,7 @@ pub enum MotionSection {
     },
 }
 
-/// `[[inlets]]`: an [`Inlet`] whose spheres are of `material`.
+/// `[[inlets]]`: an [`Inlet`] whose spheres (or bodies of `shape`) are of `material`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct InletSection {
@@ -650,6 +651,12 @@ pub struct InletSection {
     /// seed (default: the scene's seed + 1000 + the inlet's index)
     #[serde(default)]
     pub seed: Option<u64>,
+    /// the shape of the poured bodies, as in `[[bodies]]` (any size: each is scaled so that
+    /// its bounding radius about its frame's origin is the sampled radius, and turned by a
+    /// random rotation, [`Inlet`]); default: spheres. A scene whose inlet pours another shape
+    /// than spheres runs in the rigid-body simulator ([`BuiltScene::runs_rigid`]).
+    #[serde(default)]
+    pub shape: Option<BodyShape>,
 }
 
 /// One segment of a key path.
@@ -760,6 +767,12 @@ impl InletRun {
         t0: f64,
         t1: f64,
     ) -> Result<(usize, usize), SimulationError> {
+        if let Some(shape) = self.inlet.poured_shape() {
+            return Err(SimulationError::Parameter(format!(
+                "inlet: it pours bodies of shape {}, which the sphere simulator cannot hold; a scene with such an inlet runs in the rigid-body simulator (InletRun::pour_rigid)",
+                shape.kind()
+            )));
+        }
         let present: Vec<(Vec3, f64)> = sim
             .world
             .bodies
@@ -788,6 +801,66 @@ impl InletRun {
             .map_err(|e| SimulationError::Parameter(format!("inlet: {e}")))?;
         sim.insert_bodies(spheres)?;
         Ok((e.particles.len(), e.skipped))
+    }
+}
+
+/// What the inlets poured in one call of [`BuiltScene::pour_rigid`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Poured {
+    /// bodies inserted
+    pub inserted: usize,
+    /// emissions that found no free position (the capped ones included)
+    pub skipped: usize,
+    /// emissions not tried because an inlet's region could hold no more in this step
+    /// ([`crate::generate::Emission::capped`])
+    pub capped: usize,
+}
+
+impl InletRun {
+    /// Inserts into the rigid scene `rigid` ([`RigidScene::insert_bodies`]) the bodies due
+    /// in (t0, t1] ([`Inlet::emit`]): spheres, or the inlet's shape scaled to each sampled
+    /// radius and turned by its random rotation, each placed so that its bounding ball
+    /// overlaps the bounding ball of no body present (centred on its shape frame's origin,
+    /// [`BodyShape::bounding_radius`]: conservative), with the inlet's velocity, density and
+    /// material; returns (inserted, skipped). Emission i depends only on (seed, i), the times
+    /// and the bodies present, so a restarted run pours the bodies of the uninterrupted one.
+    pub fn pour_rigid(
+        &mut self,
+        rigid: &mut RigidScene,
+        t0: f64,
+        t1: f64,
+    ) -> Result<(usize, usize), SceneError> {
+        let present: Vec<(Vec3, f64)> = rigid
+            .world
+            .positions()
+            .iter()
+            .zip(&rigid.shapes)
+            .map(|(p, s)| (v3(*p), s.bounding_radius()))
+            .collect();
+        let e = self.inlet.emit(t0, t1, &present);
+        self.capped += e.capped;
+        if e.particles.is_empty() {
+            return Ok((0, e.skipped));
+        }
+        let bodies: Vec<BodySpec> = e
+            .particles
+            .iter()
+            .enumerate()
+            .map(|(k, p)| BodySpec {
+                shape: self.inlet.body_shape(p.radius),
+                orientation: e
+                    .orientations
+                    .get(k)
+                    .copied()
+                    .unwrap_or(crate::shape::IDENTITY),
+                velocity: p.velocity,
+                material: self.material.clone(),
+                ..BodySpec::sphere(p.position, p.radius, self.density)
+            })
+            .collect();
+        let n = bodies.len();
+        rigid.insert_bodies(bodies)?;
+        Ok((n, e.skipped))
     }
 }
 
@@ -1211,7 +1284,17 @@ impl LoadedScene {
                         .get(&s.material)
                         .map_or(DEFAULT_DENSITY, |x| x.density);
                     let r = s.sizes.min_radius();
-                    m / (rho * 4.0 / 3.0 * std::f64::consts::PI * r * r * r)
+                    // a body of another shape is lighter than its bounding ball: its volume
+                    // at bounding radius 1 (a shape that does not validate is refused later)
+                    let unit = match s.shape.as_ref().filter(|x| !x.is_sphere()) {
+                        None => 4.0 / 3.0 * std::f64::consts::PI,
+                        Some(x) => {
+                            let r0 = x.bounding_radius();
+                            x.volume()
+                                .map_or(4.0 / 3.0 * std::f64::consts::PI, |v| v / (r0 * r0 * r0))
+                        }
+                    };
+                    m / (rho * unit * r * r * r)
                 }
             };
             let emitted = (per_second * time).ceil();
@@ -1550,6 +1633,15 @@ impl LoadedScene {
             if let Some(a) = s.attempts {
                 inlet.attempts = a;
             }
+            if let Some(shape) = &s.shape {
+                shape.validate().map_err(|e| {
+                    self.invalid(
+                        &[&p[..], &[key("shape")]].concat(),
+                        format!("{} refused: {e}", shape.kind()),
+                    )
+                })?;
+            }
+            let inlet = inlet.with_shape(s.shape.clone());
             inlet
                 .validate()
                 .map_err(|e| self.invalid(&p, e.to_string()))?;
@@ -1607,10 +1699,17 @@ impl LoadedScene {
             for b in order.iter_mut().filter_map(|e| e.as_mut().err()) {
                 b.material = DEFAULT_MATERIAL.to_string();
             }
+            for i in &mut inlets {
+                i.material = DEFAULT_MATERIAL.to_string();
+            }
         }
-        // with shaped bodies, every body is a body spec in file order (the rigid-body
-        // simulator's indices); else the spheres are batches (the sphere simulator's path)
-        let (specs, sphere_batches) = if order.iter().any(|e| e.is_err()) || !joints.is_empty() {
+        // with shaped bodies (or an inlet pouring them), every body is a body spec in file
+        // order (the rigid-body simulator's indices, after which poured bodies are appended);
+        // else the spheres are batches (the sphere simulator's path)
+        let rigid = order.iter().any(|e| e.is_err())
+            || !joints.is_empty()
+            || inlets.iter().any(|i| i.inlet.poured_shape().is_some());
+        let (specs, sphere_batches) = if rigid {
             let specs = order
                 .into_iter()
                 .map(|e| match e {
@@ -2007,6 +2106,32 @@ fn batches(bodies: &[BodyOut]) -> Vec<SphereBatch> {
 }
 
 impl BuiltScene {
+    /// Whether the scene runs in the rigid-body simulator: its model has bodies of other
+    /// shapes than spheres or joints ([`SceneModel::has_shapes`]), or an inlet pours bodies
+    /// of another shape (its spheres are then bodies of the rigid world, from the start).
+    pub fn runs_rigid(&self) -> bool {
+        self.model.has_shapes() || self.inlets.iter().any(|i| i.inlet.poured_shape().is_some())
+    }
+
+    /// Every inlet's bodies due in (t0, t1] inserted into `rigid` ([`InletRun::pour_rigid`],
+    /// inlets in file order): what a run does after each step t0 → t1 of a rigid scene.
+    pub fn pour_rigid(
+        &mut self,
+        rigid: &mut RigidScene,
+        t0: f64,
+        t1: f64,
+    ) -> Result<Poured, SceneError> {
+        let mut out = Poured::default();
+        for inlet in &mut self.inlets {
+            let before = inlet.capped;
+            let (n, k) = inlet.pour_rigid(rigid, t0, t1)?;
+            out.inserted += n;
+            out.skipped += k;
+            out.capped += inlet.capped - before;
+        }
+        Ok(out)
+    }
+
     /// The world and parameters of the scene ([`SceneModel::build_with`] with `checks`), the
     /// parameters completed by `[step]`'s activation, projection and warm-start settings.
     pub fn build(&self, checks: &BuildChecks) -> Result<(World, Params), SceneFileError> {
@@ -2148,6 +2273,19 @@ mod tests {
             scene.planned_spheres(&BuildOptions::default()),
             crate::generate::MAX_EMISSIONS as u64
         );
+        // a mass rate of cubes counts bodies of a cube's mass, not its bounding ball's:
+        // (4/3 π) / (8 / 3^1.5) ≈ 2.72 times as many
+        let mass = "[step]\nh = 0.01\nsteps = 100\n[[inlets]]\nregion = { kind = \"box\", lo = [0, 0, 0.5], hi = [1, 1, 1] }\nsizes = { kind = \"uniform\", min = 0.01, max = 0.02 }\nrate = { mass = 100.0 }\n";
+        let balls = parse(mass)
+            .unwrap()
+            .planned_spheres(&BuildOptions::default());
+        let cubes = parse(&format!(
+            "{mass}shape = {{ kind = \"cuboid\", half_extents = [1, 1, 1] }}\n"
+        ))
+        .unwrap()
+        .planned_spheres(&BuildOptions::default());
+        let ratio = cubes as f64 / balls as f64;
+        assert!((ratio - 2.72).abs() < 0.01, "{cubes} / {balls}");
     }
 
     /// A random fill past the packing bound: refused at once when every sphere must be placed,

@@ -9,6 +9,7 @@
 //! needs no random-number state to continue an inlet.
 
 use crate::math::Vec3;
+use crate::shape::BodyShape;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -928,6 +929,15 @@ pub const MAX_EMISSIONS: usize = 10_000_000;
 /// (counted in [`Emission::skipped`]), never retried: what is emitted between two times
 /// depends only on (seed, i), the times and the bodies present, so a restart needs no inlet
 /// state beyond the time.
+///
+/// With a [`Inlet::shape`] (a body of any shape, not a sphere), emission i is that shape
+/// scaled about its frame's origin so that its bounding radius
+/// ([`BodyShape::bounding_radius`]) is the sampled radius, placed as the sphere of that
+/// radius would be (its bounding ball avoids every body's bounding ball: conservative), then
+/// turned by a uniformly random rotation drawn next from the same stream i (three more
+/// numbers, Shoemake's method): emission i is the same body whatever the step or a restart.
+/// Without a shape nothing more is drawn, so the spheres are those of an inlet without the
+/// option, to the bit.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Inlet {
@@ -954,6 +964,13 @@ pub struct Inlet {
     /// seed of the ChaCha8 streams
     #[serde(default)]
     pub seed: u64,
+    /// the shape of the emitted bodies (any size: it is scaled so that its bounding radius is
+    /// the sampled radius); `None` (or a sphere): spheres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shape: Option<BodyShape>,
+    /// volume of the shape at bounding radius 1 (mass rates), computed on demand
+    #[serde(skip)]
+    unit_volume: Option<f64>,
     /// cumulative masses of the first emission indices (mass rates), rebuilt on demand
     #[serde(skip)]
     prefix_mass: Vec<f64>,
@@ -970,8 +987,12 @@ fn default_attempts() -> usize {
 /// What an inlet emitted in one call.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Emission {
-    /// the inserted spheres, in emission order
+    /// the inserted spheres (for an inlet with a shape: each body's bounding ball, centred
+    /// on its shape frame's origin), in emission order
     pub particles: Vec<Particle>,
+    /// for an inlet with a shape, the orientation (w, x, y, z) of each inserted body, in the
+    /// order of `particles`; empty for spheres
+    pub orientations: Vec<[f64; 4]>,
     /// emission indices that found no free position
     pub skipped: usize,
     /// the emission indices handled: [first, end)
@@ -1004,6 +1025,8 @@ impl Inlet {
             velocity: [0.0; 3],
             attempts: default_attempts(),
             seed,
+            shape: None,
+            unit_volume: None,
             prefix_mass: Vec::new(),
         }
     }
@@ -1031,7 +1054,53 @@ impl Inlet {
                 self.density, self.start, self.end, self.attempts
             )));
         }
+        if let Some(shape) = &self.shape {
+            shape.validate().map_err(|e| {
+                GenerateError::Parameter(format!("inlet shape: {} refused: {e}", shape.kind()))
+            })?;
+            let r0 = shape.bounding_radius();
+            if !(r0.is_finite() && r0 > 0.0) {
+                return Err(GenerateError::Parameter(format!(
+                    "inlet shape: bounding radius {r0} must be positive"
+                )));
+            }
+        }
         Ok(())
+    }
+
+    /// The inlet pouring bodies of `shape` (module docs of [`Inlet`]); a sphere is stored as
+    /// no shape (the same spheres, to the bit).
+    pub fn with_shape(mut self, shape: Option<BodyShape>) -> Self {
+        self.shape = shape.filter(|s| !s.is_sphere());
+        self.unit_volume = None;
+        self.prefix_mass.clear();
+        self
+    }
+
+    /// The shape of the bodies poured when they are not spheres.
+    pub fn poured_shape(&self) -> Option<&BodyShape> {
+        self.shape.as_ref().filter(|s| !s.is_sphere())
+    }
+
+    /// The body of an emission of (bounding) radius `radius`: a sphere of that radius
+    /// without a shape; with one, the shape scaled so that its bounding radius is `radius`.
+    pub fn body_shape(&self, radius: f64) -> BodyShape {
+        match self.poured_shape() {
+            None => BodyShape::Sphere { radius },
+            Some(s) => s.scaled(radius / s.bounding_radius()),
+        }
+    }
+
+    /// Volume of an emitted body of radius 1: 4/3 π for spheres, the shape's volume over its
+    /// bounding radius cubed otherwise (NaN for a shape that does not validate).
+    fn volume_factor(&mut self) -> f64 {
+        let Some(shape) = self.shape.as_ref().filter(|s| !s.is_sphere()) else {
+            return 4.0 / 3.0 * std::f64::consts::PI;
+        };
+        *self.unit_volume.get_or_insert_with(|| {
+            let r0 = shape.bounding_radius();
+            shape.volume().map_or(f64::NAN, |v| v / (r0 * r0 * r0))
+        })
     }
 
     /// The radius of emission index i (the first draw of stream i).
@@ -1064,7 +1133,7 @@ impl Inlet {
             }
             Rate::Mass(r) => {
                 let budget = r * elapsed * (1.0 + 1e-12);
-                let vol = 4.0 / 3.0 * std::f64::consts::PI;
+                let vol = self.volume_factor();
                 while self.prefix_mass.last().copied().unwrap_or(0.0) <= budget
                     && self.prefix_mass.len() < MAX_EMISSIONS
                 {
@@ -1086,6 +1155,7 @@ impl Inlet {
         let (first, last) = (self.due(t0), self.due(t1));
         let mut out = Emission {
             particles: Vec::new(),
+            orientations: Vec::new(),
             skipped: 0,
             indices: (first, last.max(first)),
             capped: 0,
@@ -1133,6 +1203,9 @@ impl Inlet {
                         radius: r,
                         velocity,
                     });
+                    if self.poured_shape().is_some() {
+                        out.orientations.push(random_rotation(&mut rng));
+                    }
                     placed = true;
                     break;
                 }
@@ -1146,6 +1219,18 @@ impl Inlet {
         }
         out
     }
+}
+
+/// A rotation drawn uniformly (Haar measure) from three numbers of `rng` (Shoemake, "Uniform
+/// random rotations", Graphics Gems III, 1992), as a unit quaternion (w, x, y, z).
+fn random_rotation(rng: &mut ChaCha8Rng) -> [f64; 4] {
+    let u1: f64 = rng.random_range(0.0..1.0);
+    let a = std::f64::consts::TAU * rng.random_range(0.0..1.0);
+    let b = std::f64::consts::TAU * rng.random_range(0.0..1.0);
+    let (s1, s2) = ((1.0 - u1).sqrt(), u1.sqrt());
+    let q = [s2 * b.cos(), s1 * a.sin(), s1 * a.cos(), s2 * b.sin()];
+    let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+    q.map(|x| x / n)
 }
 
 #[cfg(test)]
@@ -1523,6 +1608,79 @@ mod tests {
         let e = inlet.emit(0.0, 0.3, &present);
         assert!(e.particles.is_empty());
         assert_eq!(e.skipped, 20);
+    }
+
+    #[test]
+    fn an_inlet_shape_adds_only_a_rotation_drawn_after_the_sphere() {
+        let sphere = || {
+            let mut inlet = Inlet::new(
+                Shape::Box {
+                    lo: [0.0, 0.0, 0.0],
+                    hi: [0.5, 0.5, 0.5],
+                },
+                SizeDistribution::Uniform {
+                    min: 0.02,
+                    max: 0.04,
+                },
+                1000.0,
+                Rate::Count(400.0),
+                9,
+            );
+            inlet.velocity = [0.0, 0.0, -1.0];
+            inlet
+        };
+        let present = [(Vec3::new(0.25, 0.25, 0.25), 0.1)];
+        let plain = sphere().emit(0.0, 0.25, &present);
+        assert_eq!(plain.particles.len() + plain.skipped, 100);
+        assert!(plain.particles.len() >= 90);
+        assert!(plain.orientations.is_empty());
+        // a sphere as the shape: the same inlet, the same spheres to the bit
+        let ball = sphere().with_shape(Some(BodyShape::Sphere { radius: 3.0 }));
+        assert_eq!(ball, sphere());
+        // a capsule: the same bounding balls (placement draws first), and a unit
+        // quaternion per body, each its own
+        let capsule = BodyShape::Capsule {
+            radius: 0.5,
+            half_height: 1.0,
+        };
+        let mut shaped = sphere().with_shape(Some(capsule.clone()));
+        shaped.validate().unwrap();
+        let e = shaped.emit(0.0, 0.25, &present);
+        assert_eq!(e.particles, plain.particles);
+        assert_eq!(e.orientations.len(), e.particles.len());
+        for q in &e.orientations {
+            crate::shape::check_quaternion("q", *q).unwrap();
+        }
+        let distinct: std::collections::BTreeSet<_> =
+            e.orientations.iter().map(|q| q.map(f64::to_bits)).collect();
+        assert_eq!(distinct.len(), e.orientations.len());
+        // stateless: the emissions of (0.1, 0.25] by a fresh inlet are the tail of the above
+        let mut fresh = sphere().with_shape(Some(capsule.clone()));
+        let first = fresh.due(0.1);
+        let mut present_then = present.to_vec();
+        present_then.extend(e.particles[..first].iter().map(|p| (p.position, p.radius)));
+        let tail = fresh.emit(0.1, 0.25, &present_then);
+        assert_eq!(tail.particles, e.particles[first..]);
+        assert_eq!(tail.orientations, e.orientations[first..]);
+        // the body: the capsule scaled to the radius
+        let r = e.particles[0].radius;
+        let body = shaped.body_shape(r);
+        assert!((body.bounding_radius() - r).abs() <= 1e-15);
+        // a mass rate counts each body's mass: the shape's volume at that radius
+        let mut by_mass = sphere().with_shape(Some(capsule));
+        by_mass.rate = Rate::Mass(2.0);
+        let n = by_mass.due(0.5);
+        let mass: f64 = (0..n)
+            .map(|i| 1000.0 * by_mass.body_shape(by_mass.radius_of(i)).volume().unwrap())
+            .sum();
+        assert!(mass <= 1.0 * (1.0 + 1e-9), "{mass}");
+        let next = 1000.0 * by_mass.body_shape(by_mass.radius_of(n)).volume().unwrap();
+        assert!(mass + next > 1.0 * (1.0 - 1e-9), "{mass} + {next}");
+        // an invalid shape is refused by validate
+        let bad = sphere().with_shape(Some(BodyShape::Cuboid {
+            half_extents: [1.0, -1.0, 1.0],
+        }));
+        assert!(bad.validate().is_err());
     }
 
     #[test]

@@ -349,6 +349,7 @@ pub fn scene_file_of(
             velocity: i.velocity,
             attempts: Some(i.attempts),
             seed: Some(i.seed),
+            shape: i.poured_shape().cloned(),
         })
         .collect();
     Ok(SceneFile {

@@ -102,7 +102,7 @@ fn settings_a_scene_with_other_shapes_cannot_honour_are_refused() {
     let step = |line: &str| {
         let s = ball_and_box("", line);
         let built = s.build(&BuildOptions::default()).unwrap();
-        coulomb_granular::rigid_scene::check_step_section(&built.step)
+        coulomb_granular::scene_file::check_rigid_step(&built.step)
     };
     assert!(step("").is_ok());
     assert!(step("gamma = 1.0\nprojection = true").is_ok());

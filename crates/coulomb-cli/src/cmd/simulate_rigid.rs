@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 /// command line: [`crate::scene_arg`]).
 pub fn run(a: &Args, scene: &BuiltScene, inputs: &[PathBuf]) -> anyhow::Result<Outcome> {
     let file = scene.path.display().to_string();
-    coulomb_granular::rigid_scene::check_step_section(&scene.step)
+    coulomb_granular::scene_file::check_rigid_step(&scene.step)
         .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
     let rigid = match a.resolve_overlaps {
         None => RigidScene::new(&scene.model).with_context(|| file.clone())?,

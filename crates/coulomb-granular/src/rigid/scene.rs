@@ -89,37 +89,6 @@ fn check_settings(
     Ok(())
 }
 
-/// Refuses the `[step]` settings of a scene file that the rigid-body step cannot honour
-/// (`Err` names the setting): its activation uses γ = 1, it always closes the gaps of resting
-/// contacts, warm starts, and corrects positions (`projection = true`, the default; the
-/// correction is [`RigidSettings::position_correction`]).
-pub fn check_step_section(step: &crate::scene_file::StepSection) -> Result<(), String> {
-    let no = |what: String| {
-        Err(format!(
-            "[step] {what} cannot apply to a scene with bodies of other shapes than spheres; remove it"
-        ))
-    };
-    if step.gamma != 1.0 {
-        return no(format!(
-            "gamma = {} (their activation uses gamma = 1)",
-            step.gamma
-        ));
-    }
-    if !step.projection {
-        return no("projection = false (their positions are always corrected)".into());
-    }
-    if step.projection_velocities.is_some() {
-        return no("projection_velocities (their correction moves positions only)".into());
-    }
-    if !step.gap_closure {
-        return no("gap_closure = false (their resting contacts always close their gaps)".into());
-    }
-    if !step.warm_start {
-        return no("warm_start = false (their steps are always warm started)".into());
-    }
-    Ok(())
-}
-
 /// The mass properties of a body spec: from the density, or scaled to `mass`, its inertia
 /// replaced by `inertia` and its centre of mass by `centre_of_mass`.
 fn body_mass(b: &BodySpec, shape: &SharedShape, what: &str) -> Result<MassProperties, SceneError> {

@@ -804,6 +804,38 @@ impl InletRun {
     }
 }
 
+/// Refuses the `[step]` settings of a scene file that the rigid-body step cannot honour
+/// (`Err` names the setting): its activation uses γ = 1, it always closes the gaps of resting
+/// contacts, warm starts, and corrects positions (`projection = true`, the default; the
+/// correction is the rigid settings' `position_correction`). Here, not in `rigid/`, so that
+/// the rigid engine does not import the scene file's types.
+pub fn check_rigid_step(step: &StepSection) -> Result<(), String> {
+    let no = |what: String| {
+        Err(format!(
+            "[step] {what} cannot apply to a scene with bodies of other shapes than spheres; remove it"
+        ))
+    };
+    if step.gamma != 1.0 {
+        return no(format!(
+            "gamma = {} (their activation uses gamma = 1)",
+            step.gamma
+        ));
+    }
+    if !step.projection {
+        return no("projection = false (their positions are always corrected)".into());
+    }
+    if step.projection_velocities.is_some() {
+        return no("projection_velocities (their correction moves positions only)".into());
+    }
+    if !step.gap_closure {
+        return no("gap_closure = false (their resting contacts always close their gaps)".into());
+    }
+    if !step.warm_start {
+        return no("warm_start = false (their steps are always warm started)".into());
+    }
+    Ok(())
+}
+
 /// What the inlets poured in one call of [`BuiltScene::pour_rigid`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Poured {

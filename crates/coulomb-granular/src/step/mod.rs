@@ -3,7 +3,7 @@
 //! (`nsgs`, `subspace`, `rolling`)
 //! with the library as fallback, correct positions (`projection`), integrate
 //! (`simulation`); `coarse` is a two-level correction of the sweeps (off by default). Whole
-//! runs of either engine are in [`crate::run`].
+//! runs of either engine are in [`crate::run`](mod@crate::run).
 
 pub mod assembly;
 pub mod coarse;

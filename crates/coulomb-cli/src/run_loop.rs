@@ -29,6 +29,22 @@ pub(crate) trait StepHook<E> {
     }
 }
 
+/// What the inlets of a run add to its `--json` summary (`poured`, `inlet_skipped`) and to its
+/// one-line summary, the same for every scene; nothing for a scene without inlets.
+pub(crate) fn inlet_report(
+    has_inlets: bool,
+    poured: usize,
+    skipped: usize,
+) -> (serde_json::Map<String, serde_json::Value>, String) {
+    let mut extra = serde_json::Map::new();
+    if !has_inlets {
+        return (extra, String::new());
+    }
+    extra.insert("poured".into(), poured.into());
+    extra.insert("inlet_skipped".into(), skipped.into());
+    (extra, format!(" ({poured} poured, {skipped} skipped)"))
+}
+
 /// A run with nothing to do between steps.
 pub(crate) struct NoHook;
 

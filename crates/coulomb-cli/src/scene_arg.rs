@@ -469,14 +469,7 @@ impl StepHook<Simulation> for Inlets<'_> {
     }
 
     fn report(&self) -> (serde_json::Map<String, serde_json::Value>, String) {
-        let mut extra = serde_json::Map::new();
-        if self.scene.inlets.is_empty() {
-            return (extra, String::new());
-        }
-        extra.insert("poured".into(), self.poured.into());
-        extra.insert("inlet_skipped".into(), self.skipped.into());
-        let note = format!(" ({} poured, {} skipped)", self.poured, self.skipped);
-        (extra, note)
+        crate::run_loop::inlet_report(!self.scene.inlets.is_empty(), self.poured, self.skipped)
     }
 }
 

@@ -125,13 +125,6 @@ impl StepHook<RigidScene> for Pour {
 
     /// The same fields and note as the sphere scenes' inlets.
     fn report(&self) -> (serde_json::Map<String, serde_json::Value>, String) {
-        let mut extra = serde_json::Map::new();
-        if self.scene.inlets.is_empty() {
-            return (extra, String::new());
-        }
-        extra.insert("poured".into(), self.poured.into());
-        extra.insert("inlet_skipped".into(), self.skipped.into());
-        let note = format!(" ({} poured, {} skipped)", self.poured, self.skipped);
-        (extra, note)
+        crate::run_loop::inlet_report(!self.scene.inlets.is_empty(), self.poured, self.skipped)
     }
 }

@@ -89,6 +89,22 @@ fn check_settings(
     Ok(())
 }
 
+/// The index of material `name` in `table`, for the body or inlet `what` (else an error that
+/// lists the materials known).
+fn material_index(
+    table: &crate::world::MaterialTable,
+    what: &str,
+    name: &str,
+) -> Result<u32, SceneError> {
+    table
+        .index(name)
+        .ok_or_else(|| SceneError::UnknownMaterial {
+            what: what.to_string(),
+            name: name.to_string(),
+            known: table.names.join(", "),
+        })
+}
+
 /// The mass properties of a body spec: from the density, or scaled to `mass`, its inertia
 /// replaced by `inertia` and its centre of mass by `centre_of_mass`.
 fn body_mass(b: &BodySpec, shape: &SharedShape, what: &str) -> Result<MassProperties, SceneError> {
@@ -362,15 +378,7 @@ impl RigidScene {
         let sphere_world = spheres_only.world()?;
         let (table, _) = model.material_table()?;
         check_settings(model, &table)?;
-        let material = |what: &str, name: &str| {
-            table
-                .index(name)
-                .ok_or_else(|| SceneError::UnknownMaterial {
-                    what: what.to_string(),
-                    name: name.to_string(),
-                    known: table.names.join(", "),
-                })
-        };
+        let material = |what: &str, name: &str| material_index(&table, what, name);
         let mut bodies = Vec::new();
         let mut shapes = Vec::new();
         for (k, b) in model.bodies.iter().enumerate() {
@@ -497,15 +505,7 @@ impl RigidScene {
             ));
         }
         let (table, _) = self.model.material_table()?;
-        let material = |what: &str, name: &str| {
-            table
-                .index(name)
-                .ok_or_else(|| SceneError::UnknownMaterial {
-                    what: what.to_string(),
-                    name: name.to_string(),
-                    known: table.names.join(", "),
-                })
-        };
+        let material = |what: &str, name: &str| material_index(&table, what, name);
         let first = self.world.len();
         let descs = bodies
             .iter()

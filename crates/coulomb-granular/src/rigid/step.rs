@@ -440,6 +440,16 @@ impl RigidWorld {
         Ok(first..self.bodies.len())
     }
 
+    /// The thinnest half width over the moving bodies (∞ when none moves).
+    fn thinnest_half_width(&self) -> f64 {
+        self.half_width
+            .iter()
+            .zip(&self.bodies)
+            .filter(|(_, b)| !b.fixed)
+            .map(|(w, _)| *w)
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// Refuses a time step in which a body falls under gravity (g h²), or travels at its
     /// initial speed (|v| + |ω| × its reach, h times), more than half its thinnest width: its
     /// contacts could not be detected before it is through a wall or another body (the rule of
@@ -447,13 +457,7 @@ impl RigidWorld {
     fn check_time_step(&self) -> Result<(), RigidError> {
         let h = self.settings.h;
         let g = self.gravity.length();
-        let thin = self
-            .half_width
-            .iter()
-            .zip(&self.bodies)
-            .filter(|(_, b)| !b.fixed)
-            .map(|(w, _)| *w)
-            .fold(f64::INFINITY, f64::min);
+        let thin = self.thinnest_half_width();
         if !thin.is_finite() {
             return Ok(());
         }
@@ -1050,13 +1054,7 @@ impl RigidWorld {
                     gap + h * ((1.0 - theta) * u_nk + theta * u_end)
                 }));
                 let extra: Vec<&nsgs::Row> = inactive.iter().map(|(row, ..)| row).collect();
-                let scale = self
-                    .half_width
-                    .iter()
-                    .zip(&self.bodies)
-                    .filter(|(_, b)| !b.fixed)
-                    .map(|(w, _)| *w)
-                    .fold(f64::INFINITY, f64::min);
+                let scale = self.thinnest_half_width();
                 correct_positions(&problem, &extra, &end_gaps, 1e-3 * scale, 1e-4 * scale, 200)
                     .map(|(dq, _)| dq)
             } else {

@@ -353,7 +353,9 @@ impl PySimulation {
 
     /// The scene of the file `path` (`.toml` or `.json`, `coulomb_granular::scene_file`;
     /// `seed` replaces the file's), `params` applied on top of its step settings; with the
-    /// file's inlets when it has some.
+    /// file's inlets when it has some. A `_RigidSimulation`, pouring itself, when the scene
+    /// runs in the rigid-body simulator (`BuiltScene::runs_rigid`), else a `_Simulation` and
+    /// its inlets.
     #[staticmethod]
     #[pyo3(signature = (path, seed, params, solver, resolve_overlaps=None))]
     fn from_file(
@@ -363,7 +365,7 @@ impl PySimulation {
         params: &Bound<'_, PyDict>,
         solver: Option<&Bound<'_, PyDict>>,
         resolve_overlaps: Option<usize>,
-    ) -> PyResult<(Self, Option<PyFeed>)> {
+    ) -> PyResult<(Py<PyAny>, Option<PyFeed>)> {
         let file_err = |e: SceneFileError| crate::errors::scene_file_error(py, &e);
         let loaded = py.detach(|| LoadedScene::load(&path)).map_err(file_err)?;
         let opts = BuildOptions {
@@ -371,6 +373,16 @@ impl PySimulation {
             max_fill: None,
         };
         let mut built = py.detach(|| loaded.build(&opts)).map_err(file_err)?;
+        if built.runs_rigid() {
+            if solver.is_some_and(|d| !d.is_empty()) {
+                return Err(PyValueError::new_err(format!(
+                    "{}: solver= sets the sphere engine's library solver; this scene has bodies of other shapes (or pours them), whose steps use the library at its default settings",
+                    path.display()
+                )));
+            }
+            let sim = crate::rigid::from_built(py, built, params, resolve_overlaps)?;
+            return Ok((Py::new(py, sim)?.into_any(), None));
+        }
         let feed = (!built.inlets.is_empty()).then(|| PyFeed {
             model: SceneModel {
                 materials: built.model.materials.clone(),
@@ -389,7 +401,8 @@ impl PySimulation {
                 relaxed.map_err(|e| crate::errors::scene_error(py, &e))?
             }
         };
-        Ok((Self::finish(py, Ok(world_params), rest, solver)?, feed))
+        let sim = Self::finish(py, Ok(world_params), rest, solver)?;
+        Ok((Py::new(py, sim)?.into_any(), feed))
     }
 
     /// One time step; its record (`coulomb_granular::StepRecord`, the same keys for every
@@ -464,6 +477,31 @@ impl PySimulation {
     #[getter]
     fn masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
         numpy::PyArray1::from_iter(py, self.sim.world.bodies.iter().map(|s| s.mass)).into_any()
+    }
+
+    /// The last step's contacts as the rigid scenes' (`RigidContact`: a, b (`kind` "body" or
+    /// "obstacle", `index`; a sphere world's obstacles are the scene's, then its fixed
+    /// spheres), point, normal (b → a), t1, gap, impulse (r_N, r_T1, r_T2)).
+    #[getter]
+    fn contacts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        use coulomb_granular::rigid::{RigidContact, RigidPartner};
+        let c: Vec<RigidContact> = (self.sim.contacts.iter())
+            .map(|c| RigidContact {
+                a: c.body,
+                b: match c.partner {
+                    coulomb_granular::Partner::Body(j) => RigidPartner::Body(j),
+                    coulomb_granular::Partner::Obstacle(k, _) => RigidPartner::Obstacle(k),
+                },
+                point: c.point.to_array(),
+                normal: c.normal.to_array(),
+                t1: c.t1.to_array(),
+                gap: c.gap,
+                impulse: c.impulse,
+            })
+            .collect();
+        let json = serde_json::to_value(c)
+            .map_err(|e| PyRuntimeError::new_err(format!("cannot serialize: {e}")))?;
+        convert::json_to_py(py, &json)
     }
 
     /// Replaces the sphere velocities (flattened (n, 3), finite).
@@ -663,6 +701,68 @@ impl PySimulation {
     }
 }
 
+/// The inlets `inlets` (JSON list of `{inlet, material}`: `inlet` the serde form of
+/// `Inlet`, its `shape` optional) validated, with a model holding the materials of the scene
+/// description `json` (an inlet's material must be one of them).
+pub(crate) fn inlet_runs(
+    py: Python<'_>,
+    json: &str,
+    inlets: &str,
+) -> PyResult<(SceneModel, Vec<InletRun>)> {
+    #[derive(serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Entry {
+        inlet: coulomb_granular::generate::Inlet,
+        material: String,
+    }
+    let bad = |field: &str, index: Option<usize>, m: String| {
+        let index = index.map_or_else(
+            || py.None(),
+            |i| {
+                i.into_pyobject(py)
+                    .map_or_else(|_| py.None(), |x| x.into_any().unbind())
+            },
+        );
+        crate::errors::scene_input_error(py, "inlet", Some(field), index, m)
+    };
+    let desc: serde_json::Value = serde_json::from_str(json)
+        .map_err(|e| bad("inlets", None, format!("scene description: {e}")))?;
+    let materials: coulomb_granular::Materials = desc
+        .get("materials")
+        .map(|m| serde_json::from_value(m.clone()))
+        .transpose()
+        .map_err(|e| bad("inlets", None, format!("materials: {e}")))?
+        .unwrap_or_default();
+    let model = SceneModel {
+        materials,
+        ..SceneModel::default()
+    };
+    let entries: Vec<Entry> =
+        serde_json::from_str(inlets).map_err(|e| bad("inlets", None, format!("inlets: {e}")))?;
+    let mut out = Vec::with_capacity(entries.len());
+    for (k, e) in entries.into_iter().enumerate() {
+        e.inlet
+            .validate()
+            .map_err(|err| bad("inlets", Some(k), format!("inlet {k}: {err}")))?;
+        // the material must exist (the error of the model, naming the inlet)
+        let probe = coulomb_granular::SphereBatch {
+            material: e.material.clone(),
+            density: Some(e.inlet.density),
+            ..Default::default()
+        };
+        model
+            .spheres_of(&probe)
+            .map_err(|err| bad("material", Some(k), format!("inlet {k}: {err}")))?;
+        out.push(InletRun {
+            density: e.inlet.density,
+            material: e.material,
+            inlet: e.inlet,
+            capped: 0,
+        });
+    }
+    Ok((model, out))
+}
+
 /// The inlets of a scene: spheres poured into a running simulation
 /// (`coulomb_granular::generate::Inlet`, the emission rule of `coulomb simulate`).
 #[pyclass(name = "_Feed", module = "coulomb._coulomb")]
@@ -678,58 +778,8 @@ impl PyFeed {
     /// `Inlet`) with the materials of the scene description `json`.
     #[new]
     fn new(py: Python<'_>, json: &str, inlets: &str) -> PyResult<Self> {
-        #[derive(serde::Deserialize)]
-        #[serde(deny_unknown_fields)]
-        struct Entry {
-            inlet: coulomb_granular::generate::Inlet,
-            material: String,
-        }
-        let bad = |field: &str, index: Option<usize>, m: String| {
-            let index = index.map_or_else(
-                || py.None(),
-                |i| {
-                    i.into_pyobject(py)
-                        .map_or_else(|_| py.None(), |x| x.into_any().unbind())
-                },
-            );
-            crate::errors::scene_input_error(py, "inlet", Some(field), index, m)
-        };
-        let desc: serde_json::Value = serde_json::from_str(json)
-            .map_err(|e| bad("inlets", None, format!("scene description: {e}")))?;
-        let materials: coulomb_granular::Materials = desc
-            .get("materials")
-            .map(|m| serde_json::from_value(m.clone()))
-            .transpose()
-            .map_err(|e| bad("inlets", None, format!("materials: {e}")))?
-            .unwrap_or_default();
-        let model = SceneModel {
-            materials,
-            ..SceneModel::default()
-        };
-        let entries: Vec<Entry> = serde_json::from_str(inlets)
-            .map_err(|e| bad("inlets", None, format!("inlets: {e}")))?;
-        let mut out = Vec::with_capacity(entries.len());
-        for (k, e) in entries.into_iter().enumerate() {
-            e.inlet
-                .validate()
-                .map_err(|err| bad("inlets", Some(k), format!("inlet {k}: {err}")))?;
-            // the material must exist (the error of the model, naming the inlet)
-            let probe = coulomb_granular::SphereBatch {
-                material: e.material.clone(),
-                density: Some(e.inlet.density),
-                ..Default::default()
-            };
-            model
-                .spheres_of(&probe)
-                .map_err(|err| bad("material", Some(k), format!("inlet {k}: {err}")))?;
-            out.push(InletRun {
-                density: e.inlet.density,
-                material: e.material,
-                inlet: e.inlet,
-                capped: 0,
-            });
-        }
-        Ok(Self { model, inlets: out })
+        let (model, inlets) = inlet_runs(py, json, inlets)?;
+        Ok(Self { model, inlets })
     }
 
     /// Inserts into `sim` the spheres the inlets owe for (t0, t1], placed among the spheres

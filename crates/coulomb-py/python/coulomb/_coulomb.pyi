@@ -1,6 +1,6 @@
 """Type stubs of the compiled module (the public API is the Python layer around it)."""
 
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any, Dict, List, Optional, Tuple, Union
 
 import numpy as np
 
@@ -48,7 +48,8 @@ class _Simulation:
     @staticmethod
     def from_file(path: str, seed: Optional[int], params: Dict[str, Any],
                   solver: Optional[Dict[str, Any]],
-                  resolve_overlaps: Optional[int] = None) -> Tuple[_Simulation, Optional[_Feed]]: ...
+                  resolve_overlaps: Optional[int] = None
+                  ) -> Tuple[Union[_Simulation, "_RigidSimulation"], Optional[_Feed]]: ...
     def step(self) -> Dict[str, Any]: ...
     def run(self, n: int) -> List[Dict[str, Any]]: ...
     positions: np.ndarray
@@ -56,6 +57,7 @@ class _Simulation:
     angular_velocities: np.ndarray
     radii: np.ndarray
     masses: np.ndarray
+    contacts: List[Dict[str, Any]]
     time: float
     steps_done: int
     keep_problem: bool
@@ -89,11 +91,8 @@ class _Feed:
 class _RigidSimulation:
     @staticmethod
     def from_scene(json: str, batches: List[Any], meshes: List[Any],
-                   params: Dict[str, Any],
+                   params: Dict[str, Any], inlets: str,
                    resolve_overlaps: Optional[int] = None) -> "_RigidSimulation": ...
-    @staticmethod
-    def from_file(path: str, seed: Optional[int], params: Dict[str, Any],
-                  resolve_overlaps: Optional[int] = None) -> "_RigidSimulation": ...
     def step(self) -> Dict[str, Any]: ...
     def run(self, n: int) -> List[Dict[str, Any]]: ...
     body_positions: np.ndarray
@@ -101,10 +100,25 @@ class _RigidSimulation:
     velocities: np.ndarray
     angular_velocities: np.ndarray
     contacts: List[Dict[str, Any]]
+    radii: np.ndarray
+    masses: np.ndarray
+    joint_forces: np.ndarray
+    joint_drift: float
     time: float
     steps_done: int
+    keep_problem: bool
+    params: Dict[str, Any]
     last_problem: Optional[_Problem]
+    def set_velocities(self, v: np.ndarray) -> None: ...
+    def set_positions(self, x: Any) -> None: ...
+    def set_params(self, **params: Any) -> None: ...
+    def set_solver(self, **settings: Any) -> None: ...
+    def write_frames(self, dir: str) -> None: ...
+    def save_checkpoint(self, path: str) -> None: ...
+    @staticmethod
+    def load_checkpoint(path: str) -> "_RigidSimulation": ...
+    def pour_from(self, scene: "_RigidSimulation") -> bool: ...
     def __len__(self) -> int: ...
 
 
-def _scene_file_has_shapes(path: str) -> bool: ...
+def _checkpoint_is_rigid(path: str) -> bool: ...

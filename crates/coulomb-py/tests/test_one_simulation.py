@@ -193,7 +193,8 @@ def test_every_public_member_answers_in_every_scene(make, tmp_path):
         c = sim.contacts
         assert len(c) >= n and all(set(x) == CONTACT for x in c)
         for x in c:
-            assert x["b"]["kind"] in ("body", "obstacle") and 0 <= x["a"] < n
+            assert x["b"] in ({"kind": "obstacle", "index": 0},) or x["b"]["kind"] == "body"
+            assert 0 <= x["a"] < n
             assert math.isclose(np.linalg.norm(x["normal"]), 1.0, rel_tol=1e-9)
             assert x["impulse"][0] >= 0.0
         # the floor carries every body's weight over the last step: Σ r_N ≈ m g h
@@ -292,3 +293,18 @@ def test_every_public_member_answers_in_every_scene(make, tmp_path):
     # the order above: steps first, then what reads them
     for f in checks.values():
         f()
+
+
+@pytest.mark.parametrize("shaped", [False, True])
+def test_contacts_number_the_obstacles_as_the_scene(shaped: bool) -> None:
+    """A contact's obstacle is the scene's (plane 0, box 1), also where the rigid world holds
+    the box as six walls."""
+    scene = Scene().add_plane((0, 0, 0), (0, 0, 1)).add_box((-1, -1, -1), (1, 1, 1))
+    scene.add_spheres([(0.95, 0.0, 0.05)], radii=0.05)
+    if shaped:
+        scene.add_body(Cuboid((0.05, 0.05, 0.05)), (-0.5, 0.0, 0.05))
+    sim = Simulation(scene, h=0.005)
+    sim.step()
+    assert sim.is_rigid == shaped
+    touched = {c["b"]["index"] for c in sim.contacts if c["b"]["kind"] == "obstacle"}
+    assert touched == {0, 1}

@@ -107,7 +107,7 @@ impl PyRigidSimulation {
 impl PyRigidSimulation {
     /// A scene built in Python (as `_Simulation.from_scene`); `params` may set the step
     /// settings h, theta, tol, max_sweeps, relaxation and the default law mu, restitution.
-    /// `inlets` (the JSON list of `_Feed`) pour after each step; with some, the spheres of
+    /// `inlets` (the JSON list of `Scene._inlets`) pour after each step; with some, the spheres of
     /// the batches become bodies (in the same order), after which the poured ones are
     /// appended, as a scene file's are.
     #[staticmethod]

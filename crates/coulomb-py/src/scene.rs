@@ -330,7 +330,7 @@ pub(crate) fn scene_fill<'py>(
 }
 
 /// Writes the scene (`json`, `batches`, `meshes` as for `_Simulation.from_scene`; `inlets`
-/// the JSON list of `{inlet, material}` of `_Feed`) as the scene file `path` (`.toml` or
+/// the JSON list of `{inlet, material}` of `Scene._inlets`) as the scene file `path` (`.toml` or
 /// `.json`, `coulomb_granular::scene_save`), with the step settings the same `params` give
 /// `Simulation(scene, **params)` (a scene with shaped bodies: the rigid defaults h = 1e-3 s,
 /// tol = 1e-8) and `steps` steps (default: the scene files' 200). Written atomically; a path

@@ -929,10 +929,8 @@ class Simulation:
                 self._sim = _coulomb._RigidSimulation.from_scene(desc, batches, meshes,
                                                                  dict(params), inlets, relax)
                 return
-            if scene._inlets:  # checked before the build
-                self._feed = _coulomb._Feed(desc, inlets)
             self._sim = _coulomb._Simulation.from_scene(desc, batches, meshes, dict(params),
-                                                        dict(solver or {}), relax)
+                                                        dict(solver or {}), inlets, relax)
         elif isinstance(scene, str):
             if relax is not None:
                 raise _arg_error("resolve_overlaps", "the built-in scenes have no overlaps to "
@@ -942,9 +940,6 @@ class Simulation:
         else:
             raise TypeError(f"scene must be a coulomb.granular.Scene or the name of a built-in "
                             f"scene {SCENES}, got {type(scene).__name__}")
-
-    #: the scene's inlets (None: none)
-    _feed: Any = None
 
     @staticmethod
     def from_file(path: Union[str, "os.PathLike[str]"], seed: Optional[int] = None,
@@ -958,7 +953,7 @@ class Simulation:
         read). The file's inlets pour as in ``coulomb simulate``, spheres or bodies of any
         shape, into a sphere or a rigid-body scene alike."""
         sim = Simulation.__new__(Simulation)
-        sim._sim, sim._feed = _coulomb._Simulation.from_file(
+        sim._sim = _coulomb._Simulation.from_file(
             os.fspath(path), None if seed is None else int(seed), dict(params),
             dict(solver or {}), _sweeps(resolve_overlaps))
         return sim
@@ -966,19 +961,13 @@ class Simulation:
     def step(self) -> StepStats:
         """Advances one step t_k → t_{k+1} (GIL released) and returns its statistics; then
         the scene's inlets insert the bodies due in (t_k, t_{k+1}]."""
-        if self._feed is None:
-            return self._sim.step()
-        t0 = self._sim.time
-        stats = self._sim.step()
-        self._feed.emit(self._sim, t0, self._sim.time)
-        return stats
+        return self._sim.step()
 
     def run(self, steps: int) -> List[StepStats]:
-        """Advances ``steps`` steps at once (GIL released for all of them) and returns their
-        statistics (a list; use :meth:`step` to read or steer the state between steps)."""
-        if self._feed is None:
-            return self._sim.run(int(steps))
-        return [self.step() for _ in range(int(steps))]
+        """Advances ``steps`` steps at once (GIL released for each, inlets pouring after
+        each) and returns their statistics (a list; use :meth:`step` to read or steer the
+        state between steps)."""
+        return self._sim.run(int(steps))
 
     @property
     def is_rigid(self) -> bool:
@@ -1168,12 +1157,10 @@ class Simulation:
         else:
             raise TypeError(f"scene must be a coulomb.granular.Scene or a scene file, got "
                             f"{type(scene).__name__}")
-        if probe.is_rigid != rigid or not (sim._sim.pour_from(probe._sim) if rigid
-                                           else sim._sim.same_setup(probe._sim)):
+        if probe.is_rigid != rigid or not sim._sim.pour_from(probe._sim):
             raise ValueError(f"the scene given is not the scene of the checkpoint "
                              f"{os.fspath(path)}: its bodies, obstacles, materials or gravity "
                              f"differ")
-        sim._feed = probe._feed
         return sim
 
 

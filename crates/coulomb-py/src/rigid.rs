@@ -8,7 +8,7 @@ use crate::PyProblem;
 use coulomb::problem::Problem;
 use coulomb_granular::rigid_scene::RigidScene;
 use coulomb_granular::scene_file::{BuiltScene, InletRun};
-use coulomb_granular::{BodySpec, SceneModel, StepRecord};
+use coulomb_granular::{BodySpec, CheckpointError, SceneModel, StepRecord};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -386,7 +386,15 @@ impl PyRigidSimulation {
             }
             Err(e) => {
                 self.scene.model = old;
-                Err(PyValueError::new_err(e.to_string()))
+                // the model's error, not the round trip's wrapping of it
+                let why = match &e {
+                    CheckpointError::Invalid { detail, .. } => detail
+                        .strip_prefix("the stored scene: ")
+                        .unwrap_or(detail)
+                        .to_string(),
+                    other => other.to_string(),
+                };
+                Err(PyValueError::new_err(format!("set_params: {why}")))
             }
         }
     }

@@ -216,7 +216,7 @@ def test_every_public_member_answers_in_every_scene(make, tmp_path):
         assert math.isclose(sim.time - t, 0.005, rel_tol=1e-9)
         with pytest.raises(TypeError, match="bogus"):
             sim.set_params(bogus=1)
-        with pytest.raises(ValueError):
+        with pytest.raises(ValueError, match="h = -1"):
             sim.set_params(h=-1.0)
         assert sim.params["h"] == 0.005
 

@@ -130,6 +130,11 @@ def test_sphere_inlets_pour_into_a_scene_with_spheres_and_a_cuboid(tmp_path: Pat
     _same(straight, again)
     # the spheres poured are balls: a radius each
     assert not np.isnan(again.radii[1:]).any()
+    # the same bodies and bits as `coulomb simulate` on the scene saved as a file
+    scene().save(tmp_path / "mixed.toml", steps=40, h=0.002)
+    _simulate(str(tmp_path / "mixed.toml"), "--checkpoint-every", "40", "--output",
+              str(tmp_path / "run"))
+    _same(straight, Simulation.load_checkpoint(tmp_path / "run" / "checkpoint.h5"))
 
 
 def test_a_rigid_scene_file_refuses_what_coulomb_simulate_refuses(tmp_path: Path) -> None:

@@ -261,6 +261,16 @@ pub struct PySimulation {
     /// the folder of `write_frames` and its writer (the collections continue while the
     /// same folder is given)
     frames: Option<(PathBuf, coulomb_granular::output::VtkWriter)>,
+    /// the scene's inlets, pouring after each step
+    feed: Feed,
+}
+
+/// The inlets of a sphere scene (`InletRun::emit`, the emission rule of `coulomb simulate`)
+/// with the scene's materials (the inserted spheres' material indices).
+#[derive(Clone, Default)]
+struct Feed {
+    model: SceneModel,
+    inlets: Vec<InletRun>,
 }
 
 /// The build checks of a scene whose overlaps `resolve_overlaps=` relaxes: those
@@ -328,7 +338,8 @@ impl PySimulation {
     /// and `meshes` the arrays (see `scene.rs`); `params` as for the constructor. Built and
     /// validated with every check of `SceneModel::build`, without the GIL.
     #[staticmethod]
-    #[pyo3(signature = (json, batches, meshes, params, solver, resolve_overlaps=None))]
+    #[pyo3(signature = (json, batches, meshes, params, solver, inlets, resolve_overlaps=None))]
+    #[allow(clippy::too_many_arguments)]
     fn from_scene(
         py: Python<'_>,
         json: &str,
@@ -336,8 +347,11 @@ impl PySimulation {
         meshes: &Bound<'_, PyList>,
         params: &Bound<'_, PyDict>,
         solver: Option<&Bound<'_, PyDict>>,
+        inlets: &str,
         resolve_overlaps: Option<usize>,
     ) -> PyResult<Self> {
+        // the inlets checked before the build
+        let (materials, inlets) = inlet_runs(py, json, inlets)?;
         let arrays = SceneArrays::extract(batches, meshes)?;
         let json = json.to_string();
         let mut model = py
@@ -348,12 +362,18 @@ impl PySimulation {
             None => model.build(),
             Some(sweeps) => relaxed(model.build_with(&UNCHECKED), sweeps),
         });
-        Self::finish(py, built, rest, solver)
+        let mut sim = Self::finish(py, built, rest, solver)?;
+        sim.feed = Feed {
+            model: materials,
+            inlets,
+        };
+        Ok(sim)
     }
 
     /// The scene of the file `path` (`.toml` or `.json`, `coulomb_granular::scene_file`;
     /// `seed` replaces the file's), `params` applied on top of its step settings; with the
-    /// file's inlets when it has some.
+    /// file's inlets pouring after each step: a `_RigidSimulation` when the scene runs in
+    /// the rigid-body simulator (`BuiltScene::runs_rigid`), else a `_Simulation`.
     #[staticmethod]
     #[pyo3(signature = (path, seed, params, solver, resolve_overlaps=None))]
     fn from_file(
@@ -363,7 +383,7 @@ impl PySimulation {
         params: &Bound<'_, PyDict>,
         solver: Option<&Bound<'_, PyDict>>,
         resolve_overlaps: Option<usize>,
-    ) -> PyResult<(Self, Option<PyFeed>)> {
+    ) -> PyResult<Py<PyAny>> {
         let file_err = |e: SceneFileError| crate::errors::scene_file_error(py, &e);
         let loaded = py.detach(|| LoadedScene::load(&path)).map_err(file_err)?;
         let opts = BuildOptions {
@@ -371,13 +391,23 @@ impl PySimulation {
             max_fill: None,
         };
         let mut built = py.detach(|| loaded.build(&opts)).map_err(file_err)?;
-        let feed = (!built.inlets.is_empty()).then(|| PyFeed {
+        if built.runs_rigid() {
+            if solver.is_some_and(|d| !d.is_empty()) {
+                return Err(PyValueError::new_err(format!(
+                    "{}: solver= sets the sphere engine's library solver; this scene has bodies of other shapes (or pours them), whose steps use the library at its default settings",
+                    path.display()
+                )));
+            }
+            let sim = crate::rigid::from_built(py, built, params, resolve_overlaps)?;
+            return Ok(Py::new(py, sim)?.into_any());
+        }
+        let feed = Feed {
             model: SceneModel {
                 materials: built.model.materials.clone(),
                 ..SceneModel::default()
             },
             inlets: built.inlets.clone(),
-        });
+        };
         let rest = apply_to_model(&mut built.model, params)?;
         let world_params = match resolve_overlaps {
             None => py
@@ -389,14 +419,15 @@ impl PySimulation {
                 relaxed.map_err(|e| crate::errors::scene_error(py, &e))?
             }
         };
-        Ok((Self::finish(py, Ok(world_params), rest, solver)?, feed))
+        let mut sim = Self::finish(py, Ok(world_params), rest, solver)?;
+        sim.feed = feed;
+        Ok(Py::new(py, sim)?.into_any())
     }
 
     /// One time step; its record (`coulomb_granular::StepRecord`, the same keys for every
     /// scene) as a dict.
     fn step<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let sim = &mut self.sim;
-        let stats = py.detach(move || sim.step()).map_err(sim_error)?;
+        let stats = self.advance(py)?;
         stats_to_py(py, &stats)
     }
 
@@ -406,9 +437,7 @@ impl PySimulation {
         // raises KeyboardInterrupt after the step in progress (the steps taken stay taken)
         let mut stats = Vec::with_capacity(n.min(1 << 20));
         for _ in 0..n {
-            let sim = &mut self.sim;
-            let s = py.detach(move || sim.step()).map_err(sim_error)?;
-            stats.push(s);
+            stats.push(self.advance(py)?);
             py.check_signals()?;
         }
         let list = PyList::empty(py);
@@ -464,6 +493,31 @@ impl PySimulation {
     #[getter]
     fn masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
         numpy::PyArray1::from_iter(py, self.sim.world.bodies.iter().map(|s| s.mass)).into_any()
+    }
+
+    /// The last step's contacts as the rigid scenes' (`RigidContact`: a, b (`kind` "body" or
+    /// "obstacle", `index`; a sphere world's obstacles are the scene's, then its fixed
+    /// spheres), point, normal (b → a), t1, gap, impulse (r_N, r_T1, r_T2)).
+    #[getter]
+    fn contacts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        use coulomb_granular::rigid::{RigidContact, RigidPartner};
+        let c: Vec<RigidContact> = (self.sim.contacts.iter())
+            .map(|c| RigidContact {
+                a: c.body,
+                b: match c.partner {
+                    coulomb_granular::Partner::Body(j) => RigidPartner::Body(j),
+                    coulomb_granular::Partner::Obstacle(k, _) => RigidPartner::Obstacle(k),
+                },
+                point: c.point.to_array(),
+                normal: c.normal.to_array(),
+                t1: c.t1.to_array(),
+                gap: c.gap,
+                impulse: c.impulse,
+            })
+            .collect();
+        let json = serde_json::to_value(c)
+            .map_err(|e| PyRuntimeError::new_err(format!("cannot serialize: {e}")))?;
+        convert::json_to_py(py, &json)
     }
 
     /// Replaces the sphere velocities (flattened (n, 3), finite).
@@ -606,11 +660,16 @@ impl PySimulation {
         .map_err(|e| crate::errors::output_error(e, &target))
     }
 
-    /// Whether `other` has this simulation's gravity and obstacles (the check that a scene
-    /// given to `load_checkpoint` for its inlets is the stored run's).
-    fn same_setup(&self, other: &PySimulation) -> bool {
-        self.sim.world.gravity == other.sim.world.gravity
-            && self.sim.world.obstacles == other.sim.world.obstacles
+    /// Makes the inlets of `scene` (the scene the stored run was built from) pour into this
+    /// loaded run after each step, as `coulomb simulate FILE --restart`; False, nothing
+    /// changed, when `scene` has other gravity or obstacles.
+    fn pour_from(&mut self, scene: &PySimulation) -> bool {
+        let (a, b) = (&self.sim.world, &scene.sim.world);
+        if a.gravity != b.gravity || a.obstacles != b.obstacles {
+            return false;
+        }
+        self.feed = scene.feed.clone();
+        true
     }
 
     /// The simulation stored in the checkpoint file `path`; stepping it gives the same bits as
@@ -618,12 +677,33 @@ impl PySimulation {
     #[staticmethod]
     fn load_checkpoint(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
         py.detach(|| Simulation::load_checkpoint(&path))
-            .map(|sim| Self { sim, frames: None })
+            .map(|sim| Self {
+                sim,
+                frames: None,
+                feed: Feed::default(),
+            })
             .map_err(|e| crate::errors::checkpoint_error(py, e))
     }
 }
 
 impl PySimulation {
+    /// One step t_k → t_{k+1}, then the inlets insert the spheres due in (t_k, t_{k+1}]
+    /// (`InletRun::emit`, placed among the spheres present, as `coulomb simulate` does after
+    /// each step); the step's statistics. Without the GIL.
+    fn advance(&mut self, py: Python<'_>) -> PyResult<coulomb_granular::StepStats> {
+        let (sim, feed) = (&mut self.sim, &mut self.feed);
+        py.detach(move || {
+            let t0 = sim.time;
+            let stats = sim.step()?;
+            let t1 = sim.time;
+            for inlet in feed.inlets.iter_mut() {
+                inlet.emit(sim, &feed.model, t0, t1)?;
+            }
+            Ok(stats)
+        })
+        .map_err(sim_error)
+    }
+
     /// The simulation of a built scene: `rest` (warm_start, gap_closure) applied to its
     /// parameters, `solver` (keyword settings of `coulomb.solve`) replacing the library
     /// solver's settings when given.
@@ -659,103 +739,72 @@ impl PySimulation {
         let sim = py
             .detach(move || Simulation::new(world, p))
             .map_err(sim_error)?;
-        Ok(Self { sim, frames: None })
-    }
-}
-
-/// The inlets of a scene: spheres poured into a running simulation
-/// (`coulomb_granular::generate::Inlet`, the emission rule of `coulomb simulate`).
-#[pyclass(name = "_Feed", module = "coulomb._coulomb")]
-pub struct PyFeed {
-    /// the scene's materials (the inserted spheres' material indices)
-    model: SceneModel,
-    inlets: Vec<InletRun>,
-}
-
-#[pymethods]
-impl PyFeed {
-    /// The inlets `inlets` (JSON list of `{inlet, material}`: `inlet` the serde form of
-    /// `Inlet`) with the materials of the scene description `json`.
-    #[new]
-    fn new(py: Python<'_>, json: &str, inlets: &str) -> PyResult<Self> {
-        #[derive(serde::Deserialize)]
-        #[serde(deny_unknown_fields)]
-        struct Entry {
-            inlet: coulomb_granular::generate::Inlet,
-            material: String,
-        }
-        let bad = |field: &str, index: Option<usize>, m: String| {
-            let index = index.map_or_else(
-                || py.None(),
-                |i| {
-                    i.into_pyobject(py)
-                        .map_or_else(|_| py.None(), |x| x.into_any().unbind())
-                },
-            );
-            crate::errors::scene_input_error(py, "inlet", Some(field), index, m)
-        };
-        let desc: serde_json::Value = serde_json::from_str(json)
-            .map_err(|e| bad("inlets", None, format!("scene description: {e}")))?;
-        let materials: coulomb_granular::Materials = desc
-            .get("materials")
-            .map(|m| serde_json::from_value(m.clone()))
-            .transpose()
-            .map_err(|e| bad("inlets", None, format!("materials: {e}")))?
-            .unwrap_or_default();
-        let model = SceneModel {
-            materials,
-            ..SceneModel::default()
-        };
-        let entries: Vec<Entry> = serde_json::from_str(inlets)
-            .map_err(|e| bad("inlets", None, format!("inlets: {e}")))?;
-        let mut out = Vec::with_capacity(entries.len());
-        for (k, e) in entries.into_iter().enumerate() {
-            e.inlet
-                .validate()
-                .map_err(|err| bad("inlets", Some(k), format!("inlet {k}: {err}")))?;
-            // the material must exist (the error of the model, naming the inlet)
-            let probe = coulomb_granular::SphereBatch {
-                material: e.material.clone(),
-                density: Some(e.inlet.density),
-                ..Default::default()
-            };
-            model
-                .spheres_of(&probe)
-                .map_err(|err| bad("material", Some(k), format!("inlet {k}: {err}")))?;
-            out.push(InletRun {
-                density: e.inlet.density,
-                material: e.material,
-                inlet: e.inlet,
-                capped: 0,
-            });
-        }
-        Ok(Self { model, inlets: out })
-    }
-
-    /// Inserts into `sim` the spheres the inlets owe for (t0, t1], placed among the spheres
-    /// present; returns (inserted, skipped).
-    fn emit(
-        &mut self,
-        py: Python<'_>,
-        sim: &mut PySimulation,
-        t0: f64,
-        t1: f64,
-    ) -> PyResult<(usize, usize)> {
-        let (model, inlets, sim) = (&self.model, &mut self.inlets, &mut sim.sim);
-        py.detach(move || {
-            let (mut n, mut k) = (0, 0);
-            for inlet in inlets.iter_mut() {
-                let (a, b) = inlet.emit(sim, model, t0, t1)?;
-                n += a;
-                k += b;
-            }
-            Ok((n, k))
+        Ok(Self {
+            sim,
+            frames: None,
+            feed: Feed::default(),
         })
-        .map_err(sim_error)
     }
+}
 
-    /// Number of inlets.
-    fn __len__(&self) -> usize {
-        self.inlets.len()
+/// The inlets `inlets` (JSON list of `{inlet, material}`: `inlet` the serde form of
+/// `Inlet`, its `shape` optional) validated, with a model holding the materials of the scene
+/// description `json` (an inlet's material must be one of them).
+pub(crate) fn inlet_runs(
+    py: Python<'_>,
+    json: &str,
+    inlets: &str,
+) -> PyResult<(SceneModel, Vec<InletRun>)> {
+    #[derive(serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Entry {
+        inlet: coulomb_granular::generate::Inlet,
+        material: String,
     }
+    let bad = |field: &str, index: Option<usize>, m: String| {
+        let index = index.map_or_else(
+            || py.None(),
+            |i| {
+                i.into_pyobject(py)
+                    .map_or_else(|_| py.None(), |x| x.into_any().unbind())
+            },
+        );
+        crate::errors::scene_input_error(py, "inlet", Some(field), index, m)
+    };
+    let desc: serde_json::Value = serde_json::from_str(json)
+        .map_err(|e| bad("inlets", None, format!("scene description: {e}")))?;
+    let materials: coulomb_granular::Materials = desc
+        .get("materials")
+        .map(|m| serde_json::from_value(m.clone()))
+        .transpose()
+        .map_err(|e| bad("inlets", None, format!("materials: {e}")))?
+        .unwrap_or_default();
+    let model = SceneModel {
+        materials,
+        ..SceneModel::default()
+    };
+    let entries: Vec<Entry> =
+        serde_json::from_str(inlets).map_err(|e| bad("inlets", None, format!("inlets: {e}")))?;
+    let mut out = Vec::with_capacity(entries.len());
+    for (k, e) in entries.into_iter().enumerate() {
+        e.inlet
+            .validate()
+            .map_err(|err| bad("inlets", Some(k), format!("inlet {k}: {err}")))?;
+        // the material must exist (the error of the model, naming the inlet)
+        let probe = coulomb_granular::SphereBatch {
+            material: e.material.clone(),
+            density: Some(e.inlet.density),
+            ..Default::default()
+        };
+        model
+            .spheres_of(&probe)
+            .map_err(|err| bad("material", Some(k), format!("inlet {k}: {err}")))?;
+        out.push(InletRun {
+            density: e.inlet.density,
+            material: e.material,
+            inlet: e.inlet,
+            capped: 0,
+        });
+    }
+    Ok((model, out))
 }

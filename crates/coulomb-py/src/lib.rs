@@ -423,9 +423,7 @@ fn _coulomb(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fclib_read, m)?)?;
     m.add_function(wrap_pyfunction!(fclib_write, m)?)?;
     m.add_class::<granular::PySimulation>()?;
-    m.add_class::<granular::PyFeed>()?;
     m.add_class::<rigid::PyRigidSimulation>()?;
-    m.add_function(wrap_pyfunction!(rigid::_scene_file_has_shapes, m)?)?;
     m.add_function(wrap_pyfunction!(rigid::_checkpoint_is_rigid, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

@@ -7,8 +7,8 @@ use crate::scene::{model_from_parts, SceneArrays};
 use crate::PyProblem;
 use coulomb::problem::Problem;
 use coulomb_granular::rigid_scene::RigidScene;
-use coulomb_granular::scene_file::{BuildOptions, LoadedScene};
-use coulomb_granular::SceneModel;
+use coulomb_granular::scene_file::{BuiltScene, InletRun};
+use coulomb_granular::{BodySpec, CheckpointError, SceneModel, StepRecord};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -23,6 +23,8 @@ pub struct PyRigidSimulation {
     scene: RigidScene,
     /// the folder of `write_frames` and its writer
     frames: Option<(PathBuf, coulomb_granular::output::RigidVtkWriter)>,
+    /// the scene's inlets, pouring after each step
+    pour: Vec<InletRun>,
 }
 
 fn rows<'py, const N: usize>(py: Python<'py>, v: &[[f64; N]]) -> Bound<'py, PyAny> {
@@ -52,28 +54,95 @@ fn build(
     Ok(PyRigidSimulation {
         scene,
         frames: None,
+        pour: Vec::new(),
     })
+}
+
+/// The rigid scene of a scene file that runs in the rigid-body simulator
+/// ([`BuiltScene::runs_rigid`]), as `coulomb simulate FILE` builds it: its `[step]` settings
+/// checked ([`coulomb_granular::scene_file::check_rigid_step`]), `params` applied on top (as
+/// for `from_scene`), its inlets pouring after each step.
+pub(crate) fn from_built(
+    py: Python<'_>,
+    mut built: BuiltScene,
+    params: &Bound<'_, PyDict>,
+    resolve_overlaps: Option<usize>,
+) -> PyResult<PyRigidSimulation> {
+    coulomb_granular::scene_file::check_rigid_step(&built.step)
+        .map_err(|e| PyValueError::new_err(format!("{}: {e}", built.path.display())))?;
+    let rest = crate::granular::apply_to_model(&mut built.model, params)?;
+    if let Some((k, _)) = rest.first() {
+        return Err(PyTypeError::new_err(format!(
+            "'{k}' is not a parameter of rigid-body scenes"
+        )));
+    }
+    let mut sim = build(py, built.model, resolve_overlaps)?;
+    sim.pour = built.inlets;
+    Ok(sim)
+}
+
+impl PyRigidSimulation {
+    /// One step t_k → t_{k+1}, then the inlets, in order, pour the bodies due in
+    /// (t_k, t_{k+1}] ([`InletRun::pour_rigid`], as `coulomb simulate` does after each step,
+    /// [`BuiltScene::pour_rigid`]); the step's record. Without the GIL.
+    fn advance(&mut self, py: Python<'_>) -> PyResult<StepRecord> {
+        let (scene, pour) = (&mut self.scene, &mut self.pour);
+        py.detach(move || {
+            let t0 = scene.world.time();
+            let r = scene.step().map_err(|e| e.to_string())?;
+            let record = StepRecord::of_rigid(&r, scene.world.potential_energy());
+            let t1 = scene.world.time();
+            for inlet in pour.iter_mut() {
+                inlet
+                    .pour_rigid(scene, t0, t1)
+                    .map_err(|e| format!("inlet at t = {t1}: {e}"))?;
+            }
+            Ok(record)
+        })
+        .map_err(PyRuntimeError::new_err::<String>)
+    }
 }
 
 #[pymethods]
 impl PyRigidSimulation {
     /// A scene built in Python (as `_Simulation.from_scene`); `params` may set the step
-    /// settings h, theta, tol, max_sweeps and the default law mu, restitution.
+    /// settings h, theta, tol, max_sweeps, relaxation and the default law mu, restitution.
+    /// `inlets` (the JSON list of `Scene._inlets`) pour after each step; with some, the spheres of
+    /// the batches become bodies (in the same order), after which the poured ones are
+    /// appended, as a scene file's are.
     #[staticmethod]
-    #[pyo3(signature = (json, batches, meshes, params, resolve_overlaps=None))]
+    #[pyo3(signature = (json, batches, meshes, params, inlets, resolve_overlaps=None))]
     fn from_scene(
         py: Python<'_>,
         json: &str,
         batches: &Bound<'_, PyList>,
         meshes: &Bound<'_, PyList>,
         params: &Bound<'_, PyDict>,
+        inlets: &str,
         resolve_overlaps: Option<usize>,
     ) -> PyResult<Self> {
+        let (_, pour) = crate::granular::inlet_runs(py, json, inlets)?;
         let arrays = SceneArrays::extract(batches, meshes)?;
         let json = json.to_string();
         let mut model = py
             .detach(move || model_from_parts(&json, arrays))
             .map_err(|e| e.into_py(py))?;
+        if !pour.is_empty() {
+            for batch in std::mem::take(&mut model.sphere_batches) {
+                let spheres = model
+                    .spheres_of(&batch)
+                    .map_err(|e| crate::errors::scene_error(py, &e))?;
+                model.bodies.extend(spheres.iter().map(|s| BodySpec {
+                    mass: Some(s.mass),
+                    density: None,
+                    velocity: s.velocity,
+                    angular_velocity: s.angular_velocity,
+                    material: batch.material.clone(),
+                    fixed: batch.fixed,
+                    ..BodySpec::sphere(s.position, s.radius, 1.0)
+                }));
+            }
+        }
         // the rigid scene files' step defaults (h = 1e-3 s, tol = 1e-8), not the sphere
         // scenes' 0.02 s and 1e-4 (issue 55: a 10-cube tower sank 5.6 cm at those)
         model.step.h = RIGID_H;
@@ -81,53 +150,18 @@ impl PyRigidSimulation {
         let rest = crate::granular::apply_to_model(&mut model, params)?;
         if let Some((k, _)) = rest.first() {
             return Err(PyTypeError::new_err(format!(
-                "'{k}' is not a parameter of rigid-body scenes (h, theta, tol, max_sweeps, mu, restitution)"
+                "'{k}' is not a parameter of rigid-body scenes (h, theta, tol, max_sweeps, relaxation, mu, restitution)"
             )));
         }
-        build(py, model, resolve_overlaps)
-    }
-
-    /// The scene of a scene file with shaped bodies; `params` as for `from_scene`.
-    #[staticmethod]
-    #[pyo3(signature = (path, seed, params, resolve_overlaps=None))]
-    fn from_file(
-        py: Python<'_>,
-        path: PathBuf,
-        seed: Option<u64>,
-        params: &Bound<'_, PyDict>,
-        resolve_overlaps: Option<usize>,
-    ) -> PyResult<Self> {
-        let file_err = |e| crate::errors::scene_file_error(py, &e);
-        let loaded = py.detach(|| LoadedScene::load(&path)).map_err(file_err)?;
-        let opts = BuildOptions {
-            seed,
-            max_fill: None,
-        };
-        let mut built = py.detach(|| loaded.build(&opts)).map_err(file_err)?;
-        if !built.inlets.is_empty() {
-            return Err(PyValueError::new_err(format!(
-                "{}: the inlets of a scene that runs in the rigid-body simulator (bodies of other shapes, joints, or an inlet with a shape) pour in `coulomb simulate` only, not yet in Python",
-                path.display()
-            )));
-        }
-        let rest = crate::granular::apply_to_model(&mut built.model, params)?;
-        if let Some((k, _)) = rest.first() {
-            return Err(PyTypeError::new_err(format!(
-                "'{k}' is not a parameter of rigid-body scenes"
-            )));
-        }
-        build(py, built.model, resolve_overlaps)
+        let mut sim = build(py, model, resolve_overlaps)?;
+        sim.pour = pour;
+        Ok(sim)
     }
 
     /// One time step; its record (`coulomb_granular::StepRecord`, the same keys for every
     /// scene) as a dict.
     fn step<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let scene = &mut self.scene;
-        let r = py
-            .detach(move || scene.step())
-            .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-        let record =
-            coulomb_granular::StepRecord::of_rigid(&r, self.scene.world.potential_energy());
+        let record = self.advance(py)?;
         crate::granular::record_to_py(py, &record)
     }
 
@@ -137,14 +171,7 @@ impl PyRigidSimulation {
         // raises KeyboardInterrupt after the step in progress (the steps taken stay taken)
         let mut records = Vec::with_capacity(n.min(1 << 20));
         for _ in 0..n {
-            let scene = &mut self.scene;
-            let r = py
-                .detach(move || scene.step())
-                .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-            records.push(coulomb_granular::StepRecord::of_rigid(
-                &r,
-                self.scene.world.potential_energy(),
-            ));
+            records.push(self.advance(py)?);
             py.check_signals()?;
         }
         let out = PyList::empty(py);
@@ -226,10 +253,18 @@ impl PyRigidSimulation {
         rows(py, &self.scene.world.angular_velocities())
     }
 
-    /// The last step's contacts (`RigidContact`: a, b, point, normal, t1, gap, impulse).
+    /// The last step's contacts (`RigidContact`: a, b, point, normal, t1, gap, impulse), an
+    /// obstacle numbered as in the scene (not as the part of it the rigid world holds), as
+    /// the sphere scenes' contacts are.
     #[getter]
     fn contacts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let json = serde_json::to_value(self.scene.world.contacts())
+        let mut c = self.scene.world.contacts();
+        for x in &mut c {
+            if let coulomb_granular::rigid::RigidPartner::Obstacle(k) = &mut x.b {
+                *k = self.scene.obstacle_of.get(*k).copied().unwrap_or(*k);
+            }
+        }
+        let json = serde_json::to_value(c)
             .map_err(|e| PyRuntimeError::new_err(format!("cannot serialize: {e}")))?;
         convert::json_to_py(py, &json)
     }
@@ -292,34 +327,125 @@ impl PyRigidSimulation {
             .map(|scene| Self {
                 scene,
                 frames: None,
+                pour: Vec::new(),
             })
             .map_err(|e| crate::errors::checkpoint_error(py, e))
     }
 
-    /// Whether `other` was built from the same scene (bodies at t = 0, obstacles, materials,
-    /// gravity; the step settings, which the checkpoint holds, may differ).
-    /// The step settings and the default contact law the rigid world runs with (h, theta,
-    /// tol, max_sweeps, mu, restitution: the parameters `from_scene` accepts).
+    /// The step settings and contact law the rigid world runs with, under the keys of the
+    /// sphere scenes' `params`: those it fixes (method "nsgs" finished by the library,
+    /// warm starts, gap closure, position correction moving positions only) as it fixes them.
     #[getter]
     fn params<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let step = &self.scene.model.step;
         let law = &self.scene.model.materials.default;
+        let s = self.scene.world.settings();
         let d = PyDict::new(py);
         d.set_item("h", step.h)?;
         d.set_item("theta", step.theta)?;
+        d.set_item("restitution", law.restitution)?;
+        d.set_item("mu", law.mu)?;
+        d.set_item("rolling_friction", law.rolling_friction)?;
+        d.set_item("warm_start", s.warm_start)?;
+        d.set_item("gap_closure", true)?;
+        d.set_item(
+            "projection_velocities",
+            s.position_correction.then_some("positions_only"),
+        )?;
+        d.set_item("method", "nsgs")?;
         d.set_item("tol", step.tol)?;
         d.set_item("max_sweeps", step.max_sweeps)?;
-        d.set_item("mu", law.mu)?;
-        d.set_item("restitution", law.restitution)?;
+        d.set_item("relaxation", step.relaxation)?;
+        d.set_item("solver", convert::settings_to_dict(py, &s.solver)?)?;
         Ok(d)
     }
 
-    fn same_setup(&self, other: &Self) -> bool {
-        let step = self.scene.model.step.clone();
-        SceneModel {
-            step,
-            ..other.scene.model.clone()
-        } == self.scene.model
+    /// Changes h, theta, tol, max_sweeps, relaxation and the default law (mu, restitution)
+    /// for the following steps: the scene's model takes them and the world is rebuilt from it
+    /// with its state at t_k (the round trip of a checkpoint, what a restart does), so that
+    /// its checks apply and its checkpoints hold them. Refused, nothing changed, as the
+    /// constructor refuses them.
+    #[pyo3(signature = (**params))]
+    fn set_params(&mut self, params: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
+        let Some(kw) = params else { return Ok(()) };
+        let mut model = self.scene.model.clone();
+        if let Some((k, _)) = crate::granular::apply_to_model(&mut model, kw)?.first() {
+            return Err(PyTypeError::new_err(format!(
+                "'{k}' is not a parameter of rigid-body scenes (h, theta, tol, max_sweeps, relaxation, mu, restitution)"
+            )));
+        }
+        let old = std::mem::replace(&mut self.scene.model, model);
+        let rebuilt = self
+            .scene
+            .checkpoint_bytes()
+            .and_then(|b| RigidScene::from_checkpoint_bytes("set_params", b));
+        match rebuilt {
+            Ok(scene) => {
+                self.scene = scene;
+                Ok(())
+            }
+            Err(e) => {
+                self.scene.model = old;
+                // the model's error, not the round trip's wrapping of it
+                let why = match &e {
+                    CheckpointError::Invalid { detail, .. } => detail
+                        .strip_prefix("the stored scene: ")
+                        .unwrap_or(detail)
+                        .to_string(),
+                    other => other.to_string(),
+                };
+                Err(PyValueError::new_err(format!("set_params: {why}")))
+            }
+        }
+    }
+
+    /// Whether each step keeps its problem (2.10): the rigid world always does.
+    #[getter]
+    fn keep_problem(&self) -> bool {
+        self.scene.world.settings().keep_problem
+    }
+
+    #[setter]
+    fn set_keep_problem(&mut self, keep: bool) -> PyResult<()> {
+        if keep != self.keep_problem() {
+            return Err(PyValueError::new_err(
+                "keep_problem: the rigid-body simulator keeps each step's problem (2.10) always",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Refused: see the message.
+    #[pyo3(signature = (**_settings))]
+    fn set_solver(&mut self, _settings: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
+        Err(PyValueError::new_err(
+            "set_solver: a scene with bodies of other shapes than spheres finishes its steps with the library solver at its default settings (its tol is the scene's: set_params(tol=...)); they cannot be changed yet",
+        ))
+    }
+
+    /// Refused: see the message.
+    fn set_positions(&mut self, _x: &Bound<'_, PyAny>) -> PyResult<()> {
+        Err(PyValueError::new_err(
+            "set_positions: the bodies of a scene with other shapes than spheres cannot be moved between steps yet (give their positions to the Scene, or set their velocities)",
+        ))
+    }
+
+    /// Makes the inlets of `scene` (the scene file or `Scene` the stored run was built from)
+    /// pour into this loaded run after each step, as `coulomb simulate FILE --restart`: an
+    /// emission depends only on its inlet's seed, the time and the bodies present, so the
+    /// continued run pours the uninterrupted one's bodies. False, nothing changed, when
+    /// `scene` is not this run's (its bodies, those poured since aside, obstacles,
+    /// materials, gravity or joints differ; the step settings may).
+    fn pour_from(&mut self, scene: &Self) -> bool {
+        let model = SceneModel {
+            step: self.scene.model.step.clone(),
+            ..scene.scene.model.clone()
+        };
+        if !self.scene.is_built_from(&model, !scene.pour.is_empty()) {
+            return false;
+        }
+        self.pour.clone_from(&scene.pour);
+        true
     }
 }
 
@@ -330,23 +456,4 @@ pub fn _checkpoint_is_rigid(py: Python<'_>, path: PathBuf) -> bool {
         coulomb_granular::checkpoint::format_of(&path).as_deref()
             == Some(coulomb_granular::rigid_checkpoint::FORMAT_NAME)
     })
-}
-
-/// Whether the scene file at `path` has bodies of another shape than the sphere, joints or
-/// URDF robots (then it runs in the rigid-body simulator, as `SceneModel::has_shapes` says
-/// of its model).
-#[pyfunction]
-pub fn _scene_file_has_shapes(py: Python<'_>, path: PathBuf) -> PyResult<bool> {
-    let loaded = py
-        .detach(|| LoadedScene::load(&path))
-        .map_err(|e| crate::errors::scene_file_error(py, &e))?;
-    let f = &loaded.file;
-    Ok(!f.joints.is_empty()
-        || !f.urdf.is_empty()
-        || f.bodies
-            .iter()
-            .any(|g| g.shape.as_ref().is_some_and(|s| !s.is_sphere()))
-        || f.inlets
-            .iter()
-            .any(|i| i.shape.as_ref().is_some_and(|s| !s.is_sphere())))
 }

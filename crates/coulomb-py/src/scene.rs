@@ -330,7 +330,7 @@ pub(crate) fn scene_fill<'py>(
 }
 
 /// Writes the scene (`json`, `batches`, `meshes` as for `_Simulation.from_scene`; `inlets`
-/// the JSON list of `{inlet, material}` of `_Feed`) as the scene file `path` (`.toml` or
+/// the JSON list of `{inlet, material}` of `Scene._inlets`) as the scene file `path` (`.toml` or
 /// `.json`, `coulomb_granular::scene_save`), with the step settings the same `params` give
 /// `Simulation(scene, **params)` (a scene with shaped bodies: the rigid defaults h = 1e-3 s,
 /// tol = 1e-8) and `steps` steps (default: the scene files' 200). Written atomically; a path
@@ -360,26 +360,21 @@ pub(crate) fn scene_save(
     let mut model = py
         .detach(move || model_from_parts(&json, arrays))
         .map_err(|e| e.into_py(py))?;
-    if model.has_shapes() {
+    let entries: Vec<Entry> = serde_json::from_str(inlets)
+        .map_err(|e| describe_error(py, Some("inlets"), format!("inlets: {e}")))?;
+    // the scene runs in the rigid-body simulator (`BuiltScene::runs_rigid` of the file)
+    let rigid = model.has_shapes() || entries.iter().any(|e| e.inlet.poured_shape().is_some());
+    if rigid {
         model.step.h = crate::rigid::RIGID_H;
         model.step.tol = crate::rigid::RIGID_TOL;
     }
     let rest = crate::granular::apply_to_model(&mut model, params)?;
-    let entries: Vec<Entry> = serde_json::from_str(inlets)
-        .map_err(|e| describe_error(py, Some("inlets"), format!("inlets: {e}")))?;
-    if model.has_shapes() && !entries.is_empty() {
-        return Err(describe_error(
-            py,
-            Some("inlets"),
-            "inlets are for sphere-only scenes".into(),
-        ));
-    }
     let inlets: Vec<_> = entries.into_iter().map(|e| (e.inlet, e.material)).collect();
     let mut file = scene_save::scene_file_of(&model, &inlets)
         .map_err(|e| describe_error(py, Some("scene"), e.to_string()))?;
     for (k, v) in rest {
         if k == "projection_velocities" {
-            if model.has_shapes() {
+            if rigid {
                 return Err(pyo3::exceptions::PyTypeError::new_err(format!(
                     "'{k}' is not a parameter of rigid-body scenes"
                 )));
@@ -390,7 +385,7 @@ pub(crate) fn scene_save(
         let b: bool = v
             .extract()
             .map_err(|_| pyo3::exceptions::PyTypeError::new_err(format!("{k} must be a bool")))?;
-        if model.has_shapes() {
+        if rigid {
             return Err(pyo3::exceptions::PyTypeError::new_err(format!(
                 "'{k}' is not a parameter of rigid-body scenes"
             )));

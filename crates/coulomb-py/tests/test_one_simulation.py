@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -132,3 +133,178 @@ def test_resolve_overlaps_means_the_same_for_every_scene(shaped: bool) -> None:
         Simulation(scene, resolve_overlaps=-1)
     with pytest.raises(coulomb.SceneError):
         Simulation("box", resolve_overlaps=10)
+
+
+#: the keys of ``Simulation.params`` in every scene
+PARAMS = {"h", "theta", "tol", "method", "max_sweeps", "relaxation", "restitution", "mu",
+          "rolling_friction", "warm_start", "gap_closure", "projection_velocities", "solver"}
+#: the keys of each of ``Simulation.contacts``
+CONTACT = {"a", "b", "point", "normal", "t1", "gap", "impulse"}
+
+
+@pytest.mark.parametrize("make", [_spheres, _rigid])
+def test_every_public_member_answers_in_every_scene(make, tmp_path):
+    """Each public method and property of Simulation on a sphere scene and on a rigid one (a
+    cuboid and spheres): a value of the documented shape, or a documented refusal with a
+    message; a member added without a check here fails the test."""
+    rigid = make is _rigid
+    sim = Simulation(make(), h=0.01)
+    n = 3 if rigid else 2
+    checks = {}
+
+    def check(f):
+        checks[f.__name__] = f
+        return f
+
+    @check
+    def is_rigid():
+        assert sim.is_rigid == rigid
+
+    @check
+    def step():
+        assert set(sim.step()) == KEYS
+
+    @check
+    def run():
+        assert [set(r) for r in sim.run(2)] == [KEYS, KEYS]
+
+    @check
+    def time():
+        k = sim.steps_done
+        assert math.isclose(sim.time, k * sim.params["h"], rel_tol=1e-12)
+
+    @check
+    def steps_done():
+        assert isinstance(sim.steps_done, int) and sim.steps_done >= 3
+
+    for name, shape in [("positions", (n, 3)), ("body_positions", (n, 3)),
+                        ("body_orientations", (n, 4)), ("velocities", (n, 3)),
+                        ("angular_velocities", (n, 3)), ("radii", (n,)), ("masses", (n,)),
+                        ("joint_forces", (0, 6))]:
+        checks[name] = (lambda name=name, shape=shape:
+                        (getattr(sim, name).shape == shape) or pytest.fail(name))
+
+    @check
+    def joint_drift():
+        assert sim.joint_drift == 0.0
+
+    @check
+    def contacts():
+        c = sim.contacts
+        assert len(c) >= n and all(set(x) == CONTACT for x in c)
+        for x in c:
+            assert x["b"] in ({"kind": "obstacle", "index": 0},) or x["b"]["kind"] == "body"
+            assert 0 <= x["a"] < n
+            assert math.isclose(np.linalg.norm(x["normal"]), 1.0, rel_tol=1e-9)
+            assert x["impulse"][0] >= 0.0
+        # the floor carries every body's weight over the last step: Σ r_N ≈ m g h
+        floor = sum(x["impulse"][0] for x in c if x["b"]["kind"] == "obstacle")
+        assert math.isclose(floor, sim.masses.sum() * 9.81 * 0.01, rel_tol=1e-2)
+
+    @check
+    def params():
+        p = sim.params
+        assert set(p) == PARAMS and p["h"] == 0.01 and p["method"] == "nsgs"
+        assert isinstance(p["solver"], dict)
+
+    @check
+    def set_params():
+        sim.set_params(h=0.005, theta=0.6)
+        assert sim.params["h"] == 0.005 and sim.params["theta"] == 0.6
+        t = sim.time
+        sim.step()
+        assert math.isclose(sim.time - t, 0.005, rel_tol=1e-9)
+        with pytest.raises(TypeError, match="bogus"):
+            sim.set_params(bogus=1)
+        with pytest.raises(ValueError, match="h = -1"):
+            sim.set_params(h=-1.0)
+        assert sim.params["h"] == 0.005
+
+    @check
+    def set_velocities():
+        v = sim.velocities
+        sim.set_velocities(v)
+        assert np.array_equal(sim.velocities, v)
+
+    @check
+    def set_positions():
+        x = sim.positions
+        if rigid:
+            with pytest.raises(ValueError, match="set_positions"):
+                sim.set_positions(x)
+        else:
+            sim.set_positions(x + [0.0, 0.0, 1e-3])
+            assert np.array_equal(sim.positions, x + [0.0, 0.0, 1e-3])
+            sim.set_positions(x)
+
+    @check
+    def set_solver():
+        if rigid:
+            with pytest.raises(ValueError, match="set_solver"):
+                sim.set_solver(max_outer=50)
+        else:
+            sim.set_solver(max_outer=50)
+            assert sim.params["solver"]["max_outer"] == 50
+
+    @check
+    def keep_problem():
+        sim.keep_problem = True
+        assert sim.keep_problem
+        if rigid:
+            with pytest.raises(ValueError, match="keep_problem"):
+                sim.keep_problem = False
+
+    @check
+    def last_problem():
+        sim.keep_problem = True
+        record = sim.step()
+        p = sim.last_problem
+        assert p is not None and p.contacts == record["contacts"] >= n
+
+    @check
+    def write_frames():
+        sim.write_frames(tmp_path / "frames")
+        sim.step()
+        sim.write_frames(tmp_path / "frames")
+        pvd = (tmp_path / "frames" / "bodies.pvd").read_text()
+        assert len(set(re.findall(r'timestep="([^"]+)"', pvd))) == 2
+
+    @check
+    def save_checkpoint():
+        sim.save_checkpoint(tmp_path / "state.h5")
+        assert (tmp_path / "state.h5").stat().st_size > 0
+
+    @check
+    def load_checkpoint():
+        again = Simulation.load_checkpoint(tmp_path / "state.h5", scene=make())
+        assert again.is_rigid == rigid and again.steps_done == sim.steps_done
+        again.step()
+        sim.step()
+        assert np.array_equal(again.positions, sim.positions)
+
+    @check
+    def from_file():
+        make().save(tmp_path / "scene.toml", h=0.01)
+        other = Simulation.from_file(tmp_path / "scene.toml")
+        assert other.is_rigid == rigid and other.params["h"] == 0.01
+
+    public = {m for m in dir(Simulation) if not m.startswith("_")}
+    assert set(checks) == public, "check the new members here"
+    # the order above: steps first, then what reads them
+    for f in checks.values():
+        f()
+
+
+@pytest.mark.parametrize("shaped", [False, True])
+def test_contacts_number_the_obstacles_as_the_scene(shaped: bool) -> None:
+    """A contact's obstacle is the scene's (plane 0, box 1), also where the rigid world holds
+    the box as six walls."""
+    scene = Scene().add_plane((0, 0, 0), (0, 0, 1)).add_box((-1, -1, -1), (1, 1, 1))
+    scene.add_spheres([(0.95, 0.0, 0.05)], radii=0.05)
+    if shaped:
+        scene.add_body(Cuboid((0.05, 0.05, 0.05)), (-0.5, 0.0, 0.05))
+    sim = Simulation(scene, h=0.005)
+    sim.step()
+    assert sim.is_rigid == shaped
+    touched = {c["b"]["index"] for c in sim.contacts if c["b"]["kind"] == "obstacle"}
+    assert touched == {0, 1}

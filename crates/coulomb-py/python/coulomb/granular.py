@@ -627,10 +627,12 @@ class Scene:
 
     @property
     def has_shapes(self) -> bool:
-        """Whether some body is not a sphere or the scene has joints (the scene then runs in
-        the rigid-body simulator)."""
+        """Whether some body is not a sphere, the scene has joints or an inlet pours another
+        shape (the scene then runs in the rigid-body simulator)."""
         return (any(b["shape"]["kind"] != "sphere" for b in self._bodies)
-                or bool(self._joints))
+                or bool(self._joints)
+                or any(i["inlet"].get("shape", {}).get("kind", "sphere") != "sphere"
+                       for i in self._inlets))
 
     @property
     def sphere_count(self) -> int:
@@ -706,7 +708,7 @@ class Scene:
                   density: float = 2500.0, material: str = "default", rate_kind: str = "count",
                   start: float = 0.0, end: Optional[float] = None,
                   velocity: Sequence[float] = (0.0, 0.0, 0.0), attempts: int = 20,
-                  seed: int = 0) -> "Scene":
+                  seed: int = 0, shape: Any = None) -> "Scene":
         """Pours spheres into the running simulation: from ``start`` to ``end`` (s),
         ``rate`` spheres per second (``rate_kind="count"``) or kilograms per second
         (``"mass"``) appear in ``region`` (:meth:`Region.box` or :meth:`Region.cylinder`)
@@ -714,7 +716,10 @@ class Scene:
         :meth:`fill`). Sphere i is placed at the first of ``attempts`` seeded random
         positions that overlaps nothing, else skipped (``coulomb_granular::generate::Inlet``,
         the rule of ``coulomb simulate``); the spheres due in (t_k, t_{k+1}] are inserted
-        after step k, after those already present in the arrays."""
+        after step k, after those already present in the arrays. ``shape`` (a shape of
+        :meth:`add_body`, e.g. :class:`Capsule`): bodies of that shape instead, scaled so that
+        their bounding radius is the sampled radius and turned at random (the scene files'
+        ``[[inlets]] shape``; the scene then runs in the rigid-body simulator)."""
         if rate_kind not in ("count", "mass"):
             raise _arg_error("rate_kind", f"rate_kind {rate_kind!r}: 'count' or 'mass'")
         if not isinstance(region, Mapping) or region.get("kind") not in ("box", "cylinder"):
@@ -728,6 +733,8 @@ class Scene:
             "seed": int(seed)}
         if end is not None:
             inlet["end"] = _real("end", end)
+        if shape is not None:
+            inlet["shape"] = _shape_spec(shape)
         self._inlets.append({"inlet": inlet, "material": self._use(material)})
         return self
 
@@ -914,16 +921,16 @@ class Simulation:
         relax = _sweeps(resolve_overlaps)
         if isinstance(scene, Scene):
             desc, batches, meshes = scene._parts()
+            inlets = json.dumps(scene._inlets, allow_nan=False)
             if scene.has_shapes:
-                if scene._inlets or solver:
-                    raise _arg_error("scene", "inlets and solver= are for sphere-only scenes")
+                if solver:
+                    raise _arg_error("solver", "solver= sets the sphere engine's library solver; "
+                                     "a scene with bodies of other shapes uses its defaults")
                 self._sim = _coulomb._RigidSimulation.from_scene(desc, batches, meshes,
-                                                                 dict(params), relax)
+                                                                 dict(params), inlets, relax)
                 return
-            if scene._inlets:  # checked before the build
-                self._feed = _coulomb._Feed(desc, json.dumps(scene._inlets, allow_nan=False))
             self._sim = _coulomb._Simulation.from_scene(desc, batches, meshes, dict(params),
-                                                        dict(solver or {}), relax)
+                                                        dict(solver or {}), inlets, relax)
         elif isinstance(scene, str):
             if relax is not None:
                 raise _arg_error("resolve_overlaps", "the built-in scenes have no overlaps to "
@@ -934,9 +941,6 @@ class Simulation:
             raise TypeError(f"scene must be a coulomb.granular.Scene or the name of a built-in "
                             f"scene {SCENES}, got {type(scene).__name__}")
 
-    #: the scene's inlets (None: none)
-    _feed: Any = None
-
     @staticmethod
     def from_file(path: Union[str, "os.PathLike[str]"], seed: Optional[int] = None,
                   solver: Optional[Mapping[str, Any]] = None,
@@ -946,34 +950,24 @@ class Simulation:
         simulate SCENE.toml``, docs/granular.md "Scene files"); ``seed`` replaces the file's,
         ``params`` (as for :class:`Simulation`) override its ``[step]`` settings. Errors name
         the file, line and key (:class:`coulomb.SceneError`; ``OSError`` when it cannot be
-        read). The file's inlets pour as in ``coulomb simulate``."""
+        read). The file's inlets pour as in ``coulomb simulate``, spheres or bodies of any
+        shape, into a sphere or a rigid-body scene alike."""
         sim = Simulation.__new__(Simulation)
-        relax = _sweeps(resolve_overlaps)
-        if _coulomb._scene_file_has_shapes(os.fspath(path)):
-            sim._sim = _coulomb._RigidSimulation.from_file(
-                os.fspath(path), None if seed is None else int(seed), dict(params), relax)
-            return sim
-        sim._sim, sim._feed = _coulomb._Simulation.from_file(
+        sim._sim = _coulomb._Simulation.from_file(
             os.fspath(path), None if seed is None else int(seed), dict(params),
-            dict(solver or {}), relax)
+            dict(solver or {}), _sweeps(resolve_overlaps))
         return sim
 
     def step(self) -> StepStats:
         """Advances one step t_k → t_{k+1} (GIL released) and returns its statistics; then
-        the scene's inlets insert the spheres due in (t_k, t_{k+1}]."""
-        if self._feed is None:
-            return self._sim.step()
-        t0 = self._sim.time
-        stats = self._sim.step()
-        self._feed.emit(self._sim, t0, self._sim.time)
-        return stats
+        the scene's inlets insert the bodies due in (t_k, t_{k+1}]."""
+        return self._sim.step()
 
     def run(self, steps: int) -> List[StepStats]:
-        """Advances ``steps`` steps at once (GIL released for all of them) and returns their
-        statistics (a list; use :meth:`step` to read or steer the state between steps)."""
-        if self._feed is None:
-            return self._sim.run(int(steps))
-        return [self.step() for _ in range(int(steps))]
+        """Advances ``steps`` steps at once (GIL released for each, inlets pouring after
+        each) and returns their statistics (a list; use :meth:`step` to read or steer the
+        state between steps)."""
+        return self._sim.run(int(steps))
 
     @property
     def is_rigid(self) -> bool:
@@ -1016,10 +1010,9 @@ class Simulation:
 
     @property
     def contacts(self) -> List[Dict[str, Any]]:
-        """The last step's contacts of a rigid-body scene (body ``a``, partner ``b``,
-        ``point``, ``normal`` from b to a, ``t1``, ``gap``, ``impulse`` (r_N, r_T1, r_T2))."""
-        if not self.is_rigid:
-            raise AttributeError("contacts are listed for rigid-body scenes")
+        """The last step's contacts, one dict each: body ``a``, partner ``b``
+        (``{"kind": "body" | "obstacle", "index": i}``), ``point``, unit ``normal`` from b
+        to a, first tangent ``t1``, ``gap`` at t_k, ``impulse`` (r_N, r_T1, r_T2)."""
         return self._sim.contacts
 
     @property
@@ -1075,22 +1068,28 @@ class Simulation:
         self._sim.set_velocities(np.ascontiguousarray(a).ravel())
 
     def set_positions(self, x: Any) -> None:
-        """Replaces the sphere centres (shape (n, 3), finite) before the next step."""
+        """Replaces the sphere centres (shape (n, 3), finite) before the next step; refused
+        (``ValueError``) in a rigid-body scene."""
         a = _rows3("positions", x, self.positions.shape[0])
         self._sim.set_positions(np.ascontiguousarray(a).ravel())
 
     def set_params(self, **params: Any) -> None:
-        """Changes h, theta, restitution, mu, rolling_friction, warm_start, gap_closure for the following
-        steps."""
+        """Changes the step settings and default law of :class:`Simulation` (h, theta, tol,
+        method, max_sweeps, relaxation, restitution, mu, rolling_friction, warm_start,
+        gap_closure, projection_velocities) for the following steps, checked as there; a
+        rigid-body scene takes h, theta, tol, max_sweeps, relaxation, mu and restitution
+        (its checkpoints hold them)."""
         self._sim.set_params(**params)
 
     def set_solver(self, **settings: Any) -> None:
-        """Replaces the solver settings (keyword arguments of :func:`coulomb.solve`)."""
+        """Replaces the solver settings (keyword arguments of :func:`coulomb.solve`);
+        refused (``ValueError``) in a rigid-body scene."""
         self._sim.set_solver(**settings)
 
     @property
     def keep_problem(self) -> bool:
-        """When True, each step's problem (2.10) is kept in :attr:`last_problem`."""
+        """When True, each step's problem (2.10) is kept in :attr:`last_problem` (always
+        True in a rigid-body scene, where setting False raises ``ValueError``)."""
         return self._sim.keep_problem
 
     @keep_problem.setter
@@ -1142,43 +1141,26 @@ class Simulation:
         ``coulomb simulate SCENE.toml --restart FILE``). The scene is built to read its
         inlets and compared with the checkpoint: another gravity or other obstacles raise
         ``ValueError``. A rigid checkpoint (bodies of other shapes) holds its whole scene and
-        step settings; a ``scene`` given with it must have the same bodies, obstacles,
-        materials and gravity (else ``ValueError``)."""
+        step settings; a ``scene`` given with it must have the same bodies (those its inlets
+        poured aside), obstacles, materials and gravity (else ``ValueError``), and its inlets
+        go on pouring bodies of any shape the same way."""
         sim = Simulation.__new__(Simulation)
-        if _coulomb._checkpoint_is_rigid(os.fspath(path)):
-            sim._sim = _coulomb._RigidSimulation.load_checkpoint(os.fspath(path))
-            if scene is None:
-                return sim
-            if isinstance(scene, Scene):
-                probe = Simulation(scene) if scene.has_shapes else None
-            elif isinstance(scene, (str, os.PathLike)):
-                probe = Simulation.from_file(scene)
-            else:
-                raise TypeError(f"scene must be a coulomb.granular.Scene or a scene file, got "
-                                f"{type(scene).__name__}")
-            if probe is None or not probe.is_rigid or not sim._sim.same_setup(probe._sim):
-                raise ValueError(f"the scene given is not the scene of the checkpoint "
-                                 f"{os.fspath(path)}: its bodies, obstacles, materials or gravity "
-                                 f"differ")
-            return sim
-        sim._sim = _coulomb._Simulation.load_checkpoint(os.fspath(path))
+        rigid = _coulomb._checkpoint_is_rigid(os.fspath(path))
+        engine = _coulomb._RigidSimulation if rigid else _coulomb._Simulation
+        sim._sim = engine.load_checkpoint(os.fspath(path))
         if scene is None:
             return sim
         if isinstance(scene, Scene):
-            if scene.has_shapes:
-                raise _arg_error("scene", "checkpoints hold sphere scenes only")
             probe = Simulation(scene)
         elif isinstance(scene, (str, os.PathLike)):
             probe = Simulation.from_file(scene)
-            if probe.is_rigid:
-                raise _arg_error("scene", "checkpoints hold sphere scenes only")
         else:
             raise TypeError(f"scene must be a coulomb.granular.Scene or a scene file, got "
                             f"{type(scene).__name__}")
-        if not sim._sim.same_setup(probe._sim):
+        if probe.is_rigid != rigid or not sim._sim.pour_from(probe._sim):
             raise ValueError(f"the scene given is not the scene of the checkpoint "
-                             f"{os.fspath(path)}: its gravity or obstacles differ")
-        sim._feed = probe._feed
+                             f"{os.fspath(path)}: its bodies, obstacles, materials or gravity "
+                             f"differ")
         return sim
 
 

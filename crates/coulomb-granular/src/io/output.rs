@@ -1053,6 +1053,70 @@ mod tests {
         fs::remove_dir_all(&dir).ok();
     }
 
+    /// The sphere frames are those of the writer before the two writers became one (issue 52,
+    /// item 4): the FNV-1a fingerprints of the folders (file names and bytes) were recorded
+    /// with the sphere-only `VtkWriter` (commit 79e1757) on beads, contacts and times set by
+    /// hand (no physics involved): three frames, the beads moving away (the obstacles' extent
+    /// grows), binary and ASCII.
+    #[test]
+    fn sphere_frames_are_those_of_the_sphere_only_writer() {
+        let mut got = Vec::new();
+        for format in [VtkFormat::Binary, VtkFormat::Ascii] {
+            let dir = std::env::temp_dir().join(format!("coulomb-golden-{}", std::process::id()));
+            let _ = fs::remove_dir_all(&dir);
+            let mut sim = Simulation::new(Scene::Box.build(4, 1), Params::default()).unwrap();
+            let mut w = VtkWriter::new(&dir).unwrap().with_format(format);
+            for (frame, k) in [0usize, 5, 9].into_iter().enumerate() {
+                let f = frame as f64;
+                for (i, b) in sim.world.bodies.iter_mut().enumerate() {
+                    let x = i as f64;
+                    b.position = Vec3::new(0.01 * x + 0.3 * f, 0.02 + f * f, 0.05 * x + 0.1);
+                    b.velocity = Vec3::new(0.1 * x, -0.2 * f, 0.3);
+                    b.angular_velocity = Vec3::new(f, 0.5 * x, -0.25);
+                    b.radius = 0.005 + 0.001 * x;
+                }
+                sim.contacts = (0..frame)
+                    .map(|i| crate::contact::Contact {
+                        body: i,
+                        partner: match i {
+                            0 => crate::contact::Partner::Obstacle(0, 0),
+                            _ => crate::contact::Partner::Body(i + 1),
+                        },
+                        normal: Vec3::Z,
+                        t1: Vec3::X,
+                        t2: Vec3::Y,
+                        point: Vec3::new(0.1 * i as f64, 0.0, 0.001),
+                        gap: -1e-4 * (i + 1) as f64,
+                        normal_velocity: 0.0,
+                        impulse: [1e-3 * (i + 1) as f64, 2e-4, -3e-4 / 7.0],
+                    })
+                    .collect();
+                (sim.steps_done, sim.time) = (k, k as f64 * 1e-3 / 3.0);
+                w.frame(&sim).unwrap();
+            }
+            let mut files: Vec<_> = [dir.clone(), dir.join("frames")]
+                .iter()
+                .flat_map(|d| fs::read_dir(d).unwrap().map(|e| e.unwrap().path()))
+                .filter(|p| p.is_file())
+                .collect();
+            files.sort();
+            let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+            for f in files {
+                let name = f.strip_prefix(&dir).unwrap().to_string_lossy().into_owned();
+                for b in name.bytes().chain(fs::read(&f).unwrap()) {
+                    h = (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+                }
+            }
+            got.push(h);
+            fs::remove_dir_all(&dir).ok();
+        }
+        assert_eq!(
+            got,
+            [0x4e7b_ef5d_299a_4c09, 0x06fa_bd14_a9a3_b0e6],
+            "{got:x?}"
+        );
+    }
+
     #[test]
     fn stats_continue_after_a_restart() {
         let dir = std::env::temp_dir().join(format!("coulomb-stats-{}", std::process::id()));

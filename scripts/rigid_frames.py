@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
-"""Reads the body frames that `coulomb simulate SCENE.toml --output DIR` writes for a
-rigid scene (DIR/frames/bodies_KKKKKK.vtp: VTK XML PolyData, raw appended binary with UInt64
-headers, or ASCII; each body as its shape's polygons with the cell array `body`; the balls as
-points with the point arrays `radius` and `body` in DIR/frames/balls_KKKKKK.vtp beside it),
-with numpy only.
+"""Reads the body frames that `coulomb simulate SCENE.toml --output DIR` writes for any scene
+(VTK XML PolyData, raw appended binary with UInt64 headers, or ASCII): the balls as points
+with the point arrays `radius` and, when the scene has other shapes, `body` in
+DIR/frames/bodies_KKKKKK.vtp; every other body as its shape's polygons with the cell array
+`body` in DIR/frames/shapes_KKKKKK.vtp beside it), with numpy only.
 
     rigid_frames.py displacement DIR      largest displacement of a body's centre (the mean
                                           of its vertices) between the first and the last
@@ -65,14 +65,16 @@ def read_vtp(path):
 
 
 def body_centres(path):
-    """{body index: mean of its vertices} of a bodies frame."""
-    d = read_vtp(path)
-    points = d[("Points", "")] if ("Points", "") in d else next(
-        v for (s, _), v in d.items() if s == "Points")
-    conn, offsets = d[("Polys", "connectivity")], d[("Polys", "offsets")]
-    body = d[("CellData", "body")].astype(int)
-    # cells: the Verts (none for bodies) come before the Polys
-    body = body[len(body) - len(offsets):]
+    """{body index: mean of its vertices} of a bodies frame (the balls: their centres), with
+    the polygons of the shapes file beside it (none if absent)."""
+    shapes = Path(path).with_name(Path(path).name.replace("bodies_", "shapes_"))
+    points, conn = np.zeros((0, 3)), np.zeros(0, dtype=int)
+    offsets, body = np.zeros(0, dtype=int), np.zeros(0, dtype=int)
+    if shapes.exists():
+        d = read_vtp(shapes)
+        points = next(v for (s, _), v in d.items() if s == "Points").reshape(-1, 3)
+        conn, offsets = d[("Polys", "connectivity")], d[("Polys", "offsets")]
+        body = d[("CellData", "body")].astype(int)
     verts = {}
     start = 0
     for b, end in zip(body, offsets):
@@ -85,14 +87,11 @@ def body_centres(path):
 
 
 def balls(path):
-    """[(body index, centre, radius)] of the balls file beside a bodies frame (none if absent)."""
-    other = Path(path).with_name(Path(path).name.replace("bodies_", "balls_"))
-    if not other.exists():
-        return []
-    d = read_vtp(other)
+    """[(body index, centre, radius)] of the balls of a bodies frame."""
+    d = read_vtp(path)
     points = next(v for (s, _), v in d.items() if s == "Points").reshape(-1, 3)
-    body = d[("PointData", "body")].astype(int)
     radius = d[("PointData", "radius")]
+    body = d.get(("PointData", "body"), np.arange(len(radius))).astype(int)
     return list(zip((int(b) for b in body), points, radius))
 
 

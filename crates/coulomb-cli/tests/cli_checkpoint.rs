@@ -217,11 +217,12 @@ fn a_rigid_restart_with_its_scene_file_keeps_pouring_capsules() {
     assert_eq!(bodies(&a), bodies(&c));
     let read = |p: &Path| std::fs::read(p).unwrap();
     assert_eq!(read(&ckpt), read(&c.join("checkpoint.h5")));
-    let f = "frames/bodies_000060.vtp";
-    assert_eq!(read(&a.join(f)), read(&c.join(f)), "{f}");
-    // the frame draws the capsules (one polygon set per body: far more than the first's)
+    for f in ["frames/bodies_000060.vtp", "frames/shapes_000060.vtp"] {
+        assert_eq!(read(&a.join(f)), read(&c.join(f)), "{f}");
+    }
+    // the frame draws the capsules as polygons (part 1; far more than the one ball's file)
     let first = read(&c.join("frames/bodies_000000.vtp")).len();
-    assert!(read(&c.join(f)).len() > 10 * first);
+    assert!(read(&c.join("frames/shapes_000060.vtp")).len() > 10 * first);
     // a file with one more body is not the checkpoint's scene
     let other = root.join("other.toml");
     std::fs::write(

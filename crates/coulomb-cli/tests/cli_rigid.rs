@@ -51,8 +51,11 @@ fn the_incline_runs_with_frames_stats_and_fclib_dumps() {
     ] {
         assert!(out.join(f).exists(), "{f}");
     }
-    let body = std::fs::read(out.join("frames/bodies_000020.vtp")).unwrap();
+    // one writer (issue 52): the block as its polygons in part 1, no ball in part 0
+    let body = std::fs::read(out.join("frames/shapes_000020.vtp")).unwrap();
     assert!(String::from_utf8_lossy(&body).contains("NumberOfPolys=\"6\""));
+    let balls = std::fs::read(out.join("frames/bodies_000020.vtp")).unwrap();
+    assert!(String::from_utf8_lossy(&balls).contains("NumberOfPoints=\"0\""));
     assert!(fc.join("step_000019.hdf5").exists());
     // one statistics schema (issue 52): the rigid run's stats.csv has the columns of a sphere
     // run's, 12 fields a row, status and energies filled
@@ -266,7 +269,12 @@ fn a_rigid_run_restarts_to_the_bit() {
     );
     let read = |p: &std::path::Path| std::fs::read(p).unwrap();
     assert_eq!(read(&ckpt), read(&c.join("checkpoint.h5")));
-    for f in ["frames/bodies_000012.vtp", "frames/contacts_000012.vtp"] {
+    for f in [
+        "frames/bodies_000012.vtp",
+        "frames/shapes_000012.vtp",
+        "frames/contacts_000012.vtp",
+        "bodies.pvd",
+    ] {
         assert_eq!(read(&a.join(f)), read(&c.join(f)), "{f}");
     }
     assert_eq!(rigid_stats(&a), rigid_stats(&c));

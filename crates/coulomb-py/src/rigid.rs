@@ -22,7 +22,7 @@ use std::sync::Arc;
 pub struct PyRigidSimulation {
     scene: RigidScene,
     /// the folder of `write_frames` and its writer
-    frames: Option<(PathBuf, coulomb_granular::output::RigidVtkWriter)>,
+    frames: Option<(PathBuf, coulomb_granular::output::VtkWriter)>,
     /// the scene's inlets, pouring after each step
     pour: Vec<InletRun>,
 }
@@ -282,14 +282,14 @@ impl PyRigidSimulation {
     }
 
     /// Writes the current state as a ParaView frame into the folder `dir` with the writer of
-    /// `coulomb simulate --output` (each body as its shape's polygons; the same folder
-    /// safety as the sphere frames).
+    /// `coulomb simulate --output`, the one of every scene (balls as glyph points, other
+    /// bodies as their shapes' polygons; the same folder safety).
     fn write_frames(&mut self, py: Python<'_>, dir: PathBuf) -> PyResult<()> {
         let (scene, frames) = (&self.scene, &mut self.frames);
         let target = dir.clone();
         py.detach(move || {
             if frames.as_ref().is_none_or(|(d, _)| *d != dir) {
-                let w = coulomb_granular::output::RigidVtkWriter::new(&dir, scene)?;
+                let w = coulomb_granular::output::VtkWriter::new(&dir)?;
                 *frames = Some((dir.clone(), w));
             }
             let (_, w) = frames.as_mut().expect("set above");

@@ -3,7 +3,6 @@
 //! writers draw ([`crate::output`]) and the rigid engine collides with ([`crate::rigid_scene`]).
 
 use crate::math::Vec3;
-use crate::simulation::Simulation;
 use crate::world::{Motion, Obstacle, Shape};
 
 /// An axis-aligned box [lo, hi]: the region the obstacles' drawings must cover.
@@ -16,18 +15,17 @@ pub struct Extent {
 }
 
 impl Extent {
-    /// The bounding box of the spheres (centres ± radii) grown by 10 % of its diagonal and by
-    /// the largest diameter on every side; a unit box around the origin without spheres.
-    pub fn of_bodies(sim: &Simulation) -> Self {
-        let b = &sim.world.bodies;
+    /// The bounding box of balls (centre, radius; a point is a ball of radius 0, a ball whose
+    /// centre is not finite is left out) grown by 10 % of its diagonal and by the largest
+    /// diameter on every side; a unit box around the origin without any.
+    pub fn around(balls: impl IntoIterator<Item = (Vec3, f64)>) -> Self {
         let mut lo = Vec3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
         let mut hi = -lo;
         let mut rmax: f64 = 0.0;
-        for s in b.iter().filter(|s| s.position.is_finite()) {
-            let r = Vec3::new(s.radius, s.radius, s.radius);
-            lo = lo.min(s.position - r);
-            hi = hi.max(s.position + r);
-            rmax = rmax.max(s.radius);
+        for (x, r) in balls.into_iter().filter(|b| b.0.is_finite()) {
+            lo = lo.min(x - Vec3::new(r, r, r));
+            hi = hi.max(x + Vec3::new(r, r, r));
+            rmax = rmax.max(r);
         }
         if !(lo.is_finite() && hi.is_finite()) {
             return Self {

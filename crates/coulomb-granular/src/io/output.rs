@@ -1,6 +1,8 @@
-//! Outputs: per-step statistics as CSV and JSON, and VTK PolyData frames (.vtp) indexed by
-//! ParaView collections (.pvd): the beads (positions, radii, velocities, contact forces), the
-//! contacts (points, normals, forces, gaps) and the obstacles as surfaces (triangles).
+//! Outputs: per-step statistics as CSV and JSON, and VTK PolyData frames (.vtp) of every
+//! scene ([`VtkWriter`] over a [`FrameSource`]) indexed by ParaView collections (.pvd): the
+//! balls as glyph-ready points (positions, radii, velocities, contact forces), the other
+//! bodies as their shapes' polygons, the contacts (points, normals, forces, gaps) and the
+//! obstacles as surfaces (triangles).
 //!
 //! Frames are binary by default ([`VtkFormat::Binary`]: VTK XML with raw appended data,
 //! `header_type="UInt64"`, little-endian; 8 bytes a number instead of ~20 characters, so a
@@ -8,9 +10,12 @@
 //! numbers); [`VtkFormat::Ascii`] writes the same arrays as text.
 
 pub use crate::bodies::surface::{obstacle_surface, Extent, CYLINDER_SEGMENTS};
+use crate::contact::Partner;
 use crate::math::Vec3;
 use crate::output_dir::OutputDir;
-use crate::shape::BodyShape;
+use crate::rigid::RigidPartner;
+use crate::rigid_scene::RigidScene;
+use crate::shape::{BodyShape, IDENTITY};
 use crate::simulation::{Simulation, StepStats};
 use crate::world::{Motion, Obstacle};
 use std::fmt::Write as _;
@@ -141,22 +146,13 @@ impl Values {
         }
     }
     fn append_text(&self, components: usize, out: &mut String) {
-        let c = components.max(1);
-        match self {
-            Values::F64(v) => {
-                for row in v.chunks(c) {
-                    let line: Vec<String> = row.iter().map(|x| x.to_string()).collect();
-                    out.push_str(&line.join(" "));
-                    out.push('\n');
-                }
-            }
-            Values::I64(v) => {
-                for row in v.chunks(c) {
-                    let line: Vec<String> = row.iter().map(|x| x.to_string()).collect();
-                    out.push_str(&line.join(" "));
-                    out.push('\n');
-                }
-            }
+        let text: Vec<String> = match self {
+            Values::F64(v) => v.iter().map(f64::to_string).collect(),
+            Values::I64(v) => v.iter().map(i64::to_string).collect(),
+        };
+        for row in text.chunks(components.max(1)) {
+            out.push_str(&row.join(" "));
+            out.push('\n');
         }
     }
 }
@@ -187,15 +183,13 @@ impl Array {
 }
 
 /// A VTK PolyData piece: points with point and cell data, and either one vertex per point or
-/// triangles.
+/// polygons.
 #[derive(Debug, Clone, PartialEq, Default)]
 struct PolyData {
     points: Vec<Vec3>,
     point_data: Vec<Array>,
     cell_data: Vec<Array>,
-    /// triangles (point indices); none: one vertex cell per point
-    triangles: Option<Vec<[usize; 3]>>,
-    /// polygons of any size (point indices), instead of `triangles` when given
+    /// polygons (point indices); none: one vertex cell per point
     polygons: Option<Vec<Vec<u32>>>,
 }
 
@@ -203,26 +197,20 @@ impl PolyData {
     /// The .vtp file.
     fn to_vtp(&self, format: VtkFormat) -> Vec<u8> {
         let n = self.points.len();
-        let (cells, conn, offsets): (usize, Vec<i64>, Vec<i64>) =
-            match (&self.triangles, &self.polygons) {
-                (_, Some(p)) => (
-                    p.len(),
-                    p.iter().flatten().map(|&i| i as i64).collect(),
-                    p.iter()
-                        .scan(0i64, |end, f| {
-                            *end += f.len() as i64;
-                            Some(*end)
-                        })
-                        .collect(),
-                ),
-                (None, None) => (n, (0..n as i64).collect(), (1..=n as i64).collect()),
-                (Some(t), None) => (
-                    t.len(),
-                    t.iter().flatten().map(|&i| i as i64).collect(),
-                    (1..=t.len() as i64).map(|k| 3 * k).collect(),
-                ),
-            };
-        let polys = self.triangles.is_some() || self.polygons.is_some();
+        let (cells, conn, offsets): (usize, Vec<i64>, Vec<i64>) = match &self.polygons {
+            Some(p) => (
+                p.len(),
+                p.iter().flatten().map(|&i| i as i64).collect(),
+                (p.iter())
+                    .scan(0i64, |end, f| {
+                        *end += f.len() as i64;
+                        Some(*end)
+                    })
+                    .collect(),
+            ),
+            None => (n, (0..n as i64).collect(), (1..=n as i64).collect()),
+        };
+        let polys = self.polygons.is_some();
         let (nverts, npolys) = if polys { (0, cells) } else { (cells, 0) };
         let mut xml = String::new();
         let header = match format {
@@ -304,78 +292,6 @@ impl PolyData {
     }
 }
 
-/// The total contact force Σ r / h on each sphere (world frame).
-fn contact_forces(sim: &Simulation) -> Vec<Vec3> {
-    let h = sim.params.h;
-    let mut force = vec![Vec3::ZERO; sim.world.bodies.len()];
-    for c in &sim.contacts {
-        let f = c.world_impulse() * (1.0 / h);
-        if let Some(fa) = force.get_mut(c.body) {
-            *fa += f;
-        }
-        if let crate::contact::Partner::Body(j) = c.partner {
-            if let Some(fb) = force.get_mut(j) {
-                *fb += -f;
-            }
-        }
-    }
-    force
-}
-
-/// The beads of `sim` as PolyData: points = centres, point data radius, velocity, angular
-/// velocity and the total contact force Σ r / h on each sphere.
-fn beads_polydata(sim: &Simulation) -> PolyData {
-    let b = &sim.world.bodies;
-    PolyData {
-        points: b.iter().map(|s| s.position).collect(),
-        point_data: vec![
-            Array::scalars("radius", b.iter().map(|s| s.radius)),
-            Array::vectors("velocity", b.iter().map(|s| s.velocity)),
-            Array::vectors("angular_velocity", b.iter().map(|s| s.angular_velocity)),
-            Array::vectors("contact_force", contact_forces(sim).into_iter()),
-        ],
-        cell_data: Vec::new(),
-        triangles: None,
-        polygons: None,
-    }
-}
-
-/// The active contacts of the last step: points, normals, forces r / h, gaps.
-fn contacts_polydata(sim: &Simulation) -> PolyData {
-    let h = sim.params.h;
-    let c = &sim.contacts;
-    PolyData {
-        points: c.iter().map(|x| x.point).collect(),
-        point_data: vec![
-            Array::vectors("normal", c.iter().map(|x| x.normal)),
-            Array::vectors("force", c.iter().map(|x| x.world_impulse() * (1.0 / h))),
-            Array::scalars("gap", c.iter().map(|x| x.gap)),
-        ],
-        cell_data: Vec::new(),
-        triangles: None,
-        polygons: None,
-    }
-}
-
-/// The frame of the beads and of the contacts (two .vtp files) in `format`.
-pub fn vtp_frame_with(sim: &Simulation, format: VtkFormat) -> (Vec<u8>, Vec<u8>) {
-    (
-        beads_polydata(sim).to_vtp(format),
-        contacts_polydata(sim).to_vtp(format),
-    )
-}
-
-/// VTK PolyData (.vtp, ASCII) of the spheres: points = centres, point data radius, velocity,
-/// angular velocity and the total contact force Σ r / h on each sphere; plus a second file
-/// with one vertex per contact (point, normal, force r/h, gap).
-pub fn vtp_frame(sim: &Simulation) -> (String, String) {
-    let (b, c) = vtp_frame_with(sim, VtkFormat::Ascii);
-    (
-        String::from_utf8_lossy(&b).into_owned(),
-        String::from_utf8_lossy(&c).into_owned(),
-    )
-}
-
 /// The obstacles at time t as one PolyData of triangles, with the obstacle's index as cell
 /// data (`obstacle`).
 fn obstacles_polydata(obstacles: &[Obstacle], t: f64, extent: &Extent) -> PolyData {
@@ -387,38 +303,182 @@ fn obstacles_polydata(obstacles: &[Obstacle], t: f64, extent: &Extent) -> PolyDa
         let base = points.len();
         points.extend(p);
         index.extend(std::iter::repeat_n(k as f64, tris.len()));
-        triangles.extend(
-            tris.into_iter()
-                .map(|[a, b, c]| [a + base, b + base, c + base]),
-        );
+        let at = |i: usize| (i + base) as u32;
+        triangles.extend(tris.into_iter().map(|[a, b, c]| vec![at(a), at(b), at(c)]));
     }
     PolyData {
         points,
-        point_data: Vec::new(),
         cell_data: vec![Array::scalars("obstacle", index.into_iter())],
-        triangles: Some(triangles),
-        polygons: None,
+        polygons: Some(triangles),
+        ..PolyData::default()
     }
 }
 
-/// One frame of the collections: time, the beads, contacts and obstacles files.
+/// How a frame draws a body: a ball as a glyph-ready point with its radius, any other shape as
+/// its tessellation's polygons ([`BodyShape::tessellation`]).
+#[derive(Debug, Clone, Copy)]
+pub enum Look<'a> {
+    /// a sphere of this radius
+    Ball(f64),
+    /// another shape
+    Shape(&'a BodyShape),
+}
+
+/// A body in a frame: how it is drawn, its pose and velocities (world frame).
+#[derive(Debug, Clone, Copy)]
+pub struct FrameBody<'a> {
+    /// ball or shape
+    pub look: Look<'a>,
+    /// centre (the origin of the shape's frame)
+    pub position: Vec3,
+    /// orientation of the shape's frame (w, x, y, z; not used for balls)
+    pub orientation: [f64; 4],
+    /// velocity
+    pub velocity: Vec3,
+    /// angular velocity ω
+    pub angular_velocity: Vec3,
+}
+
+/// A contact point of the last step in a frame.
+#[derive(Debug, Clone, Copy)]
+pub struct FrameContact {
+    /// body A
+    pub a: usize,
+    /// body B; `None` for an obstacle
+    pub b: Option<usize>,
+    /// the point, midway between the two surfaces
+    pub point: Vec3,
+    /// unit normal n, from B towards A
+    pub normal: Vec3,
+    /// the force on A: the impulse r in world axes over h (−force on B)
+    pub force: Vec3,
+    /// the gap at the start of the step (negative: penetration)
+    pub gap: f64,
+}
+
+/// What a frame shows of a scene at t_k, the same for every scene (issue 52, item 4).
+#[derive(Debug, Clone)]
+pub struct FrameData<'a> {
+    /// k
+    pub step: usize,
+    /// t_k
+    pub time: f64,
+    /// every body, in the scene's order
+    pub bodies: Vec<FrameBody<'a>>,
+    /// the last step's contact points
+    pub contacts: Vec<FrameContact>,
+    /// the obstacles, drawn at t_k
+    pub obstacles: &'a [Obstacle],
+}
+
+/// A scene that frames are drawn of: [`Simulation`] and [`RigidScene`].
+pub trait FrameSource {
+    /// What the frame of the current state shows.
+    fn frame_data(&self) -> FrameData<'_>;
+}
+
+impl FrameSource for Simulation {
+    fn frame_data(&self) -> FrameData<'_> {
+        let h = self.params.h;
+        FrameData {
+            step: self.steps_done,
+            time: self.time,
+            bodies: (self.world.bodies.iter())
+                .map(|s| FrameBody {
+                    look: Look::Ball(s.radius),
+                    position: s.position,
+                    orientation: IDENTITY,
+                    velocity: s.velocity,
+                    angular_velocity: s.angular_velocity,
+                })
+                .collect(),
+            contacts: (self.contacts.iter())
+                .map(|c| FrameContact {
+                    a: c.body,
+                    b: match c.partner {
+                        Partner::Body(j) => Some(j),
+                        Partner::Obstacle(..) => None,
+                    },
+                    point: c.point,
+                    normal: c.normal,
+                    force: c.world_impulse() * (1.0 / h),
+                    gap: c.gap,
+                })
+                .collect(),
+            obstacles: &self.world.obstacles,
+        }
+    }
+}
+
+impl FrameSource for RigidScene {
+    fn frame_data(&self) -> FrameData<'_> {
+        let w = &self.world;
+        let (x, q, v, om) = (
+            w.positions(),
+            w.orientations(),
+            w.velocities(),
+            w.angular_velocities(),
+        );
+        let h = w.settings().h;
+        let v3 = Vec3::from_slice;
+        FrameData {
+            step: w.steps() as usize,
+            time: w.time(),
+            bodies: (self.shapes.iter().zip(x).zip(q).zip(v).zip(om))
+                .map(|((((s, x), q), v), om)| FrameBody {
+                    look: match s {
+                        BodyShape::Sphere { radius } => Look::Ball(*radius),
+                        s => Look::Shape(s),
+                    },
+                    position: v3(&x),
+                    orientation: q,
+                    velocity: v3(&v),
+                    angular_velocity: v3(&om),
+                })
+                .collect(),
+            contacts: (w.contacts().iter())
+                .map(|c| FrameContact {
+                    a: c.a,
+                    b: match c.b {
+                        RigidPartner::Body(j) => Some(j),
+                        RigidPartner::Obstacle(_) => None,
+                    },
+                    point: v3(&c.point),
+                    normal: v3(&c.normal),
+                    force: v3(&c.world_impulse()) * (1.0 / h),
+                    gap: c.gap,
+                })
+                .collect(),
+            obstacles: &self.obstacles,
+        }
+    }
+}
+
+/// One frame of the collections: its time and files (`shapes` empty when the frame has no
+/// body other than balls).
 #[derive(Debug, Clone, PartialEq)]
 struct FrameFiles {
     time: f64,
-    beads: String,
+    bodies: String,
+    shapes: String,
     contacts: String,
     obstacles: String,
-    /// a rigid scene's balls as points (`frames/balls_KKKKKK.vtp`, part 1 of `bodies.pvd`);
-    /// empty when none
-    balls: String,
 }
 
-/// Writes VTK frames into a directory and the ParaView collections `bodies.pvd`,
-/// `contacts.pvd` and `obstacles.pvd` indexing them. Obstacles are written as triangles into
-/// `frames/obstacles_KKKKKK.vtp` when they move or when the region they must cover (the
-/// bodies' [`Extent`], only ever grown) has grown; otherwise the collection points again to
-/// the last obstacles file (a scene whose obstacles are fixed has one file as long as the
-/// beads stay inside the first extent).
+/// Writes VTK frames of any scene ([`FrameSource`]) into a directory, with the ParaView
+/// collections `bodies.pvd`, `contacts.pvd` and `obstacles.pvd` indexing them. Each frame:
+/// - `frames/bodies_KKKKKK.vtp` (part 0 of `bodies.pvd`): the balls as points (centres) with
+///   point data `radius`, `velocity`, `angular_velocity`, `contact_force` (Σ r / h over the
+///   ball's contacts) and, when the frame has other shapes, `body` (the ball's index among
+///   the bodies), for ParaView's *Glyph* filter; written every frame, balls or not;
+/// - `frames/shapes_KKKKKK.vtp` (part 1, when the frame has a body that is not a ball): each
+///   such body as its shape's polygons (tessellated once) placed by its pose, with cell data
+///   `body`, `velocity`, `angular_velocity` and `contact_force`;
+/// - `frames/contacts_KKKKKK.vtp`: one point per contact point with `normal` (B → A), `force`
+///   (the impulse over h, on A) and `gap`;
+/// - the obstacles as triangles into `frames/obstacles_KKKKKK.vtp`, written when one moves or
+///   when the region they must cover (the bodies' [`Extent`], only ever grown) has grown;
+///   otherwise the collection points again to the last obstacles file.
 #[derive(Debug)]
 pub struct VtkWriter {
     dir: Arc<OutputDir>,
@@ -426,6 +486,9 @@ pub struct VtkWriter {
     frames: Vec<FrameFiles>,
     /// the region the last obstacles file covers, and that file
     obstacles: Option<(Extent, String)>,
+    /// the tessellations of the bodies that are not balls, in the bodies' order (bodies are
+    /// only ever added: an inlet pouring)
+    tessellations: Vec<crate::shape::Tessellation>,
 }
 
 impl VtkWriter {
@@ -446,19 +509,14 @@ impl VtkWriter {
             format: VtkFormat::default(),
             frames: Vec::new(),
             obstacles: None,
+            tessellations: Vec::new(),
         }
     }
 
-    /// A writer into `dir` that continues the collections found there (a restarted run): the
-    /// frames before step `first_step` that `bodies.pvd` lists are kept, later ones dropped.
-    pub fn resume(dir: &Path, first_step: usize) -> io::Result<Self> {
-        let w = Self::new(dir)?;
-        Ok(w.resumed(first_step))
-    }
-
-    /// The writer continuing the collections of its folder from step `first_step`.
+    /// The writer continuing the collections of its folder from step `first_step` (a restarted
+    /// run): the frames before `first_step` that `bodies.pvd` lists are kept, later ones dropped.
     pub fn resumed(mut self, first_step: usize) -> Self {
-        self.frames = frames_before(&self.dir, "bodies.pvd", first_step);
+        self.frames = frames_before(&self.dir, first_step);
         self
     }
 
@@ -468,112 +526,192 @@ impl VtkWriter {
         self
     }
 
-    /// Writes the frame of the simulation's current state.
-    pub fn frame(&mut self, sim: &Simulation) -> io::Result<()> {
-        let (beads, contacts) = vtp_frame_with(sim, self.format);
-        let k = sim.steps_done;
-        let b = format!("frames/bodies_{k:06}.vtp");
-        let c = format!("frames/contacts_{k:06}.vtp");
-        self.dir.write(&b, &beads)?;
-        self.dir.write(&c, &contacts)?;
-        let o = self.obstacles_file(sim)?;
+    /// Writes the frame of the scene's current state.
+    pub fn frame<S: FrameSource + ?Sized>(&mut self, scene: &S) -> io::Result<()> {
+        let f = scene.frame_data();
+        let k = f.step;
+        let file = |what: &str| format!("frames/{what}_{k:06}.vtp");
+        // Σ r / h on each body (A gets the force, B its opposite)
+        let mut force = vec![Vec3::ZERO; f.bodies.len()];
+        for c in &f.contacts {
+            if let Some(fa) = force.get_mut(c.a) {
+                *fa += c.force;
+            }
+            if let Some(fb) = c.b.and_then(|j| force.get_mut(j)) {
+                *fb += -c.force;
+            }
+        }
+        let radius = |b: &FrameBody| match b.look {
+            Look::Ball(r) => Some(r),
+            Look::Shape(_) => None,
+        };
+        let balls: Vec<(&FrameBody, f64, usize)> = (f.bodies.iter().enumerate())
+            .filter_map(|(i, b)| Some((b, radius(b)?, i)))
+            .collect();
+        let shaped = balls.len() < f.bodies.len();
+        let mut point_data = vec![
+            Array::scalars("radius", balls.iter().map(|b| b.1)),
+            Array::vectors("velocity", balls.iter().map(|b| b.0.velocity)),
+            Array::vectors(
+                "angular_velocity",
+                balls.iter().map(|b| b.0.angular_velocity),
+            ),
+            Array::vectors("contact_force", balls.iter().map(|b| force[b.2])),
+        ];
+        if shaped {
+            point_data.push(Array::scalars("body", balls.iter().map(|b| b.2 as f64)));
+        }
+        let shapes = shaped.then(|| self.shapes_polydata(&f, &force));
+        // the region the obstacles must cover: the balls and the shapes' vertices
+        let extent = Extent::around(
+            (balls.iter().map(|b| (b.0.position, b.1))).chain(
+                shapes
+                    .iter()
+                    .flat_map(|s| s.points.iter().map(|&p| (p, 0.0))),
+            ),
+        );
+        let balls = PolyData {
+            points: balls.iter().map(|b| b.0.position).collect(),
+            point_data,
+            ..PolyData::default()
+        };
+        let (b, s, c) = (file("bodies"), file("shapes"), file("contacts"));
+        self.dir.write(&b, &balls.to_vtp(self.format))?;
+        if let Some(poly) = &shapes {
+            self.dir.write(&s, &poly.to_vtp(self.format))?;
+        }
+        let contacts = PolyData {
+            points: f.contacts.iter().map(|c| c.point).collect(),
+            point_data: vec![
+                Array::vectors("normal", f.contacts.iter().map(|c| c.normal)),
+                Array::vectors("force", f.contacts.iter().map(|c| c.force)),
+                Array::scalars("gap", f.contacts.iter().map(|c| c.gap)),
+            ],
+            ..PolyData::default()
+        };
+        self.dir.write(&c, &contacts.to_vtp(self.format))?;
+        let o = self.obstacles_file(&f, extent)?;
         self.frames.push(FrameFiles {
-            time: sim.time,
-            beads: b,
+            time: f.time,
+            bodies: b,
+            shapes: if shaped { s } else { String::new() },
             contacts: c,
             obstacles: o,
-            balls: String::new(),
         });
-        self.write_collections()
+        write_collections(&self.dir, &self.frames)
+    }
+
+    /// The bodies of `f` that are not balls as polygons: each one's tessellation placed by its
+    /// position and orientation; cell data: the body's index, velocity, angular velocity and
+    /// `contact_force` (Σ r / h on the body).
+    fn shapes_polydata(&mut self, f: &FrameData, force: &[Vec3]) -> PolyData {
+        let (mut points, mut polygons, mut body) = (Vec::new(), Vec::new(), Vec::new());
+        let shaped = (f.bodies.iter().enumerate()).filter_map(|(i, b)| match b.look {
+            Look::Shape(s) => Some((i, b, s)),
+            Look::Ball(_) => None,
+        });
+        for (k, (i, b, shape)) in shaped.enumerate() {
+            if k == self.tessellations.len() {
+                let t = shape.tessellation().unwrap_or_default();
+                self.tessellations.push(t);
+            }
+            let t = &self.tessellations[k];
+            let base = points.len() as u32;
+            points.extend(t.vertices.iter().map(|p| {
+                let r = crate::shape::rotate(b.orientation, *p);
+                Vec3::new(r[0], r[1], r[2]) + b.position
+            }));
+            polygons.extend(
+                t.faces
+                    .iter()
+                    .map(|face| face.iter().map(|v| v + base).collect()),
+            );
+            body.extend(std::iter::repeat_n(i, t.faces.len()));
+        }
+        let at = |i: &usize| &f.bodies[*i];
+        PolyData {
+            points,
+            cell_data: vec![
+                Array::scalars("body", body.iter().map(|&i| i as f64)),
+                Array::vectors("velocity", body.iter().map(|i| at(i).velocity)),
+                Array::vectors(
+                    "angular_velocity",
+                    body.iter().map(|i| at(i).angular_velocity),
+                ),
+                Array::vectors("contact_force", body.iter().map(|&i| force[i])),
+            ],
+            polygons: Some(polygons),
+            ..PolyData::default()
+        }
     }
 
     /// The obstacles file of this frame: the last one, unless an obstacle moves or the bodies
-    /// left the region it covers (then a new one over the grown region).
-    fn obstacles_file(&mut self, sim: &Simulation) -> io::Result<String> {
-        let now = Extent::of_bodies(sim);
-        let moving = sim
-            .world
-            .obstacles
-            .iter()
-            .any(|o| o.motion != Motion::Fixed);
+    /// left the region it covers (`now`; then a new one over the grown region).
+    fn obstacles_file(&mut self, f: &FrameData, now: Extent) -> io::Result<String> {
+        let moving = f.obstacles.iter().any(|o| o.motion != Motion::Fixed);
         if let Some((covered, file)) = &self.obstacles {
             if !moving && covered.union(now) == *covered {
                 return Ok(file.clone());
             }
         }
-        // grown by a quarter of its diagonal on every side, so that beads spreading slowly do
-        // not make a new file at every frame
+        // grown by a quarter of its diagonal on every side, so that bodies spreading slowly
+        // do not make a new file at every frame
         let extent = match &self.obstacles {
             Some((covered, _)) => covered.union(now),
             None => now,
         }
         .grown(0.25);
-        let k = sim.steps_done;
-        let file = format!("frames/obstacles_{k:06}.vtp");
-        let poly = obstacles_polydata(&sim.world.obstacles, sim.time, &extent);
+        let file = format!("frames/obstacles_{:06}.vtp", f.step);
+        let poly = obstacles_polydata(f.obstacles, f.time, &extent);
         self.dir.write(&file, &poly.to_vtp(self.format))?;
         self.obstacles = Some((extent, file.clone()));
         Ok(file)
     }
-
-    fn write_collections(&self) -> io::Result<()> {
-        write_collections(&self.dir, "bodies.pvd", &self.frames)
-    }
 }
 
-/// The frames of the collections in `dir` (`bodies`, contacts.pvd, obstacles.pvd) whose
-/// bodies file is of a step before `first_step` (a restarted run keeps them; missing or
-/// unreadable collections give none).
-fn frames_before(dir: &OutputDir, bodies: &str, first_step: usize) -> Vec<FrameFiles> {
-    let listed = |name: &str| -> Vec<(f64, String)> {
+/// The frames of the collections in `dir` whose bodies file (part 0 of `bodies.pvd`) is of a
+/// step before `first_step` (a restarted run keeps them; missing or unreadable collections
+/// give none).
+fn frames_before(dir: &OutputDir, first_step: usize) -> Vec<FrameFiles> {
+    let listed = |name: &str| -> Vec<(f64, usize, String)> {
         dir.read(name)
             .ok()
             .flatten()
             .map(|s| collection_entries(&String::from_utf8_lossy(&s)))
             .unwrap_or_default()
     };
-    let contacts = listed("contacts.pvd");
-    let obstacles = listed("obstacles.pvd");
-    // bodies.pvd lists a rigid scene's ball files (part 1) beside its body files
-    let (balls, bodies): (Vec<_>, Vec<_>) = listed(bodies)
-        .into_iter()
-        .partition(|(_, f)| f.starts_with("frames/balls_"));
+    let (contacts, obstacles) = (listed("contacts.pvd"), listed("obstacles.pvd"));
+    let (bodies, shapes): (Vec<_>, Vec<_>) =
+        listed("bodies.pvd").into_iter().partition(|e| e.1 == 0);
+    let step = |file: &str| {
+        let end = file.rsplit('_').next()?;
+        end.trim_end_matches(".vtp").parse::<usize>().ok()
+    };
     let mut frames = Vec::new();
-    for (k, (time, beads)) in bodies.into_iter().enumerate() {
-        let step = beads
-            .rsplit('_')
-            .next()
-            .and_then(|s| s.trim_end_matches(".vtp").parse::<usize>().ok());
-        if step.is_none_or(|s| s >= first_step) {
+    for (k, (time, _, bodies)) in bodies.into_iter().enumerate() {
+        let s = step(&bodies);
+        if s.is_none_or(|s| s >= first_step) {
             continue;
         }
-        let file = |list: &[(f64, String)]| list.get(k).map(|x| x.1.clone()).unwrap_or_default();
-        let ball_file = balls
-            .iter()
-            .find(|(_, f)| f.trim_start_matches("frames/balls_") == step_suffix(&beads))
-            .map(|x| x.1.clone())
-            .unwrap_or_default();
+        let file = |list: &[(f64, usize, String)]| list.get(k).map(|x| x.2.clone());
         frames.push(FrameFiles {
             time,
-            beads,
-            contacts: file(&contacts),
-            obstacles: file(&obstacles),
-            balls: ball_file,
+            bodies,
+            shapes: (shapes.iter().find(|x| step(&x.2) == s))
+                .map(|x| x.2.clone())
+                .unwrap_or_default(),
+            contacts: file(&contacts).unwrap_or_default(),
+            obstacles: file(&obstacles).unwrap_or_default(),
         });
     }
     frames
 }
 
-/// The `KKKKKK.vtp` end of a frame file's name.
-fn step_suffix(file: &str) -> &str {
-    file.rsplit('_').next().unwrap_or("")
-}
-
-/// The three .pvd collections of a run's frames in `dir`: `bodies` (the beads' or bodies'
-/// files), contacts.pvd and obstacles.pvd, one `<DataSet …/>` per frame that has the file,
-/// each written atomically.
-fn write_collections(dir: &OutputDir, bodies: &str, frames: &[FrameFiles]) -> io::Result<()> {
-    for name in [bodies, "contacts.pvd", "obstacles.pvd"] {
+/// The three .pvd collections of a run's frames in `dir`: bodies.pvd (part 0 the balls, part
+/// 1 the other shapes), contacts.pvd and obstacles.pvd, one `<DataSet …/>` per file, each
+/// written atomically.
+fn write_collections(dir: &OutputDir, frames: &[FrameFiles]) -> io::Result<()> {
+    for name in BODIES_NAMES {
         let mut s = String::from(
             "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n",
         );
@@ -581,7 +719,7 @@ fn write_collections(dir: &OutputDir, bodies: &str, frames: &[FrameFiles]) -> io
             let files: [&str; 2] = match name {
                 "contacts.pvd" => [&f.contacts, ""],
                 "obstacles.pvd" => [&f.obstacles, ""],
-                _ => [&f.beads, &f.balls],
+                _ => [&f.bodies, &f.shapes],
             };
             for (part, file) in files.iter().enumerate() {
                 if file.is_empty() {
@@ -600,9 +738,9 @@ fn write_collections(dir: &OutputDir, bodies: &str, frames: &[FrameFiles]) -> io
     Ok(())
 }
 
-/// The (timestep, file) entries of a .pvd collection written by [`VtkWriter`] (one
-/// `<DataSet …/>` element a line).
-fn collection_entries(pvd: &str) -> Vec<(f64, String)> {
+/// The (timestep, part, file) entries of a .pvd collection written by [`VtkWriter`] (one
+/// `<DataSet …/>` element a line; a missing part reads as 0).
+fn collection_entries(pvd: &str) -> Vec<(f64, usize, String)> {
     let attr = |line: &str, name: &str| -> Option<String> {
         let start = line.find(&format!(" {name}=\""))? + name.len() + 3;
         let len = line[start..].find('"')?;
@@ -610,250 +748,11 @@ fn collection_entries(pvd: &str) -> Vec<(f64, String)> {
     };
     pvd.lines()
         .filter(|l| l.trim_start().starts_with("<DataSet"))
-        .filter_map(|l| Some((attr(l, "timestep")?.parse().ok()?, attr(l, "file")?)))
-        .collect()
-}
-
-// ------------------------------------------------------------------------------------------
-// Rigid bodies of any shape (issue 41)
-// ------------------------------------------------------------------------------------------
-
-fn v3a(a: [f64; 3]) -> Vec3 {
-    Vec3::new(a[0], a[1], a[2])
-}
-
-/// The bodies of a rigid scene as polygons: each body's tessellation (shape frame, computed
-/// once: polyhedra as their faces, curved shapes with [`crate::shape::CURVE_SEGMENTS`]
-/// segments) placed by its position and orientation; cell data: the body's index, its
-/// velocity and angular velocity.
-fn rigid_bodies_polydata(
-    scene: &crate::rigid_scene::RigidScene,
-    shapes: &[crate::shape::Tessellation],
-) -> PolyData {
-    let w = &scene.world;
-    let (x, q, v, om) = (
-        w.positions(),
-        w.orientations(),
-        w.velocities(),
-        w.angular_velocities(),
-    );
-    let mut points = Vec::new();
-    let mut polygons = Vec::new();
-    let (mut body, mut vel, mut ang) = (Vec::new(), Vec::new(), Vec::new());
-    for (i, t) in shapes.iter().enumerate() {
-        if matches!(scene.shapes.get(i), Some(BodyShape::Sphere { .. })) {
-            continue;
-        }
-        let base = points.len() as u32;
-        for p in &t.vertices {
-            let r = crate::shape::rotate(q[i], *p);
-            points.push(Vec3::new(r[0] + x[i][0], r[1] + x[i][1], r[2] + x[i][2]));
-        }
-        for f in &t.faces {
-            polygons.push(f.iter().map(|k| k + base).collect());
-            body.push(i as f64);
-            vel.push(v3a(v[i]));
-            ang.push(v3a(om[i]));
-        }
-    }
-    PolyData {
-        points,
-        point_data: Vec::new(),
-        cell_data: vec![
-            Array::scalars("body", body.into_iter()),
-            Array::vectors("velocity", vel.into_iter()),
-            Array::vectors("angular_velocity", ang.into_iter()),
-        ],
-        triangles: None,
-        polygons: Some(polygons),
-    }
-}
-
-/// The balls of a rigid scene as glyph-ready points (as the sphere scenes' beads): the
-/// centres, point data `radius`, `body` (the body's index), `velocity` and
-/// `angular_velocity`; `None` when the scene has no ball.
-fn rigid_balls_polydata(scene: &crate::rigid_scene::RigidScene) -> Option<PolyData> {
-    let balls: Vec<(usize, f64)> = scene
-        .shapes
-        .iter()
-        .enumerate()
-        .filter_map(|(i, s)| match s {
-            BodyShape::Sphere { radius } => Some((i, *radius)),
-            _ => None,
+        .filter_map(|l| {
+            let part = attr(l, "part").and_then(|p| p.parse().ok()).unwrap_or(0);
+            Some((attr(l, "timestep")?.parse().ok()?, part, attr(l, "file")?))
         })
-        .collect();
-    if balls.is_empty() {
-        return None;
-    }
-    let w = &scene.world;
-    let (x, v, om) = (w.positions(), w.velocities(), w.angular_velocities());
-    Some(PolyData {
-        points: balls.iter().map(|&(i, _)| v3a(x[i])).collect(),
-        point_data: vec![
-            Array::scalars("radius", balls.iter().map(|b| b.1)),
-            Array::scalars("body", balls.iter().map(|b| b.0 as f64)),
-            Array::vectors("velocity", balls.iter().map(|&(i, _)| v3a(v[i]))),
-            Array::vectors("angular_velocity", balls.iter().map(|&(i, _)| v3a(om[i]))),
-        ],
-        cell_data: Vec::new(),
-        triangles: None,
-        polygons: None,
-    })
-}
-
-/// The last step's contacts of a rigid scene as points (one per manifold point): the normal
-/// (from B to A), the force (the impulse in world axes over h, acting on A), the normal
-/// impulse r_N and the gap at the start of the step.
-fn rigid_contacts_polydata(scene: &crate::rigid_scene::RigidScene) -> PolyData {
-    let h = scene.world.settings().h;
-    let c = scene.world.contacts();
-    PolyData {
-        points: c.iter().map(|c| v3a(c.point)).collect(),
-        point_data: vec![
-            Array::vectors("normal", c.iter().map(|c| v3a(c.normal))),
-            Array::vectors(
-                "force",
-                c.iter().map(|c| v3a(c.world_impulse()) * (1.0 / h)),
-            ),
-            Array::scalars("normal_impulse", c.iter().map(|c| c.impulse[0])),
-            Array::scalars("gap", c.iter().map(|c| c.gap)),
-        ],
-        cell_data: Vec::new(),
-        triangles: None,
-        polygons: None,
-    }
-}
-
-/// Writes the frames of a rigid scene into a directory: `frames/bodies_KKKKKK.vtp` (each body
-/// but the balls as its shape's polygons), `frames/balls_KKKKKK.vtp` (the balls as points
-/// with a `radius` array, for glyphs; part 1 of the same frame in `bodies.pvd`, only when the
-/// scene has balls), `frames/contacts_KKKKKK.vtp` (contact points, normals, forces)
-/// and the obstacles (`frames/obstacles_KKKKKK.vtp`, written again only when one moves), with
-/// the collections `bodies.pvd`, `contacts.pvd` and `obstacles.pvd`.
-#[derive(Debug)]
-pub struct RigidVtkWriter {
-    dir: Arc<OutputDir>,
-    format: VtkFormat,
-    shapes: Vec<crate::shape::Tessellation>,
-    frames: Vec<FrameFiles>,
-    obstacles: Option<String>,
-}
-
-impl RigidVtkWriter {
-    /// A writer into `dir` (created) for `scene`: the bodies' shapes tessellated once here.
-    pub fn new(dir: &Path, scene: &crate::rigid_scene::RigidScene) -> io::Result<Self> {
-        let mut out = OutputDir::open(dir)?;
-        out.check(&BODIES_NAMES)?;
-        out.open_frames()?;
-        Ok(Self::in_dir(Arc::new(out), scene))
-    }
-
-    /// A writer into the output folder `dir` (its `frames/` opened) for `scene`.
-    pub fn in_dir(dir: Arc<OutputDir>, scene: &crate::rigid_scene::RigidScene) -> Self {
-        Self {
-            dir,
-            format: VtkFormat::Binary,
-            shapes: scene.tessellations(),
-            frames: Vec::new(),
-            obstacles: None,
-        }
-    }
-
-    /// The writer continuing the collections of its folder from step `first_step`.
-    pub fn resumed(mut self, first_step: usize) -> Self {
-        self.frames = frames_before(&self.dir, "bodies.pvd", first_step);
-        self
-    }
-
-    /// A writer into `dir` for `scene` that continues the collections found there (a
-    /// restarted run): the frames before step `first_step` that `bodies.pvd` lists are kept,
-    /// later ones dropped.
-    pub fn resume(
-        dir: &Path,
-        scene: &crate::rigid_scene::RigidScene,
-        first_step: usize,
-    ) -> io::Result<Self> {
-        Ok(Self::new(dir, scene)?.resumed(first_step))
-    }
-
-    /// The same writer with `format`.
-    pub fn with_format(mut self, format: VtkFormat) -> Self {
-        self.format = format;
-        self
-    }
-
-    /// Writes the frame of the scene's current state.
-    pub fn frame(&mut self, scene: &crate::rigid_scene::RigidScene) -> io::Result<()> {
-        // bodies inserted since the last frame (an inlet pouring): their shapes tessellated
-        let have = self.shapes.len().min(scene.shapes.len());
-        self.shapes.extend(
-            scene.shapes[have..]
-                .iter()
-                .map(|s| s.tessellation().unwrap_or_default()),
-        );
-        let k = scene.world.steps();
-        let b = format!("frames/bodies_{k:06}.vtp");
-        let c = format!("frames/contacts_{k:06}.vtp");
-        let bodies = rigid_bodies_polydata(scene, &self.shapes);
-        self.dir.write(&b, &bodies.to_vtp(self.format))?;
-        let balls = rigid_balls_polydata(scene);
-        let ball_file = match &balls {
-            Some(poly) => {
-                let f = format!("frames/balls_{k:06}.vtp");
-                self.dir.write(&f, &poly.to_vtp(self.format))?;
-                f
-            }
-            None => String::new(),
-        };
-        self.dir
-            .write(&c, &rigid_contacts_polydata(scene).to_vtp(self.format))?;
-        let moving = scene.obstacles.iter().any(|o| o.motion != Motion::Fixed);
-        let o = match &self.obstacles {
-            Some(f) if !moving => f.clone(),
-            _ => {
-                let (mut lo, mut hi) = (
-                    Vec3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY),
-                    Vec3::new(f64::NEG_INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY),
-                );
-                for p in &bodies.points {
-                    lo = lo.min(*p);
-                    hi = hi.max(*p);
-                }
-                if let Some(poly) = &balls {
-                    let radii = match &poly.point_data[0].values {
-                        Values::F64(r) => r.as_slice(),
-                        Values::I64(_) => &[],
-                    };
-                    for (p, r) in poly.points.iter().zip(radii) {
-                        let r = Vec3::new(*r, *r, *r);
-                        lo = lo.min(*p - r);
-                        hi = hi.max(*p + r);
-                    }
-                }
-                let extent = if lo.x.is_finite() {
-                    Extent { lo, hi }.grown(0.25)
-                } else {
-                    Extent {
-                        lo: Vec3::new(-1.0, -1.0, -1.0),
-                        hi: Vec3::new(1.0, 1.0, 1.0),
-                    }
-                };
-                let file = format!("frames/obstacles_{k:06}.vtp");
-                let poly = obstacles_polydata(&scene.obstacles, scene.world.time(), &extent);
-                self.dir.write(&file, &poly.to_vtp(self.format))?;
-                self.obstacles = Some(file.clone());
-                file
-            }
-        };
-        self.frames.push(FrameFiles {
-            time: scene.world.time(),
-            beads: b,
-            contacts: c,
-            obstacles: o,
-            balls: ball_file,
-        });
-        write_collections(&self.dir, "bodies.pvd", &self.frames)
-    }
+        .collect()
 }
 
 #[cfg(test)]
@@ -862,6 +761,28 @@ mod tests {
     use crate::scene::Scene;
     use crate::simulation::Params;
     use crate::world::Shape;
+
+    fn extent(sim: &Simulation) -> Extent {
+        Extent::around(sim.world.bodies.iter().map(|b| (b.position, b.radius)))
+    }
+
+    /// The files `frames/bodies_KKKKKK.vtp` and `frames/contacts_KKKKKK.vtp` of `sim`'s frame
+    /// in `format` (written into a scratch folder, removed).
+    fn frame_files(sim: &Simulation, format: VtkFormat) -> (Vec<u8>, Vec<u8>) {
+        let dir = std::env::temp_dir().join(format!(
+            "coulomb-vtk-{format:?}-{}-{}",
+            std::process::id(),
+            sim.world.bodies.len()
+        ));
+        let _ = fs::remove_dir_all(&dir);
+        let mut w = VtkWriter::new(&dir).unwrap().with_format(format);
+        w.frame(sim).unwrap();
+        let k = sim.steps_done;
+        let read = |f: &str| fs::read(dir.join(format!("frames/{f}_{k:06}.vtp"))).unwrap();
+        let files = (read("bodies"), read("contacts"));
+        fs::remove_dir_all(&dir).ok();
+        files
+    }
 
     fn stepped(scene: Scene, beads: usize, steps: usize) -> Simulation {
         let mut sim = Simulation::new(scene.build(beads, 1), Params::default()).unwrap();
@@ -903,8 +824,8 @@ mod tests {
     #[test]
     fn binary_frames_hold_the_exact_positions_and_are_smaller() {
         let sim = stepped(Scene::Box, 200, 5);
-        let (bin, _) = vtp_frame_with(&sim, VtkFormat::Binary);
-        let (ascii, _) = vtp_frame_with(&sim, VtkFormat::Ascii);
+        let (bin, _) = frame_files(&sim, VtkFormat::Binary);
+        let (ascii, _) = frame_files(&sim, VtkFormat::Ascii);
         assert!(
             bin.len() < ascii.len(),
             "binary {} B, ascii {} B",
@@ -944,7 +865,7 @@ mod tests {
     fn obstacle_surfaces_lie_on_the_obstacles_and_cover_the_beads() {
         for scene in Scene::ALL {
             let sim = stepped(scene, 60, 3);
-            let extent = Extent::of_bodies(&sim);
+            let extent = extent(&sim);
             for o in &sim.world.obstacles {
                 let (pts, tris) = obstacle_surface(o, sim.time, &extent);
                 assert!(!tris.is_empty(), "{}", o.name);
@@ -983,7 +904,7 @@ mod tests {
             .iter()
             .find(|o| o.motion != Motion::Fixed)
             .unwrap();
-        let e = Extent::of_bodies(&sim);
+        let e = extent(&sim);
         for t in [0.0, 0.013, 0.031] {
             let (pts, _) = obstacle_surface(plate, t, &e);
             for p in pts {
@@ -1029,19 +950,19 @@ mod tests {
         let files = collection_entries(&pvd);
         assert_eq!(files.len(), 3);
         // the beads fall and stay inside the first frame's (grown) extent: one file
-        assert!(files.iter().all(|f| f.1 == files[0].1), "{pvd}");
-        let obstacles = fs::read(dir.join(&files[0].1)).unwrap();
+        assert!(files.iter().all(|f| f.2 == files[0].2), "{pvd}");
+        let obstacles = fs::read(dir.join(&files[0].2)).unwrap();
         let text = String::from_utf8_lossy(&obstacles);
         assert!(
             text.contains("NumberOfPolys=\"10\""),
             "5 planes, 2 triangles each"
         );
         // a restart at step 10 keeps frames 0 and 5, then adds its own
-        let mut r = VtkWriter::resume(&dir, 10).unwrap();
+        let mut r = VtkWriter::new(&dir).unwrap().resumed(10);
         assert_eq!(r.frames.len(), 2);
         r.frame(&sim).unwrap();
         let beads = collection_entries(&fs::read_to_string(dir.join("bodies.pvd")).unwrap());
-        let names: Vec<&str> = beads.iter().map(|x| x.1.as_str()).collect();
+        let names: Vec<&str> = beads.iter().map(|x| x.2.as_str()).collect();
         assert_eq!(
             names,
             [
@@ -1051,6 +972,70 @@ mod tests {
             ]
         );
         fs::remove_dir_all(&dir).ok();
+    }
+
+    /// The sphere frames are those of the writer before the two writers became one (issue 52,
+    /// item 4): the FNV-1a fingerprints of the folders (file names and bytes) were recorded
+    /// with the sphere-only `VtkWriter` (commit 79e1757) on beads, contacts and times set by
+    /// hand (no physics involved): three frames, the beads moving away (the obstacles' extent
+    /// grows), binary and ASCII.
+    #[test]
+    fn sphere_frames_are_those_of_the_sphere_only_writer() {
+        let mut got = Vec::new();
+        for format in [VtkFormat::Binary, VtkFormat::Ascii] {
+            let dir = std::env::temp_dir().join(format!("coulomb-golden-{}", std::process::id()));
+            let _ = fs::remove_dir_all(&dir);
+            let mut sim = Simulation::new(Scene::Box.build(4, 1), Params::default()).unwrap();
+            let mut w = VtkWriter::new(&dir).unwrap().with_format(format);
+            for (frame, k) in [0usize, 5, 9].into_iter().enumerate() {
+                let f = frame as f64;
+                for (i, b) in sim.world.bodies.iter_mut().enumerate() {
+                    let x = i as f64;
+                    b.position = Vec3::new(0.01 * x + 0.3 * f, 0.02 + f * f, 0.05 * x + 0.1);
+                    b.velocity = Vec3::new(0.1 * x, -0.2 * f, 0.3);
+                    b.angular_velocity = Vec3::new(f, 0.5 * x, -0.25);
+                    b.radius = 0.005 + 0.001 * x;
+                }
+                sim.contacts = (0..frame)
+                    .map(|i| crate::contact::Contact {
+                        body: i,
+                        partner: match i {
+                            0 => Partner::Obstacle(0, 0),
+                            _ => Partner::Body(i + 1),
+                        },
+                        normal: Vec3::Z,
+                        t1: Vec3::X,
+                        t2: Vec3::Y,
+                        point: Vec3::new(0.1 * i as f64, 0.0, 0.001),
+                        gap: -1e-4 * (i + 1) as f64,
+                        normal_velocity: 0.0,
+                        impulse: [1e-3 * (i + 1) as f64, 2e-4, -3e-4 / 7.0],
+                    })
+                    .collect();
+                (sim.steps_done, sim.time) = (k, k as f64 * 1e-3 / 3.0);
+                w.frame(&sim).unwrap();
+            }
+            let mut files: Vec<_> = [dir.clone(), dir.join("frames")]
+                .iter()
+                .flat_map(|d| fs::read_dir(d).unwrap().map(|e| e.unwrap().path()))
+                .filter(|p| p.is_file())
+                .collect();
+            files.sort();
+            let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+            for f in files {
+                let name = f.strip_prefix(&dir).unwrap().to_string_lossy().into_owned();
+                for b in name.bytes().chain(fs::read(&f).unwrap()) {
+                    h = (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+                }
+            }
+            got.push(h);
+            fs::remove_dir_all(&dir).ok();
+        }
+        assert_eq!(
+            got,
+            [0x4e7b_ef5d_299a_4c09, 0x06fa_bd14_a9a3_b0e6],
+            "{got:x?}"
+        );
     }
 
     #[test]
@@ -1113,12 +1098,10 @@ mod tests {
         ));
         let mut scene = crate::rigid_scene::RigidScene::new(&m).unwrap();
         let dir = std::env::temp_dir().join(format!("coulomb-rigid-vtk-{}", std::process::id()));
-        let mut w = RigidVtkWriter::new(&dir, &scene)
-            .unwrap()
-            .with_format(VtkFormat::Ascii);
+        let mut w = VtkWriter::new(&dir).unwrap().with_format(VtkFormat::Ascii);
         scene.step().unwrap();
         w.frame(&scene).unwrap();
-        let text = fs::read_to_string(dir.join("frames/bodies_000001.vtp")).unwrap();
+        let text = fs::read_to_string(dir.join("frames/shapes_000001.vtp")).unwrap();
         let cyl = BodyShape::Cylinder {
             radius: 0.05,
             half_height: 0.1,
@@ -1133,7 +1116,7 @@ mod tests {
         // the box turned 90° about z: its x half-extent 0.1 now along y, so its corners lie
         // at x = 1 ± 0.2, y = 2 ± 0.1
         let x = scene.world.positions()[0];
-        let pts = &w.shapes[0].vertices;
+        let pts = &w.tessellations[0].vertices;
         let placed: Vec<[f64; 3]> = pts
             .iter()
             .map(|p| {
@@ -1187,18 +1170,18 @@ mod tests {
         let mut scene = crate::rigid_scene::RigidScene::new(&m).unwrap();
         let dir = std::env::temp_dir().join(format!("coulomb-rigid-balls-{}", std::process::id()));
         let _ = fs::remove_dir_all(&dir);
-        let mut w = RigidVtkWriter::new(&dir, &scene).unwrap();
+        let mut w = VtkWriter::new(&dir).unwrap();
         for _ in 0..2 {
             scene.step().unwrap();
             w.frame(&scene).unwrap();
         }
         // the cuboid alone as polygons
         let body =
-            String::from_utf8_lossy(&fs::read(dir.join("frames/bodies_000002.vtp")).unwrap())
+            String::from_utf8_lossy(&fs::read(dir.join("frames/shapes_000002.vtp")).unwrap())
                 .into_owned();
         assert!(body.contains("NumberOfPolys=\"6\""), "{body}");
         // the balls as two points: centres exact, radii and velocities as point data
-        let file = fs::read(dir.join("frames/balls_000002.vtp")).unwrap();
+        let file = fs::read(dir.join("frames/bodies_000002.vtp")).unwrap();
         let text = String::from_utf8_lossy(&file).into_owned();
         assert!(
             text.contains("NumberOfPoints=\"2\" NumberOfVerts=\"2\""),
@@ -1217,10 +1200,25 @@ mod tests {
             v,
             [scene.world.velocities()[1], scene.world.velocities()[2]].concat()
         );
-        // one collection: part 0 the meshes, part 1 the balls, per frame
+        assert_eq!(appended_f64(&file, at("body")), [1.0, 2.0]);
+        // the cuboid's contact force on each of its faces: Σ r / h over its points on the floor
+        let shapes = fs::read(dir.join("frames/shapes_000002.vtp")).unwrap();
+        let at = String::from_utf8_lossy(&shapes)
+            .find("Name=\"contact_force\"")
+            .unwrap();
+        let force = appended_f64(&shapes, at - "<DataArray type=\"Float64\" ".len());
+        let h = scene.world.settings().h;
+        let mut want = Vec3::ZERO;
+        for c in scene.world.contacts() {
+            assert_eq!((c.a, c.b), (0, crate::rigid::RigidPartner::Obstacle(0)));
+            want += Vec3::from_slice(&c.world_impulse()) * (1.0 / h);
+        }
+        assert!(want.z > 0.0, "{want:?}");
+        assert_eq!(force, [want.to_array(); 6].concat());
+        // one collection: part 0 the balls, part 1 the other shapes, per frame
         let pvd = fs::read_to_string(dir.join("bodies.pvd")).unwrap();
         assert!(
-            pvd.contains("part=\"1\" file=\"frames/balls_000001.vtp\""),
+            pvd.contains("part=\"1\" file=\"frames/shapes_000001.vtp\""),
             "{pvd}"
         );
         assert!(
@@ -1228,19 +1226,19 @@ mod tests {
             "{pvd}"
         );
         // a restart from step 2 keeps frame 1's two parts and drops frame 2's
-        let mut w = RigidVtkWriter::resume(&dir, &scene, 2).unwrap();
+        let mut w = VtkWriter::new(&dir).unwrap().resumed(2);
         scene.step().unwrap();
         w.frame(&scene).unwrap();
         let pvd = fs::read_to_string(dir.join("bodies.pvd")).unwrap();
         for f in [
-            "balls_000001",
+            "shapes_000001",
             "bodies_000001",
-            "balls_000003",
+            "shapes_000003",
             "bodies_000003",
         ] {
             assert!(pvd.contains(f), "{f}: {pvd}");
         }
-        assert!(!pvd.contains("balls_000002"), "{pvd}");
+        assert!(!pvd.contains("shapes_000002"), "{pvd}");
         let _ = fs::remove_dir_all(&dir);
     }
 }

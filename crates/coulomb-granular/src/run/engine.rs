@@ -5,7 +5,7 @@
 //! rule, the frames, the checkpoints and the FCLIB dumps are asked the same way.
 
 use crate::checkpoint::CheckpointError;
-use crate::output::{RigidVtkWriter, VtkWriter};
+use crate::output::{FrameSource, VtkWriter};
 use crate::output_dir::{OutputDir, RunKind};
 use crate::report::EngineStep;
 use crate::rigid::RigidError;
@@ -26,10 +26,9 @@ pub enum EngineError {
     Rigid(#[from] RigidError),
 }
 
-/// A scene being simulated, whichever engine steps it.
-pub trait Engine {
-    /// The VTK writer of the scene's frames (`bodies.pvd`).
-    type Frames;
+/// A scene being simulated, whichever engine steps it; its frames are drawn by the one
+/// [`VtkWriter`] ([`FrameSource`]).
+pub trait Engine: FrameSource {
     /// One Moreau–Jean step.
     fn step(&mut self) -> Result<EngineStep, EngineError>;
     /// Steps taken since t = 0 (a restart's included): k of t_k.
@@ -57,9 +56,17 @@ pub trait Engine {
     fn run_kind(&self) -> RunKind;
     /// The frame writer into `dir`, continuing the collection found there from step
     /// `resumed` (a restart).
-    fn frames(&self, dir: Arc<OutputDir>, resumed: Option<usize>) -> Self::Frames;
+    fn frames(&self, dir: Arc<OutputDir>, resumed: Option<usize>) -> VtkWriter {
+        let w = VtkWriter::in_dir(dir);
+        match resumed {
+            Some(k) => w.resumed(k),
+            None => w,
+        }
+    }
     /// Writes the frame of the current state.
-    fn frame(&self, frames: &mut Self::Frames) -> io::Result<()>;
+    fn frame(&self, frames: &mut VtkWriter) -> io::Result<()> {
+        frames.frame(self)
+    }
     /// A warning about the step size, said once per run: the sphere engine's check that no
     /// sphere crosses a thin wall within one step ([`crate::tunnelling`]); `None` when
     /// nothing is wrong or the engine does not check.
@@ -69,7 +76,6 @@ pub trait Engine {
 }
 
 impl Engine for Simulation {
-    type Frames = VtkWriter;
     fn step(&mut self) -> Result<EngineStep, EngineError> {
         Ok(EngineStep::of_spheres(Simulation::step(self)?))
     }
@@ -103,16 +109,6 @@ impl Engine for Simulation {
     fn run_kind(&self) -> RunKind {
         RunKind::Spheres
     }
-    fn frames(&self, dir: Arc<OutputDir>, resumed: Option<usize>) -> VtkWriter {
-        let w = VtkWriter::in_dir(dir);
-        match resumed {
-            Some(k) => w.resumed(k),
-            None => w,
-        }
-    }
-    fn frame(&self, frames: &mut VtkWriter) -> io::Result<()> {
-        frames.frame(self)
-    }
     fn step_warning(&self) -> Option<String> {
         let (v, r) = crate::tunnelling::speed_and_radius(&self.world);
         crate::tunnelling::check(&self.world, self.params.h, v, r)
@@ -122,7 +118,6 @@ impl Engine for Simulation {
 }
 
 impl Engine for RigidScene {
-    type Frames = RigidVtkWriter;
     fn step(&mut self) -> Result<EngineStep, EngineError> {
         let r = RigidScene::step(self)?;
         Ok(EngineStep::of_rigid(r, self.world.potential_energy()))
@@ -168,15 +163,5 @@ impl Engine for RigidScene {
     }
     fn run_kind(&self) -> RunKind {
         RunKind::Rigid
-    }
-    fn frames(&self, dir: Arc<OutputDir>, resumed: Option<usize>) -> RigidVtkWriter {
-        let w = RigidVtkWriter::in_dir(dir, self);
-        match resumed {
-            Some(k) => w.resumed(k),
-            None => w,
-        }
-    }
-    fn frame(&self, frames: &mut RigidVtkWriter) -> io::Result<()> {
-        frames.frame(self)
     }
 }

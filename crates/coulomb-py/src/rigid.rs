@@ -116,7 +116,16 @@ impl PyRigidSimulation {
                 "'{k}' is not a parameter of rigid-body scenes"
             )));
         }
-        build(py, built.model, resolve_overlaps)
+        // the file's [step] switches (gamma, projection, gap_closure, warm_start), as
+        // `coulomb simulate` sets them
+        let switches = coulomb_granular::scene_file::check_rigid_step(&built.step)
+            .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))?;
+        let mut sim = build(py, built.model, resolve_overlaps)?;
+        sim.scene
+            .world
+            .set_switches(switches)
+            .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))?;
+        Ok(sim)
     }
 
     /// One time step; its record (`coulomb_granular::StepRecord`, the same keys for every

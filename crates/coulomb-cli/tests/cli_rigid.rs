@@ -280,6 +280,32 @@ fn a_rigid_run_restarts_to_the_bit() {
     ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("not the scene of the checkpoint"));
+    // and so is the same scene with other `[step]` switches (the checkpoint stores them),
+    // not a copy of it
+    let (same, cold) = (root.join("same.toml"), root.join("cold.toml"));
+    let text = std::fs::read_to_string(&wall).unwrap();
+    std::fs::write(&same, &text).unwrap();
+    ok(&coulomb(&[
+        "simulate",
+        same.to_str().unwrap(),
+        "--restart",
+        ckpt.to_str().unwrap(),
+        "--steps",
+        "1",
+    ]));
+    std::fs::write(
+        &cold,
+        text.replacen("[step]", "[step]\nwarm_start = false", 1),
+    )
+    .unwrap();
+    let o = coulomb(&[
+        "simulate",
+        cold.to_str().unwrap(),
+        "--restart",
+        ckpt.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("not the scene of the checkpoint"));
 }
 
 /// Issues 52 (item 3) and 55 (item 6): a rigid scene with h = 100 s, a cube thrown at

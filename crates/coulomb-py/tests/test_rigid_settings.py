@@ -1,0 +1,48 @@
+"""A rigid scene file's [step] switches apply in Python as in `coulomb simulate` (issue 52,
+item 3): warm_start = false starts every step cold; projection_velocities = "rescale" is
+refused naming it."""
+
+from __future__ import annotations
+
+import pytest
+
+from coulomb.granular import Simulation
+
+SCENE = """[step]
+h = 0.001
+tol = 1e-8
+{step}
+[default_pair]
+mu = 0.5
+restitution = 0.0
+[[obstacles]]
+name = "floor"
+shape = {{ kind = "plane", point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }}
+[[bodies]]
+spheres = [[0.0, 0.0, 0.1, 0.1]]
+velocity = [1.0, 0.0, 0.0]
+[[bodies]]
+shape = {{ kind = "cuboid", half_extents = [0.1, 0.1, 0.1] }}
+positions = [[5.0, 0.0, 0.1]]
+"""
+
+
+def _records(tmp_path, step: str, n: int = 4):
+    path = tmp_path / "scene.toml"
+    path.write_text(SCENE.format(step=step))
+    sim = Simulation.from_file(path)
+    assert sim.is_rigid
+    return [sim.step() for _ in range(n)]
+
+
+def test_warm_start_false_in_the_file_starts_every_step_cold(tmp_path):
+    warm = _records(tmp_path, "")
+    cold = _records(tmp_path, "warm_start = false")
+    assert all(r["warm_started"] > 0 for r in warm[1:])
+    assert all(r["warm_started"] == 0 for r in cold)
+    assert all(r["converged"] for r in cold)
+
+
+def test_a_correction_the_rigid_step_has_not_is_refused(tmp_path):
+    with pytest.raises(ValueError, match="projection_velocities"):
+        _records(tmp_path, 'projection_velocities = "rescale"')

@@ -55,10 +55,35 @@ fn build(
     })
 }
 
+/// `rest` (the keywords `warm_start`, `gap_closure`) applied to the switches `w`
+/// (`coulomb_granular::rigid::StepSwitches`); any other keyword refused.
+fn switches_of(
+    rest: Vec<(String, Bound<'_, PyAny>)>,
+    mut w: coulomb_granular::rigid::StepSwitches,
+) -> PyResult<coulomb_granular::rigid::StepSwitches> {
+    for (k, v) in rest {
+        let b = || {
+            v.extract::<bool>()
+                .map_err(|_| PyTypeError::new_err(format!("{k} must be a bool")))
+        };
+        match k.as_str() {
+            "warm_start" => w.warm_start = b()?,
+            "gap_closure" => w.gap_closure = b()?,
+            _ => {
+                return Err(PyTypeError::new_err(format!(
+                    "'{k}' is not a parameter of rigid-body scenes (h, theta, tol, method, max_sweeps, relaxation, mu, restitution, rolling_friction, warm_start, gap_closure)"
+                )))
+            }
+        }
+    }
+    Ok(w)
+}
+
 #[pymethods]
 impl PyRigidSimulation {
     /// A scene built in Python (as `_Simulation.from_scene`); `params` may set the step
-    /// settings h, theta, tol, max_sweeps and the default law mu, restitution.
+    /// settings h, theta, tol, method, max_sweeps, relaxation, the default law mu,
+    /// restitution, rolling_friction, and the switches warm_start, gap_closure.
     #[staticmethod]
     #[pyo3(signature = (json, batches, meshes, params, resolve_overlaps=None))]
     fn from_scene(
@@ -79,12 +104,13 @@ impl PyRigidSimulation {
         model.step.h = RIGID_H;
         model.step.tol = RIGID_TOL;
         let rest = crate::granular::apply_to_model(&mut model, params)?;
-        if let Some((k, _)) = rest.first() {
-            return Err(PyTypeError::new_err(format!(
-                "'{k}' is not a parameter of rigid-body scenes (h, theta, tol, max_sweeps, mu, restitution)"
-            )));
-        }
-        build(py, model, resolve_overlaps)
+        let switches = switches_of(rest, Default::default())?;
+        let mut sim = build(py, model, resolve_overlaps)?;
+        sim.scene
+            .world
+            .set_switches(switches)
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        Ok(sim)
     }
 
     /// The scene of a scene file with shaped bodies; `params` as for `from_scene`.
@@ -111,15 +137,11 @@ impl PyRigidSimulation {
             )));
         }
         let rest = crate::granular::apply_to_model(&mut built.model, params)?;
-        if let Some((k, _)) = rest.first() {
-            return Err(PyTypeError::new_err(format!(
-                "'{k}' is not a parameter of rigid-body scenes"
-            )));
-        }
         // the file's [step] switches (gamma, projection, gap_closure, warm_start), as
-        // `coulomb simulate` sets them
+        // `coulomb simulate` sets them, then the keywords'
         let switches = coulomb_granular::scene_file::check_rigid_step(&built.step)
             .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))?;
+        let switches = switches_of(rest, switches)?;
         let mut sim = build(py, built.model, resolve_overlaps)?;
         sim.scene
             .world

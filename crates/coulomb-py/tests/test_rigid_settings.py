@@ -46,3 +46,18 @@ def test_warm_start_false_in_the_file_starts_every_step_cold(tmp_path):
 def test_a_correction_the_rigid_step_has_not_is_refused(tmp_path):
     with pytest.raises(ValueError, match="projection_velocities"):
         _records(tmp_path, 'projection_velocities = "rescale"')
+
+
+def test_the_keywords_warm_start_and_gap_closure_apply_to_a_rigid_scene():
+    from coulomb.granular import Cuboid, Scene, Sphere
+
+    scene = Scene().set_default_law(mu=0.5, restitution=0.0)
+    scene.add_plane((0, 0, 0), (0, 0, 1))
+    scene.add_body(Sphere(0.1), (0, 0, 0.1), density=2500)
+    scene.add_body(Cuboid((0.1, 0.1, 0.1)), (5, 0, 0.1), density=1000)
+    warm = Simulation(scene, gap_closure=False)
+    cold = Simulation(scene, warm_start=False, gap_closure=False)
+    assert all(r["warm_started"] > 0 for r in [warm.step() for _ in range(3)][1:])
+    assert all(cold.step()["warm_started"] == 0 for _ in range(3))
+    with pytest.raises(TypeError, match="warm_start must be a bool"):
+        Simulation(scene, warm_start="no")

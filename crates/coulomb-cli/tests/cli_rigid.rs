@@ -288,12 +288,38 @@ fn a_rigid_run_restarts_to_the_bit() {
     ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("not the scene of the checkpoint"));
+    // and so is the same scene with other `[step]` switches (the checkpoint stores them),
+    // not a copy of it
+    let (same, cold) = (root.join("same.toml"), root.join("cold.toml"));
+    let text = std::fs::read_to_string(&wall).unwrap();
+    std::fs::write(&same, &text).unwrap();
+    ok(&coulomb(&[
+        "simulate",
+        same.to_str().unwrap(),
+        "--restart",
+        ckpt.to_str().unwrap(),
+        "--steps",
+        "1",
+    ]));
+    std::fs::write(
+        &cold,
+        text.replacen("[step]", "[step]\nwarm_start = false", 1),
+    )
+    .unwrap();
+    let o = coulomb(&[
+        "simulate",
+        cold.to_str().unwrap(),
+        "--restart",
+        ckpt.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("not the scene of the checkpoint"));
 }
 
 /// Issues 52 (item 3) and 55 (item 6): a rigid scene with h = 100 s, a cube thrown at
-/// 1e8 m/s, rolling friction or `gamma`/`projection = false` exits 2 naming the setting
-/// (before: h = 100 and the cube ran to the end with every step "converged", exit 0; the
-/// settings were dropped).
+/// 1e8 m/s, rolling friction between the cube and the floor (no ball), γ > 1 or
+/// `projection_velocities = "rescale"` exits 2 naming the setting (before: h = 100 and the
+/// cube ran to the end with every step "converged", exit 0; the settings were dropped).
 #[test]
 fn unsafe_steps_and_unhonoured_settings_exit_2() {
     let dir = temp_dir("rigid-unsafe");
@@ -312,12 +338,16 @@ fn unsafe_steps_and_unhonoured_settings_exit_2() {
             "rolling_friction = 0.5",
         ),
         (
-            cube("h = 0.001\ngamma = 0.5", "", "[0.0, 0.0, 0.0]"),
-            "gamma = 0.5",
+            cube("h = 0.001\ngamma = 2.0", "", "[0.0, 0.0, 0.0]"),
+            "gamma = 2",
         ),
         (
-            cube("h = 0.001\nprojection = false", "", "[0.0, 0.0, 0.0]"),
-            "projection = false",
+            cube(
+                "h = 0.001\nprojection_velocities = \"rescale\"",
+                "",
+                "[0.0, 0.0, 0.0]",
+            ),
+            "projection_velocities = \"rescale\"",
         ),
     ] {
         let path = dir.join("cube.toml");
@@ -327,10 +357,16 @@ fn unsafe_steps_and_unhonoured_settings_exit_2() {
         assert_eq!(o.status.code(), Some(2), "{text}\n{err}");
         assert!(err.contains(words), "{err}");
     }
-    // the same cube at rest with h = 1e-3 runs
+    // the same cube at rest with h = 1e-3 runs, with the `[step]` switches too (issue 52,
+    // item 3: they apply to every scene)
     let path = dir.join("cube.toml");
-    std::fs::write(&path, cube("h = 0.001", "", "[0.0, 0.0, 0.0]")).unwrap();
-    ok(&coulomb(&["simulate", path.to_str().unwrap()]));
+    for step in [
+        "h = 0.001",
+        "h = 0.001\ngamma = 0.5\nprojection = false\ngap_closure = false\nwarm_start = false\nmethod = \"library\"",
+    ] {
+        std::fs::write(&path, cube(step, "", "[0.0, 0.0, 0.0]")).unwrap();
+        ok(&coulomb(&["simulate", path.to_str().unwrap()]));
+    }
 }
 
 /// A scene file with a bad joint exits 2 naming the joint and the field (issue 53); a good

@@ -14,6 +14,7 @@ mod physics;
 mod rigid_contacts;
 mod rigid_inlets;
 mod rigid_scenes;
+mod rigid_settings;
 mod rigid_threads;
 mod rolling;
 mod scene_model;

@@ -74,9 +74,10 @@ fn ball_and_box(pair: &str, step: &str) -> LoadedScene {
         .unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// Issue 52, item 3: settings the rigid-body step cannot honour are refused with a message
-/// naming them (before: rolling_friction 0.5 gave the kinetic energy of 0 to the last digit,
-/// `method`, `relaxation`, `gamma`, `projection` were dropped; `relaxation` now applies).
+/// Issue 52, item 3: the settings a scene with other shapes cannot honour are refused with
+/// a message naming them, the others apply (tests/rigid_settings.rs shows what they do).
+/// Before: rolling_friction 0.5 gave the kinetic energy of 0 to the last digit, `method`,
+/// `relaxation`, `gamma`, `projection` were dropped; then all of them were refused.
 #[test]
 fn settings_a_scene_with_other_shapes_cannot_honour_are_refused() {
     let build = |pair: &str, step: &str| {
@@ -89,36 +90,47 @@ fn settings_a_scene_with_other_shapes_cannot_honour_are_refused() {
     };
     assert!(build("", "").is_ok());
     assert!(build("rolling_friction = 0.0", "").is_ok());
+    // the cuboid lies on the floor with the same material: that pair has no ball
     let e = build("rolling_friction = 0.5", "").unwrap_err();
     assert!(
-        e.contains("rolling_friction = 0.5") && e.contains("'default' and 'default'"),
+        e.contains("rolling_friction = 0.5")
+            && e.contains("'default' and 'default'")
+            && e.contains("body 1 (Cuboid)")
+            && e.contains("obstacle 'floor' (HalfSpace)"),
         "{e}"
     );
-    let e = build("", "method = \"library\"").unwrap_err();
-    assert!(e.contains("method = \"library\""), "{e}");
+    assert!(build("", "method = \"library\"").is_ok());
     // relaxation applies to the rigid Gauss–Seidel as to the spheres' (issue 52)
     assert!(build("", "relaxation = 1.2").is_ok());
     assert!(build("", "relaxation = 1.0").is_ok());
+    // method = "library" with a motor (a bounded row, which only nsgs solves)
+    let mut mill = LoadedScene::load(&scenes_dir().join("ball-mill.toml"))
+        .unwrap()
+        .build(&BuildOptions::default())
+        .unwrap();
+    mill.model.step.method = coulomb_granular::model::StepChoice::Library;
+    let e = RigidScene::new(&mill.model).unwrap_err().to_string();
+    assert!(
+        e.contains("method = \"library\"") && e.contains("joint "),
+        "{e}"
+    );
     let step = |line: &str| {
         let s = ball_and_box("", line);
         let built = s.build(&BuildOptions::default()).unwrap();
         coulomb_granular::scene_file::check_rigid_step(&built.step)
     };
-    assert!(step("").is_ok());
-    assert!(step("gamma = 1.0\nprojection = true").is_ok());
-    for (line, name) in [
-        ("gamma = 0.5", "gamma = 0.5"),
-        ("projection = false", "projection = false"),
-        ("gap_closure = false", "gap_closure = false"),
-        (
-            "projection_velocities = \"inelastic\"",
-            "projection_velocities",
-        ),
-        ("warm_start = false", "warm_start = false"),
+    for line in [
+        "",
+        "gamma = 0.5",
+        "projection = false",
+        "gap_closure = false",
+        "warm_start = false",
+        "projection_velocities = \"positions_only\"",
     ] {
-        let e = step(line).unwrap_err();
-        assert!(e.contains(name), "{e}");
+        assert!(step(line).is_ok(), "{line}");
     }
+    let e = step("projection_velocities = \"inelastic\"").unwrap_err();
+    assert!(e.contains("projection_velocities = \"inelastic\""), "{e}");
 }
 
 /// The shipped pendulum chain (issue 53): 8 links on revolute joints swinging into a brick

@@ -60,23 +60,25 @@ fn build(
 
 /// The rigid scene of a scene file that runs in the rigid-body simulator
 /// ([`BuiltScene::runs_rigid`]), as `coulomb simulate FILE` builds it: its `[step]` settings
-/// checked ([`coulomb_granular::scene_file::check_rigid_step`]), `params` applied on top (as
-/// for `from_scene`), its inlets pouring after each step.
+/// checked and its switches (gamma, projection, gap_closure, warm_start) set
+/// ([`coulomb_granular::scene_file::check_rigid_step`]), `params` applied on top (as for
+/// `from_scene`), its inlets pouring after each step.
 pub(crate) fn from_built(
     py: Python<'_>,
     mut built: BuiltScene,
     params: &Bound<'_, PyDict>,
     resolve_overlaps: Option<usize>,
 ) -> PyResult<PyRigidSimulation> {
-    coulomb_granular::scene_file::check_rigid_step(&built.step)
+    let switches = coulomb_granular::scene_file::check_rigid_step(&built.step)
         .map_err(|e| PyValueError::new_err(format!("{}: {e}", built.path.display())))?;
     let rest = crate::granular::apply_to_model(&mut built.model, params)?;
-    if let Some((k, _)) = rest.first() {
-        return Err(PyTypeError::new_err(format!(
-            "'{k}' is not a parameter of rigid-body scenes"
-        )));
-    }
+    let switches = switches_of(rest, switches)?;
+    let path = built.path.clone();
     let mut sim = build(py, built.model, resolve_overlaps)?;
+    sim.scene
+        .world
+        .set_switches(switches)
+        .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))?;
     sim.pour = built.inlets;
     Ok(sim)
 }
@@ -103,10 +105,35 @@ impl PyRigidSimulation {
     }
 }
 
+/// `rest` (the keywords `warm_start`, `gap_closure`) applied to the switches `w`
+/// (`coulomb_granular::rigid::StepSwitches`); any other keyword refused.
+fn switches_of(
+    rest: Vec<(String, Bound<'_, PyAny>)>,
+    mut w: coulomb_granular::rigid::StepSwitches,
+) -> PyResult<coulomb_granular::rigid::StepSwitches> {
+    for (k, v) in rest {
+        let b = || {
+            v.extract::<bool>()
+                .map_err(|_| PyTypeError::new_err(format!("{k} must be a bool")))
+        };
+        match k.as_str() {
+            "warm_start" => w.warm_start = b()?,
+            "gap_closure" => w.gap_closure = b()?,
+            _ => {
+                return Err(PyTypeError::new_err(format!(
+                    "'{k}' is not a parameter of rigid-body scenes (h, theta, tol, method, max_sweeps, relaxation, mu, restitution, rolling_friction, warm_start, gap_closure)"
+                )))
+            }
+        }
+    }
+    Ok(w)
+}
+
 #[pymethods]
 impl PyRigidSimulation {
     /// A scene built in Python (as `_Simulation.from_scene`); `params` may set the step
-    /// settings h, theta, tol, max_sweeps, relaxation and the default law mu, restitution.
+    /// settings h, theta, tol, method, max_sweeps, relaxation, the default law mu,
+    /// restitution, rolling_friction, and the switches warm_start, gap_closure.
     /// `inlets` (the JSON list of `Scene._inlets`) pour after each step; with some, the spheres of
     /// the batches become bodies (in the same order), after which the poured ones are
     /// appended, as a scene file's are.
@@ -148,12 +175,12 @@ impl PyRigidSimulation {
         model.step.h = RIGID_H;
         model.step.tol = RIGID_TOL;
         let rest = crate::granular::apply_to_model(&mut model, params)?;
-        if let Some((k, _)) = rest.first() {
-            return Err(PyTypeError::new_err(format!(
-                "'{k}' is not a parameter of rigid-body scenes (h, theta, tol, max_sweeps, relaxation, mu, restitution)"
-            )));
-        }
+        let switches = switches_of(rest, Default::default())?;
         let mut sim = build(py, model, resolve_overlaps)?;
+        sim.scene
+            .world
+            .set_switches(switches)
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
         sim.pour = pour;
         Ok(sim)
     }
@@ -347,12 +374,12 @@ impl PyRigidSimulation {
         d.set_item("mu", law.mu)?;
         d.set_item("rolling_friction", law.rolling_friction)?;
         d.set_item("warm_start", s.warm_start)?;
-        d.set_item("gap_closure", true)?;
+        d.set_item("gap_closure", s.gap_closure)?;
         d.set_item(
             "projection_velocities",
             s.position_correction.then_some("positions_only"),
         )?;
-        d.set_item("method", "nsgs")?;
+        d.set_item("method", if s.library_only { "library" } else { "nsgs" })?;
         d.set_item("tol", step.tol)?;
         d.set_item("max_sweeps", step.max_sweeps)?;
         d.set_item("relaxation", step.relaxation)?;
@@ -360,25 +387,33 @@ impl PyRigidSimulation {
         Ok(d)
     }
 
-    /// Changes h, theta, tol, max_sweeps, relaxation and the default law (mu, restitution)
-    /// for the following steps: the scene's model takes them and the world is rebuilt from it
-    /// with its state at t_k (the round trip of a checkpoint, what a restart does), so that
-    /// its checks apply and its checkpoints hold them. Refused, nothing changed, as the
-    /// constructor refuses them.
+    /// Changes the settings of `from_scene` (h, theta, tol, method, max_sweeps, relaxation,
+    /// the default law mu, restitution, rolling_friction, and the switches warm_start,
+    /// gap_closure) for the following steps: the scene's model takes them and the world is
+    /// rebuilt from it with its state at t_k (the round trip of a checkpoint, what a restart
+    /// does), so that its checks apply and its checkpoints hold them. Refused, nothing
+    /// changed, as the constructor refuses them.
     #[pyo3(signature = (**params))]
     fn set_params(&mut self, params: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
         let Some(kw) = params else { return Ok(()) };
         let mut model = self.scene.model.clone();
-        if let Some((k, _)) = crate::granular::apply_to_model(&mut model, kw)?.first() {
-            return Err(PyTypeError::new_err(format!(
-                "'{k}' is not a parameter of rigid-body scenes (h, theta, tol, max_sweeps, relaxation, mu, restitution)"
-            )));
-        }
+        let rest = crate::granular::apply_to_model(&mut model, kw)?;
+        let switches = switches_of(rest, self.scene.world.switches())?;
         let old = std::mem::replace(&mut self.scene.model, model);
         let rebuilt = self
             .scene
             .checkpoint_bytes()
-            .and_then(|b| RigidScene::from_checkpoint_bytes("set_params", b));
+            .and_then(|b| RigidScene::from_checkpoint_bytes("set_params", b))
+            .and_then(|mut scene| {
+                scene.world.set_switches(switches).map_err(|e| {
+                    CheckpointError::Invalid {
+                        path: "set_params".into(),
+                        location: "switches".into(),
+                        detail: e.to_string(),
+                    }
+                })?;
+                Ok(scene)
+            });
         match rebuilt {
             Ok(scene) => {
                 self.scene = scene;

@@ -18,7 +18,10 @@
 //! - the last step's contacts (`/json/contacts`, read by the outputs only);
 //! - per joint the last step's impulses by row slot, the next step's warm start, and its
 //!   force and torque (`/joints/…`; version 2, absent from version-1 files, which are still
-//!   read when their scene has no joint).
+//!   read when their scene has no joint);
+//! - the step's switches that the model does not hold (`/json/switches`,
+//!   [`crate::rigid::StepSwitches`]: γ, projection, gap closure, warm start; version 3, the
+//!   defaults for older files, which had no other).
 //!
 //! Not stored: the step reports and the last step's problem (reports of the steps already
 //! taken). A sphere-only scene has its own checkpoint ([`crate::checkpoint`]); the `format`
@@ -42,6 +45,7 @@
 //! | `/json/model`, `/json/contacts`, `/json/detector` | UTF-8 string | scalar |
 //! | `/joints/warm_start` | f64, by row slot | (joints, `SLOTS`) |
 //! | `/joints/force` | f64, force and torque, world axes | (joints, 6) |
+//! | `/json/switches` | UTF-8 string | scalar |
 
 use crate::checkpoint::{
     check_rows, encode_entries, index, json_of, open, read_checked, read_file, write_file,
@@ -57,9 +61,10 @@ use std::path::Path;
 
 /// The `format` attribute of a rigid-scene checkpoint.
 pub const FORMAT_NAME: &str = "coulomb-rigid-checkpoint";
-/// The `format_version` attribute written. Version 1 (before joints were stored) is still
-/// read, for scenes without joints; other versions are refused.
-pub const FORMAT_VERSION: i64 = 2;
+/// The `format_version` attribute written. Versions 2 (before the switches were stored) and
+/// 1 (before joints were, for scenes without joints) are still read; other versions are
+/// refused.
+pub const FORMAT_VERSION: i64 = 3;
 
 /// Columns of `/warm_start/key`.
 const KEY_COLUMNS: usize = 8;
@@ -102,6 +107,12 @@ fn entries(model: &SceneModel, state: &RigidState) -> Result<Vec<Entry>, Checkpo
         ),
         ("json/contacts", 0, Data::Str(contacts)),
         ("json/detector", 0, Data::Str(state.detector.clone())),
+        // with the other json/ datasets: the writer groups datasets by their first component
+        (
+            "json/switches",
+            0,
+            Data::Str(json_of("the step's switches", &state.switches)?),
+        ),
         (
             "joints/warm_start",
             SLOTS,
@@ -161,7 +172,7 @@ fn keys(r: &Reader<'_>, raw: &[i64]) -> Result<Vec<ContactKey>, CheckpointError>
 }
 
 /// The layout of a checkpoint of `version` (paths, columns, types): version 1 has no
-/// `/joints/…` datasets.
+/// `/joints/…` datasets, versions 1 and 2 no `/json/switches`.
 fn layout(version: i64) -> Result<Vec<Entry>, CheckpointError> {
     let empty = RigidState {
         time: 0.0,
@@ -175,18 +186,19 @@ fn layout(version: i64) -> Result<Vec<Entry>, CheckpointError> {
         detector: String::new(),
         joint_warm: Vec::new(),
         joint_forces: Vec::new(),
+        switches: Default::default(),
     };
     let mut all = entries(&SceneModel::default(), &empty)?;
-    if version == 1 {
-        all.retain(|(p, _, _)| !p.starts_with("joints/"));
-    }
+    all.retain(|(p, _, _)| {
+        (version > 1 || !p.starts_with("joints/")) && (version > 2 || *p != "json/switches")
+    });
     Ok(all)
 }
 
 fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
-    let (read, version) = match read_checked(r, FORMAT_NAME, FORMAT_VERSION, &layout(2)?) {
-        Err(CheckpointError::Version { found: 1, .. }) => {
-            (read_checked(r, FORMAT_NAME, 1, &layout(1)?)?, 1)
+    let (read, version) = match read_checked(r, FORMAT_NAME, FORMAT_VERSION, &layout(3)?) {
+        Err(CheckpointError::Version { found, .. }) if found == 1 || found == 2 => {
+            (read_checked(r, FORMAT_NAME, found, &layout(found)?)?, found)
         }
         other => (other?, FORMAT_VERSION),
     };
@@ -233,6 +245,11 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
     let (dp, detector) = match c.entries.next() {
         Some((p, _, Data::Str(s))) => (p, s),
         _ => return Err(r.corrupt("json/detector", "expected a string")),
+    };
+    let switches: crate::rigid::StepSwitches = if version > 2 {
+        c.json()?
+    } else {
+        Default::default()
     };
     let (joint_warm, joint_forces) = if version == 1 {
         if !model.joints.is_empty() {
@@ -298,6 +315,7 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
         detector,
         joint_warm,
         joint_forces,
+        switches,
     };
     scene.world.restore(state).map_err(|e| {
         // what `restore` still checks: fixed bodies at rest ("body i …"), warm-start and
@@ -310,6 +328,8 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
             "json/contacts"
         } else if e.starts_with("joints") {
             "joints/warm_start"
+        } else if e.contains("gamma") {
+            "json/switches"
         } else {
             dp
         };
@@ -455,6 +475,29 @@ mod tests {
     }
 
     #[test]
+    fn the_step_switches_are_restored() {
+        let mut a = scene(MIXED);
+        let switches = crate::rigid::StepSwitches {
+            gamma: 0.5,
+            projection: false,
+            gap_closure: false,
+            warm_start: false,
+        };
+        a.world.set_switches(switches).expect("switches");
+        for _ in 0..10 {
+            a.step().expect("step");
+        }
+        let bytes = a.checkpoint_bytes().expect("checkpoint");
+        let mut b = RigidScene::from_checkpoint_bytes("switches.h5", bytes).expect("load");
+        assert_eq!(b.world.switches(), switches);
+        for _ in 0..10 {
+            assert_eq!(a.step().expect("a").warm_started, 0);
+            b.step().expect("b");
+        }
+        assert_eq!(snapshot(&b), snapshot(&a));
+    }
+
+    #[test]
     fn the_shipped_wall_restarts_to_the_bit() {
         let path = concat!(
             env!("CARGO_MANIFEST_DIR"),
@@ -522,14 +565,26 @@ mod tests {
         for _ in 0..5 {
             a.step().expect("step");
         }
+        // the datasets of a version-`v` file
+        let older = |v: i64, e: Vec<Entry>| -> Vec<Entry> {
+            e.into_iter()
+                .filter(|(p, _, _)| {
+                    (v > 1 || !p.starts_with("joints/")) && (v > 2 || *p != "json/switches")
+                })
+                .collect()
+        };
         let state = a.world.state().expect("state");
-        let mut v1 = entries(&a.model, &state).expect("entries");
-        v1.retain(|(p, _, _)| !p.starts_with("joints/"));
+        let v1 = older(1, entries(&a.model, &state).expect("entries"));
         let bytes = encode_entries(FORMAT_NAME, 1, &v1).expect("v1 bytes");
         let mut b = RigidScene::from_checkpoint_bytes("v1.h5", bytes).expect("v1 loads");
+        let v2 = older(2, entries(&a.model, &state).expect("entries"));
+        let bytes = encode_entries(FORMAT_NAME, 2, &v2).expect("v2 bytes");
+        let mut b2 = RigidScene::from_checkpoint_bytes("v2.h5", bytes).expect("v2 loads");
         a.step().expect("a");
         b.step().expect("b");
+        b2.step().expect("b2");
         assert_eq!(snapshot(&b), snapshot(&a));
+        assert_eq!(snapshot(&b2), snapshot(&a));
         // a version-1 file whose model has joints cannot be continued to the bit
         let path = concat!(
             env!("CARGO_MANIFEST_DIR"),
@@ -539,21 +594,20 @@ mod tests {
         let built = loaded.build(&Default::default()).expect("build");
         let c = RigidScene::new(&built.model).expect("scene");
         let state = c.world.state().expect("state");
-        let mut v1 = entries(&c.model, &state).expect("entries");
-        v1.retain(|(p, _, _)| !p.starts_with("joints/"));
+        let v1 = older(1, entries(&c.model, &state).expect("entries"));
         let bytes = encode_entries(FORMAT_NAME, 1, &v1).expect("v1 bytes");
         let e = RigidScene::from_checkpoint_bytes("v1j.h5", bytes).expect_err("joints in v1");
         assert!(e.to_string().contains("json/model"), "{e}");
         // and another version is refused
         let bytes = encode_entries(
             FORMAT_NAME,
-            3,
+            4,
             &entries(&a.model, &a.world.state().expect("s")).expect("e"),
         )
-        .expect("v3 bytes");
-        let e = RigidScene::from_checkpoint_bytes("v3.h5", bytes).expect_err("v3");
+        .expect("v4 bytes");
+        let e = RigidScene::from_checkpoint_bytes("v4.h5", bytes).expect_err("v4");
         assert!(
-            matches!(e, CheckpointError::Version { found: 3, .. }),
+            matches!(e, CheckpointError::Version { found: 4, .. }),
             "{e}"
         );
     }

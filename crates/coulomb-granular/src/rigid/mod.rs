@@ -222,6 +222,10 @@ pub struct RigidSettings {
     /// hand a step that Gauss–Seidel leaves above the tolerance to `coulomb::solver` on
     /// the step's global problem; default true
     pub library_finish: bool,
+    /// solve every step's problem (2.10) by `coulomb::solver` alone, from the warm start,
+    /// without Gauss–Seidel (a scene's `method = "library"`, as the sphere engine's
+    /// [`crate::StepMethod::Library`]); default false
+    pub library_only: bool,
     /// settings of the library's solver (its `tol` is replaced by `tolerance`)
     pub solver: coulomb::solver::Settings,
     /// γ ∈ [0, 1] of the activation rule g + γ h min(u_N, 0) ≤ δ; default 1
@@ -234,6 +238,10 @@ pub struct RigidSettings {
     /// warm start each contact from the impulse of the same manifold point (parry's
     /// feature ids) at the previous step; default true
     pub warm_start: bool,
+    /// add (1 − e) g_k / h to the normal row of a pair at a positive gap g_k that gravity's
+    /// look-ahead made active ([`crate::assembly::gap_closure`]'s rule; a scene's
+    /// `gap_closure`); default true
+    pub gap_closure: bool,
     /// correct the positions after each step when a contact ends deeper than 1e-3 of the
     /// thinnest half width, down to 1e-4 of it (the sphere scenes' projection,
     /// [`step`]'s `correct_positions`); positions only, velocities and impulses untouched;
@@ -256,13 +264,44 @@ impl Default for RigidSettings {
             relaxation: 1.5,
             time_limit: Some(std::time::Duration::from_secs(60)),
             library_finish: true,
+            library_only: false,
             solver: coulomb::solver::Settings::default(),
             activation_gamma: 1.0,
             activation_delta: 1e-8,
             max_initial_penetration: 1e-8,
             warm_start: true,
+            gap_closure: true,
             position_correction: true,
             keep_problem: true,
+        }
+    }
+}
+
+/// The `[step]` switches of a scene file that its model does not hold, as the rigid step
+/// honours them ([`RigidWorld::set_switches`]; docs/granular.md, "`[step]`"): γ of the
+/// activation rule (`gamma`), the position correction (`projection`), the gap closure
+/// (`gap_closure`) and the warm start (`warm_start`). Rigid checkpoints store them.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StepSwitches {
+    /// [`RigidSettings::activation_gamma`]
+    pub gamma: f64,
+    /// [`RigidSettings::position_correction`]
+    pub projection: bool,
+    /// [`RigidSettings::gap_closure`]
+    pub gap_closure: bool,
+    /// [`RigidSettings::warm_start`]
+    pub warm_start: bool,
+}
+
+impl Default for StepSwitches {
+    fn default() -> Self {
+        let s = RigidSettings::default();
+        Self {
+            gamma: s.activation_gamma,
+            projection: s.position_correction,
+            gap_closure: s.gap_closure,
+            warm_start: s.warm_start,
         }
     }
 }

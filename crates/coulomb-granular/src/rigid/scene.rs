@@ -13,8 +13,10 @@
 //!   container, a spherical container, a rectangle and a triangle mesh the triangle mesh of
 //!   their surface (the one the output draws). The infinite `cylinder_inside` (rotating drum)
 //!   is refused: use a finite cylinder.
-//! - the step settings: h, θ, the tolerance and the sweep cap of the model's
-//!   [`crate::StepSettings`], the model's gravity; the rest [`RigidSettings::default`].
+//! - the step settings: h, θ, the tolerance, the sweep cap, the relaxation and the method of
+//!   the model's [`crate::StepSettings`], the model's gravity; the rest
+//!   [`RigidSettings::default`] (a scene file's `[step]` switches are set after,
+//!   [`crate::rigid::RigidWorld::set_switches`]).
 //!
 //! The bodies keep the model's order (`bodies`, then the spheres of each batch).
 
@@ -59,32 +61,21 @@ fn invalid(what: &str, reason: impl Into<String>) -> SceneError {
 }
 
 /// Refuses the settings of `model` that the rigid-body step cannot honour (issue 52, item 3:
-/// a setting means the same in every scene, or is refused, never dropped): rolling friction
-/// (not modelled between bodies of a scene with other shapes; the refusal names the
-/// material pair), `method = "library"` (the rigid step is Gauss–Seidel finished by the
-/// library where it stalls: `nsgs`). `relaxation` and `max_sweeps` apply as in sphere scenes
-/// ([`RigidSettings::relaxation`], [`RigidSettings::max_sweeps`]).
-fn check_settings(
-    model: &SceneModel,
-    table: &crate::world::MaterialTable,
-) -> Result<(), SceneError> {
-    let n = table.names.len();
-    for a in 0..n {
-        for b in a..n {
-            if let Some(law) = table.law(a as u32, b as u32) {
-                if law.rolling_friction != 0.0 {
-                    return Err(SceneError::InvalidStep(format!(
-                        "rolling_friction = {} between materials '{}' and '{}' cannot apply: rolling resistance is not modelled in scenes with bodies of other shapes than spheres; set it to 0 for this pair or use spheres only",
-                        law.rolling_friction, table.names[a], table.names[b]
-                    )));
-                }
-            }
-        }
-    }
-    if model.step.method != crate::model::StepChoice::Nsgs {
-        return Err(SceneError::InvalidStep(
-            "method = \"library\" cannot apply to a scene with bodies of other shapes than spheres: its steps are solved by nsgs, finished by the library where it stalls; use method = \"nsgs\"".into(),
-        ));
+/// a setting means the same in every scene, or is refused, never dropped): `method =
+/// "library"` with a joint that has limits, a motor or friction (bounded rows, which the
+/// library does not solve). `method = "library"` otherwise ([`RigidSettings::library_only`]),
+/// `relaxation` and `max_sweeps` apply as in sphere scenes; rolling friction applies to the
+/// contacts of balls ([`RigidWorld`] refuses it between two bodies neither of which is a ball,
+/// naming the materials and the shapes).
+fn check_settings(model: &SceneModel) -> Result<(), SceneError> {
+    let library = model.step.method == crate::model::StepChoice::Library;
+    let bounded = |j: &crate::rigid::joints::JointDesc| {
+        j.limits.is_some() || j.motor.is_some() || j.friction.is_some()
+    };
+    if let Some(k) = model.joints.iter().position(bounded).filter(|_| library) {
+        return Err(SceneError::InvalidStep(format!(
+            "method = \"library\" cannot apply to joint {k}: its limits, motor or friction are bounded rows that only nsgs solves (the library solves contacts and equality constraints); use method = \"nsgs\""
+        )));
     }
     Ok(())
 }
@@ -377,7 +368,7 @@ impl RigidScene {
         };
         let sphere_world = spheres_only.world()?;
         let (table, _) = model.material_table()?;
-        check_settings(model, &table)?;
+        check_settings(model)?;
         let material = |what: &str, name: &str| material_index(&table, what, name);
         let mut bodies = Vec::new();
         let mut shapes = Vec::new();
@@ -449,6 +440,7 @@ impl RigidScene {
             tolerance: model.step.tol,
             max_sweeps: model.step.max_sweeps,
             relaxation: model.step.relaxation,
+            library_only: model.step.method == crate::model::StepChoice::Library,
             ..RigidSettings::default()
         };
         let (world, relaxed) = match overlaps {

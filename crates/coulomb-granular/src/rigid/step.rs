@@ -26,7 +26,10 @@
 //! `stall_window` sweeps, or after `max_sweeps`, the step's global problem goes to
 //! `coulomb::solver::solve_with_guess` from Gauss–Seidel's iterate, the same hand-over as the
 //! sphere step's. The result with the smaller error on the stored problem is kept, and the
-//! step's [`RigidStatus`] says whether it is ≤ the tolerance.
+//! step's [`RigidStatus`] says whether it is ≤ the tolerance. With
+//! [`RigidSettings::library_only`] (`method = "library"`) the library's solver alone solves
+//! each step. Contacts with rolling resistance alternate that solve with passes over their
+//! rolling impulses (`step/rolling.rs`).
 
 use super::body::{
     free_rotation, integrate_orientation, rotation_from_wxyz, rotation_to_wxyz, BodyState,
@@ -37,7 +40,7 @@ use super::parry::math::{Pose, Rotation, Vector};
 use super::parry::shape::SharedShape;
 use super::{
     RigidBodyDesc, RigidContact, RigidError, RigidObstacle, RigidPartner, RigidSettings,
-    RigidStatus, RigidStepReport, QUATERNION_TOLERANCE,
+    RigidStatus, RigidStepReport, StepSwitches, QUATERNION_TOLERANCE,
 };
 use crate::world::{MaterialTable, Motion};
 use coulomb::problem::GlobalProblem;
@@ -46,6 +49,7 @@ use std::time::Instant;
 
 pub(crate) mod equality;
 mod relax;
+mod rolling;
 pub use equality::{DEPENDENT_PIVOT, DROPPED_PIVOT};
 pub use relax::{Overlaps, Relaxed};
 
@@ -104,6 +108,8 @@ pub(crate) struct RigidState {
     pub joint_warm: Vec<[f64; SLOTS]>,
     /// each joint's last force and torque (read by the outputs)
     pub joint_forces: Vec<[f64; 6]>,
+    /// the settings' switches ([`RigidWorld::switches`])
+    pub switches: StepSwitches,
 }
 
 fn v3(a: [f64; 3]) -> Vector {
@@ -348,6 +354,7 @@ impl RigidWorld {
             half_width,
         };
         world.check_time_step()?;
+        world.check_rolling()?;
         world.check_overlaps()?;
         Ok(world)
     }
@@ -436,6 +443,13 @@ impl RigidWorld {
             self.bodies.push(state);
             self.half_width.push(w);
             self.shapes.push(shape);
+        }
+        if let Err(e) = self.check_rolling() {
+            self.dof.truncate(first);
+            self.bodies.truncate(first);
+            self.half_width.truncate(first);
+            self.shapes.truncate(first);
+            return Err(e);
         }
         Ok(first..self.bodies.len())
     }
@@ -565,6 +579,7 @@ impl RigidWorld {
             detector: self.detector.to_json()?,
             joint_warm: self.joint_warm.clone(),
             joint_forces: self.joint_forces.clone(),
+            switches: self.switches(),
         })
     }
 
@@ -635,6 +650,7 @@ impl RigidWorld {
             return Err(format!("joints: row {j} is not finite"));
         }
         let detector = Detector::from_json(&s.detector, n, no)?;
+        self.set_switches(s.switches).map_err(|e| e.to_string())?;
         for (i, b) in self.bodies.iter_mut().enumerate() {
             b.x = v3(s.x[i]);
             b.q = rotation_from_wxyz(s.q[i]);
@@ -671,6 +687,32 @@ impl RigidWorld {
     /// The settings.
     pub fn settings(&self) -> &RigidSettings {
         &self.settings
+    }
+
+    /// The switches of the settings that a scene file's `[step]` sets ([`StepSwitches`]).
+    pub fn switches(&self) -> StepSwitches {
+        let s = &self.settings;
+        StepSwitches {
+            gamma: s.activation_gamma,
+            projection: s.position_correction,
+            gap_closure: s.gap_closure,
+            warm_start: s.warm_start,
+        }
+    }
+
+    /// Sets the switches of the settings (checked as [`RigidWorld::new`] checks them: γ in
+    /// [0, 1]); they apply from the next step.
+    pub fn set_switches(&mut self, w: StepSwitches) -> Result<(), RigidError> {
+        let settings = RigidSettings {
+            activation_gamma: w.gamma,
+            position_correction: w.projection,
+            gap_closure: w.gap_closure,
+            warm_start: w.warm_start,
+            ..self.settings.clone()
+        };
+        check_settings(&settings)?;
+        self.settings = settings;
+        Ok(())
     }
     /// Origins of the bodies' shape frames, world.
     pub fn positions(&self) -> Vec<[f64; 3]> {
@@ -911,7 +953,7 @@ impl RigidWorld {
                 (blk(Some(j.desc.body_a)), blk(j.desc.body_b), rows)
             })
             .collect();
-        let lambda0: Vec<f64> = self
+        let mut lambda0: Vec<f64> = self
             .joints
             .iter()
             .zip(&joint_blocks)
@@ -931,11 +973,23 @@ impl RigidWorld {
                 })
             })
             .collect();
-        let problem = nsgs::Problem::new(rows, mass, f)
+        let rolling_rows = if self.materials.any_rolling() {
+            let row = |(i, c): (usize, &ContactPoint)| self.rolling_row(c).map(|row| (i, row));
+            active.iter().enumerate().filter_map(row).collect()
+        } else {
+            Vec::new()
+        };
+        let rolling = rolling::Rolling::new(rolling_rows, &mass);
+        let f0 = if rolling.is_empty() {
+            Vec::new()
+        } else {
+            f.clone()
+        };
+        let mut problem = nsgs::Problem::new(rows, mass, f)
             .and_then(|p| p.with_joints(joint_blocks))
             .map_err(|detail| RigidError::Solve { step: k, detail })?;
         let mut warm_started = 0;
-        let r0: Vec<f64> = active
+        let mut r0: Vec<f64> = active
             .iter()
             .flat_map(|c| {
                 let p = if self.settings.warm_start {
@@ -965,53 +1019,99 @@ impl RigidWorld {
                 )
             } else {
                 let s = &self.settings;
-                let sol = problem.solve(
-                    &r0,
-                    &lambda0,
-                    nsgs::Rule {
-                        tol: s.tolerance,
-                        max_sweeps: s.max_sweeps,
-                        stall_window: s.stall_window,
-                        relaxation: s.relaxation,
-                        time_limit: s.time_limit,
-                    },
-                );
-                let mut lambda = sol.lambda;
-                let mut best = (sol.r, sol.error, "nsgs");
-                let library = s.library_finish;
-                let global = if library && sol.error > s.tolerance || s.keep_problem {
-                    Some(
-                        problem
-                            .to_global_with(&lambda)
-                            .map_err(|e| RigidError::Solve {
-                                step: k,
-                                detail: format!("global problem: {e}"),
-                            })?,
-                    )
-                } else {
-                    None
-                };
-                if sol.error > s.tolerance && library {
-                    if let Some(g) = &global {
-                        if let Some((r_lib, l_lib, err_lib)) =
-                            library_finish(g, &problem, &best.0, &lambda, s)
-                        {
-                            if err_lib < best.1 || !best.1.is_finite() {
-                                best = (r_lib, err_lib, "nsgs+library");
-                                lambda = l_lib;
+                // rolling resistance: the solve below alternates with passes over the rolling
+                // impulses y (given impulses of the problem solved, `rolling` module)
+                let mut y = vec![[0.0; 3]; rolling.rows.len()];
+                let (mut passes, mut total_sweeps) = (0, 0);
+                let deadline = coulomb::deadline::deadline(Instant::now(), s.time_limit);
+                let solved = loop {
+                    // `library_only` (method = "library"): no Gauss–Seidel, the library's solver
+                    // from the warm start (r0, λ0) unless that already solves the problem
+                    let (mut best, mut lambda, sweeps) = if s.library_only {
+                        let err = problem.error_with(&r0, &lambda0);
+                        ((r0.clone(), err, "library"), lambda0.clone(), 0)
+                    } else {
+                        let sol = problem.solve(
+                            &r0,
+                            &lambda0,
+                            nsgs::Rule {
+                                tol: s.tolerance,
+                                max_sweeps: s.max_sweeps,
+                                stall_window: s.stall_window,
+                                relaxation: s.relaxation,
+                                time_limit: s.time_limit,
+                            },
+                        );
+                        ((sol.r, sol.error, "nsgs"), sol.lambda, sol.sweeps)
+                    };
+                    let library = s.library_finish || s.library_only;
+                    let global =
+                        if library && best.1 > s.tolerance || s.keep_problem {
+                            Some(problem.to_global_with(&lambda).map_err(|e| {
+                                RigidError::Solve {
+                                    step: k,
+                                    detail: format!("global problem: {e}"),
+                                }
+                            })?)
+                        } else {
+                            None
+                        };
+                    if best.1 > s.tolerance && library {
+                        if let Some(g) = &global {
+                            if let Some((r_lib, l_lib, err_lib)) =
+                                library_finish(g, &problem, &best.0, &lambda, s)
+                            {
+                                if err_lib < best.1 || !best.1.is_finite() {
+                                    let how = if s.library_only {
+                                        "library"
+                                    } else {
+                                        "nsgs+library"
+                                    };
+                                    best = (r_lib, err_lib, how);
+                                    lambda = l_lib;
+                                }
                             }
                         }
                     }
-                }
-                self.last_problem = if s.keep_problem { global } else { None };
-                let (r, error, method) = best;
+                    self.last_problem = if s.keep_problem { global } else { None };
+                    total_sweeps += sweeps;
+                    if rolling.is_empty() {
+                        break (best, lambda);
+                    }
+                    best.1 = rolling.error(&problem, &best.0, &lambda, &y);
+                    passes += 1;
+                    let late = deadline.is_some_and(|d| Instant::now() >= d);
+                    if best.1 <= s.tolerance
+                        || !best.1.is_finite()
+                        || passes >= rolling::MAX_PASSES
+                        || late
+                    {
+                        break (best, lambda);
+                    }
+                    let mut v = problem.velocities_with(&best.0, &lambda);
+                    rolling.sweep(&problem.mass, &mut v, &best.0, &mut y);
+                    let joints = problem
+                        .joints
+                        .iter()
+                        .map(|jb| (jb.a, jb.b, jb.rows.clone()))
+                        .collect();
+                    problem = nsgs::Problem::new(
+                        problem.rows.clone(),
+                        problem.mass.clone(),
+                        rolling.momenta(&f0, &y),
+                    )
+                    .and_then(|p| p.with_joints(joints))
+                    .map_err(|detail| RigidError::Solve { step: k, detail })?;
+                    (r0, lambda0) = (best.0, lambda);
+                };
+                let ((r, error, method), lambda) = solved;
                 let v = problem.velocities_with(&r, &lambda);
                 let status = if error <= s.tolerance {
                     RigidStatus::Converged
                 } else {
                     RigidStatus::NotConverged
                 };
-                (r, lambda, v, status, error, sol.sweeps, method)
+                (r, lambda, v, status, error, total_sweeps, method)
             };
         if v.iter().flatten().any(|x| !x.is_finite())
             || r.iter().chain(&lambda).any(|x| !x.is_finite())
@@ -1188,6 +1288,96 @@ impl RigidWorld {
         })
     }
 
+    /// The rolling-resistance row of manifold point `c` ([`rolling`]): J_R = ±R_e (Rᵀ t)
+    /// for t = (t₁, t₂, n) on the rotational dofs of A (+) and B (−), w_R = −R_e t·ω_B of a
+    /// rotating obstacle, μ_r in `mu`; None when the pair's μ_r is 0 or no side moves. R_e =
+    /// R_A R_B / (R_A + R_B) between two balls, else the ball's radius (a pair without a ball
+    /// is refused by [`RigidWorld::check_rolling`]).
+    fn rolling_row(&self, c: &ContactPoint) -> Option<nsgs::Row> {
+        let radius = |i: usize| self.shapes[i].as_ball().map(|b| b.radius);
+        let a = &self.bodies[c.a];
+        let (material, rb, omega_b) = match c.b {
+            RigidPartner::Body(j) => (self.bodies[j].material, radius(j), Vector::ZERO),
+            RigidPartner::Obstacle(o) => {
+                let ob = &self.obstacles[o];
+                let w = match &ob.motion {
+                    Motion::Rotate { axis, omega, .. } => v3(axis.to_array()) * *omega,
+                    _ => Vector::ZERO,
+                };
+                (ob.material, None, w)
+            }
+        };
+        let mu_r = self.materials.law(a.material, material)?.rolling_friction;
+        let re = match (radius(c.a), rb) {
+            (Some(x), Some(y)) => x * y / (x + y),
+            (Some(x), None) | (None, Some(x)) => x,
+            (None, None) => return None,
+        };
+        let frame = [c.t1, c.t2, c.normal];
+        let side = |i: usize, sign: f64| -> Option<(usize, [[f64; 6]; 3])> {
+            let b = &self.bodies[i];
+            let jac = std::array::from_fn(|k| {
+                let t = b.q.conjugate() * (sign * re * frame[k]);
+                [0.0, 0.0, 0.0, t.x, t.y, t.z]
+            });
+            (!b.fixed).then(|| (self.dof[i].unwrap_or(0), jac))
+        };
+        let row = nsgs::Row {
+            a: side(c.a, 1.0),
+            b: match c.b {
+                RigidPartner::Body(j) => side(j, -1.0),
+                RigidPartner::Obstacle(_) => None,
+            },
+            w: std::array::from_fn(|k| -re * frame[k].dot(omega_b)),
+            mu: mu_r,
+        };
+        (mu_r > 0.0 && (row.a.is_some() || row.b.is_some())).then_some(row)
+    }
+
+    /// Refuses rolling friction (μ_r ≠ 0) between two bodies of which neither is a ball, or
+    /// between a body that is not a ball and an obstacle: rolling resistance is defined with a
+    /// ball's radius as lever arm (docs/granular.md, "Rolling resistance"). The error names
+    /// the materials and the shapes of the first such pair.
+    fn check_rolling(&self) -> Result<(), RigidError> {
+        // the first two bodies of each material that are not balls
+        let mut of: BTreeMap<u32, Vec<usize>> = BTreeMap::new();
+        for (i, (b, s)) in self.bodies.iter().zip(&self.shapes).enumerate() {
+            if s.as_ball().is_none() {
+                let v = of.entry(b.material).or_default();
+                if v.len() < 2 {
+                    v.push(i);
+                }
+            }
+        }
+        let body = |i: usize| format!("body {i} ({:?})", self.shapes[i].shape_type());
+        for (&ma, bodies) in &of {
+            let i = bodies[0];
+            let others = of
+                .iter()
+                .filter_map(|(&mb, js)| js.iter().find(|&&j| j != i).map(|&j| (mb, body(j))))
+                .chain(self.obstacles.iter().map(|o| {
+                    let what = format!("obstacle '{}' ({:?})", o.name, o.shape.shape_type());
+                    (o.material, what)
+                }));
+            for (mb, other) in others {
+                let mu_r = self
+                    .materials
+                    .law(ma, mb)
+                    .map_or(0.0, |l| l.rolling_friction);
+                if mu_r != 0.0 {
+                    let name = |m: u32| self.materials.names.get(m as usize).cloned();
+                    return Err(RigidError::Settings(format!(
+                        "rolling_friction = {mu_r} between materials '{}' and '{}' cannot apply between {} and {other}: rolling resistance is defined for contacts with a ball (its radius is the lever arm); set it to 0 for this pair of materials or give these bodies another material",
+                        name(ma).unwrap_or_default(),
+                        name(mb).unwrap_or_default(),
+                        body(i)
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// The row of manifold point `c` (Jacobians, w, μ), its normal velocity u_{N,k} at t_k
     /// and u_{N,free} of the free motion (gravity and free rotation).
     fn row(
@@ -1260,7 +1450,7 @@ impl RigidWorld {
         w[0] += crate::assembly::impact_offset(e, u_nk);
         // gap closure of a pair that gravity's look-ahead made active (no hovering)
         let g = self.gravity.length();
-        if c.gap > 0.0 && u_nk >= -2.0 * h * g {
+        if self.settings.gap_closure && c.gap > 0.0 && u_nk >= -2.0 * h * g {
             w[0] += (1.0 - e).clamp(0.0, 1.0) * c.gap / h;
         }
         let row = nsgs::Row {
@@ -1431,7 +1621,9 @@ pub fn obstacle_pose(motion: &Motion, base: &Pose, t: f64) -> Pose {
 /// the stored problem) of the better one, or None if both refused. Cold first because the
 /// stalled iterate is a poor start on face contacts: on a brick wall with touching joints
 /// (2 742 unknowns, W rank-deficient) the library took 2.4 s a step from it and 0.1 s from
-/// its own start, both to 1e-8 (docs/rigid-bodies.md, "Touching bricks").
+/// its own start, both to 1e-8 (docs/rigid-bodies.md, "Touching bricks"). With
+/// [`RigidSettings::library_only`] (no Gauss–Seidel), only from `r`, the step's warm start, as
+/// the sphere engine's `method = "library"` solves from its guess.
 ///
 /// With joints, `global` is the problem at Gauss–Seidel's multipliers `lambda` (its active set
 /// of motors and limits, [`nsgs::Problem::to_global_with`]): the library's multipliers of the
@@ -1484,6 +1676,9 @@ fn library_finish(
         let err = problem.error_with(&sol.r, &l);
         Some((sol.r, l, err))
     };
+    if s.library_only {
+        return run(Some(&guess));
+    }
     let cold = run(None);
     if cold.as_ref().is_some_and(|(_, _, e)| *e <= s.tolerance) {
         return cold;
@@ -1760,6 +1955,11 @@ pub mod nsgs {
             let v0 = p.velocities(&[]);
             p.q_norm = law::norm(&p.u_all(&v0));
             Ok(p)
+        }
+
+        /// ‖q‖ = ‖Hᵀ M⁻¹ f + w‖ of the error's scale.
+        pub fn q_norm(&self) -> f64 {
+            self.q_norm
         }
 
         /// Number of contacts.

@@ -804,36 +804,30 @@ impl InletRun {
     }
 }
 
-/// Refuses the `[step]` settings of a scene file that the rigid-body step cannot honour
-/// (`Err` names the setting): its activation uses γ = 1, it always closes the gaps of resting
-/// contacts, warm starts, and corrects positions (`projection = true`, the default; the
-/// correction is the rigid settings' `position_correction`). Here, not in `rigid/`, so that
-/// the rigid engine does not import the scene file's types.
-pub fn check_rigid_step(step: &StepSection) -> Result<(), String> {
-    let no = |what: String| {
-        Err(format!(
-            "[step] {what} cannot apply to a scene with bodies of other shapes than spheres; remove it"
-        ))
+/// The `[step]` switches of a scene file for the rigid-body step
+/// ([`crate::rigid::StepSwitches`]: `gamma`, `projection`, `gap_closure`, `warm_start`, each
+/// with the sphere engine's meaning, [`crate::rigid::RigidWorld::set_switches`]); `Err` names
+/// what it cannot honour: `projection_velocities` other than `"positions_only"` (the rigid
+/// correction moves positions only). Here, not in `rigid/`, so that the rigid engine does not
+/// import the scene file's types.
+pub fn check_rigid_step(step: &StepSection) -> Result<crate::rigid::StepSwitches, String> {
+    use crate::projection::Velocities;
+    let name = match step.projection_velocities {
+        Some(Velocities::Rescale) => "rescale",
+        Some(Velocities::Inelastic) => "inelastic",
+        _ => "",
     };
-    if step.gamma != 1.0 {
-        return no(format!(
-            "gamma = {} (their activation uses gamma = 1)",
-            step.gamma
+    if !name.is_empty() {
+        return Err(format!(
+            "[step] projection_velocities = \"{name}\" cannot apply to a scene with bodies of other shapes than spheres: their correction moves positions only (\"positions_only\"); remove it"
         ));
     }
-    if !step.projection {
-        return no("projection = false (their positions are always corrected)".into());
-    }
-    if step.projection_velocities.is_some() {
-        return no("projection_velocities (their correction moves positions only)".into());
-    }
-    if !step.gap_closure {
-        return no("gap_closure = false (their resting contacts always close their gaps)".into());
-    }
-    if !step.warm_start {
-        return no("warm_start = false (their steps are always warm started)".into());
-    }
-    Ok(())
+    Ok(crate::rigid::StepSwitches {
+        gamma: step.gamma,
+        projection: step.projection,
+        gap_closure: step.gap_closure,
+        warm_start: step.warm_start,
+    })
 }
 
 /// What the inlets poured in one call of [`BuiltScene::pour_rigid`].

@@ -428,7 +428,7 @@ fn solve6(a: &[[f64; 6]; 6], c: &[f64; 6]) -> Option<[f64; 6]> {
 /// row-major): y = −(S + λI)⁻¹ g with λ = 0 when that lies in the ball, else λ > 0 with
 /// ‖y‖ = ρ, found by Newton's method on 1/‖y(λ)‖ − 1/ρ (Moré & Sorensen 1983, monotone from
 /// λ = 0). None when S is not positive definite or the iteration fails.
-fn ball_qp(s: &[f64; 9], g: &[f64; 3], rho: f64) -> Option<[f64; 3]> {
+pub(crate) fn ball_qp(s: &[f64; 9], g: &[f64; 3], rho: f64) -> Option<[f64; 3]> {
     if rho.is_nan() || rho <= 0.0 {
         return Some([0.0; 3]);
     }

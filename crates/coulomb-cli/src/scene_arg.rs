@@ -13,8 +13,8 @@ use crate::run_loop::StepHook;
 use crate::sim_args::{Args, Method};
 use anyhow::{bail, Context};
 use clap::Parser;
-use coulomb_granular::model::{overlaps, relax, BuildChecks};
-use coulomb_granular::scene_file::{BuildOptions, BuiltScene, LoadedScene, MethodName};
+use coulomb_granular::model::{overlaps, relax, BuildChecks, StepChoice};
+use coulomb_granular::scene_file::{BuildOptions, BuiltScene, LoadedScene};
 use coulomb_granular::{Simulation, World};
 use std::path::Path;
 
@@ -80,8 +80,8 @@ fn file_args(args: &Args, scene: &BuiltScene) -> Args {
     a.theta = s.theta;
     a.tol = s.tol;
     a.method = match s.method {
-        MethodName::Nsgs => Method::Nsgs,
-        MethodName::Library => Method::Library,
+        StepChoice::Nsgs => Method::Nsgs,
+        StepChoice::Library => Method::Library,
     };
     a.max_sweeps = s.max_sweeps;
     a.relaxation = s.relaxation;

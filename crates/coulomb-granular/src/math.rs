@@ -107,17 +107,45 @@ impl Serialize for Vec3 {
 }
 
 impl<'de> Deserialize<'de> for Vec3 {
+    /// From `[x, y, z]` (an array of another length is refused with its length: TOML's
+    /// fixed-size arrays drop extra elements, issue 55) or `{ x, y, z }`.
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        #[derive(Deserialize)]
-        #[serde(untagged)]
-        enum Repr {
-            Array([f64; 3]),
-            Map { x: f64, y: f64, z: f64 },
+        use serde::de::{Error, IgnoredAny, MapAccess, SeqAccess, Visitor};
+        struct Xyz;
+        impl<'de> Visitor<'de> for Xyz {
+            type Value = Vec3;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a vector [x, y, z] of 3 numbers")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut s: A) -> Result<Vec3, A::Error> {
+                let mut c = [0.0; 3];
+                for (i, x) in c.iter_mut().enumerate() {
+                    *x = s
+                        .next_element()?
+                        .ok_or_else(|| A::Error::invalid_length(i, &self))?;
+                }
+                let mut n = 3;
+                while s.next_element::<IgnoredAny>()?.is_some() {
+                    n += 1;
+                }
+                if n > 3 {
+                    return Err(A::Error::invalid_length(n, &self));
+                }
+                Ok(Vec3::new(c[0], c[1], c[2]))
+            }
+            fn visit_map<A: MapAccess<'de>>(self, m: A) -> Result<Vec3, A::Error> {
+                #[derive(Deserialize)]
+                struct Map {
+                    x: f64,
+                    y: f64,
+                    z: f64,
+                }
+                let Map { x, y, z } =
+                    Map::deserialize(serde::de::value::MapAccessDeserializer::new(m))?;
+                Ok(Vec3::new(x, y, z))
+            }
         }
-        Ok(match Repr::deserialize(d)? {
-            Repr::Array([x, y, z]) => Vec3::new(x, y, z),
-            Repr::Map { x, y, z } => Vec3::new(x, y, z),
-        })
+        d.deserialize_any(Xyz)
     }
 }
 

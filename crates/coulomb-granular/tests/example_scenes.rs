@@ -75,3 +75,109 @@ fn every_shipped_scene_parses_builds_and_runs_three_steps() {
         assert_eq!(sim.steps_done, 3);
     }
 }
+
+/// FNV-1a (64 bits) of `bytes`: a fingerprint of a built scene's text.
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+/// Fingerprints of what every scene file of the repository builds (fills capped at 100
+/// spheres): the scene model's JSON (every number to the bit: serde_json writes the shortest
+/// text that reads back to the same f64) and the run settings, inlets and fills. Recorded
+/// before the scene file's schema became the model's own types (issue 52, item 5): the
+/// same files must keep building the same models. A file changed on purpose gets its new
+/// fingerprint from the failure message.
+const MODEL_FINGERPRINTS: &[(&str, u64)] = &[
+    ("examples/scenes/box.toml", 0x2e34e6e05cfd6fbb),
+    ("examples/scenes/chute.toml", 0x2bbbb41571d184c7),
+    ("examples/scenes/drum-mesh.toml", 0x8eef41ce556050f4),
+    ("examples/scenes/funnel.toml", 0x6f0fffc61974e248),
+    ("examples/scenes/rigid/ball-mill.toml", 0x71cf08c45d93cba4),
+    (
+        "examples/scenes/rigid/brick-wall-touching.toml",
+        0xbe79e075c1060f3a,
+    ),
+    ("examples/scenes/rigid/brick-wall.toml", 0xc1c058f57d0b5aae),
+    (
+        "examples/scenes/rigid/capsule-hopper.toml",
+        0xaeb6e165bdd0a208,
+    ),
+    (
+        "examples/scenes/rigid/cube-pyramid.toml",
+        0xebf8491777a11eec,
+    ),
+    (
+        "examples/scenes/rigid/double-pendulum-urdf.toml",
+        0xb64e4a1db013c868,
+    ),
+    ("examples/scenes/rigid/incline.toml", 0x08a400f9803681a2),
+    ("examples/scenes/rigid/kapla-tower.toml", 0x770e0032f40488ad),
+    (
+        "examples/scenes/rigid/newtons-cradle.toml",
+        0x72f987150d7e4838,
+    ),
+    (
+        "examples/scenes/rigid/pendulum-chain.toml",
+        0x6f1d2558182282f3,
+    ),
+    ("examples/scenes/rigid/rock-pile.json", 0xf3701fd0a5925f0b),
+    (
+        "examples/scenes/rigid/slider-crank.toml",
+        0x9d85cf3701224f28,
+    ),
+    (
+        "examples/scenes/rigid/vehicle-on-spheres.toml",
+        0xf539ab4e987511db,
+    ),
+    ("examples/scenes/rigid/wall-impact.toml", 0x1d24c60f98fa1473),
+    ("examples/scenes/rotating-drum.toml", 0x3ed9a9e838fb40ae),
+    ("examples/scenes/silo.toml", 0xe16a160685b65a17),
+    (
+        "examples/scenes/validation/beverloo.toml",
+        0xc41579e942c6d984,
+    ),
+    (
+        "examples/scenes/validation/incline.toml",
+        0x4408287fbc62a88d,
+    ),
+    (
+        "examples/scenes/validation/janssen.toml",
+        0x77b12881ab6e0e2e,
+    ),
+    ("examples/scenes/validation/repose.toml", 0x571dff3013ab5cd2),
+    ("examples/scenes/vibrating-plate.toml", 0xeb8b532ae6991bc6),
+    ("scripts/onesim/spheres-cuboid.toml", 0xf8e12dd45707e45e),
+    ("scripts/onesim/spheres.toml", 0x00416c153ce96a32),
+];
+
+#[test]
+fn every_scene_file_builds_the_model_it_built_before() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let mut actual = Vec::new();
+    for (file, _) in MODEL_FINGERPRINTS {
+        let loaded = LoadedScene::load(&root.join(file)).unwrap_or_else(|e| panic!("{e}"));
+        let built = loaded
+            .build(&BuildOptions {
+                max_fill: Some(100),
+                ..Default::default()
+            })
+            .unwrap_or_else(|e| panic!("{e}"));
+        let text = format!(
+            "{}\n{:?}",
+            serde_json::to_string(&built.model).unwrap(),
+            (&built.name, &built.step, &built.inlets, &built.fills)
+        );
+        actual.push((file.to_string(), fnv1a(text.as_bytes())));
+    }
+    let table: String = actual
+        .iter()
+        .map(|(f, h)| format!("    (\"{f}\", {h:#018x}),\n"))
+        .collect();
+    let expected: Vec<(String, u64)> = MODEL_FINGERPRINTS
+        .iter()
+        .map(|(f, h)| (f.to_string(), *h))
+        .collect();
+    assert_eq!(actual, expected, "the fingerprints now:\n{table}");
+}

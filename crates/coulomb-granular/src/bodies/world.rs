@@ -74,21 +74,33 @@ impl Sphere {
     }
 }
 
-/// The coefficients of the contact law of one pair of materials.
+/// The coefficients of the contact law of one pair of materials (a coefficient not given:
+/// [`ContactLaw::DEFAULT`]'s).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct ContactLaw {
     /// friction coefficient μ ≥ 0 of Coulomb's cone (2.9)
     pub mu: f64,
     /// Newton restitution coefficient e ∈ [0, 1] of Moreau's impact law
-    #[serde(default)]
     pub restitution: f64,
     /// rolling-friction coefficient μ_r ≥ 0 ([`crate::rolling`])
-    #[serde(default)]
     pub rolling_friction: f64,
 }
 
+impl Default for ContactLaw {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
 impl ContactLaw {
+    /// The law of `Params::default()` and of every pair of materials without one of its own:
+    /// μ = 0.3, e = 0.2, μ_r = 0.
+    pub const DEFAULT: ContactLaw = ContactLaw {
+        mu: 0.3,
+        restitution: 0.2,
+        rolling_friction: 0.0,
+    };
     /// Why the coefficients are out of range (μ, μ_r finite ≥ 0, e ∈ [0, 1]), if they are.
     pub fn check(&self) -> Result<(), String> {
         if !(self.mu.is_finite() && self.mu >= 0.0) {
@@ -206,6 +218,10 @@ fn yes() -> bool {
     true
 }
 
+fn z_axis() -> Vec3 {
+    Vec3::Z
+}
+
 /// The shape of an obstacle, in its reference position (time-independent).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
@@ -251,7 +267,8 @@ pub enum Shape {
         lo: Vec3,
         /// upper corner
         hi: Vec3,
-        /// container (true) or solid (false)
+        /// container (true, the default) or solid (false)
+        #[serde(default = "yes")]
         inside: bool,
         /// container without its top wall z = hi
         #[serde(default)]
@@ -265,13 +282,15 @@ pub enum Shape {
     Cylinder {
         /// centre of the bottom cap
         base: Vec3,
-        /// unit axis, bottom to top
+        /// unit axis, bottom to top (default +z)
+        #[serde(default = "z_axis")]
         axis: Vec3,
         /// radius
         radius: f64,
         /// length along the axis
         height: f64,
-        /// container (true) or solid (false)
+        /// container (true, the default) or solid (false)
+        #[serde(default = "yes")]
         inside: bool,
         /// the bottom cap is there
         #[serde(default = "yes")]
@@ -290,7 +309,8 @@ pub enum Shape {
         center: Vec3,
         /// radius
         radius: f64,
-        /// container (true) or solid (false)
+        /// container (true) or solid (false, the default)
+        #[serde(default)]
         inside: bool,
     },
     /// A triangle mesh, open or closed (features: the triangles; duplicate contacts at shared
@@ -305,10 +325,11 @@ pub enum Shape {
 }
 
 /// Prescribed rigid motion of an obstacle (§5.6: external objects in rigid motion).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Motion {
-    /// motionless
+    /// motionless (the default)
+    #[default]
     Fixed,
     /// translation d(t) = v t at constant velocity v
     Translate {

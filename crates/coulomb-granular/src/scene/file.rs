@@ -20,7 +20,7 @@ use crate::model::{
 };
 use crate::rigid_scene::RigidScene;
 use crate::simulation::{Params, Simulation, SimulationError};
-use crate::world::{MeshSide, Motion, Shape, Sphere, World};
+use crate::world::{ContactLaw, MeshSide, Motion, Shape, Sphere, World};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -140,7 +140,8 @@ pub struct SceneFile {
     /// materials by name; `default` always exists (density 2500 kg/m³ unless redefined)
     #[serde(default)]
     pub materials: BTreeMap<String, MaterialSection>,
-    /// the contact law of every pair of materials not listed in `pairs`
+    /// the contact law of every pair of materials not listed in `pairs` (the model's
+    /// [`crate::world::ContactLaw`]: μ 0.3, e 0.2, μ_r 0 unless given)
     #[serde(default)]
     pub default_pair: ContactLaw,
     /// contact laws of given pairs of materials
@@ -195,17 +196,6 @@ fn identity_quaternion() -> [f64; 4] {
     crate::shape::IDENTITY
 }
 
-/// Which solver takes each step.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum MethodName {
-    /// body-level nonsmooth Gauss–Seidel (the CLI's default)
-    #[default]
-    Nsgs,
-    /// the library solver on the assembled problem
-    Library,
-}
-
 fn d_h() -> f64 {
     0.02
 }
@@ -246,7 +236,7 @@ pub struct StepSection {
     pub tol: f64,
     /// step solver
     #[serde(default)]
-    pub method: MethodName,
+    pub method: StepChoice,
     /// number of steps (default 200 unless `duration` or `until_rest`)
     #[serde(default)]
     pub steps: Option<usize>,
@@ -293,7 +283,7 @@ impl Default for StepSection {
             h: d_h(),
             theta: d_theta(),
             tol: d_tol(),
-            method: MethodName::Nsgs,
+            method: StepChoice::Nsgs,
             steps: None,
             duration: None,
             until_rest: false,
@@ -311,6 +301,18 @@ impl Default for StepSection {
 }
 
 impl StepSection {
+    /// The scene model's step settings: h, θ, tol, method, max_sweeps, relaxation.
+    pub fn settings(&self) -> StepSettings {
+        StepSettings {
+            h: self.h,
+            theta: self.theta,
+            tol: self.tol,
+            method: self.method,
+            max_sweeps: self.max_sweeps,
+            relaxation: self.relaxation,
+        }
+    }
+
     /// The number of steps of a fixed-length run: `steps`, else ⌈duration / h⌉, else 200.
     pub fn fixed_steps(&self) -> usize {
         match (self.steps, self.duration) {
@@ -327,38 +329,6 @@ impl StepSection {
 pub struct MaterialSection {
     /// density (kg/m³)
     pub density: f64,
-}
-
-fn d_mu() -> f64 {
-    0.3
-}
-fn d_e() -> f64 {
-    0.2
-}
-
-/// A contact law: Coulomb friction μ, Newton restitution e, rolling friction μ_r.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ContactLaw {
-    /// friction coefficient μ ≥ 0
-    #[serde(default = "d_mu")]
-    pub mu: f64,
-    /// restitution e ∈ [0, 1]
-    #[serde(default = "d_e")]
-    pub restitution: f64,
-    /// rolling-friction coefficient μ_r ≥ 0
-    #[serde(default)]
-    pub rolling_friction: f64,
-}
-
-impl Default for ContactLaw {
-    fn default() -> Self {
-        Self {
-            mu: d_mu(),
-            restitution: d_e(),
-            rolling_friction: 0.0,
-        }
-    }
 }
 
 /// `[[pairs]]`: the law of one pair of materials (unset coefficients: `default_pair`'s).
@@ -465,13 +435,13 @@ pub struct FillSection {
 #[serde(deny_unknown_fields)]
 pub struct MeshSource {
     /// an .stl or .obj file
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub file: Option<String>,
     /// inline vertices (m)
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub vertices: Option<Vec<[f64; 3]>>,
     /// inline triangles (vertex indices, from 0)
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub triangles: Option<Vec<[usize; 3]>>,
     /// scale, rotation and translation applied to the vertices
     #[serde(default)]
@@ -490,137 +460,81 @@ pub struct ObstacleSection {
     pub material: String,
     /// geometry
     pub shape: ObstacleShape,
-    /// prescribed motion (default fixed)
+    /// prescribed motion (default fixed): the world's [`Motion`], its direction or axis
+    /// normalized when read
     #[serde(default)]
-    pub motion: MotionSection,
+    pub motion: Motion,
 }
 
-/// Geometry of an obstacle.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+/// Geometry of an obstacle, by `kind`: a shape of the world ([`Shape`], its keys and
+/// defaults: `plane`, `rectangle`, `cylinder_inside`, `box`, `cylinder`, `sphere`), its
+/// normals and axes normalized when read (a rectangle's `u` made orthogonal to its normal
+/// first), or `mesh`: a triangle mesh (any closed or open surface) from `file` or inline
+/// ([`MeshSource`]) and the `side` the spheres live on (`surface`, the default, `inside` or
+/// `outside`: a closed, consistently oriented mesh).
+#[derive(Debug, Clone, PartialEq)]
 pub enum ObstacleShape {
-    /// an infinite plane; spheres live on the side `normal` points to
-    Plane {
-        /// a point of the plane (m)
-        point: [f64; 3],
-        /// normal (normalized here)
-        normal: [f64; 3],
-    },
-    /// a thin two-sided rectangle
-    Rectangle {
-        /// centre (m)
-        center: [f64; 3],
-        /// normal (normalized here)
-        normal: [f64; 3],
-        /// in-plane axis (made orthogonal to the normal, normalized)
-        u: [f64; 3],
-        /// half-length along u (m)
-        half_u: f64,
-        /// half-length along normal × u (m)
-        half_v: f64,
-    },
-    /// an axis-aligned box container [lo, hi] (spheres inside), or a solid block (outside)
-    Box {
-        /// lower corner (m)
-        lo: [f64; 3],
-        /// upper corner (m)
-        hi: [f64; 3],
-        /// spheres inside (a container, default) or outside (a block)
-        #[serde(default = "yes")]
-        inside: bool,
-        /// no lid (a container open at z = hi.z)
-        #[serde(default)]
-        open_top: bool,
-    },
-    /// a circular cylinder from `base` along `axis` over `height`
-    Cylinder {
-        /// centre of the base (m)
-        base: [f64; 3],
-        /// axis (normalized here; default +z)
-        #[serde(default = "z_axis")]
-        axis: [f64; 3],
-        /// radius (m)
-        radius: f64,
-        /// length along the axis (m)
-        height: f64,
-        /// spheres inside (a silo or drum, default) or outside (a post)
-        #[serde(default = "yes")]
-        inside: bool,
-        /// the base is closed (default true)
-        #[serde(default = "yes")]
-        bottom_cap: bool,
-        /// the far end is closed (default true)
-        #[serde(default = "yes")]
-        top_cap: bool,
-        /// radius of a circular hole centred in the base cap (m; 0: none)
-        #[serde(default)]
-        orifice: f64,
-    },
-    /// a sphere
-    Sphere {
-        /// centre (m)
-        center: [f64; 3],
-        /// radius (m)
-        radius: f64,
-        /// spheres inside (a spherical container) or outside (default)
-        #[serde(default)]
-        inside: bool,
-    },
-    /// a triangle mesh (any closed or open surface), from `file` or inline
+    /// any shape of the world but a mesh
+    Shape(Shape),
+    /// `kind = "mesh"`
     Mesh {
-        /// an .stl or .obj file (relative to the scene file)
-        #[serde(default)]
-        file: Option<String>,
-        /// inline vertices (m)
-        #[serde(default)]
-        vertices: Option<Vec<[f64; 3]>>,
-        /// inline triangles (vertex indices, from 0)
-        #[serde(default)]
-        triangles: Option<Vec<[usize; 3]>>,
-        /// scale, rotation and translation applied to the vertices
-        #[serde(default)]
-        transform: Transform,
-        /// where the spheres live: `surface` (either side, default), `inside` or `outside`
-        /// (a closed, consistently oriented mesh)
-        #[serde(default)]
+        /// the triangles
+        source: MeshSource,
+        /// where the spheres live
         side: MeshSide,
     },
 }
 
-fn z_axis() -> [f64; 3] {
-    [0.0, 0.0, 1.0]
+impl Serialize for ObstacleShape {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        #[derive(Serialize)]
+        struct Mesh<'a> {
+            kind: &'static str,
+            #[serde(flatten)]
+            source: &'a MeshSource,
+            side: MeshSide,
+        }
+        match self {
+            ObstacleShape::Shape(x) => x.serialize(s),
+            ObstacleShape::Mesh { source, side } => Mesh {
+                kind: "mesh",
+                source,
+                side: *side,
+            }
+            .serialize(s),
+        }
+    }
 }
 
-/// Prescribed motion of an obstacle.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
-pub enum MotionSection {
-    /// motionless
-    #[default]
-    Fixed,
-    /// translation at a constant velocity
-    Translate {
-        /// velocity (m/s)
-        velocity: [f64; 3],
-    },
-    /// translation A sin(2π f t) along `direction`
-    Oscillate {
-        /// direction (normalized here)
-        direction: [f64; 3],
-        /// amplitude A (m)
-        amplitude: f64,
-        /// frequency f (Hz)
-        frequency: f64,
-    },
-    /// rotation at ω about the line through `center` along `axis`
-    Rotate {
-        /// a point of the axis (m)
-        center: [f64; 3],
-        /// axis (normalized here)
-        axis: [f64; 3],
-        /// angular velocity (rad/s)
-        omega: f64,
-    },
+impl<'de> Deserialize<'de> for ObstacleShape {
+    /// The keys of a mesh or of the world's shape of that `kind` (errors at the shape).
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        // buffered as JSON, where TOML's nan and inf become null (refused: every number of
+        // an obstacle's shape must be finite)
+        let mut v = serde_json::Value::deserialize(d)?;
+        let custom = |e: serde_json::Error| -> D::Error {
+            let mut m = e.to_string();
+            if m.starts_with("invalid type: null") {
+                m.push_str(" (every number of an obstacle's shape must be finite)");
+            }
+            serde::de::Error::custom(m)
+        };
+        if v.get("kind").and_then(serde_json::Value::as_str) != Some("mesh") {
+            return Shape::deserialize(v)
+                .map(ObstacleShape::Shape)
+                .map_err(custom);
+        }
+        let side = v.as_object_mut().and_then(|m| {
+            m.remove("kind");
+            m.remove("side")
+        });
+        let side = match side {
+            Some(x) => MeshSide::deserialize(x).map_err(custom)?,
+            None => MeshSide::default(),
+        };
+        let source = MeshSource::deserialize(v).map_err(custom)?;
+        Ok(ObstacleShape::Mesh { source, side })
+    }
 }
 
 /// `[[inlets]]`: an [`Inlet`] whose spheres (or bodies of `shape`) are of `material`.
@@ -1389,7 +1303,9 @@ impl LoadedScene {
                 )
             })
         };
-        self.check_law(&[key("default_pair")], &f.default_pair)?;
+        // the model's validation of a law, located here
+        let check_law = |p: &[Seg], l: &ContactLaw| l.check().map_err(|m| self.invalid(p, m));
+        check_law(&[key("default_pair")], &f.default_pair)?;
         let mut pairs = BTreeMap::new();
         for (i, pr) in f.pairs.iter().enumerate() {
             let p = [key("pairs"), Seg::Index(i)];
@@ -1403,7 +1319,7 @@ impl LoadedScene {
                     .rolling_friction
                     .unwrap_or(f.default_pair.rolling_friction),
             };
-            self.check_law(&p, &law)?;
+            check_law(&p, &law)?;
             let mut k = pr.materials.clone();
             k.sort();
             let [a, b] = k;
@@ -1632,11 +1548,25 @@ impl LoadedScene {
             let p = [key("obstacles"), Seg::Index(i)];
             known(&[&p[..], &[key("material")]].concat(), &o.material)?;
             let name = o.name.clone().unwrap_or_else(|| format!("obstacle-{i}"));
-            let motion = self.motion(&[&p[..], &[key("motion")]].concat(), &o.motion)?;
-            let sp = [&p[..], &[key("shape")]].concat();
+            let mut shape = match &o.shape {
+                ObstacleShape::Shape(s) => s.clone(),
+                ObstacleShape::Mesh { source, side } => {
+                    let sp = [&p[..], &[key("shape")]].concat();
+                    let m = self.mesh(source, &sp)?;
+                    let tris = m.triangles.iter().map(|t| t.map(|i| i as u64)).collect();
+                    let mesh = TriangleMesh::new(m.vertices, tris)
+                        .map_err(|e| self.invalid(&sp, e.to_string()))?;
+                    Shape::Mesh { mesh, side: *side }
+                }
+            };
+            let mut motion = o.motion.clone();
+            self.unit_vectors(&p, &mut shape, &mut motion)?;
+            // the model's validation, located here
+            crate::model::check_obstacle(i, &name, &shape, &motion)
+                .map_err(|e| self.invalid(&p, e.to_string()))?;
             obstacles.push(ObstacleSpec {
                 name,
-                shape: self.obstacle(&sp, &o.shape)?,
+                shape,
                 motion,
                 material: o.material.clone(),
             });
@@ -1685,18 +1615,13 @@ impl LoadedScene {
                 .unwrap_or("scene")
                 .to_string()
         });
-        let law = |l: &ContactLaw| crate::world::ContactLaw {
-            mu: l.mu,
-            restitution: l.restitution,
-            rolling_friction: l.rolling_friction,
-        };
         let materials = Materials {
             names: density
                 .keys()
                 .filter(|n| n.as_str() != DEFAULT_MATERIAL)
                 .cloned()
                 .collect(),
-            default: law(&f.default_pair),
+            default: f.default_pair,
             pairs: pairs
                 .iter()
                 .map(|((a, b), l)| MaterialPair {
@@ -1753,17 +1678,7 @@ impl LoadedScene {
             bodies: specs,
             sphere_batches,
             obstacles,
-            step: StepSettings {
-                h: f.step.h,
-                theta: f.step.theta,
-                tol: f.step.tol,
-                method: match f.step.method {
-                    MethodName::Nsgs => StepChoice::Nsgs,
-                    MethodName::Library => StepChoice::Library,
-                },
-                max_sweeps: f.step.max_sweeps,
-                relaxation: f.step.relaxation,
-            },
+            step: f.step.settings(),
             joints,
         };
         Ok(BuiltScene {
@@ -1877,15 +1792,10 @@ impl LoadedScene {
         let s = &self.file.step;
         let at = |k: &str| [key("step"), key(k)];
         let pos = |x: f64| x.is_finite() && x > 0.0;
-        if !pos(s.h) {
-            return Err(self.invalid(&at("h"), format!("{} must be a positive time (s)", s.h)));
-        }
-        if !(0.0..=1.0).contains(&s.theta) {
-            return Err(self.invalid(&at("theta"), format!("{} must be in [0, 1]", s.theta)));
-        }
-        if let Err(m) = coulomb::settings::check_tol(s.tol) {
-            return Err(self.invalid(&at("tol"), m));
-        }
+        // h, theta, tol, max_sweeps, relaxation: the model's validation, located here
+        s.settings()
+            .check_key()
+            .map_err(|(k, m)| self.invalid(&at(k), m))?;
         if let Some(d) = s.duration {
             if !(d.is_finite() && d >= 0.0) {
                 return Err(self.invalid(&at("duration"), format!("{d} must be ≥ 0")));
@@ -1903,9 +1813,6 @@ impl LoadedScene {
         if !pos(s.rest_speed) {
             return Err(self.invalid(&at("rest_speed"), "must be positive"));
         }
-        if !(s.relaxation.is_finite() && (1.0..2.0).contains(&s.relaxation)) {
-            return Err(self.invalid(&at("relaxation"), "must be in [1, 2)"));
-        }
         if !(s.gamma.is_finite() && s.gamma >= 0.0) {
             return Err(self.invalid(&at("gamma"), "must be ≥ 0"));
         }
@@ -1915,8 +1822,8 @@ impl LoadedScene {
                 "there is no position correction (projection = false) to apply it to",
             ));
         }
-        if s.max_sweeps == 0 || s.max_steps == 0 {
-            return Err(self.invalid(&[key("step")], "max_sweeps and max_steps must be ≥ 1"));
+        if s.max_steps == 0 {
+            return Err(self.invalid(&at("max_steps"), "must be ≥ 1"));
         }
         if self.file.step.fixed_steps() > 100_000_000 {
             return Err(self.invalid(&[key("step")], "more than 1e8 steps"));
@@ -1924,164 +1831,44 @@ impl LoadedScene {
         Ok(())
     }
 
-    fn check_law(&self, p: &[Seg], l: &ContactLaw) -> Result<(), SceneFileError> {
-        let nonneg = |x: f64| x.is_finite() && x >= 0.0;
-        if !nonneg(l.mu) || !nonneg(l.rolling_friction) || !(0.0..=1.0).contains(&l.restitution) {
-            return Err(self.invalid(
-                p,
-                format!(
-                    "mu {} and rolling_friction {} must be ≥ 0, restitution {} in [0, 1]",
-                    l.mu, l.rolling_friction, l.restitution
-                ),
-            ));
+    /// The normals, axes and directions of obstacle `p` normalized (a rectangle's `u` made
+    /// orthogonal to its normal first), each refused at its shape or motion where it is not
+    /// finite and non-zero: a file may write `normal = [0, 0, 2]`, the model holds unit
+    /// vectors.
+    fn unit_vectors(
+        &self,
+        p: &[Seg],
+        shape: &mut Shape,
+        motion: &mut Motion,
+    ) -> Result<(), SceneFileError> {
+        let unit = |at: &str, v: &mut Vec3, what: &str| {
+            if v.is_finite() && v.norm() > 0.0 {
+                *v = v.normalized_or(Vec3::Z);
+                Ok(())
+            } else {
+                Err(self.invalid(
+                    &[p, &[key(at)]].concat(),
+                    format!("{what} {:?} must be finite and non-zero", v.to_array()),
+                ))
+            }
+        };
+        match shape {
+            Shape::Plane { normal, .. } => unit("shape", normal, "normal")?,
+            Shape::Rectangle { normal, u, .. } => {
+                unit("shape", &mut *normal, "normal")?;
+                *u = *u - *normal * u.dot(*normal);
+                unit("shape", u, "u (orthogonal to the normal)")?;
+            }
+            Shape::CylinderInside { axis, .. } | Shape::Cylinder { axis, .. } => {
+                unit("shape", axis, "axis")?
+            }
+            _ => {}
         }
-        Ok(())
-    }
-
-    fn motion(&self, p: &[Seg], m: &MotionSection) -> Result<Motion, SceneFileError> {
-        let unit = |a: [f64; 3], what: &str| -> Result<Vec3, SceneFileError> {
-            let v = v3(a);
-            if v.is_finite() && v.norm() > 0.0 {
-                Ok(v.normalized_or(Vec3::Z))
-            } else {
-                Err(self.invalid(p, format!("{what} {a:?} must be finite and non-zero")))
-            }
-        };
-        Ok(match m {
-            MotionSection::Fixed => Motion::Fixed,
-            MotionSection::Translate { velocity } => {
-                if !v3(*velocity).is_finite() {
-                    return Err(self.invalid(p, "velocity must be finite"));
-                }
-                Motion::Translate {
-                    velocity: v3(*velocity),
-                }
-            }
-            MotionSection::Oscillate {
-                direction,
-                amplitude,
-                frequency,
-            } => {
-                if !(amplitude.is_finite() && frequency.is_finite()) {
-                    return Err(self.invalid(p, "amplitude and frequency must be finite"));
-                }
-                Motion::Oscillate {
-                    direction: unit(*direction, "direction")?,
-                    amplitude: *amplitude,
-                    frequency: *frequency,
-                }
-            }
-            MotionSection::Rotate {
-                center,
-                axis,
-                omega,
-            } => {
-                if !(v3(*center).is_finite() && omega.is_finite()) {
-                    return Err(self.invalid(p, "center and omega must be finite"));
-                }
-                Motion::Rotate {
-                    center: v3(*center),
-                    axis: unit(*axis, "axis")?,
-                    omega: *omega,
-                }
-            }
-        })
-    }
-
-    fn obstacle(&self, p: &[Seg], shape: &ObstacleShape) -> Result<Shape, SceneFileError> {
-        let unit = |a: [f64; 3], what: &str| -> Result<Vec3, SceneFileError> {
-            let v = v3(a);
-            if v.is_finite() && v.norm() > 0.0 {
-                Ok(v.normalized_or(Vec3::Z))
-            } else {
-                Err(self.invalid(p, format!("{what} {a:?} must be finite and non-zero")))
-            }
-        };
-        Ok(match shape {
-            ObstacleShape::Plane { point, normal } => Shape::Plane {
-                point: v3(*point),
-                normal: unit(*normal, "normal")?,
-            },
-            ObstacleShape::Rectangle {
-                center,
-                normal,
-                u,
-                half_u,
-                half_v,
-            } => {
-                let n = unit(*normal, "normal")?;
-                let u = v3(*u);
-                let u = unit(
-                    (u - n * u.dot(n)).to_array(),
-                    "u (orthogonal to the normal)",
-                )?;
-                Shape::Rectangle {
-                    center: v3(*center),
-                    normal: n,
-                    u,
-                    half_u: *half_u,
-                    half_v: *half_v,
-                }
-            }
-            ObstacleShape::Box {
-                lo,
-                hi,
-                inside,
-                open_top,
-            } => Shape::Box {
-                lo: v3(*lo),
-                hi: v3(*hi),
-                inside: *inside,
-                open_top: *open_top,
-            },
-            ObstacleShape::Cylinder {
-                base,
-                axis,
-                radius,
-                height,
-                inside,
-                bottom_cap,
-                top_cap,
-                orifice,
-            } => Shape::Cylinder {
-                base: v3(*base),
-                axis: unit(*axis, "axis")?,
-                radius: *radius,
-                height: *height,
-                inside: *inside,
-                bottom_cap: *bottom_cap,
-                top_cap: *top_cap,
-                orifice: *orifice,
-            },
-            ObstacleShape::Sphere {
-                center,
-                radius,
-                inside,
-            } => Shape::Sphere {
-                center: v3(*center),
-                radius: *radius,
-                inside: *inside,
-            },
-            ObstacleShape::Mesh {
-                file,
-                vertices,
-                triangles,
-                transform,
-                side,
-            } => {
-                let source = MeshSource {
-                    file: file.clone(),
-                    vertices: vertices.clone(),
-                    triangles: triangles.clone(),
-                    transform: transform.clone(),
-                };
-                let m = self.mesh(&source, p)?;
-                let tris = m.triangles.iter().map(|t| t.map(|i| i as u64)).collect();
-                let mesh = TriangleMesh::new(m.vertices, tris)
-                    .map_err(|e| self.invalid(p, e.to_string()))?;
-                Shape::Mesh { mesh, side: *side }
-            }
-        })
+        match motion {
+            Motion::Oscillate { direction, .. } => unit("motion", direction, "direction"),
+            Motion::Rotate { axis, .. } => unit("motion", axis, "axis"),
+            _ => Ok(()),
+        }
     }
 }
 
@@ -2682,6 +2469,106 @@ mass = 3.0
             "[[bodies]]\n{ball}positions = [[0, 0, 1]]\ninertia = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]\n"
         ));
         assert!(e.contains("inertia"), "{e}");
+    }
+
+    /// Obstacle shapes and motions, the default law and the step method are the model's own
+    /// types (one schema with Python's description): the same keys and defaults read the same
+    /// values, and the model's validation refuses bad values at their place in the file.
+    #[test]
+    fn obstacles_laws_and_steps_are_the_models_types_validated_once() {
+        let text = "[default_pair]\nmu = 0.5\n[step]\nmethod = \"library\"\n\
+            [[obstacles]]\nname = \"drum\"\nshape = { kind = \"cylinder_inside\", point = [0, 0, 0], axis = [0, 2, 0], radius = 1 }\n\
+            motion = { kind = \"rotate\", center = [0, 0, 0], axis = [0, 3, 0], omega = 1.5 }\n\
+            [[obstacles]]\nshape = { kind = \"box\", lo = [-1, -1, -1], hi = [1, 1, 1] }\n";
+        let b = parse(text)
+            .unwrap()
+            .build(&BuildOptions::default())
+            .unwrap();
+        // a law's missing coefficients are the default law's, in a file as in a model
+        let model: SceneModel =
+            serde_json::from_str(r#"{"materials": {"default": {"mu": 0.5}}}"#).unwrap();
+        assert_eq!(b.model.materials.default, model.materials.default);
+        assert_eq!(b.model.materials.default.restitution, 0.2);
+        assert_eq!(b.model.step.method, StepChoice::Library);
+        // axes normalized; the box a container by default
+        let o = &b.model.obstacles;
+        assert_eq!(
+            (&o[0].shape, &o[0].motion),
+            (
+                &Shape::CylinderInside {
+                    point: Vec3::ZERO,
+                    axis: Vec3::Y,
+                    radius: 1.0
+                },
+                &Motion::Rotate {
+                    center: Vec3::ZERO,
+                    axis: Vec3::Y,
+                    omega: 1.5
+                }
+            )
+        );
+        assert!(matches!(o[1].shape, Shape::Box { inside: true, .. }));
+        assert_eq!(
+            (o[1].name.as_str(), &o[1].motion),
+            ("obstacle-1", &Motion::Fixed)
+        );
+        // the model's refusals, at the obstacle's, the law's and the setting's lines
+        let refused = |t: &str| {
+            parse(t)
+                .and_then(|s| s.build(&BuildOptions::default()))
+                .unwrap_err()
+                .to_string()
+        };
+        let e = refused(
+            "seed = 1\n[[obstacles]]\nshape = { kind = \"box\", lo = [1, 0, 0], hi = [0, 1, 1] }\n",
+        );
+        let located = |e: &str, lines: [usize; 2]| {
+            lines.iter().any(|l| e.starts_with(&format!("t.toml:{l}:")))
+        };
+        assert!(
+            located(&e, [2, 3]) && e.contains("obstacles[0]") && e.contains("below hi"),
+            "{e}"
+        );
+        let e = refused("[[obstacles]]\nshape = { kind = \"plane\", point = [0, 0, 0], normal = [0, 0, 1] }\nmotion = { kind = \"oscillate\", direction = [0, 0, 1], amplitude = inf, frequency = 1 }\n");
+        assert!(located(&e, [1, 2]) && e.contains("motion"), "{e}");
+        let e = refused("[[obstacles]]\nshape = { kind = \"plane\", point = [0, 0, 0], normal = [0, 0, 1] }\nmotion = { kind = \"rotate\", center = [0, 0, 0], axis = [0, 0, 0], omega = 1 }\n");
+        assert!(
+            e.contains("obstacles[0].motion") && e.contains("non-zero"),
+            "{e}"
+        );
+        let e = refused("[[obstacles]]\nshape = { kind = \"plane\", point = [0, 0, 0], normal = [0, 0, 1] }\nmotion = { kind = \"translate\", velocity = [1, 0, 0, 0] }\n");
+        assert!(
+            e.starts_with("t.toml:3:") && e.contains("invalid length 4"),
+            "{e}"
+        );
+        let e = refused("seed = 1\n[default_pair]\nrolling_friction = -1\n");
+        assert!(
+            located(&e, [2, 3]) && e.contains("default_pair: rolling_friction = -1"),
+            "{e}"
+        );
+        let e = refused("[step]\n\ntol = 1.5\n");
+        assert!(e.starts_with("t.toml:3:") && e.contains("step.tol"), "{e}");
+        let e = refused("[step]\nrelaxation = 2\n");
+        assert!(
+            e.starts_with("t.toml:2:") && e.contains("step.relaxation"),
+            "{e}"
+        );
+        // a mesh obstacle is written back as it was read: arrays that lost elements found
+        let mesh = "[[obstacles]]\nshape = { kind = \"mesh\", vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]], triangles = [[0, 1, 2]], side = \"surface\" }\n";
+        let e = parse(&format!(
+            "{mesh}[[bodies]]\nspheres = [[0.5, 0.5, 0.5, 0.1, 1]]\n"
+        ))
+        .unwrap_err();
+        assert!(e.to_string().contains("5 values where 4"), "{e}");
+        let loaded = parse(mesh).unwrap();
+        let back: SceneFile = toml::from_str(&toml::to_string(&loaded.file).unwrap()).unwrap();
+        assert_eq!(back, loaded.file);
+        // the model alone refuses the same settings
+        let step = StepSettings {
+            tol: 1.5,
+            ..StepSettings::default()
+        };
+        assert!(matches!(step.check(), Err(SceneError::InvalidStep(_))));
     }
 
     #[test]

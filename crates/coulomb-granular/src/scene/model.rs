@@ -69,15 +69,7 @@ fn default_gravity() -> Vec3 {
 }
 
 /// The contact law of `Params::default()`: μ = 0.3, e = 0.2, μ_r = 0.
-pub const DEFAULT_LAW: ContactLaw = ContactLaw {
-    mu: 0.3,
-    restitution: 0.2,
-    rolling_friction: 0.0,
-};
-
-fn default_law() -> ContactLaw {
-    DEFAULT_LAW
-}
+pub const DEFAULT_LAW: ContactLaw = ContactLaw::DEFAULT;
 
 /// A scene: everything a simulation is built from.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -130,8 +122,9 @@ pub struct Materials {
     /// material names besides `default` (which may be listed too)
     #[serde(default)]
     pub names: Vec<String>,
-    /// the law of every pair not in `pairs` (default μ = 0.3, e = 0.2, μ_r = 0)
-    #[serde(default = "default_law")]
+    /// the law of every pair not in `pairs` (default μ = 0.3, e = 0.2, μ_r = 0, also for a
+    /// coefficient not given)
+    #[serde(default)]
     pub default: ContactLaw,
     /// the laws of given pairs (symmetric)
     #[serde(default)]
@@ -308,15 +301,11 @@ pub struct ObstacleSpec {
     /// its shape in the reference position
     pub shape: Shape,
     /// its prescribed motion (default fixed)
-    #[serde(default = "fixed_motion")]
+    #[serde(default)]
     pub motion: Motion,
     /// material name
     #[serde(default = "default_material")]
     pub material: String,
-}
-
-fn fixed_motion() -> Motion {
-    Motion::Fixed
 }
 
 impl ObstacleSpec {
@@ -438,24 +427,31 @@ impl StepSettings {
 
     /// Refuses invalid step settings (h, θ, tolerance, sweep cap, relaxation).
     pub fn check(&self) -> Result<(), SceneError> {
-        let bad = |s: String| Err(SceneError::InvalidStep(s));
+        self.check_key()
+            .map_err(|(_, reason)| SceneError::InvalidStep(reason))
+    }
+
+    /// [`Self::check`] with the key of the setting refused (`h`, `theta`, `tol`,
+    /// `max_sweeps`, `relaxation`): a scene file's error names its place.
+    pub fn check_key(&self) -> Result<(), (&'static str, String)> {
         if !(self.h.is_finite() && self.h > 0.0) {
-            return bad(format!(
-                "h = {} must be a positive number of seconds",
-                self.h
+            return Err((
+                "h",
+                format!("h = {} must be a positive number of seconds", self.h),
             ));
         }
         if !(0.0..=1.0).contains(&self.theta) {
-            return bad(format!("theta = {} is not in [0, 1]", self.theta));
+            return Err(("theta", format!("theta = {} is not in [0, 1]", self.theta)));
         }
-        if !(self.tol.is_finite() && self.tol > 0.0) {
-            return bad(format!("tol = {} must be positive", self.tol));
-        }
+        coulomb::settings::check_tol(self.tol).map_err(|m| ("tol", m))?;
         if self.max_sweeps == 0 {
-            return bad("max_sweeps must be at least 1".into());
+            return Err(("max_sweeps", "max_sweeps must be at least 1".into()));
         }
         if !(self.relaxation.is_finite() && (1.0..2.0).contains(&self.relaxation)) {
-            return bad(format!("relaxation = {} is not in [1, 2)", self.relaxation));
+            return Err((
+                "relaxation",
+                format!("relaxation = {} is not in [1, 2)", self.relaxation),
+            ));
         }
         Ok(())
     }
@@ -1241,8 +1237,9 @@ fn batch_spheres(k: usize, batch: &SphereBatch, material: u32) -> Result<Vec<Sph
     Ok(out)
 }
 
-/// Validation of one obstacle's shape and motion.
-fn check_obstacle(
+/// Validation of one obstacle's shape and motion (a scene file's obstacles too, located in
+/// the file by `crate::scene_file`).
+pub(crate) fn check_obstacle(
     index: usize,
     name: &str,
     shape: &Shape,

@@ -9,19 +9,19 @@
 //! and spheres given by their masses become `shape = sphere` groups with `mass`. Unit vectors
 //! (normals, axes) are normalized again when read, which may move their last bit.
 //!
-//! What a scene file cannot hold is refused, never dropped: an infinite cylinder
-//! (`cylinder_inside`), two inlets of one material with different densities (a file's inlet
-//! takes its material's density).
+//! Obstacles are written as the model holds them (their shapes and motions are the scene
+//! file's, `crate::scene_file::ObstacleShape`), meshes inline. What a scene file cannot
+//! hold is refused, never dropped: two inlets of one material with different densities (a
+//! file's inlet takes its material's density).
 
 use crate::generate::Inlet;
 use crate::math::Vec3;
-use crate::model::{BodyShape, SceneModel, StepChoice};
+use crate::model::{BodyShape, SceneModel};
 use crate::scene_file::{
-    BodiesSection, ContactLaw, InletSection, LoadedScene, MaterialSection, MethodName,
-    MotionSection, ObstacleSection, ObstacleShape, PairSection, SceneFile, StepSection,
-    DEFAULT_DENSITY, DEFAULT_MATERIAL,
+    BodiesSection, InletSection, LoadedScene, MaterialSection, MeshSource, ObstacleSection,
+    ObstacleShape, PairSection, SceneFile, StepSection, DEFAULT_DENSITY, DEFAULT_MATERIAL,
 };
-use crate::world::{Motion, Shape};
+use crate::world::Shape;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -72,10 +72,7 @@ pub fn scene_file_of(
         h: s.h,
         theta: s.theta,
         tol: s.tol,
-        method: match s.method {
-            StepChoice::Nsgs => MethodName::Nsgs,
-            StepChoice::Library => MethodName::Library,
-        },
+        method: s.method,
         max_sweeps: s.max_sweeps,
         relaxation: s.relaxation,
         ..StepSection::default()
@@ -110,11 +107,6 @@ pub fn scene_file_of(
             },
         );
     }
-    let law = |l: &crate::world::ContactLaw| ContactLaw {
-        mu: l.mu,
-        restitution: l.restitution,
-        rolling_friction: l.rolling_friction,
-    };
     let pairs = model
         .materials
         .pairs
@@ -232,109 +224,26 @@ pub fn scene_file_of(
             o.name.clone()
         };
         let shape = match &o.shape {
-            Shape::Plane { point, normal } => ObstacleShape::Plane {
-                point: a3(*point),
-                normal: a3(*normal),
-            },
-            Shape::Rectangle {
-                center,
-                normal,
-                u,
-                half_u,
-                half_v,
-            } => ObstacleShape::Rectangle {
-                center: a3(*center),
-                normal: a3(*normal),
-                u: a3(*u),
-                half_u: *half_u,
-                half_v: *half_v,
-            },
-            Shape::CylinderInside { .. } => {
-                return Err(SaveError::Unsupported(format!(
-                    "obstacle {k} ('{name}'): an infinite cylinder has no scene-file form; give it a height (a cylinder with caps as needed)"
-                )))
-            }
-            Shape::Box {
-                lo,
-                hi,
-                inside,
-                open_top,
-            } => ObstacleShape::Box {
-                lo: a3(*lo),
-                hi: a3(*hi),
-                inside: *inside,
-                open_top: *open_top,
-            },
-            Shape::Cylinder {
-                base,
-                axis,
-                radius,
-                height,
-                inside,
-                bottom_cap,
-                top_cap,
-                orifice,
-            } => ObstacleShape::Cylinder {
-                base: a3(*base),
-                axis: a3(*axis),
-                radius: *radius,
-                height: *height,
-                inside: *inside,
-                bottom_cap: *bottom_cap,
-                top_cap: *top_cap,
-                orifice: *orifice,
-            },
-            Shape::Sphere {
-                center,
-                radius,
-                inside,
-            } => ObstacleShape::Sphere {
-                center: a3(*center),
-                radius: *radius,
-                inside: *inside,
-            },
             Shape::Mesh { mesh, side } => ObstacleShape::Mesh {
-                file: None,
-                vertices: Some(mesh.vertices().iter().map(|&v| a3(v)).collect()),
-                triangles: Some(
-                    mesh.triangles()
-                        .iter()
-                        .map(|t| t.map(|i| i as usize))
-                        .collect(),
-                ),
-                transform: Default::default(),
+                source: MeshSource {
+                    vertices: Some(mesh.vertices().iter().map(|&v| a3(v)).collect()),
+                    triangles: Some(
+                        mesh.triangles()
+                            .iter()
+                            .map(|t| t.map(|i| i as usize))
+                            .collect(),
+                    ),
+                    ..MeshSource::default()
+                },
                 side: *side,
             },
-        };
-        let motion = match &o.motion {
-            Motion::Fixed => MotionSection::Fixed,
-            Motion::Translate { velocity } => MotionSection::Translate {
-                velocity: a3(*velocity),
-            },
-            Motion::Oscillate {
-                direction,
-                amplitude,
-                frequency,
-            } => MotionSection::Oscillate {
-                direction: a3(*direction),
-                amplitude: *amplitude,
-                frequency: *frequency,
-            },
-            Motion::Rotate {
-                center,
-                axis,
-                omega,
-            } => MotionSection::Rotate {
-                center: a3(*center),
-                axis: a3(*axis),
-                omega: *omega,
-            },
+            other => ObstacleShape::Shape(other.clone()),
         };
         obstacles.push(ObstacleSection {
             name: Some(name),
             material: o.material.clone(),
             shape,
-            motion,
+            motion: o.motion.clone(),
         });
     }
     let inlets = inlets
@@ -358,7 +267,7 @@ pub fn scene_file_of(
         gravity: a3(model.gravity),
         step,
         materials,
-        default_pair: law(&model.materials.default),
+        default_pair: model.materials.default,
         pairs,
         bodies,
         obstacles,
@@ -423,6 +332,7 @@ mod tests {
     use crate::model::{BodySpec, ObstacleSpec, SphereBatch};
     use crate::scene_file::BuildOptions;
     use crate::shape::IDENTITY;
+    use crate::world::Motion;
 
     /// A folder of its own, removed when dropped.
     struct TempDir(std::path::PathBuf);
@@ -631,15 +541,19 @@ mod tests {
                 radius: 1.0,
             },
         ));
-        let e = scene_file_of(&m, &[]).unwrap_err().to_string();
-        assert!(
-            e.contains("obstacle 4 ('drum')") && e.contains("infinite"),
-            "{e}"
+        // an infinite cylinder is a shape of the file as of the model: written as it is
+        let file = scene_file_of(&m, &[]).unwrap();
+        assert_eq!(
+            file.obstacles[4].shape,
+            ObstacleShape::Shape(m.obstacles[4].shape.clone())
         );
+        let dir = temp_dir();
+        let path = dir.path().join("drum.toml");
+        save(&path, &file).unwrap();
+        assert_eq!(LoadedScene::load(&path).unwrap().file, file);
         let file = scene_file_of(&model(), &[]).unwrap();
         let e = save(Path::new("/dev/null"), &file).unwrap_err();
         assert!(matches!(e, SaveError::Extension(_)), "{e}");
-        let dir = temp_dir();
         let sub = dir.path().join("x.toml");
         std::fs::create_dir(&sub).unwrap();
         let e = save(&sub, &file).unwrap_err();

@@ -862,8 +862,8 @@ class Scene:
 
         Written atomically (a failed write leaves an existing file as it was); a ``path``
         that exists and is not a regular file is refused (``ValueError``). What a scene
-        file cannot hold is refused (:class:`coulomb.SceneError`): an infinite cylinder
-        (``height=None``), two inlets of one material with different densities."""
+        file cannot hold is refused (:class:`coulomb.SceneError`): two inlets of one material
+        with different densities."""
         if steps is not None and (isinstance(steps, bool) or int(steps) != steps or steps < 0):
             raise _arg_error("steps", f"steps must be a nonnegative int, got {steps!r}")
         desc, batches, meshes = self._parts()

@@ -405,13 +405,14 @@ impl PyRigidSimulation {
             .checkpoint_bytes()
             .and_then(|b| RigidScene::from_checkpoint_bytes("set_params", b))
             .and_then(|mut scene| {
-                scene.world.set_switches(switches).map_err(|e| {
-                    CheckpointError::Invalid {
+                scene
+                    .world
+                    .set_switches(switches)
+                    .map_err(|e| CheckpointError::Invalid {
                         path: "set_params".into(),
                         location: "switches".into(),
                         detail: e.to_string(),
-                    }
-                })?;
+                    })?;
                 Ok(scene)
             });
         match rebuilt {

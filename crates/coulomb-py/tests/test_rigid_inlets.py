@@ -140,13 +140,14 @@ def test_sphere_inlets_pour_into_a_scene_with_spheres_and_a_cuboid(tmp_path: Pat
 def test_a_rigid_scene_file_refuses_what_coulomb_simulate_refuses(tmp_path: Path) -> None:
     """The ``[step]`` settings a rigid scene cannot honour, and ``solver=``, are refused with
     a message, as by the CLI (exit 2), never dropped."""
-    scene = tmp_path / "gamma.toml"
-    scene.write_text(POUR.replace("tol = 1e-8\n", "tol = 1e-8\ngamma = 0.5\n"))
-    with pytest.raises(ValueError, match="gamma"):
+    scene = tmp_path / "rescale.toml"
+    scene.write_text(POUR.replace("tol = 1e-8\n",
+                                  "tol = 1e-8\nprojection_velocities = \"rescale\"\n"))
+    with pytest.raises(ValueError, match="projection_velocities"):
         Simulation.from_file(scene)
     run = subprocess.run([str(cli_binary()), "simulate", str(scene), "--steps", "1"],
                          capture_output=True, text=True, timeout=120)
-    assert run.returncode == 2 and "gamma" in run.stderr
+    assert run.returncode == 2 and "projection_velocities" in run.stderr
     plain = tmp_path / "pour.toml"
     plain.write_text(POUR)
     with pytest.raises(ValueError, match="solver"):

@@ -74,7 +74,7 @@ fn refused_options(args: &Args) -> Vec<&'static str> {
 /// The arguments of a built-in run with the file's step settings and default contact law
 /// (so that [`Args::params`] makes the same parameters as for a built-in scene).
 fn file_args(args: &Args, scene: &BuiltScene) -> Args {
-    let s = &scene.step;
+    let s = &scene.model.step;
     let mut a = args.clone();
     a.dt = s.h;
     a.theta = s.theta;
@@ -96,13 +96,13 @@ fn file_args(args: &Args, scene: &BuiltScene) -> Args {
     a.mu = law.mu;
     a.restitution = law.restitution;
     a.rolling_friction = law.rolling_friction;
-    a.rest_speed = s.rest_speed;
-    a.max_steps = s.max_steps;
-    a.until_rest = args.until_rest || (s.until_rest && args.steps.is_none());
+    a.rest_speed = scene.step.rest_speed;
+    a.max_steps = scene.step.max_steps;
+    a.until_rest = args.until_rest || (scene.step.until_rest && args.steps.is_none());
     a.steps = if a.until_rest {
         None
     } else {
-        Some(args.steps.unwrap_or_else(|| s.fixed_steps()))
+        Some(args.steps.unwrap_or_else(|| scene.step.fixed_steps()))
     };
     a
 }

@@ -117,7 +117,7 @@ fn settings_a_scene_with_other_shapes_cannot_honour_are_refused() {
     let step = |line: &str| {
         let s = ball_and_box("", line);
         let built = s.build(&BuildOptions::default()).unwrap();
-        coulomb_granular::scene_file::check_rigid_step(&built.step)
+        RigidScene::new(&built.model).map_err(|e| e.to_string())
     };
     for line in [
         "",

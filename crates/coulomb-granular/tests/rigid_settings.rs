@@ -5,7 +5,7 @@
 use coulomb_granular::model::BuildChecks;
 use coulomb_granular::rigid::{RigidStatus, RigidStepReport};
 use coulomb_granular::rigid_scene::RigidScene;
-use coulomb_granular::scene_file::{check_rigid_step, BuildOptions, BuiltScene, LoadedScene};
+use coulomb_granular::scene_file::{BuildOptions, BuiltScene, LoadedScene};
 use coulomb_granular::Simulation;
 
 /// A ball of radius 0.1 m (material `ball`) at height `z` with velocity `v` over a floor,
@@ -30,12 +30,10 @@ fn scene(step: &str, pair: &str, z: f64, v: [f64; 3], cuboid: bool) -> BuiltScen
         .unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// The rigid scene of `built` with its `[step]` switches, and the reports of `n` steps.
+/// The rigid scene of `built` (its `[step]` settings are its model's), and the reports of
+/// `n` steps.
 fn run(built: &BuiltScene, n: usize) -> (RigidScene, Vec<RigidStepReport>) {
     let mut s = RigidScene::new(&built.model).unwrap_or_else(|e| panic!("{e}"));
-    s.world
-        .set_switches(check_rigid_step(&built.step).unwrap())
-        .unwrap();
     let reports = (0..n).map(|_| s.step().unwrap()).collect();
     (s, reports)
 }
@@ -88,10 +86,11 @@ fn projection_and_gamma_mean_what_they_mean_for_spheres() {
     assert_eq!(r0[0].contacts + 1, r[0].contacts);
     assert_eq!(r5[0].contacts, r[0].contacts);
     // positions only is what the rigid correction does; the others are refused by name
-    assert!(check_rigid_step(&built("projection_velocities = \"positions_only\"").step).is_ok());
+    let rigid = |b: BuiltScene| RigidScene::new(&b.model).map(|_| ());
+    assert!(rigid(built("projection_velocities = \"positions_only\"")).is_ok());
     for v in ["rescale", "inelastic"] {
         let line = format!("projection_velocities = \"{v}\"");
-        let e = check_rigid_step(&built(&line).step).unwrap_err();
+        let e = rigid(built(&line)).unwrap_err().to_string();
         assert!(e.contains(&line), "{e}");
     }
 }

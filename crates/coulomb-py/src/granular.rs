@@ -91,14 +91,14 @@ fn ordered<'py>(kw: &Bound<'py, PyDict>) -> PyResult<Vec<(String, Bound<'py, PyA
 }
 
 /// Applies the constructor's keyword parameters to the scene model: the step settings (h,
-/// theta, tol, method, max_sweeps, relaxation) and the default contact law (mu, restitution,
-/// rolling_friction: the law of every pair of materials not set by a pair). The others
-/// (warm_start, gap_closure) are returned, to be applied to the built parameters.
-pub(crate) fn apply_to_model<'py>(
-    model: &mut SceneModel,
-    kw: &Bound<'py, PyDict>,
-) -> PyResult<Vec<(String, Bound<'py, PyAny>)>> {
-    let mut rest = Vec::new();
+/// theta, tol, method, max_sweeps, relaxation, warm_start, gap_closure,
+/// projection_velocities) and the default contact law (mu, restitution, rolling_friction:
+/// the law of every pair of materials not set by a pair).
+pub(crate) fn apply_to_model(model: &mut SceneModel, kw: &Bound<'_, PyDict>) -> PyResult<()> {
+    let flag = |name: &str, v: &Bound<'_, PyAny>| {
+        v.extract::<bool>()
+            .map_err(|_| PyTypeError::new_err(format!("{name} must be a bool")))
+    };
     for (name, v) in ordered(kw)? {
         let (step, law) = (&mut model.step, &mut model.materials.default);
         match name.as_str() {
@@ -114,7 +114,11 @@ pub(crate) fn apply_to_model<'py>(
             "mu" => law.mu = real(&name, &v)?,
             "restitution" => law.restitution = real(&name, &v)?,
             "rolling_friction" => law.rolling_friction = real(&name, &v)?,
-            "warm_start" | "gap_closure" | "projection_velocities" => rest.push((name, v)),
+            "warm_start" => step.warm_start = flag(&name, &v)?,
+            "gap_closure" => step.gap_closure = flag(&name, &v)?,
+            "projection_velocities" => {
+                step.projection_velocities = Some(projection_velocities(&v)?)
+            }
             other => {
                 return Err(PyTypeError::new_err(format!(
                     "unexpected simulation parameter '{other}' (parameters: {PARAM_NAMES})"
@@ -122,7 +126,7 @@ pub(crate) fn apply_to_model<'py>(
             }
         }
     }
-    Ok(rest)
+    Ok(())
 }
 
 /// Applies `name = value` to the time-stepping parameters (the names of
@@ -322,7 +326,7 @@ impl PySimulation {
         )
         .map_err(|e| crate::errors::scene_error(py, &e))?;
         let mut model = py.detach(move || scene.model(beads, seed, &BoxLayout::for_beads(beads)));
-        let rest = apply_to_model(&mut model, params)?;
+        apply_to_model(&mut model, params)?;
         // the built-in arrangements are loose by construction: the data are validated, the
         // start checks (overlaps, containment) are those of `Scene::build` (none)
         let checks = BuildChecks {
@@ -331,7 +335,7 @@ impl PySimulation {
             memory: true,
         };
         let built = py.detach(move || model.build_with(&checks));
-        Self::finish(py, built, rest, solver)
+        Self::finish(py, built, solver)
     }
 
     /// A scene built in Python: `json` is the [`SceneModel`] without its arrays, `batches`
@@ -357,12 +361,12 @@ impl PySimulation {
         let mut model = py
             .detach(move || model_from_parts(&json, arrays))
             .map_err(|e| e.into_py(py))?;
-        let rest = apply_to_model(&mut model, params)?;
+        apply_to_model(&mut model, params)?;
         let built = py.detach(move || match resolve_overlaps {
             None => model.build(),
             Some(sweeps) => relaxed(model.build_with(&UNCHECKED), sweeps),
         });
-        let mut sim = Self::finish(py, built, rest, solver)?;
+        let mut sim = Self::finish(py, built, solver)?;
         sim.feed = Feed {
             model: materials,
             inlets,
@@ -408,7 +412,7 @@ impl PySimulation {
             },
             inlets: built.inlets.clone(),
         };
-        let rest = apply_to_model(&mut built.model, params)?;
+        apply_to_model(&mut built.model, params)?;
         let world_params = match resolve_overlaps {
             None => py
                 .detach(move || built.build(&BuildChecks::default()))
@@ -419,7 +423,7 @@ impl PySimulation {
                 relaxed.map_err(|e| crate::errors::scene_error(py, &e))?
             }
         };
-        let mut sim = Self::finish(py, Ok(world_params), rest, solver)?;
+        let mut sim = Self::finish(py, Ok(world_params), solver)?;
         sim.feed = feed;
         Ok(Py::new(py, sim)?.into_any())
     }
@@ -704,19 +708,14 @@ impl PySimulation {
         .map_err(sim_error)
     }
 
-    /// The simulation of a built scene: `rest` (warm_start, gap_closure) applied to its
-    /// parameters, `solver` (keyword settings of `coulomb.solve`) replacing the library
-    /// solver's settings when given.
+    /// The simulation of a built scene, `solver` (keyword settings of `coulomb.solve`)
+    /// replacing the library solver's settings when given.
     fn finish(
         py: Python<'_>,
         built: Result<(World, Params), coulomb_granular::SceneError>,
-        rest: Vec<(String, Bound<'_, PyAny>)>,
         solver: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let (world, mut p) = built.map_err(|e| crate::errors::scene_error(py, &e))?;
-        for (k, v) in rest {
-            set_param(&mut p, &k, &v)?;
-        }
         // the g·h² rule of `coulomb simulate` (issue 55: Python skipped it): a sphere must not
         // fall more than the smallest radius in one step
         let r_min = world

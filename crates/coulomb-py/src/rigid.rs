@@ -10,7 +10,7 @@ use coulomb_granular::rigid_scene::RigidScene;
 use coulomb_granular::scene_file::{BuiltScene, InletRun};
 use coulomb_granular::{BodySpec, CheckpointError, SceneModel, StepRecord};
 use numpy::{PyArray1, PyArrayMethods};
-use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::path::PathBuf;
@@ -59,26 +59,16 @@ fn build(
 }
 
 /// The rigid scene of a scene file that runs in the rigid-body simulator
-/// ([`BuiltScene::runs_rigid`]), as `coulomb simulate FILE` builds it: its `[step]` settings
-/// checked and its switches (gamma, projection, gap_closure, warm_start) set
-/// ([`coulomb_granular::scene_file::check_rigid_step`]), `params` applied on top (as for
-/// `from_scene`), its inlets pouring after each step.
+/// ([`BuiltScene::runs_rigid`]), as `coulomb simulate FILE` builds it, `params` applied on
+/// top of its model's step settings (as for `from_scene`), its inlets pouring after each step.
 pub(crate) fn from_built(
     py: Python<'_>,
     mut built: BuiltScene,
     params: &Bound<'_, PyDict>,
     resolve_overlaps: Option<usize>,
 ) -> PyResult<PyRigidSimulation> {
-    let switches = coulomb_granular::scene_file::check_rigid_step(&built.step)
-        .map_err(|e| PyValueError::new_err(format!("{}: {e}", built.path.display())))?;
-    let rest = crate::granular::apply_to_model(&mut built.model, params)?;
-    let switches = switches_of(rest, switches)?;
-    let path = built.path.clone();
+    crate::granular::apply_to_model(&mut built.model, params)?;
     let mut sim = build(py, built.model, resolve_overlaps)?;
-    sim.scene
-        .world
-        .set_switches(switches)
-        .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))?;
     sim.pour = built.inlets;
     Ok(sim)
 }
@@ -105,35 +95,11 @@ impl PyRigidSimulation {
     }
 }
 
-/// `rest` (the keywords `warm_start`, `gap_closure`) applied to the switches `w`
-/// (`coulomb_granular::rigid::StepSwitches`); any other keyword refused.
-fn switches_of(
-    rest: Vec<(String, Bound<'_, PyAny>)>,
-    mut w: coulomb_granular::rigid::StepSwitches,
-) -> PyResult<coulomb_granular::rigid::StepSwitches> {
-    for (k, v) in rest {
-        let b = || {
-            v.extract::<bool>()
-                .map_err(|_| PyTypeError::new_err(format!("{k} must be a bool")))
-        };
-        match k.as_str() {
-            "warm_start" => w.warm_start = b()?,
-            "gap_closure" => w.gap_closure = b()?,
-            _ => {
-                return Err(PyTypeError::new_err(format!(
-                    "'{k}' is not a parameter of rigid-body scenes (h, theta, tol, method, max_sweeps, relaxation, mu, restitution, rolling_friction, warm_start, gap_closure)"
-                )))
-            }
-        }
-    }
-    Ok(w)
-}
-
 #[pymethods]
 impl PyRigidSimulation {
     /// A scene built in Python (as `_Simulation.from_scene`); `params` may set the step
     /// settings h, theta, tol, method, max_sweeps, relaxation, the default law mu,
-    /// restitution, rolling_friction, and the switches warm_start, gap_closure.
+    /// restitution, rolling_friction, the switches warm_start, gap_closure, projection_velocities (`"positions_only"` only).
     /// `inlets` (the JSON list of `Scene._inlets`) pour after each step; with some, the spheres of
     /// the batches become bodies (in the same order), after which the poured ones are
     /// appended, as a scene file's are.
@@ -174,13 +140,8 @@ impl PyRigidSimulation {
         // scenes' 0.02 s and 1e-4 (issue 55: a 10-cube tower sank 5.6 cm at those)
         model.step.h = RIGID_H;
         model.step.tol = RIGID_TOL;
-        let rest = crate::granular::apply_to_model(&mut model, params)?;
-        let switches = switches_of(rest, Default::default())?;
+        crate::granular::apply_to_model(&mut model, params)?;
         let mut sim = build(py, model, resolve_overlaps)?;
-        sim.scene
-            .world
-            .set_switches(switches)
-            .map_err(|e| PyValueError::new_err(e.to_string()))?;
         sim.pour = pour;
         Ok(sim)
     }
@@ -388,8 +349,8 @@ impl PyRigidSimulation {
     }
 
     /// Changes the settings of `from_scene` (h, theta, tol, method, max_sweeps, relaxation,
-    /// the default law mu, restitution, rolling_friction, and the switches warm_start,
-    /// gap_closure) for the following steps: the scene's model takes them and the world is
+    /// the default law mu, restitution, rolling_friction, the switches warm_start,
+    /// gap_closure, projection_velocities) for the following steps: the scene's model takes them and the world is
     /// rebuilt from it with its state at t_k (the round trip of a checkpoint, what a restart
     /// does), so that its checks apply and its checkpoints hold them. Refused, nothing
     /// changed, as the constructor refuses them.
@@ -397,24 +358,12 @@ impl PyRigidSimulation {
     fn set_params(&mut self, params: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
         let Some(kw) = params else { return Ok(()) };
         let mut model = self.scene.model.clone();
-        let rest = crate::granular::apply_to_model(&mut model, kw)?;
-        let switches = switches_of(rest, self.scene.world.switches())?;
+        crate::granular::apply_to_model(&mut model, kw)?;
         let old = std::mem::replace(&mut self.scene.model, model);
         let rebuilt = self
             .scene
             .checkpoint_bytes()
-            .and_then(|b| RigidScene::from_checkpoint_bytes("set_params", b))
-            .and_then(|mut scene| {
-                scene
-                    .world
-                    .set_switches(switches)
-                    .map_err(|e| CheckpointError::Invalid {
-                        path: "set_params".into(),
-                        location: "switches".into(),
-                        detail: e.to_string(),
-                    })?;
-                Ok(scene)
-            });
+            .and_then(|b| RigidScene::from_checkpoint_bytes("set_params", b));
         match rebuilt {
             Ok(scene) => {
                 self.scene = scene;

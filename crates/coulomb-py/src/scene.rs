@@ -368,33 +368,20 @@ pub(crate) fn scene_save(
         model.step.h = crate::rigid::RIGID_H;
         model.step.tol = crate::rigid::RIGID_TOL;
     }
-    let rest = crate::granular::apply_to_model(&mut model, params)?;
+    crate::granular::apply_to_model(&mut model, params)?;
+    if rigid
+        && model
+            .step
+            .projection_velocities
+            .is_some_and(|v| v != coulomb_granular::projection::Velocities::PositionsOnly)
+    {
+        return Err(pyo3::exceptions::PyValueError::new_err(
+            "projection_velocities: a scene with bodies of other shapes than spheres moves positions only (\"positions_only\")",
+        ));
+    }
     let inlets: Vec<_> = entries.into_iter().map(|e| (e.inlet, e.material)).collect();
     let mut file = scene_save::scene_file_of(&model, &inlets)
         .map_err(|e| describe_error(py, Some("scene"), e.to_string()))?;
-    for (k, v) in rest {
-        if k == "projection_velocities" {
-            if rigid {
-                return Err(pyo3::exceptions::PyTypeError::new_err(format!(
-                    "'{k}' is not a parameter of rigid-body scenes"
-                )));
-            }
-            file.step.projection_velocities = Some(crate::granular::projection_velocities(&v)?);
-            continue;
-        }
-        let b: bool = v
-            .extract()
-            .map_err(|_| pyo3::exceptions::PyTypeError::new_err(format!("{k} must be a bool")))?;
-        if rigid {
-            return Err(pyo3::exceptions::PyTypeError::new_err(format!(
-                "'{k}' is not a parameter of rigid-body scenes"
-            )));
-        }
-        match k.as_str() {
-            "warm_start" => file.step.warm_start = b,
-            _ => file.step.gap_closure = b,
-        }
-    }
     file.step.steps = steps;
     py.detach(|| scene_save::save(&path, &file))
         .map_err(|e| match e {

@@ -22,9 +22,7 @@ use std::path::{Path, PathBuf};
 /// command line: [`crate::scene_arg`]).
 pub fn run(a: &Args, scene: &BuiltScene, inputs: &[PathBuf]) -> anyhow::Result<Outcome> {
     let file = scene.path.display().to_string();
-    let switches = coulomb_granular::scene_file::check_rigid_step(&scene.step)
-        .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
-    let mut rigid = match a.resolve_overlaps {
+    let rigid = match a.resolve_overlaps {
         None => RigidScene::new(&scene.model).with_context(|| file.clone())?,
         Some(sweeps) => {
             let (rigid, r) =
@@ -38,10 +36,6 @@ pub fn run(a: &Args, scene: &BuiltScene, inputs: &[PathBuf]) -> anyhow::Result<O
             rigid
         }
     };
-    rigid
-        .world
-        .set_switches(switches)
-        .map_err(|e| anyhow::anyhow!("{file}: [step] {e}"))?;
     run_loop::steps(a, rigid, &scene.name, false, inputs, &mut Pour::of(scene))
 }
 
@@ -66,10 +60,7 @@ pub fn restart(
         .with_context(|| format!("cannot restart from {}", checkpoint.display()))?;
     let name = match scene {
         Some(s) => {
-            let switches = coulomb_granular::scene_file::check_rigid_step(&s.step).ok();
-            if !rigid.is_built_from(&s.model, !s.inlets.is_empty())
-                || switches != Some(rigid.world.switches())
-            {
+            if !rigid.is_built_from(&s.model, !s.inlets.is_empty()) {
                 anyhow::bail!(
                     "{} is not the scene of the checkpoint {}: its bodies, obstacles or settings differ",
                     s.path.display(),

@@ -19,9 +19,9 @@
 //! - per joint the last step's impulses by row slot, the next step's warm start, and its
 //!   force and torque (`/joints/…`; version 2, absent from version-1 files, which are still
 //!   read when their scene has no joint);
-//! - the step's switches that the model does not hold (`/json/switches`,
-//!   [`crate::rigid::StepSwitches`]: γ, projection, gap closure, warm start; version 3, the
-//!   defaults for older files, which had no other).
+//! - the step's settings are the model's (`/json/model`, its `step`): version 3 stored γ,
+//!   projection, gap closure and warm start apart (`/json/switches`, read into the model's
+//!   step), versions 1 and 2 had the defaults.
 //!
 //! Not stored: the step reports and the last step's problem (reports of the steps already
 //! taken). A sphere-only scene has its own checkpoint ([`crate::checkpoint`]); the `format`
@@ -45,7 +45,7 @@
 //! | `/json/model`, `/json/contacts`, `/json/detector` | UTF-8 string | scalar |
 //! | `/joints/warm_start` | f64, by row slot | (joints, `SLOTS`) |
 //! | `/joints/force` | f64, force and torque, world axes | (joints, 6) |
-//! | `/json/switches` | UTF-8 string | scalar |
+//! | `/json/switches` (version 3 only) | UTF-8 string | scalar |
 
 use crate::checkpoint::{
     check_rows, encode_entries, index, json_of, open, read_checked, read_file, write_file,
@@ -61,10 +61,20 @@ use std::path::Path;
 
 /// The `format` attribute of a rigid-scene checkpoint.
 pub const FORMAT_NAME: &str = "coulomb-rigid-checkpoint";
-/// The `format_version` attribute written. Versions 2 (before the switches were stored) and
-/// 1 (before joints were, for scenes without joints) are still read; other versions are
-/// refused.
-pub const FORMAT_VERSION: i64 = 3;
+/// The `format_version` attribute written. Versions 3 (the step's switches apart from the
+/// model), 2 (before the switches were stored) and 1 (before joints were, for scenes without
+/// joints) are still read; other versions are refused.
+pub const FORMAT_VERSION: i64 = 4;
+
+/// `/json/switches` of a version-3 file: the step settings now in the model's step.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct V3Switches {
+    gamma: f64,
+    projection: bool,
+    gap_closure: bool,
+    warm_start: bool,
+}
 
 /// Columns of `/warm_start/key`.
 const KEY_COLUMNS: usize = 8;
@@ -107,12 +117,6 @@ fn entries(model: &SceneModel, state: &RigidState) -> Result<Vec<Entry>, Checkpo
         ),
         ("json/contacts", 0, Data::Str(contacts)),
         ("json/detector", 0, Data::Str(state.detector.clone())),
-        // with the other json/ datasets: the writer groups datasets by their first component
-        (
-            "json/switches",
-            0,
-            Data::Str(json_of("the step's switches", &state.switches)?),
-        ),
         (
             "joints/warm_start",
             SLOTS,
@@ -172,7 +176,7 @@ fn keys(r: &Reader<'_>, raw: &[i64]) -> Result<Vec<ContactKey>, CheckpointError>
 }
 
 /// The layout of a checkpoint of `version` (paths, columns, types): version 1 has no
-/// `/joints/…` datasets, versions 1 and 2 no `/json/switches`.
+/// `/joints/…` datasets, only version 3 has `/json/switches`.
 fn layout(version: i64) -> Result<Vec<Entry>, CheckpointError> {
     let empty = RigidState {
         time: 0.0,
@@ -186,18 +190,31 @@ fn layout(version: i64) -> Result<Vec<Entry>, CheckpointError> {
         detector: String::new(),
         joint_warm: Vec::new(),
         joint_forces: Vec::new(),
-        switches: Default::default(),
     };
-    let mut all = entries(&SceneModel::default(), &empty)?;
-    all.retain(|(p, _, _)| {
-        (version > 1 || !p.starts_with("joints/")) && (version > 2 || *p != "json/switches")
-    });
-    Ok(all)
+    Ok(older(version, entries(&SceneModel::default(), &empty)?))
+}
+
+/// The datasets `e` of the current version as a version-`v` file holds them.
+fn older(v: i64, e: Vec<Entry>) -> Vec<Entry> {
+    let mut e: Vec<Entry> = e
+        .into_iter()
+        .filter(|(p, _, _)| v > 1 || !p.starts_with("joints/"))
+        .collect();
+    if v == 3 {
+        // with the other json/ datasets: the writer groups datasets by their first component
+        let at = e
+            .iter()
+            .position(|(p, _, _)| *p == "json/detector")
+            .map_or(0, |i| i + 1);
+        e.insert(at, ("json/switches", 0, Data::Str(String::new())));
+    }
+    e
 }
 
 fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
-    let (read, version) = match read_checked(r, FORMAT_NAME, FORMAT_VERSION, &layout(3)?) {
-        Err(CheckpointError::Version { found, .. }) if found == 1 || found == 2 => {
+    let layout_now = layout(FORMAT_VERSION)?;
+    let (read, version) = match read_checked(r, FORMAT_NAME, FORMAT_VERSION, &layout_now) {
+        Err(CheckpointError::Version { found, .. }) if (1..=3).contains(&found) => {
             (read_checked(r, FORMAT_NAME, found, &layout(found)?)?, found)
         }
         other => (other?, FORMAT_VERSION),
@@ -240,17 +257,18 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
     let keys = keys(r, &raw)?;
     let (p, imp) = c.f64s()?;
     let imp: Vec<[f64; 3]> = rows(r, p, imp, Some(keys.len()))?;
-    let model: SceneModel = c.json()?;
+    let mut model: SceneModel = c.json()?;
     let contacts: Vec<RigidContact> = c.json()?;
     let (dp, detector) = match c.entries.next() {
         Some((p, _, Data::Str(s))) => (p, s),
         _ => return Err(r.corrupt("json/detector", "expected a string")),
     };
-    let switches: crate::rigid::StepSwitches = if version > 2 {
-        c.json()?
-    } else {
-        Default::default()
-    };
+    if version == 3 {
+        let w: V3Switches = c.json()?;
+        let s = &mut model.step;
+        (s.gamma, s.projection, s.gap_closure, s.warm_start) =
+            (w.gamma, w.projection, w.gap_closure, w.warm_start);
+    }
     let (joint_warm, joint_forces) = if version == 1 {
         if !model.joints.is_empty() {
             return Err(r.invalid(
@@ -315,7 +333,6 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
         detector,
         joint_warm,
         joint_forces,
-        switches,
     };
     scene.world.restore(state).map_err(|e| {
         // what `restore` still checks: fixed bodies at rest ("body i …"), warm-start and
@@ -328,8 +345,6 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
             "json/contacts"
         } else if e.starts_with("joints") {
             "joints/warm_start"
-        } else if e.contains("gamma") {
-            "json/switches"
         } else {
             dp
         };
@@ -474,22 +489,37 @@ mod tests {
         assert_eq!(b.world.contacts(), a.world.contacts());
     }
 
+    /// The model's step settings (γ, projection, gap closure, warm start among them) are
+    /// restored with it, and a version-3 file's `/json/switches` goes into the model's step.
     #[test]
     fn the_step_switches_are_restored() {
-        let mut a = scene(MIXED);
-        let switches = crate::rigid::StepSwitches {
-            gamma: 0.5,
-            projection: false,
-            gap_closure: false,
-            warm_start: false,
-        };
-        a.world.set_switches(switches).expect("switches");
+        let mut model = scene(MIXED).model;
+        let s = &mut model.step;
+        (s.gamma, s.projection, s.gap_closure, s.warm_start) = (0.5, false, false, false);
+        let mut a = RigidScene::new(&model).expect("scene");
         for _ in 0..10 {
             a.step().expect("step");
         }
         let bytes = a.checkpoint_bytes().expect("checkpoint");
         let mut b = RigidScene::from_checkpoint_bytes("switches.h5", bytes).expect("load");
-        assert_eq!(b.world.switches(), switches);
+        assert_eq!(b.model.step, model.step);
+        assert_eq!(b.world.settings(), a.world.settings());
+        // the same state as a version-3 file: the model with default switches, the switches
+        // apart
+        let state = a.world.state().expect("state");
+        let mut v3 = older(3, entries(&scene(MIXED).model, &state).expect("entries"));
+        for e in &mut v3 {
+            if e.0 == "json/switches" {
+                e.2 = Data::Str(
+                    r#"{"gamma":0.5,"projection":false,"gap_closure":false,"warm_start":false}"#
+                        .into(),
+                );
+            }
+        }
+        let bytes = encode_entries(FORMAT_NAME, 3, &v3).expect("v3 bytes");
+        let c = RigidScene::from_checkpoint_bytes("v3.h5", bytes).expect("v3 loads");
+        assert_eq!(c.model.step, model.step);
+        assert_eq!(c.world.settings(), a.world.settings());
         for _ in 0..10 {
             assert_eq!(a.step().expect("a").warm_started, 0);
             b.step().expect("b");
@@ -565,14 +595,6 @@ mod tests {
         for _ in 0..5 {
             a.step().expect("step");
         }
-        // the datasets of a version-`v` file
-        let older = |v: i64, e: Vec<Entry>| -> Vec<Entry> {
-            e.into_iter()
-                .filter(|(p, _, _)| {
-                    (v > 1 || !p.starts_with("joints/")) && (v > 2 || *p != "json/switches")
-                })
-                .collect()
-        };
         let state = a.world.state().expect("state");
         let v1 = older(1, entries(&a.model, &state).expect("entries"));
         let bytes = encode_entries(FORMAT_NAME, 1, &v1).expect("v1 bytes");
@@ -601,13 +623,13 @@ mod tests {
         // and another version is refused
         let bytes = encode_entries(
             FORMAT_NAME,
-            4,
+            5,
             &entries(&a.model, &a.world.state().expect("s")).expect("e"),
         )
-        .expect("v4 bytes");
-        let e = RigidScene::from_checkpoint_bytes("v4.h5", bytes).expect_err("v4");
+        .expect("v5 bytes");
+        let e = RigidScene::from_checkpoint_bytes("v5.h5", bytes).expect_err("v5");
         assert!(
-            matches!(e, CheckpointError::Version { found: 4, .. }),
+            matches!(e, CheckpointError::Version { found: 5, .. }),
             "{e}"
         );
     }

@@ -277,35 +277,6 @@ impl Default for RigidSettings {
     }
 }
 
-/// The `[step]` switches of a scene file that its model does not hold, as the rigid step
-/// honours them ([`RigidWorld::set_switches`]; docs/granular.md, "`[step]`"): γ of the
-/// activation rule (`gamma`), the position correction (`projection`), the gap closure
-/// (`gap_closure`) and the warm start (`warm_start`). Rigid checkpoints store them.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct StepSwitches {
-    /// [`RigidSettings::activation_gamma`]
-    pub gamma: f64,
-    /// [`RigidSettings::position_correction`]
-    pub projection: bool,
-    /// [`RigidSettings::gap_closure`]
-    pub gap_closure: bool,
-    /// [`RigidSettings::warm_start`]
-    pub warm_start: bool,
-}
-
-impl Default for StepSwitches {
-    fn default() -> Self {
-        let s = RigidSettings::default();
-        Self {
-            gamma: s.activation_gamma,
-            projection: s.position_correction,
-            gap_closure: s.gap_closure,
-            warm_start: s.warm_start,
-        }
-    }
-}
-
 /// The other party of a rigid contact.
 #[derive(
     Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, serde::Deserialize,

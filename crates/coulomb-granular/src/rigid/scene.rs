@@ -13,10 +13,10 @@
 //!   container, a spherical container, a rectangle and a triangle mesh the triangle mesh of
 //!   their surface (the one the output draws). The infinite `cylinder_inside` (rotating drum)
 //!   is refused: use a finite cylinder.
-//! - the step settings: h, θ, the tolerance, the sweep cap, the relaxation and the method of
-//!   the model's [`crate::StepSettings`], the model's gravity; the rest
-//!   [`RigidSettings::default`] (a scene file's `[step]` switches are set after,
-//!   [`crate::rigid::RigidWorld::set_switches`]).
+//! - the step settings: h, θ, the tolerance, the sweep cap, the relaxation, the method, γ,
+//!   the position correction, the gap closure and the warm start of the model's
+//!   [`crate::StepSettings`] (its `projection_velocities` only as `positions_only`: the rigid
+//!   correction moves positions only), the model's gravity; the rest [`RigidSettings::default`].
 //!
 //! The bodies keep the model's order (`bodies`, then the spheres of each batch).
 
@@ -350,6 +350,16 @@ impl RigidScene {
         overlaps: InitialOverlaps,
     ) -> Result<(Self, Option<crate::rigid::step::Relaxed>), SceneError> {
         model.step.check()?;
+        if let Some(v) = model
+            .step
+            .projection_velocities
+            .filter(|v| *v != crate::projection::Velocities::PositionsOnly)
+        {
+            let name = serde_json::to_string(&v).unwrap_or_default();
+            return Err(SceneError::InvalidStep(format!(
+                "projection_velocities = {name} cannot apply to a scene with bodies of other shapes than spheres: their correction moves positions only (\"positions_only\"); remove it"
+            )));
+        }
         let g = model.gravity;
         if !g.is_finite() {
             return Err(SceneError::InvalidGravity(g.to_array()));
@@ -441,6 +451,10 @@ impl RigidScene {
             max_sweeps: model.step.max_sweeps,
             relaxation: model.step.relaxation,
             library_only: model.step.method == crate::model::StepChoice::Library,
+            activation_gamma: model.step.gamma,
+            position_correction: model.step.projection,
+            gap_closure: model.step.gap_closure,
+            warm_start: model.step.warm_start,
             ..RigidSettings::default()
         };
         let (world, relaxed) = match overlaps {

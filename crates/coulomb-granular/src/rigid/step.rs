@@ -40,7 +40,7 @@ use super::parry::math::{Pose, Rotation, Vector};
 use super::parry::shape::SharedShape;
 use super::{
     RigidBodyDesc, RigidContact, RigidError, RigidObstacle, RigidPartner, RigidSettings,
-    RigidStatus, RigidStepReport, StepSwitches, QUATERNION_TOLERANCE,
+    RigidStatus, RigidStepReport, QUATERNION_TOLERANCE,
 };
 use crate::world::{MaterialTable, Motion};
 use coulomb::problem::GlobalProblem;
@@ -108,8 +108,6 @@ pub(crate) struct RigidState {
     pub joint_warm: Vec<[f64; SLOTS]>,
     /// each joint's last force and torque (read by the outputs)
     pub joint_forces: Vec<[f64; 6]>,
-    /// the settings' switches ([`RigidWorld::switches`])
-    pub switches: StepSwitches,
 }
 
 fn v3(a: [f64; 3]) -> Vector {
@@ -579,7 +577,6 @@ impl RigidWorld {
             detector: self.detector.to_json()?,
             joint_warm: self.joint_warm.clone(),
             joint_forces: self.joint_forces.clone(),
-            switches: self.switches(),
         })
     }
 
@@ -650,7 +647,6 @@ impl RigidWorld {
             return Err(format!("joints: row {j} is not finite"));
         }
         let detector = Detector::from_json(&s.detector, n, no)?;
-        self.set_switches(s.switches).map_err(|e| e.to_string())?;
         for (i, b) in self.bodies.iter_mut().enumerate() {
             b.x = v3(s.x[i]);
             b.q = rotation_from_wxyz(s.q[i]);
@@ -689,31 +685,6 @@ impl RigidWorld {
         &self.settings
     }
 
-    /// The switches of the settings that a scene file's `[step]` sets ([`StepSwitches`]).
-    pub fn switches(&self) -> StepSwitches {
-        let s = &self.settings;
-        StepSwitches {
-            gamma: s.activation_gamma,
-            projection: s.position_correction,
-            gap_closure: s.gap_closure,
-            warm_start: s.warm_start,
-        }
-    }
-
-    /// Sets the switches of the settings (checked as [`RigidWorld::new`] checks them: γ in
-    /// [0, 1]); they apply from the next step.
-    pub fn set_switches(&mut self, w: StepSwitches) -> Result<(), RigidError> {
-        let settings = RigidSettings {
-            activation_gamma: w.gamma,
-            position_correction: w.projection,
-            gap_closure: w.gap_closure,
-            warm_start: w.warm_start,
-            ..self.settings.clone()
-        };
-        check_settings(&settings)?;
-        self.settings = settings;
-        Ok(())
-    }
     /// Origins of the bodies' shape frames, world.
     pub fn positions(&self) -> Vec<[f64; 3]> {
         self.bodies

@@ -301,7 +301,8 @@ impl Default for StepSection {
 }
 
 impl StepSection {
-    /// The scene model's step settings: h, θ, tol, method, max_sweeps, relaxation.
+    /// The scene model's step settings: every key but the run's (`steps`, `duration`,
+    /// `until_rest`, `rest_speed`, `max_steps`).
     pub fn settings(&self) -> StepSettings {
         StepSettings {
             h: self.h,
@@ -310,6 +311,11 @@ impl StepSection {
             method: self.method,
             max_sweeps: self.max_sweeps,
             relaxation: self.relaxation,
+            gamma: self.gamma,
+            projection: self.projection,
+            projection_velocities: self.projection_velocities,
+            gap_closure: self.gap_closure,
+            warm_start: self.warm_start,
         }
     }
 
@@ -716,32 +722,6 @@ impl InletRun {
         sim.insert_bodies(spheres)?;
         Ok((e.particles.len(), e.skipped))
     }
-}
-
-/// The `[step]` switches of a scene file for the rigid-body step
-/// ([`crate::rigid::StepSwitches`]: `gamma`, `projection`, `gap_closure`, `warm_start`, each
-/// with the sphere engine's meaning, [`crate::rigid::RigidWorld::set_switches`]); `Err` names
-/// what it cannot honour: `projection_velocities` other than `"positions_only"` (the rigid
-/// correction moves positions only). Here, not in `rigid/`, so that the rigid engine does not
-/// import the scene file's types.
-pub fn check_rigid_step(step: &StepSection) -> Result<crate::rigid::StepSwitches, String> {
-    use crate::projection::Velocities;
-    let name = match step.projection_velocities {
-        Some(Velocities::Rescale) => "rescale",
-        Some(Velocities::Inelastic) => "inelastic",
-        _ => "",
-    };
-    if !name.is_empty() {
-        return Err(format!(
-            "[step] projection_velocities = \"{name}\" cannot apply to a scene with bodies of other shapes than spheres: their correction moves positions only (\"positions_only\"); remove it"
-        ));
-    }
-    Ok(crate::rigid::StepSwitches {
-        gamma: step.gamma,
-        projection: step.projection,
-        gap_closure: step.gap_closure,
-        warm_start: step.warm_start,
-    })
 }
 
 /// What the inlets poured in one call of [`BuiltScene::pour_rigid`].
@@ -1792,7 +1772,7 @@ impl LoadedScene {
         let s = &self.file.step;
         let at = |k: &str| [key("step"), key(k)];
         let pos = |x: f64| x.is_finite() && x > 0.0;
-        // h, theta, tol, max_sweeps, relaxation: the model's validation, located here
+        // the model's validation, located here
         s.settings()
             .check_key()
             .map_err(|(k, m)| self.invalid(&at(k), m))?;
@@ -1812,15 +1792,6 @@ impl LoadedScene {
         }
         if !pos(s.rest_speed) {
             return Err(self.invalid(&at("rest_speed"), "must be positive"));
-        }
-        if !(s.gamma.is_finite() && s.gamma >= 0.0) {
-            return Err(self.invalid(&at("gamma"), "must be ≥ 0"));
-        }
-        if s.projection_velocities.is_some() && !s.projection {
-            return Err(self.invalid(
-                &at("projection_velocities"),
-                "there is no position correction (projection = false) to apply it to",
-            ));
         }
         if s.max_steps == 0 {
             return Err(self.invalid(&at("max_steps"), "must be ≥ 1"));
@@ -1945,26 +1916,14 @@ impl BuiltScene {
         Ok(out)
     }
 
-    /// The world and parameters of the scene ([`SceneModel::build_with`] with `checks`), the
-    /// parameters completed by `[step]`'s activation, projection and warm-start settings.
+    /// The world and parameters of the scene ([`SceneModel::build_with`] with `checks`).
     pub fn build(&self, checks: &BuildChecks) -> Result<(World, Params), SceneFileError> {
-        let (world, mut params) =
-            self.model
-                .build_with(checks)
-                .map_err(|source| SceneFileError::Model {
-                    path: self.path.clone(),
-                    source,
-                })?;
-        params.activation.gamma = self.step.gamma;
-        params.activation.close_gaps = self.step.gap_closure;
-        params.warm_start = self.step.warm_start;
-        if !self.step.projection {
-            params.projection = None;
-        }
-        if let (Some(p), Some(v)) = (&mut params.projection, self.step.projection_velocities) {
-            p.velocities = v;
-        }
-        Ok((world, params))
+        self.model
+            .build_with(checks)
+            .map_err(|source| SceneFileError::Model {
+                path: self.path.clone(),
+                source,
+            })
     }
 
     /// Every sphere the scene starts with (free and fixed).

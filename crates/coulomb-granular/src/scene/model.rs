@@ -47,7 +47,7 @@ use crate::contact::candidate_pairs;
 use crate::math::Vec3;
 use crate::mesh::MeshError;
 use crate::nsgs::NsgsSettings;
-use crate::projection::Projection;
+use crate::projection::{Projection, Velocities};
 pub use crate::shape::{BodyShape, CompoundPart, ShapeError};
 use crate::simulation::{Params, StepMethod};
 use crate::world::{
@@ -354,6 +354,29 @@ pub struct StepSettings {
     /// over-relaxation ω ∈ [1, 2) (nsgs), default 1.5
     #[serde(default = "d_relax")]
     pub relaxation: f64,
+    /// γ ≥ 0 of the activation rule g + γ h min(u_N, 0) ≤ δ, default 1
+    #[serde(default = "d_gamma")]
+    pub gamma: f64,
+    /// position correction after each step, default true
+    #[serde(default = "yes")]
+    pub projection: bool,
+    /// what the position correction does to velocities (`None`: rescale, for spheres;
+    /// scenes with other shapes move positions only and refuse any other choice)
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub projection_velocities: Option<Velocities>,
+    /// gap closure of resting contacts ([`crate::assembly::gap_closure`]), default true
+    #[serde(default = "yes")]
+    pub gap_closure: bool,
+    /// warm starts from the previous step's impulses, default true
+    #[serde(default = "yes")]
+    pub warm_start: bool,
+}
+
+fn d_gamma() -> f64 {
+    1.0
+}
+fn yes() -> bool {
+    true
 }
 
 fn d_h() -> f64 {
@@ -381,14 +404,19 @@ impl Default for StepSettings {
             method: StepChoice::Nsgs,
             max_sweeps: d_sweeps(),
             relaxation: d_relax(),
+            gamma: d_gamma(),
+            projection: true,
+            projection_velocities: None,
+            gap_closure: true,
+            warm_start: true,
         }
     }
 }
 
 impl StepSettings {
     /// The [`Params`] of these settings with the contact law `law` (the parameters of
-    /// `coulomb simulate` with its default arguments otherwise: accurate activation, position
-    /// correction, warm starts; the library's solver with Gauss–Seidel inner iterations fused
+    /// `coulomb simulate` with its default arguments otherwise: accurate activation with
+    /// these γ and gap closure, these position correction and warm starts; the library's solver with Gauss–Seidel inner iterations fused
     /// with the law, APGD + Anderson as fallback, up to 20 outer iterations).
     pub fn params(&self, law: ContactLaw) -> Params {
         let d = Settings::time_stepping(Method::new(InnerKind::Pgs, Settings::default().outer));
@@ -408,10 +436,17 @@ impl StepSettings {
             theta: self.theta,
             restitution: law.restitution,
             mu: law.mu,
-            activation: Activation::accurate(),
+            activation: Activation {
+                gamma: self.gamma,
+                close_gaps: self.gap_closure,
+                ..Activation::accurate()
+            },
             solver,
-            warm_start: true,
-            projection: Some(Projection::default()),
+            warm_start: self.warm_start,
+            projection: self.projection.then(|| Projection {
+                velocities: self.projection_velocities.unwrap_or(Velocities::Rescale),
+                ..Projection::default()
+            }),
             method: match self.method {
                 StepChoice::Nsgs => StepMethod::Nsgs(NsgsSettings {
                     tol: self.tol,
@@ -425,14 +460,16 @@ impl StepSettings {
         }
     }
 
-    /// Refuses invalid step settings (h, θ, tolerance, sweep cap, relaxation).
+    /// Refuses invalid step settings (h, θ, tolerance, sweep cap, relaxation, γ, a
+    /// `projection_velocities` without projection).
     pub fn check(&self) -> Result<(), SceneError> {
         self.check_key()
             .map_err(|(_, reason)| SceneError::InvalidStep(reason))
     }
 
     /// [`Self::check`] with the key of the setting refused (`h`, `theta`, `tol`,
-    /// `max_sweeps`, `relaxation`): a scene file's error names its place.
+    /// `max_sweeps`, `relaxation`, `gamma`, `projection_velocities`): a scene file's error
+    /// names its place.
     pub fn check_key(&self) -> Result<(), (&'static str, String)> {
         if !(self.h.is_finite() && self.h > 0.0) {
             return Err((
@@ -451,6 +488,15 @@ impl StepSettings {
             return Err((
                 "relaxation",
                 format!("relaxation = {} is not in [1, 2)", self.relaxation),
+            ));
+        }
+        if !(self.gamma.is_finite() && self.gamma >= 0.0) {
+            return Err(("gamma", format!("gamma = {} must be ≥ 0", self.gamma)));
+        }
+        if self.projection_velocities.is_some() && !self.projection {
+            return Err((
+                "projection_velocities",
+                "there is no position correction (projection = false) to apply it to".into(),
             ));
         }
         Ok(())

@@ -61,8 +61,8 @@ fn a3(v: Vec3) -> [f64; 3] {
 }
 
 /// The scene file of `model` with the inlets `inlets` (each with the material of its
-/// spheres). The `[step]` section carries the model's step settings; its other keys (steps,
-/// activation, projection, warm starts) are the defaults, for the caller to set.
+/// spheres). The `[step]` section carries the model's step settings; its run keys (steps,
+/// duration, until_rest, …) are the defaults, for the caller to set.
 pub fn scene_file_of(
     model: &SceneModel,
     inlets: &[(Inlet, String)],
@@ -75,6 +75,11 @@ pub fn scene_file_of(
         method: s.method,
         max_sweeps: s.max_sweeps,
         relaxation: s.relaxation,
+        gamma: s.gamma,
+        projection: s.projection,
+        projection_velocities: s.projection_velocities,
+        gap_closure: s.gap_closure,
+        warm_start: s.warm_start,
         ..StepSection::default()
     };
     // materials: every name, with the density of its inlets (bodies carry their own)

@@ -416,11 +416,7 @@ impl PyRigidSimulation {
                 Ok(scene)
             });
         match rebuilt {
-            Ok(mut scene) => {
-                // what the model does not hold: set_solver's and keep_problem's settings
-                let kept = self.scene.world.settings();
-                scene.world.set_solver(kept.solver.clone());
-                scene.world.set_keep_problem(kept.keep_problem);
+            Ok(scene) => {
                 self.scene = scene;
                 Ok(())
             }

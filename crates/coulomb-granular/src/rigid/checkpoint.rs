@@ -21,7 +21,10 @@
 //!   read when their scene has no joint);
 //! - the step's switches that the model does not hold (`/json/switches`,
 //!   [`crate::rigid::StepSwitches`]: γ, projection, gap closure, warm start; version 3, the
-//!   defaults for older files, which had no other).
+//!   defaults for older files, which had no other);
+//! - the library solver's settings and `keep_problem` (`/json/library`, `LibrarySettings`:
+//!   `RigidWorld::set_solver`, `set_keep_problem`; version 4, the scene's defaults for older
+//!   files).
 //!
 //! Not stored: the step reports and the last step's problem (reports of the steps already
 //! taken). A sphere-only scene has its own checkpoint ([`crate::checkpoint`]); the `format`
@@ -45,7 +48,7 @@
 //! | `/json/model`, `/json/contacts`, `/json/detector` | UTF-8 string | scalar |
 //! | `/joints/warm_start` | f64, by row slot | (joints, `SLOTS`) |
 //! | `/joints/force` | f64, force and torque, world axes | (joints, 6) |
-//! | `/json/switches` | UTF-8 string | scalar |
+//! | `/json/switches`, `/json/library` | UTF-8 string | scalar |
 
 use crate::checkpoint::{
     check_rows, encode_entries, index, json_of, open, read_checked, read_file, write_file,
@@ -54,17 +57,17 @@ use crate::checkpoint::{
 use crate::model::SceneModel;
 use crate::rigid::contacts::ContactKey;
 use crate::rigid::joints::SLOTS;
-use crate::rigid::step::RigidState;
+use crate::rigid::step::{LibrarySettings, RigidState};
 use crate::rigid::{RigidContact, RigidPartner};
 use crate::rigid_scene::RigidScene;
 use std::path::Path;
 
 /// The `format` attribute of a rigid-scene checkpoint.
 pub const FORMAT_NAME: &str = "coulomb-rigid-checkpoint";
-/// The `format_version` attribute written. Versions 2 (before the switches were stored) and
-/// 1 (before joints were, for scenes without joints) are still read; other versions are
-/// refused.
-pub const FORMAT_VERSION: i64 = 3;
+/// The `format_version` attribute written. Versions 3 (before the library solver's settings
+/// were stored), 2 (before the switches were) and 1 (before joints were, for scenes without
+/// joints) are still read; other versions are refused.
+pub const FORMAT_VERSION: i64 = 4;
 
 /// Columns of `/warm_start/key`.
 const KEY_COLUMNS: usize = 8;
@@ -112,6 +115,17 @@ fn entries(model: &SceneModel, state: &RigidState) -> Result<Vec<Entry>, Checkpo
             "json/switches",
             0,
             Data::Str(json_of("the step's switches", &state.switches)?),
+        ),
+        (
+            "json/library",
+            0,
+            Data::Str(json_of(
+                "the library solver's settings",
+                &state.library.clone().unwrap_or(LibrarySettings {
+                    solver: Default::default(),
+                    keep_problem: true,
+                }),
+            )?),
         ),
         (
             "joints/warm_start",
@@ -172,7 +186,8 @@ fn keys(r: &Reader<'_>, raw: &[i64]) -> Result<Vec<ContactKey>, CheckpointError>
 }
 
 /// The layout of a checkpoint of `version` (paths, columns, types): version 1 has no
-/// `/joints/…` datasets, versions 1 and 2 no `/json/switches`.
+/// `/joints/…` datasets, versions 1 and 2 no `/json/switches`, versions 1 to 3 no
+/// `/json/library`.
 fn layout(version: i64) -> Result<Vec<Entry>, CheckpointError> {
     let empty = RigidState {
         time: 0.0,
@@ -187,17 +202,23 @@ fn layout(version: i64) -> Result<Vec<Entry>, CheckpointError> {
         joint_warm: Vec::new(),
         joint_forces: Vec::new(),
         switches: Default::default(),
+        library: None,
     };
     let mut all = entries(&SceneModel::default(), &empty)?;
-    all.retain(|(p, _, _)| {
-        (version > 1 || !p.starts_with("joints/")) && (version > 2 || *p != "json/switches")
-    });
+    all.retain(|(p, _, _)| in_version(version, p));
     Ok(all)
 }
 
+/// Whether a file of `version` has the dataset `path`.
+fn in_version(version: i64, path: &str) -> bool {
+    (version > 1 || !path.starts_with("joints/"))
+        && (version > 2 || path != "json/switches")
+        && (version > 3 || path != "json/library")
+}
+
 fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
-    let (read, version) = match read_checked(r, FORMAT_NAME, FORMAT_VERSION, &layout(3)?) {
-        Err(CheckpointError::Version { found, .. }) if found == 1 || found == 2 => {
+    let (read, version) = match read_checked(r, FORMAT_NAME, FORMAT_VERSION, &layout(4)?) {
+        Err(CheckpointError::Version { found, .. }) if (1..=3).contains(&found) => {
             (read_checked(r, FORMAT_NAME, found, &layout(found)?)?, found)
         }
         other => (other?, FORMAT_VERSION),
@@ -251,6 +272,7 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
     } else {
         Default::default()
     };
+    let library: Option<LibrarySettings> = if version > 3 { Some(c.json()?) } else { None };
     let (joint_warm, joint_forces) = if version == 1 {
         if !model.joints.is_empty() {
             return Err(r.invalid(
@@ -316,6 +338,7 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
         joint_warm,
         joint_forces,
         switches,
+        library,
     };
     scene.world.restore(state).map_err(|e| {
         // what `restore` still checks: fixed bodies at rest ("body i …"), warm-start and
@@ -475,6 +498,40 @@ mod tests {
     }
 
     #[test]
+    fn the_library_settings_are_restored() {
+        let mut a = scene(MIXED);
+        let solver = coulomb::solver::Settings {
+            max_outer: 17,
+            max_inner: 33,
+            ..Default::default()
+        };
+        a.world.set_solver(solver.clone());
+        a.world.set_keep_problem(false);
+        for _ in 0..3 {
+            a.step().expect("step");
+        }
+        let bytes = a.checkpoint_bytes().expect("bytes");
+        let mut b = RigidScene::from_checkpoint_bytes("library.h5", bytes).expect("load");
+        assert_eq!(b.world.settings().solver, solver);
+        assert!(!b.world.settings().keep_problem);
+        a.step().expect("a");
+        b.step().expect("b");
+        assert_eq!(snapshot(&b), snapshot(&a));
+        assert!(b.world.last_problem().is_none());
+        // a version-3 file (before they were stored) gives the scene's defaults
+        let state = a.world.state().expect("state");
+        let v3 = entries(&a.model, &state)
+            .expect("entries")
+            .into_iter()
+            .filter(|(p, _, _)| in_version(3, p))
+            .collect::<Vec<_>>();
+        let bytes = encode_entries(FORMAT_NAME, 3, &v3).expect("v3 bytes");
+        let c = RigidScene::from_checkpoint_bytes("v3.h5", bytes).expect("v3 loads");
+        assert_eq!(c.world.settings().solver, Default::default());
+        assert!(c.world.settings().keep_problem);
+    }
+
+    #[test]
     fn the_step_switches_are_restored() {
         let mut a = scene(MIXED);
         let switches = crate::rigid::StepSwitches {
@@ -567,11 +624,7 @@ mod tests {
         }
         // the datasets of a version-`v` file
         let older = |v: i64, e: Vec<Entry>| -> Vec<Entry> {
-            e.into_iter()
-                .filter(|(p, _, _)| {
-                    (v > 1 || !p.starts_with("joints/")) && (v > 2 || *p != "json/switches")
-                })
-                .collect()
+            e.into_iter().filter(|(p, _, _)| in_version(v, p)).collect()
         };
         let state = a.world.state().expect("state");
         let v1 = older(1, entries(&a.model, &state).expect("entries"));
@@ -601,13 +654,13 @@ mod tests {
         // and another version is refused
         let bytes = encode_entries(
             FORMAT_NAME,
-            4,
+            5,
             &entries(&a.model, &a.world.state().expect("s")).expect("e"),
         )
-        .expect("v4 bytes");
-        let e = RigidScene::from_checkpoint_bytes("v4.h5", bytes).expect_err("v4");
+        .expect("v5 bytes");
+        let e = RigidScene::from_checkpoint_bytes("v5.h5", bytes).expect_err("v5");
         assert!(
-            matches!(e, CheckpointError::Version { found: 4, .. }),
+            matches!(e, CheckpointError::Version { found: 5, .. }),
             "{e}"
         );
     }

@@ -110,6 +110,21 @@ pub(crate) struct RigidState {
     pub joint_forces: Vec<[f64; 6]>,
     /// the settings' switches ([`RigidWorld::switches`])
     pub switches: StepSwitches,
+    /// the library solver's settings and `keep_problem` (None: those of the world restored
+    /// into, for files written before they were stored)
+    pub library: Option<LibrarySettings>,
+}
+
+/// The settings of a [`RigidWorld`] that neither the scene model nor the switches hold,
+/// set by [`RigidWorld::set_solver`] and [`RigidWorld::set_keep_problem`]; rigid checkpoints
+/// store them (`/json/library`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct LibrarySettings {
+    /// [`RigidSettings::solver`]
+    pub solver: coulomb::solver::Settings,
+    /// [`RigidSettings::keep_problem`]
+    pub keep_problem: bool,
 }
 
 fn v3(a: [f64; 3]) -> Vector {
@@ -580,6 +595,10 @@ impl RigidWorld {
             joint_warm: self.joint_warm.clone(),
             joint_forces: self.joint_forces.clone(),
             switches: self.switches(),
+            library: Some(LibrarySettings {
+                solver: self.settings.solver.clone(),
+                keep_problem: self.settings.keep_problem,
+            }),
         })
     }
 
@@ -651,6 +670,10 @@ impl RigidWorld {
         }
         let detector = Detector::from_json(&s.detector, n, no)?;
         self.set_switches(s.switches).map_err(|e| e.to_string())?;
+        if let Some(l) = s.library {
+            self.settings.solver = l.solver;
+            self.settings.keep_problem = l.keep_problem;
+        }
         for (i, b) in self.bodies.iter_mut().enumerate() {
             b.x = v3(s.x[i]);
             b.q = rotation_from_wxyz(s.q[i]);

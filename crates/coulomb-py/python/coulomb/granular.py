@@ -1089,15 +1089,13 @@ class Simulation:
         as there) for the following steps; in a rigid-body scene those of the library's
         solver that finishes the steps Gauss–Seidel leaves above the tolerance (or takes
         every step with ``method="library"``), its ``tol`` being the scene's
-        (``set_params(tol=...)``). A rigid-body checkpoint does not hold them: a run loaded
-        from it has the defaults."""
+        (``set_params(tol=...)``); checkpoints hold them."""
         self._sim.set_solver(**settings)
 
     @property
     def keep_problem(self) -> bool:
         """When True, each step's problem (2.10) is kept in :attr:`last_problem`; False
-        drops it (the steps are the same to the bit). A rigid-body checkpoint does not hold
-        it: a run loaded from it keeps its problems."""
+        drops it (the steps are the same to the bit); checkpoints hold it."""
         return self._sim.keep_problem
 
     @keep_problem.setter

@@ -219,7 +219,7 @@ fn validate(p: &Params) -> PyResult<()> {
 }
 
 /// A `(n, 3)` float64 array (flattened by the Python layer) as points.
-fn points(what: &str, n: usize, a: &PyReadonlyArray1<'_, f64>) -> PyResult<Vec<Vec3>> {
+pub(crate) fn points(what: &str, n: usize, a: &PyReadonlyArray1<'_, f64>) -> PyResult<Vec<Vec3>> {
     let s = convert::slice(what, a)?;
     if a.len() != 3 * n {
         return Err(PyValueError::new_err(format!(

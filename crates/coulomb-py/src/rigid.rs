@@ -384,35 +384,43 @@ impl PyRigidSimulation {
         }
     }
 
-    /// Whether each step keeps its problem (2.10): the rigid world always does.
+    /// Whether each step keeps its problem (2.10) in `last_problem` (default True).
     #[getter]
     fn keep_problem(&self) -> bool {
         self.scene.world.settings().keep_problem
     }
 
+    /// Switches keeping each step's problem on or off (`RigidWorld::set_keep_problem`): the
+    /// rigid step builds the global problem for the library's finish without it.
     #[setter]
-    fn set_keep_problem(&mut self, keep: bool) -> PyResult<()> {
-        if keep != self.keep_problem() {
-            return Err(PyValueError::new_err(
-                "keep_problem: the rigid-body simulator keeps each step's problem (2.10) always",
-            ));
-        }
+    fn set_keep_problem(&mut self, keep: bool) {
+        self.scene.world.set_keep_problem(keep);
+    }
+
+    /// Replaces the settings of the library's solver that finishes (or, with method
+    /// "library", takes) the steps, from the next step: the keyword arguments of `solve`,
+    /// checked as the sphere scenes' `set_solver` checks them; its tol is the scene's
+    /// (`set_params(tol=...)`), as at construction.
+    #[pyo3(signature = (**settings))]
+    fn set_solver(&mut self, py: Python<'_>, settings: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
+        let s = convert::settings_from_kwargs(py, "set_solver", settings)?;
+        self.scene.world.set_solver(s);
         Ok(())
     }
 
-    /// Refused: see the message.
-    #[pyo3(signature = (**_settings))]
-    fn set_solver(&mut self, _settings: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
-        Err(PyValueError::new_err(
-            "set_solver: a scene with bodies of other shapes than spheres finishes its steps with the library solver at its default settings (its tol is the scene's: set_params(tol=...)); they cannot be changed yet",
-        ))
-    }
-
-    /// Refused: see the message.
-    fn set_positions(&mut self, _x: &Bound<'_, PyAny>) -> PyResult<()> {
-        Err(PyValueError::new_err(
-            "set_positions: the bodies of a scene with other shapes than spheres cannot be moved between steps yet (give their positions to the Scene, or set their velocities)",
-        ))
+    /// Moves the bodies before the next step: the origins of their shape frames (flattened
+    /// (n, 3), finite, as `body_positions`), orientations unchanged (`RigidWorld::set_positions`;
+    /// a fixed body must stay where it is). Refused, nothing changed, otherwise.
+    fn set_positions(&mut self, x: numpy::PyReadonlyArray1<'_, f64>) -> PyResult<()> {
+        let n = self.scene.world.len();
+        let rows: Vec<[f64; 3]> = crate::granular::points("positions", n, &x)?
+            .iter()
+            .map(|p| [p.x, p.y, p.z])
+            .collect();
+        self.scene
+            .world
+            .set_positions(&rows)
+            .map_err(|e| PyValueError::new_err(format!("positions: {e}")))
     }
 
     /// Makes the inlets of `scene` (the scene file or `Scene` the stored run was built from)

@@ -229,30 +229,41 @@ def test_every_public_member_answers_in_every_scene(make, tmp_path):
     @check
     def set_positions():
         x = sim.positions
-        if rigid:
-            with pytest.raises(ValueError, match="set_positions"):
-                sim.set_positions(x)
-        else:
-            sim.set_positions(x + [0.0, 0.0, 1e-3])
-            assert np.array_equal(sim.positions, x + [0.0, 0.0, 1e-3])
-            sim.set_positions(x)
+        q = sim.body_orientations
+        sim.set_positions(x + [0.0, 0.0, 1e-3])
+        assert np.allclose(sim.positions, x + [0.0, 0.0, 1e-3], rtol=0.0, atol=1e-15)
+        assert np.array_equal(sim.body_orientations, q)
+        with pytest.raises(ValueError, match="positions"):
+            sim.set_positions(x[:1])
+        bad = x.copy()
+        bad[0, 1] = np.nan
+        with pytest.raises(ValueError, match="positions"):
+            sim.set_positions(bad)
+        sim.set_positions(x)
+        assert np.allclose(sim.positions, x, rtol=0.0, atol=1e-15)
 
     @check
     def set_solver():
-        if rigid:
-            with pytest.raises(ValueError, match="set_solver"):
-                sim.set_solver(max_outer=50)
-        else:
-            sim.set_solver(max_outer=50)
+        sim.set_solver(max_outer=50)
+        assert sim.params["solver"]["max_outer"] == 50
+        with pytest.raises((TypeError, ValueError), match="bogus"):
+            sim.set_solver(bogus=1)
+        assert sim.params["solver"]["max_outer"] == 50
+        if rigid:  # the model's settings changed: the solver's stay
+            sim.set_params(theta=0.6)
             assert sim.params["solver"]["max_outer"] == 50
 
     @check
     def keep_problem():
+        sim.keep_problem = False
+        assert not sim.keep_problem
+        sim.step()
+        assert sim.last_problem is None
+        if rigid:
+            sim.set_params(theta=0.6)
+            assert not sim.keep_problem
         sim.keep_problem = True
         assert sim.keep_problem
-        if rigid:
-            with pytest.raises(ValueError, match="keep_problem"):
-                sim.keep_problem = False
 
     @check
     def last_problem():
@@ -278,6 +289,8 @@ def test_every_public_member_answers_in_every_scene(make, tmp_path):
     def load_checkpoint():
         again = Simulation.load_checkpoint(tmp_path / "state.h5", scene=make())
         assert again.is_rigid == rigid and again.steps_done == sim.steps_done
+        assert again.params["solver"] == sim.params["solver"]
+        assert again.params["solver"]["max_outer"] == 50 and again.keep_problem
         again.step()
         sim.step()
         assert np.array_equal(again.positions, sim.positions)

@@ -21,7 +21,10 @@
 //!   read when their scene has no joint);
 //! - the step's settings are the model's (`/json/model`, its `step`): version 3 stored γ,
 //!   projection, gap closure and warm start apart (`/json/switches`, read into the model's
-//!   step), versions 1 and 2 had the defaults.
+//!   step), versions 1 and 2 had the defaults;
+//! - the library solver's settings and `keep_problem` (`/json/library`, `LibrarySettings`:
+//!   `RigidWorld::set_solver`, `set_keep_problem`; version 4, the scene's defaults for older
+//!   files).
 //!
 //! Not stored: the step reports and the last step's problem (reports of the steps already
 //! taken). A sphere-only scene has its own checkpoint ([`crate::checkpoint`]); the `format`
@@ -45,7 +48,7 @@
 //! | `/json/model`, `/json/contacts`, `/json/detector` | UTF-8 string | scalar |
 //! | `/joints/warm_start` | f64, by row slot | (joints, `SLOTS`) |
 //! | `/joints/force` | f64, force and torque, world axes | (joints, 6) |
-//! | `/json/switches` (version 3 only) | UTF-8 string | scalar |
+//! | `/json/library` (version 4), `/json/switches` (version 3 only) | UTF-8 string | scalar |
 
 use crate::checkpoint::{
     check_rows, encode_entries, index, json_of, open, read_checked, read_file, write_file,
@@ -54,16 +57,17 @@ use crate::checkpoint::{
 use crate::model::SceneModel;
 use crate::rigid::contacts::ContactKey;
 use crate::rigid::joints::SLOTS;
-use crate::rigid::step::RigidState;
+use crate::rigid::step::{LibrarySettings, RigidState};
 use crate::rigid::{RigidContact, RigidPartner};
 use crate::rigid_scene::RigidScene;
 use std::path::Path;
 
 /// The `format` attribute of a rigid-scene checkpoint.
 pub const FORMAT_NAME: &str = "coulomb-rigid-checkpoint";
-/// The `format_version` attribute written. Versions 3 (the step's switches apart from the
-/// model), 2 (before the switches were stored) and 1 (before joints were, for scenes without
-/// joints) are still read; other versions are refused.
+/// The `format_version` attribute written (4: the step's settings in the model, the library
+/// solver's settings stored). Versions 3 (the step's switches apart from the model, no
+/// library settings), 2 (before the switches were stored) and 1 (before joints were, for
+/// scenes without joints) are still read; other versions are refused.
 pub const FORMAT_VERSION: i64 = 4;
 
 /// `/json/switches` of a version-3 file: the step settings now in the model's step.
@@ -117,6 +121,17 @@ fn entries(model: &SceneModel, state: &RigidState) -> Result<Vec<Entry>, Checkpo
         ),
         ("json/contacts", 0, Data::Str(contacts)),
         ("json/detector", 0, Data::Str(state.detector.clone())),
+        (
+            "json/library",
+            0,
+            Data::Str(json_of(
+                "the library solver's settings",
+                &state.library.clone().unwrap_or(LibrarySettings {
+                    solver: Default::default(),
+                    keep_problem: true,
+                }),
+            )?),
+        ),
         (
             "joints/warm_start",
             SLOTS,
@@ -176,7 +191,8 @@ fn keys(r: &Reader<'_>, raw: &[i64]) -> Result<Vec<ContactKey>, CheckpointError>
 }
 
 /// The layout of a checkpoint of `version` (paths, columns, types): version 1 has no
-/// `/joints/…` datasets, only version 3 has `/json/switches`.
+/// `/joints/…` datasets, only version 3 has `/json/switches`, versions 1 to 3 no
+/// `/json/library`.
 fn layout(version: i64) -> Result<Vec<Entry>, CheckpointError> {
     let empty = RigidState {
         time: 0.0,
@@ -190,6 +206,7 @@ fn layout(version: i64) -> Result<Vec<Entry>, CheckpointError> {
         detector: String::new(),
         joint_warm: Vec::new(),
         joint_forces: Vec::new(),
+        library: None,
     };
     Ok(older(version, entries(&SceneModel::default(), &empty)?))
 }
@@ -198,7 +215,7 @@ fn layout(version: i64) -> Result<Vec<Entry>, CheckpointError> {
 fn older(v: i64, e: Vec<Entry>) -> Vec<Entry> {
     let mut e: Vec<Entry> = e
         .into_iter()
-        .filter(|(p, _, _)| v > 1 || !p.starts_with("joints/"))
+        .filter(|(p, _, _)| (v > 1 || !p.starts_with("joints/")) && (v > 3 || *p != "json/library"))
         .collect();
     if v == 3 {
         // with the other json/ datasets: the writer groups datasets by their first component
@@ -269,6 +286,7 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
         (s.gamma, s.projection, s.gap_closure, s.warm_start) =
             (w.gamma, w.projection, w.gap_closure, w.warm_start);
     }
+    let library: Option<LibrarySettings> = if version > 3 { Some(c.json()?) } else { None };
     let (joint_warm, joint_forces) = if version == 1 {
         if !model.joints.is_empty() {
             return Err(r.invalid(
@@ -333,6 +351,7 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
         detector,
         joint_warm,
         joint_forces,
+        library,
     };
     scene.world.restore(state).map_err(|e| {
         // what `restore` still checks: fixed bodies at rest ("body i …"), warm-start and
@@ -491,6 +510,36 @@ mod tests {
 
     /// The model's step settings (γ, projection, gap closure, warm start among them) are
     /// restored with it, and a version-3 file's `/json/switches` goes into the model's step.
+    #[test]
+    fn the_library_settings_are_restored() {
+        let mut a = scene(MIXED);
+        let solver = coulomb::solver::Settings {
+            max_outer: 17,
+            max_inner: 33,
+            ..Default::default()
+        };
+        a.world.set_solver(solver.clone());
+        a.world.set_keep_problem(false);
+        for _ in 0..3 {
+            a.step().expect("step");
+        }
+        let bytes = a.checkpoint_bytes().expect("bytes");
+        let mut b = RigidScene::from_checkpoint_bytes("library.h5", bytes).expect("load");
+        assert_eq!(b.world.settings().solver, solver);
+        assert!(!b.world.settings().keep_problem);
+        a.step().expect("a");
+        b.step().expect("b");
+        assert_eq!(snapshot(&b), snapshot(&a));
+        assert!(b.world.last_problem().is_none());
+        // a version-2 file (before they were stored) gives the scene's defaults
+        let state = a.world.state().expect("state");
+        let v2 = older(2, entries(&a.model, &state).expect("entries"));
+        let bytes = encode_entries(FORMAT_NAME, 2, &v2).expect("v2 bytes");
+        let c = RigidScene::from_checkpoint_bytes("v2.h5", bytes).expect("v2 loads");
+        assert_eq!(c.world.settings().solver, Default::default());
+        assert!(c.world.settings().keep_problem);
+    }
+
     #[test]
     fn the_step_switches_are_restored() {
         let mut model = scene(MIXED).model;

@@ -248,6 +248,26 @@ impl Detector {
         })
     }
 
+    /// Drops the pair caches (parry's manifolds and workspaces, kept from the last
+    /// detection) of every pair with a body `i` where `moved[i]`: after a body is moved
+    /// between steps, its next detection starts afresh rather than from the manifolds of
+    /// where it was ([`super::RigidWorld::set_positions`]).
+    pub(crate) fn forget_moved(&mut self, moved: &[bool]) {
+        let gone = |i: usize| moved.get(i).copied().unwrap_or(false);
+        self.pairs
+            .retain(|(a, b), _| !(gone(*a) || matches!(b, RigidPartner::Body(j) if gone(*j))));
+    }
+
+    /// The pairs cached with body `i` (tests).
+    #[cfg(test)]
+    pub(crate) fn pairs_of(&self, i: usize) -> Vec<(usize, RigidPartner)> {
+        self.pairs
+            .keys()
+            .filter(|(a, b)| *a == i || *b == RigidPartner::Body(i))
+            .copied()
+            .collect()
+    }
+
     /// The detector that hands every pair to parry, balls included (no fast path): the
     /// reference the fast path is tested against.
     #[cfg(test)]

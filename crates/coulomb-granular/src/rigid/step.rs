@@ -108,6 +108,21 @@ pub(crate) struct RigidState {
     pub joint_warm: Vec<[f64; SLOTS]>,
     /// each joint's last force and torque (read by the outputs)
     pub joint_forces: Vec<[f64; 6]>,
+    /// the library solver's settings and `keep_problem` (None: those of the world restored
+    /// into, for files written before they were stored)
+    pub library: Option<LibrarySettings>,
+}
+
+/// The settings of a [`RigidWorld`] that the scene model does not hold,
+/// set by [`RigidWorld::set_solver`] and [`RigidWorld::set_keep_problem`]; rigid checkpoints
+/// store them (`/json/library`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct LibrarySettings {
+    /// [`RigidSettings::solver`]
+    pub solver: coulomb::solver::Settings,
+    /// [`RigidSettings::keep_problem`]
+    pub keep_problem: bool,
 }
 
 fn v3(a: [f64; 3]) -> Vector {
@@ -577,6 +592,10 @@ impl RigidWorld {
             detector: self.detector.to_json()?,
             joint_warm: self.joint_warm.clone(),
             joint_forces: self.joint_forces.clone(),
+            library: Some(LibrarySettings {
+                solver: self.settings.solver.clone(),
+                keep_problem: self.settings.keep_problem,
+            }),
         })
     }
 
@@ -647,6 +666,10 @@ impl RigidWorld {
             return Err(format!("joints: row {j} is not finite"));
         }
         let detector = Detector::from_json(&s.detector, n, no)?;
+        if let Some(l) = s.library {
+            self.settings.solver = l.solver;
+            self.settings.keep_problem = l.keep_problem;
+        }
         for (i, b) in self.bodies.iter_mut().enumerate() {
             b.x = v3(s.x[i]);
             b.q = rotation_from_wxyz(s.q[i]);
@@ -736,6 +759,63 @@ impl RigidWorld {
             b.v = Vector::new(vi[0], vi[1], vi[2]);
         }
         Ok(())
+    }
+    /// Moves the bodies before the next step: `x[i]` is the new origin of body i's shape
+    /// frame (world, as [`RigidWorld::positions`] returns it), its orientation unchanged; the
+    /// centre of mass follows, x = origin + R_shape · local_com. What the sphere engine's
+    /// `World::bodies[i].position` is for a sphere. Refused, nothing changed, when the count
+    /// is not the number of bodies, an entry is not finite, or a fixed body would move (as
+    /// [`RigidWorld::set_velocities`]: a fixed body's state is the scene's, which restarts
+    /// check). A body given its current origin keeps its state to the bit (the next step's
+    /// bits do not change); a moved body's pair caches in the detector are dropped, so its
+    /// next contacts are found from its new pose alone. Overlaps are not checked (the sphere
+    /// engine's setter does not check them either): the next step's contacts push them
+    /// apart. Velocities, warm starts and the last step's contacts are kept.
+    pub fn set_positions(&mut self, x: &[[f64; 3]]) -> Result<(), String> {
+        if x.len() != self.bodies.len() {
+            return Err(format!(
+                "expected {} positions (one per body), got {}",
+                self.bodies.len(),
+                x.len()
+            ));
+        }
+        let mut moved = vec![false; x.len()];
+        for (i, (b, xi)) in self.bodies.iter().zip(x).enumerate() {
+            if xi.iter().any(|c| !c.is_finite()) {
+                return Err(format!("body {i}: non-finite position {xi:?}"));
+            }
+            moved[i] = b.shape_origin().to_array() != *xi;
+            if b.fixed && moved[i] {
+                return Err(format!(
+                    "body {i} is fixed: it stays at {:?}, got {xi:?}",
+                    b.shape_origin().to_array()
+                ));
+            }
+        }
+        for ((b, xi), m) in self.bodies.iter_mut().zip(x).zip(&moved) {
+            if *m {
+                b.x = v3(*xi) + b.shape_rotation() * b.local_com;
+            }
+        }
+        self.detector.forget_moved(&moved);
+        Ok(())
+    }
+    /// Replaces the settings of the library's solver ([`RigidSettings::solver`]: the finish
+    /// of a step Gauss–Seidel leaves above the tolerance, or every step's solve with
+    /// `library_only`) from the next step; its `tol` is replaced by the step's tolerance, as
+    /// at construction.
+    pub fn set_solver(&mut self, solver: coulomb::solver::Settings) {
+        self.settings.solver = solver;
+    }
+    /// Whether each step keeps its problem (2.10) in global form
+    /// ([`RigidWorld::last_problem`], [`RigidSettings::keep_problem`]), from the next step.
+    /// The step does not need it: without it, the global problem is built only for the
+    /// library's finish and dropped after. Switched off, the problem kept is dropped now.
+    pub fn set_keep_problem(&mut self, keep: bool) {
+        self.settings.keep_problem = keep;
+        if !keep {
+            self.last_problem = None;
+        }
     }
     /// Angular velocities, world frame.
     pub fn angular_velocities(&self) -> Vec<[f64; 3]> {
@@ -2634,6 +2714,118 @@ mod tests {
         }
         // touching is fine
         assert!(world(vec![a]).is_ok());
+    }
+
+    /// Bits of every body's state (x, q, v, Ω) and of the last contacts' impulses.
+    fn state_bits(w: &RigidWorld) -> Vec<u64> {
+        let mut out = Vec::new();
+        for b in &w.bodies {
+            let q = b.q;
+            for x in [b.x, b.v, b.omega]
+                .iter()
+                .flat_map(|v| v.to_array())
+                .chain([q.w, q.x, q.y, q.z])
+            {
+                out.push(x.to_bits());
+            }
+        }
+        for c in w.contacts() {
+            out.extend(c.impulse.iter().map(|x| x.to_bits()));
+        }
+        out
+    }
+
+    #[test]
+    fn set_positions_moves_the_shape_frames_and_same_positions_keep_the_bits() {
+        // a tilted cuboid whose centre of mass is off its shape frame's origin, resting on
+        // a second cuboid, above the floor; a fixed cuboid aside
+        let mut a = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
+        a.mass.local_com = [0.01, -0.02, 0.0];
+        let mut b = cuboid([0.05, 0.1, 0.05], 800.0, [0.0, 0.0, 0.25]).unwrap();
+        let (c, s) = (0.3_f64.cos(), 0.3_f64.sin());
+        b.orientation = [c, 0.0, 0.0, s];
+        let mut f = cuboid([0.1; 3], 1000.0, [1.0, 0.0, 0.1]).unwrap();
+        f.fixed = true;
+        let started = || {
+            let mut w = world(vec![a.clone(), b.clone(), f.clone()]).unwrap();
+            for _ in 0..5 {
+                w.step().unwrap();
+            }
+            w
+        };
+        let mut w = started();
+        // the same positions: nothing changes, the next steps give the same bits
+        let mut same = started();
+        assert_eq!(state_bits(&same), state_bits(&w));
+        same.set_positions(&w.positions()).unwrap();
+        assert_eq!(state_bits(&same), state_bits(&w));
+        for _ in 0..3 {
+            w.step().unwrap();
+            same.step().unwrap();
+        }
+        assert_eq!(state_bits(&same), state_bits(&w));
+        assert!(!w.detector.pairs_of(1).is_empty());
+        // moved: the origins read back, the orientations and velocities are kept
+        let (q0, v0) = (w.orientations(), w.velocities());
+        let mut x = w.positions();
+        x[1][0] += 0.5;
+        x[1][2] += 0.25;
+        w.set_positions(&x).unwrap();
+        for (got, want) in w.positions().iter().zip(&x) {
+            for k in 0..3 {
+                assert!((got[k] - want[k]).abs() < 1e-15, "{got:?} {want:?}");
+            }
+        }
+        assert_eq!(w.orientations(), q0);
+        assert_eq!(w.velocities(), v0);
+        // the centre of mass follows the frame: x_com − origin = R_shape · local_com
+        let com = w.centres_of_mass();
+        let off = w.bodies[0].shape_rotation() * v3([0.01, -0.02, 0.0]);
+        for k in 0..3 {
+            assert!((com[0][k] - x[0][k] - off.to_array()[k]).abs() < 1e-15);
+        }
+        // the moved body's pair caches are gone; it now falls freely
+        assert!(w.detector.pairs_of(1).is_empty());
+        let z = w.positions()[1][2];
+        w.step().unwrap();
+        assert!(w.positions()[1][2] < z);
+        // refusals leave the world as it was
+        let before = state_bits(&w);
+        let mut bad = w.positions();
+        bad[0][1] = f64::NAN;
+        let e = w.set_positions(&bad).unwrap_err();
+        assert!(e.contains("body 0") && e.contains("non-finite"), "{e}");
+        let e = w.set_positions(&bad[..2]).unwrap_err();
+        assert!(e.contains("expected 3 positions"), "{e}");
+        let mut moved_fixed = w.positions();
+        moved_fixed[2][0] += 1.0;
+        let e = w.set_positions(&moved_fixed).unwrap_err();
+        assert!(e.contains("body 2 is fixed"), "{e}");
+        assert_eq!(state_bits(&w), before);
+    }
+
+    #[test]
+    fn the_solver_settings_and_keep_problem_can_be_changed() {
+        let b = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
+        let mut other = world(vec![b.clone()]).unwrap();
+        let mut w = world(vec![b]).unwrap();
+        w.step().unwrap();
+        other.step().unwrap();
+        assert!(w.last_problem().is_some());
+        w.set_keep_problem(false);
+        assert!(!w.settings().keep_problem && w.last_problem().is_none());
+        w.step().unwrap();
+        assert!(w.last_problem().is_none());
+        // the step does not depend on keeping its problem
+        other.step().unwrap();
+        assert!(other.last_problem().is_some());
+        assert_eq!(state_bits(&other), state_bits(&w));
+        let solver = coulomb::solver::Settings {
+            max_outer: 7,
+            ..Default::default()
+        };
+        w.set_solver(solver.clone());
+        assert_eq!(w.settings().solver.max_outer, 7);
     }
 
     #[test]

@@ -1068,8 +1068,11 @@ class Simulation:
         self._sim.set_velocities(np.ascontiguousarray(a).ravel())
 
     def set_positions(self, x: Any) -> None:
-        """Replaces the sphere centres (shape (n, 3), finite) before the next step; refused
-        (``ValueError``) in a rigid-body scene."""
+        """Replaces the sphere centres (shape (n, 3), finite) before the next step; in a
+        rigid-body scene the origins of the bodies' shape frames (as :attr:`positions`),
+        their orientations unchanged and their centres of mass following (a fixed body must
+        stay where it is); ``ValueError`` otherwise, nothing changed. Overlaps are not
+        checked. A rigid body given its current position keeps its state to the bit."""
         a = _rows3("positions", x, self.positions.shape[0])
         self._sim.set_positions(np.ascontiguousarray(a).ravel())
 
@@ -1082,14 +1085,17 @@ class Simulation:
         self._sim.set_params(**params)
 
     def set_solver(self, **settings: Any) -> None:
-        """Replaces the solver settings (keyword arguments of :func:`coulomb.solve`);
-        refused (``ValueError``) in a rigid-body scene."""
+        """Replaces the solver settings (keyword arguments of :func:`coulomb.solve`, checked
+        as there) for the following steps; in a rigid-body scene those of the library's
+        solver that finishes the steps Gauss–Seidel leaves above the tolerance (or takes
+        every step with ``method="library"``), its ``tol`` being the scene's
+        (``set_params(tol=...)``); checkpoints hold them."""
         self._sim.set_solver(**settings)
 
     @property
     def keep_problem(self) -> bool:
-        """When True, each step's problem (2.10) is kept in :attr:`last_problem` (always
-        True in a rigid-body scene, where setting False raises ``ValueError``)."""
+        """When True, each step's problem (2.10) is kept in :attr:`last_problem`; False
+        drops it (the steps are the same to the bit); checkpoints hold it."""
         return self._sim.keep_problem
 
     @keep_problem.setter

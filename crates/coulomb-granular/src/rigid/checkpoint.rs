@@ -364,6 +364,8 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
             "json/contacts"
         } else if e.starts_with("joints") {
             "joints/warm_start"
+        } else if e.starts_with("the library solver") {
+            "json/library"
         } else {
             dp
         };
@@ -538,6 +540,25 @@ mod tests {
         let c = RigidScene::from_checkpoint_bytes("v2.h5", bytes).expect("v2 loads");
         assert_eq!(c.world.settings().solver, Default::default());
         assert!(c.world.settings().keep_problem);
+        // settings the library refuses are refused on reading, naming the dataset
+        let mut bad = a.world.state().expect("state");
+        if let Some(l) = bad.library.as_mut() {
+            l.solver.max_outer = 0;
+        }
+        let bytes = encode_entries(
+            FORMAT_NAME,
+            FORMAT_VERSION,
+            &entries(&a.model, &bad).expect("entries"),
+        )
+        .expect("bytes");
+        let err = RigidScene::from_checkpoint_bytes("bad.h5", bytes)
+            .err()
+            .expect("refused")
+            .to_string();
+        assert!(
+            err.contains("json/library") && err.contains("max_outer"),
+            "{err}"
+        );
     }
 
     #[test]

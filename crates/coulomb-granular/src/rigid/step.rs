@@ -666,6 +666,11 @@ impl RigidWorld {
             return Err(format!("joints: row {j} is not finite"));
         }
         let detector = Detector::from_json(&s.detector, n, no)?;
+        if let Some(l) = &s.library {
+            l.solver
+                .validate()
+                .map_err(|e| format!("the library solver's settings: {e}"))?;
+        }
         if let Some(l) = s.library {
             self.settings.solver = l.solver;
             self.settings.keep_problem = l.keep_problem;

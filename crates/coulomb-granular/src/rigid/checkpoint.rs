@@ -551,10 +551,10 @@ mod tests {
             &entries(&a.model, &bad).expect("entries"),
         )
         .expect("bytes");
-        let err = RigidScene::from_checkpoint_bytes("bad.h5", bytes)
-            .err()
-            .expect("refused")
-            .to_string();
+        let Err(err) = RigidScene::from_checkpoint_bytes("bad.h5", bytes) else {
+            panic!("a checkpoint with max_outer = 0 was read");
+        };
+        let err = err.to_string();
         assert!(
             err.contains("json/library") && err.contains("max_outer"),
             "{err}"

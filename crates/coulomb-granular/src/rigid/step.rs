@@ -1818,8 +1818,6 @@ pub mod nsgs {
         pub mass: Vec<[f64; 6]>,
         /// f per moving body
         pub f: Vec<[f64; 6]>,
-        w_ii: Vec<[f64; 9]>,
-        w_inv: Vec<[f64; 9]>,
         q_norm: f64,
         /// the joints' blocks (equality rows, [`crate::rigid::joints`])
         pub joints: Vec<JointBlock>,
@@ -1829,11 +1827,82 @@ pub mod nsgs {
         /// the contacts coloured so that no two of one colour share a moving body (the
         /// sphere engine's [`crate::nsgs::Colouring`]); a sweep visits the colours in order
         colouring: crate::nsgs::Colouring,
+        /// what one update reads of each contact, in colour order (colour k at
+        /// `colouring.starts[k]..colouring.starts[k + 1]`): a copy, so that a sweep streams
+        /// through memory instead of jumping between contacts (the sphere engine keeps its
+        /// rows in colour order for the same reason)
+        sweep_rows: Vec<SweepRow>,
         /// each body block's contacts, in contact order: (contact, whether the body is its
         /// side B), those of block b at `incident[incident_start[b]..incident_start[b + 1]]`
         /// (the gather of [`Problem::velocities_with`])
         incident: Vec<(usize, bool)>,
         incident_start: Vec<usize>,
+    }
+
+    /// W_ii is taken as diag(W_NN, W_TT, W_TT) in a contact's update ([`SweepRow::isotropic`])
+    /// when its off-diagonal entries are at most this times the geometric mean of the
+    /// diagonal entries they couple and its two tangent entries differ by at most this times
+    /// the larger one: the blocks of contacts between balls or of a ball with an obstacle,
+    /// whose lever arms lie along the normal (their coupling entries are round-off, about
+    /// 1e-16 of the diagonal).
+    pub const ISOTROPIC_TOL: f64 = 1e-13;
+
+    /// One contact as a sweep reads it: its index, J and block per side, w, μ, W_ii, W_ii⁻¹.
+    #[derive(Debug, Clone, PartialEq)]
+    struct SweepRow {
+        /// the contact's index (its r at 3i..3i + 3)
+        i: usize,
+        a: Option<(usize, [[f64; 6]; 3])>,
+        b: Option<(usize, [[f64; 6]; 3])>,
+        w: [f64; 3],
+        mu: f64,
+        w_ii: [f64; 9],
+        w_inv: [f64; 9],
+        /// W_ii = diag(W_NN, W_TT, W_TT) to [`ISOTROPIC_TOL`] (a ball's contact): the
+        /// one-contact law is solved in closed form ([`isotropic_law`])
+        isotropic: bool,
+    }
+
+    /// Whether the 3 × 3 block `w` (row-major) is diag(w_N, w_T, w_T) to [`ISOTROPIC_TOL`].
+    fn is_isotropic(w: &[f64; 9]) -> bool {
+        let (n, t1, t2) = (w[0], w[4], w[8]);
+        if !(n > 0.0 && t1 > 0.0 && t2 > 0.0 && n.is_finite() && t1.is_finite() && t2.is_finite()) {
+            return false;
+        }
+        let small = |x: f64, p: f64, q: f64| x.abs() <= ISOTROPIC_TOL * (p * q).sqrt();
+        small(w[1], n, t1)
+            && small(w[3], n, t1)
+            && small(w[2], n, t2)
+            && small(w[6], n, t2)
+            && small(w[5], t1, t2)
+            && small(w[7], t1, t2)
+            && (t1 - t2).abs() <= ISOTROPIC_TOL * t1.max(t2)
+    }
+
+    /// The solution r of the one-contact Coulomb law (2.9), u = W r + c, for
+    /// W = diag(w_N, w_T, w_T) (w_T the mean of the block's two tangent entries), μ ∈ [0, ∞):
+    /// take-off r = 0 when c_N ≥ 0; stick r = −W⁻¹c when it lies in K_μ; else slide:
+    /// u_N = 0 gives r_N = −c_N / w_N (the normal row does not see r_T), and u_T = w_T r_T + c_T
+    /// opposite to r_T = −μ r_N τ gives τ = c_T / ‖c_T‖ (u_T = (‖c_T‖ − w_T μ r_N) τ, whose
+    /// factor is ≥ 0 exactly when sticking failed). The same cases as the library's
+    /// `solve_contact_law`, whose slip equation needs Newton's method for a general W_ii.
+    #[inline]
+    fn isotropic_law(w: &[f64; 9], mu: f64, c: &[f64; 3]) -> [f64; 3] {
+        if c[0] >= 0.0 {
+            return [0.0; 3];
+        }
+        let wt = 0.5 * (w[4] + w[8]);
+        let rn = -c[0] / w[0];
+        let stick = [rn, -c[1] / wt, -c[2] / wt];
+        // r_N > 0 (c_N < 0): stick in K_μ iff ‖r_T‖² ≤ (μ r_N)² (no square root)
+        let limit = mu * rn;
+        if stick[1] * stick[1] + stick[2] * stick[2] <= limit * limit {
+            return stick;
+        }
+        // sticking failed: μ r_N < ‖r_T‖ = ‖c_T‖ / w_T, so ‖c_T‖ > 0
+        let ct = (c[1] * c[1] + c[2] * c[2]).sqrt();
+        let s = mu * rn / ct;
+        [rn, -s * c[1], -s * c[2]]
     }
 
     /// Raw storage shared by the updates of one colour, which touch disjoint bodies and
@@ -1955,9 +2024,14 @@ pub mod nsgs {
                     let m = mass
                         .get(*blk)
                         .ok_or(format!("contact {i}: no body {blk}"))?;
+                    // symmetric (the products commute): the upper triangle, mirrored
                     for r in 0..3 {
-                        for c in 0..3 {
-                            w[3 * r + c] += (0..6).map(|d| j[r][d] * j[c][d] / m[d]).sum::<f64>();
+                        for c in r..3 {
+                            let x = (0..6).map(|d| j[r][d] * j[c][d] / m[d]).sum::<f64>();
+                            w[3 * r + c] += x;
+                            if c != r {
+                                w[3 * c + r] += x;
+                            }
                         }
                     }
                 }
@@ -1995,16 +2069,32 @@ pub mod nsgs {
                     next[blk] += 1;
                 }
             }
+            let sweep_rows = colouring
+                .order
+                .iter()
+                .map(|&i| {
+                    let row = &rows[i];
+                    SweepRow {
+                        i,
+                        a: row.a,
+                        b: row.b,
+                        w: row.w,
+                        mu: row.mu,
+                        w_ii: w_ii[i],
+                        w_inv: w_inv[i],
+                        isotropic: row.mu.is_finite() && is_isotropic(&w_ii[i]),
+                    }
+                })
+                .collect();
             let mut p = Self {
                 rows,
                 mass,
                 f,
-                w_ii,
-                w_inv,
                 q_norm: 0.0,
                 joints: Vec::new(),
                 equality: None,
                 colouring,
+                sweep_rows,
                 incident,
                 incident_start,
             };
@@ -2454,33 +2544,35 @@ pub mod nsgs {
             let (vp, rp) = (Raw(v.as_mut_ptr()), Raw(r.as_mut_ptr()));
             let c = &self.colouring;
             for k in 0..c.colours() {
-                let ids = &c.order[c.starts[k]..c.starts[k + 1]];
+                let rows = &self.sweep_rows[c.starts[k]..c.starts[k + 1]];
                 // SAFETY: one colour of a valid colouring (checked in `Problem::new`), v and
                 // r of the lengths asserted above
-                let run = |chunk: &[usize]| {
-                    for &i in chunk {
-                        unsafe { self.update(i, vp.get(), rp.get(), omega) }
+                let run = |chunk: &[SweepRow]| {
+                    for row in chunk {
+                        unsafe { self.update(row, vp.get(), rp.get(), omega) }
                     }
                 };
-                if ids.len() >= crate::nsgs::PARALLEL_MIN {
-                    ids.par_chunks(crate::nsgs::colour_chunk(ids.len()))
+                if rows.len() >= crate::nsgs::PARALLEL_MIN {
+                    rows.par_chunks(crate::nsgs::colour_chunk(rows.len()))
                         .for_each(run);
                 } else {
-                    run(ids);
+                    run(rows);
                 }
             }
         }
 
-        /// One Gauss–Seidel update of contact i (the others frozen), v kept = M⁻¹(f + H r);
-        /// with ω ≠ 1 the solution r_i' of the one-contact law becomes
+        /// One Gauss–Seidel update of contact i = `row.i` (the others frozen), v kept =
+        /// M⁻¹(f + H r); with ω ≠ 1 the solution r_i' of the one-contact law becomes
         /// P_{K_μ}(r_i + ω (r_i' − r_i)) (over-relaxation, as the sphere engine's
-        /// `crate::nsgs::update_contact`).
+        /// `crate::nsgs::update_contact`). The law is solved in closed form where W_ii is
+        /// diag(W_NN, W_TT, W_TT) ([`isotropic_law`]: a ball's contact), else by the library's
+        /// `solve_contact_law`.
         ///
         /// # Safety
         /// `v` points to one velocity per body block and `r` to 3 impulses per contact; no
         /// other thread reads or writes the velocities of contact i's bodies or r_i meanwhile.
-        unsafe fn update(&self, i: usize, v: *mut [f64; 6], r: *mut f64, omega: f64) {
-            let row = &self.rows[i];
+        unsafe fn update(&self, row: &SweepRow, v: *mut [f64; 6], r: *mut f64, omega: f64) {
+            let i = row.i;
             let mut u = row.w;
             for (blk, j) in row.a.iter().chain(row.b.iter()) {
                 // SAFETY: by the caller's contract
@@ -2491,23 +2583,27 @@ pub mod nsgs {
             }
             // SAFETY: by the caller's contract
             let ri = unsafe { &mut *r.add(3 * i).cast::<[f64; 3]>() };
-            let a = &self.w_ii[i];
+            let a = &row.w_ii;
             let old = *ri;
             let mut c = u;
             for k in 0..3 {
                 c[k] -= a[3 * k] * old[0] + a[3 * k + 1] * old[1] + a[3 * k + 2] * old[2];
             }
-            let mut contact = OneContact {
-                a,
-                ainv: &self.w_inv[i],
-                d: 3,
-                mu: row.mu,
-                c,
+            let new = if row.isotropic {
+                isotropic_law(a, row.mu, &c)
+            } else {
+                let mut contact = OneContact {
+                    a,
+                    ainv: &row.w_inv,
+                    d: 3,
+                    mu: row.mu,
+                    c,
+                };
+                solve_contact_law(&contact, &old, &u).unwrap_or_else(|| {
+                    contact.c[0] += row.mu * cone::tangent_norm(&u);
+                    solve_contact(&contact, &old)
+                })
             };
-            let new = solve_contact_law(&contact, &old, &u).unwrap_or_else(|| {
-                contact.c[0] += row.mu * cone::tangent_norm(&u);
-                solve_contact(&contact, &old)
-            });
             let new = if omega != 1.0 {
                 let mut x: [f64; 3] = std::array::from_fn(|k| old[k] + omega * (new[k] - old[k]));
                 cone::project(row.mu, &mut x);
@@ -2616,6 +2712,133 @@ pub mod nsgs {
                 .map_err(|source| ProblemError::Sparse { what: "G", source })?;
             let problem = GlobalProblem { f, ..problem };
             problem.with_equality(g, b)
+        }
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+
+        /// A deterministic generator of numbers in [−½, ½).
+        fn numbers(mut seed: u64) -> impl FnMut() -> f64 {
+            move || {
+                seed ^= seed << 13;
+                seed ^= seed >> 7;
+                seed ^= seed << 17;
+                (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            }
+        }
+
+        /// The closed form satisfies Coulomb's law (2.9) (natural-map residual of
+        /// docs/error.md at round-off) in all its cases, and gives the library's solution
+        /// where the library's one-contact solve finds one.
+        #[test]
+        fn isotropic_law_solves_the_one_contact_law() {
+            let mut rnd = numbers(0x9e37_79b9_7f4a_7c15);
+            let (mut stick, mut slide, mut off) = (0, 0, 0);
+            for trial in 0..20_000 {
+                let wn = 0.1 + 10.0 * (rnd() + 0.5);
+                let wt = 0.1 + 10.0 * (rnd() + 0.5);
+                let w = [wn, 0.0, 0.0, 0.0, wt, 0.0, 0.0, 0.0, wt];
+                let winv = [1.0 / wn, 0.0, 0.0, 0.0, 1.0 / wt, 0.0, 0.0, 0.0, 1.0 / wt];
+                let mu = [0.0, 0.3, 1.5][trial % 3];
+                let c = [4.0 * rnd(), 4.0 * rnd(), 4.0 * rnd()];
+                assert!(is_isotropic(&w));
+                let r = isotropic_law(&w, mu, &c);
+                let u: [f64; 3] = std::array::from_fn(|k| w[4 * k] * r[k] + c[k]);
+                let scale = 1.0 + c.iter().map(|x| x.abs()).sum::<f64>();
+                let e = law::contact_residual_sq(mu, &u, &r).sqrt();
+                assert!(
+                    e <= 1e-14 * scale,
+                    "trial {trial}: mu {mu} c {c:?} r {r:?} e {e}"
+                );
+                match (r[0] > 0.0, cone::contains(mu, &r, -1e-12)) {
+                    (false, _) => off += 1,
+                    (true, true) => stick += 1,
+                    (true, false) => slide += 1,
+                }
+                let contact = OneContact {
+                    a: &w,
+                    ainv: &winv,
+                    d: 3,
+                    mu,
+                    c,
+                };
+                if let Some(lib) = solve_contact_law(&contact, &[0.0; 3], &c) {
+                    for k in 0..3 {
+                        assert!((lib[k] - r[k]).abs() <= 1e-12 * scale, "{lib:?} vs {r:?}");
+                    }
+                }
+            }
+            assert!(
+                stick > 1000 && slide > 1000 && off > 1000,
+                "{stick} {slide} {off}"
+            );
+        }
+
+        /// J of a contact at lever arm `arm` (body frame = world) with frame n, t₁, t₂.
+        fn jacobian(arm: [f64; 3], frame: [[f64; 3]; 3], sign: f64) -> [[f64; 6]; 3] {
+            std::array::from_fn(|k| {
+                let t = frame[k];
+                let x = [
+                    arm[1] * t[2] - arm[2] * t[1],
+                    arm[2] * t[0] - arm[0] * t[2],
+                    arm[0] * t[1] - arm[1] * t[0],
+                ];
+                [t[0], t[1], t[2], x[0], x[1], x[2]].map(|e| sign * e)
+            })
+        }
+
+        /// A ball's contacts (lever arm along the normal, scalar inertia) take the closed
+        /// form, a box's corner (lever arm across the normal) the library's solve; both
+        /// problems are solved to the tolerance on the stored problem.
+        #[test]
+        fn ball_contacts_take_the_closed_form() {
+            let s = 0.5f64.sqrt();
+            let n = [0.0, s, s];
+            let frame = [n, [1.0, 0.0, 0.0], [0.0, s, -s]];
+            let (m, radius) = (2.0, 0.1);
+            let inertia = 0.4 * m * radius * radius;
+            let ball = [m, m, m, inertia, inertia, inertia];
+            let rule = Rule {
+                tol: 1e-10,
+                max_sweeps: 500,
+                stall_window: 100,
+                relaxation: 1.0,
+                time_limit: None,
+            };
+            // two balls in contact, the lower one on an inclined plane (gravity along −z)
+            let f = [[0.0, 0.0, -0.1 * m, 0.0, 0.0, 0.0]; 2];
+            let rows = vec![
+                Row {
+                    a: Some((0, jacobian(n.map(|x| -radius * x), frame, 1.0))),
+                    b: None,
+                    w: [0.0; 3],
+                    mu: 0.3,
+                },
+                Row {
+                    a: Some((1, jacobian(n.map(|x| -radius * x), frame, 1.0))),
+                    b: Some((0, jacobian(n.map(|x| radius * x), frame, -1.0))),
+                    w: [0.0; 3],
+                    mu: 0.3,
+                },
+            ];
+            let p = Problem::new(rows, vec![ball; 2], f.to_vec()).unwrap();
+            assert!(p.sweep_rows.iter().all(|r| r.isotropic));
+            let sol = p.solve(&[], &[], rule);
+            assert!(sol.error <= 1e-10, "{}", sol.error);
+            // a box (inertia not scalar) on its corner
+            let cuboid = [m, m, m, 0.01, 0.02, 0.03];
+            let rows = vec![Row {
+                a: Some((0, jacobian([-0.1, -0.05, -0.2], frame, 1.0))),
+                b: None,
+                w: [0.0; 3],
+                mu: 0.3,
+            }];
+            let p = Problem::new(rows, vec![cuboid], vec![f[0]]).unwrap();
+            assert!(!p.sweep_rows[0].isotropic);
+            let sol = p.solve(&[], &[], rule);
+            assert!(sol.error <= 1e-10, "{}", sol.error);
         }
     }
 }

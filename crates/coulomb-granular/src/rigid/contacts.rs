@@ -104,6 +104,25 @@ struct PairCache {
     workspace: Option<ContactManifoldsWorkspace>,
 }
 
+/// Each of the sorted, distinct `keys` with its entry of `old` (the default when it has none),
+/// by one merge of the two sorted lists; the entries of the other keys are dropped: the
+/// pairs' caches handed from one detection to the next (what `old.remove(key)` per key
+/// gives, without the tree's searches and rebalancing).
+fn take_caches<K: Ord + Copy, V: Default>(old: BTreeMap<K, V>, keys: &[K]) -> Vec<(K, V)> {
+    let mut old = old.into_iter().peekable();
+    keys.iter()
+        .map(|&p| {
+            while old.next_if(|(k, _)| *k < p).is_some() {}
+            let cache = old.next_if(|(k, _)| *k == p).map(|(_, c)| c);
+            (p, cache.unwrap_or_default())
+        })
+        .collect()
+}
+
+/// Bodies per task of the parallel poses and boxes of [`Detector::detect`] (a constant: the
+/// numbers are each body's own whatever the number of threads).
+const BOX_CHUNK: usize = 64;
+
 /// The warm-start key of the one contact of a ball with a body or a half-space: parry's
 /// (sub-shape 0, sub-shape 0, face 0, face 0, rank 0).
 fn ball_key(a: usize, b: RigidPartner) -> ContactKey {
@@ -289,13 +308,20 @@ impl Detector {
         obstacles: &[PlacedObstacle<'_>],
         margins: &[f64],
     ) -> Result<Vec<ContactPoint>, RigidError> {
-        let poses: Vec<Pose> = bodies.iter().map(|b| b.shape_pose()).collect();
-        let aabbs: Vec<Aabb> = shapes
-            .iter()
-            .zip(&poses)
-            .zip(margins)
-            .map(|((s, p), m)| s.compute_aabb(p).loosened(*m))
-            .collect();
+        // the poses and boxes of every body, in parallel (rayon; each its own numbers)
+        let (poses, aabbs): (Vec<Pose>, Vec<Aabb>) = {
+            use rayon::prelude::*;
+            bodies
+                .par_iter()
+                .zip(shapes)
+                .zip(margins)
+                .with_min_len(BOX_CHUNK)
+                .map(|((b, s), m)| {
+                    let pose = b.shape_pose();
+                    (pose, s.compute_aabb(&pose).loosened(*m))
+                })
+                .unzip()
+        };
         // the balls (radius) and the half-space obstacles (world normal, boundary point) of
         // the fast path
         let fast = !self.parry_only;
@@ -355,8 +381,6 @@ impl Detector {
         }
         pairs.sort_unstable();
         pairs.dedup();
-        // drop the caches of pairs that left the broad phase
-        let mut old = std::mem::take(&mut self.pairs);
         // bodies inserted between steps (an inlet) are appended: only theirs are built
         if self.polytopes.len() > shapes.len() {
             self.polytopes.clear();
@@ -370,10 +394,7 @@ impl Detector {
         // the narrow phase of every pair in parallel (rayon): each pair owns its cache, the
         // points are gathered in pair order and sorted by key, so the result does not depend
         // on the number of threads; the first error in pair order is returned
-        let jobs: Vec<((usize, RigidPartner), PairCache)> = pairs
-            .iter()
-            .map(|&p| (p, old.remove(&p).unwrap_or_default()))
-            .collect();
+        let jobs = take_caches(std::mem::take(&mut self.pairs), &pairs);
         let polytopes = &self.polytopes;
         let narrow = |((a, b), mut cache): ((usize, RigidPartner), PairCache)|
          -> Result<(Vec<ContactPoint>, Option<PairCache>), RigidError> {
@@ -469,12 +490,24 @@ impl Detector {
             jobs.into_par_iter().map(narrow).collect()
         };
         let mut points = fast_points;
+        // the caches kept, in pair order: the map is built in one pass from the sorted list
+        let mut kept = Vec::with_capacity(results.len());
+        let mut failed = None;
         for (result, &pair) in results.into_iter().zip(&pairs) {
-            let (found, cache) = result?;
-            points.extend(found);
-            if let Some(cache) = cache {
-                self.pairs.insert(pair, cache);
+            match result {
+                Ok((found, cache)) => {
+                    points.extend(found);
+                    kept.extend(cache.map(|c| (pair, c)));
+                }
+                Err(e) => {
+                    failed = Some(e);
+                    break;
+                }
             }
+        }
+        self.pairs = kept.into_iter().collect();
+        if let Some(e) = failed {
+            return Err(e);
         }
         points.sort_by_key(|x| x.key);
         Ok(points)
@@ -558,6 +591,38 @@ mod tests {
             assert!((f.t1.cross(f.t2) - f.normal).length() <= 1e-15);
         }
         fast.len()
+    }
+
+    #[test]
+    fn the_caches_handed_on_are_those_remove_gives() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(52);
+        for case in 0..50 {
+            let n = 1 + case * 3;
+            let old: BTreeMap<(usize, u8), u32> = (0..n)
+                .map(|_| {
+                    (
+                        (rng.random_range(0..40), rng.random_range(0..3)),
+                        rng.random_range(1..1000),
+                    )
+                })
+                .collect();
+            let mut keys: Vec<(usize, u8)> = (0..n)
+                .map(|_| (rng.random_range(0..40), rng.random_range(0..3)))
+                .collect();
+            keys.sort_unstable();
+            keys.dedup();
+            let mut reference = old.clone();
+            let expected: Vec<((usize, u8), u32)> = keys
+                .iter()
+                .map(|k| (*k, reference.remove(k).unwrap_or_default()))
+                .collect();
+            let got = take_caches(old.clone(), &keys);
+            assert_eq!(got, expected, "case {case}");
+            // not vacuous: some keys find their entry, some do not
+            if case > 10 {
+                assert!(got.iter().any(|(k, v)| *v != 0 && old.get(k) == Some(v)));
+            }
+        }
     }
 
     #[test]

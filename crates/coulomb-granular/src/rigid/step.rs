@@ -47,9 +47,11 @@ use coulomb::problem::GlobalProblem;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
+mod correct;
 pub(crate) mod equality;
 mod relax;
 mod rolling;
+use correct::correct_positions;
 pub use equality::{DEPENDENT_PIVOT, DROPPED_PIVOT};
 pub use relax::{Overlaps, Relaxed};
 
@@ -964,8 +966,17 @@ impl RigidWorld {
         // its other contacts may close them), as the spheres' correction detects anew
         let mut inactive = Vec::new();
         let look_ahead = h * self.gravity.length();
-        for c in points {
-            let (row, u_nk, u_free, w_obstacle) = self.row(&c, &omega_free, t_end);
+        // every point's row in parallel (rayon; each its own numbers), then the index set in
+        // point order
+        let built: Vec<_> = {
+            use rayon::prelude::*;
+            points
+                .par_iter()
+                .with_min_len(ROW_CHUNK)
+                .map(|c| self.row(c, &omega_free, t_end))
+                .collect()
+        };
+        for (c, (row, u_nk, u_free, w_obstacle)) in points.into_iter().zip(built) {
             // two bodies fall together in the free motion: either may be stopped by its other
             // contacts within the step, so the pair looks ahead by h |g| as a body does
             // against an obstacle (a stack with gaps just above δ closes them in one step)
@@ -1101,17 +1112,19 @@ impl RigidWorld {
                         ((sol.r, sol.error, "nsgs"), sol.lambda, sol.sweeps)
                     };
                     let library = s.library_finish || s.library_only;
-                    let global =
-                        if library && best.1 > s.tolerance || s.keep_problem {
-                            Some(problem.to_global_with(&lambda).map_err(|e| {
-                                RigidError::Solve {
+                    // wrapped once for the library (no copy of H)
+                    let global = if library && best.1 > s.tolerance || s.keep_problem {
+                        Some(coulomb::problem::Problem::Global(
+                            problem
+                                .to_global_with(&lambda)
+                                .map_err(|e| RigidError::Solve {
                                     step: k,
                                     detail: format!("global problem: {e}"),
-                                }
-                            })?)
-                        } else {
-                            None
-                        };
+                                })?,
+                        ))
+                    } else {
+                        None
+                    };
                     if best.1 > s.tolerance && library {
                         if let Some(g) = &global {
                             if let Some((r_lib, l_lib, err_lib)) =
@@ -1129,7 +1142,10 @@ impl RigidWorld {
                             }
                         }
                     }
-                    self.last_problem = if s.keep_problem { global } else { None };
+                    self.last_problem = match global {
+                        Some(coulomb::problem::Problem::Global(g)) if s.keep_problem => Some(g),
+                        _ => None,
+                    };
                     total_sweeps += sweeps;
                     if rolling.is_empty() {
                         break (best, lambda);
@@ -1522,78 +1538,9 @@ impl RigidWorld {
     }
 }
 
-/// The position correction of a step (`RigidSettings::position_correction`), the sphere
-/// scenes' projection (`crate::projection`) for bodies of any shape: when some contact's end
-/// gap g_i (linearized along its normal: g_k + h((1 − θ) u_{N,k} + θ u_{N,k+1})) is below
-/// −`trigger`, the displacements Δq = M⁻¹ H_Nᵀ λ (translations and body-frame rotations, the
-/// metric of M) with λ ≥ 0 that bring every g_i + (H_Nᵀ Δq)_i to ≥ 0, by projected
-/// Gauss–Seidel on λ until every gap is ≥ −`target` (at most 200 sweeps). Positions only: the
-/// velocities and the impulses are untouched, so the correction carries no load (the
-/// impulses written out balance the weight). None when nothing is below −`trigger`; else the
-/// displacements and the sweeps done (at most `max_sweeps`). The constraints are the rows of
-/// `problem` then those of `extra` (points outside the index set), `end_gaps` in that order.
-fn correct_positions(
-    problem: &nsgs::Problem,
-    extra: &[&nsgs::Row],
-    end_gaps: &[f64],
-    trigger: f64,
-    target: f64,
-    max_sweeps: usize,
-) -> Option<(Vec<[f64; 6]>, usize)> {
-    let worst = end_gaps.iter().map(|g| -g).fold(0.0, f64::max);
-    if worst.is_nan() || worst <= trigger {
-        return None;
-    }
-    let mut dq = vec![[0.0; 6]; problem.mass.len()];
-    let mut lambda = vec![0.0; end_gaps.len()];
-    let rows: Vec<&nsgs::Row> = problem.rows.iter().chain(extra.iter().copied()).collect();
-    let w: Vec<f64> = rows
-        .iter()
-        .map(|row| {
-            row.a
-                .iter()
-                .chain(row.b.iter())
-                .map(|(blk, j)| {
-                    (0..6)
-                        .map(|d| j[0][d] * j[0][d] / problem.mass[*blk][d])
-                        .sum::<f64>()
-                })
-                .sum()
-        })
-        .collect();
-    let mut sweeps = 0;
-    while sweeps < max_sweeps {
-        sweeps += 1;
-        let mut worst: f64 = 0.0;
-        for (i, row) in rows.iter().enumerate() {
-            if w[i].is_nan() || w[i] <= 0.0 {
-                continue;
-            }
-            let mut g = end_gaps[i];
-            for (blk, j) in row.a.iter().chain(row.b.iter()) {
-                g += (0..6).map(|d| j[0][d] * dq[*blk][d]).sum::<f64>();
-            }
-            worst = worst.max(-g);
-            let new = (lambda[i] - g / w[i]).max(0.0);
-            let delta = new - lambda[i];
-            if delta != 0.0 {
-                lambda[i] = new;
-                for (blk, j) in row.a.iter().chain(row.b.iter()) {
-                    for d in 0..6 {
-                        dq[*blk][d] += j[0][d] * delta / problem.mass[*blk][d];
-                    }
-                }
-            }
-        }
-        if worst <= target {
-            break;
-        }
-    }
-    dq.iter()
-        .flatten()
-        .all(|x| x.is_finite())
-        .then_some((dq, sweeps))
-}
+/// Contact points per task of the parallel row building of [`RigidWorld::step`] (a
+/// constant: each row is its point's own numbers whatever the number of threads).
+const ROW_CHUNK: usize = 64;
 
 /// The joints' positions are projected back until every |C| ≤ this (m or rad), at most 100
 /// Gauss–Seidel Newton sweeps (`joints::project`).
@@ -1686,13 +1633,12 @@ pub fn obstacle_pose(motion: &Motion, base: &Pose, t: f64) -> Pose {
 /// stored equality rows replace those, the others keep theirs, and the error is that of
 /// [`nsgs::Problem::error_with`] (bounds and signs included).
 fn library_finish(
-    global: &GlobalProblem,
+    global: &coulomb::problem::Problem,
     problem: &nsgs::Problem,
     r: &[f64],
     lambda: &[f64],
     s: &RigidSettings,
 ) -> Option<(Vec<f64>, Vec<f64>, f64)> {
-    use coulomb::problem::Problem;
     use coulomb::solver::{solve_with_guess, Guess};
     let start = if r.iter().all(|x| x.is_finite()) {
         r.to_vec()
@@ -1713,9 +1659,8 @@ fn library_finish(
         tol: s.tolerance,
         ..s.solver.clone()
     };
-    let wrapped = Problem::Global(global.clone());
     let run = |guess: Option<&Guess>| {
-        let sol = solve_with_guess(&wrapped, &settings, guess).ok()?;
+        let sol = solve_with_guess(global, &settings, guess).ok()?;
         if sol.r.len() != r.len() || sol.r.iter().any(|x| !x.is_finite()) {
             return None;
         }

@@ -21,10 +21,8 @@ impl Extent {
     pub fn around(balls: impl IntoIterator<Item = (Vec3, f64)>) -> Self {
         Self::of_bounds(Self::bounds(balls))
     }
-    /// What [`Extent::around`] needs of the balls: (−lo, hi, largest radius) of their
-    /// bounding box, 7 numbers whose element-wise maximum over the parts of a set of balls is
-    /// that of the set (so a run split over processes reduces them with a maximum and draws
-    /// the extent of one process, to the bit).
+    /// What [`Extent::around`] needs of the balls: (−lo, hi, largest radius), whose maximum
+    /// over the parts of a set of balls is the set's (a reduction over processes, exact).
     pub fn bounds(balls: impl IntoIterator<Item = (Vec3, f64)>) -> [f64; 7] {
         let mut lo = Vec3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
         let mut hi = -lo;

@@ -589,26 +589,15 @@ impl VtkWriter {
     /// Writes the frame of the scene's current state.
     pub fn frame<S: FrameSource + ?Sized>(&mut self, scene: &S) -> io::Result<()> {
         let f = scene.frame_data();
-        // Σ r / h on each body (A gets the force, B its opposite)
-        let mut force = vec![Vec3::ZERO; f.bodies.len()];
-        for c in &f.contacts {
-            if let Some(fa) = force.get_mut(c.a) {
-                *fa += c.force;
-            }
-            if let Some(fb) = c.b.and_then(|j| force.get_mut(j)) {
-                *fb += -c.force;
-            }
-        }
-        self.write_frame(&f, &force, None)
+        self.write_frame(&f, &contact_forces(&f), None)
     }
 
-    /// Writes the frame `f` with the contact force Σ r / h on each of its bodies (`force`,
-    /// the contacts of every process included): the files of one process ([`Self::frame`]),
-    /// or, with `part`, this process's part of a frame (balls only) of a run split over
-    /// processes, every process for the same step: the pieces `frames/bodies_K_R.vtp`,
-    /// `frames/contacts_K_R.vtp` with the arrays of one process plus `body` (each ball's
-    /// global index) and `rank`; rank 0 also the `.pvtp` files joining them, which the
-    /// collections list, and the obstacles over the bodies of every process.
+    /// Writes the frame `f` with the contact force Σ r / h on each body (`force`, from the
+    /// contacts of every process): the files of one process, or with `part` this process's
+    /// part of a frame of balls split over processes (every process for the same step): the
+    /// pieces `frames/bodies_K_R.vtp`, `frames/contacts_K_R.vtp` with the arrays of one
+    /// process plus `body` (the global index) and `rank`; rank 0 also the `.pvtp` files
+    /// joining them, listed by the collections, and the obstacles over every process's balls.
     pub fn write_frame(
         &mut self,
         f: &FrameData,
@@ -623,11 +612,11 @@ impl VtkWriter {
         let balls: Vec<(&FrameBody, f64, usize)> = (f.bodies.iter().enumerate())
             .filter_map(|(i, b)| Some((b, radius(b)?, i)))
             .collect();
-        let shaped = balls.len() < f.bodies.len();
-        if shaped && part.is_some() {
+        let (n, shaped) = (f.bodies.len(), balls.len() < f.bodies.len());
+        if force.len() != n || part.as_ref().is_some_and(|p| shaped || p.ids.len() != n) {
             return Err(io::Error::new(
-                io::ErrorKind::Unsupported,
-                "a frame split over processes holds balls only",
+                io::ErrorKind::InvalidInput,
+                "a frame takes one force per body; split over processes, balls with one index each",
             ));
         }
         let mut point_data = vec![
@@ -640,8 +629,7 @@ impl VtkWriter {
             Array::vectors("contact_force", balls.iter().map(|b| force[b.2])),
         ];
         if shaped || part.is_some() {
-            let id = |i: usize| part.as_ref().map_or(Some(i), |p| p.ids.get(i).copied());
-            let id = |i| id(i).map_or(f64::NAN, |g| g as f64);
+            let id = |i: usize| part.as_ref().map_or(i, |p| p.ids[i]) as f64;
             point_data.push(Array::scalars("body", balls.iter().map(|b| id(b.2))));
         }
         if let Some(rank) = part.as_ref().map(|p| p.rank as f64) {
@@ -779,6 +767,20 @@ impl VtkWriter {
         self.obstacles = Some((extent, file.clone()));
         Ok(file)
     }
+}
+
+/// Σ r / h on each body of `f` (A gets the force, B its opposite).
+fn contact_forces(f: &FrameData) -> Vec<Vec3> {
+    let mut force = vec![Vec3::ZERO; f.bodies.len()];
+    for c in &f.contacts {
+        if let Some(fa) = force.get_mut(c.a) {
+            *fa += c.force;
+        }
+        if let Some(fb) = c.b.and_then(|j| force.get_mut(j)) {
+            *fb += -c.force;
+        }
+    }
+    force
 }
 
 /// The frames of the collections in `dir` whose bodies file (part 0 of `bodies.pvd`) is of a
@@ -971,6 +973,115 @@ mod tests {
         let a = String::from_utf8(ascii).unwrap();
         let p = sim.world.bodies[7].position;
         assert!(a.contains(&format!("{} {} {}", p.x, p.y, p.z)));
+    }
+
+    /// The names of the data arrays of a .vtp or .pvtp file, in order.
+    fn array_names(file: &[u8]) -> Vec<String> {
+        let text = String::from_utf8_lossy(file);
+        let end = text.find("<AppendedData").unwrap_or(text.len());
+        (text[..end].split('<').filter(|e| e.contains("DataArray ")))
+            .map(|e| attr(e, "Name").to_string())
+            .collect()
+    }
+
+    /// The f64 values of the appended array `name` of a binary .vtp file.
+    fn named_f64(file: &[u8], name: &str) -> Vec<f64> {
+        let text = String::from_utf8_lossy(file);
+        let at = text.find(&format!("Name=\"{name}\"")).expect(name);
+        appended_f64(file, text[..at].rfind("<DataArray").unwrap())
+    }
+
+    /// A frame split over two processes in one (rank 0 the even beads of a stepped box, rank 1
+    /// the odd ones, the bounds' reduction standing for MPI's): each piece holds the arrays of
+    /// one process plus `body` and `rank`, their values those of the one-process frame to the
+    /// bit; the .pvtp declares the same arrays and lists both pieces; the collections list the
+    /// .pvtp files where one process lists .vtp files; the obstacles file is byte-identical. A
+    /// force missing for a body, or an index for a ball of a part, is refused.
+    #[test]
+    fn frames_split_over_processes_hold_the_arrays_of_one_process() {
+        let sim = stepped(Scene::Box, 60, 8);
+        let base = std::env::temp_dir().join(format!("coulomb-parts-{}", std::process::id()));
+        let (one, two) = (base.join("one"), base.join("two"));
+        VtkWriter::new(&one).unwrap().frame(&sim).unwrap();
+        let f = sim.frame_data();
+        assert!(!f.contacts.is_empty());
+        let force = contact_forces(&f);
+        let all = Extent::bounds(f.bodies.iter().map(|b| (b.position, radius(b))));
+        let mut w = VtkWriter::new(&two).unwrap();
+        for rank in [1usize, 0] {
+            let ids: Vec<usize> = (rank..f.bodies.len()).step_by(2).collect();
+            let part_of = FrameData {
+                bodies: ids.iter().map(|&i| f.bodies[i]).collect(),
+                contacts: (f.contacts.iter().filter(|c| c.a % 2 == rank).copied()).collect(),
+                ..f.clone()
+            };
+            let force: Vec<Vec3> = ids.iter().map(|&i| force[i]).collect();
+            let mut max = |x: &mut [f64]| {
+                for (x, a) in x.iter_mut().zip(all) {
+                    assert!(*x <= a);
+                    *x = a;
+                }
+            };
+            fn part<'a>(
+                rank: usize,
+                ids: &'a [usize],
+                max: &'a mut dyn FnMut(&mut [f64]),
+            ) -> Option<FramePart<'a>> {
+                let ranks = 2;
+                Some(FramePart {
+                    rank,
+                    ranks,
+                    ids,
+                    max,
+                })
+            }
+            let refused = w.write_frame(&part_of, &force[1..], part(rank, &ids, &mut max));
+            assert_eq!(refused.unwrap_err().kind(), io::ErrorKind::InvalidInput);
+            let refused = w.write_frame(&part_of, &force, part(rank, &ids[1..], &mut max));
+            assert_eq!(refused.unwrap_err().kind(), io::ErrorKind::InvalidInput);
+            w.write_frame(&part_of, &force, part(rank, &ids, &mut max))
+                .unwrap();
+        }
+        let read = |dir: &Path, name: &str| fs::read(dir.join(name)).unwrap();
+        let k = sim.steps_done;
+        let whole = read(&one, &format!("frames/bodies_{k:06}.vtp"));
+        let mut names = array_names(&whole);
+        let at = names.iter().position(|n| n == "connectivity").unwrap();
+        names.splice(at..at, ["body".to_string(), "rank".to_string()]);
+        let pvtp = read(&two, &format!("frames/bodies_{k:06}.pvtp"));
+        assert_eq!(array_names(&pvtp), names[..at + 2]);
+        let text = String::from_utf8_lossy(&pvtp);
+        assert!(text.contains(&format!("<Piece Source=\"bodies_{k:06}_1.vtp\"/>")));
+        for (name, width) in [("points", 3), ("radius", 1), ("contact_force", 3)] {
+            let want = named_f64(&whole, name);
+            let mut seen = 0;
+            for rank in 0..2 {
+                let piece = read(&two, &format!("frames/bodies_{k:06}_{rank}.vtp"));
+                assert_eq!(array_names(&piece), names);
+                assert!(named_f64(&piece, "rank").iter().all(|&r| r == rank as f64));
+                let got = named_f64(&piece, name);
+                for (j, id) in named_f64(&piece, "body").into_iter().enumerate() {
+                    let (id, j) = (id as usize * width, j * width);
+                    assert_eq!(got[j..j + width], want[id..id + width], "{name}");
+                    seen += 1;
+                }
+            }
+            assert_eq!(seen, sim.world.bodies.len());
+        }
+        let pvd = |dir: &Path, name: &str| String::from_utf8(read(dir, name)).unwrap();
+        for name in ["bodies.pvd", "contacts.pvd"] {
+            assert_eq!(pvd(&two, name), pvd(&one, name).replace(".vtp", ".pvtp"));
+        }
+        let obstacles = format!("frames/obstacles_{k:06}.vtp");
+        assert_eq!(read(&two, &obstacles), read(&one, &obstacles));
+        fs::remove_dir_all(&base).ok();
+    }
+
+    fn radius(b: &FrameBody) -> f64 {
+        match b.look {
+            Look::Ball(r) => r,
+            Look::Shape(_) => 0.0,
+        }
     }
 
     #[test]

@@ -17,9 +17,8 @@ use crate::exit::Outcome;
 use crate::progress::bar as progress;
 use crate::sim_args::{Args, BalanceArg, Method};
 use anyhow::{bail, Context};
-use coulomb_granular::distributed::output::DistributedVtk;
 use coulomb_granular::distributed::{Balance, Comm, DistributedSimulation, DistributedStats};
-use coulomb_granular::output::write_stats;
+use coulomb_granular::output::{write_stats, VtkWriter};
 use coulomb_granular::scene::BoxLayout;
 use coulomb_granular::{Scene, StepStats, Stop, Summary};
 
@@ -144,14 +143,13 @@ fn run_source(
     };
     let mut vtk = match &args.output {
         Some(dir) => Some(
-            DistributedVtk::new(dir)
-                .with_context(|| format!("cannot write into {}", dir.display()))?,
+            VtkWriter::new(dir).with_context(|| format!("cannot write into {}", dir.display()))?,
         ),
         None => None,
     };
-    let frame = |sim: &mut DistributedSimulation, vtk: &mut Option<DistributedVtk>| {
+    let frame = |sim: &mut DistributedSimulation, vtk: &mut Option<VtkWriter>| {
         let failed = match vtk.as_mut() {
-            Some(w) => w.frame(sim).err(),
+            Some(w) => sim.frame(w).err(),
             None => None,
         };
         // every rank learns whether one failed, so that none waits for the others forever

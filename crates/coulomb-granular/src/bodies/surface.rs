@@ -19,6 +19,11 @@ impl Extent {
     /// centre is not finite is left out) grown by 10 % of its diagonal and by the largest
     /// diameter on every side; a unit box around the origin without any.
     pub fn around(balls: impl IntoIterator<Item = (Vec3, f64)>) -> Self {
+        Self::of_bounds(Self::bounds(balls))
+    }
+    /// What [`Extent::around`] needs of the balls: (−lo, hi, largest radius), whose maximum
+    /// over the parts of a set of balls is the set's (a reduction over processes, exact).
+    pub fn bounds(balls: impl IntoIterator<Item = (Vec3, f64)>) -> [f64; 7] {
         let mut lo = Vec3::new(f64::INFINITY, f64::INFINITY, f64::INFINITY);
         let mut hi = -lo;
         let mut rmax: f64 = 0.0;
@@ -27,6 +32,15 @@ impl Extent {
             hi = hi.max(x + Vec3::new(r, r, r));
             rmax = rmax.max(r);
         }
+        [-lo.x, -lo.y, -lo.z, hi.x, hi.y, hi.z, rmax]
+    }
+    /// [`Extent::around`] of balls whose [`Extent::bounds`] are `b`.
+    pub fn of_bounds(b: [f64; 7]) -> Self {
+        let (lo, hi, rmax) = (
+            Vec3::new(-b[0], -b[1], -b[2]),
+            Vec3::new(b[3], b[4], b[5]),
+            b[6],
+        );
         if !(lo.is_finite() && hi.is_finite()) {
             return Self {
                 lo: Vec3::new(-1.0, -1.0, -1.0),

@@ -64,7 +64,6 @@
 
 mod comm;
 pub mod grid;
-pub mod output;
 pub mod slab;
 pub mod subdomain;
 
@@ -76,6 +75,7 @@ use crate::assembly::StepData;
 use crate::contact::{candidate_pairs, detect_with_speed, Contact, Partner};
 use crate::math::Vec3;
 use crate::nsgs::{StepProblem, RELAX_WINDOW};
+use crate::output::{FrameBody, FrameContact, FrameData, FramePart, VtkWriter};
 use crate::projection::project;
 use crate::simulation::{
     check_spheres, Params, Simulation, SimulationError, StepMethod, StepStats,
@@ -1444,6 +1444,31 @@ impl DistributedSimulation {
             .sum::<f64>()];
         self.comm.sum(&mut e);
         e[0]
+    }
+
+    /// Writes this rank's part of the frame of the current state through the one VTK writer
+    /// ([`VtkWriter::write_frame`], docs/distributed.md); every rank calls it (the region the
+    /// obstacles are drawn over is reduced over the ranks).
+    pub fn frame(&mut self, vtk: &mut VtkWriter) -> std::io::Result<()> {
+        let h = self.params.h;
+        let f = FrameData {
+            step: self.steps_done,
+            time: self.time,
+            bodies: self.beads.iter().map(|(_, b)| FrameBody::ball(b)).collect(),
+            contacts: (self.contacts.iter())
+                .map(|c| FrameContact::of_sphere(c, h))
+                .collect(),
+            obstacles: &self.obstacles,
+        };
+        let ids: Vec<usize> = self.beads.iter().map(|(gid, _)| *gid).collect();
+        let comm = &mut self.comm;
+        let part = FramePart {
+            rank: comm.rank(),
+            ranks: comm.size(),
+            ids: &ids,
+            max: &mut |x| comm.max(x),
+        };
+        vtk.write_frame(&f, &self.forces, Some(part))
     }
 
     /// All beads gathered on every rank in global id order (for tests and small runs: O(N)

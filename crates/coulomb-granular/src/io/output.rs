@@ -10,14 +10,14 @@
 //! numbers); [`VtkFormat::Ascii`] writes the same arrays as text.
 
 pub use crate::bodies::surface::{obstacle_surface, Extent, CYLINDER_SEGMENTS};
-use crate::contact::Partner;
+use crate::contact::{Contact, Partner};
 use crate::math::Vec3;
 use crate::output_dir::OutputDir;
 use crate::rigid::RigidPartner;
 use crate::rigid_scene::RigidScene;
 use crate::shape::{BodyShape, IDENTITY};
 use crate::simulation::{Simulation, StepStats};
-use crate::world::{Motion, Obstacle};
+use crate::world::{Motion, Obstacle, Sphere};
 use std::fmt::Write as _;
 use std::fs;
 use std::io;
@@ -224,12 +224,7 @@ impl PolyData {
         let mut appended: Vec<u8> = Vec::new();
         let mut array = |xml: &mut String, name: Option<&str>, components: usize, v: &Values| {
             let name = name.map(|s| format!(" Name=\"{s}\"")).unwrap_or_default();
-            let comps = if components > 1 {
-                format!(" NumberOfComponents=\"{components}\"")
-            } else {
-                String::new()
-            };
-            let ty = v.vtk_type();
+            let (comps, ty) = (self::components(components), v.vtk_type());
             match format {
                 VtkFormat::Binary => {
                     let _ = writeln!(
@@ -260,16 +255,7 @@ impl PolyData {
             if arrays.is_empty() {
                 continue;
             }
-            let scalars = arrays.iter().find(|a| a.components == 1);
-            let vectors = arrays.iter().find(|a| a.components == 3);
-            let _ = write!(xml, "<{tag}");
-            if let Some(a) = scalars {
-                let _ = write!(xml, " Scalars=\"{}\"", a.name);
-            }
-            if let Some(a) = vectors {
-                let _ = write!(xml, " Vectors=\"{}\"", a.name);
-            }
-            xml.push_str(">\n");
+            open_data(&mut xml, tag, arrays);
             for a in arrays {
                 array(&mut xml, Some(a.name), a.components, &a.values);
             }
@@ -290,6 +276,54 @@ impl PolyData {
         out.extend_from_slice(b"</VTKFile>\n");
         out
     }
+
+    /// The parallel file (.pvtp) joining `pieces` (names relative to it), each a .vtp of
+    /// this polydata's arrays ([`PolyData::to_vtp`]) with its own points and cells.
+    fn to_pvtp(&self, pieces: impl Iterator<Item = String>) -> Vec<u8> {
+        let mut xml = String::from(
+            "<?xml version=\"1.0\"?>\n<VTKFile type=\"PPolyData\" version=\"1.0\" byte_order=\"LittleEndian\">\n<PPolyData GhostLevel=\"0\">\n<PPoints>\n<PDataArray type=\"Float64\" Name=\"points\" NumberOfComponents=\"3\"/>\n</PPoints>\n",
+        );
+        for (tag, arrays) in [
+            ("PPointData", &self.point_data),
+            ("PCellData", &self.cell_data),
+        ] {
+            if arrays.is_empty() {
+                continue;
+            }
+            open_data(&mut xml, tag, arrays);
+            for a in arrays {
+                let (ty, name, comps) = (a.values.vtk_type(), a.name, components(a.components));
+                let _ = writeln!(xml, "<PDataArray type=\"{ty}\" Name=\"{name}\"{comps}/>");
+            }
+            let _ = writeln!(xml, "</{tag}>");
+        }
+        for p in pieces {
+            let _ = writeln!(xml, "<Piece Source=\"{p}\"/>");
+        }
+        xml.push_str("</PPolyData>\n</VTKFile>\n");
+        xml.into_bytes()
+    }
+}
+
+/// The `NumberOfComponents` attribute of an array of `n` components (none for 1).
+fn components(n: usize) -> String {
+    match n {
+        1 => String::new(),
+        n => format!(" NumberOfComponents=\"{n}\""),
+    }
+}
+
+/// The opening tag `<{tag} Scalars=… Vectors=…>` of a point or cell data section: its first
+/// scalar and its first vector array are the active ones.
+fn open_data(xml: &mut String, tag: &str, arrays: &[Array]) {
+    let _ = write!(xml, "<{tag}");
+    if let Some(a) = arrays.iter().find(|a| a.components == 1) {
+        let _ = write!(xml, " Scalars=\"{}\"", a.name);
+    }
+    if let Some(a) = arrays.iter().find(|a| a.components == 3) {
+        let _ = write!(xml, " Vectors=\"{}\"", a.name);
+    }
+    xml.push_str(">\n");
 }
 
 /// The obstacles at time t as one PolyData of triangles, with the obstacle's index as cell
@@ -339,6 +373,19 @@ pub struct FrameBody<'a> {
     pub angular_velocity: Vec3,
 }
 
+impl FrameBody<'_> {
+    /// A sphere of the sphere engine, drawn as a ball.
+    pub fn ball(s: &Sphere) -> Self {
+        FrameBody {
+            look: Look::Ball(s.radius),
+            position: s.position,
+            orientation: IDENTITY,
+            velocity: s.velocity,
+            angular_velocity: s.angular_velocity,
+        }
+    }
+}
+
 /// A contact point of the last step in a frame.
 #[derive(Debug, Clone, Copy)]
 pub struct FrameContact {
@@ -356,6 +403,24 @@ pub struct FrameContact {
     pub gap: f64,
 }
 
+impl FrameContact {
+    /// A contact of the sphere engine whose impulse was taken over a step `h` (its bodies'
+    /// indices as the contact holds them).
+    pub fn of_sphere(c: &Contact, h: f64) -> Self {
+        FrameContact {
+            a: c.body,
+            b: match c.partner {
+                Partner::Body(j) => Some(j),
+                Partner::Obstacle(..) => None,
+            },
+            point: c.point,
+            normal: c.normal,
+            force: c.world_impulse() * (1.0 / h),
+            gap: c.gap,
+        }
+    }
+}
+
 /// What a frame shows of a scene at t_k, the same for every scene (issue 52, item 4).
 #[derive(Debug, Clone)]
 pub struct FrameData<'a> {
@@ -371,6 +436,19 @@ pub struct FrameData<'a> {
     pub obstacles: &'a [Obstacle],
 }
 
+/// One process's part of a frame of a run split over processes (a distributed run,
+/// docs/distributed.md), for [`VtkWriter::write_frame`]; `max` is collective.
+pub struct FramePart<'a> {
+    /// this process (0 writes the .pvtp files, the obstacles and the collections)
+    pub rank: usize,
+    /// the processes, each writing one piece
+    pub ranks: usize,
+    /// the global index of each body of the frame (its `body` array)
+    pub ids: &'a [usize],
+    /// replaces each number by its maximum over the processes (collective)
+    pub max: &'a mut dyn FnMut(&mut [f64]),
+}
+
 /// A scene that frames are drawn of: [`Simulation`] and [`RigidScene`].
 pub trait FrameSource {
     /// What the frame of the current state shows.
@@ -383,27 +461,9 @@ impl FrameSource for Simulation {
         FrameData {
             step: self.steps_done,
             time: self.time,
-            bodies: (self.world.bodies.iter())
-                .map(|s| FrameBody {
-                    look: Look::Ball(s.radius),
-                    position: s.position,
-                    orientation: IDENTITY,
-                    velocity: s.velocity,
-                    angular_velocity: s.angular_velocity,
-                })
-                .collect(),
+            bodies: self.world.bodies.iter().map(FrameBody::ball).collect(),
             contacts: (self.contacts.iter())
-                .map(|c| FrameContact {
-                    a: c.body,
-                    b: match c.partner {
-                        Partner::Body(j) => Some(j),
-                        Partner::Obstacle(..) => None,
-                    },
-                    point: c.point,
-                    normal: c.normal,
-                    force: c.world_impulse() * (1.0 / h),
-                    gap: c.gap,
-                })
+                .map(|c| FrameContact::of_sphere(c, h))
                 .collect(),
             obstacles: &self.world.obstacles,
         }
@@ -529,18 +589,22 @@ impl VtkWriter {
     /// Writes the frame of the scene's current state.
     pub fn frame<S: FrameSource + ?Sized>(&mut self, scene: &S) -> io::Result<()> {
         let f = scene.frame_data();
+        self.write_frame(&f, &contact_forces(&f), None)
+    }
+
+    /// Writes the frame `f` with the contact force Σ r / h on each body (`force`, from the
+    /// contacts of every process): the files of one process, or with `part` this process's
+    /// part of a frame of balls split over processes (every process for the same step): the
+    /// pieces `frames/bodies_K_R.vtp`, `frames/contacts_K_R.vtp` with the arrays of one
+    /// process plus `body` (the global index) and `rank`; rank 0 also the `.pvtp` files
+    /// joining them, listed by the collections, and the obstacles over every process's balls.
+    pub fn write_frame(
+        &mut self,
+        f: &FrameData,
+        force: &[Vec3],
+        mut part: Option<FramePart<'_>>,
+    ) -> io::Result<()> {
         let k = f.step;
-        let file = |what: &str| format!("frames/{what}_{k:06}.vtp");
-        // Σ r / h on each body (A gets the force, B its opposite)
-        let mut force = vec![Vec3::ZERO; f.bodies.len()];
-        for c in &f.contacts {
-            if let Some(fa) = force.get_mut(c.a) {
-                *fa += c.force;
-            }
-            if let Some(fb) = c.b.and_then(|j| force.get_mut(j)) {
-                *fb += -c.force;
-            }
-        }
         let radius = |b: &FrameBody| match b.look {
             Look::Ball(r) => Some(r),
             Look::Shape(_) => None,
@@ -548,7 +612,13 @@ impl VtkWriter {
         let balls: Vec<(&FrameBody, f64, usize)> = (f.bodies.iter().enumerate())
             .filter_map(|(i, b)| Some((b, radius(b)?, i)))
             .collect();
-        let shaped = balls.len() < f.bodies.len();
+        let (n, shaped) = (f.bodies.len(), balls.len() < f.bodies.len());
+        if force.len() != n || part.as_ref().is_some_and(|p| shaped || p.ids.len() != n) {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                "a frame takes one force per body; split over processes, balls with one index each",
+            ));
+        }
         let mut point_data = vec![
             Array::scalars("radius", balls.iter().map(|b| b.1)),
             Array::vectors("velocity", balls.iter().map(|b| b.0.velocity)),
@@ -558,28 +628,32 @@ impl VtkWriter {
             ),
             Array::vectors("contact_force", balls.iter().map(|b| force[b.2])),
         ];
-        if shaped {
-            point_data.push(Array::scalars("body", balls.iter().map(|b| b.2 as f64)));
+        if shaped || part.is_some() {
+            let id = |i: usize| part.as_ref().map_or(i, |p| p.ids[i]) as f64;
+            point_data.push(Array::scalars("body", balls.iter().map(|b| id(b.2))));
         }
-        let shapes = shaped.then(|| self.shapes_polydata(&f, &force));
-        // the region the obstacles must cover: the balls and the shapes' vertices
-        let extent = Extent::around(
+        if let Some(rank) = part.as_ref().map(|p| p.rank as f64) {
+            point_data.push(Array::scalars("rank", balls.iter().map(|_| rank)));
+        }
+        let shapes = shaped.then(|| self.shapes_polydata(f, force));
+        // the region the obstacles must cover: the balls and the shapes' vertices (of every
+        // process)
+        let mut bounds = Extent::bounds(
             (balls.iter().map(|b| (b.0.position, b.1))).chain(
                 shapes
                     .iter()
                     .flat_map(|s| s.points.iter().map(|&p| (p, 0.0))),
             ),
         );
+        if let Some(p) = part.as_mut() {
+            (p.max)(&mut bounds);
+        }
+        let extent = Extent::of_bounds(bounds);
         let balls = PolyData {
             points: balls.iter().map(|b| b.0.position).collect(),
             point_data,
             ..PolyData::default()
         };
-        let (b, s, c) = (file("bodies"), file("shapes"), file("contacts"));
-        self.dir.write(&b, &balls.to_vtp(self.format))?;
-        if let Some(poly) = &shapes {
-            self.dir.write(&s, &poly.to_vtp(self.format))?;
-        }
         let contacts = PolyData {
             points: f.contacts.iter().map(|c| c.point).collect(),
             point_data: vec![
@@ -589,12 +663,38 @@ impl VtkWriter {
             ],
             ..PolyData::default()
         };
-        self.dir.write(&c, &contacts.to_vtp(self.format))?;
-        let o = self.obstacles_file(&f, extent)?;
+        // the file a collection lists: written whole by one process, or this process's
+        // piece, joined by rank 0's .pvtp
+        let put = |what: &str, poly: &PolyData| -> io::Result<String> {
+            let Some(p) = &part else {
+                let file = format!("frames/{what}_{k:06}.vtp");
+                self.dir.write(&file, &poly.to_vtp(self.format))?;
+                return Ok(file);
+            };
+            let piece = |r: usize| format!("{what}_{k:06}_{r}.vtp");
+            let mine = format!("frames/{}", piece(p.rank));
+            self.dir.write(&mine, &poly.to_vtp(self.format))?;
+            let file = format!("frames/{what}_{k:06}.pvtp");
+            if p.rank == 0 {
+                self.dir
+                    .write(&file, &poly.to_pvtp((0..p.ranks).map(piece)))?;
+            }
+            Ok(file)
+        };
+        let b = put("bodies", &balls)?;
+        let s = shapes
+            .as_ref()
+            .map(|poly| put("shapes", poly))
+            .transpose()?;
+        let c = put("contacts", &contacts)?;
+        if part.is_some_and(|p| p.rank != 0) {
+            return Ok(());
+        }
+        let o = self.obstacles_file(f, extent)?;
         self.frames.push(FrameFiles {
             time: f.time,
             bodies: b,
-            shapes: if shaped { s } else { String::new() },
+            shapes: s.unwrap_or_default(),
             contacts: c,
             obstacles: o,
         });
@@ -667,6 +767,20 @@ impl VtkWriter {
         self.obstacles = Some((extent, file.clone()));
         Ok(file)
     }
+}
+
+/// Σ r / h on each body of `f` (A gets the force, B its opposite).
+fn contact_forces(f: &FrameData) -> Vec<Vec3> {
+    let mut force = vec![Vec3::ZERO; f.bodies.len()];
+    for c in &f.contacts {
+        if let Some(fa) = force.get_mut(c.a) {
+            *fa += c.force;
+        }
+        if let Some(fb) = c.b.and_then(|j| force.get_mut(j)) {
+            *fb += -c.force;
+        }
+    }
+    force
 }
 
 /// The frames of the collections in `dir` whose bodies file (part 0 of `bodies.pvd`) is of a
@@ -859,6 +973,115 @@ mod tests {
         let a = String::from_utf8(ascii).unwrap();
         let p = sim.world.bodies[7].position;
         assert!(a.contains(&format!("{} {} {}", p.x, p.y, p.z)));
+    }
+
+    /// The names of the data arrays of a .vtp or .pvtp file, in order.
+    fn array_names(file: &[u8]) -> Vec<String> {
+        let text = String::from_utf8_lossy(file);
+        let end = text.find("<AppendedData").unwrap_or(text.len());
+        (text[..end].split('<').filter(|e| e.contains("DataArray ")))
+            .map(|e| attr(e, "Name").to_string())
+            .collect()
+    }
+
+    /// The f64 values of the appended array `name` of a binary .vtp file.
+    fn named_f64(file: &[u8], name: &str) -> Vec<f64> {
+        let text = String::from_utf8_lossy(file);
+        let at = text.find(&format!("Name=\"{name}\"")).expect(name);
+        appended_f64(file, text[..at].rfind("<DataArray").unwrap())
+    }
+
+    /// A frame split over two processes in one (rank 0 the even beads of a stepped box, rank 1
+    /// the odd ones, the bounds' reduction standing for MPI's): each piece holds the arrays of
+    /// one process plus `body` and `rank`, their values those of the one-process frame to the
+    /// bit; the .pvtp declares the same arrays and lists both pieces; the collections list the
+    /// .pvtp files where one process lists .vtp files; the obstacles file is byte-identical. A
+    /// force missing for a body, or an index for a ball of a part, is refused.
+    #[test]
+    fn frames_split_over_processes_hold_the_arrays_of_one_process() {
+        let sim = stepped(Scene::Box, 60, 8);
+        let base = std::env::temp_dir().join(format!("coulomb-parts-{}", std::process::id()));
+        let (one, two) = (base.join("one"), base.join("two"));
+        VtkWriter::new(&one).unwrap().frame(&sim).unwrap();
+        let f = sim.frame_data();
+        assert!(!f.contacts.is_empty());
+        let force = contact_forces(&f);
+        let all = Extent::bounds(f.bodies.iter().map(|b| (b.position, radius(b))));
+        let mut w = VtkWriter::new(&two).unwrap();
+        for rank in [1usize, 0] {
+            let ids: Vec<usize> = (rank..f.bodies.len()).step_by(2).collect();
+            let part_of = FrameData {
+                bodies: ids.iter().map(|&i| f.bodies[i]).collect(),
+                contacts: (f.contacts.iter().filter(|c| c.a % 2 == rank).copied()).collect(),
+                ..f.clone()
+            };
+            let force: Vec<Vec3> = ids.iter().map(|&i| force[i]).collect();
+            let mut max = |x: &mut [f64]| {
+                for (x, a) in x.iter_mut().zip(all) {
+                    assert!(*x <= a);
+                    *x = a;
+                }
+            };
+            fn part<'a>(
+                rank: usize,
+                ids: &'a [usize],
+                max: &'a mut dyn FnMut(&mut [f64]),
+            ) -> Option<FramePart<'a>> {
+                let ranks = 2;
+                Some(FramePart {
+                    rank,
+                    ranks,
+                    ids,
+                    max,
+                })
+            }
+            let refused = w.write_frame(&part_of, &force[1..], part(rank, &ids, &mut max));
+            assert_eq!(refused.unwrap_err().kind(), io::ErrorKind::InvalidInput);
+            let refused = w.write_frame(&part_of, &force, part(rank, &ids[1..], &mut max));
+            assert_eq!(refused.unwrap_err().kind(), io::ErrorKind::InvalidInput);
+            w.write_frame(&part_of, &force, part(rank, &ids, &mut max))
+                .unwrap();
+        }
+        let read = |dir: &Path, name: &str| fs::read(dir.join(name)).unwrap();
+        let k = sim.steps_done;
+        let whole = read(&one, &format!("frames/bodies_{k:06}.vtp"));
+        let mut names = array_names(&whole);
+        let at = names.iter().position(|n| n == "connectivity").unwrap();
+        names.splice(at..at, ["body".to_string(), "rank".to_string()]);
+        let pvtp = read(&two, &format!("frames/bodies_{k:06}.pvtp"));
+        assert_eq!(array_names(&pvtp), names[..at + 2]);
+        let text = String::from_utf8_lossy(&pvtp);
+        assert!(text.contains(&format!("<Piece Source=\"bodies_{k:06}_1.vtp\"/>")));
+        for (name, width) in [("points", 3), ("radius", 1), ("contact_force", 3)] {
+            let want = named_f64(&whole, name);
+            let mut seen = 0;
+            for rank in 0..2 {
+                let piece = read(&two, &format!("frames/bodies_{k:06}_{rank}.vtp"));
+                assert_eq!(array_names(&piece), names);
+                assert!(named_f64(&piece, "rank").iter().all(|&r| r == rank as f64));
+                let got = named_f64(&piece, name);
+                for (j, id) in named_f64(&piece, "body").into_iter().enumerate() {
+                    let (id, j) = (id as usize * width, j * width);
+                    assert_eq!(got[j..j + width], want[id..id + width], "{name}");
+                    seen += 1;
+                }
+            }
+            assert_eq!(seen, sim.world.bodies.len());
+        }
+        let pvd = |dir: &Path, name: &str| String::from_utf8(read(dir, name)).unwrap();
+        for name in ["bodies.pvd", "contacts.pvd"] {
+            assert_eq!(pvd(&two, name), pvd(&one, name).replace(".vtp", ".pvtp"));
+        }
+        let obstacles = format!("frames/obstacles_{k:06}.vtp");
+        assert_eq!(read(&two, &obstacles), read(&one, &obstacles));
+        fs::remove_dir_all(&base).ok();
+    }
+
+    fn radius(b: &FrameBody) -> f64 {
+        match b.look {
+            Look::Ball(r) => r,
+            Look::Shape(_) => 0.0,
+        }
     }
 
     #[test]

@@ -96,9 +96,9 @@ fn file_args(args: &Args, scene: &BuiltScene) -> Args {
     a.mu = law.mu;
     a.restitution = law.restitution;
     a.rolling_friction = law.rolling_friction;
-    a.rest_speed = scene.step.rest_speed;
-    a.max_steps = scene.step.max_steps;
-    a.until_rest = args.until_rest || (scene.step.until_rest && args.steps.is_none());
+    a.rest_speed = scene.step.run.rest_speed;
+    a.max_steps = scene.step.run.max_steps;
+    a.until_rest = args.until_rest || (scene.step.run.until_rest && args.steps.is_none());
     a.steps = if a.until_rest {
         None
     } else {

@@ -58,8 +58,8 @@ pub use engine::{Engine, EngineError};
 pub use math::Vec3;
 pub use mesh::{MeshError, TriangleMesh};
 pub use model::{
-    resolve_overlaps, BodyShape, BodySpec, BuildChecks, MaterialPair, Materials, ObstacleSpec,
-    SceneError, SceneModel, SphereBatch, StepChoice, StepSettings,
+    resolve_overlaps, BodyShape, BodySpec, BuildChecks, LawKey, MaterialPair, Materials,
+    ObstacleSpec, SceneError, SceneModel, SphereBatch, StepChoice, StepSettings,
 };
 pub use nsgs::{NsgsSettings, NsgsStatus, StepProblem};
 pub use projection::{Penetration, Projection, ProjectionStats, Velocities};

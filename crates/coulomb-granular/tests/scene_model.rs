@@ -30,11 +30,10 @@ fn a_sphere_slides_further_on_ice_than_on_rubber() {
     m.materials.names = vec!["ice".into(), "rubber".into()];
     for (name, mu) in [("ice", 0.1), ("rubber", 0.5)] {
         m.materials.pairs.push(MaterialPair {
-            a: name.into(),
-            b: "default".into(),
-            mu,
-            restitution: 0.0,
-            rolling_friction: 0.0,
+            materials: [name.into(), "default".into()],
+            mu: Some(mu),
+            restitution: Some(0.0),
+            rolling_friction: Some(0.0),
         });
     }
     m.obstacles.push(slab("ice", -5.0, 0.0, "ice"));
@@ -241,11 +240,10 @@ fn restitution_and_rolling_friction_are_per_pair() {
     m.materials.names = vec!["bouncy".into(), "dead".into()];
     for (name, e, mu_r) in [("bouncy", 0.9, 0.02), ("dead", 0.0, 0.2)] {
         m.materials.pairs.push(MaterialPair {
-            a: "default".into(),
-            b: name.into(),
-            mu: 0.5,
-            restitution: e,
-            rolling_friction: mu_r,
+            materials: ["default".into(), name.into()],
+            mu: Some(0.5),
+            restitution: Some(e),
+            rolling_friction: Some(mu_r),
         });
     }
     m.obstacles.push(slab("bouncy", -5.0, 0.0, "bouncy"));

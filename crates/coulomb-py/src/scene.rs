@@ -382,7 +382,7 @@ pub(crate) fn scene_save(
     let inlets: Vec<_> = entries.into_iter().map(|e| (e.inlet, e.material)).collect();
     let mut file = scene_save::scene_file_of(&model, &inlets)
         .map_err(|e| describe_error(py, Some("scene"), e.to_string()))?;
-    file.step.steps = steps;
+    file.step.run.steps = steps;
     py.detach(|| scene_save::save(&path, &file))
         .map_err(|e| match e {
             SaveError::Io { path, source } => errors::output_error(source, &path),

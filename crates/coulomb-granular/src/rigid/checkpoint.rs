@@ -274,7 +274,18 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
     let keys = keys(r, &raw)?;
     let (p, imp) = c.f64s()?;
     let imp: Vec<[f64; 3]> = rows(r, p, imp, Some(keys.len()))?;
-    let mut model: SceneModel = c.json()?;
+    // a pair of materials written before the pairs became the scene file's `[[pairs]]`
+    // (`MaterialPair`) names its materials `a` and `b`: read as `materials = [a, b]`
+    let mut json: serde_json::Value = c.json()?;
+    let pairs = json.pointer_mut("/materials/pairs");
+    for p in pairs.and_then(|p| p.as_array_mut()).into_iter().flatten() {
+        if let Some(p) = p.as_object_mut().filter(|p| p.contains_key("a")) {
+            let ab = [p.remove("a"), p.remove("b")];
+            p.insert("materials".into(), serde_json::json!(ab));
+        }
+    }
+    let mut model: SceneModel =
+        serde_json::from_value(json).map_err(|e| r.invalid("json/model", format!("JSON: {e}")))?;
     let contacts: Vec<RigidContact> = c.json()?;
     let (dp, detector) = match c.entries.next() {
         Some((p, _, Data::Str(s))) => (p, s),

@@ -15,8 +15,8 @@ use crate::import::{self, ImportError, Transform, TriMesh};
 use crate::math::Vec3;
 use crate::mesh::TriangleMesh;
 use crate::model::{
-    BodyShape, BodySpec, BuildChecks, MaterialPair, Materials, ObstacleSpec, SceneError,
-    SceneModel, SphereBatch, StepChoice, StepSettings,
+    BodyShape, BodySpec, BuildChecks, LawKey, MaterialPair, Materials, ObstacleSpec, SceneError,
+    SceneModel, SphereBatch, StepSettings,
 };
 use crate::rigid_scene::RigidScene;
 use crate::simulation::{Params, Simulation, SimulationError};
@@ -144,9 +144,10 @@ pub struct SceneFile {
     /// [`crate::world::ContactLaw`]: μ 0.3, e 0.2, μ_r 0 unless given)
     #[serde(default)]
     pub default_pair: ContactLaw,
-    /// contact laws of given pairs of materials
+    /// contact laws of given pairs of materials (the model's [`MaterialPair`]: a coefficient
+    /// not given is `default_pair`'s)
     #[serde(default)]
-    pub pairs: Vec<PairSection>,
+    pub pairs: Vec<MaterialPair>,
     /// groups of spheres
     #[serde(default)]
     pub bodies: Vec<BodiesSection>,
@@ -196,134 +197,131 @@ fn identity_quaternion() -> [f64; 4] {
     crate::shape::IDENTITY
 }
 
-fn d_h() -> f64 {
-    0.02
-}
-fn d_theta() -> f64 {
-    0.5
-}
-fn d_tol() -> f64 {
-    1e-4
-}
-fn d_rest_speed() -> f64 {
-    0.05
-}
-fn d_max_steps() -> usize {
-    2000
-}
-fn d_max_sweeps() -> usize {
-    20_000
-}
-fn d_relaxation() -> f64 {
-    1.5
-}
-fn d_gamma() -> f64 {
-    1.0
+/// `[step]`: the scene model's [`StepSettings`] (`h`, `theta`, `tol`, `method`, `max_sweeps`,
+/// `relaxation`, `gamma`, `projection`, `projection_velocities`, `gap_closure`,
+/// `warm_start`: the model's keys and defaults) and the run's keys ([`RunSettings`]), in one
+/// table: read by [`StepSection::deserialize`], which routes each key to its part.
+#[derive(Debug, Clone, PartialEq, Default, Serialize)]
+pub struct StepSection {
+    /// the model's step settings
+    #[serde(flatten)]
+    pub settings: StepSettings,
+    /// how long the run lasts
+    #[serde(flatten)]
+    pub run: RunSettings,
 }
 
-/// `[step]`: the time stepping (defaults: those of `coulomb simulate`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct StepSection {
-    /// time step h (s)
-    #[serde(default = "d_h")]
-    pub h: f64,
-    /// θ of the position update (2.7)
-    #[serde(default = "d_theta")]
-    pub theta: f64,
-    /// tolerance on each step's error
-    #[serde(default = "d_tol")]
-    pub tol: f64,
-    /// step solver
-    #[serde(default)]
-    pub method: StepChoice,
+/// The keys of `[step]` that are the run's, not the scene model's (defaults: those of
+/// `coulomb simulate`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RunSettings {
     /// number of steps (default 200 unless `duration` or `until_rest`)
-    #[serde(default)]
     pub steps: Option<usize>,
     /// simulated time (s): ⌈duration / h⌉ steps
-    #[serde(default)]
     pub duration: Option<f64>,
     /// run until every sphere moves slower than `rest_speed` for 10 steps
-    #[serde(default)]
     pub until_rest: bool,
-    /// rest speed (m/s)
-    #[serde(default = "d_rest_speed")]
+    /// rest speed (m/s), default 0.05
     pub rest_speed: f64,
-    /// step cap of `until_rest`
-    #[serde(default = "d_max_steps")]
+    /// step cap of `until_rest`, default 2000
     pub max_steps: usize,
-    /// cap on Gauss–Seidel sweeps per step (nsgs)
-    #[serde(default = "d_max_sweeps")]
-    pub max_sweeps: usize,
-    /// over-relaxation ω ∈ [1, 2) (nsgs)
-    #[serde(default = "d_relaxation")]
-    pub relaxation: f64,
-    /// γ of the activation rule
-    #[serde(default = "d_gamma")]
-    pub gamma: f64,
-    /// position correction after each step
-    #[serde(default = "yes")]
-    pub projection: bool,
-    /// what the position correction does to velocities ("rescale", the default,
-    /// "positions_only" or "inelastic": `crate::projection::Velocities`); refused with
-    /// `projection = false`
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub projection_velocities: Option<crate::projection::Velocities>,
-    /// gap closure of resting contacts
-    #[serde(default = "yes")]
-    pub gap_closure: bool,
-    /// warm starts from the previous step's impulses
-    #[serde(default = "yes")]
-    pub warm_start: bool,
 }
 
-impl Default for StepSection {
+impl Default for RunSettings {
     fn default() -> Self {
         Self {
-            h: d_h(),
-            theta: d_theta(),
-            tol: d_tol(),
-            method: StepChoice::Nsgs,
             steps: None,
             duration: None,
             until_rest: false,
-            rest_speed: d_rest_speed(),
-            max_steps: d_max_steps(),
-            max_sweeps: d_max_sweeps(),
-            relaxation: d_relaxation(),
-            gamma: d_gamma(),
-            projection: true,
-            projection_velocities: None,
-            gap_closure: true,
-            warm_start: true,
+            rest_speed: 0.05,
+            max_steps: 2000,
         }
+    }
+}
+
+/// Every key of `[step]`.
+const STEP_KEYS: &[&str] = &[
+    "h",
+    "theta",
+    "tol",
+    "method",
+    "max_sweeps",
+    "relaxation",
+    "gamma",
+    "projection",
+    "projection_velocities",
+    "gap_closure",
+    "warm_start",
+    "steps",
+    "duration",
+    "until_rest",
+    "rest_speed",
+    "max_steps",
+];
+
+impl<'de> Deserialize<'de> for StepSection {
+    /// Each key into the model's settings or the run's (the defaults for the keys not given);
+    /// an unknown or repeated key refused at its place, naming it.
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::{DeserializeSeed, Error, MapAccess, Visitor};
+        /// A key of `[step]` as its index in [`STEP_KEYS`]: an unknown key is refused while it
+        /// is read, so that the parser locates it.
+        struct Key;
+        impl<'de> DeserializeSeed<'de> for Key {
+            type Value = usize;
+            fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<usize, D::Error> {
+                let k = String::deserialize(d)?;
+                (STEP_KEYS.iter().position(|x| *x == k))
+                    .ok_or_else(|| D::Error::unknown_field(&k, STEP_KEYS))
+            }
+        }
+        struct Keys;
+        impl<'de> Visitor<'de> for Keys {
+            type Value = StepSection;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a table of step settings")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut m: A) -> Result<StepSection, A::Error> {
+                let mut out = StepSection::default();
+                let (s, r) = (&mut out.settings, &mut out.run);
+                let mut seen = [false; STEP_KEYS.len()];
+                while let Some(i) = m.next_key_seed(Key)? {
+                    if std::mem::replace(&mut seen[i], true) {
+                        return Err(A::Error::duplicate_field(STEP_KEYS[i]));
+                    }
+                    match STEP_KEYS[i] {
+                        "h" => s.h = m.next_value()?,
+                        "theta" => s.theta = m.next_value()?,
+                        "tol" => s.tol = m.next_value()?,
+                        "method" => s.method = m.next_value()?,
+                        "max_sweeps" => s.max_sweeps = m.next_value()?,
+                        "relaxation" => s.relaxation = m.next_value()?,
+                        "gamma" => s.gamma = m.next_value()?,
+                        "projection" => s.projection = m.next_value()?,
+                        "projection_velocities" => s.projection_velocities = m.next_value()?,
+                        "gap_closure" => s.gap_closure = m.next_value()?,
+                        "warm_start" => s.warm_start = m.next_value()?,
+                        "steps" => r.steps = m.next_value()?,
+                        "duration" => r.duration = m.next_value()?,
+                        "until_rest" => r.until_rest = m.next_value()?,
+                        "rest_speed" => r.rest_speed = m.next_value()?,
+                        "max_steps" => r.max_steps = m.next_value()?,
+                        other => return Err(A::Error::unknown_field(other, STEP_KEYS)),
+                    }
+                }
+                Ok(out)
+            }
+        }
+        d.deserialize_map(Keys)
     }
 }
 
 impl StepSection {
-    /// The scene model's step settings: every key but the run's (`steps`, `duration`,
-    /// `until_rest`, `rest_speed`, `max_steps`).
-    pub fn settings(&self) -> StepSettings {
-        StepSettings {
-            h: self.h,
-            theta: self.theta,
-            tol: self.tol,
-            method: self.method,
-            max_sweeps: self.max_sweeps,
-            relaxation: self.relaxation,
-            gamma: self.gamma,
-            projection: self.projection,
-            projection_velocities: self.projection_velocities,
-            gap_closure: self.gap_closure,
-            warm_start: self.warm_start,
-        }
-    }
-
     /// The number of steps of a fixed-length run: `steps`, else ⌈duration / h⌉, else 200.
     pub fn fixed_steps(&self) -> usize {
-        match (self.steps, self.duration) {
+        match (self.run.steps, self.run.duration) {
             (Some(n), _) => n,
-            (None, Some(d)) => (d / self.h - 1e-9).ceil().max(0.0) as usize,
+            (None, Some(d)) => (d / self.settings.h - 1e-9).ceil().max(0.0) as usize,
             (None, None) => 200,
         }
     }
@@ -337,27 +335,12 @@ pub struct MaterialSection {
     pub density: f64,
 }
 
-/// `[[pairs]]`: the law of one pair of materials (unset coefficients: `default_pair`'s).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct PairSection {
-    /// the two materials (the same name twice for contacts within one material)
-    pub materials: [String; 2],
-    /// friction coefficient μ
-    #[serde(default)]
-    pub mu: Option<f64>,
-    /// restitution e
-    #[serde(default)]
-    pub restitution: Option<f64>,
-    /// rolling-friction coefficient μ_r
-    #[serde(default)]
-    pub rolling_friction: Option<f64>,
-}
-
 /// `[[bodies]]`: a group of spheres, from exactly one of `spheres`, `file` or `fill`, or a
 /// group of bodies of one `shape` (any [`BodyShape`]: the same keys as the scene model) at
-/// `positions`, in `orientations`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// `positions`, in `orientations`. File sugar: it expands into the model's
+/// [`SphereBatch`]es and [`BodySpec`]s ([`LoadedScene::build`]). (`Default`: no source, the
+/// material's name empty.)
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BodiesSection {
     /// material of the group (a CSV `material` column overrides it per sphere)
@@ -1180,8 +1163,8 @@ impl LoadedScene {
                 n = n.saturating_add(count as u64);
             }
         }
-        let run_end = match (f.step.steps, f.step.duration) {
-            (Some(k), _) => Some(k as f64 * f.step.h),
+        let run_end = match (f.step.run.steps, f.step.run.duration) {
+            (Some(k), _) => Some(k as f64 * f.step.settings.h),
             (None, Some(d)) => Some(d),
             _ => None,
         };
@@ -1283,30 +1266,35 @@ impl LoadedScene {
                 )
             })
         };
-        // the model's validation of a law, located here
-        let check_law = |p: &[Seg], l: &ContactLaw| l.check().map_err(|m| self.invalid(p, m));
-        check_law(&[key("default_pair")], &f.default_pair)?;
-        let mut pairs = BTreeMap::new();
-        for (i, pr) in f.pairs.iter().enumerate() {
-            let p = [key("pairs"), Seg::Index(i)];
-            for (k, m) in pr.materials.iter().enumerate() {
-                known(&[&p[..], &[key("materials"), Seg::Index(k)]].concat(), m)?;
-            }
-            let law = ContactLaw {
-                mu: pr.mu.unwrap_or(f.default_pair.mu),
-                restitution: pr.restitution.unwrap_or(f.default_pair.restitution),
-                rolling_friction: pr
-                    .rolling_friction
-                    .unwrap_or(f.default_pair.rolling_friction),
+        // the model's validation of the laws, located here
+        let materials = Materials {
+            names: density
+                .keys()
+                .filter(|n| n.as_str() != DEFAULT_MATERIAL)
+                .cloned()
+                .collect(),
+            default: f.default_pair,
+            pairs: f.pairs.clone(),
+        };
+        materials.check_key().map_err(|(at, e)| {
+            let p = match at {
+                LawKey::Default => vec![key("default_pair")],
+                LawKey::Pair(k) => vec![key("pairs"), Seg::Index(k)],
+                LawKey::PairMaterial(k, i) => {
+                    vec![key("pairs"), Seg::Index(k), key("materials"), Seg::Index(i)]
+                }
             };
-            check_law(&p, &law)?;
-            let mut k = pr.materials.clone();
-            k.sort();
-            let [a, b] = k;
-            if pairs.insert((a.clone(), b.clone()), law).is_some() {
-                return Err(self.invalid(&p, format!("the pair ({a}, {b}) is listed twice")));
-            }
-        }
+            let message = match e {
+                SceneError::InvalidLaw { reason, .. } if at == LawKey::Default => {
+                    reason.trim_start_matches("the default law: ").to_string()
+                }
+                SceneError::UnknownMaterial { name, known, .. } => {
+                    format!("unknown material '{name}' (materials: {known})")
+                }
+                e => e.to_string(),
+            };
+            self.invalid(&p, message)
+        })?;
         // bodies
         let mut bodies: Vec<BodyOut> = Vec::new();
         // every group's bodies in file order: spheres (index into `bodies`) or shaped
@@ -1595,30 +1583,12 @@ impl LoadedScene {
                 .unwrap_or("scene")
                 .to_string()
         });
-        let materials = Materials {
-            names: density
-                .keys()
-                .filter(|n| n.as_str() != DEFAULT_MATERIAL)
-                .cloned()
-                .collect(),
-            default: f.default_pair,
-            pairs: pairs
-                .iter()
-                .map(|((a, b), l)| MaterialPair {
-                    a: a.clone(),
-                    b: b.clone(),
-                    mu: l.mu,
-                    restitution: l.restitution,
-                    rolling_friction: l.rolling_friction,
-                })
-                .collect(),
-        };
-        // With one law for every pair, the model's world carries no material table
-        // (World::materials = None) but keeps the material indices of bodies and obstacles,
-        // which Simulation::new then refuses; the names only select laws (densities are
-        // resolved above), so they all become `default`.
         let mut materials = materials;
-        if materials.pairs.iter().all(|p| p.law() == materials.default) {
+        if materials
+            .pairs
+            .iter()
+            .all(|p| p.law(materials.default) == materials.default)
+        {
             materials.names.clear();
             materials.pairs.clear();
             for b in &mut bodies {
@@ -1658,7 +1628,7 @@ impl LoadedScene {
             bodies: specs,
             sphere_batches,
             obstacles,
-            step: f.step.settings(),
+            step: f.step.settings.clone(),
             joints,
         };
         Ok(BuiltScene {
@@ -1769,11 +1739,10 @@ impl LoadedScene {
     }
 
     fn check_step(&self) -> Result<(), SceneFileError> {
-        let s = &self.file.step;
+        let (settings, s) = (&self.file.step.settings, &self.file.step.run);
         let at = |k: &str| [key("step"), key(k)];
-        let pos = |x: f64| x.is_finite() && x > 0.0;
         // the model's validation, located here
-        s.settings()
+        settings
             .check_key()
             .map_err(|(k, m)| self.invalid(&at(k), m))?;
         if let Some(d) = s.duration {
@@ -1790,7 +1759,7 @@ impl LoadedScene {
                 "until_rest stops by itself (cap: max_steps): drop `steps` and `duration`",
             ));
         }
-        if !pos(s.rest_speed) {
+        if !(s.rest_speed.is_finite() && s.rest_speed > 0.0) {
             return Err(self.invalid(&at("rest_speed"), "must be positive"));
         }
         if s.max_steps == 0 {
@@ -1945,6 +1914,7 @@ impl BuiltScene {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::StepChoice;
 
     fn parse(text: &str) -> Result<LoadedScene, SceneFileError> {
         LoadedScene::parse(Path::new("t.toml"), text.to_string(), true)
@@ -2213,6 +2183,16 @@ mod tests {
             s.contains("pairs[0].materials[1]") && s.contains("unknown material 'steel'"),
             "{s}"
         );
+        // the model's refusal of a pair given twice (in either order), at the second one
+        let e = parse(&format!("{text}[[pairs]]\nmaterials = [\"glass\", \"glass\"]\n[[pairs]]\nmaterials = [\"glass\", \"glass\"]\nrestitution = 0.1\n").replace("\"steel\"", "\"default\""))
+            .unwrap()
+            .build(&BuildOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("t.toml:9:") && e.contains("pairs[2]") && e.contains("given twice"),
+            "{e}"
+        );
         // a body's material too
         let e = parse("[[bodies]]\nmaterial = \"sand\"\nspheres = [[0, 0, 1, 0.1]]\n")
             .unwrap()
@@ -2262,8 +2242,10 @@ mod tests {
         assert_eq!(batch.velocities[0], Vec3::X);
         assert_eq!(batch.material, "steel");
         let pair = &b.model.materials.pairs[0];
-        assert_eq!((pair.a.as_str(), pair.b.as_str()), ("default", "steel"));
-        assert_eq!((pair.mu, pair.restitution), (0.1, 0.2));
+        assert_eq!(pair.materials, ["steel", "default"]);
+        // the restitution not given is the default law's
+        let law = pair.law(b.model.materials.default);
+        assert_eq!((law.mu, law.restitution), (0.1, 0.2));
         let (world, params) = b.build(&BuildChecks::default()).unwrap();
         assert_eq!(world.bodies.len(), 2);
         // the steel–default law is in the world's table; the default law in the parameters
@@ -2503,6 +2485,24 @@ mass = 3.0
         let e = refused("seed = 1\n[default_pair]\nrolling_friction = -1\n");
         assert!(
             located(&e, [2, 3]) && e.contains("default_pair: rolling_friction = -1"),
+            "{e}"
+        );
+        // [step]: each key to the model's settings or the run's; a repeated key refused
+        let s = parse("[step]\nsteps = 7\nh = 0.01\nuntil_rest = false\ngamma = 0.5\n").unwrap();
+        assert_eq!(
+            (s.file.step.run.steps, s.file.step.settings.h),
+            (Some(7), 0.01)
+        );
+        assert_eq!(s.file.step.settings.gamma, 0.5);
+        let e = LoadedScene::parse(
+            Path::new("t.json"),
+            "{\"step\": {\"h\": 0.01,\n \"h\": 0.02}}".into(),
+            false,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.starts_with("t.json:2:") && e.contains("duplicate field `h`"),
             "{e}"
         );
         let e = refused("[step]\n\ntol = 1.5\n");

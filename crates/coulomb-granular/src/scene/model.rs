@@ -141,32 +141,91 @@ impl Default for Materials {
     }
 }
 
-/// The contact law of the pair of materials (a, b), which is also that of (b, a).
+/// The contact law of a pair of materials, which is also that of the pair reversed: a scene
+/// file's `[[pairs]]` entry. A coefficient not given is the default law's
+/// ([`MaterialPair::law`], the one place a pair inherits).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialPair {
-    /// first material
-    pub a: String,
-    /// second material
-    pub b: String,
-    /// friction coefficient μ
-    pub mu: f64,
-    /// restitution e
-    #[serde(default)]
-    pub restitution: f64,
-    /// rolling friction μ_r
-    #[serde(default)]
-    pub rolling_friction: f64,
+    /// the two materials (the same name twice for contacts within one material)
+    pub materials: [String; 2],
+    /// friction coefficient μ (default: the default law's)
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mu: Option<f64>,
+    /// restitution e (default: the default law's)
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub restitution: Option<f64>,
+    /// rolling friction μ_r (default: the default law's)
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rolling_friction: Option<f64>,
 }
 
 impl MaterialPair {
-    /// The pair's law.
-    pub fn law(&self) -> ContactLaw {
+    /// The pair's law: its coefficients, `default`'s where it gives none.
+    pub fn law(&self, default: ContactLaw) -> ContactLaw {
         ContactLaw {
-            mu: self.mu,
-            restitution: self.restitution,
-            rolling_friction: self.rolling_friction,
+            mu: self.mu.unwrap_or(default.mu),
+            restitution: self.restitution.unwrap_or(default.restitution),
+            rolling_friction: self.rolling_friction.unwrap_or(default.rolling_friction),
         }
+    }
+}
+
+/// Where [`Materials::check_key`] found a law refused: a scene file's error names its place.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LawKey {
+    /// the default law
+    Default,
+    /// pair k (its law, or the pair given twice)
+    Pair(usize),
+    /// material i (0 or 1) of pair k
+    PairMaterial(usize, usize),
+}
+
+impl Materials {
+    /// The declared names, `default` first; refuses a name declared twice.
+    fn declared(&self) -> Result<Vec<String>, SceneError> {
+        let mut names = vec![default_material()];
+        for n in self.names.iter().filter(|n| *n != DEFAULT_MATERIAL) {
+            if names.contains(n) {
+                return Err(SceneError::DuplicateMaterial(n.clone()));
+            }
+            names.push(n.clone());
+        }
+        Ok(names)
+    }
+
+    /// Refuses the default law or a pair out of range ([`ContactLaw::check`]), a pair naming
+    /// an undeclared material, a pair given twice (in either order), with the place refused.
+    pub fn check_key(&self) -> Result<(), (LawKey, SceneError)> {
+        let names = self.declared().map_err(|e| (LawKey::Default, e))?;
+        let d = self.default;
+        d.check().map_err(|reason| {
+            let reason = format!("the default law: {reason}");
+            let (a, b) = (default_material(), default_material());
+            (LawKey::Default, SceneError::InvalidLaw { a, b, reason })
+        })?;
+        let index = MaterialIndex { names };
+        let mut seen = Vec::new();
+        for (k, p) in self.pairs.iter().enumerate() {
+            let mut ab = [0; 2];
+            for (i, name) in p.materials.iter().enumerate() {
+                ab[i] = index
+                    .get(|| format!("material pair {k}"), name)
+                    .map_err(|e| (LawKey::PairMaterial(k, i), e))?;
+            }
+            let invalid = |reason: String| {
+                let [a, b] = p.materials.clone();
+                (LawKey::Pair(k), SceneError::InvalidLaw { a, b, reason })
+            };
+            let key = (ab[0].min(ab[1]), ab[0].max(ab[1]));
+            if seen.contains(&key) {
+                return Err(invalid("the pair is given twice".into()));
+            }
+            seen.push(key);
+            p.law(d).check().map_err(invalid)?;
+        }
+        Ok(())
     }
 }
 
@@ -922,44 +981,16 @@ impl SceneModel {
     /// The material table (index order: `default`, then `materials.names` in order) and
     /// whether every pair has the same law (then the world carries no table).
     pub fn material_table(&self) -> Result<(MaterialTable, bool), SceneError> {
-        let mut names = vec![default_material()];
-        for n in &self.materials.names {
-            if n == DEFAULT_MATERIAL {
-                continue;
-            }
-            if names.contains(n) {
-                return Err(SceneError::DuplicateMaterial(n.clone()));
-            }
-            names.push(n.clone());
+        let m = &self.materials;
+        m.check_key().map_err(|(_, e)| e)?;
+        let names = m.declared()?;
+        let index = |n: &str| names.iter().position(|x| x == n).unwrap_or(0) as u32;
+        let mut table = MaterialTable::uniform(names.clone(), m.default);
+        for p in &m.pairs {
+            let [a, b] = &p.materials;
+            table.set(index(a), index(b), p.law(m.default));
         }
-        let d = self.materials.default;
-        d.check().map_err(|reason| SceneError::InvalidLaw {
-            a: "default".into(),
-            b: "default".into(),
-            reason: format!("the default law: {reason}"),
-        })?;
-        let index = MaterialIndex {
-            names: names.clone(),
-        };
-        let mut table = MaterialTable::uniform(names, d);
-        let mut seen = Vec::new();
-        for (k, p) in self.materials.pairs.iter().enumerate() {
-            let a = index.get(|| format!("material pair {k}"), &p.a)?;
-            let b = index.get(|| format!("material pair {k}"), &p.b)?;
-            let key = (a.min(b), a.max(b));
-            let invalid = |reason: String| SceneError::InvalidLaw {
-                a: p.a.clone(),
-                b: p.b.clone(),
-                reason,
-            };
-            if seen.contains(&key) {
-                return Err(invalid("the pair is given twice".into()));
-            }
-            seen.push(key);
-            p.law().check().map_err(invalid)?;
-            table.set(a, b, p.law());
-        }
-        let uniform = table.laws.iter().all(|l| *l == d);
+        let uniform = table.laws.iter().all(|l| *l == m.default);
         Ok((table, uniform))
     }
 
@@ -1474,11 +1505,10 @@ mod tests {
         let mut m = SceneModel::default();
         m.materials.names = vec!["steel".into(), "glass".into()];
         m.materials.pairs.push(MaterialPair {
-            a: "steel".into(),
-            b: "glass".into(),
-            mu: 0.6,
-            restitution: 0.5,
-            rolling_friction: 0.01,
+            materials: ["steel".into(), "glass".into()],
+            mu: Some(0.6),
+            restitution: Some(0.5),
+            rolling_friction: Some(0.01),
         });
         m.bodies.push(ball(0.0, 0.0, 0.5));
         let mut fixed = ball(1.0, 0.0, 0.1);
@@ -1605,11 +1635,10 @@ mod tests {
         assert!(matches!(err(m), SceneError::UnknownMaterial { name, .. } if name == "ice"));
         let mut m = base();
         m.materials.pairs.push(MaterialPair {
-            a: "default".into(),
-            b: "rubber".into(),
-            mu: 1.0,
-            restitution: 0.0,
-            rolling_friction: 0.0,
+            materials: ["default".into(), "rubber".into()],
+            mu: Some(1.0),
+            restitution: Some(0.0),
+            rolling_friction: None,
         });
         assert!(matches!(err(m), SceneError::UnknownMaterial { name, .. } if name == "rubber"));
         let mut m = base();

@@ -19,7 +19,7 @@ use crate::math::Vec3;
 use crate::model::{BodyShape, SceneModel};
 use crate::scene_file::{
     BodiesSection, InletSection, LoadedScene, MaterialSection, MeshSource, ObstacleSection,
-    ObstacleShape, PairSection, SceneFile, StepSection, DEFAULT_DENSITY, DEFAULT_MATERIAL,
+    ObstacleShape, RunSettings, SceneFile, StepSection, DEFAULT_DENSITY, DEFAULT_MATERIAL,
 };
 use crate::world::Shape;
 use std::collections::BTreeMap;
@@ -67,20 +67,9 @@ pub fn scene_file_of(
     model: &SceneModel,
     inlets: &[(Inlet, String)],
 ) -> Result<SceneFile, SaveError> {
-    let s = &model.step;
     let step = StepSection {
-        h: s.h,
-        theta: s.theta,
-        tol: s.tol,
-        method: s.method,
-        max_sweeps: s.max_sweeps,
-        relaxation: s.relaxation,
-        gamma: s.gamma,
-        projection: s.projection,
-        projection_velocities: s.projection_velocities,
-        gap_closure: s.gap_closure,
-        warm_start: s.warm_start,
-        ..StepSection::default()
+        settings: model.step.clone(),
+        run: RunSettings::default(),
     };
     // materials: every name, with the density of its inlets (bodies carry their own)
     let mut materials: BTreeMap<String, MaterialSection> = BTreeMap::new();
@@ -112,32 +101,10 @@ pub fn scene_file_of(
             },
         );
     }
-    let pairs = model
-        .materials
-        .pairs
-        .iter()
-        .map(|p| PairSection {
-            materials: [p.a.clone(), p.b.clone()],
-            mu: Some(p.mu),
-            restitution: Some(p.restitution),
-            rolling_friction: Some(p.rolling_friction),
-        })
-        .collect();
     let group = |material: &str, fixed: bool| BodiesSection {
         material: material.to_string(),
-        density: None,
         fixed,
-        velocity: None,
-        angular_velocity: [0.0; 3],
-        spheres: None,
-        file: None,
-        fill: None,
-        shape: None,
-        positions: None,
-        orientations: None,
-        mass: None,
-        inertia: None,
-        centre_of_mass: None,
+        ..BodiesSection::default()
     };
     let mut bodies = Vec::new();
     // bodies one by one (they come first in the world, as in the model)
@@ -273,7 +240,7 @@ pub fn scene_file_of(
         step,
         materials,
         default_pair: model.materials.default,
-        pairs,
+        pairs: model.materials.pairs.clone(),
         bodies,
         obstacles,
         inlets,

@@ -185,8 +185,8 @@ fn law_of(model: &SceneModel, a: &str, b: &str) -> ContactLaw {
         .materials
         .pairs
         .iter()
-        .find(|p| (p.a == a && p.b == b) || (p.a == b && p.b == a))
-        .map_or(model.materials.default, |p| p.law())
+        .find(|p| p.materials == [a, b] || p.materials == [b, a])
+        .map_or(model.materials.default, |p| p.law(model.materials.default))
 }
 
 /// Least-squares line y = a + b x through the points; (a, b), or `None` with fewer than two

@@ -390,8 +390,8 @@ class Scene:
         declared (used, or :meth:`add_material`) by the time the scene is built."""
         a, b = _material(a), _material(b)
         self._pairs[(min(a, b), max(a, b))] = {
-            "a": a, "b": b, "mu": _real("mu", mu), "restitution": _real("restitution",
-                                                                        restitution),
+            "materials": [a, b], "mu": _real("mu", mu),
+            "restitution": _real("restitution", restitution),
             "rolling_friction": _real("rolling_friction", rolling_friction)}
         return self
 

@@ -39,10 +39,11 @@ ab() {
   local label="$1" steps="$2" a="$3" b="$4"
   local ta=() tb=()
   for _ in $(seq "$REPS"); do
-    # shellcheck disable=SC2086
-    ta+=("$(run $a "$steps")")
-    # shellcheck disable=SC2086
-    tb+=("$(run $b "$steps")")
+    # each of A, B is "scene threads [bin]": run takes scene threads steps [bin]
+    read -r sa tha ba <<<"$a"
+    read -r sb thb bb <<<"$b"
+    ta+=("$(run "$sa" "$tha" "$steps" "${ba:-$BIN}")")
+    tb+=("$(run "$sb" "$thb" "$steps" "${bb:-$BIN}")")
   done
   local ma mb
   ma=$(median "${ta[@]}")

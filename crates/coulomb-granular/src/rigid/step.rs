@@ -1784,7 +1784,7 @@ pub mod nsgs {
         incident_start: Vec<usize>,
     }
 
-    /// W_ii is taken as diag(W_NN, W_TT, W_TT) in a contact's update ([`SweepRow::isotropic`])
+    /// W_ii is taken as diag(W_NN, W_TT, W_TT) in a contact's update (`SweepRow::isotropic`)
     /// when its off-diagonal entries are at most this times the geometric mean of the
     /// diagonal entries they couple and its two tangent entries differ by at most this times
     /// the larger one: the blocks of contacts between balls or of a ball with an obstacle,

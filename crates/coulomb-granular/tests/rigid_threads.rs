@@ -54,7 +54,7 @@ fn a_cube_pyramid_gives_the_same_bits_on_one_and_two_threads() {
     // 7 layers: 140 cubes, 49 on the floor (4 points each): colours of more than 64 rows
     let bodies = cube_pyramid(7).unwrap();
     let obstacles = vec![floor()];
-    let (one, contacts) = run(&bodies, &obstacles, 20, 1);
+    let (one, contacts) = run(&bodies, &obstacles, 8, 1);
     assert!(
         contacts > 4 * coulomb_granular::nsgs::PARALLEL_MIN,
         "{contacts} contacts: too few for parallel colours"
@@ -63,11 +63,11 @@ fn a_cube_pyramid_gives_the_same_bits_on_one_and_two_threads() {
         contacts >= coulomb_granular::rigid::step::nsgs::EVAL_PARALLEL_MIN,
         "{contacts} contacts: too few for the parallel evaluation"
     );
-    let (two, _) = run(&bodies, &obstacles, 20, 2);
+    let (two, _) = run(&bodies, &obstacles, 8, 2);
     assert_eq!(one.len(), two.len());
     let differ = one.iter().zip(&two).filter(|(a, b)| a != b).count();
     assert_eq!(differ, 0, "{differ} numbers differ between 1 and 2 threads");
-    let (three, _) = run(&bodies, &obstacles, 20, 3);
+    let (three, _) = run(&bodies, &obstacles, 8, 3);
     assert!(one == three, "1 and 3 threads differ");
 }
 

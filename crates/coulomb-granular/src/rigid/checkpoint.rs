@@ -715,6 +715,76 @@ mod tests {
         );
     }
 
+    /// A rigid checkpoint written before the pairs became the scene file's `[[pairs]]`
+    /// stored each pair of materials as `{"a", "b", "mu", …}`: it reads as
+    /// `materials = [a, b]`, gives the same model, and continues to the bit.
+    #[test]
+    fn pairs_written_as_a_and_b_read_as_the_same_materials() {
+        let mut a = scene(
+            r#"
+            [step]
+            h = 0.005
+            tol = 1e-8
+
+            [materials.wood]
+            density = 600.0
+            [materials.steel]
+            density = 7800.0
+
+            [default_pair]
+            mu = 0.4
+
+            [[pairs]]
+            materials = ["wood", "steel"]
+            mu = 0.7
+            restitution = 0.1
+
+            [[obstacles]]
+            name = "floor"
+            material = "steel"
+            shape = { kind = "plane", point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }
+
+            [[bodies]]
+            material = "wood"
+            shape = { kind = "cuboid", half_extents = [0.05, 0.04, 0.03] }
+            positions = [[0.0, 0.0, 0.0305]]
+            velocity = [0.4, 0.0, 0.0]
+            "#,
+        );
+        for _ in 0..5 {
+            a.step().expect("step");
+        }
+        let state = a.world.state().expect("state");
+        let mut e = entries(&a.model, &state).expect("entries");
+        let mut rewritten = 0;
+        for (p, _, d) in &mut e {
+            if let (true, Data::Str(json)) = (*p == "json/model", &mut *d) {
+                let mut v: serde_json::Value = serde_json::from_str(json).expect("model JSON");
+                let pairs = v.pointer_mut("/materials/pairs").expect("pairs");
+                for pair in pairs.as_array_mut().expect("array") {
+                    let o = pair.as_object_mut().expect("object");
+                    let m = o.remove("materials").expect("materials");
+                    o.insert("a".into(), m[0].clone());
+                    o.insert("b".into(), m[1].clone());
+                    rewritten += 1;
+                }
+                *json = v.to_string();
+            }
+        }
+        assert_eq!(rewritten, 1, "the model holds one pair");
+        let bytes = encode_entries(FORMAT_NAME, FORMAT_VERSION, &e).expect("encode");
+        let mut b = RigidScene::from_checkpoint_bytes("old-pairs.h5", bytes).expect("old pairs");
+        assert_eq!(
+            serde_json::to_value(&b.model).expect("b"),
+            serde_json::to_value(&a.model).expect("a")
+        );
+        for _ in 0..5 {
+            a.step().expect("a");
+            b.step().expect("b");
+        }
+        assert_eq!(snapshot(&b), snapshot(&a));
+    }
+
     #[test]
     fn damaged_or_foreign_files_are_refused_with_a_reason() {
         let mut a = scene(MIXED);

@@ -159,6 +159,40 @@ pub struct StepStats {
     pub projection_sweeps: usize,
 }
 
+impl StepStats {
+    /// The statistics of step k (to t_{k+1} = `time`) known before its solve: the active
+    /// contacts, their largest penetration at t_k and the activation threshold δ_k; the
+    /// solve's fields are those of a step without contact until the solve sets them.
+    fn before_solve(step: usize, time: f64, contacts: &[Contact], delta: f64) -> Self {
+        StepStats {
+            step,
+            time,
+            contacts: contacts.len(),
+            subproblems: 0,
+            inner_iterations: 0,
+            solve_ms: 0.0,
+            assembly_ms: 0.0,
+            delassus_ms: 0.0,
+            error: 0.0,
+            rule_6_1: 0.0,
+            status: "no_contact".into(),
+            converged: true,
+            kinetic_energy: 0.0,
+            potential_energy: 0.0,
+            max_penetration: contacts
+                .iter()
+                .map(|c| (-c.gap).max(0.0))
+                .fold(0.0, f64::max),
+            warm_started: 0,
+            delta,
+            end_max_penetration: 0.0,
+            end_mean_penetration: 0.0,
+            projection_work: 0.0,
+            projection_sweeps: 0,
+        }
+    }
+}
+
 /// A one-thread rayon pool for small steps (built once; `None` if the system refuses a
 /// thread, and the step then runs on the current pool).
 fn serial_pool() -> Option<&'static rayon::ThreadPool> {
@@ -306,7 +340,9 @@ impl Simulation {
         self.step_on_current_pool()
     }
 
-    /// [`Simulation::step`] on the current rayon pool.
+    /// [`Simulation::step`] on the current rayon pool, as named phases: detect (with the
+    /// index set's activation rule), assemble and solve (`solve_nsgs`, or `solve_library`
+    /// with the assembled global problem), integrate, record the contacts, correct positions.
     fn step_on_current_pool(&mut self) -> Result<StepStats, SimulationError> {
         let k = self.steps_done;
         let h = self.params.h;
@@ -320,43 +356,10 @@ impl Simulation {
             mu: self.params.mu,
             close_gaps: self.params.activation.close_gaps,
         };
-        let max_penetration = contacts
-            .iter()
-            .map(|c| (-c.gap).max(0.0))
-            .fold(0.0, f64::max);
-        let mut stats = StepStats {
-            step: k,
-            time: self.time + h,
-            contacts: contacts.len(),
-            subproblems: 0,
-            inner_iterations: 0,
-            solve_ms: 0.0,
-            assembly_ms: 0.0,
-            delassus_ms: 0.0,
-            error: 0.0,
-            rule_6_1: 0.0,
-            status: "no_contact".into(),
-            converged: true,
-            kinetic_energy: 0.0,
-            potential_energy: 0.0,
-            max_penetration,
-            warm_started: 0,
-            delta,
-            end_max_penetration: 0.0,
-            end_mean_penetration: 0.0,
-            projection_work: 0.0,
-            projection_sweeps: 0,
-        };
+        let mut stats = StepStats::before_solve(k, self.time + h, &contacts, delta);
         let v_new = if contacts.is_empty() {
             stats.assembly_ms = t0.elapsed().as_secs_f64() * 1e3;
-            self.last_history.clear();
-            self.last_problem = None;
-            let diag = mass_diagonal(&self.world);
-            free_momentum(&self.world, h)
-                .iter()
-                .zip(&diag)
-                .map(|(f, m)| f / m)
-                .collect()
+            self.free_velocities()
         } else if let (StepMethod::Nsgs(settings), false) = (
             self.params.method,
             self.world.has_rolling(self.params.rolling_friction),
@@ -365,88 +368,126 @@ impl Simulation {
             // solved below whatever the method
             self.step_nsgs(&mut contacts, &data, &settings, &mut stats, t0)?
         } else {
-            let problem = assemble(&self.world, &contacts, &data)
-                .map_err(|source| SimulationError::Assembly { step: k, source })?;
-            let r0 = self.warm_start(&contacts, &mut stats);
-            // v consistent with the guess: v = M⁻¹ (H r + f)
-            let mut hr = problem.f.clone();
-            problem.h.gemv_acc(1.0, &r0, &mut hr);
-            let v0: Vec<f64> = hr
-                .iter()
-                .zip(&problem.m.values)
-                .map(|(x, m)| x / m)
-                .collect();
-            let guess = Guess { r: r0, v: Some(v0) };
-            stats.assembly_ms = t0.elapsed().as_secs_f64() * 1e3;
-            if self.profile_delassus {
-                let td = Instant::now();
-                let delassus = coulomb::delassus::Delassus::new(&problem)
-                    .map_err(|source| SimulationError::Assembly { step: k, source })?;
-                stats.delassus_ms = td.elapsed().as_secs_f64() * 1e3;
-                drop(delassus);
-            }
-            let mut problem = problem;
-            let t1 = Instant::now();
-            // ---- hook: rolling resistance (crate::rolling). With μ_r > 0 the step's
-            // 6-component problem is solved there (problem.f then holds the rolling impulses);
-            // otherwise the library's solver, as before.
-            let rolling = self
-                .world
-                .has_rolling(self.params.rolling_friction)
-                .then(|| {
-                    crate::rolling::solve_step(
-                        &self.world,
-                        &contacts,
-                        &mut problem,
-                        self.params.rolling_friction,
-                        &self.params.solver,
-                        &guess.r,
-                        &mut self.rolling,
-                    )
-                });
-            let wrapped = Problem::Global(problem);
-            let sol = match rolling {
-                Some(sol) => sol,
-                None => solver::solve_with_guess(&wrapped, &self.params.solver, Some(&guess)),
-            }
-            .map_err(|source| SimulationError::Solve { step: k, source })?;
-            // ---- end of the rolling-resistance hook
-            stats.solve_ms = t1.elapsed().as_secs_f64() * 1e3;
-            stats.subproblems = sol.outer_iterations;
-            stats.inner_iterations = sol.inner_iterations;
-            stats.error = sol.error;
-            stats.rule_6_1 = sol.history.last().map(|r| r.rule_6_1).unwrap_or(0.0);
-            stats.converged = sol.status == Status::Converged;
-            stats.status = serde_json::to_value(sol.status)
-                .ok()
-                .and_then(|v| v.as_str().map(str::to_string))
-                .unwrap_or_else(|| format!("{:?}", sol.status));
-            let Problem::Global(problem) = wrapped else {
-                return Err(SimulationError::NonFinite(k));
-            };
-            let v = match &sol.v {
-                Some(v) if v.len() == problem.dofs() => v.clone(),
-                _ => {
-                    let mut hr = problem.f.clone();
-                    problem.h.gemv_acc(1.0, &sol.r, &mut hr);
-                    hr.iter()
-                        .zip(&problem.m.values)
-                        .map(|(x, m)| x / m)
-                        .collect()
-                }
-            };
-            self.residual_velocity =
-                sol.error.max(self.params.solver.tol) * local_scale(&problem, &sol.r, &v);
-            self.keep_impulses(&mut contacts, &sol.r);
-            self.last_history = sol.history;
-            self.last_problem = self.keep_problem.then_some(problem);
-            v
+            self.step_library(&mut contacts, &data, &mut stats, t0)?
         };
         if v_new.iter().any(|x| !x.is_finite()) {
             return Err(SimulationError::NonFinite(k));
         }
-        let theta = self.params.theta;
-        // q_{k+1} = q_k + h((1 − θ) v_k + θ v_{k+1}), sphere by sphere (b.velocity is v_k)
+        self.integrate(&v_new);
+        self.record_contacts(contacts);
+        self.correct(&mut stats);
+        self.steps_done += 1;
+        stats.kinetic_energy = self.world.kinetic_energy();
+        stats.potential_energy = self.world.potential_energy();
+        Ok(stats)
+    }
+
+    /// v_{k+1} = M⁻¹ f of a step without contact (the free motion); no problem is kept.
+    fn free_velocities(&mut self) -> Vec<f64> {
+        self.last_history.clear();
+        self.last_problem = None;
+        let diag = mass_diagonal(&self.world);
+        free_momentum(&self.world, self.params.h)
+            .iter()
+            .zip(&diag)
+            .map(|(f, m)| f / m)
+            .collect()
+    }
+
+    /// Steps 2–3 by the library: the incremental problem (2.10) assembled as a global
+    /// problem, solved by `coulomb::solver::solve_with_guess` warm started from the previous
+    /// impulses of persisting contacts (with rolling resistance, by `crate::rolling`);
+    /// returns v_{k+1}.
+    fn step_library(
+        &mut self,
+        contacts: &mut [Contact],
+        data: &StepData,
+        stats: &mut StepStats,
+        t0: Instant,
+    ) -> Result<Vec<f64>, SimulationError> {
+        let k = self.steps_done;
+        let problem = assemble(&self.world, contacts, data)
+            .map_err(|source| SimulationError::Assembly { step: k, source })?;
+        let r0 = self.warm_start(contacts, stats);
+        // v consistent with the guess: v = M⁻¹ (H r + f)
+        let mut hr = problem.f.clone();
+        problem.h.gemv_acc(1.0, &r0, &mut hr);
+        let v0: Vec<f64> = hr
+            .iter()
+            .zip(&problem.m.values)
+            .map(|(x, m)| x / m)
+            .collect();
+        let guess = Guess { r: r0, v: Some(v0) };
+        stats.assembly_ms = t0.elapsed().as_secs_f64() * 1e3;
+        if self.profile_delassus {
+            let td = Instant::now();
+            let delassus = coulomb::delassus::Delassus::new(&problem)
+                .map_err(|source| SimulationError::Assembly { step: k, source })?;
+            stats.delassus_ms = td.elapsed().as_secs_f64() * 1e3;
+            drop(delassus);
+        }
+        let mut problem = problem;
+        let t1 = Instant::now();
+        // ---- hook: rolling resistance (crate::rolling). With μ_r > 0 the step's
+        // 6-component problem is solved there (problem.f then holds the rolling impulses);
+        // otherwise the library's solver, as before.
+        let rolling = self
+            .world
+            .has_rolling(self.params.rolling_friction)
+            .then(|| {
+                crate::rolling::solve_step(
+                    &self.world,
+                    contacts,
+                    &mut problem,
+                    self.params.rolling_friction,
+                    &self.params.solver,
+                    &guess.r,
+                    &mut self.rolling,
+                )
+            });
+        let wrapped = Problem::Global(problem);
+        let sol = match rolling {
+            Some(sol) => sol,
+            None => solver::solve_with_guess(&wrapped, &self.params.solver, Some(&guess)),
+        }
+        .map_err(|source| SimulationError::Solve { step: k, source })?;
+        // ---- end of the rolling-resistance hook
+        stats.solve_ms = t1.elapsed().as_secs_f64() * 1e3;
+        stats.subproblems = sol.outer_iterations;
+        stats.inner_iterations = sol.inner_iterations;
+        stats.error = sol.error;
+        stats.rule_6_1 = sol.history.last().map(|r| r.rule_6_1).unwrap_or(0.0);
+        stats.converged = sol.status == Status::Converged;
+        stats.status = serde_json::to_value(sol.status)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_string))
+            .unwrap_or_else(|| format!("{:?}", sol.status));
+        let Problem::Global(problem) = wrapped else {
+            return Err(SimulationError::NonFinite(k));
+        };
+        let v = match &sol.v {
+            Some(v) if v.len() == problem.dofs() => v.clone(),
+            _ => {
+                let mut hr = problem.f.clone();
+                problem.h.gemv_acc(1.0, &sol.r, &mut hr);
+                hr.iter()
+                    .zip(&problem.m.values)
+                    .map(|(x, m)| x / m)
+                    .collect()
+            }
+        };
+        self.residual_velocity =
+            sol.error.max(self.params.solver.tol) * local_scale(&problem, &sol.r, &v);
+        self.keep_impulses(contacts, &sol.r);
+        self.last_history = sol.history;
+        self.last_problem = self.keep_problem.then_some(problem);
+        Ok(v)
+    }
+
+    /// The position update (2.7), q_{k+1} = q_k + h((1 − θ) v_k + θ v_{k+1}), sphere by
+    /// sphere, and (v, ω) ← v_{k+1} (ω zero for a sphere whose rotation is locked).
+    fn integrate(&mut self, v_new: &[f64]) {
+        let (h, theta) = (self.params.h, self.params.theta);
         self.world
             .bodies
             .par_iter_mut()
@@ -462,12 +503,22 @@ impl Simulation {
                     crate::math::Vec3::from_slice(&vn6[3..6])
                 };
             });
+    }
+
+    /// Keeps the step's contacts (their impulses are the next step's warm start) and
+    /// advances the time to t_{k+1}.
+    fn record_contacts(&mut self, contacts: Vec<Contact>) {
         if contacts.is_empty() {
             self.previous.clear();
             self.residual_velocity = 0.0;
         }
         self.contacts = contacts;
-        self.time += h;
+        self.time += self.params.h;
+    }
+
+    /// The position correction at t_{k+1} ([`project_contacts`]), or the end penetrations
+    /// alone without it; both into `stats`.
+    fn correct(&mut self, stats: &mut StepStats) {
         let pen = match &self.params.projection {
             Some(pr) => {
                 let (p, pen) = project_contacts(&mut self.world, self.time, pr, &mut self.contacts);
@@ -479,10 +530,6 @@ impl Simulation {
         };
         stats.end_max_penetration = pen.max;
         stats.end_mean_penetration = pen.mean;
-        self.steps_done += 1;
-        stats.kinetic_energy = self.world.kinetic_energy();
-        stats.potential_energy = self.world.potential_energy();
-        Ok(stats)
     }
 
     /// The warm start r₀ of the step: the previous impulse of each persisting contact (same

@@ -4,7 +4,7 @@
 //!
 //! Each phase is a method on the world that takes the previous phases' values and returns its
 //! own: the step itself (`super::RigidWorld::step`) only sequences them, times detection and
-//! solve, and builds the [`RigidStepReport`].
+//! solve, and builds the [`crate::rigid::RigidStepReport`].
 
 use super::{
     correct_positions, library_finish, nsgs, placed_obstacles, rolling, RigidWorld,

@@ -75,6 +75,12 @@ pub struct BodyState {
 }
 
 impl BodyState {
+    /// The body's diagonal block of M, diag(m, m, m, I₁, I₂, I₃) (principal frame).
+    pub fn mass_block(&self) -> [f64; 6] {
+        let [i1, i2, i3] = self.inertia;
+        [self.mass, self.mass, self.mass, i1, i2, i3]
+    }
+
     /// Orientation of the shape frame: q ⊗ principal⁻¹.
     pub fn shape_rotation(&self) -> Rotation {
         (self.q * self.principal.conjugate()).normalize()

@@ -848,19 +848,7 @@ pub const GLOBAL_NEWTON_STEPS: usize = 4;
 /// when the factor is refused or a value is not finite.
 fn global_newton_step(joints: &[Joint], bodies: &mut [BodyState]) -> bool {
     use crate::rigid::step::equality::{EqRow, EqualitySolve};
-    let mass: Vec<[f64; 6]> = bodies
-        .iter()
-        .map(|b| {
-            [
-                b.mass,
-                b.mass,
-                b.mass,
-                b.inertia[0],
-                b.inertia[1],
-                b.inertia[2],
-            ]
-        })
-        .collect();
+    let mass: Vec<[f64; 6]> = bodies.iter().map(BodyState::mass_block).collect();
     let moving = |p: Option<usize>| p.filter(|&i| !bodies[i].fixed);
     let mut rows = Vec::new();
     for j in joints {

@@ -177,14 +177,7 @@ impl RigidWorld {
         let mut f = vec![[0.0; 6]; moving];
         for (i, b) in self.bodies.iter().enumerate() {
             if let Some(d) = self.dof[i] {
-                mass[d] = [
-                    b.mass,
-                    b.mass,
-                    b.mass,
-                    b.inertia[0],
-                    b.inertia[1],
-                    b.inertia[2],
-                ];
+                mass[d] = b.mass_block();
                 let p = b.mass * (b.v + h * self.gravity);
                 let l = Vector::from_array(b.inertia) * omega_free[i];
                 f[d] = [p.x, p.y, p.z, l.x, l.y, l.z];

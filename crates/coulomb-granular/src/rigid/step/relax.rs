@@ -85,14 +85,7 @@ impl RigidWorld {
             let mut mass = vec![[0.0; 6]; moving];
             for (i, b) in self.bodies.iter().enumerate() {
                 if let Some(d) = self.dof[i] {
-                    mass[d] = [
-                        b.mass,
-                        b.mass,
-                        b.mass,
-                        b.inertia[0],
-                        b.inertia[1],
-                        b.inertia[2],
-                    ];
+                    mass[d] = b.mass_block();
                 }
             }
             let (rows, gaps): (Vec<nsgs::Row>, Vec<f64>) = points

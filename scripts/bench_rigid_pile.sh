@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Rock-pile benchmark of the rigid-body simulator (issue #41, docs/rigid-bodies.md): N random
-# convex rocks poured in a box (crates/coulomb-granular/src/rigid/validation.rs, rock_pile),
+# convex rocks poured in a box (crates/coulomb-granular/src/validation/rigid.rs, rock_pile),
 # S steps at tolerance 1e-4: time per step, share of collision detection (parry's BVH broad
 # phase and contact manifolds), Gauss–Seidel sweeps per step, contacts per step.
 # Usage: scripts/bench_rigid_pile.sh [ROCKS [STEPS]]   (default 200 rocks, 300 steps)

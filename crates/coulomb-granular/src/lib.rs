@@ -44,9 +44,10 @@ pub mod validation;
 // `coulomb_granular::world::World` and the like still name the same items.
 pub use bodies::{mesh, shape, world};
 pub use collision::{contact, tunnelling};
+pub use io::rigid_checkpoint;
 pub use io::{checkpoint, output, output_dir, report};
-pub use rigid::{checkpoint as rigid_checkpoint, scene as rigid_scene};
 pub use run::engine;
+pub use scene::rigid as rigid_scene;
 pub use scene::{file as scene_file, generate, import, model, save as scene_save, urdf};
 use step::colour_progress;
 pub use step::{assembly, coarse, nsgs, projection, rolling, simulation, subspace};

@@ -1,5 +1,5 @@
 //! Long chains of joints (issue 53): the step solves all the joints' equality rows together
-//! (W_EE = G_Eᵀ M⁻¹ G_E factored once per step, rigid/step/equality.rs), so that a chain of
+//! (W_EE = G_Eᵀ M⁻¹ G_E factored once per step, step/rigid/equality.rs), so that a chain of
 //! 200 links is held exactly in one Gauss–Seidel sweep (a per-joint block solve carries a
 //! correction one link further per sweep), and a 200-link chain landing on a floor neither
 //! gains energy nor drifts apart.

@@ -1,6 +1,6 @@
 //! The obstacles' surfaces as triangles (plane, box, cylinder, sphere, rectangle, mesh), cut to
 //! the region the bodies occupy ([`Extent`]) and placed by their motion at time t: what the VTK
-//! writers draw ([`crate::output`]) and the rigid engine collides with ([`crate::rigid_scene`]).
+//! writers draw ([`crate::output`]) and the rigid engine collides with ([`crate::scene::rigid`]).
 
 use crate::math::Vec3;
 use crate::world::{Motion, Obstacle, Shape};

@@ -1470,28 +1470,6 @@ impl DistributedSimulation {
         };
         vtk.write_frame(&f, &self.forces, Some(part))
     }
-
-    /// All beads gathered on every rank in global id order (for tests and small runs: O(N)
-    /// data per rank).
-    pub fn gather_world(&mut self) -> World {
-        let size = self.comm.size();
-        let mut buf = Vec::with_capacity(BEAD_WORDS * self.beads.len());
-        for (gid, b) in &self.beads {
-            pack_bead(&mut buf, *gid, b);
-        }
-        let recv = self.comm.exchange(&vec![buf; size]);
-        let mut all: Vec<(usize, Sphere)> = recv
-            .iter()
-            .flat_map(|b| b.chunks_exact(BEAD_WORDS).map(unpack_bead))
-            .collect();
-        all.sort_by_key(|x| x.0);
-        World {
-            bodies: all.into_iter().map(|x| x.1).collect(),
-            obstacles: self.obstacles.clone(),
-            gravity: self.gravity,
-            materials: None,
-        }
-    }
 }
 
 fn pack_bead(buf: &mut Vec<f64>, gid: usize, b: &Sphere) {

@@ -959,7 +959,7 @@ pub(crate) fn read_checked(
 
 /// The `format` attribute of the HDF5 file at `path` (`None`: not HDF5, unreadable, or
 /// without one): tells a sphere checkpoint ([`FORMAT_NAME`]) from a rigid one
-/// ([`crate::rigid_checkpoint::FORMAT_NAME`]).
+/// ([`crate::io::rigid_checkpoint::FORMAT_NAME`]).
 pub fn format_of(path: impl AsRef<Path>) -> Option<String> {
     let bytes = read_file(path.as_ref()).ok()?;
     open(path.as_ref(), bytes, |r| {

@@ -9,12 +9,12 @@
 //! frame of 10⁶ beads is ~100 MB instead of ~300 MB and is written without formatting
 //! numbers); [`VtkFormat::Ascii`] writes the same arrays as text.
 
+use crate::bodies::rigid::RigidPartner;
 pub use crate::bodies::surface::{obstacle_surface, Extent, CYLINDER_SEGMENTS};
 use crate::contact::{Contact, Partner};
 use crate::math::Vec3;
 use crate::output_dir::OutputDir;
-use crate::rigid::RigidPartner;
-use crate::rigid_scene::RigidScene;
+use crate::scene::rigid::RigidScene;
 use crate::shape::{BodyShape, IDENTITY};
 use crate::simulation::{Simulation, StepStats};
 use crate::world::{Motion, Obstacle, Sphere};
@@ -1319,7 +1319,7 @@ mod tests {
             IDENTITY,
             1000.0,
         ));
-        let mut scene = crate::rigid_scene::RigidScene::new(&m).unwrap();
+        let mut scene = crate::scene::rigid::RigidScene::new(&m).unwrap();
         let dir = std::env::temp_dir().join(format!("coulomb-rigid-vtk-{}", std::process::id()));
         let mut w = VtkWriter::new(&dir).unwrap().with_format(VtkFormat::Ascii);
         scene.step().unwrap();
@@ -1390,7 +1390,7 @@ mod tests {
                 1000.0,
             ));
         }
-        let mut scene = crate::rigid_scene::RigidScene::new(&m).unwrap();
+        let mut scene = crate::scene::rigid::RigidScene::new(&m).unwrap();
         let dir = std::env::temp_dir().join(format!("coulomb-rigid-balls-{}", std::process::id()));
         let _ = fs::remove_dir_all(&dir);
         let mut w = VtkWriter::new(&dir).unwrap();
@@ -1433,7 +1433,10 @@ mod tests {
         let h = scene.world.settings().h;
         let mut want = Vec3::ZERO;
         for c in scene.world.contacts() {
-            assert_eq!((c.a, c.b), (0, crate::rigid::RigidPartner::Obstacle(0)));
+            assert_eq!(
+                (c.a, c.b),
+                (0, crate::bodies::rigid::RigidPartner::Obstacle(0))
+            );
             want += Vec3::from_slice(&c.world_impulse()) * (1.0 / h);
         }
         assert!(want.z > 0.0, "{want:?}");

@@ -3,8 +3,8 @@
 //! (the sphere engine's [`StepStats`] or the rigid engine's [`RigidStepReport`], each of which
 //! keeps its engine's details for `stats.json`). docs/reference.md lists the columns.
 
-use crate::rigid::{RigidStatus, RigidStepReport};
 use crate::simulation::StepStats;
+use crate::step::rigid::{RigidStatus, RigidStepReport};
 use serde::Serialize;
 
 /// Header of `stats.csv`, the fields of [`StepRecord`] in order.

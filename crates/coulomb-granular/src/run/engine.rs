@@ -4,12 +4,12 @@
 //! [`EngineStep`] of every scene (the `stats.csv` record and the engine's report); the rest
 //! rule, the frames, the checkpoints and the FCLIB dumps are asked the same way.
 
+use crate::bodies::rigid::RigidError;
 use crate::checkpoint::CheckpointError;
 use crate::output::{FrameSource, VtkWriter};
 use crate::output_dir::{OutputDir, RunKind};
 use crate::report::EngineStep;
-use crate::rigid::RigidError;
-use crate::rigid_scene::RigidScene;
+use crate::scene::rigid::RigidScene;
 use crate::simulation::{Simulation, SimulationError};
 use coulomb::problem::GlobalProblem;
 use std::io;

@@ -18,7 +18,7 @@ use crate::model::{
     BodyShape, BodySpec, BuildChecks, LawKey, MaterialPair, Materials, ObstacleSpec, SceneError,
     SceneModel, SphereBatch, StepSettings,
 };
-use crate::rigid_scene::RigidScene;
+use crate::scene::rigid::RigidScene;
 use crate::simulation::{Params, Simulation, SimulationError};
 use crate::world::{ContactLaw, MeshSide, Motion, Shape, Sphere, World};
 use serde::{Deserialize, Serialize};
@@ -162,7 +162,7 @@ pub struct SceneFile {
     /// position (+ gain), max_force}); bodies are
     /// numbered from 0 in file order over every `[[bodies]]` group
     #[serde(default)]
-    pub joints: Vec<crate::rigid::joints::JointDesc>,
+    pub joints: Vec<crate::bodies::joints::JointDesc>,
     /// `[[urdf]]`: robots read from URDF files (issue 53, [`crate::urdf`]); their links are
     /// bodies numbered after every `[[bodies]]` group's (robot after robot, each robot's
     /// links in its file's order), their joints come after `[[joints]]`

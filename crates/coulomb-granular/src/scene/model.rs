@@ -15,7 +15,7 @@
 //! A model whose bodies are all spheres ([`SceneModel::has_shapes`] false) builds the sphere
 //! simulator's [`World`] ([`SceneModel::build`], the fast path, unchanged); a model with any
 //! other shape (cuboid, capsule, cylinder, cone, convex hull or polyhedron, compound) runs in
-//! the rigid-body simulator (`crate::rigid_scene`), where spheres are balls and every body
+//! the rigid-body simulator (`crate::scene::rigid`), where spheres are balls and every body
 //! has an orientation (unit quaternion (w, x, y, z), refused if not of unit norm) and may
 //! override its mass and inertia.
 //!
@@ -97,7 +97,7 @@ pub struct SceneModel {
     /// `bodies` in order, then the spheres of each batch; a scene with joints goes to the
     /// rigid-body simulator ([`SceneModel::has_shapes`])
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub joints: Vec<crate::rigid::joints::JointDesc>,
+    pub joints: Vec<crate::bodies::joints::JointDesc>,
 }
 
 impl Default for SceneModel {
@@ -672,7 +672,7 @@ pub enum SceneError {
     /// the rigid-body simulator refused the scene (interpenetrating bodies, invalid mass
     /// properties, …)
     #[error("rigid bodies: {0}")]
-    Rigid(crate::rigid::RigidError),
+    Rigid(crate::bodies::rigid::RigidError),
     /// the scene would need more memory than the machine has
     #[error("the scene needs about {estimate} bytes ({spheres} spheres, {triangles} mesh triangles), more than the {available} bytes of memory available")]
     Memory {
@@ -832,7 +832,7 @@ pub struct Resolved {
 
 /// The time cap of an overlap relaxation (`--resolve-overlaps`, Python's `resolve_overlaps=`),
 /// besides its sweep cap: spheres ([`resolve_overlaps`]) and bodies of any shape
-/// ([`crate::rigid::RigidWorld::relax_overlaps`]). A relaxation that reaches it with overlaps
+/// ([`crate::step::rigid::RigidWorld::relax_overlaps`]). A relaxation that reaches it with overlaps
 /// left is refused, saying so.
 pub const RELAXATION_TIME_LIMIT: std::time::Duration = std::time::Duration::from_secs(300);
 

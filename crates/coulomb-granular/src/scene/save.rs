@@ -483,14 +483,14 @@ mod tests {
                 normal: Vec3::Z,
             },
         ));
-        m.joints.push(crate::rigid::joints::JointDesc {
-            kind: crate::rigid::joints::JointKind::Revolute,
+        m.joints.push(crate::bodies::joints::JointDesc {
+            kind: crate::bodies::joints::JointKind::Revolute,
             body_a: 1,
             body_b: Some(0),
             anchor: [0.5, 0.0, 0.5],
             axis: Some([0.0, 1.0, 0.0]),
             limits: Some((-0.5, 0.25)),
-            motor: Some(crate::rigid::joints::Motor::with_velocity(1.5, 2.0)),
+            motor: Some(crate::bodies::joints::Motor::with_velocity(1.5, 2.0)),
             limit_restitution: Some(0.5),
             friction: Some(0.25),
         });

@@ -39,10 +39,10 @@
 //! `mimic` joints and nonzero `dynamics damping` (not modelled).
 
 use super::urdf_reader::{self as reader, Geometry};
+use crate::bodies::joints::{JointDesc, JointKind};
+use crate::bodies::rigid::MassProperties;
 use crate::import::{self, Scale, Transform};
 use crate::model::{BodyShape, BodySpec, CompoundPart};
-use crate::rigid::joints::{JointDesc, JointKind};
-use crate::rigid::MassProperties;
 use crate::shape::{check_quaternion, IDENTITY};
 use crate::Vec3;
 use serde::{Deserialize, Serialize};

@@ -415,29 +415,7 @@ pub fn update_contact(
     };
     let u = row.velocity_fast(va, vb.as_deref());
     let old = *r;
-    let a = &row.w_ii;
-    let mut c = u;
-    for k in 0..3 {
-        c[k] -= a[3 * k] * old[0] + a[3 * k + 1] * old[1] + a[3 * k + 2] * old[2];
-    }
-    let mut contact = OneContact {
-        a,
-        ainv: &row.w_inv,
-        d: 3,
-        mu: row.mu,
-        c,
-    };
-    let new = solve_contact_law(&contact, &old, &u).unwrap_or_else(|| {
-        contact.c[0] += row.mu * cone::tangent_norm(&u);
-        solve_contact(&contact, &old)
-    });
-    let new = if omega != 1.0 {
-        let mut x: [f64; 3] = std::array::from_fn(|k| old[k] + omega * (new[k] - old[k]));
-        cone::project(row.mu, &mut x);
-        x
-    } else {
-        new
-    };
+    let new = relaxed_contact_law(&row.w_ii, &row.w_inv, row.mu, &u, &old, omega, false);
     let delta = [new[0] - old[0], new[1] - old[1], new[2] - old[2]];
     let sums = UpdateSums {
         residual_sq: law::contact_residual_sq(row.mu, &u, &old),
@@ -464,6 +442,77 @@ pub fn update_contact(
     }
     *r = new;
     sums
+}
+
+/// r_i' of one Gauss–Seidel update of a contact from its velocity u_i at the current impulse
+/// r_i = `old`: the solution of the one-contact Coulomb law (2.9) u' = W_ii r' + c with
+/// c = u_i − W_ii r_i — in closed form ([`isotropic_law`]) when `isotropic`, else by
+/// `solve_contact_law`, or the one-contact SOC-QP with s = μ‖u_T‖ where that fails — then
+/// P_{K_μ}(r_i + ω (r_i' − r_i)) when ω ≠ 1 (over-relaxation). The contact update of both
+/// sweeps: [`update_contact`] (`isotropic` false) and the sweep of bodies of any shape
+/// (`step::rigid::nsgs`).
+#[inline(always)]
+pub(crate) fn relaxed_contact_law(
+    w_ii: &[f64; 9],
+    w_inv: &[f64; 9],
+    mu: f64,
+    u: &[f64; 3],
+    old: &[f64; 3],
+    omega: f64,
+    isotropic: bool,
+) -> [f64; 3] {
+    let mut c = *u;
+    for k in 0..3 {
+        c[k] -= w_ii[3 * k] * old[0] + w_ii[3 * k + 1] * old[1] + w_ii[3 * k + 2] * old[2];
+    }
+    let new = if isotropic {
+        isotropic_law(w_ii, mu, &c)
+    } else {
+        let mut contact = OneContact {
+            a: w_ii,
+            ainv: w_inv,
+            d: 3,
+            mu,
+            c,
+        };
+        solve_contact_law(&contact, old, u).unwrap_or_else(|| {
+            contact.c[0] += mu * cone::tangent_norm(u);
+            solve_contact(&contact, old)
+        })
+    };
+    if omega != 1.0 {
+        let mut x: [f64; 3] = std::array::from_fn(|k| old[k] + omega * (new[k] - old[k]));
+        cone::project(mu, &mut x);
+        x
+    } else {
+        new
+    }
+}
+
+/// The solution r of the one-contact Coulomb law (2.9), u = W r + c, for
+/// W = diag(w_N, w_T, w_T) (w_T the mean of the block's two tangent entries), μ ∈ [0, ∞):
+/// take-off r = 0 when c_N ≥ 0; stick r = −W⁻¹c when it lies in K_μ; else slide:
+/// u_N = 0 gives r_N = −c_N / w_N (the normal row does not see r_T), and u_T = w_T r_T + c_T
+/// opposite to r_T = −μ r_N τ gives τ = c_T / ‖c_T‖ (u_T = (‖c_T‖ − w_T μ r_N) τ, whose
+/// factor is ≥ 0 exactly when sticking failed). The same cases as the library's
+/// `solve_contact_law`, whose slip equation needs Newton's method for a general W_ii.
+#[inline]
+pub(crate) fn isotropic_law(w: &[f64; 9], mu: f64, c: &[f64; 3]) -> [f64; 3] {
+    if c[0] >= 0.0 {
+        return [0.0; 3];
+    }
+    let wt = 0.5 * (w[4] + w[8]);
+    let rn = -c[0] / w[0];
+    let stick = [rn, -c[1] / wt, -c[2] / wt];
+    // r_N > 0 (c_N < 0): stick in K_μ iff ‖r_T‖² ≤ (μ r_N)² (no square root)
+    let limit = mu * rn;
+    if stick[1] * stick[1] + stick[2] * stick[2] <= limit * limit {
+        return stick;
+    }
+    // sticking failed: μ r_N < ‖r_T‖ = ‖c_T‖ / w_T, so ‖c_T‖ > 0
+    let ct = (c[1] * c[1] + c[2] * c[2]).sqrt();
+    let s = mu * rn / ct;
+    [rn, -s * c[1], -s * c[2]]
 }
 
 /// Settings of [`solve`].

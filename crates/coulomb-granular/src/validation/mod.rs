@@ -1,8 +1,11 @@
 //! Textbook checks of the time stepping (docs/validation.md): each returns the value expected
 //! from mechanics, the measured one and the tolerance, used by the fast tests
-//! (`tests/physics.rs`) and by `coulomb validate`.
+//! (`tests/physics.rs`) and by `coulomb validate`; those of bodies of other shapes in `rigid`,
+//! of joints and mechanisms in `joints`.
 
+pub mod joints;
 pub mod laws;
+pub mod rigid;
 
 use crate::projection::penetrations;
 use crate::simulation::{Params, Simulation, SimulationError};

@@ -1,36 +1,17 @@
-//! Rigid bodies of any convex shape (issue #41): Newton–Euler Moreau–Jean time stepping
-//! (2.5)–(2.7) of 6-dof bodies whose contacts come from parry3d's contact manifolds, each
-//! manifold point one Coulomb contact of the incremental problem (2.10).
-//!
-//! - [`body`]: the dynamics — unit-quaternion orientation, body-frame angular velocity,
-//!   the gyroscopic term by an implicit-midpoint free-rotation predictor, exponential-map
-//!   orientation update;
-//! - [`contacts`]: parry's BVH broad phase, contact manifolds, the contact frame
-//!   (normal from B to A, as the sphere code), activation and warm-start keys;
-//! - [`step`]: [`RigidWorld`] and its step: body-level nonsmooth Gauss–Seidel with the full
-//!   inertia (W_ii = J M⁻¹ Jᵀ), handed over to the library's solver on the step's global
-//!   problem when it stalls;
-//! - [`validation`]: the validation cases (incline, slide/topple, resting box, wall, pyramid).
+//! The body model of bodies of any shape (issue #41): mass properties ([`MassProperties`],
+//! from parry3d's), a body's description ([`RigidBodyDesc`]: shape, mass, pose, velocities,
+//! material, fixed or free), an obstacle's ([`RigidObstacle`]: shape and prescribed motion),
+//! the partner of a contact and its record ([`RigidPartner`], [`RigidContact`]) and the
+//! engine's errors ([`RigidError`]). The Newton–Euler dynamics are in
+//! [`crate::bodies::dynamics`], joints in [`crate::bodies::joints`], the step in
+//! [`crate::step::rigid`].
 //!
 //! Quaternions are (w, x, y, z) in every public API; a non-unit (||q| − 1| > 1e-9) or
 //! non-finite one is refused, never normalized silently. docs/rigid.md has the details.
 
-pub use parry3d_f64 as parry;
-
-pub mod body;
-pub mod checkpoint;
-pub mod contacts;
-pub mod joint_checks;
-pub mod joints;
-pub mod polytope;
-pub mod scene;
-pub mod step;
-pub mod validation;
-
-pub use step::RigidWorld;
-
 use crate::world::Motion;
 use parry::shape::SharedShape;
+use parry3d_f64 as parry;
 use serde::Serialize;
 
 /// Largest accepted deviation ||q| − 1| of a quaternion.
@@ -187,96 +168,6 @@ pub struct RigidObstacle {
     pub material: u32,
 }
 
-/// Settings of the rigid-body time stepping.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RigidSettings {
-    /// time step h (s); default 1e-3
-    pub h: f64,
-    /// θ ∈ [0, 1] of the position update (2.7); default ½ (Siconos' mechanics default)
-    pub theta: f64,
-    /// gravity (m/s²); default (0, 0, −9.81)
-    pub gravity: [f64; 3],
-    /// tolerance on the error of docs/error.md of each step's problem; default 1e-8 (the
-    /// rigid-body tolerance of the benchmarks)
-    pub tolerance: f64,
-    /// cap on Gauss–Seidel sweeps per step; default 2 000 (a scene's `max_sweeps`, 20 000 by
-    /// default, the same cap as the sphere engine's [`crate::nsgs::NsgsSettings::max_sweeps`])
-    pub max_sweeps: usize,
-    /// Gauss–Seidel is judged stalled when the lowest error it has met has not halved over
-    /// this many sweeps and, at that rate, would need more sweeps to reach the tolerance than
-    /// it has done (then the library's solver takes over); default 100
-    pub stall_window: usize,
-    /// over-relaxation ω ∈ [1, 2) of the contact updates from the second sweep on, the
-    /// meaning of the sphere engine's [`crate::nsgs::NsgsSettings::relaxation`]: the first
-    /// sweep is plain, each update r_i' of a contact becomes P_{K_μ}(r_i + ω (r_i' − r_i)),
-    /// and ω is halved towards 1 (ω ← 1 + (ω − 1)/2, 1 below 1.01) whenever Gauss–Seidel has
-    /// not decreased over [`crate::nsgs::RELAX_WINDOW`] sweeps (judged on the exact error of
-    /// the checks, where the sphere engine judges its sweep residual); default 1.5 (a scene's
-    /// `relaxation`)
-    pub relaxation: f64,
-    /// wall-clock cap of one step's Gauss–Seidel, checked at its exact evaluations; reached,
-    /// the step goes on as a stall does (to the library's solver, itself time-capped by
-    /// `solver`); default 60 s, the sphere engine's
-    /// [`crate::nsgs::NsgsSettings::time_limit`]; `None`: no cap
-    pub time_limit: Option<std::time::Duration>,
-    /// hand a step that Gauss–Seidel leaves above the tolerance to `coulomb::solver` on
-    /// the step's global problem; default true
-    pub library_finish: bool,
-    /// solve every step's problem (2.10) by `coulomb::solver` alone, from the warm start,
-    /// without Gauss–Seidel (a scene's `method = "library"`, as the sphere engine's
-    /// [`crate::StepMethod::Library`]); default false
-    pub library_only: bool,
-    /// settings of the library's solver (its `tol` is replaced by `tolerance`)
-    pub solver: coulomb::solver::Settings,
-    /// γ ∈ [0, 1] of the activation rule g + γ h min(u_N, 0) ≤ δ; default 1
-    pub activation_gamma: f64,
-    /// δ ≥ 0 of the activation rule (m); default 1e-8
-    pub activation_delta: f64,
-    /// largest penetration accepted between bodies (and bodies and obstacles) at the start
-    /// (m); default 1e-8
-    pub max_initial_penetration: f64,
-    /// warm start each contact from the impulse of the same manifold point (parry's
-    /// feature ids) at the previous step; default true
-    pub warm_start: bool,
-    /// add (1 − e) g_k / h to the normal row of a pair at a positive gap g_k that gravity's
-    /// look-ahead made active ([`crate::assembly::gap_closure`]'s rule; a scene's
-    /// `gap_closure`); default true
-    pub gap_closure: bool,
-    /// correct the positions after each step when a contact ends deeper than 1e-3 of the
-    /// thinnest half width, down to 1e-4 of it (the sphere scenes' projection,
-    /// [`step`]'s `correct_positions`); positions only, velocities and impulses untouched;
-    /// default true
-    pub position_correction: bool,
-    /// keep each step's global problem ([`RigidWorld::last_problem`], `--dump-fclib`);
-    /// default true
-    pub keep_problem: bool,
-}
-
-impl Default for RigidSettings {
-    fn default() -> Self {
-        Self {
-            h: 1e-3,
-            theta: 0.5,
-            gravity: [0.0, 0.0, -crate::world::GRAVITY],
-            tolerance: 1e-8,
-            max_sweeps: 2_000,
-            stall_window: 100,
-            relaxation: 1.5,
-            time_limit: Some(std::time::Duration::from_secs(60)),
-            library_finish: true,
-            library_only: false,
-            solver: coulomb::solver::Settings::default(),
-            activation_gamma: 1.0,
-            activation_delta: 1e-8,
-            max_initial_penetration: 1e-8,
-            warm_start: true,
-            gap_closure: true,
-            position_correction: true,
-            keep_problem: true,
-        }
-    }
-}
-
 /// The other party of a rigid contact.
 #[derive(
     Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, serde::Deserialize,
@@ -324,60 +215,6 @@ impl RigidContact {
         let r = self.impulse;
         std::array::from_fn(|k| r[0] * n[k] + r[1] * t1[k] + r[2] * t2[k])
     }
-}
-
-/// How a step's contact problem ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum RigidStatus {
-    /// no active contact (free flight)
-    NoContact,
-    /// error on the stored problem ≤ tolerance
-    Converged,
-    /// error above the tolerance after Gauss–Seidel (and the library's solver, if enabled)
-    NotConverged,
-}
-
-/// Report of one step.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct RigidStepReport {
-    /// step index k (from t_k to t_{k+1})
-    pub step: u64,
-    /// t_{k+1}
-    pub time: f64,
-    /// how the contact problem ended
-    pub status: RigidStatus,
-    /// error of docs/error.md of the returned (v, r) on the step's stored problem (0 without
-    /// contacts)
-    pub error: f64,
-    /// active contacts (manifold points, the look-ahead ones included: every row of the
-    /// step's problem)
-    pub contacts: usize,
-    /// contacts that carry load: normal impulse r_N > 10⁻⁶ max r_N of the step (what a
-    /// side-by-side with another engine compares, whose activation rule differs)
-    pub loaded_contacts: usize,
-    /// contacts warm started from the previous step
-    pub warm_started: usize,
-    /// Gauss–Seidel sweeps
-    pub sweeps: usize,
-    /// "none", "nsgs" or "nsgs+library" (the library's solver finished the step)
-    pub method: &'static str,
-    /// wall-clock time of collision detection (s)
-    pub detection_seconds: f64,
-    /// wall-clock time of the contact solve (s)
-    pub solve_seconds: f64,
-    /// largest penetration max(0, −g) over the active contacts at t_k
-    pub max_penetration: f64,
-    /// kinetic energy at t_{k+1}
-    pub kinetic_energy: f64,
-    /// bodies whose free-rotation predictor did not converge to round-off (0 normally)
-    pub rotation_unconverged: usize,
-    /// "" when the step passed the physical checks, else the check it failed
-    /// ("penetration": a contact deeper than [`step::PENETRATION_BOUND`] of the thinner
-    /// body's half width; "energy growth": mechanical energy gained beyond
-    /// [`step::ENERGY_GROWTH_BOUND`] with fixed obstacles); the status is then
-    /// [`RigidStatus::NotConverged`]
-    pub physics_check: &'static str,
 }
 
 /// Why a rigid world cannot be built or stepped.
@@ -471,7 +308,7 @@ pub enum RigidError {
     /// positions or velocities became non-finite
     #[error("non-finite state at step {0}")]
     NonFiniteState(u64),
-    /// an invalid joint ([`joints`])
+    /// an invalid joint ([`crate::bodies::joints`])
     #[error("joint {joint}: {field}: {detail}")]
     Joint {
         /// the joint's index

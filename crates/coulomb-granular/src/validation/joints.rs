@@ -2,9 +2,10 @@
 //! period, a hanging chain's top force, a motorised hinge's acceleration, Newton's cradle's
 //! speed transfer and a double pendulum's drift and energy, each with its expected value and tolerance (docs/joints.md).
 
-use super::joints::{JointDesc, JointKind, Motor};
-use super::validation::{cuboid, one_material};
-use super::{RigidError, RigidSettings, RigidStatus, RigidWorld};
+use crate::bodies::joints::{JointDesc, JointKind, Motor};
+use crate::bodies::rigid::RigidError;
+use crate::step::rigid::{RigidSettings, RigidStatus, RigidWorld};
+use crate::validation::rigid::{cuboid, one_material};
 use crate::validation::Check;
 use crate::world::GRAVITY;
 
@@ -192,8 +193,8 @@ pub fn newtons_cradle(
     steps: usize,
     settings: RigidSettings,
 ) -> Result<Cradle, RigidError> {
-    use super::parry::shape::SharedShape;
-    use super::MassProperties;
+    use crate::bodies::rigid::MassProperties;
+    use parry3d_f64::shape::SharedShape;
     let (radius, length, n) = (0.02, 0.2, 5);
     let shape = SharedShape::ball(radius);
     let mass = MassProperties::from_shape(&shape, 7800.0)?;
@@ -202,7 +203,7 @@ pub fn newtons_cradle(
     for k in 0..n {
         let pivot = [k as f64 * (2.0 * radius + gap), 0.0, 0.1 + length];
         let a = if k == 0 { release } else { 0.0 };
-        bodies.push(super::RigidBodyDesc {
+        bodies.push(crate::bodies::rigid::RigidBodyDesc {
             shape: shape.clone(),
             mass,
             position: [

@@ -2,14 +2,12 @@
 //! gives, each returning the measured value next to the expected one. The quick ones are
 //! unit tests (below); all of them are `coulomb validate` checks ([`checks`]).
 
-use super::parry::math::Vector;
-use super::parry::shape::SharedShape;
-use super::{
-    MassProperties, RigidBodyDesc, RigidError, RigidObstacle, RigidSettings, RigidStatus,
-    RigidWorld,
-};
+use crate::bodies::rigid::{MassProperties, RigidBodyDesc, RigidError, RigidObstacle};
+use crate::step::rigid::{RigidSettings, RigidStatus, RigidWorld};
 use crate::validation::Check;
 use crate::world::{ContactLaw, MaterialTable, Motion};
+use parry3d_f64::math::Vector;
+use parry3d_f64::shape::SharedShape;
 
 /// One material with friction μ and no restitution.
 pub fn one_material(mu: f64) -> MaterialTable {
@@ -87,7 +85,7 @@ pub fn free_top(omega: [f64; 3], h: f64, steps: usize) -> Result<FreeTop, RigidE
         .max_by(|&i, &j| omega[i].abs().total_cmp(&omega[j].abs()))
         .unwrap_or(0);
     let body_y = |w: &RigidWorld| {
-        let q = super::body::rotation_from_wxyz(w.orientations()[0]);
+        let q = crate::bodies::dynamics::rotation_from_wxyz(w.orientations()[0]);
         (q.conjugate() * Vector::from_array(w.angular_velocities()[0])).to_array()[axis]
     };
     let y0 = body_y(&w);
@@ -153,7 +151,7 @@ pub fn resting_box(drop: f64, steps: usize) -> Result<RestingBox, RigidError> {
         penetration = penetration.max(-c.gap);
     }
     // the end-of-step penetration: the lowest corner's depth below z = 0
-    let q = super::body::rotation_from_wxyz(w.orientations()[0]);
+    let q = crate::bodies::dynamics::rotation_from_wxyz(w.orientations()[0]);
     let origin = Vector::from_array(w.positions()[0]);
     for sx in [-1.0, 1.0] {
         for sy in [-1.0, 1.0] {
@@ -727,7 +725,7 @@ mod report {
 #[cfg(test)]
 mod shape_tests {
     use super::*;
-    use crate::rigid::parry::math::Pose;
+    use parry3d_f64::math::Pose;
 
     fn body(shape: SharedShape, z: f64) -> RigidBodyDesc {
         let mass = MassProperties::from_shape(&shape, 1000.0).unwrap();
@@ -764,8 +762,8 @@ mod shape_tests {
             (Pose::translation(0.05, 0.0, 0.0), SharedShape::ball(0.05)),
         ]);
         // (shape, how far its lowest point is below its frame's origin: z of the origin at rest)
-        let lying = crate::rigid::body::rotation_to_wxyz(
-            crate::rigid::parry::math::Rotation::from_rotation_x(std::f64::consts::FRAC_PI_2),
+        let lying = crate::bodies::dynamics::rotation_to_wxyz(
+            parry3d_f64::math::Rotation::from_rotation_x(std::f64::consts::FRAC_PI_2),
         );
         let cases: Vec<(SharedShape, [f64; 4], f64)> = vec![
             (SharedShape::ball(0.05), [1.0, 0.0, 0.0, 0.0], 0.05),
@@ -825,7 +823,7 @@ mod shape_tests {
                 // the lowest point of the shape: its AABB's bottom at the final pose
                 let pose = Pose::from_parts(
                     Vector::from_array(w.positions()[0]),
-                    crate::rigid::body::rotation_from_wxyz(w.orientations()[0]),
+                    crate::bodies::dynamics::rotation_from_wxyz(w.orientations()[0]),
                 );
                 let bottom = shape.compute_aabb(&pose).mins.z;
                 assert!(

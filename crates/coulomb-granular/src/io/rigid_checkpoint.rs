@@ -1,5 +1,5 @@
 //! Checkpoint and restart of a rigid-body scene ([`RigidScene`]): the state the Moreau–Jean
-//! step (2.7)–(2.10) of [`crate::rigid::RigidWorld`] carries from t_k to t_{k+1}, in one HDF5
+//! step (2.7)–(2.10) of [`crate::step::rigid::RigidWorld`] carries from t_k to t_{k+1}, in one HDF5
 //! file written atomically, so that running 2K steps and running K steps, saving, loading and
 //! running K more give the same bits (test `restart_gives_the_same_bits`).
 //!
@@ -50,16 +50,16 @@
 //! | `/joints/force` | f64, force and torque, world axes | (joints, 6) |
 //! | `/json/library` (version 4), `/json/switches` (version 3 only) | UTF-8 string | scalar |
 
+use crate::bodies::joints::SLOTS;
+use crate::bodies::rigid::{RigidContact, RigidPartner};
 use crate::checkpoint::{
     check_rows, encode_entries, index, json_of, open, read_checked, read_file, write_file,
     CheckpointError, Cursor, Data, Entry, Reader,
 };
+use crate::collision::manifold::ContactKey;
 use crate::model::SceneModel;
-use crate::rigid::contacts::ContactKey;
-use crate::rigid::joints::SLOTS;
-use crate::rigid::step::{LibrarySettings, RigidState};
-use crate::rigid::{RigidContact, RigidPartner};
-use crate::rigid_scene::RigidScene;
+use crate::scene::rigid::RigidScene;
+use crate::step::rigid::{LibrarySettings, RigidState};
 use std::path::Path;
 
 /// The `format` attribute of a rigid-scene checkpoint.
@@ -387,7 +387,7 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
 
 impl RigidScene {
     /// The checkpoint of this scene as the bytes of an HDF5 file (module
-    /// [`crate::rigid_checkpoint`]).
+    /// [`crate::io::rigid_checkpoint`]).
     pub fn checkpoint_bytes(&self) -> Result<Vec<u8>, CheckpointError> {
         let state = self
             .world

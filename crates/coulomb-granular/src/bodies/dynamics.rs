@@ -42,7 +42,7 @@
 //! the body-frame rotation vector φ = h ((1 − θ) Ω_k + θ Ω_{k+1}):
 //! q_{k+1} = q_k ⊗ exp(φ / 2), re-normalized ([`integrate_orientation`]).
 
-use crate::rigid::parry::math::{Pose, Rotation, Vector};
+use parry3d_f64::math::{Pose, Rotation, Vector};
 
 /// Newton iterations of [`free_rotation`] at most.
 pub const FREE_ROTATION_MAX_ITERATIONS: usize = 50;
@@ -176,7 +176,7 @@ pub fn free_rotation(inertia: [f64; 3], omega: Vector, h: f64) -> FreeRotation {
     }
 }
 
-/// [a]× as rows.
+/// \[a\]× as rows.
 fn skew(a: Vector) -> [[f64; 3]; 3] {
     [[0.0, -a.z, a.y], [a.z, 0.0, -a.x], [-a.y, a.x, 0.0]]
 }

@@ -5,11 +5,11 @@
 //! (M, H, f, w, μ): v = M⁻¹(f + H r) recomputed from r, u = Hᵀ v + w,
 //! q = Hᵀ M⁻¹ f + w.
 
-use crate::rigid::joints::{JointRow, RowKind};
-use coulomb::inner::pgs::{solve_contact, solve_contact_law, OneContact};
+use crate::bodies::joints::{JointRow, RowKind};
+use crate::nsgs::relaxed_contact_law;
+use coulomb::law;
 use coulomb::problem::{GlobalProblem, ProblemError};
 use coulomb::sparse::CscMatrix;
-use coulomb::{cone, law};
 
 /// Whether a joint row with multiplier l is a row of G in the stored problem.
 fn stored_row(kind: RowKind, l: f64) -> bool {
@@ -71,7 +71,7 @@ pub struct Problem {
     /// f per moving body
     pub f: Vec<[f64; 6]>,
     q_norm: f64,
-    /// the joints' blocks (equality rows, [`crate::rigid::joints`])
+    /// the joints' blocks (equality rows, [`crate::bodies::joints`])
     pub joints: Vec<JointBlock>,
     /// the equality rows of all the joints factored together (W_EE, [`super::equality`]),
     /// when the step solves them together ([`GLOBAL_EQUALITY_MIN_ROWS`])
@@ -111,7 +111,7 @@ struct SweepRow {
     w_ii: [f64; 9],
     w_inv: [f64; 9],
     /// W_ii = diag(W_NN, W_TT, W_TT) to [`ISOTROPIC_TOL`] (a ball's contact): the
-    /// one-contact law is solved in closed form ([`isotropic_law`])
+    /// one-contact law is solved in closed form ([`crate::nsgs::isotropic_law`])
     isotropic: bool,
 }
 
@@ -129,32 +129,6 @@ fn is_isotropic(w: &[f64; 9]) -> bool {
         && small(w[5], t1, t2)
         && small(w[7], t1, t2)
         && (t1 - t2).abs() <= ISOTROPIC_TOL * t1.max(t2)
-}
-
-/// The solution r of the one-contact Coulomb law (2.9), u = W r + c, for
-/// W = diag(w_N, w_T, w_T) (w_T the mean of the block's two tangent entries), μ ∈ [0, ∞):
-/// take-off r = 0 when c_N ≥ 0; stick r = −W⁻¹c when it lies in K_μ; else slide:
-/// u_N = 0 gives r_N = −c_N / w_N (the normal row does not see r_T), and u_T = w_T r_T + c_T
-/// opposite to r_T = −μ r_N τ gives τ = c_T / ‖c_T‖ (u_T = (‖c_T‖ − w_T μ r_N) τ, whose
-/// factor is ≥ 0 exactly when sticking failed). The same cases as the library's
-/// `solve_contact_law`, whose slip equation needs Newton's method for a general W_ii.
-#[inline]
-fn isotropic_law(w: &[f64; 9], mu: f64, c: &[f64; 3]) -> [f64; 3] {
-    if c[0] >= 0.0 {
-        return [0.0; 3];
-    }
-    let wt = 0.5 * (w[4] + w[8]);
-    let rn = -c[0] / w[0];
-    let stick = [rn, -c[1] / wt, -c[2] / wt];
-    // r_N > 0 (c_N < 0): stick in K_μ iff ‖r_T‖² ≤ (μ r_N)² (no square root)
-    let limit = mu * rn;
-    if stick[1] * stick[1] + stick[2] * stick[2] <= limit * limit {
-        return stick;
-    }
-    // sticking failed: μ r_N < ‖r_T‖ = ‖c_T‖ / w_T, so ‖c_T‖ > 0
-    let ct = (c[1] * c[1] + c[2] * c[2]).sqrt();
-    let s = mu * rn / ct;
-    [rn, -s * c[1], -s * c[2]]
 }
 
 /// Raw storage shared by the updates of one colour, which touch disjoint bodies and
@@ -203,7 +177,7 @@ pub struct JointBlock {
     w_eq: Vec<f64>,
 }
 
-/// When [`Problem::solve`] stops, and its over-relaxation ([`super::RigidSettings`]'s
+/// When [`Problem::solve`] stops, and its over-relaxation ([`crate::step::rigid::RigidSettings`]'s
 /// fields of the same names).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Rule {
@@ -630,7 +604,7 @@ impl Problem {
         if with_equality && !jb.eq.is_empty() {
             let u = self.joint_u(j, v);
             let rhs: Vec<f64> = jb.eq.iter().map(|&r| -u[r]).collect();
-            let delta = crate::rigid::joints::solve_spd(&jb.w_eq, &rhs, jb.eq.len());
+            let delta = crate::bodies::joints::solve_spd(&jb.w_eq, &rhs, jb.eq.len());
             for (&r, d) in jb.eq.iter().zip(delta) {
                 if d != 0.0 && d.is_finite() {
                     lambda[jb.offset + r] += d;
@@ -808,11 +782,8 @@ impl Problem {
     }
 
     /// One Gauss–Seidel update of contact i = `row.i` (the others frozen), v kept =
-    /// M⁻¹(f + H r); with ω ≠ 1 the solution r_i' of the one-contact law becomes
-    /// P_{K_μ}(r_i + ω (r_i' − r_i)) (over-relaxation, as the sphere engine's
-    /// `crate::nsgs::update_contact`). The law is solved in closed form where W_ii is
-    /// diag(W_NN, W_TT, W_TT) ([`isotropic_law`]: a ball's contact), else by the library's
-    /// `solve_contact_law`.
+    /// M⁻¹(f + H r): r_i' from the sphere engine's [`relaxed_contact_law`] (over-relaxed
+    /// with ω ≠ 1; in closed form where W_ii is diag(W_NN, W_TT, W_TT), a ball's contact).
     ///
     /// # Safety
     /// `v` points to one velocity per body block and `r` to 3 impulses per contact; no
@@ -829,34 +800,16 @@ impl Problem {
         }
         // SAFETY: by the caller's contract
         let ri = unsafe { &mut *r.add(3 * i).cast::<[f64; 3]>() };
-        let a = &row.w_ii;
         let old = *ri;
-        let mut c = u;
-        for k in 0..3 {
-            c[k] -= a[3 * k] * old[0] + a[3 * k + 1] * old[1] + a[3 * k + 2] * old[2];
-        }
-        let new = if row.isotropic {
-            isotropic_law(a, row.mu, &c)
-        } else {
-            let mut contact = OneContact {
-                a,
-                ainv: &row.w_inv,
-                d: 3,
-                mu: row.mu,
-                c,
-            };
-            solve_contact_law(&contact, &old, &u).unwrap_or_else(|| {
-                contact.c[0] += row.mu * cone::tangent_norm(&u);
-                solve_contact(&contact, &old)
-            })
-        };
-        let new = if omega != 1.0 {
-            let mut x: [f64; 3] = std::array::from_fn(|k| old[k] + omega * (new[k] - old[k]));
-            cone::project(row.mu, &mut x);
-            x
-        } else {
-            new
-        };
+        let new = relaxed_contact_law(
+            &row.w_ii,
+            &row.w_inv,
+            row.mu,
+            &u,
+            &old,
+            omega,
+            row.isotropic,
+        );
         let delta = [new[0] - old[0], new[1] - old[1], new[2] - old[2]];
         if delta.iter().all(|x| *x == 0.0) {
             return;
@@ -964,6 +917,9 @@ impl Problem {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::nsgs::isotropic_law;
+    use coulomb::cone;
+    use coulomb::inner::pgs::{solve_contact_law, OneContact};
 
     /// A deterministic generator of numbers in [−½, ½).
     fn numbers(mut seed: u64) -> impl FnMut() -> f64 {

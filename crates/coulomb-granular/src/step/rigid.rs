@@ -6,7 +6,7 @@
 //! ```
 //!
 //! with, per moving body, the 6 dofs (v, Ω) (centre-of-mass velocity in world axes, angular
-//! velocity in the principal body frame, [`super::body`]), M = diag(m, m, m, I₁, I₂, I₃),
+//! velocity in the principal body frame, [`crate::bodies::dynamics`]), M = diag(m, m, m, I₁, I₂, I₃),
 //! f = (m (v_k + h g), I Ω_free) (Ω_free: the gyroscopic free-rotation predictor), and for
 //! each manifold point i with frame (t₀ = n, t₁, t₂) and lever arms a = p − x the column
 //! block of H holds (t_k, R_Aᵀ (a_A × t_k)) on A's dofs and −(t_k, R_Bᵀ (a_B × t_k)) on B's,
@@ -31,19 +31,163 @@
 //! each step. Contacts with rolling resistance alternate that solve with passes over their
 //! rolling impulses (`step/rolling.rs`).
 
-use super::body::{integrate_orientation, rotation_from_wxyz, rotation_to_wxyz, BodyState};
-use super::contacts::{ContactKey, ContactPoint, Detector, PlacedObstacle};
-use super::joints::{Joint, JointDesc, SLOTS};
-use super::parry::math::{Pose, Rotation, Vector};
-use super::parry::shape::SharedShape;
-use super::{
-    RigidBodyDesc, RigidContact, RigidError, RigidObstacle, RigidPartner, RigidSettings,
-    RigidStatus, RigidStepReport, QUATERNION_TOLERANCE,
+use crate::bodies::dynamics::{rotation_from_wxyz, rotation_to_wxyz, BodyState};
+use crate::bodies::joints::{Joint, JointDesc, SLOTS};
+use crate::bodies::rigid::{
+    RigidBodyDesc, RigidContact, RigidError, RigidObstacle, RigidPartner, QUATERNION_TOLERANCE,
 };
+use crate::collision::manifold::{ContactKey, ContactPoint, Detector, PlacedObstacle};
 use crate::world::{MaterialTable, Motion};
 use coulomb::problem::GlobalProblem;
+use parry3d_f64::math::{Pose, Rotation, Vector};
+use parry3d_f64::shape::SharedShape;
+use serde::Serialize;
 use std::collections::BTreeMap;
 use std::time::Instant;
+
+/// Settings of the rigid-body time stepping.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RigidSettings {
+    /// time step h (s); default 1e-3
+    pub h: f64,
+    /// θ ∈ [0, 1] of the position update (2.7); default ½ (Siconos' mechanics default)
+    pub theta: f64,
+    /// gravity (m/s²); default (0, 0, −9.81)
+    pub gravity: [f64; 3],
+    /// tolerance on the error of docs/error.md of each step's problem; default 1e-8 (the
+    /// rigid-body tolerance of the benchmarks)
+    pub tolerance: f64,
+    /// cap on Gauss–Seidel sweeps per step; default 2 000 (a scene's `max_sweeps`, 20 000 by
+    /// default, the same cap as the sphere engine's [`crate::nsgs::NsgsSettings::max_sweeps`])
+    pub max_sweeps: usize,
+    /// Gauss–Seidel is judged stalled when the lowest error it has met has not halved over
+    /// this many sweeps and, at that rate, would need more sweeps to reach the tolerance than
+    /// it has done (then the library's solver takes over); default 100
+    pub stall_window: usize,
+    /// over-relaxation ω ∈ [1, 2) of the contact updates from the second sweep on, the
+    /// meaning of the sphere engine's [`crate::nsgs::NsgsSettings::relaxation`]: the first
+    /// sweep is plain, each update r_i' of a contact becomes P_{K_μ}(r_i + ω (r_i' − r_i)),
+    /// and ω is halved towards 1 (ω ← 1 + (ω − 1)/2, 1 below 1.01) whenever Gauss–Seidel has
+    /// not decreased over [`crate::nsgs::RELAX_WINDOW`] sweeps (judged on the exact error of
+    /// the checks, where the sphere engine judges its sweep residual); default 1.5 (a scene's
+    /// `relaxation`)
+    pub relaxation: f64,
+    /// wall-clock cap of one step's Gauss–Seidel, checked at its exact evaluations; reached,
+    /// the step goes on as a stall does (to the library's solver, itself time-capped by
+    /// `solver`); default 60 s, the sphere engine's
+    /// [`crate::nsgs::NsgsSettings::time_limit`]; `None`: no cap
+    pub time_limit: Option<std::time::Duration>,
+    /// hand a step that Gauss–Seidel leaves above the tolerance to `coulomb::solver` on
+    /// the step's global problem; default true
+    pub library_finish: bool,
+    /// solve every step's problem (2.10) by `coulomb::solver` alone, from the warm start,
+    /// without Gauss–Seidel (a scene's `method = "library"`, as the sphere engine's
+    /// [`crate::StepMethod::Library`]); default false
+    pub library_only: bool,
+    /// settings of the library's solver (its `tol` is replaced by `tolerance`)
+    pub solver: coulomb::solver::Settings,
+    /// γ ∈ [0, 1] of the activation rule g + γ h min(u_N, 0) ≤ δ; default 1
+    pub activation_gamma: f64,
+    /// δ ≥ 0 of the activation rule (m); default 1e-8
+    pub activation_delta: f64,
+    /// largest penetration accepted between bodies (and bodies and obstacles) at the start
+    /// (m); default 1e-8
+    pub max_initial_penetration: f64,
+    /// warm start each contact from the impulse of the same manifold point (parry's
+    /// feature ids) at the previous step; default true
+    pub warm_start: bool,
+    /// add (1 − e) g_k / h to the normal row of a pair at a positive gap g_k that gravity's
+    /// look-ahead made active ([`crate::assembly::gap_closure`]'s rule; a scene's
+    /// `gap_closure`); default true
+    pub gap_closure: bool,
+    /// correct the positions after each step when a contact ends deeper than 1e-3 of the
+    /// thinnest half width, down to 1e-4 of it (the sphere scenes' projection,
+    /// `correct_positions`); positions only, velocities and impulses untouched;
+    /// default true
+    pub position_correction: bool,
+    /// keep each step's global problem ([`RigidWorld::last_problem`], `--dump-fclib`);
+    /// default true
+    pub keep_problem: bool,
+}
+
+impl Default for RigidSettings {
+    fn default() -> Self {
+        Self {
+            h: 1e-3,
+            theta: 0.5,
+            gravity: [0.0, 0.0, -crate::world::GRAVITY],
+            tolerance: 1e-8,
+            max_sweeps: 2_000,
+            stall_window: 100,
+            relaxation: 1.5,
+            time_limit: Some(std::time::Duration::from_secs(60)),
+            library_finish: true,
+            library_only: false,
+            solver: coulomb::solver::Settings::default(),
+            activation_gamma: 1.0,
+            activation_delta: 1e-8,
+            max_initial_penetration: 1e-8,
+            warm_start: true,
+            gap_closure: true,
+            position_correction: true,
+            keep_problem: true,
+        }
+    }
+}
+
+/// How a step's contact problem ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RigidStatus {
+    /// no active contact (free flight)
+    NoContact,
+    /// error on the stored problem ≤ tolerance
+    Converged,
+    /// error above the tolerance after Gauss–Seidel (and the library's solver, if enabled)
+    NotConverged,
+}
+
+/// Report of one step.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RigidStepReport {
+    /// step index k (from t_k to t_{k+1})
+    pub step: u64,
+    /// t_{k+1}
+    pub time: f64,
+    /// how the contact problem ended
+    pub status: RigidStatus,
+    /// error of docs/error.md of the returned (v, r) on the step's stored problem (0 without
+    /// contacts)
+    pub error: f64,
+    /// active contacts (manifold points, the look-ahead ones included: every row of the
+    /// step's problem)
+    pub contacts: usize,
+    /// contacts that carry load: normal impulse r_N > 10⁻⁶ max r_N of the step (what a
+    /// side-by-side with another engine compares, whose activation rule differs)
+    pub loaded_contacts: usize,
+    /// contacts warm started from the previous step
+    pub warm_started: usize,
+    /// Gauss–Seidel sweeps
+    pub sweeps: usize,
+    /// "none", "nsgs" or "nsgs+library" (the library's solver finished the step)
+    pub method: &'static str,
+    /// wall-clock time of collision detection (s)
+    pub detection_seconds: f64,
+    /// wall-clock time of the contact solve (s)
+    pub solve_seconds: f64,
+    /// largest penetration max(0, −g) over the active contacts at t_k
+    pub max_penetration: f64,
+    /// kinetic energy at t_{k+1}
+    pub kinetic_energy: f64,
+    /// bodies whose free-rotation predictor did not converge to round-off (0 normally)
+    pub rotation_unconverged: usize,
+    /// "" when the step passed the physical checks, else the check it failed
+    /// ("penetration": a contact deeper than [`PENETRATION_BOUND`] of the thinner
+    /// body's half width; "energy growth": mechanical energy gained beyond
+    /// [`ENERGY_GROWTH_BOUND`] with fixed obstacles); the status is then
+    /// [`RigidStatus::NotConverged`]
+    pub physics_check: &'static str,
+}
 
 mod correct;
 pub(crate) mod equality;
@@ -75,7 +219,7 @@ pub struct RigidWorld {
     dof: Vec<Option<usize>>,
     /// half the thinnest width of each body's shape (m): the scale of the physical checks
     half_width: Vec<f64>,
-    /// the joints ([`super::joints`])
+    /// the joints ([`crate::bodies::joints`])
     joints: Vec<Joint>,
     /// the last step's joint impulses by row slot (the next step's warm start)
     joint_warm: Vec<[f64; SLOTS]>,
@@ -574,7 +718,7 @@ impl RigidWorld {
     }
 
     /// What the world carries from step k to step k + 1 besides what it is built from (a
-    /// checkpoint's state, [`crate::rigid_checkpoint`]); `Err` when the detector's caches
+    /// checkpoint's state, [`crate::io::rigid_checkpoint`]); `Err` when the detector's caches
     /// cannot be written as JSON.
     pub(crate) fn state(&self) -> Result<RigidState, String> {
         let b = &self.bodies;
@@ -911,7 +1055,7 @@ impl RigidWorld {
     /// One Moreau–Jean step from t_k to t_{k+1} = t_k + h, as named phases
     /// (`step/phases.rs`):
     /// 1. `free_rotations`: the free rotation Ω_free of every body (gyroscopic predictor,
-    ///    [`super::body`]);
+    ///    [`crate::bodies::dynamics`]);
     /// 2. `detect`: the manifold points of the pairs the broad phase finds;
     /// 3. `activate`: the index set, points with g_k + γ h min(u_{N,k}, u_{N,free}, 0) ≤ δ;
     /// 4. `assemble`: the problem (2.10) (module docs), warm started from the previous
@@ -1193,7 +1337,7 @@ pub const ENERGY_GROWTH_BOUND: f64 = 1e-2;
 /// else the smallest extent of its local bounding box (a ball's radius, a capsule's radius,
 /// a cylinder's smaller of radius and half height).
 fn half_thinnest_width(shape: &SharedShape) -> f64 {
-    if let Some(w) = super::polytope::Polytope::of(shape).map(|p| p.thinnest_width()) {
+    if let Some(w) = crate::collision::polytope::Polytope::of(shape).map(|p| p.thinnest_width()) {
         return 0.5 * w;
     }
     let b = shape.compute_local_aabb();
@@ -1324,427 +1468,4 @@ fn library_finish(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::super::validation::{cuboid, floor, one_material};
-    use super::*;
-
-    fn world(bodies: Vec<RigidBodyDesc>) -> Result<RigidWorld, RigidError> {
-        RigidWorld::new(
-            bodies,
-            vec![floor()],
-            one_material(0.5),
-            RigidSettings::default(),
-        )
-    }
-
-    #[test]
-    fn refuses_bad_quaternions_without_normalizing() {
-        let mut b = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
-        b.orientation = [1.0, 1e-4, 0.0, 0.0]; // |q| − 1 = 5e-9
-        let e = world(vec![b.clone()]).unwrap_err();
-        assert!(
-            matches!(e, RigidError::Quaternion { ref what, .. } if what == "body 0"),
-            "{e}"
-        );
-        b.orientation = [f64::NAN, 0.0, 0.0, 0.0];
-        assert!(matches!(
-            world(vec![b]).unwrap_err(),
-            RigidError::Quaternion { .. }
-        ));
-    }
-
-    #[test]
-    fn refuses_bad_mass_state_and_material() {
-        let good = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
-        let mut b = good.clone();
-        b.mass.mass = 0.0;
-        assert!(matches!(
-            world(vec![b]).unwrap_err(),
-            RigidError::Mass { .. }
-        ));
-        let mut b = good.clone();
-        b.mass.inertia[0][0] = -1.0;
-        assert!(matches!(
-            world(vec![b]).unwrap_err(),
-            RigidError::Mass { .. }
-        ));
-        let mut b = good.clone();
-        b.velocity[1] = f64::INFINITY;
-        assert!(matches!(
-            world(vec![b]).unwrap_err(),
-            RigidError::NonFinite {
-                field: "velocity",
-                ..
-            }
-        ));
-        let mut b = good.clone();
-        b.material = 3;
-        assert!(matches!(
-            world(vec![b]).unwrap_err(),
-            RigidError::Material { material: 3, .. }
-        ));
-        let s = super::super::parry::shape::SharedShape::cuboid(0.0, 0.1, 0.1);
-        assert!(MassPropertiesCheck::zero_volume(&s));
-    }
-
-    struct MassPropertiesCheck;
-    impl MassPropertiesCheck {
-        fn zero_volume(s: &SharedShape) -> bool {
-            matches!(
-                super::super::MassProperties::from_shape(s, 1000.0),
-                Err(RigidError::Mass { .. })
-            )
-        }
-    }
-
-    #[test]
-    fn refuses_interpenetrating_bodies_with_count_and_depth() {
-        let a = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
-        let b = cuboid([0.1; 3], 1000.0, [0.15, 0.0, 0.1]).unwrap();
-        match world(vec![a.clone(), b]).unwrap_err() {
-            RigidError::Interpenetration {
-                count, depth, a, b, ..
-            } => {
-                assert!(count >= 1);
-                assert!((depth - 0.05).abs() < 1e-9, "{depth}");
-                assert_eq!((a, b), (0, RigidPartner::Body(1)));
-            }
-            e => panic!("{e}"),
-        }
-        // sunk into the floor by 1 cm
-        let c = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.09]).unwrap();
-        match world(vec![c]).unwrap_err() {
-            RigidError::Interpenetration { depth, b, .. } => {
-                assert!((depth - 0.01).abs() < 1e-9, "{depth}");
-                assert_eq!(b, RigidPartner::Obstacle(0));
-            }
-            e => panic!("{e}"),
-        }
-        // touching is fine
-        assert!(world(vec![a]).is_ok());
-    }
-
-    /// Bits of every body's state (x, q, v, Ω) and of the last contacts' impulses.
-    fn state_bits(w: &RigidWorld) -> Vec<u64> {
-        let mut out = Vec::new();
-        for b in &w.bodies {
-            let q = b.q;
-            for x in [b.x, b.v, b.omega]
-                .iter()
-                .flat_map(|v| v.to_array())
-                .chain([q.w, q.x, q.y, q.z])
-            {
-                out.push(x.to_bits());
-            }
-        }
-        for c in w.contacts() {
-            out.extend(c.impulse.iter().map(|x| x.to_bits()));
-        }
-        out
-    }
-
-    #[test]
-    fn set_positions_moves_the_shape_frames_and_same_positions_keep_the_bits() {
-        // a tilted cuboid whose centre of mass is off its shape frame's origin, resting on
-        // a second cuboid, above the floor; a fixed cuboid aside
-        let mut a = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
-        a.mass.local_com = [0.01, -0.02, 0.0];
-        let mut b = cuboid([0.05, 0.1, 0.05], 800.0, [0.0, 0.0, 0.25]).unwrap();
-        let (c, s) = (0.3_f64.cos(), 0.3_f64.sin());
-        b.orientation = [c, 0.0, 0.0, s];
-        let mut f = cuboid([0.1; 3], 1000.0, [1.0, 0.0, 0.1]).unwrap();
-        f.fixed = true;
-        let started = || {
-            let mut w = world(vec![a.clone(), b.clone(), f.clone()]).unwrap();
-            for _ in 0..5 {
-                w.step().unwrap();
-            }
-            w
-        };
-        let mut w = started();
-        // the same positions: nothing changes, the next steps give the same bits
-        let mut same = started();
-        assert_eq!(state_bits(&same), state_bits(&w));
-        same.set_positions(&w.positions()).unwrap();
-        assert_eq!(state_bits(&same), state_bits(&w));
-        for _ in 0..3 {
-            w.step().unwrap();
-            same.step().unwrap();
-        }
-        assert_eq!(state_bits(&same), state_bits(&w));
-        assert!(!w.detector.pairs_of(1).is_empty());
-        // moved: the origins read back, the orientations and velocities are kept
-        let (q0, v0) = (w.orientations(), w.velocities());
-        let mut x = w.positions();
-        x[1][0] += 0.5;
-        x[1][2] += 0.25;
-        w.set_positions(&x).unwrap();
-        for (got, want) in w.positions().iter().zip(&x) {
-            for k in 0..3 {
-                assert!((got[k] - want[k]).abs() < 1e-15, "{got:?} {want:?}");
-            }
-        }
-        assert_eq!(w.orientations(), q0);
-        assert_eq!(w.velocities(), v0);
-        // the centre of mass follows the frame: x_com − origin = R_shape · local_com
-        let com = w.centres_of_mass();
-        let off = w.bodies[0].shape_rotation() * v3([0.01, -0.02, 0.0]);
-        for k in 0..3 {
-            assert!((com[0][k] - x[0][k] - off.to_array()[k]).abs() < 1e-15);
-        }
-        // the moved body's pair caches are gone; it now falls freely
-        assert!(w.detector.pairs_of(1).is_empty());
-        let z = w.positions()[1][2];
-        w.step().unwrap();
-        assert!(w.positions()[1][2] < z);
-        // refusals leave the world as it was
-        let before = state_bits(&w);
-        let mut bad = w.positions();
-        bad[0][1] = f64::NAN;
-        let e = w.set_positions(&bad).unwrap_err();
-        assert!(e.contains("body 0") && e.contains("non-finite"), "{e}");
-        let e = w.set_positions(&bad[..2]).unwrap_err();
-        assert!(e.contains("expected 3 positions"), "{e}");
-        let mut moved_fixed = w.positions();
-        moved_fixed[2][0] += 1.0;
-        let e = w.set_positions(&moved_fixed).unwrap_err();
-        assert!(e.contains("body 2 is fixed"), "{e}");
-        assert_eq!(state_bits(&w), before);
-    }
-
-    #[test]
-    fn the_solver_settings_and_keep_problem_can_be_changed() {
-        let b = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
-        let mut other = world(vec![b.clone()]).unwrap();
-        let mut w = world(vec![b]).unwrap();
-        w.step().unwrap();
-        other.step().unwrap();
-        assert!(w.last_problem().is_some());
-        w.set_keep_problem(false);
-        assert!(!w.settings().keep_problem && w.last_problem().is_none());
-        w.step().unwrap();
-        assert!(w.last_problem().is_none());
-        // the step does not depend on keeping its problem
-        other.step().unwrap();
-        assert!(other.last_problem().is_some());
-        assert_eq!(state_bits(&other), state_bits(&w));
-        let solver = coulomb::solver::Settings {
-            max_outer: 7,
-            ..Default::default()
-        };
-        w.set_solver(solver.clone());
-        assert_eq!(w.settings().solver.max_outer, 7);
-    }
-
-    #[test]
-    fn free_fall_is_exact_and_the_problem_is_kept() {
-        let b = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 1.0]).unwrap();
-        let mut w = world(vec![b]).unwrap();
-        let r = w.step().unwrap();
-        assert_eq!(r.status, RigidStatus::NoContact);
-        assert!(w.last_problem().is_none());
-        let g = crate::world::GRAVITY;
-        let h = w.settings().h;
-        assert!((w.velocities()[0][2] + g * h).abs() < 1e-15);
-        // θ = ½: x₁ = x₀ + h (v₀ + v₁)/2
-        assert!((w.positions()[0][2] - (1.0 - 0.5 * g * h * h)).abs() < 1e-15);
-        // dropped onto the floor, the step's global problem is stored
-        let b = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
-        let mut w = world(vec![b]).unwrap();
-        let r = w.step().unwrap();
-        assert_eq!(r.status, RigidStatus::Converged);
-        let p = w.last_problem().unwrap();
-        assert_eq!(p.contacts(), r.contacts);
-        assert_eq!(p.dofs(), 6);
-    }
-
-    #[test]
-    fn warm_start_matches_manifold_points_across_steps() {
-        let b = cuboid([0.1, 0.05, 0.05], 1000.0, [0.0, 0.0, 0.05]).unwrap();
-        let mut w = world(vec![b]).unwrap();
-        let first = w.step().unwrap();
-        let second = w.step().unwrap();
-        assert_eq!(first.warm_started, 0);
-        assert_eq!(second.warm_started, second.contacts);
-        assert_eq!(second.contacts, 4);
-    }
-
-    #[test]
-    fn a_stalled_step_is_handed_to_the_library_on_the_global_problem() {
-        // one sweep only: Gauss–Seidel cannot reach 1e-8 on the 4-corner face contact
-        let b = cuboid([0.1, 0.05, 0.05], 1000.0, [0.0, 0.0, 0.05]).unwrap();
-        let settings = RigidSettings {
-            max_sweeps: 1,
-            ..RigidSettings::default()
-        };
-        let mut w = RigidWorld::new(vec![b], vec![floor()], one_material(0.5), settings).unwrap();
-        let r = w.step().unwrap();
-        assert_eq!(r.method, "nsgs+library", "{r:?}");
-        assert_eq!(r.status, RigidStatus::Converged, "{r:?}");
-        assert!(r.error <= 1e-8);
-        // the reported error is that of the stored global problem
-        let p = w.last_problem().unwrap();
-        let rr: Vec<f64> = w.contacts().iter().flat_map(|c| c.impulse).collect();
-        let mut hr = p.f.clone();
-        p.h.gemv_acc(1.0, &rr, &mut hr);
-        let v: Vec<f64> = hr.iter().zip(p.m.diagonal()).map(|(x, m)| x / m).collect();
-        let u = p.velocity(&v);
-        let q_norm = {
-            let minv_f: Vec<f64> = p.f.iter().zip(p.m.diagonal()).map(|(x, m)| x / m).collect();
-            coulomb::law::norm(&p.velocity(&minv_f))
-        };
-        let e = coulomb::law::error_measure(3, &p.mu, &rr, &u, q_norm).error;
-        assert!((e - r.error).abs() <= 1e-12, "{e} vs {}", r.error);
-    }
-
-    /// The parallel gather of v = M⁻¹(f + H r) and u = Hᵀ v + w: bitwise the numbers of the
-    /// contact-by-contact scatter, on 1, 2 and 3 threads, r full or short.
-    #[test]
-    fn parallel_evaluation_is_the_sequential_scatter_bit_for_bit() {
-        let bodies = 40;
-        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
-        let mut rnd = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
-        let mut jac =
-            || -> [[f64; 6]; 3] { std::array::from_fn(|_| std::array::from_fn(|_| rnd())) };
-        let n = 3 * nsgs::EVAL_PARALLEL_MIN;
-        let rows: Vec<nsgs::Row> = (0..n)
-            .map(|i| {
-                let a = (7 * i) % bodies;
-                let b = (a + 1 + (11 * i) % (bodies - 1)) % bodies;
-                nsgs::Row {
-                    a: Some((a, jac())),
-                    b: (i % 3 != 0).then(|| (b, jac())),
-                    w: [0.1, -0.2, 0.3],
-                    mu: 0.5,
-                }
-            })
-            .collect();
-        // Delassus blocks: J J^T / m with random J, positive definite almost surely
-        let mass: Vec<[f64; 6]> = (0..bodies)
-            .map(|b| std::array::from_fn(|d| 1.0 + 0.1 * (b + d) as f64))
-            .collect();
-        let f: Vec<[f64; 6]> = (0..bodies)
-            .map(|b| std::array::from_fn(|d| (b * 6 + d) as f64 * 0.01 - 1.0))
-            .collect();
-        let problem = nsgs::Problem::new(rows.clone(), mass.clone(), f.clone()).unwrap();
-        let r: Vec<f64> = (0..3 * n)
-            .map(|i| ((i * 37) % 101) as f64 * 0.013 - 0.4)
-            .collect();
-        for len in [3 * n, 3 * n - 5, 0] {
-            let r = &r[..len];
-            // the scatter, contact by contact
-            let mut p = f.clone();
-            for (i, row) in rows.iter().enumerate().take(len / 3) {
-                for (blk, j) in row.a.iter().chain(row.b.iter()) {
-                    for k in 0..3 {
-                        for d in 0..6 {
-                            p[*blk][d] += j[k][d] * r[3 * i + k];
-                        }
-                    }
-                }
-            }
-            for (pb, m) in p.iter_mut().zip(&mass) {
-                for d in 0..6 {
-                    pb[d] /= m[d];
-                }
-            }
-            let u: Vec<f64> = (0..n).flat_map(|i| problem.u(i, &p)).collect();
-            for threads in [1, 2, 3] {
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
-                    .build()
-                    .unwrap();
-                let (v, uu) = pool.install(|| {
-                    let v = problem.velocities(r);
-                    let uu = problem.u_all(&v);
-                    (v, uu)
-                });
-                let bits = |x: &[[f64; 6]]| -> Vec<u64> {
-                    x.iter().flatten().map(|x| x.to_bits()).collect()
-                };
-                assert_eq!(bits(&v), bits(&p), "v, {threads} threads, r of {len}");
-                let ub: Vec<u64> = uu.iter().map(|x| x.to_bits()).collect();
-                let ur: Vec<u64> = u.iter().map(|x| x.to_bits()).collect();
-                assert_eq!(ub, ur, "u, {threads} threads, r of {len}");
-            }
-        }
-    }
-
-    /// A column of `n` touching balls (radius 0.05 m) on the floor, at rest.
-    fn ball_column(n: usize, relaxation: f64) -> RigidWorld {
-        let shape = SharedShape::ball(0.05);
-        let mass = super::super::MassProperties::from_shape(&shape, 1000.0).unwrap();
-        let bodies = (0..n)
-            .map(|i| RigidBodyDesc {
-                shape: shape.clone(),
-                mass,
-                position: [0.0, 0.0, 0.05 + 0.1 * i as f64],
-                orientation: [1.0, 0.0, 0.0, 0.0],
-                velocity: [0.0; 3],
-                angular_velocity: [0.0; 3],
-                material: 0,
-                fixed: false,
-            })
-            .collect();
-        let settings = RigidSettings {
-            relaxation,
-            library_finish: false,
-            ..RigidSettings::default()
-        };
-        RigidWorld::new(bodies, vec![floor()], one_material(0.5), settings).unwrap()
-    }
-
-    /// `relaxation` means what the sphere engine's does (issue 52): over-relaxed sweeps
-    /// carry the weight of a column of balls down in fewer sweeps than plain Gauss–Seidel,
-    /// every verdict is the exact error on the stored problem, and ω outside [1, 2) is
-    /// refused.
-    #[test]
-    fn over_relaxation_finishes_a_ball_column_in_fewer_sweeps() {
-        let first = |relaxation: f64| ball_column(12, relaxation).step().unwrap();
-        let (plain, relaxed) = (first(1.0), first(1.5));
-        for r in [&plain, &relaxed] {
-            assert_eq!(r.contacts, 12, "{r:?}");
-            assert_eq!(r.method, "nsgs");
-            assert_eq!(r.status == RigidStatus::Converged, r.error <= 1e-8, "{r:?}");
-        }
-        assert_eq!(relaxed.status, RigidStatus::Converged, "{relaxed:?}");
-        assert!(relaxed.sweeps < plain.sweeps, "{relaxed:?} {plain:?}");
-        for bad in [0.9, 2.0, f64::NAN] {
-            let settings = RigidSettings {
-                relaxation: bad,
-                ..RigidSettings::default()
-            };
-            let b = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
-            let e = RigidWorld::new(vec![b], vec![floor()], one_material(0.5), settings)
-                .unwrap_err()
-                .to_string();
-            assert!(e.contains("relaxation"), "{e}");
-        }
-    }
-
-    #[test]
-    fn same_input_same_bits() {
-        let run = || {
-            let (bodies, obstacles) = super::super::validation::rock_pile(20, 3).unwrap();
-            let mut w = RigidWorld::new(
-                bodies,
-                obstacles,
-                one_material(0.5),
-                RigidSettings::default(),
-            )
-            .unwrap();
-            for _ in 0..150 {
-                w.step().unwrap();
-            }
-            (w.positions(), w.orientations(), w.contacts().len())
-        };
-        let (a, b) = (run(), run());
-        assert!(a.2 > 0);
-        assert_eq!(a, b);
-    }
-}
+mod tests;

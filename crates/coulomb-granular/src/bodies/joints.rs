@@ -47,9 +47,9 @@
 //! the contacts' impact offset and gap closure (e = 0, the default: the step ends at the
 //! limit; e = 1: the rate after the impact is minus the rate before).
 
-use super::body::BodyState;
-use super::parry::math::{Rotation, Vector};
-use super::RigidError;
+use crate::bodies::dynamics::BodyState;
+use crate::bodies::rigid::RigidError;
+use parry3d_f64::math::{Rotation, Vector};
 
 /// Kind of a joint.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -844,10 +844,10 @@ pub const GLOBAL_NEWTON_STEPS: usize = 4;
 
 /// One Newton step on all the joints' projection rows together: Δq = M⁻¹ Jᵀ δ with
 /// (J M⁻¹ Jᵀ) δ = −C over every row of every joint (the sparse factor of
-/// [`crate::rigid::step::equality`], dependent rows given no update). False, nothing moved,
+/// [`crate::step::rigid::equality`], dependent rows given no update). False, nothing moved,
 /// when the factor is refused or a value is not finite.
 fn global_newton_step(joints: &[Joint], bodies: &mut [BodyState]) -> bool {
-    use crate::rigid::step::equality::{EqRow, EqualitySolve};
+    use crate::step::rigid::equality::{EqRow, EqualitySolve};
     let mass: Vec<[f64; 6]> = bodies.iter().map(BodyState::mass_block).collect();
     let moving = |p: Option<usize>| p.filter(|&i| !bodies[i].fixed);
     let mut rows = Vec::new();
@@ -876,7 +876,7 @@ fn global_newton_step(joints: &[Joint], bodies: &mut [BodyState]) -> bool {
             continue;
         }
         b.x += Vector::new(d[0], d[1], d[2]);
-        b.q = super::body::integrate_orientation(b.q, Vector::new(d[3], d[4], d[5]));
+        b.q = crate::bodies::dynamics::integrate_orientation(b.q, Vector::new(d[3], d[4], d[5]));
     }
     true
 }
@@ -966,7 +966,10 @@ pub(crate) fn project(joints: &[Joint], bodies: &mut [BodyState], target: f64) -
                 }
                 let b = &mut bodies[i];
                 b.x += Vector::new(dq[0], dq[1], dq[2]);
-                b.q = super::body::integrate_orientation(b.q, Vector::new(dq[3], dq[4], dq[5]));
+                b.q = crate::bodies::dynamics::integrate_orientation(
+                    b.q,
+                    Vector::new(dq[3], dq[4], dq[5]),
+                );
             }
         }
         worst = joints

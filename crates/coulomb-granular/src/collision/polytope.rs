@@ -24,11 +24,11 @@
 //!    between the closest points of the two edges.
 //!
 //! Keys: the reference face (with the side it belongs to) and the incident face take the
-//! sub-shape slots of [`super::contacts::ContactKey`], each point's feature (an incident
+//! sub-shape slots of [`crate::collision::manifold::ContactKey`], each point's feature (an incident
 //! vertex, or the crossing of an incident edge with a side plane) the feature slot.
 
-use super::parry::math::{Pose, Vector};
-use super::parry::shape::{ConvexPolyhedron, SharedShape};
+use parry3d_f64::math::{Pose, Vector};
+use parry3d_f64::shape::{ConvexPolyhedron, SharedShape};
 
 /// A convex polyhedron in its shape frame: vertices, faces (outward unit normal, vertex loop
 /// counter-clockwise about the normal) and edges (two vertices, the two faces that share it).

@@ -4,18 +4,19 @@
 //!
 //! Each phase is a method on the world that takes the previous phases' values and returns its
 //! own: the step itself (`super::RigidWorld::step`) only sequences them, times detection and
-//! solve, and builds the [`crate::rigid::RigidStepReport`].
+//! solve, and builds the [`super::RigidStepReport`].
 
+use super::RigidStatus;
 use super::{
     correct_positions, library_finish, nsgs, placed_obstacles, rolling, RigidWorld,
     ENERGY_GROWTH_BOUND, JOINT_DRIFT_TARGET, PENETRATION_BOUND, ROW_CHUNK,
 };
-use crate::rigid::body::{free_rotation, integrate_orientation};
-use crate::rigid::contacts::ContactPoint;
-use crate::rigid::joints::{RowKind, SLOTS};
-use crate::rigid::parry::math::Vector;
-use crate::rigid::{RigidContact, RigidError, RigidPartner, RigidStatus};
+use crate::bodies::dynamics::{free_rotation, integrate_orientation};
+use crate::bodies::joints::{RowKind, SLOTS};
+use crate::bodies::rigid::{RigidContact, RigidError, RigidPartner};
+use crate::collision::manifold::ContactPoint;
 use crate::world::Motion;
+use parry3d_f64::math::Vector;
 use std::time::Instant;
 
 /// Ω_free of every body (zero for a fixed one) and how many free-rotation predictors did not
@@ -462,10 +463,11 @@ impl RigidWorld {
         Ok(())
     }
 
-    /// Moves each body by its correction Δq (positions only: velocities are kept), then
-    /// projects the joints back onto their constraints.
+    /// Moves each moving body by its correction Δq (positions only: velocities are kept),
+    /// then projects the joints back onto their constraints; `NonFiniteState` when a pose
+    /// became non-finite. The step's last position phase and each round of the overlap
+    /// relaxation ([`super::relax`]).
     pub(super) fn correct(&mut self, correction: Option<&[[f64; 6]]>) -> Result<(), RigidError> {
-        let k = self.steps;
         if let Some(dq) = correction {
             for (i, b) in self.bodies.iter_mut().enumerate() {
                 let Some(d) = self.dof[i] else {
@@ -474,20 +476,17 @@ impl RigidWorld {
                 let x = dq[d];
                 b.x += Vector::new(x[0], x[1], x[2]);
                 b.q = integrate_orientation(b.q, Vector::new(x[3], x[4], x[5]));
-                if !(b.x.is_finite() && b.q.is_finite()) {
-                    return Err(RigidError::NonFiniteState(k));
-                }
             }
         }
         if !self.joints.is_empty() {
-            crate::rigid::joints::project(&self.joints, &mut self.bodies, JOINT_DRIFT_TARGET);
-            if self
-                .bodies
-                .iter()
-                .any(|b| !(b.x.is_finite() && b.q.is_finite()))
-            {
-                return Err(RigidError::NonFiniteState(k));
-            }
+            crate::bodies::joints::project(&self.joints, &mut self.bodies, JOINT_DRIFT_TARGET);
+        }
+        if self
+            .bodies
+            .iter()
+            .any(|b| !(b.x.is_finite() && b.q.is_finite()))
+        {
+            return Err(RigidError::NonFiniteState(self.steps));
         }
         Ok(())
     }

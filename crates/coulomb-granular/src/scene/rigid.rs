@@ -1,5 +1,5 @@
 //! The glue from a [`SceneModel`] with bodies of any shape to the rigid-body simulator
-//! ([`crate::rigid::RigidWorld`]): [`RigidScene::new`].
+//! ([`crate::step::rigid::RigidWorld`]): [`RigidScene::new`].
 //!
 //! - every body becomes a [`RigidBodyDesc`]: its shape's parry3d shape
 //!   ([`BodyShape::to_parry`]), its mass properties from the density (or, with `mass`, those
@@ -20,16 +20,15 @@
 //!
 //! The bodies keep the model's order (`bodies`, then the spheres of each batch).
 
+use crate::bodies::rigid::{MassProperties, RigidBodyDesc, RigidObstacle};
 use crate::bodies::surface::{obstacle_surface, Extent};
 use crate::model::{BodyShape, BodySpec, SceneError, SceneModel};
-use crate::rigid::parry::math::Vector;
-use crate::rigid::parry::shape::SharedShape;
-use crate::rigid::{
-    MassProperties, RigidBodyDesc, RigidObstacle, RigidSettings, RigidStepReport, RigidWorld,
-};
 use crate::shape::{check_quaternion, Tessellation, IDENTITY};
+use crate::step::rigid::{RigidSettings, RigidStepReport, RigidWorld};
 use crate::world::{Motion, Obstacle, Shape};
 use crate::Vec3;
+use parry3d_f64::math::Vector;
+use parry3d_f64::shape::SharedShape;
 
 /// A scene built for the rigid-body simulator, with what the outputs need.
 #[derive(Debug)]
@@ -45,7 +44,7 @@ pub struct RigidScene {
     /// the reports of the steps taken
     pub reports: Vec<RigidStepReport>,
     /// the model the scene was built from (stored by its checkpoints,
-    /// [`crate::rigid_checkpoint`])
+    /// [`crate::io::rigid_checkpoint`])
     pub model: SceneModel,
 }
 
@@ -69,7 +68,7 @@ fn invalid(what: &str, reason: impl Into<String>) -> SceneError {
 /// naming the materials and the shapes).
 fn check_settings(model: &SceneModel) -> Result<(), SceneError> {
     let library = model.step.method == crate::model::StepChoice::Library;
-    let bounded = |j: &crate::rigid::joints::JointDesc| {
+    let bounded = |j: &crate::bodies::joints::JointDesc| {
         j.limits.is_some() || j.motor.is_some() || j.friction.is_some()
     };
     if let Some(k) = model.joints.iter().position(bounded).filter(|_| library) {
@@ -178,7 +177,7 @@ fn halfspace(point: Vec3, normal: Vec3) -> (SharedShape, [f64; 3]) {
 /// The unit quaternion (w, x, y, z) turning the y axis onto the unit vector `a`.
 fn y_to(a: Vec3) -> [f64; 4] {
     let y = Vector::Y;
-    let r = crate::rigid::parry::math::Rotation::from_rotation_arc(y, Vector::new(a.x, a.y, a.z));
+    let r = parry3d_f64::math::Rotation::from_rotation_arc(y, Vector::new(a.x, a.y, a.z));
     [r.w, r.x, r.y, r.z]
 }
 
@@ -274,7 +273,7 @@ fn obstacle_shapes(k: usize, o: &Obstacle) -> Result<Vec<Placed>, SceneError> {
 /// What building a scene does with bodies interpenetrating at the start.
 #[derive(Debug, Clone, Copy)]
 enum InitialOverlaps {
-    /// refused ([`crate::rigid::RigidError::Interpenetration`])
+    /// refused ([`crate::bodies::rigid::RigidError::Interpenetration`])
     Refuse,
     /// relaxed in at most this many sweeps, then refused if some are left
     Relax(usize),
@@ -334,13 +333,13 @@ impl RigidScene {
     }
 
     /// [`RigidScene::new`] with the bodies' initial interpenetrations relaxed first
-    /// ([`crate::rigid::RigidWorld::relaxed`], at most `max_sweeps` sweeps; the scene is
+    /// ([`crate::step::rigid::RigidWorld::relaxed`], at most `max_sweeps` sweeps; the scene is
     /// refused if some are left). The model keeps the positions as given; the world starts
     /// from the relaxed ones.
     pub fn new_relaxed(
         model: &SceneModel,
         max_sweeps: usize,
-    ) -> Result<(Self, crate::rigid::step::Relaxed), SceneError> {
+    ) -> Result<(Self, crate::step::rigid::Relaxed), SceneError> {
         let (scene, relaxed) = Self::build(model, InitialOverlaps::Relax(max_sweeps))?;
         Ok((scene, relaxed.unwrap_or_default()))
     }
@@ -348,7 +347,7 @@ impl RigidScene {
     fn build(
         model: &SceneModel,
         overlaps: InitialOverlaps,
-    ) -> Result<(Self, Option<crate::rigid::step::Relaxed>), SceneError> {
+    ) -> Result<(Self, Option<crate::step::rigid::Relaxed>), SceneError> {
         model.step.check()?;
         if let Some(v) = model
             .step
@@ -543,7 +542,7 @@ impl RigidScene {
     }
 
     /// One Moreau–Jean step of the rigid world; its report is kept in `reports`.
-    pub fn step(&mut self) -> Result<RigidStepReport, crate::rigid::RigidError> {
+    pub fn step(&mut self) -> Result<RigidStepReport, crate::bodies::rigid::RigidError> {
         let r = self.world.step()?;
         self.reports.push(r.clone());
         Ok(r)

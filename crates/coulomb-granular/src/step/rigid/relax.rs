@@ -4,8 +4,8 @@
 //! ([`super::correct_positions`]) on the gaps found, until no point is deeper than
 //! `max_initial_penetration`. Positions and orientations move; velocities do not.
 
+use super::placed_obstacles;
 use super::{correct_positions, nsgs, ContactPoint, RigidError, RigidWorld, Vector};
-use super::{integrate_orientation, placed_obstacles};
 
 /// Interpenetrations: how many manifold points are deeper than the limit, and the deepest.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
@@ -100,28 +100,7 @@ impl RigidWorld {
                 break;
             };
             sweeps += done.max(1);
-            for (i, b) in self.bodies.iter_mut().enumerate() {
-                let Some(d) = self.dof[i] else {
-                    continue;
-                };
-                let x = dq[d];
-                b.x += Vector::new(x[0], x[1], x[2]);
-                b.q = integrate_orientation(b.q, Vector::new(x[3], x[4], x[5]));
-            }
-            if !self.joints.is_empty() {
-                crate::rigid::joints::project(
-                    &self.joints,
-                    &mut self.bodies,
-                    super::JOINT_DRIFT_TARGET,
-                );
-            }
-            if self
-                .bodies
-                .iter()
-                .any(|b| !(b.x.is_finite() && b.q.is_finite()))
-            {
-                return Err(RigidError::NonFiniteState(0));
-            }
+            self.correct(Some(&dq))?;
             points = self.points_now()?;
         }
         let left = Self::overlaps_in(&points, limit);
@@ -144,9 +123,10 @@ impl RigidWorld {
 
 #[cfg(test)]
 mod tests {
-    use crate::rigid::parry::shape::SharedShape;
-    use crate::rigid::{MassProperties, RigidBodyDesc, RigidSettings, RigidWorld};
+    use crate::bodies::rigid::{MassProperties, RigidBodyDesc};
+    use crate::step::rigid::{RigidSettings, RigidWorld};
     use crate::world::{ContactLaw, MaterialTable};
+    use parry3d_f64::shape::SharedShape;
 
     fn cube(z: f64) -> RigidBodyDesc {
         let half = 0.05;
@@ -191,7 +171,7 @@ mod tests {
         };
         let refused = RigidWorld::new(
             bodies(),
-            vec![crate::rigid::validation::floor()],
+            vec![crate::validation::rigid::floor()],
             table(),
             settings.clone(),
         )
@@ -199,7 +179,7 @@ mod tests {
         assert!(refused.to_string().contains("interpenetrat"), "{refused}");
         let (mut w, r) = RigidWorld::relaxed(
             bodies(),
-            vec![crate::rigid::validation::floor()],
+            vec![crate::validation::rigid::floor()],
             table(),
             settings,
             &[],
@@ -224,7 +204,7 @@ mod tests {
         };
         let mut w = RigidWorld::overlapping(
             vec![cube(0.045), cube(0.135)],
-            vec![crate::rigid::validation::floor()],
+            vec![crate::validation::rigid::floor()],
             table(),
             settings,
             &[],
@@ -234,7 +214,7 @@ mod tests {
             .relax_overlaps_within(1000, std::time::Duration::ZERO)
             .expect_err("no time");
         assert!(
-            matches!(e, crate::rigid::RigidError::RelaxationTimedOut { sweeps: 0, count, .. } if count > 0),
+            matches!(e, crate::bodies::rigid::RigidError::RelaxationTimedOut { sweeps: 0, count, .. } if count > 0),
             "{e}"
         );
         assert!(e.to_string().contains("time limit"), "{e}");
@@ -253,7 +233,7 @@ mod tests {
         };
         let e = RigidWorld::relaxed(
             vec![cube(0.045), cube(0.135)],
-            vec![crate::rigid::validation::floor()],
+            vec![crate::validation::rigid::floor()],
             table(),
             settings,
             &[],

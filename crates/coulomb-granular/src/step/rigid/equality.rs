@@ -29,7 +29,7 @@
 //! row dependent on those: it is replaced by [`DROPPED_PIVOT`] (faer's dynamic
 //! regularization), which leaves the factor of the other rows exact and gives the dependent
 //! row δ ≈ 0 (of order 1e-30 of the others'), the behaviour of the per-joint block solve
-//! ([`crate::rigid::joints::solve_spd`]). On a consistent system (Gᵀ v + b in the range of
+//! ([`crate::bodies::joints::solve_spd`]). On a consistent system (Gᵀ v + b in the range of
 //! Gᵀ, as C(q)/h is after the position projection) the accepted rows' solution satisfies the
 //! dependent rows too; no regularization of the accepted rows, no iterative refinement needed.
 

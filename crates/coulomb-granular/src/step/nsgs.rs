@@ -400,7 +400,7 @@ impl std::ops::Add for UpdateSums {
 /// - writes r_i', and v_A += M_A⁻¹ J_Aᵀ Δr, v_B += M_B⁻¹ J_Bᵀ Δr (so M v − H r stays fixed).
 ///
 /// Returns the sums of the pair (u_i, r_i) met before the update.
-#[inline]
+#[inline(always)]
 pub fn update_contact(
     row: &ContactRow,
     minv_a: &[f64; 6],

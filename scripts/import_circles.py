@@ -6,7 +6,10 @@
 Each .rs file is a module (foo.rs and foo/mod.rs: `foo`; foo/bar.rs: `foo::bar`). A module
 depends on another when its text (tests included, comments excluded) names `crate::a::b…`
 or `super::…` leading to it: the longest prefix of the path that is a module (in the file's
-inline test module, `super` is the file's own module). Prints every
+inline test module, `super` is the file's own module), through `pub use` re-exports: of a
+module under another name, of a module's items by glob, and of single items (`pub use
+a::b::Item;` in module m: `crate::m::Item` leads to `a::b`, the module that defines it, not
+to m). Prints every
 strongly connected component of two or more modules (an import circle), largest first, then
 the edges inside each, and exits 1 when there is one (0 otherwise).
 """
@@ -39,7 +42,7 @@ def reexports(mods):
     """Modules re-exported under another path by `pub use` in a module file: `pub use a::b;`,
     `pub use a::{b, c as d};` (aliases: the new path -> the module) and `pub use a::*;`
     (globs: the re-exporting module -> the modules whose items it re-exports)."""
-    aliases, globs = {}, {}
+    aliases, globs, items_of = {}, {}, []
     stmt = re.compile(r"\bpub(?:\([a-z]+\))?\s+use\s+(?:self::)?([^;]*);", re.S)
     for m, path in mods.items():
         text = strip_comments(open(path, encoding="utf-8").read())
@@ -59,10 +62,18 @@ def reexports(mods):
                         globs.setdefault(m, []).append(target)
                     continue
                 target = "::".join(full)
+                new = prefix + [(alias or full[-1]).strip()]
                 if target in mods:
-                    new = prefix + [(alias or full[-1]).strip()]
                     if "::".join(new) != target:
                         aliases["::".join(new)] = target
+                else:
+                    items_of.append(("::".join(new), full[:-1]))
+    # items re-exported (`pub use a::b::Item;`): a path through the new name leads to the
+    # module that defines the item (resolved once the module aliases are known)
+    for new, parent in items_of:
+        owner = resolve(parent, mods, aliases, globs) if parent else None
+        if owner and new not in aliases and new not in mods:
+            aliases[new] = owner
     return aliases, globs
 
 

@@ -20,6 +20,37 @@ fn assert_no_import_circle(src: &str) {
     );
 }
 
+/// The script sees a circle hidden behind the crate root's re-export of an item: `b` names
+/// `crate::Thing`, which `lib.rs` re-exports from `a`, and `a` uses `b`.
+#[test]
+fn a_circle_through_a_re_exported_item_is_found() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let dir = std::env::temp_dir().join(format!("coulomb-circle-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a scratch folder");
+    let files = [
+        ("lib.rs", "pub mod a;\npub mod b;\npub use a::Thing;\n"),
+        (
+            "a.rs",
+            "use crate::b::helper;\npub struct Thing;\npub fn f() { helper() }\n",
+        ),
+        ("b.rs", "pub fn helper() {}\npub fn g(_: crate::Thing) {}\n"),
+    ];
+    for (name, text) in files {
+        std::fs::write(dir.join(name), text).expect("a scratch file");
+    }
+    let out = Command::new("python3")
+        .arg(root.join("scripts/import_circles.py"))
+        .arg(&dir)
+        .output()
+        .expect("python3 runs");
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(
+        !out.status.success() && text.contains(" 1 import circle(s)") && text.contains("a, b"),
+        "{text}"
+    );
+}
+
 #[test]
 fn the_library_has_no_import_circle() {
     assert_no_import_circle("crates/coulomb/src");

@@ -9,8 +9,9 @@
 //! the two separate and the impulse r acts on A (−r on B). parry gives the normal of a
 //! manifold in the first shape's frame pointing out of A towards B: n is its opposite. The
 //! point p is midway between the two surfaces' closest points and the gap g is parry's signed
-//! distance (negative: penetration). The tangents are t₁ ⟂ n built from the world axis least
-//! aligned with n, t₂ = n × t₁ ([`tangent_frame`]).
+//! distance (negative: penetration). The tangents are those of every contact, sphere or not
+//! ([`tangent_frame`], `Vec3::tangent_basis`): t₁ = e × n / |e × n| for the world axis e least
+//! aligned with n, t₂ = n × t₁.
 //!
 //! # Manifolds and warm start
 //! Each pair of the broad phase keeps its manifolds and parry's workspace across steps
@@ -36,6 +37,7 @@
 use crate::bodies::dynamics::BodyState;
 use crate::bodies::rigid::{RigidError, RigidPartner};
 use crate::collision::polytope::{self, Polytope};
+use crate::math::Vec3;
 use parry3d_f64::bounding_volume::{Aabb, BoundingVolume};
 use parry3d_f64::math::{Pose, Vector};
 use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy, BvhWorkspace};
@@ -204,19 +206,11 @@ pub(crate) fn ball_half_space(
     })
 }
 
-/// t₁ ⟂ n from the world axis least aligned with n, and t₂ = n × t₁.
+/// The contact frame's tangents (t₁, t₂) of the unit normal n: [`Vec3::tangent_basis`], the
+/// one rule of every contact, sphere or not, on parry's vector type.
 pub fn tangent_frame(n: Vector) -> (Vector, Vector) {
-    let a = n.abs();
-    let e = if a.x <= a.y && a.x <= a.z {
-        Vector::X
-    } else if a.y <= a.z {
-        Vector::Y
-    } else {
-        Vector::Z
-    };
-    let t1 = n.cross(e).normalize();
-    let t2 = n.cross(t1);
-    (t1, t2)
+    let (t1, t2) = Vec3::new(n.x, n.y, n.z).tangent_basis();
+    (Vector::new(t1.x, t1.y, t1.z), Vector::new(t2.x, t2.y, t2.z))
 }
 
 /// The pair caches of a [`Detector`] as serde sees them (a checkpoint's `/json/detector`):

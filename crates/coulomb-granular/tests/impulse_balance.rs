@@ -204,7 +204,7 @@ fn the_positions_only_correction_puts_the_whole_weight_on_the_floor_and_walls() 
 #[test]
 fn a_pyramid_of_boxes_puts_its_whole_weight_on_the_floor() {
     use coulomb_granular::rigid::validation::{cube_pyramid, floor, one_material};
-    use coulomb_granular::rigid::{RigidPartner, RigidSettings, RigidWorld};
+    use coulomb_granular::rigid::{RigidSettings, RigidWorld};
     for tol in [1e-4, 1e-8] {
         let settings = RigidSettings {
             tolerance: tol,
@@ -238,7 +238,7 @@ fn a_pyramid_of_boxes_puts_its_whole_weight_on_the_floor() {
             let up: f64 = w
                 .contacts()
                 .iter()
-                .filter(|c| matches!(c.b, RigidPartner::Obstacle(_)))
+                .filter(|c| matches!(c.b, Partner::Obstacle(_, _)))
                 .map(|c| c.world_impulse()[2])
                 .sum();
             let dp = momentum(&w) - p0;

@@ -142,7 +142,7 @@ fn equal_width_hull_blocks_keep_a_full_face_manifold() {
             let between = w
                 .contacts()
                 .iter()
-                .filter(|c| c.b == coulomb_granular::rigid::RigidPartner::Body(1))
+                .filter(|c| c.b == coulomb_granular::Partner::Body(1))
                 .count();
             assert_eq!(between, 4, "dx {dx}, step {k}");
         }

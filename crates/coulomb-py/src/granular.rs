@@ -504,13 +504,15 @@ impl PySimulation {
     /// spheres), point, normal (b → a), t1, gap, impulse (r_N, r_T1, r_T2)).
     #[getter]
     fn contacts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        use coulomb_granular::rigid::{RigidContact, RigidPartner};
+        use coulomb_granular::{rigid::RigidContact, Partner};
         let c: Vec<RigidContact> = (self.sim.contacts.iter())
             .map(|c| RigidContact {
                 a: c.body,
+                // the obstacle, not its feature (the wall of a box, the triangle of a
+                // mesh), as for the rigid scenes' contacts
                 b: match c.partner {
-                    coulomb_granular::Partner::Body(j) => RigidPartner::Body(j),
-                    coulomb_granular::Partner::Obstacle(k, _) => RigidPartner::Obstacle(k),
+                    Partner::Obstacle(k, _) => Partner::Obstacle(k, 0),
+                    body => body,
                 },
                 point: c.point.to_array(),
                 normal: c.normal.to_array(),

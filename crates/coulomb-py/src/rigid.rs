@@ -248,7 +248,7 @@ impl PyRigidSimulation {
     fn contacts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let mut c = self.scene.world.contacts();
         for x in &mut c {
-            if let coulomb_granular::rigid::RigidPartner::Obstacle(k) = &mut x.b {
+            if let coulomb_granular::Partner::Obstacle(k, _) = &mut x.b {
                 *k = self.scene.obstacle_of.get(*k).copied().unwrap_or(*k);
             }
         }

@@ -1,7 +1,7 @@
 //! The body model of bodies of any shape (issue #41): mass properties ([`MassProperties`],
 //! from parry3d's), a body's description ([`RigidBodyDesc`]: shape, mass, pose, velocities,
 //! material, fixed or free), an obstacle's ([`RigidObstacle`]: shape and prescribed motion),
-//! the partner of a contact and its record ([`RigidPartner`], [`RigidContact`]) and the
+//! a contact's record ([`RigidContact`], whose partner is the one [`Partner`] of every contact) and the
 //! engine's errors ([`RigidError`]). The Newton–Euler dynamics are in
 //! [`crate::bodies::dynamics`], joints in [`crate::bodies::joints`], the step in
 //! [`crate::step::rigid`].
@@ -9,6 +9,7 @@
 //! Quaternions are (w, x, y, z) in every public API; a non-unit (||q| − 1| > 1e-9) or
 //! non-finite one is refused, never normalized silently. docs/rigid.md has the details.
 
+use crate::collision::contact::Partner;
 use crate::world::Motion;
 use parry::shape::SharedShape;
 use parry3d_f64 as parry;
@@ -168,18 +169,6 @@ pub struct RigidObstacle {
     pub material: u32,
 }
 
-/// The other party of a rigid contact.
-#[derive(
-    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, serde::Deserialize,
-)]
-#[serde(tag = "kind", content = "index", rename_all = "snake_case")]
-pub enum RigidPartner {
-    /// another body (index larger than the contact's `a`)
-    Body(usize),
-    /// an obstacle
-    Obstacle(usize),
-}
-
 /// One active contact of the last step: one point of a contact manifold.
 ///
 /// Frame convention (the sphere code's): `normal` points from B towards A, so that
@@ -188,8 +177,9 @@ pub enum RigidPartner {
 pub struct RigidContact {
     /// body A
     pub a: usize,
-    /// B
-    pub b: RigidPartner,
+    /// B: another body, or an obstacle (feature 0: a rigid pair is the whole obstacle, its
+    /// sub-shapes are in the contact's key)
+    pub b: Partner,
     /// contact point (midway between the two surfaces), world
     pub point: [f64; 3],
     /// unit normal n, B → A
@@ -269,7 +259,7 @@ pub enum RigidError {
         /// body of the deepest one
         a: usize,
         /// its partner
-        b: RigidPartner,
+        b: Partner,
         /// the limit (`RigidSettings::max_initial_penetration`)
         limit: f64,
     },
@@ -293,7 +283,7 @@ pub enum RigidError {
         /// its shape type
         shape_a: String,
         /// partner
-        b: RigidPartner,
+        b: Partner,
         /// its shape type
         shape_b: String,
     },

@@ -8,15 +8,76 @@ use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::HashMap;
 
-/// The other party of a contact.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
-#[serde(tag = "kind", content = "index", rename_all = "snake_case")]
+/// The other party B of a contact, for every body (sphere or not): another body, or a
+/// feature of an obstacle.
+///
+/// As JSON (checkpoints' contacts and pair caches, Python's `contacts`): `{"kind": "body",
+/// "index": j}` or `{"kind": "obstacle", "index": o}`, with `"feature": f` when f ≠ 0 (the
+/// form of the rigid scenes' records before this type was theirs too, so older files read).
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, serde::Deserialize,
+)]
+#[serde(into = "PartnerRecord", try_from = "PartnerRecord")]
 pub enum Partner {
-    /// another sphere (its index is larger than the contact's first body)
+    /// another body (its index is larger than the contact's first body)
     Body(usize),
     /// a feature of an obstacle: (obstacle index, feature index — the wall of a box, the
-    /// triangle of a mesh, 0 for one-feature shapes; [`crate::world::Obstacle::proximities`])
+    /// triangle of a mesh, 0 for one-feature shapes; [`crate::world::Obstacle::proximities`]).
+    /// The rigid engine's pairs are whole obstacles (feature 0): a point's sub-shape is in
+    /// its contact key ([`crate::collision::manifold::ContactKey`]).
     Obstacle(usize, u32),
+}
+
+/// [`Partner`] as serde reads and writes it.
+#[derive(Clone, Copy, Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PartnerRecord {
+    kind: PartnerKind,
+    index: usize,
+    #[serde(default, skip_serializing_if = "is_zero")]
+    feature: u32,
+}
+
+#[derive(Clone, Copy, Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum PartnerKind {
+    Body,
+    Obstacle,
+}
+
+fn is_zero(f: &u32) -> bool {
+    *f == 0
+}
+
+impl From<Partner> for PartnerRecord {
+    fn from(p: Partner) -> Self {
+        match p {
+            Partner::Body(index) => Self {
+                kind: PartnerKind::Body,
+                index,
+                feature: 0,
+            },
+            Partner::Obstacle(index, feature) => Self {
+                kind: PartnerKind::Obstacle,
+                index,
+                feature,
+            },
+        }
+    }
+}
+
+impl TryFrom<PartnerRecord> for Partner {
+    type Error = String;
+    fn try_from(r: PartnerRecord) -> Result<Self, String> {
+        match r.kind {
+            PartnerKind::Body if r.feature != 0 => Err(format!(
+                "body {}: a body has no feature ({})",
+                r.index, r.feature
+            )),
+            PartnerKind::Body => Ok(Partner::Body(r.index)),
+            PartnerKind::Obstacle => Ok(Partner::Obstacle(r.index, r.feature)),
+        }
+    }
 }
 
 /// An active contact i between sphere `body` (A) and `partner` (B) at time t_k.
@@ -596,6 +657,32 @@ mod tests {
     use super::*;
     use crate::world::{Motion, Obstacle, Shape, Sphere};
     use rand::{Rng, SeedableRng};
+
+    /// One partner type for every contact: its JSON is the rigid records' form (written
+    /// and read back), a feature appears only when it is not 0, and a body with a feature
+    /// or an unknown kind is refused.
+    #[test]
+    fn a_partner_reads_and_writes_the_rigid_records_form() {
+        let cases = [
+            (Partner::Body(3), r#"{"kind":"body","index":3}"#),
+            (Partner::Obstacle(2, 0), r#"{"kind":"obstacle","index":2}"#),
+            (
+                Partner::Obstacle(2, 5),
+                r#"{"kind":"obstacle","index":2,"feature":5}"#,
+            ),
+        ];
+        for (p, json) in cases {
+            assert_eq!(serde_json::to_string(&p).unwrap(), json);
+            assert_eq!(serde_json::from_str::<Partner>(json).unwrap(), p);
+        }
+        for bad in [
+            r#"{"kind":"body","index":1,"feature":2}"#,
+            r#"{"kind":"wall","index":1}"#,
+            r#"{"kind":"body","index":1,"side":0}"#,
+        ] {
+            assert!(serde_json::from_str::<Partner>(bad).is_err(), "{bad}");
+        }
+    }
 
     #[test]
     fn grid_finds_the_same_pairs_as_brute_force() {

@@ -35,7 +35,8 @@
 //! found by one loop over the balls, outside the per-pair machinery.
 
 use crate::bodies::dynamics::BodyState;
-use crate::bodies::rigid::{RigidError, RigidPartner};
+use crate::bodies::rigid::RigidError;
+use crate::collision::contact::Partner;
 use crate::collision::polytope::{self, Polytope};
 use crate::math::Vec3;
 use parry3d_f64::bounding_volume::{Aabb, BoundingVolume};
@@ -49,7 +50,7 @@ use std::collections::BTreeMap;
 
 /// Key of a manifold point across steps: (A, B, sub-shape of A, sub-shape of B, feature
 /// of A, feature of B, rank among points with the same ids).
-pub type ContactKey = (usize, RigidPartner, u32, u32, u32, u32, u32);
+pub type ContactKey = (usize, Partner, u32, u32, u32, u32, u32);
 
 /// One manifold point at t_k.
 #[derive(Debug, Clone, PartialEq)]
@@ -57,7 +58,7 @@ pub struct ContactPoint {
     /// body A
     pub a: usize,
     /// B
-    pub b: RigidPartner,
+    pub b: Partner,
     /// warm-start key
     pub key: ContactKey,
     /// point p, world
@@ -84,7 +85,7 @@ pub struct PlacedObstacle<'a> {
 /// The pair caches of the narrow phase (kept across steps).
 #[derive(Default)]
 pub struct Detector {
-    pairs: BTreeMap<(usize, RigidPartner), PairCache>,
+    pairs: BTreeMap<(usize, Partner), PairCache>,
     bvh_workspace: BvhWorkspace,
     /// each body's polytope (cuboids and convex polyhedra), built at the first detection
     polytopes: Vec<Option<Polytope>>,
@@ -127,7 +128,7 @@ const BOX_CHUNK: usize = 64;
 
 /// The warm-start key of the one contact of a ball with a body or a half-space: parry's
 /// (sub-shape 0, sub-shape 0, face 0, face 0, rank 0).
-fn ball_key(a: usize, b: RigidPartner) -> ContactKey {
+fn ball_key(a: usize, b: Partner) -> ContactKey {
     let face = PackedFeatureId::face(0).0;
     (a, b, 0, 0, face, face, 0)
 }
@@ -160,7 +161,7 @@ pub(crate) fn ball_ball(
     };
     let normal = -n1;
     let (t1, t2) = tangent_frame(normal);
-    let bp = RigidPartner::Body(b);
+    let bp = Partner::Body(b);
     Some(ContactPoint {
         a,
         b: bp,
@@ -193,7 +194,7 @@ pub(crate) fn ball_half_space(
         return None;
     }
     let (t1, t2) = tangent_frame(n);
-    let bp = RigidPartner::Obstacle(o);
+    let bp = Partner::Obstacle(o, 0);
     Some(ContactPoint {
         a,
         b: bp,
@@ -219,12 +220,12 @@ pub fn tangent_frame(n: Vector) -> (Vector, Vector) {
 /// moved) and parry's workspace of composite shapes.
 #[derive(serde::Serialize)]
 struct DetectorView<'a> {
-    pairs: Vec<(&'a (usize, RigidPartner), &'a PairCache)>,
+    pairs: Vec<(&'a (usize, Partner), &'a PairCache)>,
 }
 
 #[derive(serde::Deserialize)]
 struct DetectorOwned {
-    pairs: Vec<((usize, RigidPartner), PairCache)>,
+    pairs: Vec<((usize, Partner), PairCache)>,
 }
 
 impl Detector {
@@ -245,8 +246,8 @@ impl Detector {
         for ((a, b), cache) in owned.pairs {
             let ok = a < bodies
                 && match b {
-                    RigidPartner::Body(j) => a < j && j < bodies,
-                    RigidPartner::Obstacle(o) => o < obstacles,
+                    Partner::Body(j) => a < j && j < bodies,
+                    Partner::Obstacle(o, _) => o < obstacles,
                 };
             if !ok {
                 return Err(format!("pair ({a}, {b:?}) out of range"));
@@ -268,15 +269,15 @@ impl Detector {
     pub(crate) fn forget_moved(&mut self, moved: &[bool]) {
         let gone = |i: usize| moved.get(i).copied().unwrap_or(false);
         self.pairs
-            .retain(|(a, b), _| !(gone(*a) || matches!(b, RigidPartner::Body(j) if gone(*j))));
+            .retain(|(a, b), _| !(gone(*a) || matches!(b, Partner::Body(j) if gone(*j))));
     }
 
     /// The pairs cached with body `i` (tests).
     #[cfg(test)]
-    pub(crate) fn pairs_of(&self, i: usize) -> Vec<(usize, RigidPartner)> {
+    pub(crate) fn pairs_of(&self, i: usize) -> Vec<(usize, Partner)> {
         self.pairs
             .keys()
-            .filter(|(a, b)| *a == i || *b == RigidPartner::Body(i))
+            .filter(|(a, b)| *a == i || *b == Partner::Body(i))
             .copied()
             .collect()
     }
@@ -330,7 +331,7 @@ impl Detector {
                 Some((o.pose.rotation * hs.normal, o.pose.translation))
             })
             .collect();
-        let mut pairs: Vec<(usize, RigidPartner)> = Vec::new();
+        let mut pairs: Vec<(usize, Partner)> = Vec::new();
         let mut fast_points: Vec<ContactPoint> = Vec::new();
         if !aabbs.is_empty() {
             let bvh = Bvh::from_leaves(BvhBuildStrategy::default(), &aabbs);
@@ -342,7 +343,7 @@ impl Detector {
                         let cj = poses[j].translation;
                         fast_points.extend(ball_ball(i, &poses[i], ri, j, cj, rj, prediction));
                     } else {
-                        pairs.push((i, RigidPartner::Body(j)));
+                        pairs.push((i, Partner::Body(j)));
                     }
                 }
             });
@@ -355,7 +356,7 @@ impl Detector {
                     for i in bvh.intersect_aabb(&aabb) {
                         let i = i as usize;
                         if !bodies[i].fixed {
-                            pairs.push((i, RigidPartner::Obstacle(o)));
+                            pairs.push((i, Partner::Obstacle(o, 0)));
                         }
                     }
                 } else {
@@ -367,7 +368,7 @@ impl Detector {
                             let c = poses[i].translation;
                             fast_points.extend(ball_half_space(i, c, r, o, n, origin, margins[i]));
                         } else {
-                            pairs.push((i, RigidPartner::Obstacle(o)));
+                            pairs.push((i, Partner::Obstacle(o, 0)));
                         }
                     }
                 }
@@ -390,19 +391,19 @@ impl Detector {
         // on the number of threads; the first error in pair order is returned
         let jobs = take_caches(std::mem::take(&mut self.pairs), &pairs);
         let polytopes = &self.polytopes;
-        let narrow = |((a, b), mut cache): ((usize, RigidPartner), PairCache)|
+        let narrow = |((a, b), mut cache): ((usize, Partner), PairCache)|
          -> Result<(Vec<ContactPoint>, Option<PairCache>), RigidError> {
             let mut points = Vec::new();
             let (shape_b, pose_b, margin_b): (&SharedShape, Pose, f64) = match b {
-                RigidPartner::Body(j) => (&shapes[j], poses[j], margins[j]),
-                RigidPartner::Obstacle(o) => (obstacles[o].shape, obstacles[o].pose, 0.0),
+                Partner::Body(j) => (&shapes[j], poses[j], margins[j]),
+                Partner::Obstacle(o, _) => (obstacles[o].shape, obstacles[o].pose, 0.0),
             };
             let pose_a = poses[a];
             let prediction = margins[a] + margin_b;
             // two convex polyhedra (not two cuboids): separating axes and face clipping
             let poly_b = match b {
-                RigidPartner::Body(j) => polytopes[j].as_ref(),
-                RigidPartner::Obstacle(o) => obstacle_polytopes[o].as_ref(),
+                Partner::Body(j) => polytopes[j].as_ref(),
+                Partner::Obstacle(o, _) => obstacle_polytopes[o].as_ref(),
             };
             let hull = shapes[a].as_convex_polyhedron().is_some()
                 || shape_b.as_convex_polyhedron().is_some();

@@ -9,7 +9,6 @@
 //! frame of 10⁶ beads is ~100 MB instead of ~300 MB and is written without formatting
 //! numbers); [`VtkFormat::Ascii`] writes the same arrays as text.
 
-use crate::bodies::rigid::RigidPartner;
 pub use crate::bodies::surface::{obstacle_surface, Extent, CYLINDER_SEGMENTS};
 use crate::contact::{Contact, Partner};
 use crate::math::Vec3;
@@ -500,8 +499,8 @@ impl FrameSource for RigidScene {
                 .map(|c| FrameContact {
                     a: c.a,
                     b: match c.b {
-                        RigidPartner::Body(j) => Some(j),
-                        RigidPartner::Obstacle(_) => None,
+                        Partner::Body(j) => Some(j),
+                        Partner::Obstacle(_, _) => None,
                     },
                     point: v3(&c.point),
                     normal: v3(&c.normal),
@@ -1433,10 +1432,7 @@ mod tests {
         let h = scene.world.settings().h;
         let mut want = Vec3::ZERO;
         for c in scene.world.contacts() {
-            assert_eq!(
-                (c.a, c.b),
-                (0, crate::bodies::rigid::RigidPartner::Obstacle(0))
-            );
+            assert_eq!((c.a, c.b), (0, crate::contact::Partner::Obstacle(0, 0)));
             want += Vec3::from_slice(&c.world_impulse()) * (1.0 / h);
         }
         assert!(want.z > 0.0, "{want:?}");

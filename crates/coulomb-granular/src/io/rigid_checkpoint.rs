@@ -51,11 +51,12 @@
 //! | `/json/library` (version 4), `/json/switches` (version 3 only) | UTF-8 string | scalar |
 
 use crate::bodies::joints::SLOTS;
-use crate::bodies::rigid::{RigidContact, RigidPartner};
+use crate::bodies::rigid::RigidContact;
 use crate::checkpoint::{
     check_rows, encode_entries, index, json_of, open, read_checked, read_file, write_file,
     CheckpointError, Cursor, Data, Entry, Reader,
 };
+use crate::collision::contact::Partner;
 use crate::collision::manifold::ContactKey;
 use crate::model::SceneModel;
 use crate::scene::rigid::RigidScene;
@@ -92,8 +93,8 @@ fn entries(model: &SceneModel, state: &RigidState) -> Result<Vec<Entry>, Checkpo
     let mut keys = Vec::with_capacity(KEY_COLUMNS * state.previous.len());
     for ((a, b, s1, s2, f1, f2, rank), _) in &state.previous {
         let (kind, j) = match b {
-            RigidPartner::Body(j) => (0, *j),
-            RigidPartner::Obstacle(o) => (1, *o),
+            Partner::Body(j) => (0, *j),
+            Partner::Obstacle(o, _) => (1, *o),
         };
         keys.extend([index(*a), kind, index(j)]);
         keys.extend([s1, s2, f1, f2, rank].map(|x| i64::from(*x)));
@@ -170,8 +171,8 @@ fn keys(r: &Reader<'_>, raw: &[i64]) -> Result<Vec<ContactKey>, CheckpointError>
         let us = |x: i64| usize::try_from(x).map_err(|_| bad());
         let u32_of = |x: i64| u32::try_from(x).map_err(|_| bad());
         let b = match k[1] {
-            0 => RigidPartner::Body(us(k[2])?),
-            1 => RigidPartner::Obstacle(us(k[2])?),
+            0 => Partner::Body(us(k[2])?),
+            1 => Partner::Obstacle(us(k[2])?, 0),
             _ => return Err(bad()),
         };
         out.push((

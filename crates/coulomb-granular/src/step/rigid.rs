@@ -34,8 +34,9 @@
 use crate::bodies::dynamics::{rotation_from_wxyz, rotation_to_wxyz, BodyState};
 use crate::bodies::joints::{Joint, JointDesc, SLOTS};
 use crate::bodies::rigid::{
-    RigidBodyDesc, RigidContact, RigidError, RigidObstacle, RigidPartner, QUATERNION_TOLERANCE,
+    RigidBodyDesc, RigidContact, RigidError, RigidObstacle, QUATERNION_TOLERANCE,
 };
+use crate::collision::contact::Partner;
 use crate::collision::manifold::{ContactKey, ContactPoint, Detector, PlacedObstacle};
 use crate::world::{MaterialTable, Motion};
 use coulomb::problem::GlobalProblem;
@@ -684,8 +685,8 @@ impl RigidWorld {
             return;
         }
         points.retain(|c| match c.b {
-            RigidPartner::Body(j) => !self.jointed.contains(&(c.a.min(j), c.a.max(j))),
-            RigidPartner::Obstacle(_) => true,
+            Partner::Body(j) => !self.jointed.contains(&(c.a.min(j), c.a.max(j))),
+            Partner::Obstacle(_, _) => true,
         });
     }
 
@@ -778,11 +779,11 @@ impl RigidWorld {
                 return Err(format!("body {i} is fixed but its stored state moved"));
             }
         }
-        let partner_ok = |a: usize, p: RigidPartner| {
+        let partner_ok = |a: usize, p: Partner| {
             a < n
                 && match p {
-                    RigidPartner::Body(j) => a < j && j < n,
-                    RigidPartner::Obstacle(o) => o < no,
+                    Partner::Body(j) => a < j && j < n,
+                    Partner::Obstacle(o, _) => o < no,
                 }
         };
         if let Some((k, _)) = s
@@ -1146,8 +1147,8 @@ impl RigidWorld {
         let radius = |i: usize| self.shapes[i].as_ball().map(|b| b.radius);
         let a = &self.bodies[c.a];
         let (material, rb, omega_b) = match c.b {
-            RigidPartner::Body(j) => (self.bodies[j].material, radius(j), Vector::ZERO),
-            RigidPartner::Obstacle(o) => {
+            Partner::Body(j) => (self.bodies[j].material, radius(j), Vector::ZERO),
+            Partner::Obstacle(o, _) => {
                 let ob = &self.obstacles[o];
                 let w = match &ob.motion {
                     Motion::Rotate { axis, omega, .. } => v3(axis.to_array()) * *omega,
@@ -1174,8 +1175,8 @@ impl RigidWorld {
         let row = nsgs::Row {
             a: side(c.a, 1.0),
             b: match c.b {
-                RigidPartner::Body(j) => side(j, -1.0),
-                RigidPartner::Obstacle(_) => None,
+                Partner::Body(j) => side(j, -1.0),
+                Partner::Obstacle(_, _) => None,
             },
             w: std::array::from_fn(|k| -re * frame[k].dot(omega_b)),
             mu: mu_r,
@@ -1263,7 +1264,7 @@ impl RigidWorld {
         let ja = (!a.fixed).then(|| side(a, 1.0));
         let va = a.point_velocity(c.point);
         let (jb, vb, vb_free, v_end, mat_b) = match c.b {
-            RigidPartner::Body(j) => {
+            Partner::Body(j) => {
                 let b = &self.bodies[j];
                 (
                     (!b.fixed).then(|| side(b, -1.0)),
@@ -1273,7 +1274,7 @@ impl RigidWorld {
                     b.material,
                 )
             }
-            RigidPartner::Obstacle(o) => {
+            Partner::Obstacle(o, _) => {
                 let ob = &self.obstacles[o];
                 let p = math3(c.point);
                 let vt = ob.motion.velocity_at(p, self.time);
@@ -1305,8 +1306,8 @@ impl RigidWorld {
         let row = nsgs::Row {
             a: ja.map(|j| (self.dof[c.a].unwrap_or(0), j)),
             b: match c.b {
-                RigidPartner::Body(j) => jb.map(|jj| (self.dof[j].unwrap_or(0), jj)),
-                RigidPartner::Obstacle(_) => None,
+                Partner::Body(j) => jb.map(|jj| (self.dof[j].unwrap_or(0), jj)),
+                Partner::Obstacle(_, _) => None,
             },
             w,
             mu: law.mu,

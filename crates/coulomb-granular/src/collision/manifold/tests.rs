@@ -62,7 +62,7 @@ fn same_points(
         assert_eq!(f.key, p.key);
         assert_eq!((f.a, f.b), (p.a, p.b));
         let tol = match (f.b, shapes[f.a].as_ball()) {
-            (RigidPartner::Obstacle(_), Some(ball)) => {
+            (Partner::Obstacle(_, _), Some(ball)) => {
                 1e-12 * (ball.radius / (f.gap + ball.radius).abs()).max(1.0)
             }
             _ => 1e-12,
@@ -141,11 +141,11 @@ fn ball_pairs_match_parry_on_random_pairs() {
             .unwrap();
         ball_ball_points += found
             .iter()
-            .filter(|c| matches!(c.b, RigidPartner::Body(_)))
+            .filter(|c| matches!(c.b, Partner::Body(_)))
             .count();
         plane_points += found
             .iter()
-            .filter(|c| c.a == 0 && matches!(c.b, RigidPartner::Obstacle(_)))
+            .filter(|c| c.a == 0 && matches!(c.b, Partner::Obstacle(_, _)))
             .count();
         same_points(&bodies, &shapes, &obstacles, &[margin, margin]);
     }

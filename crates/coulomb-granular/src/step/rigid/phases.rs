@@ -13,7 +13,8 @@ use super::{
 };
 use crate::bodies::dynamics::{free_rotation, integrate_orientation};
 use crate::bodies::joints::{RowKind, SLOTS};
-use crate::bodies::rigid::{RigidContact, RigidError, RigidPartner};
+use crate::bodies::rigid::{RigidContact, RigidError};
+use crate::collision::contact::Partner;
 use crate::collision::manifold::ContactPoint;
 use crate::world::Motion;
 use parry3d_f64::math::Vector;
@@ -147,8 +148,8 @@ impl RigidWorld {
             // contacts within the step, so the pair looks ahead by h |g| as a body does
             // against an obstacle (a stack with gaps just above δ closes them in one step)
             let u_free = match c.b {
-                RigidPartner::Body(_) => u_free - look_ahead,
-                RigidPartner::Obstacle(_) => u_free,
+                Partner::Body(_) => u_free - look_ahead,
+                Partner::Obstacle(_, _) => u_free,
             };
             let u = u_nk.min(u_free).min(0.0);
             if c.gap + gamma * h * u <= delta {
@@ -507,8 +508,8 @@ impl RigidWorld {
         let too_deep = active.iter().any(|c| {
             let wa = self.half_width[c.a];
             let w = match c.b {
-                RigidPartner::Body(j) => wa.min(self.half_width[j]),
-                RigidPartner::Obstacle(_) => wa,
+                Partner::Body(j) => wa.min(self.half_width[j]),
+                Partner::Obstacle(_, _) => wa,
             };
             -c.gap > PENETRATION_BOUND * w
         });

@@ -82,7 +82,7 @@ fn refuses_interpenetrating_bodies_with_count_and_depth() {
         } => {
             assert!(count >= 1);
             assert!((depth - 0.05).abs() < 1e-9, "{depth}");
-            assert_eq!((a, b), (0, RigidPartner::Body(1)));
+            assert_eq!((a, b), (0, Partner::Body(1)));
         }
         e => panic!("{e}"),
     }
@@ -91,7 +91,7 @@ fn refuses_interpenetrating_bodies_with_count_and_depth() {
     match world(vec![c]).unwrap_err() {
         RigidError::Interpenetration { depth, b, .. } => {
             assert!((depth - 0.01).abs() < 1e-9, "{depth}");
-            assert_eq!(b, RigidPartner::Obstacle(0));
+            assert_eq!(b, Partner::Obstacle(0, 0));
         }
         e => panic!("{e}"),
     }

@@ -645,8 +645,9 @@ impl Problem {
     /// on the stored problem is ≤ `rule.tol`, `rule.max_sweeps`, or a stall: the lowest
     /// error met has not halved over `rule.stall_window` sweeps and, decreasing at the
     /// rate of those sweeps, would need more sweeps to reach `rule.tol` than it has done
-    /// (a plateau goes to the library at once, a slow but steady finish near the
-    /// tolerance is left to Gauss–Seidel), or `rule.time_limit`. Returns the iterate of
+    /// (a plateau goes to the library, a slow but steady finish near the tolerance is left
+    /// to Gauss–Seidel; a stall met while over-relaxed first sets ω = 1 and gives plain
+    /// sweeps a window of their own), or `rule.time_limit`. Returns the iterate of
     /// lowest error (exactly evaluated: every [`CHECK_EVERY`] sweeps, the first and the
     /// last).
     pub fn solve(&self, r0: &[f64], lambda0: &[f64], rule: Rule) -> Solution {
@@ -746,6 +747,15 @@ impl Problem {
                         f64::INFINITY
                     };
                     if ratio > 0.5 && needed > sweep as f64 {
+                        // over-relaxed sweeps can stall where plain ones still progress:
+                        // before the library (seconds a hand-over on a thousand contacts),
+                        // plain sweeps get a window of their own (docs/rigid-bodies.md,
+                        // "A stall while over-relaxed")
+                        if omega > 1.0 {
+                            omega = 1.0;
+                            history.clear();
+                            continue;
+                        }
                         break;
                     }
                 }

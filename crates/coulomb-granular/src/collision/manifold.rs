@@ -239,7 +239,7 @@ impl Detector {
     }
 
     /// The detector whose pair caches [`Detector::to_json`] wrote; every pair's body indices
-    /// must be below `bodies` and its obstacle indices below `obstacles`.
+    /// must be below `bodies` and its obstacle indices below `obstacles` (feature 0).
     pub(crate) fn from_json(json: &str, bodies: usize, obstacles: usize) -> Result<Self, String> {
         let owned: DetectorOwned = serde_json::from_str(json).map_err(|e| e.to_string())?;
         let mut pairs = BTreeMap::new();
@@ -247,7 +247,8 @@ impl Detector {
             let ok = a < bodies
                 && match b {
                     Partner::Body(j) => a < j && j < bodies,
-                    Partner::Obstacle(o, _) => o < obstacles,
+                    // a rigid pair is the whole obstacle: feature 0
+                    Partner::Obstacle(o, f) => o < obstacles && f == 0,
                 };
             if !ok {
                 return Err(format!("pair ({a}, {b:?}) out of range"));

@@ -783,7 +783,7 @@ impl RigidWorld {
             a < n
                 && match p {
                     Partner::Body(j) => a < j && j < n,
-                    Partner::Obstacle(o, _) => o < no,
+                    Partner::Obstacle(o, f) => o < no && f == 0,
                 }
         };
         if let Some((k, _)) = s

@@ -157,6 +157,31 @@ fn ball_pairs_match_parry_on_random_pairs() {
     assert!(plane_points > 500 && plane_points < 1900, "{plane_points}");
 }
 
+/// A stored pair cache names a whole obstacle (feature 0): the JSON written reads back, and
+/// the same JSON with a feature on the obstacle, which no rigid pair has, is refused.
+#[test]
+fn stored_pair_caches_refuse_an_obstacle_feature() {
+    let bodies = vec![body(Vector::new(0.0, 0.0, 0.05), Rotation::IDENTITY)];
+    let shapes = vec![SharedShape::cuboid(0.05, 0.05, 0.05)];
+    let floor = SharedShape::halfspace(Vector::Z);
+    let obstacles = [PlacedObstacle {
+        shape: &floor,
+        pose: Pose::IDENTITY,
+    }];
+    let mut detector = Detector::default();
+    let points = detector
+        .detect(&bodies, &shapes, &obstacles, &[0.01])
+        .unwrap();
+    assert!(!points.is_empty());
+    let json = detector.to_json().unwrap();
+    let partner = r#""kind":"obstacle","index":0"#;
+    assert!(json.contains(partner), "{json}");
+    assert!(Detector::from_json(&json, 1, 1).is_ok());
+    let tampered = json.replace(partner, &format!("{partner},\"feature\":5"));
+    let e = Detector::from_json(&tampered, 1, 1).unwrap_err();
+    assert!(e.contains("out of range"), "{e}");
+}
+
 #[test]
 fn a_box_of_balls_and_cuboids_gives_parry_points_in_parry_order() {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);

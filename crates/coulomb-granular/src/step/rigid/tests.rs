@@ -260,16 +260,51 @@ fn a_stalled_step_is_handed_to_the_library_on_the_global_problem() {
     // the reported error is that of the stored global problem
     let p = w.last_problem().unwrap();
     let rr: Vec<f64> = w.contacts().iter().flat_map(|c| c.impulse).collect();
+    let e = stored_error(p, &rr);
+    assert!((e - r.error).abs() <= 1e-12, "{e} vs {}", r.error);
+}
+
+/// The error of docs/error.md of r on a stored global problem with M diagonal:
+/// v = M⁻¹(f + H r), u = Hᵀ v + w, q = Hᵀ M⁻¹ f + w.
+fn stored_error(p: &coulomb::problem::GlobalProblem, r: &[f64]) -> f64 {
     let mut hr = p.f.clone();
-    p.h.gemv_acc(1.0, &rr, &mut hr);
+    p.h.gemv_acc(1.0, r, &mut hr);
     let v: Vec<f64> = hr.iter().zip(p.m.diagonal()).map(|(x, m)| x / m).collect();
     let u = p.velocity(&v);
     let q_norm = {
         let minv_f: Vec<f64> = p.f.iter().zip(p.m.diagonal()).map(|(x, m)| x / m).collect();
         coulomb::law::norm(&p.velocity(&minv_f))
     };
-    let e = coulomb::law::error_measure(3, &p.mu, &rr, &u, q_norm).error;
-    assert!((e - r.error).abs() <= 1e-12, "{e} vs {}", r.error);
+    coulomb::law::error_measure(3, &p.mu, r, &u, q_norm).error
+}
+
+/// The library's mixed Gauss–Seidel of a hand-over ([`super::quick_finish`]) solves a face
+/// contact (4 corners: 12 contact unknowns for 6 degrees of freedom, W singular) to the
+/// tolerance from r = 0, judged on the problem as stored.
+#[test]
+fn the_quick_library_finish_solves_a_redundant_face_contact() {
+    let b = cuboid([0.1, 0.05, 0.05], 1000.0, [0.0, 0.0, 0.05]).unwrap();
+    let mut w = world(vec![b]).unwrap();
+    w.step().unwrap();
+    let p = w.last_problem().unwrap().clone();
+    assert!(3 * p.mu.len() > p.f.len(), "{} contacts", p.mu.len());
+    let settings = coulomb::solver::Settings::default();
+    let global = coulomb::problem::Problem::Global(p.clone());
+    let step_of = |sol: coulomb::solver::Solution| {
+        let e = stored_error(&p, &sol.r);
+        Some((sol.r, Vec::new(), e))
+    };
+    let (r, _, e) = super::quick_finish(&global, &settings, step_of).expect("solved");
+    assert!(e <= settings.tol, "{e}");
+    assert_eq!(stored_error(&p, &r), e);
+    // the normal impulses carry the weight m g h over the 4 corners
+    let s = w.settings();
+    let weight = 1000.0 * 0.2 * 0.1 * 0.1 * -s.gravity[2] * s.h;
+    let carried: f64 = r.chunks_exact(3).map(|c| c[0]).sum();
+    assert!(
+        (carried - weight).abs() <= 1e-6 * weight,
+        "{carried} vs {weight}"
+    );
 }
 
 /// The parallel gather of v = M⁻¹(f + H r) and u = Hᵀ v + w: bitwise the numbers of the

@@ -24,7 +24,10 @@
 //!   step), versions 1 and 2 had the defaults;
 //! - the library solver's settings and `keep_problem` (`/json/library`, `LibrarySettings`:
 //!   `RigidWorld::set_solver`, `set_keep_problem`; version 4, the scene's defaults for older
-//!   files).
+//!   files);
+//! - whether the world has switched to plain Gauss–Seidel sweeps (`/state/plain_sweeps`, 0 or
+//!   1: `RigidWorld`'s `plain_sweeps`, set by the first step that the library's quick finish
+//!   solved; version 5, 0 for older files, which ran before the switch existed).
 //!
 //! Not stored: the step reports and the last step's problem (reports of the steps already
 //! taken). A sphere-only scene has its own checkpoint ([`crate::checkpoint`]); the `format`
@@ -40,7 +43,7 @@
 //! | dataset | type | shape |
 //! |---|---|---|
 //! | `/state/time` | f64 | (1,) |
-//! | `/state/steps_done` | i64 | (1,) |
+//! | `/state/steps_done`, `/state/plain_sweeps` (version 5) | i64 | (1,) |
 //! | `/bodies/position`, `velocity`, `angular_velocity` | f64 | (n, 3) |
 //! | `/bodies/orientation` | f64 | (n, 4) |
 //! | `/warm_start/key` | i64 (body A, partner kind 0 body / 1 obstacle, partner index, sub-shape A, sub-shape B, feature A, feature B, rank) | (m, 8) |
@@ -48,7 +51,7 @@
 //! | `/json/model`, `/json/contacts`, `/json/detector` | UTF-8 string | scalar |
 //! | `/joints/warm_start` | f64, by row slot | (joints, `SLOTS`) |
 //! | `/joints/force` | f64, force and torque, world axes | (joints, 6) |
-//! | `/json/library` (version 4), `/json/switches` (version 3 only) | UTF-8 string | scalar |
+//! | `/json/library` (versions 4 on), `/json/switches` (version 3 only) | UTF-8 string | scalar |
 
 use crate::bodies::joints::SLOTS;
 use crate::bodies::rigid::RigidContact;
@@ -65,11 +68,12 @@ use std::path::Path;
 
 /// The `format` attribute of a rigid-scene checkpoint.
 pub const FORMAT_NAME: &str = "coulomb-rigid-checkpoint";
-/// The `format_version` attribute written (4: the step's settings in the model, the library
-/// solver's settings stored). Versions 3 (the step's switches apart from the model, no
-/// library settings), 2 (before the switches were stored) and 1 (before joints were, for
-/// scenes without joints) are still read; other versions are refused.
-pub const FORMAT_VERSION: i64 = 4;
+/// The `format_version` attribute written (5: the switch to plain sweeps stored). Versions 4
+/// (the step's settings in the model, the library solver's settings stored, no switch), 3
+/// (the step's switches apart from the model, no library settings), 2 (before the switches
+/// were stored) and 1 (before joints were, for scenes without joints) are still read; other
+/// versions are refused.
+pub const FORMAT_VERSION: i64 = 5;
 
 /// `/json/switches` of a version-3 file: the step settings now in the model's step.
 #[derive(serde::Deserialize)]
@@ -108,6 +112,11 @@ fn entries(model: &SceneModel, state: &RigidState) -> Result<Vec<Entry>, Checkpo
             "state/steps_done",
             1,
             Data::I64(vec![i64::try_from(state.steps).unwrap_or(i64::MAX)]),
+        ),
+        (
+            "state/plain_sweeps",
+            1,
+            Data::I64(vec![i64::from(state.plain_sweeps)]),
         ),
         ("bodies/position", 3, Data::F64(flat(&state.x))),
         ("bodies/orientation", 4, Data::F64(flat(&state.q))),
@@ -193,7 +202,7 @@ fn keys(r: &Reader<'_>, raw: &[i64]) -> Result<Vec<ContactKey>, CheckpointError>
 
 /// The layout of a checkpoint of `version` (paths, columns, types): version 1 has no
 /// `/joints/…` datasets, only version 3 has `/json/switches`, versions 1 to 3 no
-/// `/json/library`.
+/// `/json/library`, versions 1 to 4 no `/state/plain_sweeps`.
 fn layout(version: i64) -> Result<Vec<Entry>, CheckpointError> {
     let empty = RigidState {
         time: 0.0,
@@ -208,6 +217,7 @@ fn layout(version: i64) -> Result<Vec<Entry>, CheckpointError> {
         joint_warm: Vec::new(),
         joint_forces: Vec::new(),
         library: None,
+        plain_sweeps: false,
     };
     Ok(older(version, entries(&SceneModel::default(), &empty)?))
 }
@@ -216,7 +226,11 @@ fn layout(version: i64) -> Result<Vec<Entry>, CheckpointError> {
 fn older(v: i64, e: Vec<Entry>) -> Vec<Entry> {
     let mut e: Vec<Entry> = e
         .into_iter()
-        .filter(|(p, _, _)| (v > 1 || !p.starts_with("joints/")) && (v > 3 || *p != "json/library"))
+        .filter(|(p, _, _)| {
+            (v > 1 || !p.starts_with("joints/"))
+                && (v > 3 || *p != "json/library")
+                && (v > 4 || *p != "state/plain_sweeps")
+        })
         .collect();
     if v == 3 {
         // with the other json/ datasets: the writer groups datasets by their first component
@@ -232,7 +246,7 @@ fn older(v: i64, e: Vec<Entry>) -> Vec<Entry> {
 fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
     let layout_now = layout(FORMAT_VERSION)?;
     let (read, version) = match read_checked(r, FORMAT_NAME, FORMAT_VERSION, &layout_now) {
-        Err(CheckpointError::Version { found, .. }) if (1..=3).contains(&found) => {
+        Err(CheckpointError::Version { found, .. }) if (1..=4).contains(&found) => {
             (read_checked(r, FORMAT_NAME, found, &layout(found)?)?, found)
         }
         other => (other?, FORMAT_VERSION),
@@ -261,6 +275,16 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
     let steps = match steps.as_slice() {
         [k] => u64::try_from(*k).map_err(|_| r.invalid(sp, format!("{k} steps")))?,
         _ => return Err(r.invalid(sp, "expected one value")),
+    };
+    let plain_sweeps = if version > 4 {
+        let (pp, flag) = c.i64s()?;
+        match flag.as_slice() {
+            [0] => false,
+            [1] => true,
+            _ => return Err(r.invalid(pp, format!("{flag:?}, expected 0 or 1"))),
+        }
+    } else {
+        false
     };
     let (pp, x) = c.f64s()?;
     let x: Vec<[f64; 3]> = rows(r, pp, x, None)?;
@@ -364,6 +388,7 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
         joint_warm,
         joint_forces,
         library,
+        plain_sweeps,
     };
     scene.world.restore(state).map_err(|e| {
         // what `restore` still checks: fixed bodies at rest ("body i …"), warm-start and
@@ -520,6 +545,56 @@ mod tests {
         }
         assert_eq!(snapshot(&b), snapshot(&a));
         assert_eq!(b.world.contacts(), a.world.contacts());
+    }
+
+    /// The switch to plain sweeps (`/state/plain_sweeps`) is restored, and a restart with it
+    /// continues to the bit; a version-4 file (before it was stored) reads with it off, and a
+    /// value other than 0 or 1 is refused, naming the dataset.
+    #[test]
+    fn the_switch_to_plain_sweeps_is_restored() {
+        let mut a = scene(MIXED);
+        for _ in 0..10 {
+            a.step().expect("step");
+        }
+        let mut state = a.world.state().expect("state");
+        assert!(!state.plain_sweeps);
+        state.plain_sweeps = true;
+        let bytes = encode_entries(
+            FORMAT_NAME,
+            FORMAT_VERSION,
+            &entries(&a.model, &state).expect("entries"),
+        )
+        .expect("bytes");
+        let mut b = RigidScene::from_checkpoint_bytes("plain.h5", bytes).expect("load");
+        assert!(b.world.plain_sweeps());
+        for _ in 0..5 {
+            b.step().expect("b");
+        }
+        let again = b.checkpoint_bytes().expect("bytes");
+        let mut c = RigidScene::from_checkpoint_bytes("again.h5", again).expect("load");
+        assert!(c.world.plain_sweeps());
+        for _ in 0..5 {
+            let rb = b.step().expect("b");
+            let rc = c.step().expect("c");
+            assert_eq!(rb.sweeps, rc.sweeps);
+        }
+        assert_eq!(snapshot(&c), snapshot(&b));
+        // version 4: off
+        let v4 = older(4, entries(&a.model, &state).expect("entries"));
+        assert!(v4.iter().all(|(p, _, _)| *p != "state/plain_sweeps"));
+        let bytes = encode_entries(FORMAT_NAME, 4, &v4).expect("v4 bytes");
+        let d = RigidScene::from_checkpoint_bytes("v4.h5", bytes).expect("v4 loads");
+        assert!(!d.world.plain_sweeps());
+        // neither 0 nor 1
+        let mut e = entries(&a.model, &state).expect("entries");
+        for (p, _, data) in e.iter_mut() {
+            if *p == "state/plain_sweeps" {
+                *data = Data::I64(vec![2]);
+            }
+        }
+        let bytes = encode_entries(FORMAT_NAME, FORMAT_VERSION, &e).expect("bytes");
+        let err = RigidScene::from_checkpoint_bytes("two.h5", bytes).expect_err("2 read");
+        assert!(err.to_string().contains("state/plain_sweeps"), "{err}");
     }
 
     /// The model's step settings (γ, projection, gap closure, warm start among them) are
@@ -705,13 +780,13 @@ mod tests {
         // and another version is refused
         let bytes = encode_entries(
             FORMAT_NAME,
-            5,
+            6,
             &entries(&a.model, &a.world.state().expect("s")).expect("e"),
         )
-        .expect("v5 bytes");
-        let e = RigidScene::from_checkpoint_bytes("v5.h5", bytes).expect_err("v5");
+        .expect("v6 bytes");
+        let e = RigidScene::from_checkpoint_bytes("v6.h5", bytes).expect_err("v6");
         assert!(
-            matches!(e, CheckpointError::Version { found: 5, .. }),
+            matches!(e, CheckpointError::Version { found: 6, .. }),
             "{e}"
         );
     }

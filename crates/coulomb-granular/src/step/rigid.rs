@@ -71,7 +71,8 @@ pub struct RigidSettings {
     /// and ω is halved towards 1 (ω ← 1 + (ω − 1)/2, 1 below 1.01) whenever Gauss–Seidel has
     /// not decreased over [`crate::nsgs::RELAX_WINDOW`] sweeps (judged on the exact error of
     /// the checks, where the sphere engine judges its sweep residual); default 1.5 (a scene's
-    /// `relaxation`)
+    /// `relaxation`). A world whose plain sweeps were found drifting switches to ω = 1 for
+    /// good ([`RigidWorld::plain_sweeps`]), as the sphere engine's ω falls to 1 within a step.
     pub relaxation: f64,
     /// wall-clock cap of one step's Gauss–Seidel, checked at its exact evaluations; reached,
     /// the step goes on as a stall does (to the library's solver, itself time-capped by
@@ -228,6 +229,11 @@ pub struct RigidWorld {
     joint_forces: Vec<[f64; 6]>,
     /// pairs of bodies (i < j) that a joint links: no contact between them
     jointed: std::collections::BTreeSet<(usize, usize)>,
+    /// Gauss–Seidel without over-relaxation (ω = 1) from the first sweep of every step, set
+    /// for good by the first step that [`quick_finish`] finished: on that scene plain sweeps
+    /// drift and over-relaxed ones leave the warm starts where they drift (docs/rigid-bodies.md,
+    /// "A drift")
+    plain_sweeps: bool,
 }
 
 /// The state a [`RigidWorld`] carries between steps ([`RigidWorld::state`]).
@@ -258,6 +264,8 @@ pub(crate) struct RigidState {
     /// the library solver's settings and `keep_problem` (None: those of the world restored
     /// into, for files written before they were stored)
     pub library: Option<LibrarySettings>,
+    /// [`RigidWorld`]'s switch to plain sweeps (false for files written before it was stored)
+    pub plain_sweeps: bool,
 }
 
 /// The settings of a [`RigidWorld`] that the scene model does not hold,
@@ -493,6 +501,7 @@ impl RigidWorld {
             })
             .collect();
         let mut world = Self {
+            plain_sweeps: false,
             joint_warm: vec![[0.0; SLOTS]; joints.len()],
             joint_forces: vec![[0.0; 6]; joints.len()],
             joints,
@@ -743,6 +752,7 @@ impl RigidWorld {
                 solver: self.settings.solver.clone(),
                 keep_problem: self.settings.keep_problem,
             }),
+            plain_sweeps: self.plain_sweeps,
         })
     }
 
@@ -835,6 +845,7 @@ impl RigidWorld {
         self.detector = detector;
         self.joint_warm = s.joint_warm;
         self.joint_forces = s.joint_forces;
+        self.plain_sweeps = s.plain_sweeps;
         self.last_problem = None;
         Ok(())
     }
@@ -858,6 +869,12 @@ impl RigidWorld {
     /// The settings.
     pub fn settings(&self) -> &RigidSettings {
         &self.settings
+    }
+    /// Whether Gauss–Seidel now runs without over-relaxation (ω = 1) from the first sweep of
+    /// every step: switched on for good by the first step that the library's quick finish
+    /// solved after plain sweeps stalled just above the tolerance (a drift, docs/rigid-bodies.md).
+    pub fn plain_sweeps(&self) -> bool {
+        self.plain_sweeps
     }
 
     /// Origins of the bodies' shape frames, world.
@@ -1474,13 +1491,15 @@ fn quick_finish(
 /// of motors and limits, [`nsgs::Problem::to_global_with`]): the library's multipliers of the
 /// stored equality rows replace those, the others keep theirs, and the error is that of
 /// [`nsgs::Problem::error_with`] (bounds and signs included).
+///
+/// The last value is true when [`quick_finish`] found the step.
 fn library_finish(
     global: &coulomb::problem::Problem,
     problem: &nsgs::Problem,
     r: &[f64],
     lambda: &[f64],
     s: &RigidSettings,
-) -> Option<(Vec<f64>, Vec<f64>, f64)> {
+) -> Option<(Vec<f64>, Vec<f64>, f64, bool)> {
     use coulomb::solver::{solve_with_guess, Guess};
     let start = if r.iter().all(|x| x.is_finite()) {
         r.to_vec()
@@ -1519,25 +1538,27 @@ fn library_finish(
         Some((sol.r, l, err))
     };
     let run = |guess: Option<&Guess>| step_of(solve_with_guess(global, &settings, guess).ok()?);
+    let default =
+        |found: Option<(Vec<f64>, Vec<f64>, f64)>| found.map(|(r, l, e)| (r, l, e, false));
     if s.library_only {
-        return run(Some(&guess));
+        return default(run(Some(&guess)));
     }
     // a drift lives in the null space of W = H M⁻¹ Hᵀ: only where there are more contact
     // unknowns than degrees of freedom
     let redundant = 3 * problem.rows.len() > 6 * problem.mass.len();
     if redundant && problem.error_with(r, lambda) <= QUICK_NEAR * s.tolerance {
-        if let Some(found) = quick_finish(global, &settings, step_of) {
-            return Some(found);
+        if let Some((r, l, e)) = quick_finish(global, &settings, step_of) {
+            return Some((r, l, e, true));
         }
     }
     let cold = run(None);
     if cold.as_ref().is_some_and(|(_, _, e)| *e <= s.tolerance) {
-        return cold;
+        return default(cold);
     }
-    match (cold, run(Some(&guess))) {
+    default(match (cold, run(Some(&guess))) {
         (Some(a), Some(b)) => Some(if b.2 < a.2 { b } else { a }),
         (a, b) => a.or(b),
-    }
+    })
 }
 
 #[cfg(test)]

@@ -304,7 +304,7 @@ impl RigidWorld {
                         tol: s.tolerance,
                         max_sweeps: s.max_sweeps,
                         stall_window: s.stall_window,
-                        relaxation: s.relaxation,
+                        relaxation: if self.plain_sweeps { 1.0 } else { s.relaxation },
                         time_limit: s.time_limit,
                     },
                 );
@@ -326,9 +326,11 @@ impl RigidWorld {
             };
             if best.1 > s.tolerance && library {
                 if let Some(g) = &global {
-                    if let Some((r_lib, l_lib, err_lib)) =
+                    if let Some((r_lib, l_lib, err_lib, quick)) =
                         library_finish(g, &problem, &best.0, &lambda, s)
                     {
+                        // plain sweeps from now on (`RigidWorld::plain_sweeps`)
+                        self.plain_sweeps |= quick;
                         if err_lib < best.1 || !best.1.is_finite() {
                             let how = if s.library_only {
                                 "library"

@@ -307,6 +307,42 @@ fn the_quick_library_finish_solves_a_redundant_face_contact() {
     );
 }
 
+/// The cube pyramid of `examples/scenes/rigid/cube-pyramid.toml` (5 layers, μ = 0.7,
+/// h = 1 ms, tol 1e-8): Gauss–Seidel switches to plain sweeps at the first step that the
+/// library's quick finish solves (a library finish within [`QUICK_NEAR`] of the tolerance on a
+/// step with more contact unknowns than degrees of freedom), not before; and every step
+/// after it still reaches the tolerance on its stored problem.
+#[test]
+fn a_quick_finish_switches_the_world_to_plain_sweeps() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/scenes/rigid/cube-pyramid.toml"
+    );
+    let loaded = crate::scene_file::LoadedScene::load(std::path::Path::new(path)).unwrap();
+    let built = loaded.build(&Default::default()).unwrap();
+    let mut scene = crate::scene::rigid::RigidScene::new(&built.model).unwrap();
+    let w = &mut scene.world;
+    let tol = w.settings().tolerance;
+    assert_eq!(tol, 1e-8);
+    let mut switched_at = None;
+    for k in 0..40 {
+        assert!(!w.plain_sweeps());
+        let r = w.step().unwrap();
+        if w.plain_sweeps() {
+            assert_eq!(r.method, "nsgs+library", "step {k}");
+            assert!(r.error <= tol, "step {k}: {}", r.error);
+            switched_at = Some(k);
+            break;
+        }
+    }
+    let k = switched_at.expect("no quick finish in 40 steps");
+    for j in 1..=5 {
+        let r = w.step().unwrap();
+        assert!(w.plain_sweeps());
+        assert!(r.error <= tol, "step {}: {}", k + j, r.error);
+    }
+}
+
 /// The parallel gather of v = M⁻¹(f + H r) and u = Hᵀ v + w: bitwise the numbers of the
 /// contact-by-contact scatter, on 1, 2 and 3 threads, r full or short.
 #[test]

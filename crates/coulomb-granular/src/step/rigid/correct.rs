@@ -26,21 +26,8 @@ struct Constraint {
     lambda: f64,
 }
 
-/// The displacements Δq shared by the updates of one colour, which touch disjoint bodies.
-#[derive(Clone, Copy)]
-struct Shared(*mut [f64; 6]);
-// SAFETY: used only inside one colour of a colouring checked by `Colouring::is_valid_pairs`
-// (every block index in bounds, no two rows of one colour on one block, A ≠ B): two updates
-// running at once never touch the same body.
-unsafe impl Send for Shared {}
-unsafe impl Sync for Shared {}
-impl Shared {
-    /// The pointer (a method, so that closures capture the whole wrapper).
-    #[inline]
-    fn get(self) -> *mut [f64; 6] {
-        self.0
-    }
-}
+/// The displacements Δq, shared by the updates of one colour (which touch disjoint bodies).
+type Shared = nsgs::Raw<[f64; 6]>;
 
 /// The blocks a row touches (first, second), for the colouring.
 fn ends(sides: &[Option<Side>; 2]) -> (usize, Option<usize>) {
@@ -141,7 +128,7 @@ pub(super) fn correct_positions(
         })
         .collect();
     let mut dq = vec![[0.0; 6]; nb];
-    let shared = Shared(dq.as_mut_ptr());
+    let shared = nsgs::Raw(dq.as_mut_ptr());
     // SAFETY (both closures): the colouring is valid, so the rows of one colour touch
     // disjoint blocks, all in bounds
     let one = |c: &mut Constraint| unsafe { update(c, shared, mass) };

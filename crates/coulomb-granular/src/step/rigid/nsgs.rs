@@ -134,16 +134,17 @@ fn is_isotropic(w: &[f64; 9]) -> bool {
 /// Raw storage shared by the updates of one colour, which touch disjoint bodies and
 /// disjoint impulses.
 #[derive(Clone, Copy)]
-struct Raw<T>(*mut T);
-// SAFETY: used only by `Problem::sweep` inside one colour of a colouring checked by
-// `Colouring::is_valid_pairs` (every block index in bounds, no two rows of one colour
-// on one block, A ≠ B): two updates running at once never touch the same element.
+pub(super) struct Raw<T>(pub(super) *mut T);
+// SAFETY: used only by `Problem::sweep` and the position correction (`super::correct`)
+// inside one colour of a colouring checked by `Colouring::is_valid_pairs` (every block index
+// in bounds, no two rows of one colour on one block, A ≠ B): two updates running at once
+// never touch the same element.
 unsafe impl<T> Send for Raw<T> {}
 unsafe impl<T> Sync for Raw<T> {}
 impl<T> Raw<T> {
     /// The pointer (a method, so that closures capture the whole wrapper).
     #[inline]
-    fn get(self) -> *mut T {
+    pub(super) fn get(self) -> *mut T {
         self.0
     }
 }

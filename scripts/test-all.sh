@@ -88,7 +88,12 @@ cargo build "${PACKAGES[@]}" "${FEATURES[@]}" --lib --tests --profile test 2>&1 
 # (one of them took over a minute); clippy --all-targets (.ci/run) checks that they compile.
 # --no-fail-fast: every test binary runs even when an earlier one fails, so that the counts
 # are complete.
-cargo test "${PACKAGES[@]}" "${FEATURES[@]}" --tests --no-fail-fast 2>&1 | tee -a "$LOG"
+# Three test threads on the two cores of CI (a developer's RUST_TEST_THREADS is kept): the
+# command-line tests spend much of their time waiting on the processes they start (coulomb,
+# mpirun), and took 35 s instead of 43 s; the other binaries, busy computing, took the same
+# time (docs/testing.md).
+RUST_TEST_THREADS="${RUST_TEST_THREADS:-3}" \
+  cargo test "${PACKAGES[@]}" "${FEATURES[@]}" --tests --no-fail-fast 2>&1 | tee -a "$LOG"
 cargo test "${PACKAGES[@]}" "${FEATURES[@]}" --doc --no-fail-fast 2>&1 | tee -a "$LOG"
 
 # The extension: the binding crate built above by cargo within the workspace, in the test

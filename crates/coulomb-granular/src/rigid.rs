@@ -7,7 +7,7 @@
 //! cases in [`crate::validation::rigid`] and [`crate::validation::joints`].
 
 pub use crate::bodies::rigid::{
-    MassProperties, RigidBodyDesc, RigidContact, RigidError, RigidObstacle, QUATERNION_TOLERANCE,
+    MassProperties, RigidBodyDesc, RigidError, RigidObstacle, QUATERNION_TOLERANCE,
 };
 pub use crate::bodies::{dynamics as body, joints};
 pub use crate::collision::{manifold as contacts, polytope};

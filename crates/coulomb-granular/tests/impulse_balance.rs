@@ -268,8 +268,8 @@ fn a_pyramid_of_boxes_puts_its_whole_weight_on_the_floor() {
             let up: f64 = w
                 .contacts()
                 .iter()
-                .filter(|c| matches!(c.b, Partner::Obstacle(_, _)))
-                .map(|c| c.world_impulse()[2])
+                .filter(|c| matches!(c.partner, Partner::Obstacle(_, _)))
+                .map(|c| c.world_impulse().z)
                 .sum();
             let dp = momentum(&w) - p0;
             mean += up / (weight * h) / last as f64;

@@ -142,7 +142,7 @@ fn equal_width_hull_blocks_keep_a_full_face_manifold() {
             let between = w
                 .contacts()
                 .iter()
-                .filter(|c| c.b == coulomb_granular::Partner::Body(1))
+                .filter(|c| c.partner == coulomb_granular::Partner::Body(1))
                 .count();
             assert_eq!(between, 4, "dx {dx}, step {k}");
         }
@@ -277,7 +277,7 @@ fn small_gaps_close_at_once_and_penetrations_are_corrected() {
     assert!(z > 0.05 - 5e-6 && z < 0.05 + 1e-6, "{z}");
     let r = w.step().unwrap();
     assert!(r.max_penetration < 5e-6, "{r:?}");
-    let rn: f64 = w.contacts().iter().map(|c| c.world_impulse()[2]).sum();
+    let rn: f64 = w.contacts().iter().map(|c| c.world_impulse().z).sum();
     let weight = m * 9.81 * h;
     assert!((rn / weight - 1.0).abs() < 1e-6, "{rn} vs {weight}");
 }

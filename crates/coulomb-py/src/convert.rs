@@ -8,7 +8,7 @@ use coulomb::settings::ParseMethodError;
 use coulomb::solver::{InnerKind, Method, OuterKind, Settings, Solution, Status};
 use coulomb::sparse::{CscMatrix, SparseError};
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
-use pyo3::exceptions::PyTypeError;
+use pyo3::exceptions::{PyRuntimeError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
 use std::time::Duration;
@@ -358,6 +358,45 @@ pub fn rows3<'py>(py: Python<'py>, rows: impl Iterator<Item = [f64; 3]>) -> Boun
     let a = PyArray1::from_vec(py, flat);
     a.reshape([n, 3])
         .map_or_else(|_| a.into_any(), |b| b.into_any())
+}
+
+/// The contacts of one step as Python's `Simulation.contacts`, for every scene: a list of
+/// dicts `a`, `b` (`kind` "body" or "obstacle", `index`), `point`, `normal` (b → a), `t1`,
+/// `gap`, `impulse` (r_N, r_T1, r_T2), an obstacle numbered by `obstacle` (the scene's
+/// numbering) and named as a whole (not the wall of a box or the triangle of a mesh).
+pub fn contacts_to_py<'py>(
+    py: Python<'py>,
+    contacts: &[coulomb_granular::Contact],
+    obstacle: impl Fn(usize) -> usize,
+) -> PyResult<Bound<'py, PyAny>> {
+    use coulomb_granular::Partner;
+    #[derive(serde::Serialize)]
+    struct PyContact {
+        a: usize,
+        b: Partner,
+        point: [f64; 3],
+        normal: [f64; 3],
+        t1: [f64; 3],
+        gap: f64,
+        impulse: [f64; 3],
+    }
+    let c: Vec<PyContact> = (contacts.iter())
+        .map(|c| PyContact {
+            a: c.body,
+            b: match c.partner {
+                Partner::Obstacle(k, _) => Partner::Obstacle(obstacle(k), 0),
+                body => body,
+            },
+            point: c.point.to_array(),
+            normal: c.normal.to_array(),
+            t1: c.t1.to_array(),
+            gap: c.gap,
+            impulse: c.impulse,
+        })
+        .collect();
+    let json = serde_json::to_value(c)
+        .map_err(|e| PyRuntimeError::new_err(format!("cannot serialize: {e}")))?;
+    json_to_py(py, &json)
 }
 
 /// A JSON value (from the library's `Serialize` impls) as Python objects.

@@ -499,31 +499,11 @@ impl PySimulation {
         numpy::PyArray1::from_iter(py, self.sim.world.bodies.iter().map(|s| s.mass)).into_any()
     }
 
-    /// The last step's contacts as the rigid scenes' (`RigidContact`: a, b (`kind` "body" or
-    /// "obstacle", `index`; a sphere world's obstacles are the scene's, then its fixed
-    /// spheres), point, normal (b → a), t1, gap, impulse (r_N, r_T1, r_T2)).
+    /// The last step's contacts ([`convert::contacts_to_py`]: a sphere world's obstacles are
+    /// the scene's, then its fixed spheres).
     #[getter]
     fn contacts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        use coulomb_granular::{rigid::RigidContact, Partner};
-        let c: Vec<RigidContact> = (self.sim.contacts.iter())
-            .map(|c| RigidContact {
-                a: c.body,
-                // the obstacle, not its feature (the wall of a box, the triangle of a
-                // mesh), as for the rigid scenes' contacts
-                b: match c.partner {
-                    Partner::Obstacle(k, _) => Partner::Obstacle(k, 0),
-                    body => body,
-                },
-                point: c.point.to_array(),
-                normal: c.normal.to_array(),
-                t1: c.t1.to_array(),
-                gap: c.gap,
-                impulse: c.impulse,
-            })
-            .collect();
-        let json = serde_json::to_value(c)
-            .map_err(|e| PyRuntimeError::new_err(format!("cannot serialize: {e}")))?;
-        convert::json_to_py(py, &json)
+        convert::contacts_to_py(py, &self.sim.contacts, |k| k)
     }
 
     /// Replaces the sphere velocities (flattened (n, 3), finite).

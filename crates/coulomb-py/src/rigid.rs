@@ -241,20 +241,14 @@ impl PyRigidSimulation {
         rows(py, &self.scene.world.angular_velocities())
     }
 
-    /// The last step's contacts (`RigidContact`: a, b, point, normal, t1, gap, impulse), an
-    /// obstacle numbered as in the scene (not as the part of it the rigid world holds), as
-    /// the sphere scenes' contacts are.
+    /// The last step's contacts ([`convert::contacts_to_py`]), an obstacle numbered as in the
+    /// scene (not as the part of it the rigid world holds), as the sphere scenes' contacts are.
     #[getter]
     fn contacts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let mut c = self.scene.world.contacts();
-        for x in &mut c {
-            if let coulomb_granular::Partner::Obstacle(k, _) = &mut x.b {
-                *k = self.scene.obstacle_of.get(*k).copied().unwrap_or(*k);
-            }
-        }
-        let json = serde_json::to_value(c)
-            .map_err(|e| PyRuntimeError::new_err(format!("cannot serialize: {e}")))?;
-        convert::json_to_py(py, &json)
+        let of = &self.scene.obstacle_of;
+        convert::contacts_to_py(py, self.scene.world.contacts(), |k| {
+            of.get(k).copied().unwrap_or(k)
+        })
     }
 
     /// t_k (s).

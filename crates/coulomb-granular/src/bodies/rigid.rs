@@ -1,8 +1,8 @@
 //! The body model of bodies of any shape (issue #41): mass properties ([`MassProperties`],
 //! from parry3d's), a body's description ([`RigidBodyDesc`]: shape, mass, pose, velocities,
-//! material, fixed or free), an obstacle's ([`RigidObstacle`]: shape and prescribed motion),
-//! a contact's record ([`RigidContact`], whose partner is the one [`Partner`] of every contact) and the
-//! engine's errors ([`RigidError`]). The Newton–Euler dynamics are in
+//! material, fixed or free), an obstacle's ([`RigidObstacle`]: shape and prescribed motion)
+//! and the engine's errors ([`RigidError`]). A contact's record is every scene's
+//! [`crate::contact::Contact`]. The Newton–Euler dynamics are in
 //! [`crate::bodies::dynamics`], joints in [`crate::bodies::joints`], the step in
 //! [`crate::step::rigid`].
 //!
@@ -167,44 +167,6 @@ pub struct RigidObstacle {
     pub motion: Motion,
     /// index into the world's material table
     pub material: u32,
-}
-
-/// One active contact of the last step: one point of a contact manifold.
-///
-/// Frame convention (the sphere code's): `normal` points from B towards A, so that
-/// u_N = n · (v_A(p) − v_B(p)) > 0 when they separate; the impulse acts on A (−r on B).
-#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
-pub struct RigidContact {
-    /// body A
-    pub a: usize,
-    /// B: another body, or an obstacle (feature 0: a rigid pair is the whole obstacle, its
-    /// sub-shapes are in the contact's key)
-    pub b: Partner,
-    /// contact point (midway between the two surfaces), world
-    pub point: [f64; 3],
-    /// unit normal n, B → A
-    pub normal: [f64; 3],
-    /// first tangent t₁ (t₂ = n × t₁)
-    pub t1: [f64; 3],
-    /// gap at the start of the step (negative: penetration)
-    pub gap: f64,
-    /// impulse (r_N, r_T1, r_T2) of the step, local frame
-    pub impulse: [f64; 3],
-}
-
-impl RigidContact {
-    /// The impulse in world axes acting on A: r_N n + r_T1 t₁ + r_T2 t₂.
-    pub fn world_impulse(&self) -> [f64; 3] {
-        let n = self.normal;
-        let t1 = self.t1;
-        let t2 = [
-            n[1] * t1[2] - n[2] * t1[1],
-            n[2] * t1[0] - n[0] * t1[2],
-            n[0] * t1[1] - n[1] * t1[0],
-        ];
-        let r = self.impulse;
-        std::array::from_fn(|k| r[0] * n[k] + r[1] * t1[k] + r[2] * t2[k])
-    }
 }
 
 /// Why a rigid world cannot be built or stepped.

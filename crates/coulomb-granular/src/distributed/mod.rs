@@ -1456,7 +1456,7 @@ impl DistributedSimulation {
             time: self.time,
             bodies: self.beads.iter().map(|(_, b)| FrameBody::ball(b)).collect(),
             contacts: (self.contacts.iter())
-                .map(|c| FrameContact::of_sphere(c, h))
+                .map(|c| FrameContact::of(c, h))
                 .collect(),
             obstacles: &self.obstacles,
         };

@@ -255,6 +255,48 @@ fn push_keys(e: &mut Vec<Entry>, group: &'static [&'static str; 4], keys: KeyCol
     e.push((group[3], 1, Data::I64(keys.feature)));
 }
 
+/// The datasets `/contacts/…` of `c` (the layout's table, one row per contact), in their
+/// fixed order: the same for every scene's checkpoint ([`Cursor::contacts`] reads them).
+pub(crate) fn push_contacts(e: &mut Vec<Entry>, c: &[Contact]) {
+    push_keys(
+        e,
+        &[
+            "contacts/body",
+            "contacts/partner_kind",
+            "contacts/partner_index",
+            "contacts/partner_feature",
+        ],
+        key_columns(c.iter().map(Contact::key)),
+    );
+    e.push((
+        "contacts/normal",
+        3,
+        Data::F64(flat3(c.iter().map(|x| x.normal))),
+    ));
+    e.push(("contacts/t1", 3, Data::F64(flat3(c.iter().map(|x| x.t1)))));
+    e.push(("contacts/t2", 3, Data::F64(flat3(c.iter().map(|x| x.t2)))));
+    e.push((
+        "contacts/point",
+        3,
+        Data::F64(flat3(c.iter().map(|x| x.point))),
+    ));
+    e.push((
+        "contacts/gap",
+        1,
+        Data::F64(c.iter().map(|x| x.gap).collect()),
+    ));
+    e.push((
+        "contacts/normal_velocity",
+        1,
+        Data::F64(c.iter().map(|x| x.normal_velocity).collect()),
+    ));
+    e.push((
+        "contacts/impulse",
+        3,
+        Data::F64(c.iter().flat_map(|x| x.impulse).collect()),
+    ));
+}
+
 /// A JSON document of `value` that reads back equal to it (else the state is not storable).
 pub(crate) fn json_of<T>(what: &str, value: &T) -> Result<String, CheckpointError>
 where
@@ -362,44 +404,7 @@ fn entries(sim: &Simulation) -> Result<Vec<Entry>, CheckpointError> {
         3,
         Data::F64(sim.previous.iter().flat_map(|x| x.1).collect()),
     ));
-    let c = &sim.contacts;
-    push_keys(
-        &mut e,
-        &[
-            "contacts/body",
-            "contacts/partner_kind",
-            "contacts/partner_index",
-            "contacts/partner_feature",
-        ],
-        key_columns(c.iter().map(Contact::key)),
-    );
-    e.push((
-        "contacts/normal",
-        3,
-        Data::F64(flat3(c.iter().map(|x| x.normal))),
-    ));
-    e.push(("contacts/t1", 3, Data::F64(flat3(c.iter().map(|x| x.t1)))));
-    e.push(("contacts/t2", 3, Data::F64(flat3(c.iter().map(|x| x.t2)))));
-    e.push((
-        "contacts/point",
-        3,
-        Data::F64(flat3(c.iter().map(|x| x.point))),
-    ));
-    e.push((
-        "contacts/gap",
-        1,
-        Data::F64(c.iter().map(|x| x.gap).collect()),
-    ));
-    e.push((
-        "contacts/normal_velocity",
-        1,
-        Data::F64(c.iter().map(|x| x.normal_velocity).collect()),
-    ));
-    e.push((
-        "contacts/impulse",
-        3,
-        Data::F64(c.iter().flat_map(|x| x.impulse).collect()),
-    ));
+    push_contacts(&mut e, &sim.contacts);
     // the rolling warm start, sorted by key so that the file does not depend on hashing
     let mut rolling: Vec<((usize, Partner), [f64; 3])> =
         sim.rolling.previous.iter().map(|(k, v)| (*k, *v)).collect();
@@ -727,10 +732,7 @@ impl Cursor<'_, '_> {
             let b = usize::try_from(b)
                 .ok()
                 .filter(|&b| b < bodies)
-                .ok_or_else(|| {
-                    self.r
-                        .invalid(pb, format!("row {i}: sphere {b} of {bodies}"))
-                })?;
+                .ok_or_else(|| self.r.invalid(pb, format!("row {i}: body {b} of {bodies}")))?;
             let bound = match k {
                 0 => bodies,
                 1 => obstacles,
@@ -757,6 +759,36 @@ impl Cursor<'_, '_> {
             ));
         }
         Ok(keys)
+    }
+    /// The contacts of the datasets `/contacts/…` ([`push_contacts`]), their bodies below
+    /// `bodies` and their partners below `bodies` or `obstacles`.
+    pub(crate) fn contacts(
+        &mut self,
+        bodies: usize,
+        obstacles: usize,
+    ) -> Result<Vec<Contact>, CheckpointError> {
+        let keys = self.keys(bodies, obstacles)?;
+        let nc = keys.len();
+        let normal = self.points(nc)?;
+        let t1 = self.points(nc)?;
+        let t2 = self.points(nc)?;
+        let point = self.points(nc)?;
+        let gap = self.column(nc)?;
+        let normal_velocity = self.column(nc)?;
+        let impulse = self.triples(nc)?;
+        Ok((0..nc)
+            .map(|i| Contact {
+                body: keys[i].0,
+                partner: keys[i].1,
+                normal: normal[i],
+                t1: t1[i],
+                t2: t2[i],
+                point: point[i],
+                gap: gap[i],
+                normal_velocity: normal_velocity[i],
+                impulse: impulse[i],
+            })
+            .collect())
     }
     pub(crate) fn json<T: for<'de> Deserialize<'de>>(&mut self) -> Result<T, CheckpointError> {
         match self.next()? {
@@ -1112,28 +1144,7 @@ fn decode_file(r: &Reader<'_>) -> Result<Simulation, CheckpointError> {
         return Err(r.invalid("warm_start/body", "keys not sorted and unique"));
     }
     let previous: Vec<((usize, Partner), [f64; 3])> = keys.into_iter().zip(impulses).collect();
-    let ckeys = c.keys(n, no)?;
-    let nc = ckeys.len();
-    let normal = c.points(nc)?;
-    let t1 = c.points(nc)?;
-    let t2 = c.points(nc)?;
-    let point = c.points(nc)?;
-    let gap = c.column(nc)?;
-    let normal_velocity = c.column(nc)?;
-    let impulse = c.triples(nc)?;
-    let contacts: Vec<Contact> = (0..nc)
-        .map(|i| Contact {
-            body: ckeys[i].0,
-            partner: ckeys[i].1,
-            normal: normal[i],
-            t1: t1[i],
-            t2: t2[i],
-            point: point[i],
-            gap: gap[i],
-            normal_velocity: normal_velocity[i],
-            impulse: impulse[i],
-        })
-        .collect();
+    let contacts = c.contacts(n, no)?;
     let rkeys = c.keys(n, no)?;
     let rimp = c.triples(rkeys.len())?;
     let (ip, flat) = c.f64s()?;

@@ -403,9 +403,9 @@ pub struct FrameContact {
 }
 
 impl FrameContact {
-    /// A contact of the sphere engine whose impulse was taken over a step `h` (its bodies'
+    /// A contact (of either engine) whose impulse was taken over a step `h` (its bodies'
     /// indices as the contact holds them).
-    pub fn of_sphere(c: &Contact, h: f64) -> Self {
+    pub fn of(c: &Contact, h: f64) -> Self {
         FrameContact {
             a: c.body,
             b: match c.partner {
@@ -462,7 +462,7 @@ impl FrameSource for Simulation {
             time: self.time,
             bodies: self.world.bodies.iter().map(FrameBody::ball).collect(),
             contacts: (self.contacts.iter())
-                .map(|c| FrameContact::of_sphere(c, h))
+                .map(|c| FrameContact::of(c, h))
                 .collect(),
             obstacles: &self.world.obstacles,
         }
@@ -496,17 +496,7 @@ impl FrameSource for RigidScene {
                 })
                 .collect(),
             contacts: (w.contacts().iter())
-                .map(|c| FrameContact {
-                    a: c.a,
-                    b: match c.b {
-                        Partner::Body(j) => Some(j),
-                        Partner::Obstacle(_, _) => None,
-                    },
-                    point: v3(&c.point),
-                    normal: v3(&c.normal),
-                    force: v3(&c.world_impulse()) * (1.0 / h),
-                    gap: c.gap,
-                })
+                .map(|c| FrameContact::of(c, h))
                 .collect(),
             obstacles: &self.obstacles,
         }
@@ -1432,8 +1422,8 @@ mod tests {
         let h = scene.world.settings().h;
         let mut want = Vec3::ZERO;
         for c in scene.world.contacts() {
-            assert_eq!((c.a, c.b), (0, crate::contact::Partner::Obstacle(0, 0)));
-            want += Vec3::from_slice(&c.world_impulse()) * (1.0 / h);
+            assert_eq!(c.key(), (0, crate::contact::Partner::Obstacle(0, 0)));
+            want += c.world_impulse() * (1.0 / h);
         }
         assert!(want.z > 0.0, "{want:?}");
         assert_eq!(force, [want.to_array(); 6].concat());

@@ -15,7 +15,11 @@
 //!   starts a pair's next GJK from its stored normal and, when the pose barely moved, updates
 //!   the stored manifold points instead of recomputing them, so without them the continued
 //!   run would differ in the last bits;
-//! - the last step's contacts (`/json/contacts`, read by the outputs only);
+//! - the last step's contacts (`/contacts/…`, read by the outputs only): the sphere
+//!   checkpoint's datasets ([`crate::checkpoint`]), written and read by the same code, since
+//!   every scene's contact record is one [`Contact`] (version 6; versions 1 to 5 stored them
+//!   as JSON, `/json/contacts`, without t₂ and u_{N,k}: t₂ = n × t₁ is recomputed and u_{N,k}
+//!   read as NaN, unknown);
 //! - per joint the last step's impulses by row slot, the next step's warm start, and its
 //!   force and torque (`/joints/…`; version 2, absent from version-1 files, which are still
 //!   read when their scene has no joint);
@@ -48,19 +52,21 @@
 //! | `/bodies/orientation` | f64 | (n, 4) |
 //! | `/warm_start/key` | i64 (body A, partner kind 0 body / 1 obstacle, partner index, sub-shape A, sub-shape B, feature A, feature B, rank) | (m, 8) |
 //! | `/warm_start/impulse` | f64, world axes | (m, 3) |
-//! | `/json/model`, `/json/contacts`, `/json/detector` | UTF-8 string | scalar |
+//! | `/contacts/…` (version 6) | as in [`crate::checkpoint`] | (c, …) |
+//! | `/json/model`, `/json/detector` | UTF-8 string | scalar |
+//! | `/json/contacts` (versions 1 to 5) | UTF-8 string | scalar |
 //! | `/joints/warm_start` | f64, by row slot | (joints, `SLOTS`) |
 //! | `/joints/force` | f64, force and torque, world axes | (joints, 6) |
 //! | `/json/library` (versions 4 on), `/json/switches` (version 3 only) | UTF-8 string | scalar |
 
 use crate::bodies::joints::SLOTS;
-use crate::bodies::rigid::RigidContact;
 use crate::checkpoint::{
-    check_rows, encode_entries, index, json_of, open, read_checked, read_file, write_file,
-    CheckpointError, Cursor, Data, Entry, Reader,
+    check_rows, encode_entries, index, json_of, open, push_contacts, read_checked, read_file,
+    write_file, CheckpointError, Cursor, Data, Entry, Reader,
 };
-use crate::collision::contact::Partner;
+use crate::collision::contact::{Contact, Partner};
 use crate::collision::manifold::ContactKey;
+use crate::math::Vec3;
 use crate::model::SceneModel;
 use crate::scene::rigid::RigidScene;
 use crate::step::rigid::{LibrarySettings, RigidState};
@@ -68,12 +74,13 @@ use std::path::Path;
 
 /// The `format` attribute of a rigid-scene checkpoint.
 pub const FORMAT_NAME: &str = "coulomb-rigid-checkpoint";
-/// The `format_version` attribute written (5: the switch to plain sweeps stored). Versions 4
+/// The `format_version` attribute written (6: the contacts in the sphere checkpoint's
+/// datasets). Versions 5 (the contacts as JSON), 4
 /// (the step's settings in the model, the library solver's settings stored, no switch), 3
 /// (the step's switches apart from the model, no library settings), 2 (before the switches
 /// were stored) and 1 (before joints were, for scenes without joints) are still read; other
 /// versions are refused.
-pub const FORMAT_VERSION: i64 = 5;
+pub const FORMAT_VERSION: i64 = 6;
 
 /// `/json/switches` of a version-3 file: the step settings now in the model's step.
 #[derive(serde::Deserialize)]
@@ -104,9 +111,7 @@ fn entries(model: &SceneModel, state: &RigidState) -> Result<Vec<Entry>, Checkpo
         keys.extend([s1, s2, f1, f2, rank].map(|x| i64::from(*x)));
     }
     let impulses: Vec<[f64; 3]> = state.previous.iter().map(|(_, r)| *r).collect();
-    let contacts = serde_json::to_string(&state.contacts)
-        .map_err(|e| CheckpointError::Unrepresentable(format!("the contacts: {e}")))?;
-    Ok(vec![
+    let mut e = vec![
         ("state/time", 1, Data::F64(vec![state.time])),
         (
             "state/steps_done",
@@ -124,12 +129,14 @@ fn entries(model: &SceneModel, state: &RigidState) -> Result<Vec<Entry>, Checkpo
         ("bodies/angular_velocity", 3, Data::F64(flat(&state.omega))),
         ("warm_start/key", KEY_COLUMNS, Data::I64(keys)),
         ("warm_start/impulse", 3, Data::F64(flat(&impulses))),
+    ];
+    push_contacts(&mut e, &state.contacts);
+    e.extend([
         (
             "json/model",
             0,
             Data::Str(json_of("the scene model", model)?),
         ),
-        ("json/contacts", 0, Data::Str(contacts)),
         ("json/detector", 0, Data::Str(state.detector.clone())),
         (
             "json/library",
@@ -148,7 +155,72 @@ fn entries(model: &SceneModel, state: &RigidState) -> Result<Vec<Entry>, Checkpo
             Data::F64(flat(&state.joint_warm)),
         ),
         ("joints/force", 6, Data::F64(flat(&state.joint_forces))),
-    ])
+    ]);
+    Ok(e)
+}
+
+/// A contact as versions 1 to 5 stored it (`/json/contacts`): body A, partner B, point,
+/// normal, t₁, gap and impulse, without t₂ (= n × t₁) and u_{N,k}.
+#[derive(PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StoredContact {
+    a: usize,
+    b: Partner,
+    point: [f64; 3],
+    normal: [f64; 3],
+    t1: [f64; 3],
+    gap: f64,
+    impulse: [f64; 3],
+}
+
+impl From<StoredContact> for Contact {
+    fn from(c: StoredContact) -> Self {
+        let (normal, t1) = (Vec3::from_slice(&c.normal), Vec3::from_slice(&c.t1));
+        Contact {
+            body: c.a,
+            partner: c.b,
+            normal,
+            t1,
+            t2: normal.cross(t1),
+            point: Vec3::from_slice(&c.point),
+            gap: c.gap,
+            normal_velocity: f64::NAN,
+            impulse: c.impulse,
+        }
+    }
+}
+
+/// The datasets of a version-`v` checkpoint of `state` built from `model`: those of
+/// [`entries`] as a file of that version holds them ([`older`]), the contacts as JSON before
+/// version 6.
+fn entries_of(
+    v: i64,
+    model: &SceneModel,
+    state: &RigidState,
+) -> Result<Vec<Entry>, CheckpointError> {
+    let e = entries(model, state)?;
+    if v >= 6 {
+        return Ok(older(v, e));
+    }
+    let stored: Vec<StoredContact> = (state.contacts.iter())
+        .map(|c| StoredContact {
+            a: c.body,
+            b: c.partner,
+            point: c.point.to_array(),
+            normal: c.normal.to_array(),
+            t1: c.t1.to_array(),
+            gap: c.gap,
+            impulse: c.impulse,
+        })
+        .collect();
+    let json = json_of("the contacts", &stored)?;
+    let mut e = older(v, e);
+    let at = e
+        .iter()
+        .position(|(p, _, _)| *p == "json/model")
+        .map_or(0, |i| i + 1);
+    e.insert(at, ("json/contacts", 0, Data::Str(json)));
+    Ok(e)
 }
 
 /// `values` as rows of `N`, `n` of them when given.
@@ -219,15 +291,17 @@ fn layout(version: i64) -> Result<Vec<Entry>, CheckpointError> {
         library: None,
         plain_sweeps: false,
     };
-    Ok(older(version, entries(&SceneModel::default(), &empty)?))
+    entries_of(version, &SceneModel::default(), &empty)
 }
 
-/// The datasets `e` of the current version as a version-`v` file holds them.
+/// The datasets `e` of the current version as a version-`v` file holds them, without the
+/// contacts before version 6 ([`entries_of`] adds their JSON).
 fn older(v: i64, e: Vec<Entry>) -> Vec<Entry> {
     let mut e: Vec<Entry> = e
         .into_iter()
         .filter(|(p, _, _)| {
-            (v > 1 || !p.starts_with("joints/"))
+            (v > 5 || !p.starts_with("contacts/"))
+                && (v > 1 || !p.starts_with("joints/"))
                 && (v > 3 || *p != "json/library")
                 && (v > 4 || *p != "state/plain_sweeps")
         })
@@ -246,7 +320,7 @@ fn older(v: i64, e: Vec<Entry>) -> Vec<Entry> {
 fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
     let layout_now = layout(FORMAT_VERSION)?;
     let (read, version) = match read_checked(r, FORMAT_NAME, FORMAT_VERSION, &layout_now) {
-        Err(CheckpointError::Version { found, .. }) if (1..=4).contains(&found) => {
+        Err(CheckpointError::Version { found, .. }) if (1..=5).contains(&found) => {
             (read_checked(r, FORMAT_NAME, found, &layout(found)?)?, found)
         }
         other => (other?, FORMAT_VERSION),
@@ -299,6 +373,12 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
     let keys = keys(r, &raw)?;
     let (p, imp) = c.f64s()?;
     let imp: Vec<[f64; 3]> = rows(r, p, imp, Some(keys.len()))?;
+    // obstacle partners are checked against the world that the model builds (`restore`)
+    let contacts = if version > 5 {
+        Some(c.contacts(x.len(), usize::MAX)?)
+    } else {
+        None
+    };
     // a pair of materials written before the pairs became the scene file's `[[pairs]]`
     // (`MaterialPair`) names its materials `a` and `b`: read as `materials = [a, b]`
     let mut json: serde_json::Value = c.json()?;
@@ -311,7 +391,12 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
     }
     let mut model: SceneModel =
         serde_json::from_value(json).map_err(|e| r.invalid("json/model", format!("JSON: {e}")))?;
-    let contacts: Vec<RigidContact> = c.json()?;
+    let contacts = match contacts {
+        Some(c) => c,
+        None => (c.json::<Vec<StoredContact>>()?.into_iter())
+            .map(Contact::from)
+            .collect(),
+    };
     let (dp, detector) = match c.entries.next() {
         Some((p, _, Data::Str(s))) => (p, s),
         _ => return Err(r.corrupt("json/detector", "expected a string")),
@@ -398,7 +483,11 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
         } else if e.starts_with("warm start") {
             "warm_start/key"
         } else if e.starts_with("contact") {
-            "json/contacts"
+            if version > 5 {
+                "contacts/partner_index"
+            } else {
+                "json/contacts"
+            }
         } else if e.starts_with("joints") {
             "joints/warm_start"
         } else if e.starts_with("the library solver") {
@@ -580,7 +669,7 @@ mod tests {
         }
         assert_eq!(snapshot(&c), snapshot(&b));
         // version 4: off
-        let v4 = older(4, entries(&a.model, &state).expect("entries"));
+        let v4 = entries_of(4, &a.model, &state).expect("entries");
         assert!(v4.iter().all(|(p, _, _)| *p != "state/plain_sweeps"));
         let bytes = encode_entries(FORMAT_NAME, 4, &v4).expect("v4 bytes");
         let d = RigidScene::from_checkpoint_bytes("v4.h5", bytes).expect("v4 loads");
@@ -622,7 +711,7 @@ mod tests {
         assert!(b.world.last_problem().is_none());
         // a version-2 file (before they were stored) gives the scene's defaults
         let state = a.world.state().expect("state");
-        let v2 = older(2, entries(&a.model, &state).expect("entries"));
+        let v2 = entries_of(2, &a.model, &state).expect("entries");
         let bytes = encode_entries(FORMAT_NAME, 2, &v2).expect("v2 bytes");
         let c = RigidScene::from_checkpoint_bytes("v2.h5", bytes).expect("v2 loads");
         assert_eq!(c.world.settings().solver, Default::default());
@@ -664,7 +753,7 @@ mod tests {
         // the same state as a version-3 file: the model with default switches, the switches
         // apart
         let state = a.world.state().expect("state");
-        let mut v3 = older(3, entries(&scene(MIXED).model, &state).expect("entries"));
+        let mut v3 = entries_of(3, &scene(MIXED).model, &state).expect("entries");
         for e in &mut v3 {
             if e.0 == "json/switches" {
                 e.2 = Data::Str(
@@ -753,10 +842,10 @@ mod tests {
             a.step().expect("step");
         }
         let state = a.world.state().expect("state");
-        let v1 = older(1, entries(&a.model, &state).expect("entries"));
+        let v1 = entries_of(1, &a.model, &state).expect("entries");
         let bytes = encode_entries(FORMAT_NAME, 1, &v1).expect("v1 bytes");
         let mut b = RigidScene::from_checkpoint_bytes("v1.h5", bytes).expect("v1 loads");
-        let v2 = older(2, entries(&a.model, &state).expect("entries"));
+        let v2 = entries_of(2, &a.model, &state).expect("entries");
         let bytes = encode_entries(FORMAT_NAME, 2, &v2).expect("v2 bytes");
         let mut b2 = RigidScene::from_checkpoint_bytes("v2.h5", bytes).expect("v2 loads");
         a.step().expect("a");
@@ -773,22 +862,73 @@ mod tests {
         let built = loaded.build(&Default::default()).expect("build");
         let c = RigidScene::new(&built.model).expect("scene");
         let state = c.world.state().expect("state");
-        let v1 = older(1, entries(&c.model, &state).expect("entries"));
+        let v1 = entries_of(1, &c.model, &state).expect("entries");
         let bytes = encode_entries(FORMAT_NAME, 1, &v1).expect("v1 bytes");
         let e = RigidScene::from_checkpoint_bytes("v1j.h5", bytes).expect_err("joints in v1");
         assert!(e.to_string().contains("json/model"), "{e}");
         // and another version is refused
         let bytes = encode_entries(
             FORMAT_NAME,
-            6,
+            FORMAT_VERSION + 1,
             &entries(&a.model, &a.world.state().expect("s")).expect("e"),
         )
-        .expect("v6 bytes");
-        let e = RigidScene::from_checkpoint_bytes("v6.h5", bytes).expect_err("v6");
+        .expect("next version's bytes");
+        let e = RigidScene::from_checkpoint_bytes("v7.h5", bytes).expect_err("v7");
         assert!(
-            matches!(e, CheckpointError::Version { found: 6, .. }),
+            matches!(e, CheckpointError::Version { found, .. } if found == FORMAT_VERSION + 1),
             "{e}"
         );
+    }
+
+    /// Version 6 stores the contacts in the sphere checkpoint's datasets, every field of the
+    /// one contact record; a version-5 file's JSON contacts read as the same contacts, t₂
+    /// recomputed as n × t₁ and u_{N,k}, which they did not hold, NaN; both continue to the
+    /// bit.
+    #[test]
+    fn contacts_are_the_sphere_checkpoints_and_version_5_json_still_reads() {
+        let mut a = scene(MIXED);
+        for _ in 0..40 {
+            a.step().expect("step");
+        }
+        let state = a.world.state().expect("state");
+        assert!(!state.contacts.is_empty());
+        let now = entries(&a.model, &state).expect("entries");
+        assert!(now.iter().any(|(p, _, _)| *p == "contacts/normal_velocity"));
+        assert!(now.iter().all(|(p, _, _)| *p != "json/contacts"));
+        let b = RigidScene::from_checkpoint_bytes("v6.h5", a.checkpoint_bytes().expect("bytes"))
+            .expect("v6 loads");
+        assert_eq!(b.world.contacts(), a.world.contacts());
+        let v5 = entries_of(5, &a.model, &state).expect("entries");
+        assert!(v5.iter().all(|(p, _, _)| !p.starts_with("contacts/")));
+        let bytes = encode_entries(FORMAT_NAME, 5, &v5).expect("v5 bytes");
+        let mut c = RigidScene::from_checkpoint_bytes("v5.h5", bytes).expect("v5 loads");
+        for (x, y) in c.world.contacts().iter().zip(a.world.contacts()) {
+            assert!(x.normal_velocity.is_nan() && y.normal_velocity.is_finite());
+            let (mut x, mut y) = (x.clone(), y.clone());
+            (x.normal_velocity, y.normal_velocity) = (0.0, 0.0);
+            assert_eq!(x, y);
+        }
+        assert_eq!(c.world.contacts().len(), a.world.contacts().len());
+        let mut b = b;
+        for _ in 0..3 {
+            a.step().expect("a");
+            b.step().expect("b");
+            c.step().expect("c");
+        }
+        assert_eq!(snapshot(&b), snapshot(&a));
+        assert_eq!(snapshot(&c), snapshot(&a));
+        // a contact whose partner is not in the world is refused, naming the dataset
+        let mut e = entries(&a.model, &a.world.state().expect("state")).expect("entries");
+        for (p, _, d) in e.iter_mut() {
+            if *p == "contacts/partner_index" {
+                if let Data::I64(v) = d {
+                    v[0] = 1_000_000;
+                }
+            }
+        }
+        let bytes = encode_entries(FORMAT_NAME, FORMAT_VERSION, &e).expect("bytes");
+        let err = RigidScene::from_checkpoint_bytes("far.h5", bytes).expect_err("partner");
+        assert!(err.to_string().contains("contacts/partner_index"), "{err}");
     }
 
     /// A rigid checkpoint written before the pairs became the scene file's `[[pairs]]`

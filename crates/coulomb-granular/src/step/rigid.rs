@@ -33,10 +33,8 @@
 
 use crate::bodies::dynamics::{rotation_from_wxyz, rotation_to_wxyz, BodyState};
 use crate::bodies::joints::{Joint, JointDesc, SLOTS};
-use crate::bodies::rigid::{
-    RigidBodyDesc, RigidContact, RigidError, RigidObstacle, QUATERNION_TOLERANCE,
-};
-use crate::collision::contact::Partner;
+use crate::bodies::rigid::{RigidBodyDesc, RigidError, RigidObstacle, QUATERNION_TOLERANCE};
+use crate::collision::contact::{Contact, Partner};
 use crate::collision::manifold::{ContactKey, ContactPoint, Detector, PlacedObstacle};
 use crate::world::{MaterialTable, Motion};
 use coulomb::problem::GlobalProblem;
@@ -213,7 +211,7 @@ pub struct RigidWorld {
     gravity: Vector,
     time: f64,
     steps: u64,
-    contacts: Vec<RigidContact>,
+    contacts: Vec<Contact>,
     last_problem: Option<GlobalProblem>,
     previous: BTreeMap<ContactKey, Vector>,
     detector: Detector,
@@ -254,7 +252,7 @@ pub(crate) struct RigidState {
     /// the last step's impulses by contact key (world axes), the next step's warm start
     pub previous: Vec<(ContactKey, [f64; 3])>,
     /// the last step's contacts (read by the outputs)
-    pub contacts: Vec<RigidContact>,
+    pub contacts: Vec<Contact>,
     /// the detector's pair caches, JSON ([`Detector::to_json`])
     pub detector: String,
     /// each joint's last impulses by row slot, the next step's warm start
@@ -806,8 +804,11 @@ impl RigidWorld {
                 k.0, k.1
             ));
         }
-        if let Some(c) = s.contacts.iter().find(|c| !partner_ok(c.a, c.b)) {
-            return Err(format!("contact of pair ({}, {:?}) out of range", c.a, c.b));
+        if let Some(c) = s.contacts.iter().find(|c| !partner_ok(c.body, c.partner)) {
+            return Err(format!(
+                "contact of pair ({}, {:?}) out of range",
+                c.body, c.partner
+            ));
         }
         let nj = self.joints.len();
         if s.joint_warm.len() != nj || s.joint_forces.len() != nj {
@@ -1021,9 +1022,11 @@ impl RigidWorld {
             .map(|b| b.mass * (g * (b.x.length() + b.reach) + b.v.length_squared()))
             .sum()
     }
-    /// The last step's active contacts with their impulses.
-    pub fn contacts(&self) -> Vec<RigidContact> {
-        self.contacts.clone()
+    /// The last step's active contacts with their impulses: every scene's contact record
+    /// ([`Contact`], as [`crate::Simulation::contacts`]), one per manifold point, its partner
+    /// an obstacle as a whole (feature 0).
+    pub fn contacts(&self) -> &[Contact] {
+        &self.contacts
     }
     /// The last step's problem (2.10) in global form (None without contacts or with
     /// `keep_problem` off), for `--dump-fclib`.
@@ -1133,7 +1136,7 @@ impl RigidWorld {
             .step_by(3)
             .filter(|&&rn| max_rn > 0.0 && rn > 1e-6 * max_rn)
             .count();
-        self.record_contacts(&set.active, r);
+        self.record_contacts(&set.active, &set.normal_parts, r);
         self.time = t_end;
         self.steps += 1;
         Ok(RigidStepReport {

@@ -143,11 +143,11 @@ pub fn resting_box(drop: f64, steps: usize) -> Result<RestingBox, RigidError> {
     let mut moment = Vector::ZERO;
     let mut admissible = true;
     let mut penetration: f64 = 0.0;
-    for c in &contacts {
+    for c in contacts {
         let [rn, t1, t2] = c.impulse;
         admissible &= rn >= 0.0 && (t1 * t1 + t2 * t2).sqrt() <= mu * rn * (1.0 + 1e-12);
-        let p = Vector::from_array(c.point);
-        moment += (p - x).cross(Vector::from_array(c.world_impulse()));
+        let p = Vector::from_array(c.point.to_array());
+        moment += (p - x).cross(Vector::from_array(c.world_impulse().to_array()));
         penetration = penetration.max(-c.gap);
     }
     // the end-of-step penetration: the lowest corner's depth below z = 0

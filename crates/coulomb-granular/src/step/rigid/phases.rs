@@ -13,9 +13,10 @@ use super::{
 };
 use crate::bodies::dynamics::{free_rotation, integrate_orientation};
 use crate::bodies::joints::{RowKind, SLOTS};
-use crate::bodies::rigid::{RigidContact, RigidError};
-use crate::collision::contact::Partner;
+use crate::bodies::rigid::RigidError;
+use crate::collision::contact::{Contact, Partner};
 use crate::collision::manifold::ContactPoint;
+use crate::math::Vec3;
 use crate::world::Motion;
 use parry3d_f64::math::Vector;
 use std::time::Instant;
@@ -542,24 +543,34 @@ impl RigidWorld {
         }
     }
 
-    /// Records the step's contacts (read by the outputs) and their impulses in world axes by
+    /// Records the step's contacts (read by the outputs), each with its u_{N,k} from
+    /// `normal_parts` (the index set's, point by point), and their impulses in world axes by
     /// contact key (the next step's warm start).
-    pub(super) fn record_contacts(&mut self, active: &[ContactPoint], r: &[f64]) {
+    pub(super) fn record_contacts(
+        &mut self,
+        active: &[ContactPoint],
+        normal_parts: &[(f64, f64)],
+        r: &[f64],
+    ) {
+        let v3 = |x: Vector| Vec3::new(x.x, x.y, x.z);
         self.previous.clear();
         self.contacts = active
             .iter()
+            .zip(normal_parts)
             .enumerate()
-            .map(|(i, c)| {
+            .map(|(i, (c, &(u_nk, _)))| {
                 let ri = [r[3 * i], r[3 * i + 1], r[3 * i + 2]];
                 self.previous
                     .insert(c.key, ri[0] * c.normal + ri[1] * c.t1 + ri[2] * c.t2);
-                RigidContact {
-                    a: c.a,
-                    b: c.b,
-                    point: c.point.to_array(),
-                    normal: c.normal.to_array(),
-                    t1: c.t1.to_array(),
+                Contact {
+                    body: c.a,
+                    partner: c.b,
+                    normal: v3(c.normal),
+                    t1: v3(c.t1),
+                    t2: v3(c.t2),
+                    point: v3(c.point),
                     gap: c.gap,
+                    normal_velocity: u_nk,
                     impulse: ri,
                 }
             })

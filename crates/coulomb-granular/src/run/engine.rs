@@ -67,12 +67,14 @@ pub trait Engine: FrameSource {
     fn frame(&self, frames: &mut VtkWriter) -> io::Result<()> {
         frames.frame(self)
     }
-    /// A warning about the step size, said once per run: the sphere engine's check that no
-    /// sphere crosses a thin wall within one step ([`crate::tunnelling`]); `None` when
-    /// nothing is wrong or the engine does not check.
-    fn step_warning(&self) -> Option<String> {
-        None
-    }
+    /// A warning about the step size at the current velocities, said once per run: a body
+    /// that may cross a wall or another body within one step before a contact is detected
+    /// (spheres: [`crate::tunnelling`], against each obstacle's thickness and speed; other
+    /// shapes: [`RigidWorld::travel_warning`], against half the body's thinnest width);
+    /// `None` when nothing is wrong.
+    ///
+    /// [`RigidWorld::travel_warning`]: crate::step::rigid::RigidWorld::travel_warning
+    fn step_warning(&self) -> Option<String>;
 }
 
 impl Engine for Simulation {
@@ -121,6 +123,9 @@ impl Engine for RigidScene {
     fn step(&mut self) -> Result<EngineStep, EngineError> {
         let r = RigidScene::step(self)?;
         Ok(EngineStep::of_rigid(r, self.world.potential_energy()))
+    }
+    fn step_warning(&self) -> Option<String> {
+        self.world.travel_warning()
     }
     fn steps_done(&self) -> usize {
         self.world.steps() as usize

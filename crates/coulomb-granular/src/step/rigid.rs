@@ -649,12 +649,8 @@ impl RigidWorld {
                 (thin / g).sqrt()
             )));
         }
-        for (i, (b, w)) in self.bodies.iter().zip(&self.half_width).enumerate() {
-            if b.fixed {
-                continue;
-            }
-            let travel = h * (b.v.length() + b.omega.length() * b.reach);
-            if travel.is_nan() || travel > *w {
+        for (i, travel, w) in self.travels() {
+            if travel.is_nan() || travel > w {
                 return Err(RigidError::Settings(format!(
                     "time step h = {h} is too large for body {i}: at its initial speed it travels {travel:.3e} m in one step, more than half its thinnest width {w:.3e} m (it could pass through a wall or a body); use h <= {:.3e} or a lower speed",
                     h * w / travel.max(f64::MIN_POSITIVE)
@@ -662,6 +658,34 @@ impl RigidWorld {
             }
         }
         Ok(())
+    }
+
+    /// (i, h (|v| + |ω| × reach), half the thinnest width) of each moving body i at its
+    /// current velocities: how far it may travel in one step, against how far it may travel
+    /// before its contacts can be missed (the sphere scenes' rule, R replaced by half the
+    /// thinnest width).
+    fn travels(&self) -> impl Iterator<Item = (usize, f64, f64)> + '_ {
+        let h = self.settings.h;
+        (self.bodies.iter().zip(&self.half_width).enumerate())
+            .filter(|(_, (b, _))| !b.fixed)
+            .map(move |(i, (b, w))| (i, h * (b.v.length() + b.omega.length() * b.reach), *w))
+    }
+
+    /// The check that [`RigidWorld::new`] applies to the initial velocities, on the current
+    /// ones, as a warning: the body that travels farthest beyond half its thinnest width in
+    /// one step at its current speed (it may pass through a thin wall or another body before
+    /// a contact is detected), or `None`. The run loop says it once per run, as it says the
+    /// sphere scenes' ([`crate::tunnelling`]): `Engine::step_warning`.
+    pub fn travel_warning(&self) -> Option<String> {
+        let h = self.settings.h;
+        let (i, travel, w) = self
+            .travels()
+            .filter(|&(_, t, w)| t.is_nan() || t > w)
+            .max_by(|a, b| (a.1 / a.2).total_cmp(&(b.1 / b.2)))?;
+        Some(format!(
+            "body {i} travels {travel:.3e} m in one step of h = {h} s at its current speed, more than half its thinnest width {w:.3e} m: it may pass through a wall or another body before a contact is detected; use h <= {:.3e}",
+            h * w / travel.max(f64::MIN_POSITIVE)
+        ))
     }
 
     /// Refuses manifold points deeper than `max_initial_penetration` at t = 0.

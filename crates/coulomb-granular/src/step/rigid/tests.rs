@@ -491,3 +491,29 @@ fn same_input_same_bits() {
     assert!(a.2 > 0);
     assert_eq!(a, b);
 }
+
+/// The run's warning about the step size (`Engine::step_warning`) for bodies of any shape: at
+/// rest none; a body whose current speed carries it farther than half its thinnest width in
+/// one step is named, with the largest h that would not, and the warning goes once it slows.
+#[test]
+fn a_body_too_fast_for_the_step_is_warned_about() {
+    let mut w = world(vec![
+        cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap(),
+        cuboid([0.02, 0.1, 0.1], 1000.0, [1.0, 0.0, 0.1]).unwrap(),
+    ])
+    .unwrap();
+    assert_eq!(w.travel_warning(), None);
+    let h = w.settings().h;
+    // body 1 is 4 cm thick: 2 cm of travel per step is its limit
+    let v = 1.5 * 0.02 / h;
+    w.set_velocities(&[[0.0; 3], [v, 0.0, 0.0]]).unwrap();
+    let warning = w.travel_warning().expect("a warning");
+    assert!(warning.starts_with("body 1 travels"), "{warning}");
+    let h_max = 0.02 / v;
+    assert!(
+        warning.contains(&format!("use h <= {h_max:.3e}")),
+        "{warning}"
+    );
+    w.set_velocities(&[[0.0; 3], [0.5 * v, 0.0, 0.0]]).unwrap();
+    assert_eq!(w.travel_warning(), None);
+}

@@ -369,29 +369,15 @@ pub fn contacts_to_py<'py>(
     contacts: &[coulomb_granular::Contact],
     obstacle: impl Fn(usize) -> usize,
 ) -> PyResult<Bound<'py, PyAny>> {
+    use coulomb_granular::contact::ContactJson;
     use coulomb_granular::Partner;
-    #[derive(serde::Serialize)]
-    struct PyContact {
-        a: usize,
-        b: Partner,
-        point: [f64; 3],
-        normal: [f64; 3],
-        t1: [f64; 3],
-        gap: f64,
-        impulse: [f64; 3],
-    }
-    let c: Vec<PyContact> = (contacts.iter())
-        .map(|c| PyContact {
-            a: c.body,
-            b: match c.partner {
-                Partner::Obstacle(k, _) => Partner::Obstacle(obstacle(k), 0),
-                body => body,
-            },
-            point: c.point.to_array(),
-            normal: c.normal.to_array(),
-            t1: c.t1.to_array(),
-            gap: c.gap,
-            impulse: c.impulse,
+    let c: Vec<ContactJson> = (contacts.iter())
+        .map(|c| {
+            let mut j = ContactJson::from(c);
+            if let Partner::Obstacle(k, _) = c.partner {
+                j.b = Partner::Obstacle(obstacle(k), 0);
+            }
+            j
         })
         .collect();
     let json = serde_json::to_value(c)

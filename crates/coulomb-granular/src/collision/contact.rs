@@ -118,6 +118,61 @@ impl Contact {
     }
 }
 
+/// A [`Contact`] in its JSON form: body A (`a`), partner B (`b`), point, normal (B → A), t₁,
+/// gap and impulse (r_N, r_T1, r_T2), without t₂ = n × t₁ and u_{N,k}. The form of Python's
+/// `Simulation.contacts` for every scene, and of the contacts of rigid checkpoints before
+/// version 6 (`/json/contacts`).
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactJson {
+    /// body A
+    pub a: usize,
+    /// B
+    pub b: Partner,
+    /// contact point
+    pub point: [f64; 3],
+    /// unit normal n, B → A
+    pub normal: [f64; 3],
+    /// first tangent t₁
+    pub t1: [f64; 3],
+    /// gap at the start of the step
+    pub gap: f64,
+    /// impulse (r_N, r_T1, r_T2)
+    pub impulse: [f64; 3],
+}
+
+impl From<&Contact> for ContactJson {
+    fn from(c: &Contact) -> Self {
+        ContactJson {
+            a: c.body,
+            b: c.partner,
+            point: c.point.to_array(),
+            normal: c.normal.to_array(),
+            t1: c.t1.to_array(),
+            gap: c.gap,
+            impulse: c.impulse,
+        }
+    }
+}
+
+impl From<ContactJson> for Contact {
+    /// t₂ recomputed as n × t₁; u_{N,k}, which the form does not hold, NaN (unknown).
+    fn from(c: ContactJson) -> Self {
+        let (normal, t1) = (Vec3::from_slice(&c.normal), Vec3::from_slice(&c.t1));
+        Contact {
+            body: c.a,
+            partner: c.b,
+            normal,
+            t1,
+            t2: normal.cross(t1),
+            point: Vec3::from_slice(&c.point),
+            gap: c.gap,
+            normal_velocity: f64::NAN,
+            impulse: c.impulse,
+        }
+    }
+}
+
 /// Moreau–Jean's activation rule. A candidate pair with gap g_k and normal relative velocity
 /// u_{N,k} enters the index set when its gap predicted at t_k + γh is below the threshold
 /// ([`detect`] passes min(u_{N,k}, u_{N,free}), u_{N,free} the normal velocity of the free

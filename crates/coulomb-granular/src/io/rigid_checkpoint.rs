@@ -64,9 +64,8 @@ use crate::checkpoint::{
     check_rows, encode_entries, index, json_of, open, push_contacts, read_checked, read_file,
     write_file, CheckpointError, Cursor, Data, Entry, Reader,
 };
-use crate::collision::contact::{Contact, Partner};
+use crate::collision::contact::{Contact, ContactJson, Partner};
 use crate::collision::manifold::ContactKey;
-use crate::math::Vec3;
 use crate::model::SceneModel;
 use crate::scene::rigid::RigidScene;
 use crate::step::rigid::{LibrarySettings, RigidState};
@@ -159,37 +158,6 @@ fn entries(model: &SceneModel, state: &RigidState) -> Result<Vec<Entry>, Checkpo
     Ok(e)
 }
 
-/// A contact as versions 1 to 5 stored it (`/json/contacts`): body A, partner B, point,
-/// normal, t₁, gap and impulse, without t₂ (= n × t₁) and u_{N,k}.
-#[derive(PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-struct StoredContact {
-    a: usize,
-    b: Partner,
-    point: [f64; 3],
-    normal: [f64; 3],
-    t1: [f64; 3],
-    gap: f64,
-    impulse: [f64; 3],
-}
-
-impl From<StoredContact> for Contact {
-    fn from(c: StoredContact) -> Self {
-        let (normal, t1) = (Vec3::from_slice(&c.normal), Vec3::from_slice(&c.t1));
-        Contact {
-            body: c.a,
-            partner: c.b,
-            normal,
-            t1,
-            t2: normal.cross(t1),
-            point: Vec3::from_slice(&c.point),
-            gap: c.gap,
-            normal_velocity: f64::NAN,
-            impulse: c.impulse,
-        }
-    }
-}
-
 /// The datasets of a version-`v` checkpoint of `state` built from `model`: those of
 /// [`entries`] as a file of that version holds them ([`older`]), the contacts as JSON before
 /// version 6.
@@ -202,17 +170,7 @@ fn entries_of(
     if v >= 6 {
         return Ok(older(v, e));
     }
-    let stored: Vec<StoredContact> = (state.contacts.iter())
-        .map(|c| StoredContact {
-            a: c.body,
-            b: c.partner,
-            point: c.point.to_array(),
-            normal: c.normal.to_array(),
-            t1: c.t1.to_array(),
-            gap: c.gap,
-            impulse: c.impulse,
-        })
-        .collect();
+    let stored: Vec<ContactJson> = state.contacts.iter().map(ContactJson::from).collect();
     let json = json_of("the contacts", &stored)?;
     let mut e = older(v, e);
     let at = e
@@ -393,7 +351,7 @@ fn decode_file(r: &Reader<'_>) -> Result<RigidScene, CheckpointError> {
         serde_json::from_value(json).map_err(|e| r.invalid("json/model", format!("JSON: {e}")))?;
     let contacts = match contacts {
         Some(c) => c,
-        None => (c.json::<Vec<StoredContact>>()?.into_iter())
+        None => (c.json::<Vec<ContactJson>>()?.into_iter())
             .map(Contact::from)
             .collect(),
     };

@@ -116,11 +116,17 @@ def edges(mods):
     aliases, globs = reexports(mods)
     use_group = re.compile(r"\buse\s+(crate|super)::([^;]*);", re.S)
     inline = re.compile(r"\b(crate|super)((?:::[A-Za-z_][A-Za-z0-9_]*)+)")
-    test_mod = re.compile(r"#\[cfg\(test\)\]\s*(?:pub(?:\([a-z]+\))?\s+)?mod\s+\w+\s*\{")
+    # `#[cfg(test)]`, or the unit tests compiled into the library (scripts/unit_tests.py):
+    # `#[cfg(feature = "unit-tests")]`, alone or in an `all(…)`
+    test_mod = re.compile(
+        r'#\[cfg\((?:test|feature = "unit-tests"|all\([^)]*feature = "unit-tests"[^)]*\))\)\]'
+        r"\s*(?:pub(?:\([a-z]+\))?\s+)?mod\s+\w+\s*\{"
+    )
     for m, path in mods.items():
         text = strip_comments(open(path, encoding="utf-8").read())
         parent = m.split("::")[:-1] if m else []
-        # inside the file's inline test module (`#[cfg(test)] mod tests { … }`, at its end),
+        # inside the file's inline test module (`#[cfg(test)] mod tests { … }` or its
+        # `unit-tests` form, at its end),
         # `super` is the file's own module
         inner = test_mod.search(text)
         parts = [(text, parent)]

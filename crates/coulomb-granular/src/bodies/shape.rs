@@ -998,8 +998,8 @@ fn tessellate(spec: &BodyShape, shape: &SharedShape) -> Tessellation {
     Tessellation::default()
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
 
     fn close(a: f64, b: f64, tol: f64) -> bool {
@@ -1022,8 +1022,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn mass_properties_match_the_closed_forms() {
+    pub fn mass_properties_match_the_closed_forms() {
         let rho = 2000.0;
         let (a, b, c) = (0.1, 0.2, 0.3);
         let m = BodyShape::Cuboid {
@@ -1078,8 +1077,7 @@ mod tests {
         assert!(close(o.inertia[0][0], 2.0 * ixx, 1e-12));
     }
 
-    #[test]
-    fn a_compound_combines_its_parts() {
+    pub fn a_compound_combines_its_parts() {
         // two unit cubes side by side along x: a 2 × 1 × 1 box centred at x = 0.5
         let cube = BodyShape::Cuboid {
             half_extents: [0.5; 3],
@@ -1102,8 +1100,7 @@ mod tests {
         assert!(t.vertices.iter().any(|v| close(v[0], 1.5, 1e-12)));
     }
 
-    #[test]
-    fn tessellations_are_closed_and_outward() {
+    pub fn tessellations_are_closed_and_outward() {
         let shapes = [
             BodyShape::Sphere { radius: 0.3 },
             BodyShape::Cuboid {
@@ -1155,8 +1152,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn bad_shapes_are_refused_with_what_is_wrong() {
+    pub fn bad_shapes_are_refused_with_what_is_wrong() {
         #[track_caller]
         fn err(s: BodyShape) -> ShapeError {
             s.validate().unwrap_err()
@@ -1287,8 +1283,7 @@ mod tests {
         assert!(check_quaternion("q", [0.0, 0.6, 0.8, 0.0]).is_ok());
     }
 
-    #[test]
-    fn rotate_matches_parry() {
+    pub fn rotate_matches_parry() {
         let h = 0.5f64.sqrt();
         let q = [h, 0.0, 0.0, h]; // 90° about z
         let r = rotate(q, [1.0, 0.0, 0.0]);
@@ -1299,8 +1294,7 @@ mod tests {
         assert!(norm(sub(rotate(q, v), arr(p))) < 1e-15);
     }
 
-    #[test]
-    fn shapes_round_trip_through_toml_and_json() {
+    pub fn shapes_round_trip_through_toml_and_json() {
         let s = BodyShape::Compound {
             parts: vec![CompoundPart {
                 shape: BodyShape::Capsule {
@@ -1329,8 +1323,7 @@ mod tests {
     /// (random clouds in a ball, on a sphere, in a thin slab), and a hull of 10⁵ points on a
     /// sphere (every point a vertex: 99 s before, O(points × faces)) is validated; its time
     /// is in docs/fuzz.md, the bound here only catches a return to the quadratic scan.
-    #[test]
-    fn hull_widths_by_walking_equal_the_scan() {
+    pub fn hull_widths_by_walking_equal_the_scan() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
         for k in 0..60 {
@@ -1387,8 +1380,7 @@ mod tests {
         );
     }
 
-    #[test]
-    fn random_and_degenerate_point_sets_never_panic() {
+    pub fn random_and_degenerate_point_sets_never_panic() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(41);
         let mut accepted = 0;
@@ -1429,8 +1421,7 @@ mod tests {
     /// A convex polyhedron of 10⁵ vertices (the hull of points on a sphere, as triangles) is
     /// checked in O(n log n) and accepted; the same with one vertex pushed in (a dent), with
     /// one face reversed, or with its vertices pushed out of convex position is refused.
-    #[test]
-    fn a_large_convex_polyhedron_is_checked_and_a_dent_refused() {
+    pub fn a_large_convex_polyhedron_is_checked_and_a_dent_refused() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
         let pts: Vec<Vector> = (0..100_000)
@@ -1493,8 +1484,7 @@ mod tests {
         assert!(check_faces(&inward, &of).is_err());
     }
 
-    #[test]
-    fn bounding_radius_holds_the_shape_and_scales_with_it() {
+    pub fn bounding_radius_holds_the_shape_and_scales_with_it() {
         let shapes = [
             BodyShape::Sphere { radius: 0.3 },
             BodyShape::Cuboid {

@@ -1172,12 +1172,11 @@ impl Default for World {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
 
-    #[test]
-    fn plane_and_cylinder_gaps() {
+    pub fn plane_and_cylinder_gaps() {
         let ground = Obstacle::fixed(
             "ground",
             Shape::Plane {
@@ -1204,8 +1203,7 @@ mod tests {
         assert!((p.point - Vec3::new(0.0, 5.0, -1.0)).norm() < 1e-12);
     }
 
-    #[test]
-    fn rectangle_edge_and_face() {
+    pub fn rectangle_edge_and_face() {
         let r = Obstacle::fixed(
             "r",
             Shape::Rectangle {
@@ -1224,8 +1222,7 @@ mod tests {
         assert!((p.normal - Vec3::X).norm() < 1e-12);
     }
 
-    #[test]
-    fn motions() {
+    pub fn motions() {
         let m = Motion::Oscillate {
             direction: Vec3::Z,
             amplitude: 0.01,
@@ -1257,8 +1254,7 @@ mod tests {
         (a - b).norm() < 1e-12
     }
 
-    #[test]
-    fn box_container_walls_and_open_top() {
+    pub fn box_container_walls_and_open_top() {
         let lo = Vec3::ZERO;
         let hi = Vec3::new(1.0, 2.0, 3.0);
         let b = Obstacle::fixed(
@@ -1305,8 +1301,7 @@ mod tests {
         assert!(!b.admits(Vec3::new(-0.5, 1.0, 1.0), 0.0));
     }
 
-    #[test]
-    fn solid_box_faces_edges_and_inside() {
+    pub fn solid_box_faces_edges_and_inside() {
         let b = Obstacle::fixed(
             "rock",
             Shape::Box {
@@ -1331,8 +1326,7 @@ mod tests {
         assert_eq!(near(&b, Vec3::new(0.5, 0.5, 1.2), 0.1, 0.0, 0.1).len(), 1);
     }
 
-    #[test]
-    fn silo_with_orifice_and_solid_cylinder() {
+    pub fn silo_with_orifice_and_solid_cylinder() {
         let silo = Obstacle::fixed(
             "silo",
             Shape::Cylinder {
@@ -1399,8 +1393,7 @@ mod tests {
         assert!((p.gap + 0.2).abs() < 1e-12 && close(p.normal, Vec3::Z));
     }
 
-    #[test]
-    fn sphere_obstacles_inside_and_outside() {
+    pub fn sphere_obstacles_inside_and_outside() {
         let ball = Obstacle::fixed(
             "ball",
             Shape::Sphere {
@@ -1427,8 +1420,7 @@ mod tests {
         assert!(!ball.admits(Vec3::new(0.0, 0.5, 0.0), 0.0));
     }
 
-    #[test]
-    fn translating_and_rotating_obstacles_move_rigidly() {
+    pub fn translating_and_rotating_obstacles_move_rigidly() {
         // a plane translating upwards at 0.5 m/s: at t = 2 it is at z = 1
         let mut lift = Obstacle::fixed(
             "lift",
@@ -1494,8 +1486,7 @@ mod tests {
         assert_eq!(drum.max_normal_speed(), 0.0);
     }
 
-    #[test]
-    fn mesh_square_is_a_plane_to_a_sphere_on_it() {
+    pub fn mesh_square_is_a_plane_to_a_sphere_on_it() {
         let mesh = crate::mesh::TriangleMesh::new(
             vec![
                 Vec3::new(-1.0, -1.0, 0.0),
@@ -1535,8 +1526,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn material_table_is_symmetric_and_checked() {
+    pub fn material_table_is_symmetric_and_checked() {
         let law = |mu| ContactLaw {
             mu,
             restitution: 0.1,
@@ -1553,8 +1543,7 @@ mod tests {
         assert!(!t.any_rolling());
     }
 
-    #[test]
-    fn a_rotating_mesh_drum_is_the_rotating_cylinder_up_to_its_chords() {
+    pub fn a_rotating_mesh_drum_is_the_rotating_cylinder_up_to_its_chords() {
         let n = 256;
         let d = crate::mesh::cylinder_mesh(0.6, -0.25, 0.25, n);
         let mesh = crate::mesh::TriangleMesh::new(d.vertices, d.triangles).unwrap();

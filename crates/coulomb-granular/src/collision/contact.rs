@@ -707,8 +707,8 @@ impl World {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
     use crate::world::{Motion, Obstacle, Shape, Sphere};
     use rand::{Rng, SeedableRng};
@@ -716,8 +716,7 @@ mod tests {
     /// One partner type for every contact: its JSON is the rigid records' form (written
     /// and read back), a feature appears only when it is not 0, and a body with a feature
     /// or an unknown kind is refused.
-    #[test]
-    fn a_partner_reads_and_writes_the_rigid_records_form() {
+    pub fn a_partner_reads_and_writes_the_rigid_records_form() {
         let cases = [
             (Partner::Body(3), r#"{"kind":"body","index":3}"#),
             (Partner::Obstacle(2, 0), r#"{"kind":"obstacle","index":2}"#),
@@ -739,8 +738,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn grid_finds_the_same_pairs_as_brute_force() {
+    pub fn grid_finds_the_same_pairs_as_brute_force() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
         let mut world = World::new();
         for _ in 0..400 {
@@ -774,8 +772,7 @@ mod tests {
         assert_eq!(candidate_pairs(&world, margin), brute);
     }
 
-    #[test]
-    fn resting_spheres_find_floor_contacts_that_only_gravity_or_the_floor_closes() {
+    pub fn resting_spheres_find_floor_contacts_that_only_gravity_or_the_floor_closes() {
         // everything at rest (v_max = 0): the sphere–sphere margin is δ alone, but a sphere
         // 2 mm above a fixed floor is active by gravity's look-ahead (2 mm < h² g = 3.9 mm),
         // and one 5 mm above a plate rising at 0.5 m/s by the plate's motion (5 mm < h·0.5 + h² g)
@@ -818,8 +815,7 @@ mod tests {
         assert!(detect(&world, 0.0, h, &Activation::accurate()).is_empty());
     }
 
-    #[test]
-    fn detection_frames_and_activation() {
+    pub fn detection_frames_and_activation() {
         let mut world = World::new();
         world.obstacles.push(Obstacle::fixed(
             "ground",
@@ -867,8 +863,7 @@ mod tests {
         assert_eq!(c.len(), 1);
     }
 
-    #[test]
-    fn a_floor_of_fixed_balls_is_found_through_the_obstacle_grid() {
+    pub fn a_floor_of_fixed_balls_is_found_through_the_obstacle_grid() {
         // 10 × 10 fixed balls (a rough floor) under 30 free spheres: the contacts found through
         // the grid are those of testing every obstacle
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);

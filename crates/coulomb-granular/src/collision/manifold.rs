@@ -274,7 +274,7 @@ impl Detector {
     }
 
     /// The pairs cached with body `i` (tests).
-    #[cfg(test)]
+    #[cfg(feature = "unit-tests")]
     pub(crate) fn pairs_of(&self, i: usize) -> Vec<(usize, Partner)> {
         self.pairs
             .keys()
@@ -285,7 +285,7 @@ impl Detector {
 
     /// The detector that hands every pair to parry, balls included (no fast path): the
     /// reference the fast path is tested against.
-    #[cfg(test)]
+    #[cfg(feature = "unit-tests")]
     pub(crate) fn parry_only() -> Self {
         Self {
             parry_only: true,
@@ -510,5 +510,5 @@ impl Detector {
     }
 }
 
-#[cfg(test)]
-mod tests;
+#[cfg(feature = "unit-tests")]
+pub mod tests;

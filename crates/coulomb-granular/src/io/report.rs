@@ -182,12 +182,11 @@ impl EngineStep {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
 
-    #[test]
-    fn the_csv_row_has_one_field_per_column() {
+    pub fn the_csv_row_has_one_field_per_column() {
         let r = StepRecord {
             step: 3,
             time: 0.08,

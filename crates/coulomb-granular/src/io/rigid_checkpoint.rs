@@ -493,8 +493,8 @@ impl RigidScene {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
     use crate::scene_file::LoadedScene;
 
@@ -570,8 +570,7 @@ mod tests {
         bits
     }
 
-    #[test]
-    fn restart_gives_the_same_bits() {
+    pub fn restart_gives_the_same_bits() {
         let mut a = scene(MIXED);
         for _ in 0..40 {
             a.step().expect("step");
@@ -597,8 +596,7 @@ mod tests {
     /// The switch to plain sweeps (`/state/plain_sweeps`) is restored, and a restart with it
     /// continues to the bit; a version-4 file (before it was stored) reads with it off, and a
     /// value other than 0 or 1 is refused, naming the dataset.
-    #[test]
-    fn the_switch_to_plain_sweeps_is_restored() {
+    pub fn the_switch_to_plain_sweeps_is_restored() {
         let mut a = scene(MIXED);
         for _ in 0..10 {
             a.step().expect("step");
@@ -646,8 +644,7 @@ mod tests {
 
     /// The model's step settings (γ, projection, gap closure, warm start among them) are
     /// restored with it, and a version-3 file's `/json/switches` goes into the model's step.
-    #[test]
-    fn the_library_settings_are_restored() {
+    pub fn the_library_settings_are_restored() {
         let mut a = scene(MIXED);
         let solver = coulomb::solver::Settings {
             max_outer: 17,
@@ -695,8 +692,7 @@ mod tests {
         );
     }
 
-    #[test]
-    fn the_step_switches_are_restored() {
+    pub fn the_step_switches_are_restored() {
         let mut model = scene(MIXED).model;
         let s = &mut model.step;
         (s.gamma, s.projection, s.gap_closure, s.warm_start) = (0.5, false, false, false);
@@ -731,8 +727,7 @@ mod tests {
         assert_eq!(snapshot(&b), snapshot(&a));
     }
 
-    #[test]
-    fn the_shipped_wall_restarts_to_the_bit() {
+    pub fn the_shipped_wall_restarts_to_the_bit() {
         let path = concat!(
             env!("CARGO_MANIFEST_DIR"),
             "/../../examples/scenes/rigid/brick-wall.toml"
@@ -756,8 +751,7 @@ mod tests {
     /// The shipped pendulum chain (8 links on revolute joints) swinging into its brick wall:
     /// the joints' warm starts and forces are stored, so the continued run gives the bits of
     /// the uninterrupted one.
-    #[test]
-    fn a_scene_with_joints_restarts_to_the_bit() {
+    pub fn a_scene_with_joints_restarts_to_the_bit() {
         let path = concat!(
             env!("CARGO_MANIFEST_DIR"),
             "/../../examples/scenes/rigid/pendulum-chain.toml"
@@ -793,8 +787,7 @@ mod tests {
 
     /// A version-1 file (written before the joints' datasets existed) still reads for a scene
     /// without joints, and is refused, naming the dataset, for a scene with some.
-    #[test]
-    fn version_one_files_read_without_joints() {
+    pub fn version_one_files_read_without_joints() {
         let mut a = scene(MIXED);
         for _ in 0..5 {
             a.step().expect("step");
@@ -842,8 +835,7 @@ mod tests {
     /// one contact record; a version-5 file's JSON contacts read as the same contacts, t₂
     /// recomputed as n × t₁ and u_{N,k}, which they did not hold, NaN; both continue to the
     /// bit.
-    #[test]
-    fn contacts_are_the_sphere_checkpoints_and_version_5_json_still_reads() {
+    pub fn contacts_are_the_sphere_checkpoints_and_version_5_json_still_reads() {
         let mut a = scene(MIXED);
         for _ in 0..40 {
             a.step().expect("step");
@@ -892,8 +884,7 @@ mod tests {
     /// A rigid checkpoint written before the pairs became the scene file's `[[pairs]]`
     /// stored each pair of materials as `{"a", "b", "mu", …}`: it reads as
     /// `materials = [a, b]`, gives the same model, and continues to the bit.
-    #[test]
-    fn pairs_written_as_a_and_b_read_as_the_same_materials() {
+    pub fn pairs_written_as_a_and_b_read_as_the_same_materials() {
         let mut a = scene(
             r#"
             [step]
@@ -959,8 +950,7 @@ mod tests {
         assert_eq!(snapshot(&b), snapshot(&a));
     }
 
-    #[test]
-    fn damaged_or_foreign_files_are_refused_with_a_reason() {
+    pub fn damaged_or_foreign_files_are_refused_with_a_reason() {
         let mut a = scene(MIXED);
         a.step().expect("step");
         let bytes = a.checkpoint_bytes().expect("checkpoint");
@@ -999,8 +989,7 @@ mod tests {
         assert!(flipped > 0);
     }
 
-    #[test]
-    fn a_state_that_does_not_fit_the_world_is_refused() {
+    pub fn a_state_that_does_not_fit_the_world_is_refused() {
         let mut a = scene(MIXED);
         a.step().expect("step");
         let good = a.world.state().expect("state");
@@ -1043,8 +1032,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn errors_name_the_dataset_that_is_wrong() {
+    pub fn errors_name_the_dataset_that_is_wrong() {
         let f64s = |d: &mut Data| match d {
             Data::F64(v) => v.clone(),
             _ => unreachable!(),

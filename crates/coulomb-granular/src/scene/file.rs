@@ -1911,8 +1911,8 @@ impl BuiltScene {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
     use crate::model::StepChoice;
 
@@ -1925,8 +1925,7 @@ mod tests {
     /// Arrays longer than their field are refused at their line and column (issue 55: TOML
     /// dropped the extra elements), in a sphere list, a region corner and a shaped body's
     /// orientation and inertia; the same arrays of the right length are accepted.
-    #[test]
-    fn extra_array_elements_are_refused_with_their_place() {
+    pub fn extra_array_elements_are_refused_with_their_place() {
         let base = "[[obstacles]]\nshape = { kind = \"box\", lo = [0, 0, 0], hi = [1, 1, 1] }\n";
         let ok = format!("{base}[[bodies]]\nspheres = [[0.5, 0.5, 0.5, 0.1]]\n");
         assert!(parse(&ok).is_ok());
@@ -1977,8 +1976,7 @@ mod tests {
         );
     }
 
-    #[test]
-    fn a_huge_fill_or_inlet_is_refused_before_building() {
+    pub fn a_huge_fill_or_inlet_is_refused_before_building() {
         let fill = "[step]\nh = 0.01\nsteps = 10\n[[obstacles]]\nshape = { kind = \"box\", lo = [0, 0, 0], hi = [1, 1, 1] }\n\
             [[bodies]]\n[bodies.fill]\ncount = 1000000000000\nregion = { kind = \"box\", lo = [0, 0, 0], hi = [1, 1, 1] }\nsizes = { kind = \"uniform\", min = 0.01, max = 0.02 }\n";
         let scene = parse(fill).unwrap();
@@ -2032,8 +2030,7 @@ mod tests {
 
     /// A random fill past the packing bound: refused at once when every sphere must be placed,
     /// else the spheres that fit are kept, within the attempts of the count that could fit.
-    #[test]
-    fn an_overfull_random_fill_is_refused_or_keeps_what_fits() {
+    pub fn an_overfull_random_fill_is_refused_or_keeps_what_fits() {
         let text = |require_all: bool| {
             format!(
                 "[step]\nh = 0.01\nsteps = 10\n[[obstacles]]\nshape = {{ kind = \"box\", lo = [0, 0, 0], hi = [0.5, 0.5, 0.5] }}\n\
@@ -2064,8 +2061,7 @@ mod tests {
     /// none); the skeleton holds none of them; files it cannot enumerate (a fill after
     /// spheres, a random fill, a fixed group), a sphere the build refuses and a missing
     /// sphere file give `None`.
-    #[test]
-    fn streamed_spheres_are_the_built_ones() {
+    pub fn streamed_spheres_are_the_built_ones() {
         let list = "[[obstacles]]\nshape = { kind = \"plane\", point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }\n\
             [[bodies]]\nspheres = [[0.0, 0.0, 0.1, 0.1], [0.3, 0.0, 0.2, 0.15]]\nvelocity = [1.0, 0.0, 0.0]\n\
             [materials.heavy]\ndensity = 7800.0\n\
@@ -2132,8 +2128,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn unknown_keys_are_refused_with_file_line_and_column() {
+    pub fn unknown_keys_are_refused_with_file_line_and_column() {
         let e = parse("seed = 1\ngravty = [0, 0, -1]\n").unwrap_err();
         match &e {
             SceneFileError::Syntax {
@@ -2170,8 +2165,7 @@ mod tests {
         assert!(matches!(e, SceneFileError::Syntax { line: 1, .. }), "{e}");
     }
 
-    #[test]
-    fn a_pair_naming_an_unknown_material_is_refused_where_it_is() {
+    pub fn a_pair_naming_an_unknown_material_is_refused_where_it_is() {
         let text = "[materials.glass]\ndensity = 2500\n\n[[pairs]]\nmaterials = [\"glass\", \"steel\"]\nmu = 0.5\n";
         let e = parse(text)
             .unwrap()
@@ -2202,8 +2196,7 @@ mod tests {
         assert!(e.starts_with("t.toml:2:") && e.contains("'sand'"), "{e}");
     }
 
-    #[test]
-    fn bad_values_are_refused() {
+    pub fn bad_values_are_refused() {
         let cases = [
             ("[step]\nh = -1\n", "step.h"),
             ("[[bodies]]\nspheres = [[0, 0, 1, -0.1]]\n", "bodies[0].spheres[0]"),
@@ -2229,8 +2222,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn inline_spheres_materials_and_pairs() {
+    pub fn inline_spheres_materials_and_pairs() {
         let text = "[materials.steel]\ndensity = 7800\n[[pairs]]\nmaterials = [\"steel\", \"default\"]\nmu = 0.1\n[[bodies]]\nmaterial = \"steel\"\nvelocity = [1, 0, 0]\nspheres = [[0, 0, 1, 0.1], [1, 0, 1, 0.2]]\n";
         let b = parse(text)
             .unwrap()
@@ -2253,8 +2245,7 @@ mod tests {
         assert_eq!(params.mu, 0.3);
     }
 
-    #[test]
-    fn files_next_to_the_scene_fixed_spheres_and_a_mesh_obstacle() {
+    pub fn files_next_to_the_scene_fixed_spheres_and_a_mesh_obstacle() {
         let dir = std::env::temp_dir().join(format!("coulomb-scene-file-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let stl = "solid f\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 2 0 0\nvertex 2 2 0\nendloop\nendfacet\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 2 2 0\nvertex 0 2 0\nendloop\nendfacet\nendsolid f\n";
@@ -2308,8 +2299,7 @@ mod tests {
         assert!(world.materials.is_some());
     }
 
-    #[test]
-    fn shaped_groups_become_body_specs_in_file_order() {
+    pub fn shaped_groups_become_body_specs_in_file_order() {
         let text = r#"
 [materials.stone]
 density = 2000
@@ -2364,8 +2354,7 @@ mass = 3.0
         assert_eq!(j.model.bodies[0].shape.kind(), "cone");
     }
 
-    #[test]
-    fn bad_shaped_groups_are_refused_where_they_are() {
+    pub fn bad_shaped_groups_are_refused_where_they_are() {
         let build = |t: &str| {
             parse(t)
                 .unwrap()
@@ -2415,8 +2404,7 @@ mass = 3.0
     /// Obstacle shapes and motions, the default law and the step method are the model's own
     /// types (one schema with Python's description): the same keys and defaults read the same
     /// values, and the model's validation refuses bad values at their place in the file.
-    #[test]
-    fn obstacles_laws_and_steps_are_the_models_types_validated_once() {
+    pub fn obstacles_laws_and_steps_are_the_models_types_validated_once() {
         let text = "[default_pair]\nmu = 0.5\n[step]\nmethod = \"library\"\n\
             [[obstacles]]\nname = \"drum\"\nshape = { kind = \"cylinder_inside\", point = [0, 0, 0], axis = [0, 2, 0], radius = 1 }\n\
             motion = { kind = \"rotate\", center = [0, 0, 0], axis = [0, 3, 0], omega = 1.5 }\n\
@@ -2530,8 +2518,7 @@ mass = 3.0
         assert!(matches!(step.check(), Err(SceneError::InvalidStep(_))));
     }
 
-    #[test]
-    fn line_column_counts_characters() {
+    pub fn line_column_counts_characters() {
         let t = "ab\nμx = 1\n";
         assert_eq!(line_column(t, 0), (1, 1));
         assert_eq!(line_column(t, 3), (2, 1));

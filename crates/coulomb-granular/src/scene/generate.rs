@@ -1233,12 +1233,11 @@ fn random_rotation(rng: &mut ChaCha8Rng) -> [f64; 4] {
     q.map(|x| x / n)
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
 
-    #[test]
-    fn a_huge_rate_is_bounded_by_what_fits_in_the_region() {
+    pub fn a_huge_rate_is_bounded_by_what_fits_in_the_region() {
         let mut inlet = Inlet::new(
             Shape::Box {
                 lo: [0.0, 0.0, 0.0],
@@ -1293,8 +1292,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn lattice_fill_of_a_box_is_deterministic_counted_and_free_of_overlaps() {
+    pub fn lattice_fill_of_a_box_is_deterministic_counted_and_free_of_overlaps() {
         let region = Shape::Box {
             lo: [0.0; 3],
             hi: [1.0, 1.0, 2.0],
@@ -1339,8 +1337,7 @@ mod tests {
         assert_eq!(f.asked, 300);
     }
 
-    #[test]
-    fn random_addition_fills_a_cylinder_without_overlap_and_respects_obstacles() {
+    pub fn random_addition_fills_a_cylinder_without_overlap_and_respects_obstacles() {
         let region = Shape::Cylinder {
             base: [0.0, 0.0, 0.0],
             axis: [0.0, 0.0, 1.0],
@@ -1412,8 +1409,7 @@ mod tests {
         assert!(no_overlap(&full.particles));
     }
 
-    #[test]
-    fn predicate_region_fills_the_inside_only() {
+    pub fn predicate_region_fills_the_inside_only() {
         // a ball of radius 0.5 as an inside test
         let inside = |p: Vec3| (p - Vec3::new(0.5, 0.5, 0.5)).norm() < 0.5;
         let region = Predicate {
@@ -1437,8 +1433,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn distribution_moments() {
+    pub fn distribution_moments() {
         let n = 10_000;
         let x = samples(&SizeDistribution::Uniform { min: 1.0, max: 3.0 }, n, 1);
         assert!((mean(&x) - 2.0).abs() < 0.02 * 2.0);
@@ -1492,8 +1487,7 @@ mod tests {
             .collect()
     }
 
-    #[test]
-    fn psd_sampling_matches_the_table() {
+    pub fn psd_sampling_matches_the_table() {
         let diameters = vec![1e-3, 2e-3, 3e-3, 5e-3];
         let cumulative = vec![0.0, 0.2, 0.7, 1.0];
         for basis in [PsdBasis::Number, PsdBasis::Mass] {
@@ -1520,8 +1514,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn bad_distributions_are_refused() {
+    pub fn bad_distributions_are_refused() {
         let bad = [
             SizeDistribution::mono(-1.0),
             SizeDistribution::mono(f64::NAN),
@@ -1554,8 +1547,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn inlet_emits_by_rate_without_overlap_and_without_state() {
+    pub fn inlet_emits_by_rate_without_overlap_and_without_state() {
         let region = Shape::Box {
             lo: [0.0, 0.0, 1.0],
             hi: [1.0, 1.0, 1.2],
@@ -1610,8 +1602,7 @@ mod tests {
         assert_eq!(e.skipped, 20);
     }
 
-    #[test]
-    fn an_inlet_shape_adds_only_a_rotation_drawn_after_the_sphere() {
+    pub fn an_inlet_shape_adds_only_a_rotation_drawn_after_the_sphere() {
         let sphere = || {
             let mut inlet = Inlet::new(
                 Shape::Box {
@@ -1683,8 +1674,7 @@ mod tests {
         assert!(bad.validate().is_err());
     }
 
-    #[test]
-    fn mass_rate_inlet_never_exceeds_its_mass() {
+    pub fn mass_rate_inlet_never_exceeds_its_mass() {
         let mut inlet = Inlet::new(
             Shape::Cylinder {
                 base: [0.0; 3],

@@ -673,8 +673,8 @@ fn read_obj(path: &Path) -> Result<TriMesh, ImportError> {
     Ok(mesh)
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
 
     fn tmp(name: &str, bytes: &[u8]) -> PathBuf {
@@ -705,8 +705,7 @@ mod tests {
         out
     }
 
-    #[test]
-    fn csv_particles_with_velocities_and_materials() {
+    pub fn csv_particles_with_velocities_and_materials() {
         let p = tmp(
             "a.csv",
             b"x, y, z, r, vx, vy, vz, material\n0,0,1,0.1,1,2,3,glass\n1,0,1,0.2,0,0,0,\n",
@@ -724,8 +723,7 @@ mod tests {
         assert_eq!(r[0].velocity, None);
     }
 
-    #[test]
-    fn bad_csv_files_name_the_file_and_line() {
+    pub fn bad_csv_files_name_the_file_and_line() {
         let cases: [(&str, &[u8], &str); 5] = [
             (
                 "c1.csv",
@@ -748,8 +746,7 @@ mod tests {
         );
     }
 
-    #[test]
-    fn npy_particles() {
+    pub fn npy_particles() {
         let data = [0.0, 0.0, 1.0, 0.1, 1.0, 0.0, 1.0, 0.2];
         let r = read_particles(&tmp("a.npy", &npy_bytes((2, 4), &data))).unwrap();
         assert_eq!(r.len(), 2);
@@ -775,8 +772,7 @@ mod tests {
 
     /// The NPY header of every version, both orders and byte orders; every malformed header
     /// refused with its reason.
-    #[test]
-    fn npy_headers_orders_and_byte_orders() {
+    pub fn npy_headers_orders_and_byte_orders() {
         let npy = Npy::parse(&npy_bytes((2, 4), &[0.0; 8])).unwrap();
         assert_eq!(
             npy,
@@ -875,8 +871,7 @@ mod tests {
 
     /// [`for_each_particle`] hands out the records of [`read_particles`], in order, and fails
     /// where it fails.
-    #[test]
-    fn streamed_particles_are_the_read_ones() {
+    pub fn streamed_particles_are_the_read_ones() {
         let data = [0.0, 0.0, 1.0, 0.1, 1.0, 0.0, 1.0, 0.2];
         let data7 = [0.0, 0.0, 1.0, 0.1, 5.0, 6.0, 7.0];
         let good = [
@@ -910,8 +905,7 @@ mod tests {
         "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n\
         f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
 
-    #[test]
-    fn obj_cube_is_closed_oriented_and_answers_inside() {
+    pub fn obj_cube_is_closed_oriented_and_answers_inside() {
         let p = tmp("cube.obj", CUBE_OBJ.as_bytes());
         let t = Transform {
             scale: Scale::Uniform(2.0),
@@ -948,8 +942,7 @@ mod tests {
             .contains("closed"));
     }
 
-    #[test]
-    fn stl_binary_and_ascii_read_the_same_triangle() {
+    pub fn stl_binary_and_ascii_read_the_same_triangle() {
         let ascii = "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid t\n";
         let a = read_mesh(&tmp("t.stl", ascii.as_bytes()), &Transform::default()).unwrap();
         let mut bin = vec![0u8; 80];
@@ -964,8 +957,7 @@ mod tests {
         assert_eq!(a.vertices.len(), 3);
     }
 
-    #[test]
-    fn bad_meshes_are_refused_with_the_path() {
+    pub fn bad_meshes_are_refused_with_the_path() {
         let cases: [(&str, &str, &str); 3] = [
             (
                 "nan.obj",

@@ -10,6 +10,6 @@ pub mod model;
 pub mod rigid;
 pub mod save;
 pub mod urdf;
-mod urdf_reader;
+pub(crate) mod urdf_reader;
 
 pub use builtin::*;

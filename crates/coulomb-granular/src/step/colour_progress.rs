@@ -89,16 +89,15 @@ impl<'a> ColourProgress<'a> {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
     use std::sync::atomic::AtomicU64;
 
     /// Three threads over 50 colours: every chunk runs once, and no chunk of colour c starts
     /// before all of colour c − 1 are done (each chunk adds to its colour's counter and checks
     /// the previous colour's total); one thread is late now and then, so others park.
-    #[test]
-    fn colours_run_in_order_and_every_chunk_once() {
+    pub fn colours_run_in_order_and_every_chunk_once() {
         let chunks: Vec<usize> = (0..50).map(|c| 1 + c % 7).collect();
         let progress = ColourProgress::new(&chunks);
         let counts: Vec<AtomicU64> = chunks.iter().map(|_| AtomicU64::new(0)).collect();

@@ -10,7 +10,7 @@
 pub mod assembly;
 pub mod coarse;
 pub(crate) mod colour_progress;
-#[cfg(test)]
+#[cfg(feature = "unit-tests")]
 pub(crate) mod fixtures;
 pub mod nsgs;
 pub mod projection;

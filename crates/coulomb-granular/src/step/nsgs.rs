@@ -1337,5 +1337,5 @@ pub fn evaluate(problem: &StepProblem, r: &[f64]) -> (f64, f64, f64, Vec<f64>) {
     (m.error, m.scale, balance, v.into_iter().flatten().collect())
 }
 
-#[cfg(test)]
-mod tests;
+#[cfg(feature = "unit-tests")]
+pub mod tests;

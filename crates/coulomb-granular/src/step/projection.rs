@@ -581,13 +581,12 @@ pub fn inelastic_projection(
     (before - energy(world)).max(0.0)
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
     use crate::world::{Obstacle, Shape, Sphere};
 
-    #[test]
-    fn projection_lifts_a_sunk_sphere_out_of_a_cylinder_exactly() {
+    pub fn projection_lifts_a_sunk_sphere_out_of_a_cylinder_exactly() {
         let mut w = World::new();
         w.obstacles.push(Obstacle::fixed(
             "drum",
@@ -619,8 +618,7 @@ mod tests {
         assert!((s.work - 9.81 * 0.02 * c).abs() < 1e-4, "{s:?}");
     }
 
-    #[test]
-    fn projection_separates_a_stack_with_minimum_displacement() {
+    pub fn projection_separates_a_stack_with_minimum_displacement() {
         let mut w = World::new();
         w.obstacles.push(Obstacle::fixed(
             "ground",
@@ -647,8 +645,7 @@ mod tests {
     /// floor with a floor impulse added to the contact's: the momentum change equals the
     /// exported impulse, the tangential velocity is kept, and the kinetic energy removed is
     /// ½ m v_z² (reported as negative work next to the lift's m g d).
-    #[test]
-    fn inelastic_projection_exports_the_impulse_it_applies() {
+    pub fn inelastic_projection_exports_the_impulse_it_applies() {
         let mut w = World::new();
         w.obstacles.push(Obstacle::fixed(
             "ground",
@@ -696,8 +693,7 @@ mod tests {
         assert!(s.sweeps >= 1);
     }
 
-    #[test]
-    fn stored_settings_without_velocities_read_as_before() {
+    pub fn stored_settings_without_velocities_read_as_before() {
         let old = |c: bool| {
             format!(r#"{{"trigger":0.001,"target":0.0001,"max_sweeps":200,"conserve_energy":{c}}}"#)
         };
@@ -744,8 +740,7 @@ mod tests {
         w
     }
 
-    #[test]
-    fn coloured_projection_is_the_same_for_one_and_two_threads() {
+    pub fn coloured_projection_is_the_same_for_one_and_two_threads() {
         let run = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)

@@ -189,11 +189,11 @@ pub struct RigidStepReport {
     pub physics_check: &'static str,
 }
 
-mod correct;
+pub(crate) mod correct;
 pub(crate) mod equality;
 pub mod nsgs;
 mod phases;
-mod relax;
+pub(crate) mod relax;
 mod rolling;
 use correct::correct_positions;
 pub use equality::{DEPENDENT_PIVOT, DROPPED_PIVOT};
@@ -546,7 +546,7 @@ impl RigidWorld {
 
     /// The same world with every contact pair through parry, balls included (no analytic
     /// fast path, `contacts`): the reference of the fast path's tests.
-    #[cfg(test)]
+    #[cfg(feature = "unit-tests")]
     pub(crate) fn parry_only_detection(mut self) -> Self {
         self.detector = Detector::parry_only();
         self
@@ -1588,5 +1588,5 @@ fn library_finish(
     })
 }
 
-#[cfg(test)]
-mod tests;
+#[cfg(feature = "unit-tests")]
+pub mod tests;

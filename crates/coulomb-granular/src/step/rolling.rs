@@ -846,12 +846,11 @@ pub fn torque(world: &World, c: &Contact, y: [f64; 3]) -> Vec3 {
     (c.t1 * y[0] + c.t2 * y[1]) * effective_radius(world, c)
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
 
-    #[test]
-    fn ball_projection_and_residual() {
+    pub fn ball_projection_and_residual() {
         assert_eq!(project_ball(1.0, [0.3, 0.4, 0.0]), [0.3, 0.4, 0.0]);
         let p = project_ball(1.0, [3.0, 0.0, 4.0]);
         assert!((p[0] - 0.6).abs() < 1e-15 && (p[2] - 0.8).abs() < 1e-15 && p[1] == 0.0);
@@ -866,8 +865,7 @@ mod tests {
         assert!(rolling_residual_sq(0.1, 0.0, [0.05, 0.0, 0.0], [0.0; 3]) > 1e-4);
     }
 
-    #[test]
-    fn six_by_six_solve() {
+    pub fn six_by_six_solve() {
         let a: [[f64; 6]; 6] = std::array::from_fn(|i| {
             std::array::from_fn(|j| {
                 let diag = if i == j { 2.0 } else { 0.0 };
@@ -889,8 +887,7 @@ mod tests {
         (0..3).map(|i| 0.5 * y[i] * sy[i] + g[i] * y[i]).sum()
     }
 
-    #[test]
-    fn ball_qp_is_the_minimizer_over_the_ball() {
+    pub fn ball_qp_is_the_minimizer_over_the_ball() {
         let s = [3.0, 0.5, -0.2, 0.5, 1.0, 0.1, -0.2, 0.1, 0.4];
         for (g, rho) in [
             ([1.0, -2.0, 0.5], 0.3),
@@ -955,8 +952,7 @@ mod tests {
         blocks(&world, &contacts, &problem, 0.1).unwrap().remove(0)
     }
 
-    #[test]
-    fn stick_roll_solves_both_laws_on_a_floor_contact() {
+    pub fn stick_roll_solves_both_laws_on_a_floor_contact() {
         let blk = floor_block(0.5);
         let mu_r = 0.1;
         // pressed into the floor, pushed sideways gently, spinning: the contact sticks, the
@@ -978,8 +974,7 @@ mod tests {
         assert!(solve_stick_roll(&blk, mu_r, &[-0.2, 5.0, 0.0, 0.3, 0.0, 0.0]).is_none());
     }
 
-    #[test]
-    fn inverse_of_a_3x3() {
+    pub fn inverse_of_a_3x3() {
         let a = [4.0, 1.0, 0.5, 1.0, 3.0, 0.2, 0.5, 0.2, 2.0];
         let b = inverse3(&a);
         for i in 0..3 {

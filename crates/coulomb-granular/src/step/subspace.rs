@@ -206,5 +206,5 @@ pub(crate) fn cholesky_solve(
     b.iter().all(|x| x.is_finite()).then_some(())
 }
 
-#[cfg(test)]
-mod tests;
+#[cfg(feature = "unit-tests")]
+pub mod tests;

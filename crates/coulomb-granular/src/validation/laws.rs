@@ -572,12 +572,11 @@ pub fn repose() -> Result<Vec<Check>, LawError> {
     }])
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
 
-    #[test]
-    fn the_law_scene_files_parse_and_build() {
+    pub fn the_law_scene_files_parse_and_build() {
         for file in [INCLINE, JANSSEN, BEVERLOO, REPOSE] {
             let loaded = LoadedScene::parse(Path::new(file.0), file.1.to_string(), true).unwrap();
             let opts = BuildOptions {
@@ -589,8 +588,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn the_incline_rolls_and_slides_as_mechanics_says() {
+    pub fn the_incline_rolls_and_slides_as_mechanics_says() {
         let cs = incline().unwrap();
         assert_eq!(cs.len(), 2);
         for c in &cs {
@@ -600,33 +598,29 @@ mod tests {
         assert!(cs[1].measured > cs[0].measured);
     }
 
-    #[test]
-    fn a_line_fit_recovers_a_line() {
+    pub fn a_line_fit_recovers_a_line() {
         let pts: Vec<(f64, f64)> = (0..5).map(|i| (i as f64, 2.0 + 3.0 * i as f64)).collect();
         let (a, b) = line_fit(&pts).unwrap();
         assert!((a - 2.0).abs() < 1e-12 && (b - 3.0).abs() < 1e-12);
         assert!(line_fit(&[(1.0, 1.0)]).is_none());
     }
 
-    #[test]
     #[ignore = "a benchmark of the physics (about a minute in release): run by `coulomb validate`"]
-    fn janssen_length_matches() {
+    pub fn janssen_length_matches() {
         let cs = janssen().unwrap();
         eprintln!("{cs:#?}");
         assert!(cs.iter().all(Check::pass));
     }
 
-    #[test]
     #[ignore = "a benchmark of the physics (about 10 minutes in release): run by `coulomb validate`"]
-    fn beverloo_fit_is_in_range() {
+    pub fn beverloo_fit_is_in_range() {
         let cs = beverloo().unwrap();
         eprintln!("{cs:#?}");
         assert!(cs.iter().all(Check::pass));
     }
 
-    #[test]
     #[ignore = "a benchmark of the physics (about 3 minutes in release): run by `coulomb validate`"]
-    fn repose_angle_is_in_range() {
+    pub fn repose_angle_is_in_range() {
         let cs = repose().unwrap();
         eprintln!("{cs:#?}");
         assert!(cs.iter().all(Check::pass));

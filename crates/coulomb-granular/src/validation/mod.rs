@@ -813,12 +813,11 @@ pub struct ColumnResult {
     pub not_converged: usize,
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
 
-    #[test]
-    fn a_check_passes_only_on_finite_values_within_tolerance() {
+    pub fn a_check_passes_only_on_finite_values_within_tolerance() {
         let c = |e: f64, m: f64, t: f64| Check::new("c".into(), e, m, t, "m");
         assert!(c(1.0, 1.05, 0.1).pass());
         assert!(!c(1.0, 1.2, 0.1).pass());
@@ -832,8 +831,7 @@ mod tests {
         assert!(!late.pass());
     }
 
-    #[test]
-    fn solid_fraction_of_known_arrangements() {
+    pub fn solid_fraction_of_known_arrangements() {
         use std::f64::consts::PI;
         let ball = |x: f64, y: f64, z: f64| Sphere::new(Vec3::new(x, y, z), 1.0, 1.0);
         // one whole sphere, and one cut in half by a face of the box

@@ -593,19 +593,17 @@ pub fn checks(_quick: bool) -> Result<Vec<(String, Check)>, RigidError> {
     Ok(out)
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
 
-    #[test]
-    fn torque_free_top_keeps_momentum_and_energy() {
+    pub fn torque_free_top_keeps_momentum_and_energy() {
         let top = free_top([0.5, 0.2, 6.0], 1e-3, 10_000).unwrap();
         assert!(top.momentum_drift < 1e-10, "{top:?}");
         assert!(top.energy_drift < 1e-6, "{top:?}");
     }
 
-    #[test]
-    fn tennis_racket_flips() {
+    pub fn tennis_racket_flips() {
         // spin about the intermediate axis y with a small perturbation: it flips
         let top = free_top([0.05, 6.0, 0.05], 1e-3, 4_000).unwrap();
         assert!(top.min_intermediate_ratio < -0.9, "{top:?}");
@@ -616,8 +614,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn resting_box_carries_its_weight() {
+    pub fn resting_box_carries_its_weight() {
         let r = resting_box(0.01, 300).unwrap();
         assert!(r.contacts >= 4, "{r:?}");
         assert!(r.penetration < 0.01, "{r:?}");
@@ -629,8 +626,7 @@ mod tests {
         assert_eq!(r.not_converged, 0);
     }
 
-    #[test]
-    fn box_slides_down_an_incline() {
+    pub fn box_slides_down_an_incline() {
         let r = incline(30.0, 0.3, 0.1, 0.1, 200).unwrap();
         assert!(
             (r.acceleration - r.expected).abs() <= 0.005 * r.expected,
@@ -639,20 +635,18 @@ mod tests {
         assert_eq!(r.not_converged, 0);
     }
 
-    #[test]
-    fn box_sticks_on_a_gentle_incline() {
+    pub fn box_sticks_on_a_gentle_incline() {
         let r = incline(20.0, 0.5, 0.1, 0.1, 500).unwrap();
         assert!(r.displacement.abs() < 1e-6, "{r:?}");
         assert_eq!(r.not_converged, 0);
     }
 }
 
-#[cfg(test)]
-mod stack_tests {
+#[cfg(feature = "unit-tests")]
+pub mod stack_tests {
     use super::*;
 
-    #[test]
-    fn tall_block_topples_and_cube_slides_on_an_incline() {
+    pub fn tall_block_topples_and_cube_slides_on_an_incline() {
         // tan θ = 0.6 > w/h = 0.5 with rough contact: topples
         let r = incline(0.6f64.atan().to_degrees(), 1.0, 0.05, 0.1, 600).unwrap();
         assert!(r.rotation > 0.2, "{r:?}");
@@ -664,8 +658,7 @@ mod stack_tests {
         assert!(r.rotation < 1e-3 && r.displacement > 1e-2, "{r:?}");
     }
 
-    #[test]
-    fn small_wall_and_pyramid_stand() {
+    pub fn small_wall_and_pyramid_stand() {
         let r = stack(brick_wall(3, 3).unwrap(), 0.7, 100).unwrap();
         assert!(r.max_displacement < 1e-6, "{r:?}");
         assert_eq!(r.not_converged, 0, "{r:?}");
@@ -675,14 +668,13 @@ mod stack_tests {
     }
 }
 
-#[cfg(test)]
-mod impact_tests {
+#[cfg(feature = "unit-tests")]
+pub mod impact_tests {
     use super::*;
 
     /// A 3-course wall hit by the steel ball: bricks fly off, every step converges (the full
     /// 5-course case is a `coulomb validate` check).
-    #[test]
-    fn small_wall_is_knocked_over_by_a_ball() {
+    pub fn small_wall_is_knocked_over_by_a_ball() {
         let r = wall_impact(3, 2, 6.0, 25).unwrap();
         assert_eq!(r.not_converged, 0, "{r:?}");
         assert!(r.max_displacement > 0.05, "{r:?}");
@@ -691,9 +683,8 @@ mod impact_tests {
     }
 
     /// The `coulomb validate` case: the 5-course wall collapses, every step converges.
-    #[test]
     #[ignore = "long (18 bricks, 120 steps): a `coulomb validate` check"]
-    fn five_course_wall_collapses() {
+    pub fn five_course_wall_collapses() {
         let r = wall_impact(5, 4, 6.0, 120).unwrap();
         println!("{r:?}");
         assert_eq!(r.not_converged, 0, "{r:?}");
@@ -701,13 +692,12 @@ mod impact_tests {
     }
 }
 
-#[cfg(test)]
-mod report {
+#[cfg(feature = "unit-tests")]
+pub mod report {
     /// The full list of `coulomb validate`'s rigid checks, printed (long: the wall and the
     /// pyramid run 1 000 steps each).
-    #[test]
     #[ignore = "long (the 10-course wall and the 5-layer pyramid): run by `coulomb validate`"]
-    fn print_rigid_checks() {
+    pub fn print_rigid_checks() {
         for (s, c) in super::checks(false).unwrap() {
             println!(
                 "{s} | {} | expected {:e} | measured {:e} | tol {:e} | not converged {} | {}",
@@ -722,8 +712,8 @@ mod report {
     }
 }
 
-#[cfg(test)]
-mod shape_tests {
+#[cfg(feature = "unit-tests")]
+pub mod shape_tests {
     use super::*;
     use parry3d_f64::math::Pose;
 
@@ -744,8 +734,7 @@ mod shape_tests {
     /// Every shape kind falls 2 cm onto the floor (a half-space, then a two-triangle mesh)
     /// and comes to rest on it without sinking: the lowest surface point ends within 1 % of
     /// the shape's size of z = 0, and the last steps converge.
-    #[test]
-    fn every_shape_comes_to_rest_on_a_plane_and_a_mesh() {
+    pub fn every_shape_comes_to_rest_on_a_plane_and_a_mesh() {
         let hull = SharedShape::convex_hull(&[
             Vector::new(-0.05, -0.05, -0.04),
             Vector::new(0.06, -0.04, -0.05),
@@ -900,15 +889,14 @@ pub fn rock_pile(
     Ok((bodies, obstacles))
 }
 
-#[cfg(test)]
-mod bench {
+#[cfg(feature = "unit-tests")]
+pub mod bench {
     use super::*;
 
     /// The rock-pile benchmark (scripts/bench_rigid_pile.sh sets RIGID_PILE_ROCKS and
     /// RIGID_PILE_STEPS): time per step, sweeps per step, share of collision detection.
-    #[test]
     #[ignore = "benchmark: scripts/bench_rigid_pile.sh"]
-    fn rigid_pile_benchmark() {
+    pub fn rigid_pile_benchmark() {
         let var = |k: &str, d: usize| {
             std::env::var(k)
                 .ok()

@@ -77,8 +77,7 @@ fn same_points(
     fast.len()
 }
 
-#[test]
-fn the_caches_handed_on_are_those_remove_gives() {
+pub fn the_caches_handed_on_are_those_remove_gives() {
     let mut rng = rand::rngs::StdRng::seed_from_u64(52);
     for case in 0..50 {
         let n = 1 + case * 3;
@@ -109,8 +108,7 @@ fn the_caches_handed_on_are_those_remove_gives() {
     }
 }
 
-#[test]
-fn ball_pairs_match_parry_on_random_pairs() {
+pub fn ball_pairs_match_parry_on_random_pairs() {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(52);
     let (mut ball_ball_points, mut plane_points) = (0, 0);
     for _ in 0..2000 {
@@ -159,8 +157,7 @@ fn ball_pairs_match_parry_on_random_pairs() {
 
 /// A stored pair cache names a whole obstacle (feature 0): the JSON written reads back, and
 /// the same JSON with a feature on the obstacle, which no rigid pair has, is refused.
-#[test]
-fn stored_pair_caches_refuse_an_obstacle_feature() {
+pub fn stored_pair_caches_refuse_an_obstacle_feature() {
     let bodies = vec![body(Vector::new(0.0, 0.0, 0.05), Rotation::IDENTITY)];
     let shapes = vec![SharedShape::cuboid(0.05, 0.05, 0.05)];
     let floor = SharedShape::halfspace(Vector::Z);
@@ -182,8 +179,7 @@ fn stored_pair_caches_refuse_an_obstacle_feature() {
     assert!(e.contains("out of range"), "{e}");
 }
 
-#[test]
-fn a_box_of_balls_and_cuboids_gives_parry_points_in_parry_order() {
+pub fn a_box_of_balls_and_cuboids_gives_parry_points_in_parry_order() {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
     let mut bodies = Vec::new();
     let mut shapes = Vec::new();
@@ -292,8 +288,7 @@ fn same_run(
     (fast, worst)
 }
 
-#[test]
-fn a_ball_sliding_then_rolling_on_the_floor_moves_as_with_parry() {
+pub fn a_ball_sliding_then_rolling_on_the_floor_moves_as_with_parry() {
     // thrown along x without spin: it slides, friction spins it up until it rolls
     let r = 0.1;
     let b = ball_desc(r, [0.0, 0.0, r], [1.0, 0.0, 0.0], [0.0; 3]);
@@ -305,8 +300,7 @@ fn a_ball_sliding_then_rolling_on_the_floor_moves_as_with_parry() {
     assert!((v[0] - om[1] * r).abs() < 1e-6, "{v:?} {om:?}");
 }
 
-#[test]
-fn two_balls_colliding_above_the_floor_move_as_with_parry() {
+pub fn two_balls_colliding_above_the_floor_move_as_with_parry() {
     // head-on and off-centre, in free fall above the floor, then resting on it
     let a = ball_desc(0.05, [0.0, 0.0, 0.3], [2.0, 0.0, 0.0], [0.0, 0.0, 3.0]);
     let b = ball_desc(0.07, [0.3, 0.03, 0.3], [-1.0, 0.0, 0.0], [0.0; 3]);
@@ -322,8 +316,7 @@ fn two_balls_colliding_above_the_floor_move_as_with_parry() {
     assert!(v[0][0] < 0.5 && v[1][0] < 0.5, "{v:?}");
 }
 
-#[test]
-fn a_ball_pile_with_a_cuboid_gives_the_same_bits_on_one_and_two_threads() {
+pub fn a_ball_pile_with_a_cuboid_gives_the_same_bits_on_one_and_two_threads() {
     // 180 balls stacked in touching layers (jittered) on the floor around one cuboid:
     // fast-path pairs beside parry's (cuboid–ball, cuboid–floor), swept in parallel
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);

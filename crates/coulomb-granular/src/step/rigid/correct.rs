@@ -157,8 +157,8 @@ pub(super) fn correct_positions(
         .then_some((dq, sweeps))
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
 
@@ -259,8 +259,7 @@ mod tests {
     /// bit, on 1, 2 and 3 threads, for small problems (every colour on one thread) and large
     /// ones (colours of more than `PARALLEL_MIN` rows, swept in parallel); and where it
     /// stops before its sweep cap every linearized end gap is ≥ −target.
-    #[test]
-    fn the_coloured_correction_is_the_sequential_loop_bit_for_bit() {
+    pub fn the_coloured_correction_is_the_sequential_loop_bit_for_bit() {
         let mut rng = rand::rngs::StdRng::seed_from_u64(52);
         let mut corrected = 0;
         let cases: Vec<(usize, usize)> = (0..20)
@@ -320,8 +319,7 @@ mod tests {
     }
 
     /// The large cases above have colours that are swept in parallel.
-    #[test]
-    fn large_corrections_have_parallel_colours() {
+    pub fn large_corrections_have_parallel_colours() {
         let mut rng = rand::rngs::StdRng::seed_from_u64(7);
         let rows = random_rows(&mut rng, 2_000, 3_000);
         let colouring = crate::nsgs::Colouring::greedy_pairs(rows.len(), 3_000, |i| {

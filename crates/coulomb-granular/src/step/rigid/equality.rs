@@ -259,8 +259,8 @@ fn count_dropped(symbolic: &SymbolicCholesky<usize>, l_values: &[f64]) -> usize 
         .count()
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
 
     /// A point row (axis `e`) between blocks a and b at lever arms zero.
@@ -275,8 +275,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_chain_of_point_rows_is_solved_in_one_update() {
+    pub fn a_chain_of_point_rows_is_solved_in_one_update() {
         // 200 unit masses on a line, each tied to the next along x, the first to the world:
         // one update makes every row hold, whatever the length
         let n = 200;
@@ -296,8 +295,7 @@ mod tests {
         assert!(worst < 1e-10, "{worst}");
     }
 
-    #[test]
-    fn dependent_rows_get_no_update_and_the_others_hold() {
+    pub fn dependent_rows_get_no_update_and_the_others_hold() {
         // two bodies tied along x twice (a door on two hinges in one dimension) and to the
         // world: rows 1 and 2 identical, W_EE singular, the system consistent
         let mass = vec![[2.0; 6], [3.0; 6]];

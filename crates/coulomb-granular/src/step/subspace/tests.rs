@@ -34,8 +34,7 @@ fn compare(p: &StepProblem, tol: f64) -> (usize, usize, usize) {
     (a.sweeps, b.sweeps, b.subspace)
 }
 
-#[test]
-fn a_column_of_spheres_converges_in_far_fewer_sweeps() {
+pub fn a_column_of_spheres_converges_in_far_fewer_sweeps() {
     let p = stack(1, 1, 16);
     assert_eq!(p.contacts(), 16);
     let (plain, sm, kept) = compare(&p, 1e-8);
@@ -43,8 +42,7 @@ fn a_column_of_spheres_converges_in_far_fewer_sweeps() {
     assert!(3 * sm <= plain, "plain {plain} sweeps, subspace {sm}");
 }
 
-#[test]
-fn a_six_layer_stack_converges_in_far_fewer_sweeps() {
+pub fn a_six_layer_stack_converges_in_far_fewer_sweeps() {
     let p = stack(4, 4, 6);
     assert!(p.contacts() > 100, "{}", p.contacts());
     let (plain, sm, kept) = compare(&p, 1e-6);
@@ -52,8 +50,7 @@ fn a_six_layer_stack_converges_in_far_fewer_sweeps() {
     assert!(3 * sm <= plain, "plain {plain} sweeps, subspace {sm}");
 }
 
-#[test]
-fn same_bits_on_one_and_two_threads() {
+pub fn same_bits_on_one_and_two_threads() {
     let p = stack(4, 4, 6);
     let s = NsgsSettings {
         tol: 1e-6,

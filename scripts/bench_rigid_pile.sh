@@ -9,5 +9,5 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 RIGID_PILE_ROCKS="${1:-200}" RIGID_PILE_STEPS="${2:-300}" \
-  cargo test -p coulomb-granular --lib rigid::validation::bench -- --ignored --nocapture 2>&1 \
+  cargo test -p coulomb-granular --test integration unit::validation::rigid::bench -- --ignored --nocapture 2>&1 \
   | grep -E '^rocks '

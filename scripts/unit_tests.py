@@ -16,10 +16,12 @@ as a test harness. This script writes
     python3 scripts/unit_tests.py CRATE_DIR           write both
     python3 scripts/unit_tests.py CRATE_DIR --check   exit 1 when either is stale
 
-(the integration test `architecture::every_unit_test_is_run` runs the check).
+(the integration test `architecture::every_unit_test_is_run` runs the check). Both files are
+written as rustfmt formats them.
 """
 import os
 import re
+import subprocess
 import sys
 
 FEATURE = 'feature = "unit-tests"'
@@ -318,6 +320,18 @@ def render_wrappers(root, crate):
     return "\n".join(lines) + "\n"
 
 
+def formatted(text):
+    """`text` as `cargo fmt` leaves it (rustfmt, the workspace's edition and default settings),
+    so that the files written are the ones the format check accepts."""
+    out = subprocess.run(
+        ["rustfmt", "--edition", "2021", "--emit", "stdout"],
+        input=text, capture_output=True, text=True,
+    )
+    if out.returncode != 0:
+        raise SystemExit("rustfmt failed:\n" + out.stderr)
+    return out.stdout
+
+
 def main():
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
     check = "--check" in sys.argv
@@ -330,8 +344,8 @@ def main():
     mods = scan(src)
     root = tree(mods)
     files = {
-        os.path.join(src, "unit_tests.rs"): render_reexports(root),
-        os.path.join(crate_dir, "tests", "unit.rs"): render_wrappers(root, crate),
+        os.path.join(src, "unit_tests.rs"): formatted(render_reexports(root)),
+        os.path.join(crate_dir, "tests", "unit.rs"): formatted(render_wrappers(root, crate)),
     }
     stale = []
     for path, text in files.items():

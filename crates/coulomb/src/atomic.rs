@@ -358,16 +358,16 @@ pub fn check_writable(path: &Path) -> std::io::Result<()> {
     std::fs::remove_file(&tmp)
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
 
     /// The temporary files of a dead process are removed by the first write into their
     /// folder; those of a live process (this one, PID 1), other dot files and a directory of
     /// a temporary name are kept (issue 55: stale `.tmp-PID` files were never removed).
     #[cfg(target_os = "linux")]
-    #[test]
-    fn stale_temporaries_of_dead_processes_are_removed() {
+    pub fn stale_temporaries_of_dead_processes_are_removed() {
         let dir = scratch("stale");
         // a PID above the kernel's maximum (4194304) never runs
         let dead = dir.join(".stats.csv.tmp-4999999-3");
@@ -397,8 +397,7 @@ mod tests {
         dir
     }
 
-    #[test]
-    fn atomic_write_replaces_and_leaves_no_temporary() {
+    pub fn atomic_write_replaces_and_leaves_no_temporary() {
         let dir = scratch("plain");
         let p = dir.join("a.txt");
         write(&p, b"one").unwrap();
@@ -437,8 +436,7 @@ mod tests {
     }
 
     #[cfg(unix)]
-    #[test]
-    fn fifos_and_dangling_links_are_refused_and_left_as_they_are() {
+    pub fn fifos_and_dangling_links_are_refused_and_left_as_they_are() {
         use std::os::unix::fs::FileTypeExt;
         let dir = scratch("fifo");
         let fifo = dir.join("pipe");
@@ -489,8 +487,7 @@ mod tests {
     }
 
     #[cfg(unix)]
-    #[test]
-    fn a_link_to_a_regular_file_is_kept_and_its_target_replaced() {
+    pub fn a_link_to_a_regular_file_is_kept_and_its_target_replaced() {
         let dir = scratch("link");
         std::fs::create_dir(dir.join("data")).unwrap();
         let target = dir.join("data/out.txt");
@@ -527,8 +524,7 @@ mod tests {
     /// A character device made with `mknod` in a scratch folder (never a real one in /dev):
     /// refused by every entry point, and still a character device with the same numbers.
     #[cfg(unix)]
-    #[test]
-    fn a_device_node_is_refused_and_stays_a_device() {
+    pub fn a_device_node_is_refused_and_stays_a_device() {
         use std::os::unix::fs::{FileTypeExt, MetadataExt};
         let dir = scratch("dev");
         let dev = dir.join("full");
@@ -567,8 +563,7 @@ mod tests {
     }
 
     #[cfg(unix)]
-    #[test]
-    fn a_socket_is_refused() {
+    pub fn a_socket_is_refused() {
         let dir = scratch("sock");
         let path = dir.join("s");
         let _listener = std::os::unix::net::UnixListener::bind(&path).unwrap();

@@ -1163,8 +1163,9 @@ fn push_interior(d: usize, x: &mut [f64], margin: f64) -> f64 {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
 
     /// One run with the default parameters and first path, to 1e-8, at most 150 steps.
@@ -1181,8 +1182,7 @@ mod tests {
         )
     }
 
-    #[test]
-    fn nt_scaling_maps_b_and_a_to_the_same_point() {
+    pub fn nt_scaling_maps_b_and_a_to_the_same_point() {
         let pairs = [
             ([2.0, 0.5, -0.3], [1.5, -0.2, 0.9]),
             ([1.0, 0.0, 0.0], [3.0, 1.0, 1.0]),
@@ -1212,8 +1212,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn solves_rank_deficient_problems_and_reports_the_stored_error() {
+    pub fn solves_rank_deficient_problems_and_reports_the_stored_error() {
         // W = AᵀA + skew with A of m/2 rows: more contact unknowns than the rank of W (the
         // rigid case), μ ∈ [0.3, 1], W symmetric or not; the returned r's error is the one
         // recomputed on the problem given. Newton systems by the sparse LU of W + G, no stop
@@ -1272,8 +1271,7 @@ mod tests {
         );
     }
 
-    #[test]
-    fn a_run_jammed_near_the_end_of_its_path_stops_for_the_end_game() {
+    pub fn a_run_jammed_near_the_end_of_its_path_stops_for_the_end_game() {
         // `settle_steps` steps in a row cut below `settle_alpha`, with the lowest error ≤
         // `settle_below`, end a run (status Stalled) with its best point, judged on the
         // stored W; with `settle_below` = 0 the same run goes on to the tolerance
@@ -1302,8 +1300,7 @@ mod tests {
         assert_eq!(p.error(&r).error, cut.error);
     }
 
-    #[test]
-    fn the_skeleton_gives_the_steps_of_the_sparse_lu() {
+    pub fn the_skeleton_gives_the_steps_of_the_sparse_lu() {
         // a local problem with W = AᵀA of rank m/2: the same iterates whether the Newton
         // systems are solved through the skeleton of W (Woodbury) or by a sparse LU of W + G;
         // with an antisymmetric part in W (the skeleton then only approximates W, the solves
@@ -1338,8 +1335,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_run_gives_up_the_skeleton_after_its_strikes() {
+    pub fn a_run_gives_up_the_skeleton_after_its_strikes() {
         // W with a large antisymmetric part: the refined skeleton solves fall short and those
         // steps are solved by the sparse LU; after `skeleton_strikes` such steps in a row the
         // run goes to the sparse LU directly. Where every step falls back (skew 0.3) the same
@@ -1372,8 +1368,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn the_schur_complement_gives_the_steps_of_the_sparse_lu() {
+    pub fn the_schur_complement_gives_the_steps_of_the_sparse_lu() {
         // a global problem (M = 2I, n = m/4) and its Delassus form: the same iterates whether
         // the Newton systems are solved on M + H G⁻¹ Hᵀ or on W + G
         let (m, n) = (24, 6);
@@ -1425,8 +1420,7 @@ mod tests {
         );
     }
 
-    #[test]
-    fn solves_two_dimensional_problems() {
+    pub fn solves_two_dimensional_problems() {
         // d = 2 (the Lorentz cone of R²): W = AᵀA + I/10 with A of m/2 rows, 6 contacts
         let mut reached = 0;
         for seed in 0..8u64 {
@@ -1457,8 +1451,7 @@ mod tests {
         assert!(reached >= 6, "reached 1e-8 on {reached} of 8");
     }
 
-    #[test]
-    fn a_frictionless_contact_or_an_empty_problem_takes_no_step() {
+    pub fn a_frictionless_contact_or_an_empty_problem_takes_no_step() {
         let mut p = crate::test_problems::problem(3, 1, 0.1, 0.0);
         p.mu[1] = 0.0;
         let (r, rep) = run_default(&p);
@@ -1467,8 +1460,7 @@ mod tests {
         assert_eq!(rep.error, p.error(&r).error);
     }
 
-    #[test]
-    fn max_step_stops_at_the_boundary() {
+    pub fn max_step_stops_at_the_boundary() {
         let x = [1.0, 0.0, 0.0];
         let dx = [0.0, 2.0, 0.0];
         let a = max_step(&x, &dx);

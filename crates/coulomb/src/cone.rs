@@ -79,8 +79,9 @@ pub fn project_product_dual(dim: usize, mu: &[f64], x: &mut [f64]) {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
     use proptest::prelude::*;
 
@@ -104,8 +105,7 @@ mod tests {
         ]
     }
 
-    #[test]
-    fn known_projections() {
+    pub fn known_projections() {
         let mut x = [-1.0, 0.5, 0.0];
         project(1.0, &mut x);
         assert_eq!(x, [0.0, 0.0, 0.0]);
@@ -124,8 +124,7 @@ mod tests {
     }
 
     proptest! {
-        #[test]
-        fn projection_is_idempotent_and_in_cone(mu in mu_strategy(), x in vec_strategy()) {
+        fn prop_projection_is_idempotent_and_in_cone(mu in mu_strategy(), x in vec_strategy()) {
             let mut p = x.clone();
             project(mu, &mut p);
             prop_assert!(contains(mu, &p, 1e-9));
@@ -134,8 +133,7 @@ mod tests {
             prop_assert!(dist(&p, &pp) <= 1e-12 * (1.0 + dot(&p, &p).sqrt()));
         }
 
-        #[test]
-        fn projection_is_nonexpansive(mu in mu_strategy(), x in proptest::collection::vec(-10.0f64..10.0, 3), y in proptest::collection::vec(-10.0f64..10.0, 3)) {
+        fn prop_projection_is_nonexpansive(mu in mu_strategy(), x in proptest::collection::vec(-10.0f64..10.0, 3), y in proptest::collection::vec(-10.0f64..10.0, 3)) {
             let (mut px, mut py) = (x.clone(), y.clone());
             project(mu, &mut px);
             project(mu, &mut py);
@@ -147,8 +145,7 @@ mod tests {
         }
 
         /// Moreau: x = P_K(x) − P_{K*}(−x), the two parts orthogonal.
-        #[test]
-        fn moreau_decomposition(mu in mu_strategy(), x in vec_strategy()) {
+        fn prop_moreau_decomposition(mu in mu_strategy(), x in vec_strategy()) {
             let mut p = x.clone();
             project(mu, &mut p);
             let mut d: Vec<f64> = x.iter().map(|v| -v).collect();
@@ -157,5 +154,18 @@ mod tests {
             prop_assert!(dist(&recomposed, &x) <= 1e-9 * (1.0 + dot(&x, &x).sqrt()));
             prop_assert!(dot(&p, &d).abs() <= 1e-9 * (1.0 + dot(&x, &x)));
         }
+    }
+
+    // proptest! writes private functions: the tests are these, which run them
+    pub fn projection_is_idempotent_and_in_cone() {
+        prop_projection_is_idempotent_and_in_cone()
+    }
+
+    pub fn projection_is_nonexpansive() {
+        prop_projection_is_nonexpansive()
+    }
+
+    pub fn moreau_decomposition() {
+        prop_moreau_decomposition()
     }
 }

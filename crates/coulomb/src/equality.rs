@@ -405,5 +405,6 @@ fn dense_cholesky_solve(l: &[f64], n: usize, x: &mut [f64]) {
     }
 }
 
-#[cfg(test)]
-mod tests;
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests;

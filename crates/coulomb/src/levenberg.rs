@@ -477,13 +477,13 @@ pub fn solve(
     report
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
     use crate::test_problems::problem;
 
-    #[test]
-    fn levenberg_marquardt_solves_a_regular_problem_from_zero() {
+    pub fn levenberg_marquardt_solves_a_regular_problem_from_zero() {
         let p = problem(5, 3, 0.5, 0.0);
         let mut r = vec![0.0; 15];
         let out = solve(&p, &mut r, 1e-12, &LmParams::default(), Deadline::NEVER);
@@ -496,8 +496,7 @@ mod tests {
     /// steps) far from the solution, Levenberg–Marquardt on the Alart–Curnier map needs its
     /// escapes (watchdog and ρ switch) and reaches 1e-8; the reported error is the one
     /// recomputed from the returned r on the W given, also when W is not symmetric.
-    #[test]
-    fn the_escapes_solve_a_rank_deficient_problem_where_newton_stalls() {
+    pub fn the_escapes_solve_a_rank_deficient_problem_where_newton_stalls() {
         for skew in [0.0, 1e-3] {
             let p = problem(6, 2811, 0.0, skew);
             let q_norm = crate::law::norm(&p.q);
@@ -533,8 +532,7 @@ mod tests {
     /// LM's iterates need not lie in the cones; what it returns, and the error it reports, is
     /// the projection onto L = Π K_μᵢ, so that a caller's verdict on the stored problem (which
     /// projects a guess) agrees with it.
-    #[test]
-    fn a_point_outside_the_cones_is_judged_and_returned_as_its_projection() {
+    pub fn a_point_outside_the_cones_is_judged_and_returned_as_its_projection() {
         let p = problem(6, 2811, 0.0, 1e-3);
         let mut r = vec![0.0; 18];
         let out = solve(&p, &mut r, 1e-8, &LmParams::default(), Deadline::NEVER);
@@ -564,8 +562,7 @@ mod tests {
     /// A segment counts from its first taken step: the rejections that open it (the damping
     /// still growing) do not count, up to `max_rejections` in a row; once a step is taken,
     /// taken and rejected steps count alike.
-    #[test]
-    fn a_segment_counts_from_its_first_taken_step() {
+    pub fn a_segment_counts_from_its_first_taken_step() {
         let params = LmParams {
             segment_steps: 3,
             max_rejections: 5,
@@ -585,8 +582,7 @@ mod tests {
         assert_eq!(ends(&[f, f, f, f, f, f, t, t, t]), [4, 8]);
     }
 
-    #[test]
-    fn bad_sizes_and_caps_give_typed_statuses() {
+    pub fn bad_sizes_and_caps_give_typed_statuses() {
         let p = problem(3, 5, 0.0, 0.0);
         let mut short = vec![0.0; 8];
         let out = solve(&p, &mut short, 1e-8, &LmParams::default(), Deadline::NEVER);

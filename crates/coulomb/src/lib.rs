@@ -91,8 +91,13 @@ pub mod proximal;
 pub mod settings;
 pub mod solution;
 pub mod solver;
-#[cfg(test)]
+#[cfg(feature = "unit-tests")]
 pub(crate) mod test_problems;
+// The unit tests, compiled into the library for the integration test binary (docs/testing.md,
+// "Unit tests in the library"); the feature is on only when the crate's tests are built.
+#[cfg(feature = "unit-tests")]
+#[doc(hidden)]
+pub mod unit_tests;
 
 /// The linear algebra at its former paths (`coulomb::sparse`, `coulomb::dense`,
 /// `coulomb::skeleton`).

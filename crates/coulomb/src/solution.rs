@@ -189,13 +189,13 @@ impl std::fmt::Display for StepKind {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
 
     #[cfg(feature = "serde")]
-    #[test]
-    fn status_names_match_their_serialization() {
+    pub fn status_names_match_their_serialization() {
         for s in [
             Status::Converged,
             Status::MaxIterations,

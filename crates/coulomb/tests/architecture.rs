@@ -112,14 +112,15 @@ fn unit_tests_script(crate_dir: &Path, check: bool) -> std::process::Output {
 #[test]
 fn every_unit_test_is_run() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let krate = root.join("crates/coulomb-granular");
-    let out = unit_tests_script(&krate, true);
-    assert!(
-        out.status.success(),
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
+    for krate in ["coulomb", "coulomb-granular"] {
+        let out = unit_tests_script(&root.join("crates").join(krate), true);
+        assert!(
+            out.status.success(),
+            "{krate}: {}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
 }
 
 /// The script finds a test added to a unit-test module (also one gated by another cfg, and

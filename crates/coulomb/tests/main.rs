@@ -21,4 +21,5 @@ mod settings_json;
 mod solver_fclib;
 mod solver_painleve;
 mod solver_random;
+mod unit;
 mod zero_contacts;

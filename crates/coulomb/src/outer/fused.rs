@@ -180,8 +180,9 @@ pub fn solve_fused(
     }
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
     use crate::deadline::Deadline;
 
@@ -209,8 +210,7 @@ mod tests {
         (solved, out.residual, p.error(&r).error)
     }
 
-    #[test]
-    fn anderson_mixing_shortens_gauss_seidel_on_rank_deficient_problems() {
+    pub fn anderson_mixing_shortens_gauss_seidel_on_rank_deficient_problems() {
         // W = AᵀA + 0.01 I with A of rank m/2 (nearly rank-deficient, as for rigid bodies in
         // multi-point contact), q pushing into contact: Gauss–Seidel converges linearly and
         // slowly; with the mixing it needs fewer sweeps, and it never stops with an error

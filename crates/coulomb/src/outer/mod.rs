@@ -538,8 +538,9 @@ pub fn solve_with_guess(
     Solver::new(problem, settings.clone())?.solve(guess)
 }
 
-#[cfg(test)]
-mod tests {
+#[cfg(feature = "unit-tests")]
+#[allow(missing_docs)]
+pub mod tests {
     use super::*;
     use crate::settings::OuterKind;
 
@@ -558,8 +559,7 @@ mod tests {
 
     /// The blocks of M the plan reads: a diagonal matrix, two 2 × 2 blocks and one 3 × 3
     /// whose coupling is stored only above the diagonal, and a matrix that couples its ends.
-    #[test]
-    fn the_largest_diagonal_block_of_m() {
+    pub fn the_largest_diagonal_block_of_m() {
         let dense = |n: usize, entries: &[(usize, usize)]| {
             let mut a = vec![0.0; n * n];
             for i in 0..n {
@@ -582,8 +582,7 @@ mod tests {
     /// A stop requested before or during a solve ends it with `Interrupted`, never with a
     /// claim of convergence, and with the iterate's own error; without the request the same
     /// settings converge.
-    #[test]
-    fn a_cancelled_solve_ends_interrupted_with_its_error() {
+    pub fn a_cancelled_solve_ends_interrupted_with_its_error() {
         use std::sync::atomic::{AtomicBool, Ordering};
         static STOP: AtomicBool = AtomicBool::new(false);
         let p = Problem::Local(local(vec![-1.0, 0.4, 0.1, -0.5, -0.2, 0.3]));
@@ -610,8 +609,7 @@ mod tests {
         STOP.store(false, Ordering::Relaxed);
     }
 
-    #[test]
-    fn a_solver_set_up_once_solves_like_fresh_solves() {
+    pub fn a_solver_set_up_once_solves_like_fresh_solves() {
         let q1 = vec![-1.0, 0.4, 0.1, -0.5, -0.2, 0.3];
         let q2 = vec![-0.7, -0.1, 0.6, 0.2, 0.1, 0.0];
         let p1 = Problem::Local(local(q1));
@@ -657,8 +655,7 @@ mod tests {
         ));
     }
 
-    #[test]
-    fn a_global_solver_updates_f_and_w_like_a_fresh_problem() {
+    pub fn a_global_solver_updates_f_and_w_like_a_fresh_problem() {
         let g = crate::examples::crushed_ball(0.3, 1.0).unwrap();
         let mut g2 = g.clone();
         g2.f.iter_mut().for_each(|x| *x *= 0.5);
@@ -695,8 +692,7 @@ mod tests {
         p
     }
 
-    #[test]
-    fn a_rank_deficient_local_problem_tries_the_interior_point_method_first() {
+    pub fn a_rank_deficient_local_problem_tries_the_interior_point_method_first() {
         // W = AᵀA (rank m/2, the rigid multi-contact case), symmetric or with an antisymmetric
         // part as stored in real files: a cold solve tries the interior point on the skeleton
         // of W first (its record comes first, no warm-up); the verdict is on W as stored. With
@@ -740,8 +736,7 @@ mod tests {
             .count()
     }
 
-    #[test]
-    fn a_rigid_global_problem_tries_the_interior_point_method_first() {
+    pub fn a_rigid_global_problem_tries_the_interior_point_method_first() {
         // M = I with n = m/4 degrees of freedom, H random (n × m): W = Hᵀ H has rank m/4 (the
         // rigid multi-contact case): a cold solve runs the try first (its record comes first,
         // no warm-up), a solve from a guess does not; the verdict is the global one, err and
@@ -799,8 +794,7 @@ mod tests {
         assert!(solved >= 4, "the try alone converged on {solved} of 8");
     }
 
-    #[test]
-    fn the_multipliers_apply_to_rigid_problems_whose_skeleton_reproduces_w() {
+    pub fn the_multipliers_apply_to_rigid_problems_whose_skeleton_reproduces_w() {
         // global: n = 6 degrees of freedom for m = 24 contact unknowns (n ≤ m/2) applies,
         // n = 18 (> m/2) does not; local W = AᵀA (rank m/2) applies and has an exact
         // skeleton; W = Aᵀ N A with N not symmetric (rank m/2, as a W = Hᵀ M⁻¹ H with a
@@ -885,8 +879,7 @@ mod tests {
         }
     }
 
-    #[test]
-    fn an_unconverged_solve_returns_its_lowest_error_iterate() {
+    pub fn an_unconverged_solve_returns_its_lowest_error_iterate() {
         // Outer iterations capped at 3 per stage: the paper's single stage, and the default
         // policy (warm-up, main method, fallback). Whatever the status, the returned r is the
         // iterate of lowest error visited, and its error is recomputed from r on the problem.
@@ -934,8 +927,7 @@ mod tests {
     /// budget is one step: without the LM end game it ends at its iteration cap; with it, it
     /// converges, and the reported error is the one recomputed from r on the stored W. A run
     /// that converges without spending its Newton budget is unchanged.
-    #[test]
-    fn a_stage_hands_its_stall_to_the_lm_end_game() {
+    pub fn a_stage_hands_its_stall_to_the_lm_end_game() {
         use crate::settings::{InnerKind, OuterKind, Settings};
         let mut crawl = Settings {
             max_inner: 1,

@@ -205,7 +205,7 @@ pub(super) fn multipliers_follow(
 /// [`crate::settings::BarrierParams::skeleton_rank_ratio`] · m), when it reproduces W
 /// (symmetric or not) within [`crate::settings::MultiplierParams::skeleton_residual`] · tol
 /// ([`crate::linalg::skeleton::Skeleton::residual`]); None otherwise or when `deadline` passes.
-#[cfg(test)]
+#[cfg(feature = "unit-tests")]
 pub(super) fn exact_skeleton(
     settings: &Settings,
     p: &LocalProblem,

@@ -158,19 +158,12 @@ def other_cfgs(attrs):
 
 def tests_in(text, code, start, end):
     """The tests (name, #[ignore] attribute or None) directly in the module body [start, end)."""
-    found = []
-    depth = 0
-    k = start
-    body = code[start:end]
-    # positions at depth 0 of the body
-    level = []
+    level = []  # brace depth, relative to the body, of each of its characters
     d = 0
-    for ch in body:
+    for ch in code[start:end]:
         level.append(d)
-        if ch == "{":
-            d += 1
-        elif ch == "}":
-            d -= 1
+        d += (ch == "{") - (ch == "}")
+    found = []
     for m in FN.finditer(code, start, end):
         if level[m.start() - start] != 0:
             continue
@@ -247,38 +240,44 @@ def gates_of(node):
     return [g for g in leaves[0] if g in common] if leaves else []
 
 
+def render(root, header, module_kw, leaf):
+    """The tree of modules as Rust: `module_kw` opens a folder's module (`pub mod`, `mod`),
+    `leaf(path, name, tests, indent)` gives the lines of a test module; a cfg every test below a
+    folder shares is written once, on the folder."""
+    lines = list(header)
+
+    def emit(node, depth, outer):
+        ind = "    " * depth
+        for k in sorted(node, key=lambda k: (k[0] != "leaf", k[1])):
+            v = node[k]
+            gates = v[1] if k[0] == "leaf" else gates_of(v)
+            lines.extend(ind + g for g in gates if g not in outer)
+            if k[0] == "leaf":
+                lines.extend(leaf(v[0], k[1], v[2], ind))
+            else:
+                lines.append(f"{ind}{module_kw} {k[1]} {{")
+                emit(v, depth + 1, outer + gates)
+                lines.append(ind + "}")
+
+    emit(root, 0, [])
+    return "\n".join(lines) + "\n"
+
+
 def render_reexports(root):
-    lines = [
+    header = [
         "//! The crate's unit tests, re-exported for its integration test binary",
         "//! (`tests/unit.rs`). Written by `scripts/unit_tests.py`; do not edit.",
         "",
     ]
 
-    def emit(node, prefix, depth, outer):
-        ind = "    " * depth
-        for k in sorted(node, key=lambda k: (k[0] != "leaf", k[1])):
-            v = node[k]
-            if k[0] == "leaf":
-                modpath, gates, _ = v
-                for g in gates:
-                    if g not in outer:
-                        lines.append(ind + g)
-                lines.append(f"{ind}pub use crate::{'::'.join(modpath + [k[1]])};")
-            else:
-                g = gates_of(v)
-                for a in g:
-                    if a not in outer:
-                        lines.append(ind + a)
-                lines.append(f"{ind}pub mod {k[1]} {{")
-                emit(v, prefix + [k[1]], depth + 1, outer + g)
-                lines.append(ind + "}")
+    def leaf(modpath, name, _tests, ind):
+        return [f"{ind}pub use crate::{'::'.join(modpath + [name])};"]
 
-    emit(root, [], 0, [])
-    return "\n".join(lines) + "\n"
+    return render(root, header, "pub mod", leaf)
 
 
 def render_wrappers(root, crate):
-    lines = [
+    header = [
         f"//! The unit tests of `{crate}` (modules `#[cfg(feature = \"unit-tests\")] pub mod tests`",
         "//! of its library), each run by a `#[test]` at its module's path: compiled once, with the",
         "//! library, instead of in a second build of the whole crate as a test harness",
@@ -286,38 +285,16 @@ def render_wrappers(root, crate):
         "",
     ]
 
-    def emit(node, depth, outer):
-        ind = "    " * depth
-        for k in sorted(node, key=lambda k: (k[0] != "leaf", k[1])):
-            v = node[k]
-            if k[0] == "leaf":
-                modpath, gates, tests = v
-                for g in gates:
-                    if g not in outer:
-                        lines.append(ind + g)
-                lines.append(f"{ind}mod {k[1]} {{")
-                lines.append(
-                    f"{ind}    use {crate}::unit_tests::{'::'.join(modpath + [k[1]])} as t;"
-                )
-                for name, ignore in tests:
-                    lines.append(f"{ind}    #[test]")
-                    if ignore:
-                        lines.append(f"{ind}    {ignore}")
-                    lines.append(f"{ind}    fn {name}() {{")
-                    lines.append(f"{ind}        t::{name}()")
-                    lines.append(f"{ind}    }}")
-                lines.append(ind + "}")
-            else:
-                g = gates_of(v)
-                for a in g:
-                    if a not in outer:
-                        lines.append(ind + a)
-                lines.append(f"{ind}mod {k[1]} {{")
-                emit(v, depth + 1, outer + g)
-                lines.append(ind + "}")
+    def leaf(modpath, name, tests, ind):
+        out = [f"{ind}mod {name} {{", f"{ind}    use {crate}::unit_tests::{'::'.join(modpath + [name])} as t;"]
+        for test, ignore in tests:
+            out.append(f"{ind}    #[test]")
+            if ignore:
+                out.append(f"{ind}    {ignore}")
+            out += [f"{ind}    fn {test}() {{", f"{ind}        t::{test}()", f"{ind}    }}"]
+        return out + [ind + "}"]
 
-    emit(root, 0, [])
-    return "\n".join(lines) + "\n"
+    return render(root, header, "mod", leaf)
 
 
 def formatted(text):

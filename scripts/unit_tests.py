@@ -17,7 +17,8 @@ as a test harness. This script writes
     python3 scripts/unit_tests.py CRATE_DIR --check   exit 1 when either is stale
 
 (the integration test `architecture::every_unit_test_is_run` runs the check). Both files are
-written as rustfmt formats them.
+written as rustfmt formats them. Both commands fail on a `#[test]` or a `cfg(test)` in the
+crate's sources, which such a crate never compiles.
 """
 import os
 import re
@@ -309,6 +310,23 @@ def formatted(text):
     return out.stdout
 
 
+def never_run(src):
+    """`file:line` of each `#[test]` or `cfg(test)` in the crate's code: with `[lib] test =
+    false` neither is ever compiled, so a test written that way would silently never run."""
+    found = []
+    pat = re.compile(r"#\[test\]|\bcfg(?:_attr)?!?\((?:[^()]*\()?[^()]*\btest\b")
+    for d, _, fs in sorted(os.walk(src)):
+        for f in sorted(fs):
+            if not f.endswith(".rs"):
+                continue
+            path = os.path.join(d, f)
+            code = strip_code(open(path, encoding="utf-8").read())
+            for m in pat.finditer(code):
+                line = code.count("\n", 0, m.start()) + 1
+                found.append(f"{path}:{line}: `{m.group(0)}`")
+    return found
+
+
 def main():
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
     check = "--check" in sys.argv
@@ -318,6 +336,13 @@ def main():
     src = os.path.join(crate_dir, "src")
     crate = re.search(r'^name = "([^"]+)"', open(os.path.join(crate_dir, "Cargo.toml")).read(), re.M)
     crate = crate.group(1).replace("-", "_")
+    wrong = never_run(src)
+    if wrong:
+        print(
+            "never compiled in a crate whose tests are in its library (a test is a `pub fn` in a"
+            " `#[cfg(feature = \"unit-tests\")] pub mod`, docs/testing.md):\n  " + "\n  ".join(wrong)
+        )
+        sys.exit(1)
     mods = scan(src)
     root = tree(mods)
     files = {

@@ -124,7 +124,8 @@ fn every_unit_test_is_run() {
 }
 
 /// The script finds a test added to a unit-test module (also one gated by another cfg, and
-/// an ignored one), calls the check stale until it is run, and writes a `#[test]` for each.
+/// an ignored one), calls the check stale until it is run, and writes a `#[test]` for each;
+/// it refuses a `#[test]` in the sources, which such a crate would never compile.
 #[test]
 fn a_new_unit_test_makes_the_check_fail_until_it_is_written() {
     let dir = std::env::temp_dir().join(format!("coulomb-unit-tests-{}", std::process::id()));
@@ -159,7 +160,17 @@ fn a_new_unit_test_makes_the_check_fail_until_it_is_written() {
     );
     let wrappers = std::fs::read_to_string(dir.join("tests/unit.rs")).expect("written");
     let exports = std::fs::read_to_string(dir.join("src/unit_tests.rs")).expect("written");
+    // a `#[test]` by habit would never be compiled in such a crate: refused, with its line
+    write(
+        "src/a/b.rs",
+        "#[cfg(all(feature = \"unit-tests\", unix))]\npub mod tests {\n    \
+         #[test]\n    fn forgotten() {}\n}\n",
+    );
+    let refused = unit_tests_script(&dir, false);
     let _ = std::fs::remove_dir_all(&dir);
+    let said = String::from_utf8_lossy(&refused.stdout);
+    assert!(!refused.status.success(), "{said}");
+    assert!(said.contains("b.rs:3: `#[test]`"), "{said}");
     assert!(
         wrappers.contains("fn one() {\n") && wrappers.contains("t::one()"),
         "{wrappers}"

@@ -118,10 +118,10 @@ def child_file(src, path, name):
 
 ATTR = re.compile(r"^[ \t]*#\[([^\]]*)\][ \t]*$", re.M)
 MOD = re.compile(r"^[ \t]*(pub(?:\([a-z]+\))? )?mod (\w+)[ \t]*(\{|;)", re.M)
-FN = re.compile(r"^[ \t]*pub fn (\w+)\(\)[ \t]*\{", re.M)
+FN = re.compile(r"^[ \t]*pub fn (\w+)\(\)[ \t]*(\{|->)", re.M)
 
 
-def attrs_before(text, code, at):
+def attrs_before(text, at):
     """The attribute lines just above offset `at` (doc comments skipped), innermost last."""
     lines = text[:at].split("\n")[:-1]
     got = []
@@ -157,7 +157,7 @@ def other_cfgs(attrs):
     return [a for a in attrs if a.startswith("#[cfg(") and FEATURE not in a]
 
 
-def tests_in(text, code, start, end):
+def tests_in(path, text, code, start, end):
     """The tests (name, #[ignore] attribute or None) directly in the module body [start, end)."""
     level = []  # brace depth, relative to the body, of each of its characters
     d = 0
@@ -168,7 +168,13 @@ def tests_in(text, code, start, end):
     for m in FN.finditer(code, start, end):
         if level[m.start() - start] != 0:
             continue
-        attrs = attrs_before(text, code, m.start())
+        if m.group(2) == "->":
+            line = code.count("\n", 0, m.start()) + 1
+            raise SystemExit(
+                f"{path}:{line}: the test `{m.group(1)}` returns a value; a unit test is a"
+                " `pub fn name()` returning nothing (panic on failure)"
+            )
+        attrs = attrs_before(text, m.start())
         ignore = next((a for a in attrs if a.startswith("#[ignore")), None)
         found.append((m.group(1), ignore))
     return found
@@ -188,7 +194,7 @@ def scan(src):
             name = m.group(2)
             if not modpath and name == "unit_tests":
                 continue  # this script's own output
-            attrs = attrs_before(text, code, m.start())
+            attrs = attrs_before(text, m.start())
             is_unit, rest = cfg_rest(attrs)
             g = gates + other_cfgs(attrs) + ([f"#[cfg({rest})]"] if rest else [])
             if m.group(3) == "{":
@@ -196,14 +202,14 @@ def scan(src):
                 close = matching_brace(code, open_at)
                 inline_ranges.append((m.start(), close))
                 if is_unit:
-                    tests = tests_in(text, code, open_at + 1, close)
+                    tests = tests_in(path, text, code, open_at + 1, close)
                     if tests:
                         out.append((modpath, name, g, tests, path))
             else:
                 f = child_file(src, path, name)
                 if is_unit:
                     t2 = open(f, encoding="utf-8").read()
-                    tests = tests_in(t2, strip_code(t2), 0, len(t2))
+                    tests = tests_in(f, t2, strip_code(t2), 0, len(t2))
                     if tests:
                         out.append((modpath, name, g, tests, f))
                 else:
@@ -355,8 +361,11 @@ def main():
         if old != text:
             stale.append(path)
             if not check:
-                with open(path, "w", encoding="utf-8") as f:
+                # written whole or not at all: a temporary file beside it, then renamed
+                tmp = path + ".tmp"
+                with open(tmp, "w", encoding="utf-8") as f:
                     f.write(text)
+                os.replace(tmp, path)
     n = sum(len(t) for _, _, _, t, _ in mods)
     if check and stale:
         print(f"stale (run `python3 scripts/unit_tests.py {crate_dir}`): {', '.join(stale)}")

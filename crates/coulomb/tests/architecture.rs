@@ -125,7 +125,8 @@ fn every_unit_test_is_run() {
 
 /// The script finds a test added to a unit-test module (also one gated by another cfg, and
 /// an ignored one), calls the check stale until it is run, and writes a `#[test]` for each;
-/// it refuses a `#[test]` in the sources, which such a crate would never compile.
+/// it refuses a `#[test]` in the sources, which such a crate would never compile, and a test
+/// that returns a value.
 #[test]
 fn a_new_unit_test_makes_the_check_fail_until_it_is_written() {
     let dir = std::env::temp_dir().join(format!("coulomb-unit-tests-{}", std::process::id()));
@@ -167,10 +168,23 @@ fn a_new_unit_test_makes_the_check_fail_until_it_is_written() {
          #[test]\n    fn forgotten() {}\n}\n",
     );
     let refused = unit_tests_script(&dir, false);
+    // nor is a test returning a value taken silently as none
+    write(
+        "src/a/b.rs",
+        "#[cfg(feature = \"unit-tests\")]\npub mod tests {\n    \
+         pub fn three() -> Result<(), String> {\n        Ok(())\n    }\n}\n",
+    );
+    let returning = unit_tests_script(&dir, false);
     let _ = std::fs::remove_dir_all(&dir);
     let said = String::from_utf8_lossy(&refused.stdout);
     assert!(!refused.status.success(), "{said}");
     assert!(said.contains("b.rs:3: `#[test]`"), "{said}");
+    let said = String::from_utf8_lossy(&returning.stderr);
+    assert!(!returning.status.success(), "{said}");
+    assert!(
+        said.contains("b.rs:3: the test `three` returns a value"),
+        "{said}"
+    );
     assert!(
         wrappers.contains("fn one() {\n") && wrappers.contains("t::one()"),
         "{wrappers}"
